@@ -1,0 +1,64 @@
+// Assembly of the global residual and iteration matrix (method.md §5.1-5.3, §5.6).
+//
+// Residual (global order, data.residual):
+//   rows [0, nv):       s_R * ( g_ine + g_int - g_ext + B^T lambda )
+//   rows [nv, nv + nc): s_C * phi
+// Iteration matrix (permuted, banded, data.matrix), for unknowns (dx, dmu) with
+// dlambda = s_L dmu:
+//   [ s_R (c_M M + c_C C + c_K K T)    s_R s_L B^T ]
+//   [ s_C B T                          0           ]
+// with M = dr/d(vdot), C = dr/dv, K = dr/d(dh) (right-trivialised), T = data.node_tangent
+// (identity in statics). Statics: c_M = c_C = 0, c_K = 1, s_R = 1, s_C = s_L = k.
+// Dynamics (Bottasso scaling): c_M = beta', c_C = gamma', c_K = 1, s_R = beta h^2, s_C = 1,
+// s_L = 1 / (beta h^2).
+#pragma once
+
+#include "screwfem/model/model.h"
+
+namespace screwfem {
+
+struct AssemblyOptions {
+  double time = 0.0;          // profiles are evaluated at this time
+  double load_factor = 1.0;   // multiplies every load and prescribed motion (statics)
+  bool dynamics = false;      // include inertia and damping forces
+  double c_mass = 0.0, c_damping = 0.0, c_stiffness = 1.0;
+  double s_rows = 1.0, s_constraints = 1.0, s_multipliers = 1.0;
+  bool use_node_tangent = false;
+  bool assemble_matrix = true;
+};
+
+// Evaluates residual (and matrix). Returns false if an element's relative rotation left the
+// admissible range (data.failed_element, data.failed_rotation say which and how far).
+bool Assemble(const Model& model, Data& data, const AssemblyOptions& options);
+
+// Snapshot of the configuration (for restoring after a failed step).
+struct State {
+  std::vector<SE3> H, HJ;
+  Eigen::VectorXd q_joint;
+};
+void SaveState(const Data& data, State* state);
+void RestoreState(const State& state, Data& data);
+
+// The retraction, the only place where configurations change: H_i <- H_i exp(dx_i) for every
+// free node, alpha <- alpha + dx_J for joint coordinates (H_J <- H_J exp(A_J dx_J) for
+// spherical, planar and free joints). dx has the velocity layout (size >= nv).
+void Retract(const Model& model, Data& data, const Eigen::Ref<const Eigen::VectorXd>& dx);
+
+// Moves every element's branch reference to its current relative rotation (call after an
+// accepted step; method.md §2.7).
+void UpdateBranchReferences(const Model& model, Data& data);
+
+// Joint coordinate helpers.
+SE3 JointRelativeFrame(const Model& model, const Data& data, int joint);  // H_J
+// Configuration-dependent basis: A_J for subgroups, the universal joint's moving basis.
+Mat6X JointCurrentBasis(const Model& model, const Data& data, int joint);
+// Constraint value phi_J = log(H_J^-1 C_A^-1 H_A^-1 H_B C_B) (6) of a joint.
+Vec6 JointConstraint(const Model& model, const Data& data, int joint);
+// Effort of a joint's drive: the generalised force the drive applies along its coordinate
+// (actuator torque or force; for a series-elastic drive the spring-damper force).
+double JointDriveEffort(const Model& model, const Data& data, int joint);
+
+// Largest |phi| over all constraint rows at the current state (global order residual rows).
+double MaxConstraintViolation(const Model& model, Data& data, double time, double load_factor);
+
+}  // namespace screwfem

@@ -1,0 +1,81 @@
+// SE(3) / se(3) toolkit (method.md §1).
+//
+// Conventions, fixed for the whole code base:
+//  * A frame H = (R, x) maps frame coordinates to world coordinates: p_W = R p + x.
+//  * 6-vectors are ordered translation first, rotation second: xi = [u; w].
+//  * Velocities are body (left-invariant) velocities: dH/dt = H wedge(eta).
+//  * Increments are right-trivialised: H <- H exp(wedge(dh)). Every tangent matrix in screwfem
+//    is a derivative with respect to such a dh.
+//  * T(xi) is the right tangent of exp: exp(xi + dxi) = exp(xi) exp(wedge(T(xi) dxi)) + O(dxi^2).
+//
+// Everything here is fixed-size, allocation-free and depends on Eigen only.
+#pragma once
+
+#include <Eigen/Dense>
+
+namespace screwfem {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Mat4 = Eigen::Matrix4d;
+
+// A rigid transformation (element of SE(3)).
+struct SE3 {
+  Mat3 R = Mat3::Identity();  // orientation of the frame in the world
+  Vec3 x = Vec3::Zero();      // world position of the frame origin
+
+  static SE3 Identity() { return SE3{}; }
+  static SE3 Translation(const Vec3& p) { return SE3{Mat3::Identity(), p}; }
+
+  SE3 operator*(const SE3& other) const { return SE3{R * other.R, R * other.x + x}; }
+  SE3 Inverse() const {
+    SE3 inv;
+    inv.R = R.transpose();
+    inv.x = -(inv.R * x);
+    return inv;
+  }
+  // Maps a point given in this frame to the parent (world) frame.
+  Vec3 Act(const Vec3& p) const { return R * p + x; }
+  Mat4 Matrix() const;
+};
+
+// --- algebra operators (method.md §1.1) -------------------------------------------------------
+Mat3 Skew(const Vec3& a);          // Skew(a) b = a x b
+Vec3 Unskew(const Mat3& A);        // inverse of Skew (uses the skew-symmetric part)
+Mat4 Wedge(const Vec6& xi);        // 4x4 algebra matrix [Skew(w) u; 0 0]
+Vec6 Vee(const Mat4& X);           // inverse of Wedge
+Mat6 Ad(const SE3& H);             // H wedge(z) H^-1 = wedge(Ad(H) z)
+Mat6 ad(const Vec6& xi);           // wedge(ad(xi) z) = [wedge(xi), wedge(z)]
+Mat6 Star(const Vec6& y);          // ad(xi)^T y = Star(y) xi,  y = [force; moment]
+
+// --- SO(3) -----------------------------------------------------------------------------------
+Mat3 ExpSO3(const Vec3& w);
+// Principal logarithm, |w| <= pi. Robust at 0 and near/at pi (uses atan2, never acos).
+Vec3 LogSO3(const Mat3& R);
+Mat3 TSO3(const Vec3& w);          // R(w)^T dR = Skew(TSO3(w) dw)
+Mat3 TSO3Inv(const Vec3& w);
+
+// --- SE(3) -----------------------------------------------------------------------------------
+SE3 ExpSE3(const Vec6& xi);
+Vec6 LogSE3(const SE3& H);         // principal branch (rotation angle <= pi)
+Mat6 TSE3(const Vec6& xi);         // right tangent operator, method.md §1.3 form B
+Mat6 TSE3Inv(const Vec6& xi);      // singular at |w| = 2 pi k, k != 0
+// D(xi, sigma) = d/dxi [ TSE3Inv(xi)^T sigma ]  (method.md §1.4).
+Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma);
+
+// Logarithm on a continuous branch (method.md §2.7): of all rotation vectors representing the
+// rotation of H, w_k = (theta + 2 pi k) n, returns the one closest to w_ref, with the
+// translation part recomputed on that branch. The caller must reject |w| near 2 pi.
+Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref);
+
+// Scalar coefficient functions of phi = |w| (exposed for tests).
+namespace lie_detail {
+double A0(double phi);  // sin(phi)/phi
+double A1(double phi);  // (1 - cos(phi))/phi^2
+double A2(double phi);  // (phi - sin(phi))/phi^3
+double C(double phi);   // (1 - (phi/2) cot(phi/2))/phi^2
+}  // namespace lie_detail
+
+}  // namespace screwfem

@@ -1,0 +1,59 @@
+// Time profiles for loads and drives: a sum of terms, each a scale times a unit shape.
+// In statics the "time" is the load factor s in [0, 1].
+#pragma once
+
+#include <vector>
+
+namespace screwfem {
+
+struct ProfileValue {
+  double value = 0.0;   // f(t)
+  double rate = 0.0;    // df/dt
+  double accel = 0.0;   // d2f/dt2 (right limit at jumps)
+};
+
+struct ProfileTerm {
+  enum class Kind {
+    kConstant,    // scale
+    kRamp,        // 0 before t0, linear to scale at t1, scale after
+    kBangBang,    // triangular velocity / bang-bang acceleration from 0 to scale on [t0, t1]
+                  // (the paper's point-to-point law and its "S-shaped" force law, method §4.4)
+    kSmoothStep,  // quintic C2 step 10u^3 - 15u^4 + 6u^5 from 0 to scale on [t0, t1]
+    kSine,        // scale * sin(2 pi frequency (t - t0) + phase) for t >= t0, 0 before
+    kTable,       // piecewise-linear through (times[i], values[i]) * scale, held constant outside
+  };
+  Kind kind = Kind::kConstant;
+  double scale = 1.0;
+  double t0 = 0.0, t1 = 1.0;
+  double frequency = 0.0, phase = 0.0;
+  std::vector<double> times, values;  // kTable only
+};
+
+// Sum of terms. Right-continuous: at a switch time Eval returns the derivatives that hold just
+// after it (the right limit needed for consistent initial accelerations, method.md §5.4).
+class Profile {
+ public:
+  Profile() = default;
+  static Profile Constant(double value = 1.0);
+  static Profile Ramp(double t0, double t1, double scale = 1.0);
+  static Profile BangBang(double t0, double t1, double scale = 1.0);
+  static Profile SmoothStep(double t0, double t1, double scale = 1.0);
+  static Profile Sine(double amplitude, double frequency, double phase = 0.0, double t0 = 0.0);
+  static Profile Table(std::vector<double> times, std::vector<double> values, double scale = 1.0);
+
+  Profile& Add(const ProfileTerm& term);
+  Profile& Add(const Profile& other);
+  // Validates the parameters; throws InputError naming the problem, prefixed by `where`.
+  void Validate(const char* where) const;
+
+  ProfileValue Eval(double t) const;
+  double operator()(double t) const { return Eval(t).value; }
+  const std::vector<ProfileTerm>& terms() const { return terms_; }
+  // Times where the second derivative jumps (for aligning time steps with them).
+  std::vector<double> Breakpoints() const;
+
+ private:
+  std::vector<ProfileTerm> terms_;
+};
+
+}  // namespace screwfem

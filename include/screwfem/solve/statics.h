@@ -1,0 +1,49 @@
+// Static equilibrium on the Lie group with load stepping (method.md §5.6).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "screwfem/model/model.h"
+
+namespace screwfem {
+
+// Solves data.matrix * x = -data.residual (the system left by Assemble) into data.increment
+// (global order). Returns false when the matrix is singular.
+bool SolveAssembledSystem(const Model& model, Data& data);
+
+struct StaticOptions {
+  double time = 0.0;                  // profiles of loads and drives are evaluated at this time
+  int load_steps = 10;                // initial number of equal load increments
+  int max_halvings = 12;              // of the load increment, per solve
+  int max_iterations = 30;            // Newton iterations per load step
+  // Converged when |R|_inf <= residual_tolerance * (largest force term in R) and the last
+  // Newton increment was below increment_tolerance (translations relative to the model's
+  // length scale, rotations in rad), or when |R|_inf is at its round-off floor
+  // (32 eps times the largest term that cancels in R, e.g. EA |d| / L).
+  double residual_tolerance = 1e-10;
+  double increment_tolerance = 1e-10;
+  double constraint_tolerance = 1e-10;  // |phi|_inf
+};
+
+struct StaticStep {
+  double load_factor = 0.0;
+  int iterations = 0;
+  std::vector<double> residual_norms;  // |R|_inf before each Newton solve, then at convergence
+};
+
+struct StaticResult {
+  bool converged = false;
+  double load_factor = 0.0;     // last converged load factor (1 when converged)
+  int load_steps = 0;           // accepted load steps
+  int total_iterations = 0;
+  int halvings = 0;             // failed load steps retried with half the increment
+  std::vector<StaticStep> steps;
+  std::string message;          // why it failed (empty on success)
+};
+
+// Brings the model from data's current state to equilibrium under the full loads. On failure
+// data holds the last converged state.
+StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options = {});
+
+}  // namespace screwfem

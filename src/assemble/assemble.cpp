@@ -1,0 +1,441 @@
+#include "screwfem/assemble/assemble.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "screwfem/elements/rod.h"
+#include "screwfem/model/errors.h"
+
+namespace screwfem {
+
+namespace {
+
+// Joints whose coordinates alpha are global (H_J is a function of alpha): the abelian
+// subgroups and the universal joint (a product of two one-parameter subgroups). The others
+// (spherical, planar, free) store H_J and update it by the exponential.
+bool HasGlobalCoordinates(JointType t) {
+  return t != JointType::kSpherical && t != JointType::kPlanar && t != JointType::kFree;
+}
+
+// Writes element contributions into the global residual and the permuted band matrix.
+class Scatter {
+ public:
+  Scatter(const Model& m, Data& d, const AssemblyOptions& o) : m_(m), d_(d), o_(o) {}
+
+  int NodeDof(int node) const {
+    return node == kGround ? -1 : m_.nodes[static_cast<std::size_t>(node)].dof;
+  }
+  // Records the size of terms that cancel inside a residual entry (round-off floor estimate).
+  void Term(double magnitude) { d_.term_scale = std::max(d_.term_scale, o_.s_rows * magnitude); }
+  const Mat6& NodeT(int node) const { return d_.node_tangent[static_cast<std::size_t>(node)]; }
+
+  // residual rows [dof, dof + n) += s_R * r
+  template <typename V>
+  void Rows(int dof, const Eigen::MatrixBase<V>& r) {
+    if (dof < 0) return;
+    d_.residual.segment(dof, r.size()) += o_.s_rows * r;
+    d_.force_scale = std::max(d_.force_scale, o_.s_rows * r.cwiseAbs().maxCoeff());
+  }
+  // matrix(rows at global index gi, cols at global index gj) += scale * B
+  template <typename B>
+  void Block(int gi, int gj, const Eigen::MatrixBase<B>& block, double scale) {
+    if (gi < 0 || gj < 0 || !o_.assemble_matrix) return;
+    for (Eigen::Index j = 0; j < block.cols(); ++j) {
+      const int pj = m_.permutation[static_cast<std::size_t>(gj + j)];
+      for (Eigen::Index i = 0; i < block.rows(); ++i) {
+        const int pi = m_.permutation[static_cast<std::size_t>(gi + i)];
+        d_.matrix.At(pi, pj) += scale * block(i, j);
+      }
+    }
+  }
+  // Element matrix over nodes: rows/cols in 6-blocks. S = s_R (c_K K T + c_M M + c_C C).
+  template <int N>
+  void NodeMatrix(const int (&nodes)[N], const Eigen::Matrix<double, 6 * N, 6 * N>* K,
+                  const Eigen::Matrix<double, 6 * N, 6 * N>* M,
+                  const Eigen::Matrix<double, 6 * N, 6 * N>* C) {
+    if (!o_.assemble_matrix) return;
+    for (int b = 0; b < N; ++b) {
+      const int gj = NodeDof(nodes[b]);
+      if (gj < 0) continue;
+      for (int a = 0; a < N; ++a) {
+        const int gi = NodeDof(nodes[a]);
+        if (gi < 0) continue;
+        Mat6 S = Mat6::Zero();
+        if (K) {
+          if (o_.use_node_tangent)
+            S.noalias() += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b) * NodeT(nodes[b]);
+          else
+            S += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b);
+        }
+        if (M) S += o_.c_mass * M->template block<6, 6>(6 * a, 6 * b);
+        if (C) S += o_.c_damping * C->template block<6, 6>(6 * a, 6 * b);
+        Block(gi, gj, S, o_.s_rows);
+      }
+    }
+  }
+  // Constraint gradient block B (rows: constraint rows starting at `row`, cols: unknowns
+  // starting at gj): adds s_C B T to the constraint rows and s_R s_L B^T to the equilibrium
+  // rows, and B^T lambda to the residual.
+  template <typename BT>
+  void Gradient(int row, int gj, const Eigen::MatrixBase<BT>& B, const Mat6* T,
+                const Eigen::Ref<const Eigen::VectorXd>& lambda) {
+    if (gj < 0) return;
+    d_.residual.segment(gj, B.cols()).noalias() += o_.s_rows * (B.transpose() * lambda);
+    const int gr = m_.nv + row;
+    Block(gj, gr, B.transpose(), o_.s_rows * o_.s_multipliers);
+    if (T && o_.use_node_tangent)
+      Block(gr, gj, B * *T, o_.s_constraints);
+    else
+      Block(gr, gj, B, o_.s_constraints);
+  }
+
+ private:
+  const Model& m_;
+  Data& d_;
+  const AssemblyOptions& o_;
+};
+
+// Rigid-body mass matrix about the node origin (method.md §3).
+Mat6 RigidMass(const RigidBody& b) {
+  const Mat3 S = Skew(b.com);
+  Mat6 M;
+  M.topLeftCorner<3, 3>() = b.mass * Mat3::Identity();
+  M.topRightCorner<3, 3>() = -b.mass * S;
+  M.bottomLeftCorner<3, 3>() = b.mass * S;
+  M.bottomRightCorner<3, 3>() = b.inertia - b.mass * S * S;
+  return M;
+}
+
+// World force F (node-frame components f) at body point p: generalised force and the
+// tangent of -g (method.md §3).
+void AddDeadForce(const Vec3& f, const Vec3& p, Vec6* g, Mat6* K) {
+  g->head<3>() += f;
+  g->tail<3>() += p.cross(f);
+  const Mat3 Sf = Skew(f);
+  K->topRightCorner<3, 3>() -= Sf;
+  K->bottomRightCorner<3, 3>() -= Skew(p) * Sf;
+}
+
+bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
+  for (std::size_t e = 0; e < m.elements.size(); ++e) {
+    const RodElement& el = m.elements[e];
+    const Section& sec = m.rods[static_cast<std::size_t>(el.rod)].section;
+    const SE3& HA = d.H[static_cast<std::size_t>(el.node_a)];
+    const SE3& HB = d.H[static_cast<std::size_t>(el.node_b)];
+    RodInternal in;
+    CalcRodInternal(el, sec, HA, HB, d.w_ref[e], &in);
+    const double rotation = in.d.tail<3>().norm();
+    if (!(rotation < m.max_element_rotation) || !in.force.allFinite()) {
+      d.failed_element = static_cast<int>(e);
+      d.failed_rotation = rotation;
+      return false;
+    }
+    s.Term((sec.stiffness.cwiseProduct(in.d.cwiseAbs() + el.d0.cwiseAbs()) / el.length)
+               .maxCoeff());
+    Vec12 r = in.force;
+    Mat12 K = in.stiffness;
+    const double rhoA = sec.inertia(0);
+    if (rhoA > 0.0 && m.gravity.squaredNorm() > 0.0) {
+      Vec12 g;
+      Mat12 Kg;
+      CalcRodDistributedDeadForce(el, HA, in.d, o.load_factor * rhoA * m.gravity, &g, &Kg);
+      r -= g;
+      K += Kg;
+    }
+    const int nodes[2] = {el.node_a, el.node_b};
+    Mat12 Me, Ct;
+    const bool dyn = o.dynamics && sec.inertia.squaredNorm() > 0.0;
+    if (dyn) {
+      // Option B inertia (method.md §2.5): N = [(1-xi) I, xi I], M_e constant; the gyroscopic
+      // integrand is cubic in xi, so 2-point Gauss is exact.
+      const auto Ms = sec.inertia.asDiagonal();
+      const int da = s.NodeDof(el.node_a), db = s.NodeDof(el.node_b);
+      const Vec6 eta_a = da >= 0 ? Vec6(d.v.segment<6>(da)) : Vec6::Zero();
+      const Vec6 eta_b = db >= 0 ? Vec6(d.v.segment<6>(db)) : Vec6::Zero();
+      const Vec6 acc_a = da >= 0 ? Vec6(d.vdot.segment<6>(da)) : Vec6::Zero();
+      const Vec6 acc_b = db >= 0 ? Vec6(d.vdot.segment<6>(db)) : Vec6::Zero();
+      const double L = el.length;
+      Me.setZero();
+      for (int i = 0; i < 6; ++i) {
+        Me(i, i) = Me(i + 6, i + 6) = L * sec.inertia(i) / 3.0;
+        Me(i, i + 6) = Me(i + 6, i) = L * sec.inertia(i) / 6.0;
+      }
+      Vec12 acc;
+      acc << acc_a, acc_b;
+      r.noalias() += Me * acc;
+      Ct.setZero();
+      constexpr double kXi[2] = {0.5 - 0.28867513459481287, 0.5 + 0.28867513459481287};
+      for (double xi : kXi) {
+        const Vec6 eta = (1.0 - xi) * eta_a + xi * eta_b;
+        const Vec6 Meta = Ms * eta;
+        const Vec6 f = -(ad(eta).transpose() * Meta);
+        r.head<6>() += 0.5 * L * (1.0 - xi) * f;
+        r.tail<6>() += 0.5 * L * xi * f;
+        const Mat6 G = -(ad(eta).transpose() * Ms + Star(Meta));
+        const double w[2] = {1.0 - xi, xi};
+        for (int a = 0; a < 2; ++a)
+          for (int b = 0; b < 2; ++b) Ct.block<6, 6>(6 * a, 6 * b) += 0.5 * L * w[a] * w[b] * G;
+      }
+      // Viscous material damping on strain rates: sigma_v = D_s d_dot / L.
+      if (sec.damping.squaredNorm() > 0.0) {
+        Vec12 eta_ab;
+        eta_ab << eta_a, eta_b;
+        const Mat6x12 P = CalcRodP(in.d);
+        const Vec6 sig_v = sec.damping.cwiseProduct(P * eta_ab) / L;
+        r.noalias() += P.transpose() * sig_v;
+        Ct.noalias() += P.transpose() * (sec.damping / L).asDiagonal() * P;
+      }
+    }
+    s.Rows(s.NodeDof(el.node_a), r.head<6>());
+    s.Rows(s.NodeDof(el.node_b), r.tail<6>());
+    s.NodeMatrix<2>(nodes, &K, dyn ? &Me : nullptr, dyn ? &Ct : nullptr);
+  }
+  return true;
+}
+
+void AddBodies(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
+  for (const RigidBody& b : m.bodies) {
+    const int dof = s.NodeDof(b.node);
+    if (dof < 0) continue;
+    const SE3& H = d.H[static_cast<std::size_t>(b.node)];
+    Vec6 g = Vec6::Zero();
+    Mat6 K = Mat6::Zero();
+    AddDeadForce(o.load_factor * b.mass * (H.R.transpose() * m.gravity), b.com, &g, &K);
+    Vec6 r = -g;
+    const int nodes[1] = {b.node};
+    if (o.dynamics) {
+      const Mat6 M = RigidMass(b);
+      const Vec6 eta = d.v.segment<6>(dof);
+      const Vec6 Meta = M * eta;
+      r.noalias() += M * d.vdot.segment<6>(dof) - ad(eta).transpose() * Meta;
+      const Mat6 C = -(ad(eta).transpose() * M + Star(Meta));
+      s.NodeMatrix<1>(nodes, &K, &M, &C);
+    } else {
+      s.NodeMatrix<1>(nodes, &K, nullptr, nullptr);
+    }
+    s.Rows(dof, r);
+  }
+}
+
+void AddPointLoads(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
+  for (const PointLoad& l : m.point_loads) {
+    const int dof = s.NodeDof(l.node);
+    if (dof < 0) continue;
+    const double scale = o.load_factor * l.profile(o.time);
+    if (scale == 0.0) continue;
+    const SE3& H = d.H[static_cast<std::size_t>(l.node)];
+    Vec6 g = Vec6::Zero();
+    Mat6 K = Mat6::Zero();
+    if (l.frame == LoadFrame::kWorld) {
+      AddDeadForce(scale * (H.R.transpose() * l.force), l.point, &g, &K);
+      const Vec3 mb = scale * (H.R.transpose() * l.moment);
+      g.tail<3>() += mb;
+      K.bottomRightCorner<3, 3>() -= Skew(mb);
+    } else {
+      g.head<3>() += scale * l.force;
+      g.tail<3>() += scale * (l.point.cross(l.force) + l.moment);
+    }
+    s.Rows(dof, Vec6(-g));
+    const int nodes[1] = {l.node};
+    s.NodeMatrix<1>(nodes, &K, nullptr, nullptr);
+  }
+}
+
+void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
+  for (std::size_t jj = 0; jj < m.joints.size(); ++jj) {
+    const Joint& j = m.joints[jj];
+    const int ji = static_cast<int>(jj);
+    const int k = j.k();
+    const Mat6X A = JointCurrentBasis(m, d, ji);
+    if (j.row >= 0) {
+      const SE3 HA = j.node_a == kGround ? SE3::Identity() : d.H[static_cast<std::size_t>(j.node_a)];
+      const SE3 HB = j.node_b == kGround ? SE3::Identity() : d.H[static_cast<std::size_t>(j.node_b)];
+      const SE3 CBinv = j.offset_b.Inverse();
+      const Vec6 phi = JointConstraint(m, d, ji);
+      const Mat6 Tinv = TSE3Inv(phi);
+      const Eigen::Ref<const Eigen::VectorXd> lam = d.lambda.segment(j.row, 6);
+      d.residual.segment<6>(m.nv + j.row) += o.s_constraints * phi;
+      if (j.node_a != kGround) {
+        const Mat6 BA = -Tinv * Ad(CBinv * HB.Inverse() * HA);
+        s.Gradient(j.row, s.NodeDof(j.node_a), BA, &s.NodeT(j.node_a), lam);
+      }
+      if (j.node_b != kGround) {
+        const Mat6 BB = Tinv * Ad(CBinv);
+        s.Gradient(j.row, s.NodeDof(j.node_b), BB, &s.NodeT(j.node_b), lam);
+      }
+      if (k > 0) {
+        const Mat6X BJ = -TSE3Inv(-phi) * A;
+        s.Gradient(j.row, j.coord, BJ, nullptr, lam);
+      }
+    }
+    if (k == 0) continue;
+    // Joint springs, dampers and drives act on the coordinates.
+    const int q0 = j.coord - m.nv_nodes;
+    const auto alpha = d.q_joint.segment(q0, k);
+    const auto alpha_dot = d.v.segment(j.coord, k);
+    Vec6 rest = j.rest, rest_rate = Vec6::Zero();
+    ProfileValue drive{};
+    if (j.drive != DriveKind::kNone) drive = j.drive_profile.Eval(o.time);
+    if (j.drive == DriveKind::kSeriesElastic) {
+      rest(j.drive_coord) += o.load_factor * drive.value;
+      rest_rate(j.drive_coord) = o.load_factor * drive.rate;
+    }
+    Eigen::Matrix<double, 6, 1> f = Vec6::Zero();
+    Mat6 Kq = Mat6::Zero(), Dq = Mat6::Zero();
+    if (HasGlobalCoordinates(j.type)) {
+      for (int c = 0; c < k; ++c) {
+        s.Term(j.stiffness(c) * (std::abs(alpha(c)) + std::abs(rest(c))));
+        f(c) = j.stiffness(c) * (alpha(c) - rest(c));
+        Kq(c, c) = j.stiffness(c);
+        if (o.dynamics) {
+          f(c) += j.damping(c) * (alpha_dot(c) - rest_rate(c));
+          Dq(c, c) = j.damping(c);
+        }
+      }
+    } else if (j.stiffness.head(k).squaredNorm() > 0.0 || j.damping.head(k).squaredNorm() > 0.0) {
+      // Group joints: energy 1/2 delta^T K delta, delta = A^T log(H_J) (method.md §4.5).
+      const Vec6 xi = LogSE3(d.HJ[jj]);
+      const Mat6 Ti = TSE3Inv(xi);
+      const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1> delta = A.transpose() * xi;
+      const Vec6 Kd_alg = A * j.stiffness.head(k).cwiseProduct(delta);
+      f.head(k) = A.transpose() * Ti.transpose() * Kd_alg;
+      Kq.topLeftCorner(k, k) =
+          A.transpose() * (Ti.transpose() * A * j.stiffness.head(k).asDiagonal() * A.transpose() * Ti +
+                           DTSE3InvT(xi, Kd_alg) * Ti) * A;
+      if (o.dynamics) {
+        for (int c = 0; c < k; ++c) {
+          f(c) += j.damping(c) * alpha_dot(c);
+          Dq(c, c) = j.damping(c);
+        }
+      }
+    }
+    if (j.drive == DriveKind::kForce) f(j.drive_coord) -= o.load_factor * drive.value;
+    if (j.drive == DriveKind::kPrescribed) {
+      const double lam_act = d.lambda(j.drive_row);
+      f(j.drive_coord) += lam_act;  // B_act^T lambda_act
+      d.residual(m.nv + j.drive_row) +=
+          o.s_constraints * (alpha(j.drive_coord) - o.load_factor * drive.value);
+      s.Block(j.coord + j.drive_coord, m.nv + j.drive_row, Eigen::Matrix<double, 1, 1>::Ones(),
+              o.s_rows * o.s_multipliers);
+      s.Block(m.nv + j.drive_row, j.coord + j.drive_coord, Eigen::Matrix<double, 1, 1>::Ones(),
+              o.s_constraints);
+    }
+    s.Rows(j.coord, f.head(k));
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> S =
+        o.c_stiffness * Kq.topLeftCorner(k, k) + o.c_damping * Dq.topLeftCorner(k, k);
+    s.Block(j.coord, j.coord, S, o.s_rows);
+  }
+}
+
+}  // namespace
+
+SE3 JointRelativeFrame(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  if (!HasGlobalCoordinates(j.type)) return data.HJ[static_cast<std::size_t>(joint)];
+  const auto alpha = data.q_joint.segment(j.coord - model.nv_nodes, j.k());
+  if (j.type == JointType::kUniversal)
+    return ExpSE3(j.basis.col(0) * alpha(0)) * ExpSE3(j.basis.col(1) * alpha(1));
+  return ExpSE3(j.basis * alpha);
+}
+
+Mat6X JointCurrentBasis(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  if (j.type != JointType::kUniversal) return j.basis;
+  const double a2 = data.q_joint(j.coord - model.nv_nodes + 1);
+  Mat6X A = j.basis;
+  A.col(0) = Ad(ExpSE3(-a2 * j.basis.col(1))) * j.basis.col(0);
+  return A;
+}
+
+Vec6 JointConstraint(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  const SE3 HA = j.node_a == kGround ? SE3::Identity() : data.H[static_cast<std::size_t>(j.node_a)];
+  const SE3 HB = j.node_b == kGround ? SE3::Identity() : data.H[static_cast<std::size_t>(j.node_b)];
+  const SE3 G = j.offset_a.Inverse() * HA.Inverse() * HB * j.offset_b;
+  return LogSE3(JointRelativeFrame(model, data, joint).Inverse() * G);
+}
+
+double JointDriveEffort(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  switch (j.drive) {
+    case DriveKind::kNone:
+      return 0.0;
+    case DriveKind::kPrescribed:
+      return -data.lambda(j.drive_row);
+    case DriveKind::kForce:
+      return j.drive_profile(data.time);
+    case DriveKind::kSeriesElastic: {
+      const int c = j.coord + j.drive_coord;
+      const ProfileValue q = j.drive_profile.Eval(data.time);
+      const double alpha = data.q_joint(c - model.nv_nodes);
+      return j.stiffness(j.drive_coord) * (q.value + j.rest(j.drive_coord) - alpha) +
+             j.damping(j.drive_coord) * (q.rate - data.v(c));
+    }
+  }
+  return 0.0;
+}
+
+void SaveState(const Data& data, State* state) {
+  state->H = data.H;
+  state->HJ = data.HJ;
+  state->q_joint = data.q_joint;
+}
+
+void RestoreState(const State& state, Data& data) {
+  data.H = state.H;
+  data.HJ = state.HJ;
+  data.q_joint = state.q_joint;
+}
+
+void Retract(const Model& model, Data& data, const Eigen::Ref<const Eigen::VectorXd>& dx) {
+  for (std::size_t i = 0; i < model.nodes.size(); ++i) {
+    const int dof = model.nodes[i].dof;
+    if (dof >= 0) data.H[i] = data.H[i] * ExpSE3(dx.segment<6>(dof));
+  }
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    const int k = j.k();
+    if (k == 0) continue;
+    if (HasGlobalCoordinates(j.type)) {
+      data.q_joint.segment(j.coord - model.nv_nodes, k) += dx.segment(j.coord, k);
+    } else {
+      data.HJ[jj] = data.HJ[jj] * ExpSE3(j.basis * dx.segment(j.coord, k));
+      data.q_joint.segment(j.coord - model.nv_nodes, k) += dx.segment(j.coord, k);
+    }
+  }
+}
+
+void UpdateBranchReferences(const Model& model, Data& data) {
+  for (std::size_t e = 0; e < model.elements.size(); ++e) {
+    const RodElement& el = model.elements[e];
+    data.w_ref[e] = CalcRodRelativeMotion(data.H[static_cast<std::size_t>(el.node_a)],
+                                          data.H[static_cast<std::size_t>(el.node_b)],
+                                          data.w_ref[e])
+                        .tail<3>();
+  }
+}
+
+bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
+  data.residual.setZero();
+  if (options.assemble_matrix) data.matrix.SetZero();
+  data.failed_element = -1;
+  data.force_scale = 0.0;
+  data.term_scale = 0.0;
+  Scatter s(model, data, options);
+  if (!AddRods(model, data, options, s)) return false;
+  AddBodies(model, data, options, s);
+  AddPointLoads(model, data, options, s);
+  AddJoints(model, data, options, s);
+  return data.residual.allFinite();
+}
+
+double MaxConstraintViolation(const Model& model, Data& data, double time, double load_factor) {
+  AssemblyOptions o;
+  o.time = time;
+  o.load_factor = load_factor;
+  o.assemble_matrix = false;
+  Assemble(model, data, o);
+  return model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() : 0.0;
+}
+
+}  // namespace screwfem

@@ -1,0 +1,13 @@
+#include "screwfem/model/errors.h"
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace screwfem {
+
+void InternalCheckFailed(const char* condition, const char* file, int line) {
+  std::fprintf(stderr, "screwfem: internal check failed: %s (%s:%d)\n", condition, file, line);
+  std::abort();
+}
+
+}  // namespace screwfem

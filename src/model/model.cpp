@@ -1,0 +1,451 @@
+#include "screwfem/model/model.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+
+#include "screwfem/model/errors.h"
+
+namespace screwfem {
+
+namespace {
+
+template <typename T>
+int FindByName(const std::vector<T>& items, const std::string& name) {
+  for (std::size_t i = 0; i < items.size(); ++i)
+    if (items[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+std::string NodeLabel(const Model& m, int node) {
+  if (node == kGround) return "ground";
+  const Node& n = m.nodes[static_cast<std::size_t>(node)];
+  return n.name.empty() ? "node " + std::to_string(node) : "node '" + n.name + "'";
+}
+
+bool IsFinite(const SE3& H) { return H.R.allFinite() && H.x.allFinite(); }
+
+bool IsRotation(const Mat3& R) {
+  return (R.transpose() * R - Mat3::Identity()).norm() < 1e-9 && R.determinant() > 0.0;
+}
+
+// Frame with x along `axis` and z as close as possible to `up`.
+Mat3 FrameAlong(const Vec3& axis, const Vec3& up) {
+  const Vec3 ex = axis.normalized();
+  Vec3 ez = up - up.dot(ex) * ex;
+  if (ez.norm() < 1e-8 * std::max(1.0, up.norm())) {
+    // `up` parallel to the axis: take the world axis least aligned with it.
+    Eigen::Index i = 0;
+    ex.cwiseAbs().minCoeff(&i);
+    const Vec3 alt = Vec3::Unit(i);
+    ez = alt - alt.dot(ex) * ex;
+  }
+  ez.normalize();
+  Mat3 R;
+  R.col(0) = ex;
+  R.col(1) = ez.cross(ex);
+  R.col(2) = ez;
+  return R;
+}
+
+}  // namespace
+
+int Model::FindNode(const std::string& name) const { return FindByName(nodes, name); }
+int Model::FindRod(const std::string& name) const { return FindByName(rods, name); }
+int Model::FindBody(const std::string& name) const { return FindByName(bodies, name); }
+int Model::FindJoint(const std::string& name) const { return FindByName(joints, name); }
+
+const char* JointTypeName(JointType type) {
+  switch (type) {
+    case JointType::kRevolute: return "revolute";
+    case JointType::kPrismatic: return "prismatic";
+    case JointType::kHelical: return "helical";
+    case JointType::kCylindrical: return "cylindrical";
+    case JointType::kSpherical: return "spherical";
+    case JointType::kPlanar: return "planar";
+    case JointType::kUniversal: return "universal";
+    case JointType::kFixed: return "fixed";
+    case JointType::kFree: return "free";
+  }
+  return "?";
+}
+
+Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2, double pitch) {
+  Mat6X A;
+  auto rot = [](const Vec3& a) { Vec6 c; c << Vec3::Zero(), a; return c; };
+  auto tra = [](const Vec3& a) { Vec6 c; c << a, Vec3::Zero(); return c; };
+  switch (type) {
+    case JointType::kRevolute:
+      A.resize(6, 1);
+      A.col(0) = rot(e);
+      break;
+    case JointType::kPrismatic:
+      A.resize(6, 1);
+      A.col(0) = tra(e);
+      break;
+    case JointType::kHelical: {
+      A.resize(6, 1);
+      Vec6 c;
+      c << pitch * e, e;
+      A.col(0) = c;
+      break;
+    }
+    case JointType::kCylindrical:
+      A.resize(6, 2);
+      A.col(0) = tra(e);
+      A.col(1) = rot(e);
+      break;
+    case JointType::kSpherical:
+      A.resize(6, 3);
+      A.col(0) = rot(Vec3::UnitX());
+      A.col(1) = rot(Vec3::UnitY());
+      A.col(2) = rot(Vec3::UnitZ());
+      break;
+    case JointType::kPlanar: {
+      const Mat3 R = FrameAlong(e, Vec3::UnitZ().cross(e).norm() > 1e-6 ? Vec3::UnitZ()
+                                                                           : Vec3::UnitX());
+      // R.col(0) = normal; in-plane axes R.col(1), R.col(2).
+      A.resize(6, 3);
+      A.col(0) = tra(R.col(1));
+      A.col(1) = tra(R.col(2));
+      A.col(2) = rot(e);
+      break;
+    }
+    case JointType::kUniversal:
+      A.resize(6, 2);
+      A.col(0) = rot(e);
+      A.col(1) = rot(e2);
+      break;
+    case JointType::kFixed:
+      A.resize(6, 0);
+      break;
+    case JointType::kFree:
+      A = Mat6::Identity();
+      break;
+  }
+  return A;
+}
+
+int ModelBuilder::AddNode(const SE3& frame, std::string name) {
+  Node n;
+  n.name = std::move(name);
+  n.reference = frame;
+  model_.nodes.push_back(n);
+  return static_cast<int>(model_.nodes.size()) - 1;
+}
+
+void ModelBuilder::FixNode(int node) {
+  if (node < 0 || node >= static_cast<int>(model_.nodes.size()))
+    throw InputError("FixNode: no node " + std::to_string(node));
+  model_.nodes[static_cast<std::size_t>(node)].fixed = true;
+}
+
+int ModelBuilder::AddStraightRod(std::string name, const Vec3& p0, const Vec3& p1,
+                                 int num_elements, const Section& section, const Vec3& up,
+                                 int start_node, int end_node) {
+  const double length = (p1 - p0).norm();
+  if (!(length > 0.0) || !std::isfinite(length))
+    throw InputError("rod '" + name + "': zero length (its end points coincide)");
+  SE3 root;
+  root.R = FrameAlong(p1 - p0, up);
+  root.x = p0;
+  return AddStraightRodFromFrame(std::move(name), root, length, num_elements, section, start_node,
+                                 end_node);
+}
+
+int ModelBuilder::AddStraightRodFromFrame(std::string name, const SE3& root, double length,
+                                          int num_elements, const Section& section,
+                                          int start_node, int end_node) {
+  if (num_elements < 1)
+    throw InputError("rod '" + name + "': needs at least one element, got " +
+                     std::to_string(num_elements));
+  if (!(length > 0.0) || !std::isfinite(length))
+    throw InputError("rod '" + name + "': length must be positive");
+  std::vector<int> nodes;
+  for (int i = 0; i <= num_elements; ++i) {
+    SE3 H = root;
+    H.x = root.x + root.R.col(0) * (length * i / num_elements);
+    if (i == 0 && start_node >= 0) {
+      nodes.push_back(start_node);
+    } else if (i == num_elements && end_node >= 0) {
+      nodes.push_back(end_node);
+    } else {
+      nodes.push_back(AddNode(H, name.empty() ? std::string{} : name + "." + std::to_string(i)));
+    }
+  }
+  return AddRodThroughNodes(std::move(name), nodes, section);
+}
+
+int ModelBuilder::AddRodThroughNodes(std::string name, const std::vector<int>& nodes,
+                                     const Section& section) {
+  Rod rod;
+  rod.name = std::move(name);
+  rod.section = section;
+  rod.nodes = nodes;
+  rod.num_elements = static_cast<int>(nodes.size()) - 1;
+  model_.rods.push_back(rod);
+  return static_cast<int>(model_.rods.size()) - 1;
+}
+
+int ModelBuilder::AddRigidBody(std::string name, int node, double mass, const Vec3& com,
+                               const Mat3& inertia) {
+  RigidBody b;
+  b.name = std::move(name);
+  b.node = node;
+  b.mass = mass;
+  b.com = com;
+  b.inertia = inertia;
+  model_.bodies.push_back(b);
+  return static_cast<int>(model_.bodies.size()) - 1;
+}
+
+int ModelBuilder::AddJoint(const Joint& joint) {
+  model_.joints.push_back(joint);
+  return static_cast<int>(model_.joints.size()) - 1;
+}
+
+int ModelBuilder::AddPointLoad(const PointLoad& load) {
+  model_.point_loads.push_back(load);
+  return static_cast<int>(model_.point_loads.size()) - 1;
+}
+
+void ModelBuilder::SetGravity(const Vec3& g) { model_.gravity = g; }
+
+Model ModelBuilder::Build() const {
+  Model m = model_;
+  const int num_nodes = static_cast<int>(m.nodes.size());
+  auto valid_node = [&](int n) { return n >= 0 && n < num_nodes; };
+
+  // --- validation ------------------------------------------------------------------------
+  {
+    std::set<std::string> names;
+    for (const Node& n : m.nodes) {
+      if (!IsFinite(n.reference) || !IsRotation(n.reference.R))
+        throw InputError("node '" + n.name + "': frame is not a finite rigid transformation");
+      if (!n.name.empty() && !names.insert(n.name).second)
+        throw InputError("duplicate node name '" + n.name + "'");
+    }
+  }
+  if (!m.gravity.allFinite()) throw InputError("gravity must be finite");
+  std::vector<char> used(static_cast<std::size_t>(num_nodes), 0);
+  m.elements.clear();
+  for (std::size_t r = 0; r < m.rods.size(); ++r) {
+    Rod& rod = m.rods[r];
+    const std::string label = "rod '" + rod.name + "'";
+    if (rod.num_elements < 1) throw InputError(label + ": needs at least two nodes");
+    for (int i = 0; i < 6; ++i) {
+      if (!(rod.section.stiffness(i) > 0.0) || !std::isfinite(rod.section.stiffness(i)))
+        throw InputError(label + ": section stiffness entries must be positive");
+      if (!(rod.section.inertia(i) >= 0.0) || !(rod.section.damping(i) >= 0.0))
+        throw InputError(label + ": section inertia and damping must be non-negative");
+    }
+    rod.first_element = static_cast<int>(m.elements.size());
+    rod.length = 0.0;
+    for (int e = 0; e < rod.num_elements; ++e) {
+      RodElement el;
+      el.rod = static_cast<int>(r);
+      el.node_a = rod.nodes[static_cast<std::size_t>(e)];
+      el.node_b = rod.nodes[static_cast<std::size_t>(e) + 1];
+      if (!valid_node(el.node_a) || !valid_node(el.node_b) || el.node_a == el.node_b)
+        throw InputError(label + ": element " + std::to_string(e) + " has invalid nodes");
+      const SE3 rel = m.nodes[static_cast<std::size_t>(el.node_a)].reference.Inverse() *
+                      m.nodes[static_cast<std::size_t>(el.node_b)].reference;
+      el.d0 = LogSE3(rel);
+      el.length = el.d0.head<3>().norm();
+      if (!(el.length > 1e-12 * std::max(1.0, rel.x.norm())))
+        throw InputError(label + ": element " + std::to_string(e) +
+                         " has zero length (its nodes coincide)");
+      if (el.d0.tail<3>().norm() > 3.14159265358979323846 - 1e-3)
+        throw InputError(label + ": element " + std::to_string(e) +
+                         " is curved by more than pi in its reference state; use more elements");
+      rod.length += el.length;
+      used[static_cast<std::size_t>(el.node_a)] = used[static_cast<std::size_t>(el.node_b)] = 1;
+      m.elements.push_back(el);
+    }
+  }
+  {
+    std::set<std::string> names;
+    for (const Rod& rod : m.rods)
+      if (!rod.name.empty() && !names.insert(rod.name).second)
+        throw InputError("duplicate rod name '" + rod.name + "'");
+  }
+  {
+    std::set<std::string> names;
+    for (const RigidBody& b : m.bodies) {
+      const std::string label = "body '" + b.name + "'";
+      if (!valid_node(b.node)) throw InputError(label + ": invalid node");
+      if (!(b.mass > 0.0) || !std::isfinite(b.mass))
+        throw InputError(label + ": mass must be positive");
+      if (!b.com.allFinite()) throw InputError(label + ": centre of mass must be finite");
+      const Mat3 J = 0.5 * (b.inertia + b.inertia.transpose());
+      if (!b.inertia.allFinite() || (b.inertia - J).norm() > 1e-12 * std::max(1.0, J.norm()))
+        throw InputError(label + ": inertia must be a finite symmetric matrix");
+      Eigen::LLT<Mat3> llt(J);
+      if (llt.info() != Eigen::Success)
+        throw InputError(label + ": inertia must be positive definite");
+      if (!b.name.empty() && !names.insert(b.name).second)
+        throw InputError("duplicate body name '" + b.name + "'");
+      used[static_cast<std::size_t>(b.node)] = 1;
+    }
+  }
+  {
+    std::set<std::string> names;
+    for (const Joint& j : m.joints) {
+      const std::string label = "joint '" + j.name + "'";
+      if (j.node_a != kGround && !valid_node(j.node_a)) throw InputError(label + ": invalid side a");
+      if (j.node_b != kGround && !valid_node(j.node_b)) throw InputError(label + ": invalid side b");
+      if (j.node_a == j.node_b)
+        throw InputError(label + ": both sides are " + NodeLabel(m, j.node_a));
+      if (!IsFinite(j.offset_a) || !IsFinite(j.offset_b) || !IsRotation(j.offset_a.R) ||
+          !IsRotation(j.offset_b.R))
+        throw InputError(label + ": joint frame offsets must be rigid transformations");
+      if (!j.basis.allFinite()) throw InputError(label + ": joint basis must be finite");
+      for (int c = 0; c < j.k(); ++c) {
+        if (!(j.stiffness(c) >= 0.0) || !(j.damping(c) >= 0.0))
+          throw InputError(label + ": stiffness and damping must be non-negative");
+      }
+      if (j.drive != DriveKind::kNone) {
+        if (j.drive_coord < 0 || j.drive_coord >= j.k())
+          throw InputError(label + ": drive coordinate out of range");
+        j.drive_profile.Validate(label.c_str());
+      }
+      if (!j.name.empty() && !names.insert(j.name).second)
+        throw InputError("duplicate joint name '" + j.name + "'");
+      if (j.node_a != kGround) used[static_cast<std::size_t>(j.node_a)] = 1;
+      if (j.node_b != kGround) used[static_cast<std::size_t>(j.node_b)] = 1;
+    }
+  }
+  for (const PointLoad& l : m.point_loads) {
+    if (!valid_node(l.node)) throw InputError("point load: invalid node " + std::to_string(l.node));
+    if (!l.force.allFinite() || !l.moment.allFinite() || !l.point.allFinite())
+      throw InputError("point load on " + NodeLabel(m, l.node) + ": values must be finite");
+    l.profile.Validate(("point load on " + NodeLabel(m, l.node)).c_str());
+  }
+  for (int n = 0; n < num_nodes; ++n)
+    if (!m.nodes[static_cast<std::size_t>(n)].fixed && !used[static_cast<std::size_t>(n)])
+      throw InputError(NodeLabel(m, n) + " is connected to nothing (no rod, body or joint)");
+
+  // --- layout ------------------------------------------------------------------------------
+  m.nv = 0;
+  for (Node& n : m.nodes) {
+    n.dof = n.fixed ? -1 : m.nv;
+    if (!n.fixed) m.nv += 6;
+  }
+  m.nv_nodes = m.nv;
+  m.nc = 0;
+  for (Joint& j : m.joints) {
+    j.coord = m.nv;
+    m.nv += j.k();
+    j.row = -1;
+    if (j.type != JointType::kFree) {
+      j.row = m.nc;
+      m.nc += 6;
+    }
+    j.drive_row = -1;
+    if (j.drive == DriveKind::kPrescribed) {
+      j.drive_row = m.nc;
+      m.nc += 1;
+    }
+  }
+
+  // Block graph: a block is a contiguous range of unknowns that always couple together.
+  struct Block {
+    int start, size;
+  };
+  std::vector<Block> blocks;
+  std::vector<int> node_block(static_cast<std::size_t>(num_nodes), -1);
+  for (int n = 0; n < num_nodes; ++n) {
+    const Node& node = m.nodes[static_cast<std::size_t>(n)];
+    if (node.fixed) continue;
+    node_block[static_cast<std::size_t>(n)] = static_cast<int>(blocks.size());
+    blocks.push_back({node.dof, 6});
+  }
+  std::vector<std::vector<int>> adj;
+  auto add_block = [&](int start, int size) {
+    blocks.push_back({start, size});
+    return static_cast<int>(blocks.size()) - 1;
+  };
+  std::vector<std::pair<int, int>> edges;
+  auto link = [&](int a, int b) {
+    if (a >= 0 && b >= 0 && a != b) edges.emplace_back(a, b);
+  };
+  auto nb = [&](int node) { return node == kGround ? -1 : node_block[static_cast<std::size_t>(node)]; };
+  for (const RodElement& e : m.elements) link(nb(e.node_a), nb(e.node_b));
+  for (const Joint& j : m.joints) {
+    const int coord_block = j.k() > 0 ? add_block(j.coord, j.k()) : -1;
+    if (j.row >= 0) {
+      const int cb = add_block(m.nv + j.row, 6);
+      link(cb, nb(j.node_a));
+      link(cb, nb(j.node_b));
+      link(cb, coord_block);
+      link(nb(j.node_a), nb(j.node_b));  // through d(B^T lambda)/dq
+    }
+    if (j.drive_row >= 0) link(add_block(m.nv + j.drive_row, 1), coord_block);
+  }
+  adj.assign(blocks.size(), {});
+  for (const auto& [a, b] : edges) {
+    adj[static_cast<std::size_t>(a)].push_back(b);
+    adj[static_cast<std::size_t>(b)].push_back(a);
+  }
+  for (auto& list : adj) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  const std::vector<int> block_perm = ReverseCuthillMcKee(adj);
+  std::vector<int> order(blocks.size());
+  for (std::size_t b = 0; b < blocks.size(); ++b)
+    order[static_cast<std::size_t>(block_perm[b])] = static_cast<int>(b);
+  m.permutation.assign(static_cast<std::size_t>(m.num_unknowns()), -1);
+  std::vector<int> block_pos(blocks.size());
+  int pos = 0;
+  for (int b : order) {
+    block_pos[static_cast<std::size_t>(b)] = pos;
+    const Block& blk = blocks[static_cast<std::size_t>(b)];
+    for (int i = 0; i < blk.size; ++i) m.permutation[static_cast<std::size_t>(blk.start + i)] = pos++;
+  }
+  SCREWFEM_CHECK(pos == m.num_unknowns());
+  m.bandwidth = 0;
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    m.bandwidth = std::max(m.bandwidth, blocks[b].size - 1);
+    for (int c : adj[b]) {
+      const int lo = std::min(block_pos[b], block_pos[static_cast<std::size_t>(c)]);
+      const int hi = std::max(block_pos[b] + blocks[b].size,
+                              block_pos[static_cast<std::size_t>(c)] +
+                                  blocks[static_cast<std::size_t>(c)].size);
+      m.bandwidth = std::max(m.bandwidth, hi - 1 - lo);
+    }
+  }
+
+  // Characteristic length: the diagonal of the bounding box of all node positions.
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (const Node& n : m.nodes) {
+    lo = lo.cwiseMin(n.reference.x);
+    hi = hi.cwiseMax(n.reference.x);
+  }
+  m.length_scale = num_nodes > 0 ? std::max((hi - lo).norm(), 1e-3) : 1.0;
+  for (const Rod& r : m.rods) m.length_scale = std::max(m.length_scale, r.length);
+  return m;
+}
+
+Data MakeData(const Model& model) {
+  Data d;
+  d.H.resize(model.nodes.size());
+  for (std::size_t i = 0; i < model.nodes.size(); ++i) d.H[i] = model.nodes[i].reference;
+  d.HJ.assign(model.joints.size(), SE3::Identity());
+  d.q_joint = Eigen::VectorXd::Zero(model.nv - model.nv_nodes);
+  d.v = Eigen::VectorXd::Zero(model.nv);
+  d.vdot = Eigen::VectorXd::Zero(model.nv);
+  d.lambda = Eigen::VectorXd::Zero(model.nc);
+  d.w_ref.resize(model.elements.size());
+  for (std::size_t e = 0; e < model.elements.size(); ++e) d.w_ref[e] = model.elements[e].d0.tail<3>();
+  d.residual = Eigen::VectorXd::Zero(model.num_unknowns());
+  d.rhs = Eigen::VectorXd::Zero(model.num_unknowns());
+  d.increment = Eigen::VectorXd::Zero(model.num_unknowns());
+  d.node_tangent.assign(model.nodes.size(), Mat6::Identity());
+  d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
+  return d;
+}
+
+}  // namespace screwfem

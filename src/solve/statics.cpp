@@ -1,0 +1,151 @@
+#include "screwfem/solve/statics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "screwfem/assemble/assemble.h"
+
+namespace screwfem {
+
+bool SolveAssembledSystem(const Model& model, Data& data) {
+  const int n = model.num_unknowns();
+  for (int i = 0; i < n; ++i)
+    data.rhs(model.permutation[static_cast<std::size_t>(i)]) = -data.residual(i);
+  if (data.matrix.Factorize() >= 0) return false;
+  data.matrix.Solve(data.rhs);
+  for (int i = 0; i < n; ++i)
+    data.increment(i) = data.rhs(model.permutation[static_cast<std::size_t>(i)]);
+  return data.increment.allFinite();
+}
+
+namespace {
+
+std::string Format(const char* fmt, double a, double b = 0.0, double c = 0.0) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c);
+  return buf;
+}
+
+std::string ElementLabel(const Model& m, int e) {
+  const RodElement& el = m.elements[static_cast<std::size_t>(e)];
+  const Rod& rod = m.rods[static_cast<std::size_t>(el.rod)];
+  return "element " + std::to_string(e - rod.first_element) + " of rod '" + rod.name + "'";
+}
+
+// Scaled size of a Newton increment: translations relative to the length scale, rotations
+// and joint coordinates as they are.
+double IncrementSize(const Model& m, const Data& d) {
+  double r = 0.0;
+  for (const Node& n : m.nodes) {
+    if (n.dof < 0) continue;
+    r = std::max(r, d.increment.segment<3>(n.dof).cwiseAbs().maxCoeff() / m.length_scale);
+    r = std::max(r, d.increment.segment<3>(n.dof + 3).cwiseAbs().maxCoeff());
+  }
+  for (int i = m.nv_nodes; i < m.nv; ++i) r = std::max(r, std::abs(d.increment(i)));
+  return r;
+}
+
+enum class NewtonOutcome { kConverged, kDiverged, kBranch, kSingular };
+
+}  // namespace
+
+StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options) {
+  StaticResult result;
+  State saved;
+  SaveState(data, &saved);
+  Eigen::VectorXd saved_lambda = data.lambda;
+
+  // Scale of the constraint rows: the largest stiffness of the model (method.md §5.6).
+  double k_scale = 1.0;
+  for (const Rod& r : model.rods)
+    k_scale = std::max(k_scale, r.section.stiffness.maxCoeff() / std::max(r.length, 1e-12));
+  for (const Joint& j : model.joints) k_scale = std::max(k_scale, j.stiffness.maxCoeff());
+
+  AssemblyOptions opt;
+  opt.time = options.time;
+  opt.s_constraints = opt.s_multipliers = k_scale;
+
+  const double ds0 = 1.0 / std::max(options.load_steps, 1);
+  double s = 0.0, ds = ds0;
+  std::string last_cause;
+  while (s < 1.0) {
+    const double target = std::min(1.0, s + ds);
+    opt.load_factor = target;
+    StaticStep step;
+    step.load_factor = target;
+    NewtonOutcome outcome = NewtonOutcome::kDiverged;
+    double last_increment = INFINITY;
+    for (int it = 0; it <= options.max_iterations; ++it) {
+      if (!Assemble(model, data, opt)) {
+        if (data.failed_element >= 0) {
+          outcome = NewtonOutcome::kBranch;
+          last_cause = ElementLabel(model, data.failed_element) +
+                       Format(" rotates by %.4g rad, beyond what one helical element represents "
+                              "(2 pi); use more elements",
+                              data.failed_rotation);
+        } else {
+          last_cause = "the residual is not finite";
+        }
+        break;
+      }
+      const double res = model.nv > 0 ? data.residual.head(model.nv).cwiseAbs().maxCoeff() : 0.0;
+      const double con = model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() / k_scale
+                                      : 0.0;
+      step.residual_norms.push_back(res);
+      const double scale = std::max(data.force_scale, 1e-300);
+      // Below this level the residual is round-off (e.g. eps EA |d|/L in a stiff rod).
+      const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
+                           std::max(data.term_scale, data.force_scale);
+      const bool at_floor = res <= floor;
+      if (con <= options.constraint_tolerance &&
+          (at_floor || (res <= options.residual_tolerance * scale &&
+                        last_increment <= options.increment_tolerance))) {
+        outcome = NewtonOutcome::kConverged;
+        step.iterations = it;
+        break;
+      }
+      if (it == options.max_iterations) {
+        last_cause = Format("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
+                            options.max_iterations, res, res / scale);
+        break;
+      }
+      if (!SolveAssembledSystem(model, data)) {
+        outcome = NewtonOutcome::kSingular;
+        last_cause = "the tangent matrix is singular (a mechanism, or unsupported free motion)";
+        break;
+      }
+      Retract(model, data, data.increment.head(model.nv));
+      data.lambda += k_scale * data.increment.tail(model.nc);
+      last_increment = IncrementSize(model, data);
+    }
+    result.total_iterations += step.iterations;
+    if (outcome == NewtonOutcome::kConverged) {
+      UpdateBranchReferences(model, data);
+      SaveState(data, &saved);
+      saved_lambda = data.lambda;
+      s = target;
+      result.load_factor = s;
+      ++result.load_steps;
+      result.steps.push_back(std::move(step));
+      ds = std::min(ds0, 1.5 * ds);
+      continue;
+    }
+    // Failed load step: back to the last converged state, retry with half the increment.
+    RestoreState(saved, data);
+    data.lambda = saved_lambda;
+    UpdateBranchReferences(model, data);
+    ++result.halvings;
+    ds *= 0.5;
+    if (result.halvings > options.max_halvings || ds < ds0 * std::ldexp(1.0, -options.max_halvings)) {
+      result.message = Format("static solve failed at load factor %.6g (last converged %.6g): ",
+                              target, s) + last_cause;
+      return result;
+    }
+  }
+  result.converged = true;
+  return result;
+}
+
+}  // namespace screwfem
