@@ -10,13 +10,6 @@ namespace screwfem {
 
 namespace {
 
-// Joints whose coordinates alpha are global (H_J is a function of alpha): the abelian
-// subgroups and the universal joint (a product of two one-parameter subgroups). The others
-// (spherical, planar, free) store H_J and update it by the exponential.
-bool HasGlobalCoordinates(JointType t) {
-  return t != JointType::kSpherical && t != JointType::kPlanar && t != JointType::kFree;
-}
-
 // Writes element contributions into the global residual and the permuted band matrix.
 class Scatter {
  public:
@@ -282,7 +275,7 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     }
     Eigen::Matrix<double, 6, 1> f = Vec6::Zero();
     Mat6 Kq = Mat6::Zero(), Dq = Mat6::Zero();
-    if (HasGlobalCoordinates(j.type)) {
+    if (JointHasGlobalCoordinates(j.type)) {
       for (int c = 0; c < k; ++c) {
         s.Term(j.stiffness(c) * (std::abs(alpha(c)) + std::abs(rest(c))));
         f(c) = j.stiffness(c) * (alpha(c) - rest(c));
@@ -329,9 +322,13 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
 
 }  // namespace
 
+bool JointHasGlobalCoordinates(JointType t) {
+  return t != JointType::kSpherical && t != JointType::kPlanar && t != JointType::kFree;
+}
+
 SE3 JointRelativeFrame(const Model& model, const Data& data, int joint) {
   const Joint& j = model.joints[static_cast<std::size_t>(joint)];
-  if (!HasGlobalCoordinates(j.type)) return data.HJ[static_cast<std::size_t>(joint)];
+  if (!JointHasGlobalCoordinates(j.type)) return data.HJ[static_cast<std::size_t>(joint)];
   const auto alpha = data.q_joint.segment(j.coord - model.nv_nodes, j.k());
   if (j.type == JointType::kUniversal)
     return ExpSE3(j.basis.col(0) * alpha(0)) * ExpSE3(j.basis.col(1) * alpha(1));
@@ -396,13 +393,24 @@ void Retract(const Model& model, Data& data, const Eigen::Ref<const Eigen::Vecto
     const Joint& j = model.joints[jj];
     const int k = j.k();
     if (k == 0) continue;
-    if (HasGlobalCoordinates(j.type)) {
+    if (JointHasGlobalCoordinates(j.type)) {
       data.q_joint.segment(j.coord - model.nv_nodes, k) += dx.segment(j.coord, k);
     } else {
       data.HJ[jj] = data.HJ[jj] * ExpSE3(j.basis * dx.segment(j.coord, k));
       data.q_joint.segment(j.coord - model.nv_nodes, k) += dx.segment(j.coord, k);
     }
   }
+}
+
+double ScaledIncrementSize(const Model& model, const Eigen::Ref<const Eigen::VectorXd>& dx) {
+  double r = 0.0;
+  for (const Node& n : model.nodes) {
+    if (n.dof < 0) continue;
+    r = std::max(r, dx.segment<3>(n.dof).cwiseAbs().maxCoeff() / model.length_scale);
+    r = std::max(r, dx.segment<3>(n.dof + 3).cwiseAbs().maxCoeff());
+  }
+  for (int i = model.nv_nodes; i < model.nv; ++i) r = std::max(r, std::abs(dx(i)));
+  return r;
 }
 
 void UpdateBranchReferences(const Model& model, Data& data) {

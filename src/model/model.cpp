@@ -206,6 +206,39 @@ int ModelBuilder::AddJoint(const Joint& joint) {
   return static_cast<int>(model_.joints.size()) - 1;
 }
 
+int ModelBuilder::AddJointAt(std::string name, JointType type, int node_a, int node_b,
+                             const Vec3& point, const Vec3& axis, const Vec3& axis2,
+                             double pitch) {
+  const int n = static_cast<int>(model_.nodes.size());
+  auto check = [&](int node) {
+    if (node != kGround && (node < 0 || node >= n))
+      throw InputError("joint '" + name + "': invalid node " + std::to_string(node));
+  };
+  check(node_a);
+  check(node_b);
+  const bool needs_axis = type != JointType::kSpherical && type != JointType::kFixed &&
+                          type != JointType::kFree;
+  if (needs_axis && !(std::abs(axis.norm() - 1.0) < 1e-9))
+    throw InputError("joint '" + name + "': axis must be a unit vector");
+  if (type == JointType::kUniversal &&
+      (!(std::abs(axis2.norm() - 1.0) < 1e-9) || std::abs(axis.dot(axis2)) > 1e-9))
+    throw InputError("joint '" + name + "': universal joint axes must be orthogonal unit vectors");
+  Joint j;
+  j.name = std::move(name);
+  j.type = type;
+  j.node_a = node_a;
+  j.node_b = node_b;
+  j.pitch = pitch;
+  j.basis = JointBasis(type, axis, axis2, pitch);
+  const SE3 frame = SE3::Translation(point);
+  const auto ref = [&](int node) {
+    return node == kGround ? SE3::Identity() : model_.nodes[static_cast<std::size_t>(node)].reference;
+  };
+  j.offset_a = ref(node_a).Inverse() * frame;
+  j.offset_b = ref(node_b).Inverse() * frame;
+  return AddJoint(j);
+}
+
 int ModelBuilder::AddPointLoad(const PointLoad& load) {
   model_.point_loads.push_back(load);
   return static_cast<int>(model_.point_loads.size()) - 1;
@@ -309,6 +342,10 @@ Model ModelBuilder::Build() const {
       if (j.drive != DriveKind::kNone) {
         if (j.drive_coord < 0 || j.drive_coord >= j.k())
           throw InputError(label + ": drive coordinate out of range");
+        if (j.type == JointType::kSpherical || j.type == JointType::kPlanar ||
+            j.type == JointType::kFree)
+          throw InputError(label + ": drives need a joint with global coordinates (not " +
+                           JointTypeName(j.type) + ")");
         j.drive_profile.Validate(label.c_str());
       }
       if (!j.name.empty() && !names.insert(j.name).second)

@@ -34,19 +34,6 @@ std::string ElementLabel(const Model& m, int e) {
   return "element " + std::to_string(e - rod.first_element) + " of rod '" + rod.name + "'";
 }
 
-// Scaled size of a Newton increment: translations relative to the length scale, rotations
-// and joint coordinates as they are.
-double IncrementSize(const Model& m, const Data& d) {
-  double r = 0.0;
-  for (const Node& n : m.nodes) {
-    if (n.dof < 0) continue;
-    r = std::max(r, d.increment.segment<3>(n.dof).cwiseAbs().maxCoeff() / m.length_scale);
-    r = std::max(r, d.increment.segment<3>(n.dof + 3).cwiseAbs().maxCoeff());
-  }
-  for (int i = m.nv_nodes; i < m.nv; ++i) r = std::max(r, std::abs(d.increment(i)));
-  return r;
-}
-
 enum class NewtonOutcome { kConverged, kDiverged, kBranch, kSingular };
 
 }  // namespace
@@ -118,7 +105,7 @@ StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& op
       }
       Retract(model, data, data.increment.head(model.nv));
       data.lambda += k_scale * data.increment.tail(model.nc);
-      last_increment = IncrementSize(model, data);
+      last_increment = ScaledIncrementSize(model, data.increment.head(model.nv));
     }
     result.total_iterations += step.iterations;
     if (outcome == NewtonOutcome::kConverged) {

@@ -44,11 +44,19 @@ void RestoreState(const State& state, Data& data);
 // spherical, planar and free joints). dx has the velocity layout (size >= nv).
 void Retract(const Model& model, Data& data, const Eigen::Ref<const Eigen::VectorXd>& dx);
 
+// Size of a Newton correction dx (velocity layout): translations relative to the model's
+// length scale, rotations and joint coordinates as they are (infinity norm).
+double ScaledIncrementSize(const Model& model, const Eigen::Ref<const Eigen::VectorXd>& dx);
+
 // Moves every element's branch reference to its current relative rotation (call after an
 // accepted step; method.md §2.7).
 void UpdateBranchReferences(const Model& model, Data& data);
 
 // Joint coordinate helpers.
+// Joints whose coordinates alpha are global (H_J is a function of alpha): the abelian
+// subgroups and the universal joint (a product of two one-parameter subgroups). The others
+// (spherical, planar, free) store H_J and update it by the exponential.
+bool JointHasGlobalCoordinates(JointType type);
 SE3 JointRelativeFrame(const Model& model, const Data& data, int joint);  // H_J
 // Configuration-dependent basis: A_J for subgroups, the universal joint's moving basis.
 Mat6X JointCurrentBasis(const Model& model, const Data& data, int joint);

@@ -159,6 +159,14 @@ class ModelBuilder {
   int AddRodThroughNodes(std::string name, const std::vector<int>& nodes, const Section& section);
   int AddRigidBody(std::string name, int node, double mass, const Vec3& com, const Mat3& inertia);
   int AddJoint(const Joint& joint);  // offsets, basis and names filled by the caller
+  // A joint at world point `point` with world axis `axis` (plane normal for planar joints;
+  // `axis2` is the second axis of a universal joint), between node_a and node_b (either may be
+  // kGround). The joint frame is world-aligned in the reference configuration, so H_J = I and
+  // the coordinates are 0 there (method.md §4.2). Returns the joint index; edit
+  // model().joints[i] to add stiffness, damping or a drive.
+  int AddJointAt(std::string name, JointType type, int node_a, int node_b, const Vec3& point,
+                 const Vec3& axis = Vec3::UnitZ(), const Vec3& axis2 = Vec3::Zero(),
+                 double pitch = 0.0);
   int AddPointLoad(const PointLoad& load);
   void SetGravity(const Vec3& g);
   Model& model() { return model_; }

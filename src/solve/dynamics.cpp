@@ -1,0 +1,301 @@
+#include "screwfem/solve/dynamics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "screwfem/elements/rod.h"
+#include "screwfem/solve/statics.h"
+
+namespace screwfem {
+
+GeneralizedAlpha GeneralizedAlpha::FromSpectralRadius(double rho) {
+  GeneralizedAlpha p;
+  p.alpha_m = (2.0 * rho - 1.0) / (rho + 1.0);
+  p.alpha_f = rho / (rho + 1.0);
+  p.gamma = 0.5 + p.alpha_f - p.alpha_m;
+  p.beta = 0.25 * (p.gamma + 0.5) * (p.gamma + 0.5);
+  return p;
+}
+
+namespace {
+
+// phi(q exp(e v)) evaluated into out (constraint rows of the residual, unscaled).
+void ConstraintsAlong(const Model& model, Data& data, const State& base, double e,
+                      Eigen::VectorXd& out, Eigen::VectorXd& work) {
+  RestoreState(base, data);
+  work = e * data.v;
+  Retract(model, data, work);
+  AssemblyOptions o;
+  o.time = data.time;
+  o.assemble_matrix = false;
+  Assemble(model, data, o);
+  out = data.residual.tail(model.nc);
+}
+
+}  // namespace
+
+bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
+                        const DynamicOptions& options, std::string* message) {
+  integ.options = options;
+  integ.params = GeneralizedAlpha::FromSpectralRadius(options.rho_inf);
+  const int nv = model.nv, nc = model.nc;
+  integ.a = Eigen::VectorXd::Zero(nv);
+  integ.v_start = integ.vdot_start = integ.a_start = integ.dq = Eigen::VectorXd::Zero(nv);
+  integ.lambda_start = Eigen::VectorXd::Zero(nc);
+  SaveState(data, &integ.q_start);
+  for (Mat6& T : data.node_tangent) T.setIdentity();
+
+  // Bdot v = d^2/de^2 phi(q exp(e v)) (exact for constant body velocities), by a central
+  // second difference; only at start-up (method.md §5.4).
+  Eigen::VectorXd bdot_v = Eigen::VectorXd::Zero(nc);
+  const double vmax = ScaledIncrementSize(model, data.v);
+  if (nc > 0 && vmax > 0.0) {
+    const double e = 1e-4 / vmax;
+    Eigen::VectorXd plus(nc), minus(nc), zero(nc), work(nv);
+    ConstraintsAlong(model, data, integ.q_start, e, plus, work);
+    ConstraintsAlong(model, data, integ.q_start, -e, minus, work);
+    ConstraintsAlong(model, data, integ.q_start, 0.0, zero, work);
+    bdot_v = (plus - 2.0 * zero + minus) / (e * e);
+    RestoreState(integ.q_start, data);
+  }
+
+  // [M B^T; B 0] [vdot; lambda] = -[r(q, v, 0, t); Bdot v + phi_tt].
+  data.vdot.setZero();
+  data.lambda.setZero();
+  AssemblyOptions o;
+  o.time = data.time;
+  o.dynamics = true;
+  o.c_mass = 1.0;
+  o.c_damping = 0.0;
+  o.c_stiffness = 0.0;
+  if (!Assemble(model, data, o)) {
+    if (message) *message = "initial state is invalid (an element is bent past its limit)";
+    return false;
+  }
+  data.residual.tail(nc) = bdot_v;
+  for (const Joint& j : model.joints)
+    if (j.drive == DriveKind::kPrescribed)
+      data.residual(nv + j.drive_row) -= j.drive_profile.Eval(data.time).accel;
+  if (!SolveAssembledSystem(model, data)) {
+    if (message)
+      *message =
+          "cannot compute consistent initial accelerations: the system [M B^T; B 0] is singular "
+          "(a part without mass that is not fixed by constraints, or redundant constraints)";
+    return false;
+  }
+  data.vdot = data.increment.head(nv);
+  data.lambda = data.increment.tail(nc);
+  integ.a = data.vdot;
+  return true;
+}
+
+namespace {
+
+// One generalized-alpha step of size h from the current state (method.md §5.2). Returns the
+// number of Newton iterations, or -1 on failure (state then undefined: caller restores).
+int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::string* why) {
+  const GeneralizedAlpha& p = integ.params;
+  const DynamicOptions& opt = integ.options;
+  const int nv = model.nv;
+  const double t_new = data.time + h;
+  const double beta_p = (1.0 - p.alpha_m) / (h * h * p.beta * (1.0 - p.alpha_f));
+  const double gamma_p = p.gamma / (h * p.beta);
+  const double bh2 = p.beta * h * h;
+
+  // Predictor.
+  integ.a = (p.alpha_f * integ.vdot_start - p.alpha_m * integ.a_start) / (1.0 - p.alpha_m);
+  data.v = integ.v_start + h * (1.0 - p.gamma) * integ.a_start + h * p.gamma * integ.a;
+  integ.dq = integ.v_start + h * (0.5 - p.beta) * integ.a_start + h * p.beta * integ.a;
+  data.vdot.setZero();
+  data.lambda = integ.lambda_start;
+  data.time = t_new;
+
+  AssemblyOptions o;
+  o.time = t_new;
+  o.dynamics = true;
+  o.c_mass = beta_p;
+  o.c_damping = gamma_p;
+  o.c_stiffness = 1.0;
+  o.s_rows = bh2;
+  o.s_constraints = 1.0;
+  o.s_multipliers = 1.0 / bh2;
+  o.use_node_tangent = opt.use_tangent_operator;
+
+  double last_increment = INFINITY;
+  for (int it = 0; it <= opt.max_iterations; ++it) {
+    // q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
+    RestoreState(integ.q_start, data);
+    data.increment.head(nv) = h * integ.dq;
+    Retract(model, data, data.increment.head(nv));
+    if (opt.use_tangent_operator)
+      for (const Node& n : model.nodes)
+        if (n.dof >= 0)
+          data.node_tangent[static_cast<std::size_t>(&n - model.nodes.data())] =
+              TSE3(data.increment.segment<6>(n.dof));
+    if (!Assemble(model, data, o)) {
+      if (why) {
+        char buf[200];
+        if (data.failed_element >= 0)
+          std::snprintf(buf, sizeof buf,
+                        "element %d rotates by %.4g rad, beyond what one helical element "
+                        "represents (2 pi); use more elements",
+                        data.failed_element, data.failed_rotation);
+        else
+          std::snprintf(buf, sizeof buf, "the residual is not finite");
+        *why = buf;
+      }
+      return -1;
+    }
+    const double res = data.residual.head(nv).cwiseAbs().maxCoeff();
+    const double con =
+        model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() : 0.0;
+    const double scale = std::max(data.force_scale, 1e-300);
+    const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
+                         std::max(data.term_scale, data.force_scale);
+    if (it > 0 && con <= opt.constraint_tolerance && last_increment <= opt.increment_tolerance &&
+        (res <= opt.residual_tolerance * scale || res <= floor)) {
+      // a_{n+1} += (1 - alpha_f)/(1 - alpha_m) vdot_{n+1}
+      integ.a += (1.0 - p.alpha_f) / (1.0 - p.alpha_m) * data.vdot;
+      return it;
+    }
+    if (it == opt.max_iterations) break;
+    if (!SolveAssembledSystem(model, data)) {
+      if (why) *why = "the iteration matrix is singular";
+      return -1;
+    }
+    const auto dx = data.increment.head(nv);
+    integ.dq += dx / h;
+    data.v += gamma_p * dx;
+    data.vdot += beta_p * dx;
+    data.lambda += data.increment.tail(model.nc) / bh2;
+    last_increment = ScaledIncrementSize(model, dx);
+  }
+  if (why) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "Newton did not converge in %d iterations",
+                  opt.max_iterations);
+    *why = buf;
+  }
+  return -1;
+}
+
+void SaveStepStart(const Data& data, Integrator& integ) {
+  SaveState(data, &integ.q_start);
+  integ.v_start = data.v;
+  integ.vdot_start = data.vdot;
+  integ.a_start = integ.a;
+  integ.lambda_start = data.lambda;
+}
+
+void RestoreStepStart(const Model& model, Data& data, Integrator& integ, double t) {
+  RestoreState(integ.q_start, data);
+  data.v = integ.v_start;
+  data.vdot = integ.vdot_start;
+  integ.a = integ.a_start;
+  data.lambda = integ.lambda_start;
+  data.time = t;
+  (void)model;
+}
+
+}  // namespace
+
+StepResult Step(const Model& model, Data& data, Integrator& integ, double h) {
+  StepResult result;
+  result.substeps = 0;
+  const double t_end = data.time + h;
+  const double h_min = h * std::ldexp(1.0, -integ.options.max_halvings);
+  double hs = h;
+  std::string why;
+  while (data.time < t_end - 1e-12 * h) {
+    hs = std::min(hs, t_end - data.time);
+    const double t0 = data.time;
+    SaveStepStart(data, integ);
+    const int its = TryStep(model, data, integ, hs, &why);
+    if (its >= 0) {
+      UpdateBranchReferences(model, data);
+      result.iterations += its;
+      ++result.substeps;
+      integ.iterations += its;
+      integ.max_iterations_in_step = std::max(integ.max_iterations_in_step, its);
+      hs = std::min(h, 2.0 * hs);
+      continue;
+    }
+    RestoreStepStart(model, data, integ, t0);
+    if (hs * 0.5 < h_min * (1.0 - 1e-12)) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "step failed at t = %.9g s (step %.3g s, after %d halvings): ",
+                    t0, hs, integ.options.max_halvings);
+      result.message = std::string(buf) + why;
+      return result;
+    }
+    hs *= 0.5;
+    ++integ.halvings;
+  }
+  data.time = t_end;
+  ++integ.steps;
+  result.ok = true;
+  return result;
+}
+
+Energy CalcEnergy(const Model& model, const Data& data) {
+  Energy E;
+  for (const RigidBody& b : model.bodies) {
+    const SE3& H = data.H[static_cast<std::size_t>(b.node)];
+    const int dof = model.nodes[static_cast<std::size_t>(b.node)].dof;
+    if (dof >= 0) {
+      const Vec6 eta = data.v.segment<6>(dof);
+      const Vec3 vc = eta.head<3>() + eta.tail<3>().cross(b.com);
+      E.kinetic += 0.5 * b.mass * vc.squaredNorm() + 0.5 * eta.tail<3>().dot(b.inertia * eta.tail<3>());
+    }
+    E.gravity -= b.mass * model.gravity.dot(H.Act(b.com));
+  }
+  constexpr double kXi[3] = {0.5 - 0.3872983346207417, 0.5, 0.5 + 0.3872983346207417};
+  constexpr double kW[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+  for (std::size_t e = 0; e < model.elements.size(); ++e) {
+    const RodElement& el = model.elements[e];
+    const Section& sec = model.rods[static_cast<std::size_t>(el.rod)].section;
+    const SE3& HA = data.H[static_cast<std::size_t>(el.node_a)];
+    const SE3& HB = data.H[static_cast<std::size_t>(el.node_b)];
+    const Vec6 d = CalcRodRelativeMotion(HA, HB, data.w_ref[e]);
+    const Vec6 strain = (d - el.d0) / el.length;
+    E.strain += 0.5 * el.length * strain.dot(sec.stiffness.cwiseProduct(strain));
+    const int da = model.nodes[static_cast<std::size_t>(el.node_a)].dof;
+    const int db = model.nodes[static_cast<std::size_t>(el.node_b)].dof;
+    const Vec6 eta_a = da >= 0 ? Vec6(data.v.segment<6>(da)) : Vec6::Zero();
+    const Vec6 eta_b = db >= 0 ? Vec6(data.v.segment<6>(db)) : Vec6::Zero();
+    // Option B: linear velocity interpolation (quadratic integrand: 2-point rule exact; the
+    // 3-point rule used here is exact as well).
+    for (int i = 0; i < 3; ++i) {
+      const Vec6 eta = (1.0 - kXi[i]) * eta_a + kXi[i] * eta_b;
+      E.kinetic += 0.5 * el.length * kW[i] * eta.dot(sec.inertia.cwiseProduct(eta));
+      const Vec3 x = (HA * ExpSE3(kXi[i] * d)).x;
+      E.gravity -= el.length * kW[i] * sec.inertia(0) * model.gravity.dot(x);
+    }
+  }
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    const int k = j.k();
+    if (k == 0) continue;
+    const auto alpha = data.q_joint.segment(j.coord - model.nv_nodes, k);
+    if (!JointHasGlobalCoordinates(j.type)) {
+      const Vec6 xi = LogSE3(data.HJ[jj]);
+      for (int c = 0; c < k; ++c) {
+        const double delta = j.basis.col(c).dot(xi);
+        E.spring += 0.5 * j.stiffness(c) * delta * delta;
+      }
+      continue;
+    }
+    for (int c = 0; c < k; ++c) {
+      double rest = j.rest(c);
+      if (j.drive == DriveKind::kSeriesElastic && c == j.drive_coord)
+        rest += j.drive_profile(data.time);
+      const double delta = alpha(c) - rest;
+      E.spring += 0.5 * j.stiffness(c) * delta * delta;
+    }
+  }
+  return E;
+}
+
+}  // namespace screwfem
