@@ -434,6 +434,18 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   AddBodies(model, data, options, s);
   AddPointLoads(model, data, options, s);
   AddJoints(model, data, options, s);
+  // Redundant constraint rows (found at build time): the row becomes dmu_r = -lambda_r / s_L,
+  // which holds their multipliers at zero.
+  for (int r : model.redundant_rows) {
+    const int g = model.nv + r;
+    data.residual(g) = data.lambda(r) / options.s_multipliers;
+    if (!options.assemble_matrix) continue;
+    const int p = model.permutation[static_cast<std::size_t>(g)];
+    const int lo = std::max(0, p - data.matrix.lower_bandwidth());
+    const int hi = std::min(data.matrix.size() - 1, p + data.matrix.upper_bandwidth());
+    for (int c = lo; c <= hi; ++c) data.matrix.At(p, c) = 0.0;
+    data.matrix.At(p, p) = 1.0;
+  }
   return data.residual.allFinite();
 }
 

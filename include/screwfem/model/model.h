@@ -129,6 +129,12 @@ struct Model {
   int bandwidth = 0;             // half-bandwidth of the permuted system
   double length_scale = 1.0;     // characteristic length (bounding box diagonal) [m]
 
+  // Constraint rows found linearly dependent at build time (redundant constraints, e.g. a
+  // planar loop closed with spatial revolute joints). Their multipliers are held at zero,
+  // which leaves the motion unchanged; see ModelBuilder::Build.
+  std::vector<int> redundant_rows;
+  std::vector<std::string> warnings;  // non-fatal findings of Build, for the user
+
   // Largest |rotation| one element may reach (method.md §2.7): 2 pi minus a safety margin.
   double max_element_rotation = 2.0 * 3.14159265358979323846 - 0.05;
 
