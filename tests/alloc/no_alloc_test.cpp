@@ -1,0 +1,148 @@
+// Proves that a time step allocates no heap memory after set-up (style.md, "Math code"):
+// this test executable replaces global operator new and (outside sanitizer builds, where the
+// sanitizer owns malloc) interposes glibc's malloc/calloc/realloc, counting allocations while
+// a flag is raised. Eigen's dynamic temporaries go through malloc, std containers and strings
+// through operator new: both are counted.
+#include <gtest/gtest.h>
+
+// This file replaces the global allocation functions with malloc/free pairs; GCC cannot see
+// that the replacements match and warns at inlined call sites.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "screwfem/solve/dynamics.h"
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+#define SCREWFEM_COUNT_MALLOC 1
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* malloc(std::size_t size) {
+  if (g_counting.load(std::memory_order_relaxed)) ++g_allocations;
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t n, std::size_t size) {
+  if (g_counting.load(std::memory_order_relaxed)) ++g_allocations;
+  return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t size) {
+  if (g_counting.load(std::memory_order_relaxed)) ++g_allocations;
+  return __libc_realloc(p, size);
+}
+}
+#endif
+
+void* operator new(std::size_t size) {
+  if (g_counting.load()) ++g_allocations;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return ::operator new(size); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace screwfem {
+namespace {
+
+// A model with every kind of contribution: a rod with inertia, damping and gravity clamped to
+// a rigid body, rigid bodies, revolute/prismatic/spherical/universal joints, prescribed,
+// series-elastic and force drives, dead and follower point loads with profiles.
+Model MixedModel() {
+  ModelBuilder b;
+  const int base = b.AddNode(SE3::Translation(Vec3(0, 0, 0)), "base");
+  b.AddRigidBody("base", base, 0.15, Vec3(0.1, 0, 0), 1e-4 * Mat3::Identity());
+  const int link = b.AddNode(SE3::Translation(Vec3(0.2, 0, 0)), "link");
+  b.AddRigidBody("link", link, 0.15, Vec3(0.1, 0, 0), 1e-4 * Mat3::Identity());
+  const int ball = b.AddNode(SE3::Translation(Vec3(0.4, 0, 0)), "ball");
+  b.AddRigidBody("ball", ball, 0.1, Vec3(0.05, 0, 0), 1e-4 * Mat3::Identity());
+  Vec6 K, M;
+  K << 1e6, 1e6, 1e6, 1, 1, 1;
+  M << 0.1, 0.1, 0.1, 0.01, 0.01, 0.01;
+  Section sec = Section::FromDiagonals(K, M);
+  sec.damping << 0, 0, 0, 0.01, 0.01, 0.01;
+  const int rod = b.AddStraightRod("arm", Vec3(0.4, 0, 0), Vec3(1.0, 0, 0), 4, sec, Vec3::UnitZ(),
+                                   ball);
+  const int j0 = b.AddJointAt("J0", JointType::kRevolute, kGround, base, Vec3::Zero());
+  b.model().joints[static_cast<std::size_t>(j0)].drive = DriveKind::kPrescribed;
+  b.model().joints[static_cast<std::size_t>(j0)].drive_profile = Profile::BangBang(0, 1, 0.5);
+  const int j1 = b.AddJointAt("J1", JointType::kPrismatic, base, link, Vec3(0.2, 0, 0), Vec3::UnitX());
+  b.model().joints[static_cast<std::size_t>(j1)].stiffness(0) = 10;
+  b.model().joints[static_cast<std::size_t>(j1)].damping(0) = 5;
+  b.model().joints[static_cast<std::size_t>(j1)].drive = DriveKind::kSeriesElastic;
+  b.model().joints[static_cast<std::size_t>(j1)].drive_profile = Profile::SmoothStep(0, 1, 0.1);
+  const int j2 = b.AddJointAt("J2", JointType::kUniversal, link, ball, Vec3(0.4, 0, 0),
+                              Vec3::UnitZ(), Vec3::UnitY());
+  b.model().joints[static_cast<std::size_t>(j2)].drive = DriveKind::kForce;
+  b.model().joints[static_cast<std::size_t>(j2)].drive_profile = Profile::Sine(0.01, 2.0);
+  b.AddJointAt("J3", JointType::kSpherical, kGround, b.model().rods[0].nodes.back(),
+               Vec3(1.0, 0, 0));
+  b.model().joints.back().stiffness.head<3>().setConstant(0.5);
+  PointLoad dead;
+  dead.node = b.model().rods[0].nodes[2];
+  dead.force = Vec3(0, 0, 1);
+  dead.profile = Profile::Ramp(0, 1);
+  b.AddPointLoad(dead);
+  PointLoad follower = dead;
+  follower.frame = LoadFrame::kBody;
+  follower.moment = Vec3(0, 0.01, 0);
+  b.AddPointLoad(follower);
+  b.SetGravity(Vec3(0, 0, -9.81));
+  (void)rod;
+  return b.Build();
+}
+
+TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
+  const Model model = MixedModel();
+  Data data = MakeData(model);
+  Integrator integ;
+  DynamicOptions options;
+  options.rho_inf = 0.8;
+  std::string message;
+  ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
+  g_allocations = 0;
+  g_counting = true;
+  bool ok = true;
+  for (int i = 0; i < 50; ++i) ok = Step(model, data, integ, 1e-3).ok && ok;
+  g_counting = false;
+  EXPECT_TRUE(ok);
+  EXPECT_GT(integ.iterations, 50);  // the steps really iterated
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
+}
+
+#ifdef SCREWFEM_COUNT_MALLOC
+TEST(NoAllocation, CounterSeesEigenAllocations) {
+  g_allocations = 0;
+  g_counting = true;
+  Eigen::VectorXd v = Eigen::VectorXd::Ones(1000);
+  g_counting = false;
+  EXPECT_GE(g_allocations.load(), 1);
+  EXPECT_EQ(v.sum(), 1000.0);
+}
+#endif
+
+TEST(NoAllocation, CounterSeesAllocations) {
+  // The counter itself works (otherwise the test above could not fail).
+  g_allocations = 0;
+  g_counting = true;
+  {
+    std::vector<double> v(100, 1.0);
+    g_counting = false;
+    EXPECT_EQ(v.size(), 100u);
+  }
+  EXPECT_GE(g_allocations.load(), 1);
+}
+
+}  // namespace
+}  // namespace screwfem
