@@ -1,5 +1,9 @@
 #include "screwfem/assemble/outputs.h"
 
+#include <algorithm>
+
+#include "screwfem/elements/rod.h"
+
 namespace screwfem {
 
 PointMotion CalcPointMotion(const SE3& H, const Vec6& eta, const Vec6& eta_dot, const Vec3& p) {
@@ -17,6 +21,68 @@ PointMotion CalcNodePointMotion(const Model& model, const Data& data, int node, 
   const SE3& H = data.H[static_cast<std::size_t>(node)];
   if (dof < 0) return CalcPointMotion(H, Vec6::Zero(), Vec6::Zero(), p);
   return CalcPointMotion(H, data.v.segment<6>(dof), data.vdot.segment<6>(dof), p);
+}
+
+RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod_index, double s) {
+  const Rod& rod = model.rods[static_cast<std::size_t>(rod_index)];
+  // Element containing s (reference arc length) and the local coordinate xi.
+  int e = rod.first_element;
+  double s0 = 0.0;
+  s = std::clamp(s, 0.0, rod.length);
+  for (int k = 0; k < rod.num_elements - 1; ++k) {
+    const double L = model.elements[static_cast<std::size_t>(e)].length;
+    if (s <= s0 + L) break;
+    s0 += L;
+    ++e;
+  }
+  const RodElement& el = model.elements[static_cast<std::size_t>(e)];
+  const double xi = std::clamp((s - s0) / el.length, 0.0, 1.0);
+  const SE3& HA = data.H[static_cast<std::size_t>(el.node_a)];
+  const SE3& HB = data.H[static_cast<std::size_t>(el.node_b)];
+  const Vec6 d = CalcRodRelativeMotion(HA, HB, data.w_ref[static_cast<std::size_t>(e)]);
+  Vec12 eta_ab = Vec12::Zero(), acc_ab = Vec12::Zero();
+  const int da = model.nodes[static_cast<std::size_t>(el.node_a)].dof;
+  const int db = model.nodes[static_cast<std::size_t>(el.node_b)].dof;
+  if (da >= 0) {
+    eta_ab.head<6>() = data.v.segment<6>(da);
+    acc_ab.head<6>() = data.vdot.segment<6>(da);
+  }
+  if (db >= 0) {
+    eta_ab.tail<6>() = data.v.segment<6>(db);
+    acc_ab.tail<6>() = data.vdot.segment<6>(db);
+  }
+  const Vec6 d_dot = CalcRodP(d) * eta_ab;
+  // Time derivative of N(xi, d) along d_dot (method.md §2.5):
+  //   d/dt Ad(exp(-xi d)) = Ad(exp(-xi d)) ad(T(-xi d) (-xi d_dot)),
+  //   d/dt [xi T(xi d)] = xi dT(xi d; xi d_dot),  d/dt T^-1(+-d) = dT^-1(+-d; +-d_dot).
+  const Mat6 Ad_m = Ad(ExpSE3(-xi * d));
+  const Mat6 T = xi * TSE3(xi * d);
+  const Mat6 dT = xi * TSE3Directional(xi * d, xi * d_dot);
+  const Mat6 Ti_m = TSE3Inv(-d), Ti_p = TSE3Inv(d);
+  Mat6x12 N, N_dot;
+  N.leftCols<6>() = Ad_m - T * Ti_m;
+  N.rightCols<6>() = T * Ti_p;
+  N_dot.leftCols<6>() = Ad_m * ad(TSE3(-xi * d) * (-xi * d_dot)) - dT * Ti_m -
+                        T * TSE3InvDirectional(-d, -d_dot);
+  N_dot.rightCols<6>() = dT * Ti_p + T * TSE3InvDirectional(d, d_dot);
+  RodPoint p;
+  p.element = e;
+  p.xi = xi;
+  p.frame = HA * ExpSE3(xi * d);
+  p.motion = CalcPointMotion(p.frame, N * eta_ab, N * acc_ab + N_dot * eta_ab, Vec3::Zero());
+  return p;
+}
+
+void CalcRodStresses(const Model& model, const Data& data, int rod_index, std::vector<Vec6>* out) {
+  const Rod& rod = model.rods[static_cast<std::size_t>(rod_index)];
+  out->resize(static_cast<std::size_t>(rod.num_elements));
+  for (int k = 0; k < rod.num_elements; ++k) {
+    const std::size_t e = static_cast<std::size_t>(rod.first_element + k);
+    const RodElement& el = model.elements[e];
+    const Vec6 d = CalcRodRelativeMotion(data.H[static_cast<std::size_t>(el.node_a)],
+                                         data.H[static_cast<std::size_t>(el.node_b)], data.w_ref[e]);
+    (*out)[static_cast<std::size_t>(k)] = rod.section.stiffness.cwiseProduct((d - el.d0) / el.length);
+  }
 }
 
 }  // namespace screwfem

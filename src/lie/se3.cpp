@@ -294,6 +294,24 @@ Mat6 TSE3Inv(const Vec6& xi) {
   return Mat6::Identity() + 0.5 * A + s.s2 * A2 + s.s4 * (A2 * A2);
 }
 
+Mat6 TSE3InvDirectional(const Vec6& xi, const Vec6& dxi) {
+  const double phi = xi.tail<3>().norm();
+  const TInvCoeffs s = TInvCoefficients(phi);
+  const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
+  const double wdw = xi.tail<3>().dot(dxi.tail<3>());
+  const Mat6 A = ad(xi), dA = ad(dxi);
+  const Mat6 A2 = A * A;
+  const Mat6 A3 = A2 * A;
+  const Mat6 dA_A = dA * A, A_dA = A * dA;
+  return 0.5 * dA + ds.s2 * wdw * A2 + s.s2 * (dA_A + A_dA) + ds.s4 * wdw * (A2 * A2) +
+         s.s4 * (dA * A3 + A_dA * A2 + A2 * dA_A + A3 * dA);
+}
+
+Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi) {
+  const Mat6 T = TSE3(xi);
+  return -T * TSE3InvDirectional(xi, dxi) * T;
+}
+
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma) {
   const double phi = xi.tail<3>().norm();
   const TInvCoeffs s = TInvCoefficients(phi);

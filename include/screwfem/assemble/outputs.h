@@ -20,4 +20,19 @@ PointMotion CalcPointMotion(const SE3& H, const Vec6& eta, const Vec6& eta_dot, 
 // The same for a point p in the frame of `node` (a fixed node has zero velocity).
 PointMotion CalcNodePointMotion(const Model& model, const Data& data, int node, const Vec3& p);
 
+// Section frame and motion of the point of rod `rod` at reference arc length s (clamped to
+// [0, length]) on the section centre line: H(xi) = H_A exp(xi d), eta(xi) = N(xi, d) eta_AB,
+// eta_dot(xi) = N eta_dot_AB + (dN/dd . d_dot) eta_AB (method.md §2.5, §6).
+struct RodPoint {
+  SE3 frame;
+  PointMotion motion;
+  int element = -1;   // global element index
+  double xi = 0.0;    // in [0, 1]
+};
+RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod, double s);
+
+// Section stress resultants sigma = K (d/L - f0) of every element of a rod (section frame:
+// N, V2, V3, T, M2, M3), written into out (size = number of elements).
+void CalcRodStresses(const Model& model, const Data& data, int rod, std::vector<Vec6>* out);
+
 }  // namespace screwfem

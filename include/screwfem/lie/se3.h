@@ -65,6 +65,12 @@ Mat6 TSE3Inv(const Vec6& xi);      // singular at |w| = 2 pi k, k != 0
 // D(xi, sigma) = d/dxi [ TSE3Inv(xi)^T sigma ]  (method.md §1.4).
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma);
 
+// Directional derivative d/de TSE3Inv(xi + e dxi) at e = 0 (from form B: with A = ad(xi),
+// A' = ad(dxi), d s_k = hat_s_k (w . dw)).
+Mat6 TSE3InvDirectional(const Vec6& xi, const Vec6& dxi);
+// Directional derivative of TSE3: -T (dT^-1) T.
+Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi);
+
 // Logarithm on a continuous branch (method.md §2.7): of all rotation vectors representing the
 // rotation of H, w_k = (theta + 2 pi k) n, returns the one closest to w_ref, with the
 // translation part recomputed on that branch. The caller must reject |w| near 2 pi.

@@ -1,0 +1,70 @@
+// Scenes: a model plus what to do with it (analysis) and what to record (outputs).
+// A scene file (YAML, docs/scene-format.md) is parsed into a Scene; running a Scene writes
+// results into a directory (see run.h).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "screwfem/model/model.h"
+#include "screwfem/solve/dynamics.h"
+#include "screwfem/solve/statics.h"
+
+namespace screwfem {
+
+enum class AnalysisKind { kStatic, kDynamic };
+
+struct AnalysisSettings {
+  AnalysisKind kind = AnalysisKind::kDynamic;
+  double start_time = 0.0;   // [s]
+  double end_time = 1.0;     // [s]
+  double step = 1e-3;        // [s], dynamic analyses
+  bool align_steps = true;   // shorten steps so that profile breakpoints fall on step ends
+  DynamicOptions dynamic;
+  StaticOptions statics;
+  // Dynamic analyses may start from a static equilibrium of the loads at start_time.
+  bool static_preload = false;
+};
+
+// A recorded point: a point fixed in a node frame (rigid body, joint side or rod node), or a
+// point along a rod at arc length s from its first node.
+struct OutputPoint {
+  std::string name;      // column prefix, e.g. "P8"
+  int node = -1;         // node whose frame carries the point (node points)
+  Vec3 offset = Vec3::Zero();  // in that node frame [m]
+  int rod = -1;          // rod points: rod index and arc length
+  double arc_length = 0.0;
+};
+
+struct OutputJoint {
+  std::string name;      // column prefix, e.g. "J3"
+  int joint = -1;
+};
+
+struct OutputSpec {
+  std::vector<OutputPoint> points;
+  std::vector<OutputJoint> joints;
+  double interval = 0.0;      // [s] between recorded rows; 0: every step
+  bool vtk = true;            // ParaView files under vtk/
+  double vtk_interval = 0.0;  // [s]; 0: same as interval
+};
+
+struct Scene {
+  std::string source;          // file name (for messages and the summary)
+  std::string name;            // scene title
+  Model model;
+  AnalysisSettings analysis;
+  OutputSpec outputs;
+  // Named points of the scene (world coordinates in the reference configuration), for
+  // documentation and plotting.
+  std::vector<std::pair<std::string, Vec3>> named_points;
+};
+
+// Parses and compiles a scene. `overrides` are "key.path=value" strings applied to the YAML
+// tree before compilation (e.g. "analysis.step=5e-4", "bodies.arm56.elements=8").
+// Throws InputError with a message "FILE:LINE:COLUMN: FIELD: what was expected".
+Scene LoadScene(const std::string& path, const std::vector<std::string>& overrides = {});
+Scene ParseScene(const std::string& yaml_text, const std::string& source_name,
+                 const std::vector<std::string>& overrides = {});
+
+}  // namespace screwfem

@@ -1,0 +1,1 @@
+#include "screwfem/io/run.h"

@@ -1,0 +1,1 @@
+#include "screwfem/io/scene.h"
