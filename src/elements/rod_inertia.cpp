@@ -1,0 +1,1 @@
+#include "screwfem/elements/rod.h"

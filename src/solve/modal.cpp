@@ -1,0 +1,1 @@
+#include "screwfem/solve/statics.h"
