@@ -123,8 +123,11 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       d.failed_rotation = rotation;
       return false;
     }
-    s.Term((sec.stiffness.cwiseProduct(in.d.cwiseAbs() + el.d0.cwiseAbs()) / el.length)
-               .maxCoeff());
+    // Round-off in sigma = K (d - d0) / L: the translation of d comes from R_A^T (x_B - x_A),
+    // whose absolute error is ~eps max(|x_A|, |x_B|) however short the element is.
+    Vec6 magnitude = in.d.cwiseAbs() + el.d0.cwiseAbs();
+    magnitude.head<3>().array() += std::max(HA.x.norm(), HB.x.norm());
+    s.Term((sec.stiffness.cwiseProduct(magnitude) / el.length).maxCoeff());
     Vec12 r = in.force;
     Mat12 K = in.stiffness;
     const double rhoA = sec.inertia(0);
@@ -136,52 +139,33 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       K += Kg;
     }
     const int nodes[2] = {el.node_a, el.node_b};
-    Mat12 Me, Ct;
-    const bool dyn = o.dynamics && sec.inertia.squaredNorm() > 0.0;
-    if (dyn) {
-      // Option B inertia (method.md §2.5): N = [(1-xi) I, xi I], M_e constant; the gyroscopic
-      // integrand is cubic in xi, so 2-point Gauss is exact.
-      const auto Ms = sec.inertia.asDiagonal();
+    // Inertia (option A or B, method.md §2.5) and damping: forces and the M, C blocks.
+    const bool has_inertia = o.dynamics && sec.inertia.squaredNorm() > 0.0;
+    const bool has_damping =
+        o.dynamics && (sec.damping.squaredNorm() > 0.0 || sec.rayleigh_stiffness > 0.0 ||
+                       (has_inertia && sec.rayleigh_mass > 0.0));
+    RodInertiaTerms ine;
+    if (has_inertia || has_damping) {
       const int da = s.NodeDof(el.node_a), db = s.NodeDof(el.node_b);
-      const Vec6 eta_a = da >= 0 ? Vec6(d.v.segment<6>(da)) : Vec6::Zero();
-      const Vec6 eta_b = db >= 0 ? Vec6(d.v.segment<6>(db)) : Vec6::Zero();
-      const Vec6 acc_a = da >= 0 ? Vec6(d.vdot.segment<6>(da)) : Vec6::Zero();
-      const Vec6 acc_b = db >= 0 ? Vec6(d.vdot.segment<6>(db)) : Vec6::Zero();
-      const double L = el.length;
-      Me.setZero();
-      for (int i = 0; i < 6; ++i) {
-        Me(i, i) = Me(i + 6, i + 6) = L * sec.inertia(i) / 3.0;
-        Me(i, i + 6) = Me(i + 6, i) = L * sec.inertia(i) / 6.0;
+      Vec12 eta_ab = Vec12::Zero(), acc_ab = Vec12::Zero();
+      if (da >= 0) {
+        eta_ab.head<6>() = d.v.segment<6>(da);
+        acc_ab.head<6>() = d.vdot.segment<6>(da);
       }
-      Vec12 acc;
-      acc << acc_a, acc_b;
-      r.noalias() += Me * acc;
-      Ct.setZero();
-      constexpr double kXi[2] = {0.5 - 0.28867513459481287, 0.5 + 0.28867513459481287};
-      for (double xi : kXi) {
-        const Vec6 eta = (1.0 - xi) * eta_a + xi * eta_b;
-        const Vec6 Meta = Ms * eta;
-        const Vec6 f = -(ad(eta).transpose() * Meta);
-        r.head<6>() += 0.5 * L * (1.0 - xi) * f;
-        r.tail<6>() += 0.5 * L * xi * f;
-        const Mat6 G = -(ad(eta).transpose() * Ms + Star(Meta));
-        const double w[2] = {1.0 - xi, xi};
-        for (int a = 0; a < 2; ++a)
-          for (int b = 0; b < 2; ++b) Ct.block<6, 6>(6 * a, 6 * b) += 0.5 * L * w[a] * w[b] * G;
+      if (db >= 0) {
+        eta_ab.tail<6>() = d.v.segment<6>(db);
+        acc_ab.tail<6>() = d.vdot.segment<6>(db);
       }
-      // Viscous material damping on strain rates: sigma_v = D_s d_dot / L.
-      if (sec.damping.squaredNorm() > 0.0) {
-        Vec12 eta_ab;
-        eta_ab << eta_a, eta_b;
-        const Mat6x12 P = CalcRodP(in.d);
-        const Vec6 sig_v = sec.damping.cwiseProduct(P * eta_ab) / L;
-        r.noalias() += P.transpose() * sig_v;
-        Ct.noalias() += P.transpose() * (sec.damping / L).asDiagonal() * P;
+      if (has_inertia) {
+        CalcRodInertia(m.rod_inertia, el, sec, in.d, eta_ab, acc_ab, &ine);
+        r += ine.force;
       }
+      if (has_damping) AddRodDamping(el, sec, in.d, eta_ab, ine.mass, &r, &ine.gyroscopic);
     }
     s.Rows(s.NodeDof(el.node_a), r.head<6>());
     s.Rows(s.NodeDof(el.node_b), r.tail<6>());
-    s.NodeMatrix<2>(nodes, &K, dyn ? &Me : nullptr, dyn ? &Ct : nullptr);
+    s.NodeMatrix<2>(nodes, &K, has_inertia ? &ine.mass : nullptr,
+                    has_inertia || has_damping ? &ine.gyroscopic : nullptr);
   }
   return true;
 }
@@ -234,12 +218,53 @@ void AddPointLoads(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s
   }
 }
 
+// Distributed and concentrated loads on rods (consistent with the exact interpolation).
+void AddRodLoads(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
+  constexpr double kXi[3] = {0.5 - 0.3872983346207417, 0.5, 0.5 + 0.3872983346207417};
+  constexpr double kW[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+  for (const RodLoad& l : m.rod_loads) {
+    const double scale = o.load_factor * l.profile(o.time);
+    if (scale == 0.0) continue;
+    const Rod& rod = m.rods[static_cast<std::size_t>(l.rod)];
+    const int first = l.distributed ? rod.first_element : l.element;
+    const int last = l.distributed ? rod.first_element + rod.num_elements - 1 : l.element;
+    for (int e = first; e <= last; ++e) {
+      const RodElement& el = m.elements[static_cast<std::size_t>(e)];
+      const SE3& HA = d.H[static_cast<std::size_t>(el.node_a)];
+      const Vec6 dd = CalcRodRelativeMotion(HA, d.H[static_cast<std::size_t>(el.node_b)],
+                                            d.w_ref[static_cast<std::size_t>(e)]);
+      Vec12 g = Vec12::Zero();
+      Mat12 K = Mat12::Zero();
+      if (l.distributed) {
+        for (int i = 0; i < 3; ++i)
+          AddRodSectionLoad(kXi[i], el.length * kW[i], HA, dd, l.frame, scale * l.force,
+                            scale * l.moment, &g, &K);
+      } else {
+        AddRodSectionLoad(l.xi, 1.0, HA, dd, l.frame, scale * l.force, scale * l.moment, &g, &K);
+      }
+      s.Rows(s.NodeDof(el.node_a), Vec6(-g.head<6>()));
+      s.Rows(s.NodeDof(el.node_b), Vec6(-g.tail<6>()));
+      const int nodes[2] = {el.node_a, el.node_b};
+      s.NodeMatrix<2>(nodes, &K, nullptr, nullptr);
+    }
+  }
+}
+
 void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
   for (std::size_t jj = 0; jj < m.joints.size(); ++jj) {
     const Joint& j = m.joints[jj];
     const int ji = static_cast<int>(jj);
     const int k = j.k();
     const Mat6X A = JointCurrentBasis(m, d, ji);
+    // In dynamics the coordinates of group joints (spherical, planar, free) retract as
+    // H_J = H_J,n exp(A_J x), x = h dq_J, so their matrix columns carry the subgroup's tangent
+    // operator A_J^T T(A_J x) A_J (method.md §5.2), stored after the node tangents by the
+    // integrator. Abelian and universal joints retract additively: no tangent.
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> TJ =
+        Mat6::Identity().topLeftCorner(k, k);
+    if (o.use_node_tangent && !JointHasGlobalCoordinates(j.type) &&
+        d.node_tangent.size() > m.nodes.size() + jj)
+      TJ = d.node_tangent[m.nodes.size() + jj].topLeftCorner(k, k);
     if (j.row >= 0) {
       const SE3 HA = j.node_a == kGround ? SE3::Identity() : d.H[static_cast<std::size_t>(j.node_a)];
       const SE3 HB = j.node_b == kGround ? SE3::Identity() : d.H[static_cast<std::size_t>(j.node_b)];
@@ -257,7 +282,7 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
         s.Gradient(j.row, s.NodeDof(j.node_b), BB, &s.NodeT(j.node_b), lam);
       }
       if (k > 0) {
-        const Mat6X BJ = -TSE3Inv(-phi) * A;
+        const Mat6X BJ = -TSE3Inv(-phi) * A * TJ;
         s.Gradient(j.row, j.coord, BJ, nullptr, lam);
       }
     }
@@ -315,7 +340,7 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     }
     s.Rows(j.coord, f.head(k));
     const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> S =
-        o.c_stiffness * Kq.topLeftCorner(k, k) + o.c_damping * Dq.topLeftCorner(k, k);
+        o.c_stiffness * Kq.topLeftCorner(k, k) * TJ + o.c_damping * Dq.topLeftCorner(k, k);
     s.Block(j.coord, j.coord, S, o.s_rows);
   }
 }
@@ -433,6 +458,7 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   if (!AddRods(model, data, options, s)) return false;
   AddBodies(model, data, options, s);
   AddPointLoads(model, data, options, s);
+  AddRodLoads(model, data, options, s);
   AddJoints(model, data, options, s);
   // Redundant constraint rows (found at build time): the row becomes dmu_r = -lambda_r / s_L,
   // which holds their multipliers at zero.

@@ -52,19 +52,8 @@ RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod_index,
     acc_ab.tail<6>() = data.vdot.segment<6>(db);
   }
   const Vec6 d_dot = CalcRodP(d) * eta_ab;
-  // Time derivative of N(xi, d) along d_dot (method.md §2.5):
-  //   d/dt Ad(exp(-xi d)) = Ad(exp(-xi d)) ad(T(-xi d) (-xi d_dot)),
-  //   d/dt [xi T(xi d)] = xi dT(xi d; xi d_dot),  d/dt T^-1(+-d) = dT^-1(+-d; +-d_dot).
-  const Mat6 Ad_m = Ad(ExpSE3(-xi * d));
-  const Mat6 T = xi * TSE3(xi * d);
-  const Mat6 dT = xi * TSE3Directional(xi * d, xi * d_dot);
-  const Mat6 Ti_m = TSE3Inv(-d), Ti_p = TSE3Inv(d);
-  Mat6x12 N, N_dot;
-  N.leftCols<6>() = Ad_m - T * Ti_m;
-  N.rightCols<6>() = T * Ti_p;
-  N_dot.leftCols<6>() = Ad_m * ad(TSE3(-xi * d) * (-xi * d_dot)) - dT * Ti_m -
-                        T * TSE3InvDirectional(-d, -d_dot);
-  N_dot.rightCols<6>() = dT * Ti_p + T * TSE3InvDirectional(d, d_dot);
+  const Mat6x12 N = CalcRodN(xi, d);
+  const Mat6x12 N_dot = CalcRodNDirectional(xi, d, d_dot);  // d/dt N(xi, d(t))
   RodPoint p;
   p.element = e;
   p.xi = xi;

@@ -46,22 +46,65 @@ void CalcRodInternal(const RodElement& element, const Section& section, const SE
   out->stiffness.bottomRows<6>().noalias() += DTSE3InvT(out->d, out->stress) * P;
 }
 
+Mat6x12 CalcRodNDirectional(double xi, const Vec6& d, const Vec6& dd) {
+  // N = [Ad(exp(-xi d)) - xi T(xi d) T^-1(-d),  xi T(xi d) T^-1(d)]   (method.md §2.5), and
+  //   d Ad(exp(X)) = Ad(exp(X)) ad(T(X) dX) with X = -xi d,
+  //   d [xi T(xi d)] = xi dT(xi d; xi dd),  d T^-1(+-d) = dT^-1(+-d; +-dd).
+  const Mat6 T = xi * TSE3(xi * d);
+  const Mat6 dT = xi * TSE3Directional(xi * d, xi * dd);
+  Mat6x12 dN;
+  dN.leftCols<6>() = Ad(ExpSE3(-xi * d)) * ad(TSE3(-xi * d) * (-xi * dd));
+  dN.leftCols<6>().noalias() -= dT * TSE3Inv(-d);
+  dN.leftCols<6>().noalias() -= T * TSE3InvDirectional(-d, -dd);
+  dN.rightCols<6>().noalias() = dT * TSE3Inv(d);
+  dN.rightCols<6>().noalias() += T * TSE3InvDirectional(d, dd);
+  return dN;
+}
+
+void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, LoadFrame frame,
+                       const Vec3& force, const Vec3& moment, Vec12* g, Mat12* tangent) {
+  const Vec6 xd = xi * d;
+  const Mat6 T_p = TSE3(xd);                 // T(xi d)
+  const Mat6 Ad_m = Ad(ExpSE3(-xd));         // Ad(exp(-xi d))
+  const Mat6 Ti_m = TSE3Inv(-d), Ti_p = TSE3Inv(d);
+  Vec6 F;
+  Mat6 S = Mat6::Zero();  // dF/d theta(xi)
+  if (frame == LoadFrame::kWorld) {
+    const Mat3 Rt = (H_A.R * ExpSO3(xd.tail<3>())).transpose();
+    F << Rt * force, Rt * moment;
+    S.topRightCorner<3, 3>() = Skew(F.head<3>());
+    S.bottomRightCorner<3, 3>() = Skew(F.tail<3>());
+  } else {
+    F << force, moment;
+  }
+  // N^T F = [Ad_m^T F - T^-T(-d) z;  T^-T(d) z],  z = xi T(xi d)^T F.
+  const Vec6 tF = T_p.transpose() * F;
+  const Vec6 z = xi * tF;
+  g->head<6>() += weight * (Ad_m.transpose() * F - Ti_m.transpose() * z);
+  g->tail<6>() += weight * (Ti_p.transpose() * z);
+  // Derivative of N^T F in d at fixed F (12 x 6), using D(x, y) = d/dx [T^-T(x) y] (§1.4) and
+  // d/dx [T(x)^T F] = -T(x)^T D(x, T(x)^T F):
+  //   dz/dd = -xi^2 T(xi d)^T D(xi d, T(xi d)^T F)
+  //   d(Ad(exp(-xi d))^T F)/dd = -xi Star(Ad_m^T F) T(-xi d)
+  const Mat6 dz = -(xi * xi) * (T_p.transpose() * DTSE3InvT(xd, tF));
+  Eigen::Matrix<double, 12, 6> G;
+  G.topRows<6>() = -xi * (Star(Ad_m.transpose() * F) * TSE3(-xd)) + DTSE3InvT(-d, z) -
+                   Ti_m.transpose() * dz;
+  G.bottomRows<6>() = DTSE3InvT(d, z) + Ti_p.transpose() * dz;
+  Mat6x12 N;
+  N.leftCols<6>() = Ad_m - xi * T_p * Ti_m;
+  N.rightCols<6>() = xi * T_p * Ti_p;
+  tangent->noalias() -= weight * (G * CalcRodP(d));
+  if (frame == LoadFrame::kWorld) tangent->noalias() -= weight * (N.transpose() * S * N);
+}
+
 void CalcRodDistributedDeadForce(const RodElement& element, const SE3& H_A, const Vec6& d,
                                  const Vec3& f_w, Vec12* g, Mat12* tangent) {
-  const double L = element.length;
   g->setZero();
   tangent->setZero();
-  for (int i = 0; i < 3; ++i) {
-    const double xi = kGaussXi[i], w = L * kGaussW[i];
-    const SE3 H = H_A * ExpSE3(xi * d);
-    const Vec3 f = H.R.transpose() * f_w;  // load in the section frame at xi
-    g->segment<3>(0) += w * (1.0 - xi) * f;
-    g->segment<3>(6) += w * xi * f;
-    // d f / d theta(xi) = Skew(f); theta(xi) = rotational rows of N(xi, d) [dh_A; dh_B].
-    const Eigen::Matrix<double, 3, 12> dF = Skew(f) * CalcRodN(xi, d).bottomRows<3>();
-    tangent->middleRows<3>(0) -= w * (1.0 - xi) * dF;
-    tangent->middleRows<3>(6) -= w * xi * dF;
-  }
+  for (int i = 0; i < 3; ++i)
+    AddRodSectionLoad(kGaussXi[i], element.length * kGaussW[i], H_A, d, LoadFrame::kWorld, f_w,
+                      Vec3::Zero(), g, tangent);
 }
 
 }  // namespace screwfem

@@ -299,6 +299,11 @@ int ModelBuilder::AddPointLoad(const PointLoad& load) {
   return static_cast<int>(model_.point_loads.size()) - 1;
 }
 
+int ModelBuilder::AddRodLoad(const RodLoad& load) {
+  model_.rod_loads.push_back(load);
+  return static_cast<int>(model_.rod_loads.size()) - 1;
+}
+
 void ModelBuilder::SetGravity(const Vec3& g) { model_.gravity = g; }
 
 Model ModelBuilder::Build() const {
@@ -329,6 +334,9 @@ Model ModelBuilder::Build() const {
       if (!(rod.section.inertia(i) >= 0.0) || !(rod.section.damping(i) >= 0.0))
         throw InputError(label + ": section inertia and damping must be non-negative");
     }
+    if (!(rod.section.rayleigh_mass >= 0.0) || !std::isfinite(rod.section.rayleigh_mass) ||
+        !(rod.section.rayleigh_stiffness >= 0.0) || !std::isfinite(rod.section.rayleigh_stiffness))
+      throw InputError(label + ": Rayleigh damping coefficients must be finite and non-negative");
     rod.first_element = static_cast<int>(m.elements.size());
     rod.length = 0.0;
     for (int e = 0; e < rod.num_elements; ++e) {
@@ -414,6 +422,29 @@ Model ModelBuilder::Build() const {
     if (!l.force.allFinite() || !l.moment.allFinite() || !l.point.allFinite())
       throw InputError("point load on " + NodeLabel(m, l.node) + ": values must be finite");
     l.profile.Validate(("point load on " + NodeLabel(m, l.node)).c_str());
+  }
+  for (RodLoad& l : m.rod_loads) {
+    if (l.rod < 0 || l.rod >= static_cast<int>(m.rods.size()))
+      throw InputError("rod load: invalid rod " + std::to_string(l.rod));
+    const Rod& rod = m.rods[static_cast<std::size_t>(l.rod)];
+    const std::string label = "load on rod '" + rod.name + "'";
+    if (!l.force.allFinite() || !l.moment.allFinite())
+      throw InputError(label + ": values must be finite");
+    l.profile.Validate(label.c_str());
+    if (l.distributed) continue;
+    if (!(l.arc_length >= 0.0 && l.arc_length <= rod.length * (1.0 + 1e-12)))
+      throw InputError(label + ": arc length must be within [0, " + std::to_string(rod.length) + "]");
+    double s0 = 0.0;
+    l.element = rod.first_element + rod.num_elements - 1;
+    for (int k = 0; k < rod.num_elements; ++k) {
+      const double L = m.elements[static_cast<std::size_t>(rod.first_element + k)].length;
+      if (l.arc_length <= s0 + L || k == rod.num_elements - 1) {
+        l.element = rod.first_element + k;
+        l.xi = std::clamp((l.arc_length - s0) / L, 0.0, 1.0);
+        break;
+      }
+      s0 += L;
+    }
   }
   for (int n = 0; n < num_nodes; ++n)
     if (!m.nodes[static_cast<std::size_t>(n)].fixed && !used[static_cast<std::size_t>(n)])

@@ -56,9 +56,12 @@ StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& op
 
   const double ds0 = 1.0 / std::max(options.load_steps, 1);
   double s = 0.0, ds = ds0;
+  int consecutive_halvings = 0;
   std::string last_cause;
   while (s < 1.0) {
-    const double target = std::min(1.0, s + ds);
+    // Snap to 1 when only round-off separates s + ds from it (ten steps of 0.1 sum to
+    // 1 - 1e-16, which would otherwise cost an extra load step).
+    const double target = s + ds >= 1.0 - 1e-12 ? 1.0 : s + ds;
     opt.load_factor = target;
     StaticStep step;
     step.load_factor = target;
@@ -85,10 +88,11 @@ StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& op
       // Below this level the residual is round-off (e.g. eps EA |d|/L in a stiff rod).
       const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
                            std::max(data.term_scale, data.force_scale);
+      // There the residual no longer measures the error; the last Newton correction does, so
+      // it must be small as well (as in the dynamic solver).
       const bool at_floor = res <= floor;
-      if (con <= options.constraint_tolerance &&
-          (at_floor || (res <= options.residual_tolerance * scale &&
-                        last_increment <= options.increment_tolerance))) {
+      if (con <= options.constraint_tolerance && last_increment <= options.increment_tolerance &&
+          (at_floor || res <= options.residual_tolerance * scale)) {
         outcome = NewtonOutcome::kConverged;
         step.iterations = it;
         break;
@@ -117,6 +121,7 @@ StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& op
       ++result.load_steps;
       result.steps.push_back(std::move(step));
       ds = std::min(ds0, 1.5 * ds);
+      consecutive_halvings = 0;
       continue;
     }
     // Failed load step: back to the last converged state, retry with half the increment.
@@ -125,7 +130,9 @@ StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& op
     UpdateBranchReferences(model, data);
     ++result.halvings;
     ds *= 0.5;
-    if (result.halvings > options.max_halvings || ds < ds0 * std::ldexp(1.0, -options.max_halvings)) {
+    // The limit is on consecutive halvings: progress is still made while steps succeed, each
+    // advancing the load factor by at least ds0 / 2^max_halvings.
+    if (++consecutive_halvings > options.max_halvings) {
       result.message = Format("static solve failed at load factor %.6g (last converged %.6g): ",
                               target, s) + last_cause;
       return result;

@@ -31,10 +31,78 @@ struct RodInternal {
 void CalcRodInternal(const RodElement& element, const Section& section, const SE3& H_A,
                      const SE3& H_B, const Vec3& w_ref, RodInternal* out);
 
-// A dead (world-fixed) force per unit length f_w distributed along the element: generalised
-// external force g (to be subtracted from the residual) and the tangent of the residual
-// contribution, -dg/d[dh_A; dh_B] (exact for this load vector). The load is distributed with
-// linear weights and follows the exact helical kinematics (3-point Gauss).
+// Directional derivative of N(xi, d) along dd: d/de N(xi, d + e dd) (for d/dt N, dd = d_dot).
+Mat6x12 CalcRodNDirectional(double xi, const Vec6& d, const Vec6& dd);
+
+// Velocity-dependent forces of one element (method.md §2.5): inertia and damping, with the
+// blocks of the iteration matrix. Inputs are the relative motion d on the current branch, the
+// node body velocities eta_AB = [eta_A; eta_B] and accelerations eta_dot_AB (zero for a fixed
+// node). Every kernel is fixed-size and allocation-free.
+struct RodInertiaTerms {
+  Vec12 force = Vec12::Zero();  // g_ine (node A then node B, node-frame components) [N, N m]
+  Mat12 mass = Mat12::Zero();   // M_e = d g_ine / d eta_dot_AB (exact for both options)
+  Mat12 gyroscopic = Mat12::Zero();  // C_t, the eta_AB block of the iteration matrix (see below)
+  double kinetic_energy = 0.0;  // 1/2 eta_AB^T M_e eta_AB [J]
+};
+
+// Option A (RodInertia::kExact): the exact velocity field of the helical interpolation,
+//   eta(xi) = N(xi, d) eta_AB,  eta_dot(xi) = N eta_dot_AB + (dN/dt) eta_AB,
+//   g_ine = L int_0^1 N^T (M eta_dot - ad(eta)^T M eta) dxi,   M_e(d) = L int N^T M N dxi,
+// dN/dt = directional derivative of N in d along d_dot = P(d) eta_AB; 3-point Gauss-Legendre.
+// The residual is exact: the power eta_AB^T g_ine is the time derivative of the kinetic energy
+// of the same quadrature, and for a free element the world resultant of g_ine is the rate of
+// the linear and angular momentum of the exact field.
+// Tangent (a documented quasi-Newton choice, method.md §2.5): `mass` is exact, `gyroscopic`
+// is the option-B form evaluated with the exact N and the exact Gauss-point velocities,
+//   C_t = -L int N^T (ad(eta)^T M + Star(M eta)) N dxi,
+// which omits d[(dN/dt) eta_AB]/d eta_AB (the same order in |eta| as C_t itself) and
+// d g_ine / dq (no configuration term). In the iteration matrix beta' M_e + gamma' C_t the
+// omitted parts are O(h |eta|) and O(h^2) relative to beta' M_e, so Newton converges linearly
+// with a rate that vanishes as h -> 0 (tests/elements/rod_inertia_test.cpp measures both).
+void CalcRodInertiaExact(const RodElement& element, const Section& section, const Vec6& d,
+                         const Vec12& eta_ab, const Vec12& eta_dot_ab, RodInertiaTerms* out);
+
+// Option B (RodInertia::kConstant): velocities and virtual displacements interpolated linearly
+// in the inertia term only, N = [(1 - xi) I, xi I]: M_e = L [M/3 M/6; M/6 M/3] constant,
+// g_ine = M_e eta_dot_AB - L int N^T ad(eta)^T M eta dxi (2-point Gauss, exact), and the
+// tangents are exact: `gyroscopic` = d g_ine / d eta_AB, d g_ine / dq = 0.
+void CalcRodInertiaConstant(const RodElement& element, const Section& section,
+                            const Vec12& eta_ab, const Vec12& eta_dot_ab, RodInertiaTerms* out);
+
+// The model's choice of the two.
+void CalcRodInertia(RodInertia option, const RodElement& element, const Section& section,
+                    const Vec6& d, const Vec12& eta_ab, const Vec12& eta_dot_ab,
+                    RodInertiaTerms* out);
+
+// Kinetic energy 1/2 eta_AB^T M_e eta_AB of one element for either option [J] (the same
+// quadrature as the inertia forces, so that the power of g_ine is its exact time derivative).
+double CalcRodKineticEnergy(RodInertia option, const RodElement& element, const Section& section,
+                            const Vec6& d, const Vec12& eta_ab);
+
+// Damping forces of one element, added to *force and their eta_AB-derivative to *damping:
+//  * strain-rate (material) damping, sigma_v = D_s d_dot / L with D_s = section.damping +
+//    section.rayleigh_stiffness * section.stiffness: force P^T sigma_v, tangent
+//    (1/L) P^T diag(D_s) P. The stiffness-proportional Rayleigh term is thus a_K times the
+//    material part of K_t (objective: zero for rigid motions; equal to a_K K at an unstressed
+//    state);
+//  * mass-proportional Rayleigh damping a_M M_e eta_AB (tangent a_M M_e), with M_e = `mass`
+//    of the element's inertia option. It acts on absolute velocities: it also damps rigid-body
+//    motion (like a drag), so it does not conserve momentum.
+// The configuration derivatives of both are omitted from the iteration matrix.
+void AddRodDamping(const RodElement& element, const Section& section, const Vec6& d,
+                   const Vec12& eta_ab, const Mat12& mass, Vec12* force, Mat12* damping);
+
+// A force and a moment acting on the section at xi, consistent with the exact virtual
+// displacement field: g += weight * N(xi, d)^T F, with F = [R(xi)^T f; R(xi)^T m] for a world
+// (dead) load or F = [f; m] for a body (follower) load, R(xi) the section rotation of
+// H_A exp(xi d). tangent += -d(weight N^T F)/d[dh_A; dh_B] (exact: the residual holds -g).
+// Rigid translations of the element do exactly the virtual work of the applied force, so
+// linear momentum balance is exact and dead loads are conservative.
+void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, LoadFrame frame,
+                       const Vec3& force, const Vec3& moment, Vec12* g, Mat12* tangent);
+
+// A dead force f_w per unit length (e.g. rho A g) over the element, 3-point Gauss:
+// g and the tangent of -g (both overwritten).
 void CalcRodDistributedDeadForce(const RodElement& element, const SE3& H_A, const Vec6& d,
                                  const Vec3& f_w, Vec12* g, Mat12* tangent);
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "screwfem/lie/se3.h"
+#include "screwfem/model/errors.h"
 #include "screwfem/model/profile.h"
 #include "screwfem/model/section.h"
 #include "screwfem/solve/banded_lu.h"
@@ -70,6 +71,21 @@ struct PointLoad {
   Profile profile = Profile::Constant(1.0);
 };
 
+// A load on a rod: distributed over its whole length, or concentrated on the section at
+// reference arc length `arc_length` (measured from the rod's first node), scaled by a profile.
+struct RodLoad {
+  int rod = -1;
+  bool distributed = true;
+  double arc_length = 0.0;     // concentrated loads [m]
+  LoadFrame frame = LoadFrame::kWorld;
+  Vec3 force = Vec3::Zero();   // [N/m] distributed, [N] concentrated
+  Vec3 moment = Vec3::Zero();  // [N m/m] distributed, [N m] concentrated
+  Profile profile = Profile::Constant(1.0);
+  // Filled by Build for concentrated loads: the element carrying the section and xi in it.
+  int element = -1;
+  double xi = 0.0;
+};
+
 enum class JointType {
   kRevolute, kPrismatic, kHelical, kCylindrical, kSpherical, kPlanar, kUniversal, kFixed,
   kFree,
@@ -117,8 +133,9 @@ struct Model {
   std::vector<RigidBody> bodies;
   std::vector<Joint> joints;
   std::vector<PointLoad> point_loads;
+  std::vector<RodLoad> rod_loads;
   Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
-  RodInertia rod_inertia = RodInertia::kConstant;
+  RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
 
   // Sizes and the solver's ordering (computed by ModelBuilder::Build).
   int nv = 0;            // velocity unknowns
@@ -174,6 +191,7 @@ class ModelBuilder {
                  const Vec3& axis = Vec3::UnitZ(), const Vec3& axis2 = Vec3::Zero(),
                  double pitch = 0.0);
   int AddPointLoad(const PointLoad& load);
+  int AddRodLoad(const RodLoad& load);
   void SetGravity(const Vec3& g);
   Model& model() { return model_; }
 

@@ -21,6 +21,11 @@ struct Section {
   Vec6 stiffness = Vec6::Zero();  // diagonal of the sectional stiffness matrix K
   Vec6 inertia = Vec6::Zero();    // diagonal of the sectional mass matrix M (per length)
   Vec6 damping = Vec6::Zero();    // viscous damping on strain rates (per mode), K-units times s
+  // Rayleigh damping of the rod, C = a_M M_e + a_K K (elements/rod.h, AddRodDamping), in
+  // addition to `damping`. A mode of angular frequency w gets the damping ratio
+  // a_M / (2 w) + a_K w / 2. a_M also damps rigid-body motion; a_K acts on strain rates.
+  double rayleigh_mass = 0.0;       // a_M [1/s], >= 0
+  double rayleigh_stiffness = 0.0;  // a_K [s], >= 0
 
   static Section FromDiagonals(const Vec6& stiffness, const Vec6& inertia = Vec6::Zero());
   // Solid circle of radius r.

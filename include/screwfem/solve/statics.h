@@ -15,12 +15,13 @@ bool SolveAssembledSystem(const Model& model, Data& data);
 struct StaticOptions {
   double time = 0.0;                  // profiles of loads and drives are evaluated at this time
   int load_steps = 10;                // initial number of equal load increments
-  int max_halvings = 12;              // of the load increment, per solve
+  int max_halvings = 12;              // consecutive halvings of the load increment
   int max_iterations = 30;            // Newton iterations per load step
-  // Converged when |R|_inf <= residual_tolerance * (largest force term in R) and the last
-  // Newton increment was below increment_tolerance (translations relative to the model's
-  // length scale, rotations in rad), or when |R|_inf is at its round-off floor
-  // (32 eps times the largest term that cancels in R, e.g. EA |d| / L).
+  // Converged when the last Newton increment was below increment_tolerance (translations
+  // relative to the model's length scale, rotations in rad) and either |R|_inf <=
+  // residual_tolerance * (largest force term in R) or |R|_inf is at its round-off floor (32 eps
+  // times the largest term that cancels in R, e.g. EA max(|d|, |x|) / L). Every load step
+  // makes at least one Newton correction.
   double residual_tolerance = 1e-10;
   double increment_tolerance = 1e-10;
   double constraint_tolerance = 1e-10;  // |phi|_inf

@@ -1,0 +1,90 @@
+// Loads on the sections of a helical element (AddRodSectionLoad): the tangent is the exact
+// derivative of the generalised force, and the generalised forces are statically equivalent to
+// the applied force and moment for any deformation (exact virtual work of rigid motions).
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "screwfem/elements/rod.h"
+
+namespace screwfem {
+namespace {
+
+struct Config {
+  SE3 A, B;
+  Vec3 w_ref;
+};
+
+Config RandomBentElement(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Vec6 xa, d;
+  for (int i = 0; i < 6; ++i) xa(i) = u(rng);
+  d << 1.0 + 0.2 * u(rng), 0.1 * u(rng), 0.1 * u(rng), 1.5 * u(rng), 1.5 * u(rng), 1.5 * u(rng);
+  Config c;
+  c.A = ExpSE3(xa);
+  c.B = c.A * ExpSE3(d);
+  c.w_ref = d.tail<3>();
+  return c;
+}
+
+void Generalized(const Config& c, double xi, LoadFrame frame, const Vec3& f, const Vec3& m,
+                 Vec12* g, Mat12* K) {
+  g->setZero();
+  K->setZero();
+  const Vec6 d = CalcRodRelativeMotion(c.A, c.B, c.w_ref);
+  AddRodSectionLoad(xi, 0.7, c.A, d, frame, f, m, g, K);
+}
+
+TEST(RodSectionLoad, TangentIsTheDerivativeOfTheGeneralisedForce) {
+  std::mt19937 rng(7);
+  for (LoadFrame frame : {LoadFrame::kWorld, LoadFrame::kBody}) {
+    for (int trial = 0; trial < 4; ++trial) {
+      const Config c = RandomBentElement(rng);
+      const double xi = 0.15 + 0.2 * trial;
+      const Vec3 f(0.3, -1.2, 0.8), m(0.5, 0.2, -0.7);
+      Vec12 g;
+      Mat12 K;
+      Generalized(c, xi, frame, f, m, &g, &K);
+      Mat12 fd;
+      const double e = 1e-6;
+      for (int j = 0; j < 12; ++j) {
+        Config cp = c, cm = c;
+        Vec6 dh = Vec6::Zero();
+        dh(j % 6) = e;
+        (j < 6 ? cp.A : cp.B) = (j < 6 ? c.A : c.B) * ExpSE3(dh);
+        (j < 6 ? cm.A : cm.B) = (j < 6 ? c.A : c.B) * ExpSE3(-dh);
+        Vec12 gp, gm;
+        Mat12 unused;
+        Generalized(cp, xi, frame, f, m, &gp, &unused);
+        Generalized(cm, xi, frame, f, m, &gm, &unused);
+        fd.col(j) = -(gp - gm) / (2 * e);  // the tangent belongs to the residual term -g
+      }
+      EXPECT_LT((K - fd).norm(), 1e-7 * std::max(1.0, fd.norm()))
+          << (frame == LoadFrame::kWorld ? "dead" : "follower") << " load, trial " << trial;
+    }
+  }
+}
+
+TEST(RodSectionLoad, NodalForcesAreStaticallyEquivalentToTheAppliedLoad) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Config c = RandomBentElement(rng);
+    const double xi = 0.1 + 0.2 * trial;
+    const Vec3 f(1.0, -2.0, 0.5), m(-0.4, 0.3, 0.9);
+    Vec12 g;
+    Mat12 K;
+    Generalized(c, xi, LoadFrame::kWorld, f, m, &g, &K);
+    const Vec6 d = CalcRodRelativeMotion(c.A, c.B, c.w_ref);
+    const SE3 H = c.A * ExpSE3(xi * d);  // the loaded section
+    // Resultant force and moment about the world origin, in world components.
+    const Vec3 FA = c.A.R * g.segment<3>(0), FB = c.B.R * g.segment<3>(6);
+    const Vec3 MA = c.A.R * g.segment<3>(3), MB = c.B.R * g.segment<3>(9);
+    const Vec3 force = FA + FB;
+    const Vec3 moment = c.A.x.cross(FA) + c.B.x.cross(FB) + MA + MB;
+    EXPECT_LT((force - 0.7 * f).norm(), 1e-12);
+    EXPECT_LT((moment - 0.7 * (H.x.cross(f) + m)).norm(), 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace screwfem
