@@ -45,7 +45,9 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   integ.v_start = integ.vdot_start = integ.a_start = integ.dq = Eigen::VectorXd::Zero(nv);
   integ.lambda_start = Eigen::VectorXd::Zero(nc);
   SaveState(data, &integ.q_start);
-  for (Mat6& T : data.node_tangent) T.setIdentity();
+  // One tangent operator per node, then one per joint (used by spherical, planar and free
+  // joints, whose coordinates retract by the exponential; see TryStep).
+  data.node_tangent.assign(model.nodes.size() + model.joints.size(), Mat6::Identity());
 
   // Bdot v = d^2/de^2 phi(q exp(e v)) (exact for constant body velocities), by a central
   // second difference; only at start-up (method.md §5.4).
@@ -129,11 +131,24 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::st
     RestoreState(integ.q_start, data);
     data.increment.head(nv) = h * integ.dq;
     Retract(model, data, data.increment.head(nv));
-    if (opt.use_tangent_operator)
+    if (opt.use_tangent_operator) {
       for (const Node& n : model.nodes)
         if (n.dof >= 0)
           data.node_tangent[static_cast<std::size_t>(&n - model.nodes.data())] =
               TSE3(data.increment.segment<6>(n.dof));
+      // Group joints: H_J = H_J,n exp(A_J x) with x = h dq_J; the correction of x moves H_J
+      // by A_J T_k dx with T_k = A_J^T T(A_J x) A_J (A_J spans a subalgebra, orthonormal
+      // columns).
+      for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+        const Joint& j = model.joints[jj];
+        const int k = j.k();
+        if (k == 0 || JointHasGlobalCoordinates(j.type)) continue;
+        const Vec6 xi = j.basis * data.increment.segment(j.coord, k);
+        Mat6& TJ = data.node_tangent[model.nodes.size() + jj];
+        TJ.setIdentity();
+        TJ.topLeftCorner(k, k) = j.basis.transpose() * TSE3(xi) * j.basis;
+      }
+    }
     if (!Assemble(model, data, o)) {
       if (why) {
         char buf[200];
@@ -263,13 +278,12 @@ Energy CalcEnergy(const Model& model, const Data& data) {
     E.strain += 0.5 * el.length * strain.dot(sec.stiffness.cwiseProduct(strain));
     const int da = model.nodes[static_cast<std::size_t>(el.node_a)].dof;
     const int db = model.nodes[static_cast<std::size_t>(el.node_b)].dof;
-    const Vec6 eta_a = da >= 0 ? Vec6(data.v.segment<6>(da)) : Vec6::Zero();
-    const Vec6 eta_b = db >= 0 ? Vec6(data.v.segment<6>(db)) : Vec6::Zero();
-    // Option B: linear velocity interpolation (quadratic integrand: 2-point rule exact; the
-    // 3-point rule used here is exact as well).
+    Vec12 eta_ab = Vec12::Zero();
+    if (da >= 0) eta_ab.head<6>() = data.v.segment<6>(da);
+    if (db >= 0) eta_ab.tail<6>() = data.v.segment<6>(db);
+    // 1/2 eta_AB^T M_e eta_AB of the model's inertia option (M_e(d) for option A).
+    E.kinetic += CalcRodKineticEnergy(model.rod_inertia, el, sec, d, eta_ab);
     for (int i = 0; i < 3; ++i) {
-      const Vec6 eta = (1.0 - kXi[i]) * eta_a + kXi[i] * eta_b;
-      E.kinetic += 0.5 * el.length * kW[i] * eta.dot(sec.inertia.cwiseProduct(eta));
       const Vec3 x = (HA * ExpSE3(kXi[i] * d)).x;
       E.gravity -= el.length * kW[i] * sec.inertia(0) * model.gravity.dot(x);
     }
