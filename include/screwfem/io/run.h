@@ -21,22 +21,36 @@ namespace screwfem {
 struct RunOptions {
   bool progress = false;                    // progress bar on stderr
   const std::atomic<bool>* stop = nullptr;  // set asynchronously (e.g. SIGINT) to stop cleanly
+  // Called after every completed time step (and after the static solution) with the
+  // simulated time [s], once the step's output rows are on disk. For tests and embedding.
+  std::function<void(double t)> on_step;
 };
 
 struct RunResult {
   bool ok = false;
   bool interrupted = false;
   double end_time = 0.0;        // simulated time reached [s]
-  long steps = 0;
-  long newton_iterations = 0;
+  long steps = 0;               // time steps (static analyses: accepted load steps)
+  long newton_iterations = 0;   // dynamic steps and static solves (incl. a preload)
   int max_iterations_per_step = 0;
-  long halvings = 0;
+  long halvings = 0;            // halved time steps, or halved load increments in statics
   double wall_seconds = 0.0;
   double max_constraint_residual = 0.0;
   std::string message;          // why it stopped early, with the time
 };
 
 // Runs the scene's analysis and writes the outputs into outdir (created if needed).
+//
+// Dynamic analyses: optional static preload at start_time, consistent initial accelerations,
+// then steps of analysis.step; with align_steps, every breakpoint of a load or drive profile
+// (Profile::Breakpoints) in (start_time, end_time) falls on a step end (a grid step end within
+// a tenth of a step of a breakpoint moves onto it). Rows are recorded at start_time, at the
+// first step end at or after each multiple of outputs.interval (every step when 0) and at the
+// last step end. Static analyses: SolveStatic at statics.time, one row.
+// Numerical failure, a stop request and write errors end the run with a result (and
+// summary.json status "failed" or "interrupted"), never an exception.
+// Throws InputError for invalid settings or outputs (naming the field) and when outdir or its
+// files cannot be created.
 RunResult RunScene(const Scene& scene, const std::string& outdir, const RunOptions& options = {});
 
 }  // namespace screwfem

@@ -1,0 +1,117 @@
+// Internal to screwfem::io: the YAML document tree of a scene file, with the source location of
+// every node, and the typed readers that turn it into values with "FILE:LINE:COL: FIELD: what
+// was expected" messages (docs/scene-format.md, "Errors").
+//
+// The tree is built from yaml-cpp's event parser rather than YAML::Node so that every map key
+// keeps its own location, duplicate keys are seen (YAML::Node keeps the first silently) and
+// alias expansion is bounded.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "screwfem/lie/se3.h"
+
+namespace screwfem::scene_yaml {
+
+// Where a node came from: a line and column of the scene file (1-based), or an override string.
+struct Location {
+  int line = 0;
+  int column = 0;
+  std::string override_text;  // non-empty: the node was written by this override
+};
+
+struct MapEntry {
+  std::string key;
+  Location key_location;
+};
+
+struct Node {
+  enum class Kind { kNull, kScalar, kSequence, kMap };
+  Kind kind = Kind::kNull;
+  Location location;
+  std::string scalar;                              // kScalar
+  bool quoted = false;                             // kScalar written in quotes
+  std::vector<Node> items;                         // kSequence
+  std::vector<std::pair<MapEntry, Node>> entries;  // kMap, in file order (duplicates kept)
+
+  bool IsNull() const { return kind == Kind::kNull; }
+  bool IsScalar() const { return kind == Kind::kScalar; }
+  bool IsSequence() const { return kind == Kind::kSequence; }
+  bool IsMap() const { return kind == Kind::kMap; }
+  // First entry with this key, or nullptr (maps only).
+  const Node* Find(const std::string& key) const;
+  Node* Find(const std::string& key);
+  const MapEntry* FindEntry(const std::string& key) const;
+};
+
+// Text of a location for messages: "FILE:LINE:COL" or "FILE: override 'a.b=c'".
+std::string Where(const std::string& source, const Location& location);
+
+// Kind of a node in words ("a map", "a list", "a number or text", "nothing").
+std::string Describe(const Node& node);
+
+// Parses one YAML document. Throws InputError for empty input (unless allow_empty: then a null
+// node), invalid YAML, binary content, more than one document, non-scalar keys, or a tree
+// beyond the size limits.
+Node Parse(const std::string& text, const std::string& source, bool allow_empty = false);
+
+// Applies "a.b.c=value" to the tree (value parsed as a YAML scalar or flow collection).
+// Missing keys are created, except entries of the named collections in `collections` (dotted
+// paths such as "bodies"), which must exist unless they are the last component.
+void ApplyOverride(Node& root, const std::string& override_text, const std::string& source,
+                   const std::vector<std::string>& collections);
+
+// Closest candidate by edit distance, or "" when nothing is close.
+std::string Closest(const std::string& word, const std::vector<std::string>& candidates);
+// " (did you mean 'x'?)" or "".
+std::string DidYouMean(const std::string& word, const std::vector<std::string>& candidates);
+
+// ---------------------------------------------------------------------------------------------
+// Typed reading with messages. A Reader knows the source name; `path` is the dotted field name
+// used in messages (e.g. "bodies.arm56.elements").
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+  const std::string& source() const { return source_; }
+
+  [[noreturn]] void Fail(const Location& at, const std::string& path,
+                         const std::string& what) const;
+
+  // Checks that `node` is a map whose keys are all in `allowed` and not repeated; the first
+  // offending key (in file order) is reported.
+  void ExpectMap(const Node& node, const std::string& path) const;
+  void CheckKeys(const Node& map, const std::string& path,
+                 const std::vector<std::string>& allowed) const;
+  // A map of named entries: names must be plain identifiers and unique.
+  void CheckNames(const Node& map, const std::string& path, const std::string& entity) const;
+  const Node& Require(const Node& map, const std::string& path, const std::string& key) const;
+
+  double Number(const Node& node, const std::string& path) const;
+  double PositiveNumber(const Node& node, const std::string& path) const;
+  double NonNegativeNumber(const Node& node, const std::string& path) const;
+  int Integer(const Node& node, const std::string& path, int min, int max) const;
+  bool Bool(const Node& node, const std::string& path) const;
+  std::string Text(const Node& node, const std::string& path) const;
+  // One of `choices`; reports the closest one otherwise.
+  std::string Choice(const Node& node, const std::string& path,
+                     const std::vector<std::string>& choices) const;
+  std::vector<double> Numbers(const Node& node, const std::string& path) const;
+  // Exactly n numbers.
+  std::vector<double> FixedNumbers(const Node& node, const std::string& path, std::size_t n) const;
+  Vec3 Vector3(const Node& node, const std::string& path) const;
+  Vec6 Vector6(const Node& node, const std::string& path) const;
+
+ private:
+  std::string source_;
+};
+
+// Evaluates a number written as a decimal literal or a small arithmetic expression
+// (+ - * / parentheses, the constants pi and deg = pi/180, the functions sqrt sin cos tan asin
+// acos atan atan2 exp log).
+// Returns false (and an explanation) when the text is not such an expression.
+bool EvaluateExpression(const std::string& text, double* value, std::string* error);
+
+}  // namespace screwfem::scene_yaml

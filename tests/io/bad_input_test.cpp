@@ -1,0 +1,442 @@
+// Bad scene input (docs/scene-format.md, "Errors"): every case throws InputError with a message
+// "FILE:LINE:COL: FIELD: what was expected" that points at the offending line and column.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "screwfem/io/scene.h"
+#include "screwfem/model/errors.h"
+
+namespace screwfem {
+namespace {
+
+// A valid scene; each case edits it. Line numbers below count from 1 at "points:".
+const std::string kHead = R"(points: {A: [0, 0, 0], B: [1, 0, 0], C: [2, 0, 0]}
+sections: {s: {stiffness: [1, 1, 1, 1, 1, 1]}}
+)";
+
+std::string Error(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  try {
+    ParseScene(text, "bad.yaml", overrides);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+// Asserts the location prefix exactly and that the message contains `what`.
+void ExpectError(const std::string& text, const std::string& location, const std::string& what,
+                 const std::vector<std::string>& overrides = {}) {
+  const std::string message = Error(text, overrides);
+  EXPECT_EQ(message.rfind(location + ": ", 0), 0u) << "message: " << message;
+  EXPECT_NE(message.find(what), std::string::npos) << "message: " << message;
+}
+
+TEST(BadInput, ValidBaseSceneParses) {
+  EXPECT_EQ(Error(kHead + "bodies:\n  b: {type: rigid, between: [A, B], mass: 1, inertia: [1, 1, "
+                          "1], fixed: true}\n"),
+            "(no error)");
+}
+
+TEST(BadInput, UnknownTopLevelKeySuggestsTheClosest) {
+  ExpectError(kHead + "bodys:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n",
+              "bad.yaml:3:1", "bodys: unknown key 'bodys' (did you mean 'bodies'?)");
+}
+
+TEST(BadInput, UnknownBodyKeySuggestsTheClosest) {
+  ExpectError(
+      kHead + "bodies:\n  b: {type: rigid, at: A, mas: 1, inertia: [1, 1, 1], fixed: true}\n",
+      "bad.yaml:4:27", "bodies.b.mas: unknown key 'mas' (did you mean 'mass'?)");
+}
+
+TEST(BadInput, MissingKey) {
+  ExpectError(kHead + "bodies:\n  b: {type: rigid, at: A, inertia: [1, 1, 1], fixed: true}\n",
+              "bad.yaml:4:6", "bodies.b: missing key 'mass'");
+}
+
+TEST(BadInput, WrongTypeListForNumber) {
+  ExpectError(
+      kHead + "bodies:\n  b: {type: rigid, at: A, mass: [1], inertia: [1, 1, 1], fixed: true}\n",
+      "bad.yaml:4:33", "bodies.b.mass: expected a number, got a list");
+}
+
+TEST(BadInput, WrongTypeTextForNumber) {
+  ExpectError(kHead + "bodies:\n  b:\n    type: rigid\n    at: A\n    mass: heavy\n",
+              "bad.yaml:7:11", "bodies.b.mass: expected a number, got 'heavy'");
+}
+
+TEST(BadInput, WrongVectorSize) {
+  ExpectError("points:\n  A: [0, 0]\n", "bad.yaml:2:6",
+              "points.A: expected a list of 3 numbers, got a list of 2");
+}
+
+TEST(BadInput, WrongSixVectorSize) {
+  ExpectError("sections:\n  s:\n    stiffness: [1, 1, 1, 1, 1]\n", "bad.yaml:3:16",
+              "sections.s.stiffness: expected a list of 6 numbers, got a list of 5");
+}
+
+TEST(BadInput, UndefinedPoint) {
+  ExpectError(kHead + "bodies:\n  b: {type: rigid, between: [A, Q], mass: 1, inertia: [1, 1, 1]}\n",
+              "bad.yaml:4:33", "bodies.b.between[1]: undefined point 'Q'");
+}
+
+TEST(BadInput, UndefinedBodySuggestsTheClosest) {
+  ExpectError(
+      kHead +
+          "bodies:\n  base: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+          "joints:\n  j: {type: revolute, at: A, between: [ground, bse], axis: [0, 0, 1]}\n",
+      "bad.yaml:6:48", "joints.j.between[1]: undefined body 'bse' (did you mean 'base'?)");
+}
+
+TEST(BadInput, UndefinedSection) {
+  ExpectError(kHead + "bodies:\n  r: {type: soft, from: A, to: B, section: t, free: true}\n",
+              "bad.yaml:4:44", "bodies.r.section: undefined section 't'");
+}
+
+TEST(BadInput, DuplicateBodyName) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], fixed: true}\n"
+                  "  b: {type: rigid, at: B, mass: 1, inertia: [1, 1, 1], fixed: true}\n",
+              "bad.yaml:5:3", "duplicate body name 'b' (first defined at bad.yaml:4:3)");
+}
+
+TEST(BadInput, DuplicateKeyInsideAMap) {
+  ExpectError(
+      kHead +
+          "bodies:\n  b: {type: rigid, at: A, mass: 1, mass: 2, inertia: [1, 1, 1], fixed: true}\n",
+      "bad.yaml:4:36", "bodies.b.mass: duplicate key 'mass'");
+}
+
+TEST(BadInput, ZeroLengthRod) {
+  ExpectError(
+      kHead + "bodies:\n  r: {type: soft, from: A, to: [0, 0, 0], section: s, free: true}\n",
+      "bad.yaml:4:32", "bodies.r.to: zero-length segment");
+}
+
+TEST(BadInput, ZeroAxis) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                  "joints:\n  j: {type: revolute, at: A, between: [ground, b], axis: [0, 0, 0]}\n",
+              "bad.yaml:6:58", "joints.j.axis: the axis is zero");
+}
+
+TEST(BadInput, NonUnitAxis) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                  "joints:\n  j: {type: revolute, at: A, between: [ground, b], axis: [0, 0, 2]}\n",
+              "bad.yaml:6:58", "joints.j.axis: expected a unit vector, got length 2");
+}
+
+TEST(BadInput, NonPositiveMass) {
+  ExpectError(
+      kHead + "bodies:\n  b: {type: rigid, at: A, mass: 0, inertia: [1, 1, 1], fixed: true}\n",
+      "bad.yaml:4:33", "bodies.b.mass: expected a positive number, got '0'");
+}
+
+TEST(BadInput, NonPositiveSectionStiffness) {
+  ExpectError("sections:\n  s: {stiffness: [1, 1, -1, 1, 1, 1]}\n", "bad.yaml:2:25",
+              "sections.s.stiffness[2]: stiffness entries must be positive");
+}
+
+TEST(BadInput, NegativeJointDamping) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                  "joints:\n  j: {type: revolute, at: A, between: [ground, b], axis: [0, 0, 1], "
+                  "damping: -5}\n",
+              "bad.yaml:6:78", "joints.j.damping: expected a non-negative number, got '-5'");
+}
+
+TEST(BadInput, BodyConnectedToNothing) {
+  ExpectError(kHead + "bodies:\n  lonely: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n",
+              "bad.yaml:4:3", "bodies.lonely: body 'lonely' is connected to nothing");
+}
+
+TEST(BadInput, ProfileEndNotAfterStart) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], fixed: true}\n"
+                  "loads:\n  f:\n    body: b\n    at: A\n    force: [1, 0, 0]\n"
+                  "    profile: {type: ramp, t0: 1, t1: 0.5}\n",
+              "bad.yaml:10:38", "loads.f.profile.t1: expected t1 > t0");
+}
+
+TEST(BadInput, TableTimesNotIncreasing) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], fixed: true}\n"
+                  "loads:\n  f:\n    body: b\n    at: A\n    force: [1, 0, 0]\n"
+                  "    profile: {type: table, times: [0, 1, 1], values: [0, 1, 2]}\n",
+              "bad.yaml:10:42", "loads.f.profile.times[2]: times must be strictly increasing");
+}
+
+TEST(BadInput, NonFiniteNumbers) {
+  ExpectError("gravity: [0, 0, .inf]\n", "bad.yaml:1:17",
+              "gravity[2]: expected a number, got '.inf'");
+  ExpectError("gravity: [0, 0, 1e999]\n", "bad.yaml:1:17",
+              "gravity[2]: expected a number, got '1e999' (number out of range)");
+  ExpectError("gravity: [0, 0, 1/0]\n", "bad.yaml:1:17",
+              "gravity[2]: expected a finite number, got '1/0'");
+  ExpectError("gravity: [nan, 0, 0]\n", "bad.yaml:1:11",
+              "gravity[0]: expected a number, got 'nan'");
+}
+
+TEST(BadInput, UnitsOtherThanSI) {
+  ExpectError("units: imperial\n", "bad.yaml:1:8", "units: only SI units are supported");
+}
+
+TEST(BadInput, InvalidYaml) {
+  ExpectError("points:\n  A: [0, 0, 0\n", "bad.yaml:3:1", "not valid YAML");
+  ExpectError("points:\n  A: [0, 0, 0]\n   B: 1\n", "bad.yaml:3:4", "not valid YAML");
+}
+
+TEST(BadInput, SceneIsNotAMap) {
+  ExpectError("- just\n- a list\n", "bad.yaml:1:1", "a scene is a map of sections");
+  ExpectError("hello\n", "bad.yaml:1:1", "a scene is a map of sections");
+}
+
+TEST(BadInput, RodHasNoNodeAtTheJointPoint) {
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: C, section: s, elements: 3}\n"
+                  "joints:\n  j: {type: revolute, at: B, between: [ground, r], axis: [0, 0, 1]}\n",
+              "bad.yaml:6:48",
+              "joints.j.between[1]: joint point: soft body 'r' has no node at [1, 0, 0]");
+}
+
+TEST(BadInput, MisspelledJointType) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                  "joints:\n  j: {type: revolut, at: A, between: [ground, b], axis: [0, 0, 1]}\n",
+              "bad.yaml:6:13", "joints.j.type: expected one of revolute, prismatic");
+  EXPECT_NE(
+      Error(kHead + "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                    "joints:\n  j: {type: revolut, at: A, between: [ground, b], axis: [0, 0, 1]}\n")
+          .find("(did you mean 'revolute'?)"),
+      std::string::npos);
+}
+
+TEST(BadInput, KeyNotUsedByThisJointType) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                  "joints:\n  j: {type: spherical, at: A, between: [ground, b], axis: [0, 0, 1]}\n",
+              "bad.yaml:6:53", "joints.j.axis: 'axis' is not used by spherical joints");
+}
+
+TEST(BadInput, SeriesElasticDriveWithoutSpring) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                  "joints:\n  j:\n    type: revolute\n    at: A\n    between: [ground, b]\n"
+                  "    axis: [0, 0, 1]\n    drive: {type: series_elastic, profile: 1}\n",
+              "bad.yaml:11:12",
+              "joints.j.drive: a series_elastic drive needs a positive stiffness");
+}
+
+TEST(BadInput, DriveCoordinateOutOfRange) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                  "joints:\n  j:\n    type: revolute\n    at: A\n    between: [ground, b]\n"
+                  "    axis: [0, 0, 1]\n    drive: {type: force, coordinate: 1, profile: 1}\n",
+              "bad.yaml:11:38",
+              "joints.j.drive.coordinate: expected an integer from 0 to 0, got '1'");
+}
+
+TEST(BadInput, UniversalAxesNotOrthogonal) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                  "joints:\n  j: {type: universal, at: A, between: [ground, b], axis: [0, 0, 1], "
+                  "axis2: [0, 0.6, 0.8]}\n",
+              "bad.yaml:6:77", "joints.j.axis2: must be orthogonal to 'axis'");
+}
+
+TEST(BadInput, BothSidesTheSameBody) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1]}\n"
+                  "joints:\n  j: {type: revolute, at: A, between: [b, b], axis: [0, 0, 1]}\n",
+              "bad.yaml:6:39", "joints.j.between: both sides are the same body 'b'");
+}
+
+TEST(BadInput, GroundIsReserved) {
+  ExpectError(
+      kHead + "bodies:\n  ground: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], fixed: true}\n",
+      "bad.yaml:4:3", "bodies.ground: 'ground' is reserved");
+}
+
+TEST(BadInput, WeldToARigidBody) {
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], fixed: true}\n"
+                  "  r: {type: soft, from: A, to: B, section: s, weld_start: b}\n",
+              "bad.yaml:5:59", "bodies.r.weld_start: 'b' must be a soft body");
+}
+
+TEST(BadInput, OutputArcLengthBeyondTheRod) {
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "outputs:\n  points:\n    mid: {rod: r, s: 1.5}\n",
+              "bad.yaml:7:22", "outputs.points.mid.s: arc length beyond the end of the rod");
+}
+
+TEST(BadInput, UnknownJointInOutputs) {
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "outputs:\n  joints: [J9]\n",
+              "bad.yaml:6:12", "outputs.joints[0]: undefined joint 'J9'");
+}
+
+TEST(BadInput, AnalysisEndBeforeStart) {
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis: {start_time: 2, end_time: 1}\n",
+              "bad.yaml:5:37", "analysis.end_time: expected end_time > start_time");
+}
+
+TEST(BadInput, SpectralRadiusOutsideTheUnitInterval) {
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis:\n  rho_inf: 1.5\n",
+              "bad.yaml:6:12", "analysis.rho_inf: expected a spectral radius in [0, 1]");
+}
+
+TEST(BadInput, NonScalarMapKey) {
+  ExpectError("points:\n  [1, 2]: [0, 0, 0]\n", "bad.yaml:2:3", "map keys must be plain names");
+}
+
+TEST(BadInput, SecondYamlDocument) {
+  ExpectError("units: SI\n---\nunits: SI\n", "bad.yaml:3:1", "one YAML document");
+}
+
+TEST(BadInput, AliasExpansionIsBounded) {
+  std::string text = "a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n";
+  for (int i = 1; i <= 8; ++i) {
+    const std::string index = std::to_string(i);
+    std::string prev = "*a";
+    prev += std::to_string(i - 1);
+    text += "a";
+    text += index;
+    text += ": &a";
+    text += index;
+    text += " [";
+    text += prev;
+    for (int k = 1; k < 10; ++k) text += ", " + prev;
+    text += "]\n";
+  }
+  const std::string message = Error(text);
+  EXPECT_NE(message.find("more than 1000000 nodes"), std::string::npos) << message;
+}
+
+TEST(BadInput, DeepNestingIsAnErrorNotACrash) {
+  const std::string text = "a: " + std::string(100000, '[') + std::string(100000, ']') + "\n";
+  const std::string message = Error(text);
+  EXPECT_EQ(message.rfind("bad.yaml:", 0), 0u) << message;
+}
+
+TEST(BadInput, HugeElementCountIsRejected) {
+  ExpectError(
+      kHead + "bodies:\n  r: {type: soft, from: A, to: B, section: s, elements: 1e9, free: true}\n",
+      "bad.yaml:4:57", "bodies.r.elements: expected an integer from 1 to 100000");
+}
+
+TEST(BadInput, OverrideOfAnUnknownPathNamesIt) {
+  const std::string scene =
+      kHead + "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n";
+  ExpectError(scene, "bad.yaml: override 'analysis.stepp=1e-3'",
+              "analysis.stepp: unknown key 'stepp' (did you mean 'step'?)",
+              {"analysis.stepp=1e-3"});
+  ExpectError(scene, "bad.yaml: override 'bodies.q.elements=3'", "bodies: no entry 'q'",
+              {"bodies.q.elements=3"});
+  ExpectError(scene, "bad.yaml: override 'points.A.x=1'",
+              "'points.A' is a list of 3 items; 'x' is not an index", {"points.A.x=1"});
+  ExpectError(scene, "bad.yaml: override 'analysis'", "expected KEY.PATH=VALUE", {"analysis"});
+  ExpectError(scene, "bad.yaml: override 'bodies.r.elements=0'",
+              "bodies.r.elements: expected an integer from 1", {"bodies.r.elements=0"});
+}
+
+TEST(BadInput, WeldAcrossAKink) {
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "  q: {type: soft, from: B, to: [1, 1, 0], section: s, weld_start: r}\n",
+              "bad.yaml:5:67", "bodies.q.weld_start: the section frames of 'q' and 'r' differ");
+}
+
+TEST(BadInput, SceneWithoutBodies) {
+  ExpectError("units: SI\npoints: {A: [0, 0, 0]}\n", "bad.yaml:1:1",
+              "bodies: the scene has no bodies");
+}
+
+TEST(BadInput, ModelBuilderErrorsAreRethrownWithTheLocation) {
+  // Two welded rods share their node at B: a joint between them has the same node on both
+  // sides, which ModelBuilder::Build rejects; the message gains the file and the joint's line.
+  ExpectError(
+      kHead +
+          "bodies:\n  r: {type: soft, from: A, to: B, section: s, elements: 1, free: true}\n"
+          "  q: {type: soft, from: B, to: C, section: s, elements: 1, weld_start: r}\n"
+          "joints:\n  j: {type: revolute, at: B, between: [r, q], axis: [0, 0, 1]}\n",
+      "bad.yaml:7:3", "joints.j: joint 'j': both sides are node 'r.1'");
+}
+
+// --- files --------------------------------------------------------------------------------------
+
+class BadFile : public ::testing::Test {
+ protected:
+  std::string Write(const std::string& name, const std::string& bytes) {
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              ("screwfem_bad_input_" + std::to_string(::getpid()) + "_" + name))
+                                 .string();
+    std::ofstream(path, std::ios::binary) << bytes;
+    paths_.push_back(path);
+    return path;
+  }
+  static std::string LoadError(const std::string& path) {
+    try {
+      LoadScene(path);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "(no error)";
+  }
+  void TearDown() override {
+    for (const std::string& p : paths_) std::remove(p.c_str());
+  }
+  std::vector<std::string> paths_;
+};
+
+TEST_F(BadFile, EmptyFile) {
+  const std::string path = Write("empty.yaml", "");
+  EXPECT_EQ(LoadError(path), path + ":1:1: empty scene (no YAML content)");
+  const std::string comments = Write("comments.yaml", "# nothing but a comment\n\n");
+  EXPECT_EQ(LoadError(comments), comments + ":1:1: empty scene (no YAML content)");
+}
+
+TEST_F(BadFile, BinaryFile) {
+  std::string bytes = "units: SI\npoints:\n  A: [0, 0";
+  bytes += std::string(
+      "\x7f"
+      "ELF\x02\x01\x01\x00\x00\xff\xfe",
+      12);
+  const std::string path = Write("binary.yaml", bytes);
+  const std::string message = LoadError(path);
+  EXPECT_EQ(message.rfind(path + ":3:11: ", 0), 0u) << message;
+  EXPECT_NE(message.find("not a YAML text file"), std::string::npos) << message;
+}
+
+TEST_F(BadFile, InvalidUtf8) {
+  const std::string path = Write("latin1.yaml", "name: caf\xe9\n");
+  const std::string message = LoadError(path);
+  EXPECT_EQ(message.rfind(path + ":1:10: ", 0), 0u) << message;
+}
+
+TEST_F(BadFile, MissingFileAndDirectory) {
+  EXPECT_NE(LoadError("/nonexistent/scene.yaml").find("/nonexistent/scene.yaml: cannot open"),
+            std::string::npos);
+  const std::string dir = std::filesystem::temp_directory_path().string();
+  EXPECT_NE(LoadError(dir).find("is a directory"), std::string::npos);
+}
+
+TEST_F(BadFile, ErrorsInAFileNameTheFile) {
+  const std::string path = Write("typo.yaml", "units: SI\ngravty: [0, 0, -9.81]\n");
+  EXPECT_EQ(LoadError(path), path + ":2:1: gravty: unknown key 'gravty' (did you mean 'gravity'?)");
+}
+
+}  // namespace
+}  // namespace screwfem

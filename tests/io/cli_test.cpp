@@ -1,0 +1,236 @@
+// The screwfem program (app/main.cpp), run as a child process on tests/data/pendulum.yaml:
+// files and exit codes of run (0 completed, 1 failed step, 2 input error, 130 SIGINT),
+// check, and plot (which runs tools/screwfem_plot.py with /usr/bin/python3).
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "run_test_util.h"
+
+extern char** environ;
+
+namespace screwfem {
+namespace {
+
+using test::ParseJsonFile;
+using test::ReadCsv;
+using test::ReadFile;
+using test::ScopedDir;
+using test::Table;
+
+#ifdef SCREWFEM_CLI_PATH
+constexpr const char* kCli = SCREWFEM_CLI_PATH;
+#else
+constexpr const char* kCli = nullptr;
+#endif
+const std::string kPendulum = std::string(SCREWFEM_TEST_DATA_DIR) + "/pendulum.yaml";
+
+struct Outcome {
+  int code = -1;  // exit status, or 128 + signal
+  std::string out, err;
+};
+
+// Starts `program args...` with stdout and stderr captured in files under `dir`.
+pid_t Spawn(const std::string& program, const std::vector<std::string>& args,
+            const std::string& dir, const std::vector<std::string>& extra_env = {}) {
+  std::vector<std::string> argv_text = {program};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_text) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::vector<std::string> env_text(extra_env);
+  for (char** e = environ; *e; ++e) env_text.emplace_back(*e);
+  std::vector<char*> envp;
+  for (std::string& e : env_text) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
+  posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), envp.data());
+  posix_spawn_file_actions_destroy(&actions);
+  EXPECT_EQ(rc, 0) << "cannot start " << program;
+  return rc == 0 ? pid : -1;
+}
+
+Outcome Wait(pid_t pid, const std::string& dir) {
+  Outcome o;
+  int status = 0;
+  if (pid > 0 && waitpid(pid, &status, 0) == pid)
+    o.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  o.out = ReadFile(dir + "/stdout.txt");
+  o.err = ReadFile(dir + "/stderr.txt");
+  return o;
+}
+
+Outcome RunCli(const std::vector<std::string>& args, const std::string& dir,
+               const std::vector<std::string>& env = {}) {
+  std::filesystem::create_directories(dir);
+  return Wait(Spawn(kCli, args, dir, env), dir);
+}
+
+#define REQUIRE_CLI()                                                                      \
+  do {                                                                                     \
+    if (kCli == nullptr) GTEST_SKIP() << "the build did not say where the screwfem program is"; \
+  } while (0)
+
+TEST(Cli, RunWritesResultsAndExitsZero) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_run");
+  const std::string out = tmp.path() + "/out";
+  const Outcome o = RunCli({"run", kPendulum, "-o", out, "--quiet"}, tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_EQ(o.out.rfind("completed: t = 0.5 s, 500 steps", 0), 0u) << o.out;
+  EXPECT_EQ(o.err, "");  // no progress bar (quiet, and stderr is not a terminal)
+  const Table points = ReadCsv(out + "/points.csv");
+  ASSERT_TRUE(points.well_formed) << points.problem;
+  EXPECT_EQ(points.rows.size(), 51u);
+  EXPECT_EQ(points.columns[1], "tip.x");
+  const Table joints = ReadCsv(out + "/joints.csv");
+  EXPECT_EQ(joints.columns[1], "hinge.q");
+  const auto summary = ParseJsonFile(out + "/summary.json");
+  ASSERT_TRUE(summary);
+  EXPECT_EQ(summary->Find("status")->string, "completed");
+  EXPECT_EQ(summary->Find("scene.source")->string, kPendulum);
+  EXPECT_TRUE(std::filesystem::is_regular_file(out + "/vtk/motion.pvd"));
+}
+
+TEST(Cli, OverridesApplyInOrder) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_set");
+  const std::string out = tmp.path() + "/out";
+  const Outcome o = RunCli({"run", kPendulum, "--set", "analysis.end_time=0.1", "-o", out,
+                            "--set", "analysis.step=2e-3", "--set", "outputs.interval=0.05"},
+                           tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_NE(o.out.find("50 steps"), std::string::npos) << o.out;
+  EXPECT_EQ(ReadCsv(out + "/points.csv").rows.size(), 3u);  // t = 0, 0.05, 0.1
+}
+
+TEST(Cli, InputErrorsExitTwoWithAPrefixedMessage) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_input");
+  Outcome o = RunCli({"run", kPendulum, "-o", tmp.path() + "/out", "--set", "analysis.step=abc"},
+                     tmp.path());
+  EXPECT_EQ(o.code, 2);
+  EXPECT_EQ(o.err.rfind("error: ", 0), 0u) << o.err;
+  EXPECT_NE(o.err.find("analysis.step"), std::string::npos) << o.err;
+  o = RunCli({"run", tmp.path() + "/missing.yaml", "-o", tmp.path() + "/out"}, tmp.path());
+  EXPECT_EQ(o.code, 2);
+  EXPECT_EQ(o.err.rfind("error: ", 0), 0u) << o.err;
+  o = RunCli({"check", kPendulum, "--set", "analysis.step=-1"}, tmp.path());
+  EXPECT_EQ(o.code, 2);
+  EXPECT_EQ(o.err.rfind("error: ", 0), 0u) << o.err;
+  // Usage errors: no subcommand, a missing -o.
+  EXPECT_EQ(RunCli({}, tmp.path()).code, 2);
+  EXPECT_EQ(RunCli({"run", kPendulum}, tmp.path()).code, 2);
+}
+
+TEST(Cli, FailedStepExitsOneAndSaysWhen) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_failed");
+  const std::string out = tmp.path() + "/out";
+  const Outcome o = RunCli({"run", kPendulum, "-o", out, "--set", "analysis.max_iterations=1",
+                            "--set", "analysis.max_halvings=1"},
+                           tmp.path());
+  EXPECT_EQ(o.code, 1);
+  EXPECT_EQ(o.out.rfind("failed: ", 0), 0u) << o.out;
+  EXPECT_NE(o.err.find("step failed at t = 0 s"), std::string::npos) << o.err;
+  const auto summary = ParseJsonFile(out + "/summary.json");
+  ASSERT_TRUE(summary);
+  EXPECT_EQ(summary->Find("status")->string, "failed");
+  EXPECT_EQ(ReadCsv(out + "/points.csv").rows.size(), 1u);
+}
+
+TEST(Cli, SigintStopsCleanlyWithExitCode130) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_sigint");
+  const std::string out = tmp.path() + "/out";
+  // Far too long to finish: 1e-5 s steps for 1000 s.
+  const pid_t pid = Spawn(kCli,
+                          {"run", kPendulum, "-o", out, "--set", "analysis.step=1e-5", "--set",
+                           "analysis.end_time=1000", "--set", "outputs.vtk=false"},
+                          tmp.path());
+  ASSERT_GT(pid, 0);
+  // Wait until the run is under way (a few rows written), then interrupt.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (ReadCsv(out + "/points.csv").rows.size() < 3 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  kill(pid, SIGINT);
+  const Outcome o = Wait(pid, tmp.path());
+  EXPECT_EQ(o.code, 130) << o.err;
+  EXPECT_EQ(o.out.rfind("interrupted: ", 0), 0u) << o.out;
+  EXPECT_NE(o.err.find("interrupted at t = "), std::string::npos) << o.err;
+  const Table points = ReadCsv(out + "/points.csv");
+  ASSERT_TRUE(points.well_formed) << points.problem;
+  EXPECT_GE(points.rows.size(), 3u);
+  const auto summary = ParseJsonFile(out + "/summary.json");
+  ASSERT_TRUE(summary);
+  EXPECT_EQ(summary->Find("status")->string, "interrupted");
+}
+
+TEST(Cli, CheckPrintsCountsWithoutRunning) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_check");
+  const Outcome o = RunCli({"check", kPendulum}, tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_NE(o.out.find("1 rigid bodies, 1 joints"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("nv = 7, nc = 6"), std::string::npos) << o.out;
+}
+
+bool PythonHasMatplotlib(const std::string& dir) {
+  if (access("/usr/bin/python3", X_OK) != 0) return false;
+  return Wait(Spawn("/usr/bin/python3", {"-c", "import matplotlib, numpy"}, dir), dir).code == 0;
+}
+
+TEST(Cli, PlotDrawsPointsJointsAndSnapshots) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_plot");
+  if (!PythonHasMatplotlib(tmp.path())) GTEST_SKIP() << "no /usr/bin/python3 with matplotlib";
+  const std::string run_a = tmp.path() + "/fine", run_b = tmp.path() + "/coarse";
+  ASSERT_EQ(RunCli({"run", kPendulum, "-o", run_a, "-q"}, tmp.path()).code, 0);
+  ASSERT_EQ(RunCli({"run", kPendulum, "-o", run_b, "-q", "--set", "analysis.step=5e-3"}, tmp.path()).code, 0);
+  const std::string figs = tmp.path() + "/figs";
+  const Outcome o = RunCli({"plot", run_a, run_b, "-o", figs, "--points", "tip", "--times", "0,0.25,0.5"},
+                           tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  for (const char* f : {"point_tip.png", "joint_hinge.png", "snapshots_fine.png", "snapshots_coarse.png"}) {
+    const std::string path = figs + "/" + f;
+    ASSERT_TRUE(std::filesystem::is_regular_file(path)) << path;
+    EXPECT_EQ(ReadFile(path).substr(1, 3), "PNG") << path;
+  }
+  // Clear errors for missing inputs.
+  Outcome bad = RunCli({"plot", tmp.path() + "/nothing", "-o", figs}, tmp.path());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("error: "), std::string::npos) << bad.err;
+  std::filesystem::create_directories(tmp.path() + "/empty");
+  bad = RunCli({"plot", tmp.path() + "/empty", "-o", figs}, tmp.path());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("points.csv not found"), std::string::npos) << bad.err;
+  bad = RunCli({"plot", run_a, "-o", figs, "--points", "P8"}, tmp.path());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("point 'P8' is not recorded"), std::string::npos) << bad.err;
+}
+
+TEST(Cli, PlotScriptCanBeOverriddenByTheEnvironment) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_plot_env");
+  const Outcome o = RunCli({"plot", tmp.path(), "-o", tmp.path() + "/figs"}, tmp.path(),
+                           {"SCREWFEM_PLOT_SCRIPT=" + tmp.path() + "/no_such_script.py"});
+  EXPECT_EQ(o.code, 2);
+  EXPECT_NE(o.err.find("no_such_script.py not found"), std::string::npos) << o.err;
+}
+
+}  // namespace
+}  // namespace screwfem
