@@ -1,0 +1,142 @@
+#!/usr/bin/env bash
+# The test job (README.md, "Quick start", second command; also .ci/run):
+#   1. installs missing Debian packages;
+#   2. Release build in build/release, its ctest suite, and every example program
+#      (build/release/examples/**/*_example, run from the repository root without arguments);
+#   3. AddressSanitizer + UndefinedBehaviorSanitizer build in build/asan and its ctest suite.
+# Runs every phase even after a failure (except the sanitizer build when the Release build
+# failed), prints the time of each phase, and ends with the line "N passed, M failed" summed
+# over both ctest runs and the examples; a failed build or a ctest run without a summary counts
+# as one failure. Exits non-zero when M > 0. Run as root (installing packages needs it).
+set -uo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+release_dir=build/release
+asan_dir=build/asan
+jobs=$(nproc 2> /dev/null || echo 2)
+[[ $jobs -ge 2 ]] || jobs=2
+
+passed=0
+failed=0
+failures=()
+
+# Phase timing (bash's EPOCHREALTIME; no external tools).
+now_us() { echo "${EPOCHREALTIME//[.,]/}"; }
+timings=()
+phase_start=0
+begin() { echo "== $1"; phase_start=$(now_us); }
+end() {
+  local us=$(($(now_us) - phase_start)) t
+  t=$(printf '%d.%01d s' $((us / 1000000)) $((us % 1000000 / 100000)))
+  timings+=("$(printf '%-34s %10s' "$1" "$t")")
+  echo "== $1: $t"
+}
+fail() {
+  failed=$((failed + 1))
+  failures+=("$1")
+  echo "!! FAILED: $1" >&2
+}
+
+# configure_and_build LABEL DIR CMAKE_ARGS... -> status 0 on success
+configure_and_build() {
+  local label=$1 dir=$2
+  shift 2
+  begin "build ($label)"
+  local status=0
+  cmake -S . -B "$dir" "$@" && cmake --build "$dir" -j"$jobs" || status=1
+  end "build ($label)"
+  [[ $status -eq 0 ]] || fail "build ($label)"
+  return $status
+}
+
+# run_ctest LABEL DIR: runs the suite and adds ctest's "X tests failed out of Y" to the counts.
+run_ctest() {
+  local label=$1 dir=$2 log=$2/ctest.log status summary total bad
+  begin "ctest ($label)"
+  ctest --test-dir "$dir" -j"$jobs" --output-on-failure --no-tests=error 2>&1 | tee "$log"
+  status=${PIPESTATUS[0]}
+  end "ctest ($label)"
+  summary=$(grep -Eo '[0-9]+ tests? failed out of [0-9]+' "$log" | tail -n 1)
+  if [[ -z "$summary" ]]; then
+    fail "ctest ($label): no test summary (exit status $status)"
+    return
+  fi
+  bad=${summary%% *}
+  total=${summary##* }
+  passed=$((passed + total - bad))
+  failed=$((failed + bad))
+  if [[ $bad -gt 0 ]]; then
+    failures+=("ctest ($label): $bad of $total tests")
+  elif [[ $status -ne 0 ]]; then
+    fail "ctest ($label): exit status $status"
+  fi
+}
+
+# run_examples DIR: every *_example program under DIR/examples; the statics example must exist.
+run_examples() {
+  local dir=$1 logs=$1/example-logs exe name status
+  begin "examples (Release)"
+  mkdir -p "$logs"
+  local examples=()
+  if [[ -d "$dir/examples" ]]; then
+    mapfile -t examples < <(find "$dir/examples" -path '*/CMakeFiles' -prune -o \
+      -type f -name '*_example' -perm -u+x -print | sort)
+  fi
+  if [[ ! -x "$dir/examples/statics/screwfem_statics_example" ]]; then
+    fail "example statics: $dir/examples/statics/screwfem_statics_example was not built"
+  fi
+  for exe in "${examples[@]}"; do
+    name=$(basename "$exe")
+    timeout 600 "$exe" > "$logs/$name.log" 2>&1
+    status=$?
+    if [[ $status -eq 0 ]]; then
+      passed=$((passed + 1))
+      echo "example $name: passed (output in $logs/$name.log)"
+    else
+      tail -n 40 "$logs/$name.log"
+      fail "example $name: exit status $status (output in $logs/$name.log)"
+    fi
+  done
+  end "examples (Release)"
+}
+
+total_start=$(now_us)
+
+begin "dependencies"
+bash scripts/setup-deps.sh || { echo "run-tests: dependencies missing; stopping" >&2; exit 1; }
+end "dependencies"
+
+if configure_and_build "Release" "$release_dir" -DCMAKE_BUILD_TYPE=Release; then
+  run_ctest "Release" "$release_dir"
+  run_examples "$release_dir"
+  release_built=1
+else
+  release_built=0
+fi
+
+if [[ $release_built -eq 1 ]]; then
+  # The sanitizers also run inside the build (gtest_discover_tests executes the tests).
+  export ASAN_OPTIONS=detect_leaks=1
+  export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  # RelWithDebInfo without -DNDEBUG: optimised (the suite stays fast) with assert() and
+  # eigen_assert active, as cmake/ScrewfemTargets.cmake intends for the sanitizer build.
+  if configure_and_build "ASan+UBSan" "$asan_dir" -DSCREWFEM_SANITIZE=ON \
+      -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g" \
+      -DSCREWFEM_BUILD_BENCH=OFF; then
+    run_ctest "ASan+UBSan" "$asan_dir"
+  fi
+else
+  echo "== sanitizer build skipped: the Release build failed"
+fi
+
+total_us=$(($(now_us) - total_start))
+echo
+echo "Phase timings:"
+printf '  %s\n' "${timings[@]}"
+printf '  %-34s %8d.%01d s\n' "total" $((total_us / 1000000)) $((total_us % 1000000 / 100000))
+if [[ ${#failures[@]} -gt 0 ]]; then
+  echo "Failures:"
+  printf '  %s\n' "${failures[@]}"
+fi
+echo "$passed passed, $failed failed"
+[[ $failed -eq 0 ]]

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs the Debian packages screwfem needs (README.md, "Dependencies"), and only those that
+# are missing. Silent when everything is already installed; needs root only to install.
+set -euo pipefail
+
+packages=(
+  build-essential cmake
+  libeigen3-dev libyaml-cpp-dev libcli11-dev
+  googletest libgtest-dev libbenchmark-dev
+  pybind11-dev python3-dev python3-numpy python3-matplotlib
+)
+
+if ! command -v dpkg-query > /dev/null 2>&1; then
+  echo "setup-deps: dpkg-query not found; screwfem's scripts expect Debian 12 (bookworm)." >&2
+  exit 1
+fi
+
+missing=()
+for pkg in "${packages[@]}"; do
+  status=$(dpkg-query -W -f='${db:Status-Abbrev}' "$pkg" 2> /dev/null || true)
+  [[ "$status" == ii* ]] || missing+=("$pkg")
+done
+[[ ${#missing[@]} -eq 0 ]] && exit 0
+
+if [[ $(id -u) -ne 0 ]]; then
+  echo "setup-deps: missing Debian packages, and installing them needs root:" >&2
+  echo "  apt-get install --no-install-recommends ${missing[*]}" >&2
+  echo "setup-deps: run this script as root, or install them and run again." >&2
+  exit 1
+fi
+echo "setup-deps: installing missing Debian packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${missing[@]}"
+echo "setup-deps: done"
