@@ -1,23 +1,51 @@
 #!/usr/bin/env bash
 # Builds the benchmarks in Release (build/release), runs them and rewrites bench/RESULTS.md
-# from bench/results.json (README.md, "Benchmarks"). Extra arguments go to the benchmark
-# program, e.g. --benchmark_filter=Solve. Run as root if dependencies may be missing.
+# from their JSON results (README.md, "Benchmarks"):
+#   screwfem_bench_statics   -> bench/results_statics.json   (rod assembly and solve)
+#   screwfem_bench_dynamics  -> bench/results_dynamics.json  (GRM runs, rod time steps)
+# SCREWFEM_BENCH selects the programs (default "statics dynamics"); the results file of a
+# program not run (or whose benchmarks a filter left out entirely) is kept and reported with
+# its own date and revision. Extra arguments go to every program run, e.g.
+# SCREWFEM_BENCH=dynamics bash scripts/run-bench.sh --benchmark_filter=Rod.
+# Run as root if dependencies may be missing.
+# Takes about 4 minutes on 2 cores (plus the build).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 build_dir=build/release
 jobs=$(nproc 2> /dev/null || echo 2)
+programs=${SCREWFEM_BENCH:-statics dynamics}
+for p in $programs; do
+  case $p in
+    statics | dynamics) ;;
+    *) echo "run-bench.sh: unknown benchmark program '$p' in SCREWFEM_BENCH" >&2; exit 2 ;;
+  esac
+done
 
 bash scripts/setup-deps.sh
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release
-cmake --build "$build_dir" -j"$jobs" --target screwfem_bench_statics
-
-# Median of 5 repetitions: the numbers stay stable on a machine with other load.
-"$build_dir/bench/screwfem_bench_statics" --benchmark_format=console \
-  --benchmark_out=bench/results.json --benchmark_out_format=json \
-  --benchmark_repetitions=5 --benchmark_report_aggregates_only=true "$@"
+targets=()
+for p in $programs; do targets+=("screwfem_bench_$p"); done
+cmake --build "$build_dir" -j"$jobs" --target "${targets[@]}"
 
 revision=$(git describe --always --dirty 2> /dev/null || echo unknown)
-/usr/bin/python3 bench/make_results.py bench/results.json bench/RESULTS.md \
-  "bash scripts/run-bench.sh" "$revision"
-echo "Wrote bench/results.json and bench/RESULTS.md"
+for p in $programs; do
+  out=bench/results_$p.json
+  tmp=bench/results_$p.json.tmp
+  rm -f "$tmp"
+  # statics: median of 5 repetitions, so the numbers stay stable on a machine with other
+  # load. dynamics: each benchmark sets its own iterations and repetitions (fewer for the
+  # slow cases: a GRM run takes seconds, a 10000-element rod step about half a second).
+  repetitions=()
+  if [[ $p == statics ]]; then repetitions=(--benchmark_repetitions=5); fi
+  "$build_dir/bench/screwfem_bench_$p" --benchmark_format=console \
+    --benchmark_out="$tmp" --benchmark_out_format=json \
+    --benchmark_context=revision="$revision" \
+    "${repetitions[@]}" --benchmark_report_aggregates_only=true "$@"
+  # An empty file: the filter matched nothing in this program; keep its previous results.
+  if [[ -s $tmp ]]; then mv "$tmp" "$out"; else rm -f "$tmp"; fi
+done
+
+/usr/bin/python3 bench/make_results.py bench/RESULTS.md "bash scripts/run-bench.sh" "$revision" \
+  bench/results_statics.json bench/results_dynamics.json
+echo "Wrote bench/RESULTS.md from bench/results_statics.json and bench/results_dynamics.json"
