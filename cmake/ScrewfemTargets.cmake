@@ -19,6 +19,8 @@ function(screwfem_add_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
   add_library(screwfem_${name} STATIC ${ARG_SOURCES})
   add_library(screwfem::${name} ALIAS screwfem_${name})
+  # Position-independent, so the Python extension (a shared object) can link them too.
+  set_target_properties(screwfem_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
   target_include_directories(screwfem_${name} PUBLIC
     $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:include>)
   target_link_libraries(screwfem_${name} PUBLIC ${ARG_DEPS} PRIVATE screwfem_options)

@@ -1,0 +1,189 @@
+// Model (include/screwfem/model/model.h), read-only from Python: sizes, the entities and
+// lookups by name. Eigen members are NumPy read-only views into the Model (which stays
+// alive as long as a view exists); frames (SE3) are returned as 4x4 homogeneous matrices
+// [R x; 0 1] (copies).
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <string>
+#include <vector>
+
+#include "bind.h"
+#include "screwfem/model/model.h"
+
+namespace py = pybind11;
+
+namespace screwfem::python {
+
+namespace {
+
+// The elements of a vector as Python objects referring into the Model (kept alive by them).
+template <class T>
+py::list ReferenceList(const std::vector<T>& items, py::handle parent) {
+  py::list out;
+  for (const T& item : items)
+    out.append(py::cast(&item, py::return_value_policy::reference_internal, parent));
+  return out;
+}
+
+}  // namespace
+
+void BindModel(py::module_& m) {
+  py::enum_<JointType>(m, "JointType",
+                       "Joint types (model.h); the relative frame H_J lies in "
+                       "the joint's Lie subgroup.")
+      .value("kRevolute", JointType::kRevolute)
+      .value("kPrismatic", JointType::kPrismatic)
+      .value("kHelical", JointType::kHelical)
+      .value("kCylindrical", JointType::kCylindrical)
+      .value("kSpherical", JointType::kSpherical)
+      .value("kPlanar", JointType::kPlanar)
+      .value("kUniversal", JointType::kUniversal)
+      .value("kFixed", JointType::kFixed)
+      .value("kFree", JointType::kFree);
+
+  py::enum_<DriveKind>(m, "DriveKind", "Drive on one joint coordinate (model.h).")
+      .value("kNone", DriveKind::kNone, "passive joint")
+      .value("kPrescribed", DriveKind::kPrescribed,
+             "rheonomic constraint alpha_i = q(t) on one coordinate (method.md §4.4)")
+      .value("kSeriesElastic", DriveKind::kSeriesElastic,
+             "spring/damper towards q(t) on one coordinate (method.md §4.5)")
+      .value("kForce", DriveKind::kForce, "generalised force f(t) on one coordinate");
+
+  py::enum_<RodInertia>(m, "RodInertia", "Rod inertia model (method.md §2.5).")
+      .value("kExact", RodInertia::kExact,
+             "option A: exact helical velocity field, M(d), 3-point Gauss")
+      .value("kConstant", RodInertia::kConstant,
+             "option B: linear velocity interpolation, constant mass matrix");
+
+  m.def("joint_type_name", &JointTypeName, py::arg("type"),
+        "Name of a joint type as written in scene files, e.g. 'revolute'.");
+
+  py::class_<Node>(m, "Node", "A node: a frame on SE(3) (model.h). Read-only.")
+      .def_readonly("name", &Node::name)
+      .def_property_readonly(
+          "reference", [](const Node& n) { return n.reference.Matrix(); },
+          "Initial frame H_0 as a 4x4 homogeneous matrix [R x; 0 1]: orientation and position "
+          "[m] of the node in the world frame (a copy).")
+      .def_readonly("fixed", &Node::fixed, "Clamped to the world (eliminated from the unknowns).")
+      .def_readonly("dof", &Node::dof,
+                    "First velocity index of the node's 6 body-velocity components [v; w] "
+                    "(node frame), or -1 when fixed.")
+      .def("__repr__", [](const Node& n) { return "<screwfem.Node '" + n.name + "'>"; });
+
+  py::class_<RodElement>(m, "RodElement", "A two-node helical element (method.md §2.2). Read-only.")
+      .def_readonly("rod", &RodElement::rod)
+      .def_readonly("node_a", &RodElement::node_a)
+      .def_readonly("node_b", &RodElement::node_b)
+      .def_readonly("length", &RodElement::length, "Reference arc length L = |u(d0)| [m].")
+      .def_readonly("d0", &RodElement::d0,
+                    "Reference relative motion log(H_A0^-1 H_B0): [u (m); w (rad)] (view).");
+
+  py::class_<Rod>(m, "Rod", "A Cosserat rod: a chain of helical elements (model.h). Read-only.")
+      .def_readonly("name", &Rod::name)
+      .def_readonly("nodes", &Rod::nodes,
+                    "Node indices in order along the rod (num_elements + 1; a copy).")
+      .def_readonly("first_element", &Rod::first_element)
+      .def_readonly("num_elements", &Rod::num_elements)
+      .def_readonly("length", &Rod::length, "Reference length: sum of the element lengths [m].")
+      .def("__repr__", [](const Rod& r) { return "<screwfem.Rod '" + r.name + "'>"; });
+
+  py::class_<RigidBody>(m, "RigidBody",
+                        "A rigid body carried by one node's frame (model.h). "
+                        "Read-only.")
+      .def_readonly("name", &RigidBody::name)
+      .def_readonly("node", &RigidBody::node, "The body's frame is this node's frame.")
+      .def_readonly("mass", &RigidBody::mass, "[kg]")
+      .def_readonly("com", &RigidBody::com, "Centre of mass in the node frame [m] (view).")
+      .def_readonly("inertia", &RigidBody::inertia,
+                    "Inertia about the centre of mass, node-frame axes [kg m^2] (3x3 view).")
+      .def("__repr__", [](const RigidBody& b) { return "<screwfem.RigidBody '" + b.name + "'>"; });
+
+  py::class_<Joint>(m, "Joint",
+                    "A joint: relative frame H_J in a subgroup between frame A (node_a, or the "
+                    "ground, -1) and frame B (node_b), placed by the offsets C_A, C_B: "
+                    "H_B C_B = H_A C_A H_J (method.md §4.1). Read-only.")
+      .def_readonly("name", &Joint::name)
+      .def_readonly("type", &Joint::type)
+      .def_readonly("node_a", &Joint::node_a, "Node of side A, or -1 (kGround) for the world.")
+      .def_readonly("node_b", &Joint::node_b, "Node of side B, or -1 (kGround) for the world.")
+      .def_property_readonly(
+          "offset_a", [](const Joint& j) { return j.offset_a.Matrix(); },
+          "C_A as a 4x4 matrix in frame A [m] (for the ground: the joint frame's world pose).")
+      .def_property_readonly(
+          "offset_b", [](const Joint& j) { return j.offset_b.Matrix(); },
+          "C_B as a 4x4 matrix in frame B [m].")
+      .def_readonly("basis", &Joint::basis,
+                    "Joint basis A_J (6 x k, rows [translation; rotation]; view).")
+      .def_readonly("pitch", &Joint::pitch, "Helical joints [m/rad].")
+      .def_readonly("coord", &Joint::coord,
+                    "First velocity index of the joint coordinates (index into Simulation.v; "
+                    "into Simulation.q_joint subtract Model.nv_nodes).")
+      .def_readonly("row", &Joint::row,
+                    "First multiplier row of the 6 relative-frame constraints (-1: none).")
+      .def_readonly("stiffness", &Joint::stiffness,
+                    "Soft joint stiffness K per coordinate [N/m or N m/rad] (view).")
+      .def_readonly("damping", &Joint::damping,
+                    "Soft joint damping D per coordinate [N s/m or N m s/rad] (view).")
+      .def_readonly("rest", &Joint::rest, "Spring rest coordinates [m or rad] (view).")
+      .def_readonly("drive", &Joint::drive)
+      .def_readonly("drive_coord", &Joint::drive_coord, "Driven coordinate (0..k-1).")
+      .def_readonly("drive_row", &Joint::drive_row, "Multiplier row of a prescribed drive, or -1.")
+      .def("k", &Joint::k, "Number of joint coordinates.")
+      .def("__repr__", [](const Joint& j) {
+        return "<screwfem.Joint '" + j.name + "' (" + JointTypeName(j.type) + ")>";
+      });
+
+  py::class_<Model>(
+      m, "Model",
+      "The compiled model (model.h), constant. Velocities v (size nv) stack 6 body-velocity "
+      "components [v; w] per free node (node frame, translation first) and then k joint-"
+      "coordinate rates per joint; multipliers (size nc) stack the 6 relative-frame "
+      "constraints per joint (none for a free joint) and one row per prescribed drive. "
+      "Read-only from Python; entity lists refer into the model.")
+      .def_readonly("nv", &Model::nv, "Number of velocity unknowns.")
+      .def_readonly("nv_nodes", &Model::nv_nodes,
+                    "The first nv_nodes velocities belong to nodes, the rest to joints.")
+      .def_readonly("nc", &Model::nc, "Number of multipliers (constraint rows).")
+      .def("num_unknowns", &Model::num_unknowns, "nv + nc.")
+      .def_readonly("bandwidth", &Model::bandwidth, "Half-bandwidth of the permuted system.")
+      .def_readonly("length_scale", &Model::length_scale,
+                    "Characteristic length (bounding box diagonal) [m].")
+      .def_readonly("gravity", &Model::gravity, "Gravity [m/s^2], world frame (view).")
+      .def_readonly("rod_inertia", &Model::rod_inertia)
+      .def_readonly("redundant_rows", &Model::redundant_rows,
+                    "Constraint rows found linearly dependent at build time (their multipliers "
+                    "are held at zero).")
+      .def_readonly("warnings", &Model::warnings, "Non-fatal findings of the build.")
+      .def_property_readonly("num_nodes", [](const Model& mo) { return mo.nodes.size(); })
+      .def_property_readonly("num_elements", [](const Model& mo) { return mo.elements.size(); })
+      .def_property_readonly("num_rods", [](const Model& mo) { return mo.rods.size(); })
+      .def_property_readonly("num_bodies", [](const Model& mo) { return mo.bodies.size(); })
+      .def_property_readonly("num_joints", [](const Model& mo) { return mo.joints.size(); })
+      .def_property_readonly(
+          "nodes",
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().nodes, self); })
+      .def_property_readonly(
+          "elements",
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().elements, self); })
+      .def_property_readonly(
+          "rods",
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().rods, self); })
+      .def_property_readonly(
+          "bodies",
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().bodies, self); })
+      .def_property_readonly(
+          "joints",
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().joints, self); })
+      .def("find_node", &Model::FindNode, py::arg("name"), "Index of the named node, -1 if absent.")
+      .def("find_rod", &Model::FindRod, py::arg("name"), "Index of the named rod, -1 if absent.")
+      .def("find_body", &Model::FindBody, py::arg("name"),
+           "Index of the named rigid body, -1 if absent.")
+      .def("find_joint", &Model::FindJoint, py::arg("name"),
+           "Index of the named joint, -1 if absent.");
+
+  m.attr("kGround") = kGround;
+}
+
+}  // namespace screwfem::python

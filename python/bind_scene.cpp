@@ -1,0 +1,209 @@
+// Scenes and runs (include/screwfem/io/scene.h, run.h, schedule.h) and the solver settings they
+// carry (solve/dynamics.h, solve/statics.h). Settings are plain read-write structures; nested
+// settings are references into their owner (scene.analysis.dynamic.rho_inf = 1 edits the
+// scene).
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bind.h"
+#include "screwfem/io/run.h"
+#include "screwfem/io/scene.h"
+#include "screwfem/io/schedule.h"
+#include "screwfem/solve/dynamics.h"
+#include "screwfem/solve/statics.h"
+
+namespace py = pybind11;
+
+namespace screwfem::python {
+
+namespace {
+
+void BindSettings(py::module_& m) {
+  py::class_<GeneralizedAlpha>(m, "GeneralizedAlpha",
+                               "Generalized-alpha parameters (Chung-Hulbert), dimensionless.")
+      .def_readonly("alpha_m", &GeneralizedAlpha::alpha_m)
+      .def_readonly("alpha_f", &GeneralizedAlpha::alpha_f)
+      .def_readonly("gamma", &GeneralizedAlpha::gamma)
+      .def_readonly("beta", &GeneralizedAlpha::beta)
+      .def_static("from_spectral_radius", &GeneralizedAlpha::FromSpectralRadius, py::arg("rho_inf"),
+                  "Chung-Hulbert parameters from the spectral radius at infinity rho in [0, 1].");
+
+  py::class_<DynamicOptions>(m, "DynamicOptions",
+                             "Settings of the generalized-alpha integrator (dynamics.h).")
+      .def(py::init<>())
+      .def_readwrite("rho_inf", &DynamicOptions::rho_inf,
+                     "Spectral radius at infinity in [0, 1] (1: no numerical damping).")
+      .def_readwrite("max_iterations", &DynamicOptions::max_iterations,
+                     "Newton iterations per step.")
+      .def_readwrite("max_halvings", &DynamicOptions::max_halvings,
+                     "A failed step is retried as 2, 4, ... 2^max_halvings substeps.")
+      .def_readwrite("increment_tolerance", &DynamicOptions::increment_tolerance,
+                     "Last Newton correction of the positions (translations relative to the "
+                     "model's length scale, rotations [rad] and joint coordinates as they are).")
+      .def_readwrite("constraint_tolerance", &DynamicOptions::constraint_tolerance,
+                     "Every constraint |phi| [m or rad].")
+      .def_readwrite("residual_tolerance", &DynamicOptions::residual_tolerance,
+                     "Residual relative to its largest force term.")
+      .def_readwrite("use_tangent_operator", &DynamicOptions::use_tangent_operator,
+                     "T(h dq) on node columns of the iteration matrix.");
+
+  py::class_<StaticOptions>(m, "StaticOptions",
+                            "Settings of the static Newton solver with load stepping (statics.h).")
+      .def(py::init<>())
+      .def_readwrite("time", &StaticOptions::time,
+                     "Time at which the profiles of loads and drives are evaluated [s].")
+      .def_readwrite("load_steps", &StaticOptions::load_steps,
+                     "Initial number of equal load increments.")
+      .def_readwrite("max_halvings", &StaticOptions::max_halvings,
+                     "Consecutive halvings of the load increment.")
+      .def_readwrite("max_iterations", &StaticOptions::max_iterations,
+                     "Newton iterations per load step.")
+      .def_readwrite("residual_tolerance", &StaticOptions::residual_tolerance,
+                     "|R|_inf relative to the largest force term in R.")
+      .def_readwrite("increment_tolerance", &StaticOptions::increment_tolerance,
+                     "Last Newton increment (translations relative to the model's length scale, "
+                     "rotations [rad]).")
+      .def_readwrite("constraint_tolerance", &StaticOptions::constraint_tolerance,
+                     "|phi|_inf [m or rad].");
+
+  py::enum_<AnalysisKind>(m, "AnalysisKind")
+      .value("kStatic", AnalysisKind::kStatic)
+      .value("kDynamic", AnalysisKind::kDynamic);
+
+  py::class_<AnalysisSettings>(m, "AnalysisSettings", "What a scene does (scene.h).")
+      .def(py::init<>())
+      .def_readwrite("kind", &AnalysisSettings::kind)
+      .def_readwrite("start_time", &AnalysisSettings::start_time, "[s]")
+      .def_readwrite("end_time", &AnalysisSettings::end_time, "[s]")
+      .def_readwrite("step", &AnalysisSettings::step, "Time step of dynamic analyses [s].")
+      .def_readwrite("align_steps", &AnalysisSettings::align_steps,
+                     "Shorten steps so that profile breakpoints fall on step ends.")
+      .def_readwrite("dynamic", &AnalysisSettings::dynamic, "DynamicOptions (a reference).")
+      .def_readwrite("statics", &AnalysisSettings::statics, "StaticOptions (a reference).")
+      .def_readwrite("static_preload", &AnalysisSettings::static_preload,
+                     "Dynamic analyses start from a static equilibrium of the loads at "
+                     "start_time.")
+      .def_property(
+          "rho_inf", [](const AnalysisSettings& a) { return a.dynamic.rho_inf; },
+          [](AnalysisSettings& a, double rho) { a.dynamic.rho_inf = rho; },
+          "Shorthand for dynamic.rho_inf: spectral radius at infinity in [0, 1].");
+}
+
+void BindScenesAndRuns(py::module_& m) {
+  py::class_<OutputPoint>(m, "OutputPoint",
+                          "A recorded point (scene.h): fixed in a node frame (node >= 0, offset in "
+                          "that frame [m]) or on a rod's centre line at arc length s (rod >= 0, "
+                          "arc_length [m] from its first node).")
+      .def_readonly("name", &OutputPoint::name, "Column prefix, e.g. 'P8'.")
+      .def_readonly("node", &OutputPoint::node)
+      .def_readonly("offset", &OutputPoint::offset)
+      .def_readonly("rod", &OutputPoint::rod)
+      .def_readonly("arc_length", &OutputPoint::arc_length);
+
+  py::class_<OutputJoint>(m, "OutputJoint", "A recorded joint (scene.h).")
+      .def_readonly("name", &OutputJoint::name)
+      .def_readonly("joint", &OutputJoint::joint);
+
+  py::class_<OutputSpec>(m, "OutputSpec", "What a run records (scene.h, run.h).")
+      .def_readonly("points", &OutputSpec::points, "List of OutputPoint (copies).")
+      .def_readonly("joints", &OutputSpec::joints, "List of OutputJoint (copies).")
+      .def_readwrite("interval", &OutputSpec::interval,
+                     "Time between recorded rows [s]; 0: every step.")
+      .def_readwrite("vtk", &OutputSpec::vtk, "Write ParaView files under vtk/.")
+      .def_readwrite("vtk_interval", &OutputSpec::vtk_interval,
+                     "Time between ParaView frames [s]; 0: same as interval.");
+
+  py::class_<Scene>(m, "Scene",
+                    "A compiled scene (scene.h): the model plus what to do with it (analysis) and "
+                    "what to record (outputs). Made by load_scene or parse_scene.")
+      .def_readonly("source", &Scene::source, "File name (for messages and the summary).")
+      .def_readonly("name", &Scene::name, "Scene title.")
+      .def_readonly("model", &Scene::model, "The compiled Model (a read-only reference).")
+      .def_readwrite("analysis", &Scene::analysis, "AnalysisSettings (a reference; writable).")
+      .def_readwrite("outputs", &Scene::outputs, "OutputSpec (a reference).")
+      .def_readonly("named_points", &Scene::named_points,
+                    "Named points of the scene: (name, world position in the reference "
+                    "configuration [m]) pairs (copies).")
+      .def("__repr__", [](const Scene& s) { return "<screwfem.Scene '" + s.name + "'>"; });
+
+  m.def(
+      "load_scene", &LoadScene, py::arg("path"), py::arg("overrides") = std::vector<std::string>{},
+      "load_scene(path, overrides=[]) -> Scene\n\n"
+      "Parses and compiles a scene file (docs/scene-format.md). `overrides` are 'key.path=value'\n"
+      "strings applied to the YAML tree before compilation (e.g. 'analysis.step=5e-4',\n"
+      "'bodies.arm56.elements=8'). Raises InputError with the message\n"
+      "'FILE:LINE:COLUMN: FIELD: what was expected'.");
+  m.def("parse_scene", &ParseScene, py::arg("yaml_text"), py::arg("source_name"),
+        py::arg("overrides") = std::vector<std::string>{},
+        "parse_scene(yaml_text, source_name, overrides=[]) -> Scene\n\n"
+        "As load_scene, from YAML text; messages name `source_name` as the file.");
+
+  py::class_<RunResult>(m, "RunResult", "Outcome of run_scene (run.h).")
+      .def_readonly("ok", &RunResult::ok, "The analysis completed.")
+      .def_readonly("interrupted", &RunResult::interrupted)
+      .def_readonly("end_time", &RunResult::end_time, "Simulated time reached [s].")
+      .def_readonly("steps", &RunResult::steps,
+                    "Time steps (static analyses: accepted load steps).")
+      .def_readonly("newton_iterations", &RunResult::newton_iterations,
+                    "Dynamic steps and static solves (incl. a preload).")
+      .def_readonly("max_iterations_per_step", &RunResult::max_iterations_per_step)
+      .def_readonly("halvings", &RunResult::halvings,
+                    "Halved time steps, or halved load increments in statics.")
+      .def_readonly("wall_seconds", &RunResult::wall_seconds, "[s]")
+      .def_readonly("max_constraint_residual", &RunResult::max_constraint_residual,
+                    "Largest |phi| over the run [m or rad].")
+      .def_readonly("message", &RunResult::message, "Why it stopped early, with the time.")
+      .def("__repr__", [](const RunResult& r) {
+        return std::string("<screwfem.RunResult ok=") + (r.ok ? "True" : "False") +
+               " steps=" + std::to_string(r.steps) + ">";
+      });
+
+  m.def(
+      "run_scene",
+      [](const Scene& scene, const std::string& outdir, bool progress) {
+        RunOptions options;
+        options.progress = progress;
+        return RunScene(scene, outdir, options);
+      },
+      py::arg("scene"), py::arg("outdir"), py::arg("progress") = false,
+      "run_scene(scene, outdir, progress=False) -> RunResult\n\n"
+      "Runs the scene's analysis and writes its outputs into `outdir` (created if needed):\n"
+      "points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az; world frame,\n"
+      "SI), joints.csv, summary.json and vtk/ (run.h). `progress` draws a progress bar on\n"
+      "stderr. A numerical failure ends the run and is reported in the result (ok False,\n"
+      "message), not raised; raises InputError for invalid settings or outputs and when\n"
+      "outdir or its files cannot be created.");
+
+  py::class_<StepSchedule>(
+      m, "StepSchedule",
+      "The step ends of a dynamic run (schedule.h): start + n step for n >= 1, "
+      "every breakpoint in (start, end), and end.")
+      .def(py::init([](double start, double end, double step, std::vector<double> breakpoints) {
+             if (!(std::isfinite(start) && std::isfinite(end) && end >= start))
+               throw py::value_error("StepSchedule: start and end must be finite, end >= start");
+             if (!(std::isfinite(step) && step > 0.0))
+               throw py::value_error("StepSchedule: step must be a finite time > 0 s");
+             return StepSchedule(start, end, step, std::move(breakpoints));
+           }),
+           py::arg("start"), py::arg("end"), py::arg("step"),
+           py::arg("breakpoints") = std::vector<double>{},
+           "Times in [s]. Raises ValueError unless step > 0 and end >= start (all finite).")
+      .def("done", &StepSchedule::Done, py::arg("t"), "True once t [s] has reached the end.")
+      .def("next", &StepSchedule::Next, py::arg("t"),
+           "The step end following t [s] (start or an earlier step end); requires not done(t).");
+}
+
+}  // namespace
+
+void BindScene(py::module_& m) {
+  BindSettings(m);
+  BindScenesAndRuns(m);
+}
+
+}  // namespace screwfem::python

@@ -1,0 +1,447 @@
+// Simulation: a Model, its Data and an Integrator for stepping from Python, with the output
+// quantities of assemble/outputs.h and io/writers.h and the energies of solve/dynamics.h.
+// Every method calls one public C++ function; this file adds only argument checks, name
+// lookups and the conversion of numerical failures into screwfem.SolverError.
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bind.h"
+#include "screwfem/assemble/assemble.h"
+#include "screwfem/assemble/outputs.h"
+#include "screwfem/io/scene.h"
+#include "screwfem/io/writers.h"
+#include "screwfem/model/errors.h"
+#include "screwfem/solve/dynamics.h"
+#include "screwfem/solve/statics.h"
+
+namespace py = pybind11;
+
+namespace screwfem::python {
+
+namespace {
+
+// A copy of the scene, the Data allocated once from its model, and the integrator workspace.
+// Data's arrays are never reallocated after construction (the C++ solvers assign them in
+// place), so NumPy views of them stay valid for the life of the Simulation.
+class Simulation {
+ public:
+  explicit Simulation(const Scene& scene) : scene_(scene), data_(MakeData(scene_.model)) {
+    data_.time = scene_.analysis.kind == AnalysisKind::kStatic ? scene_.analysis.statics.time
+                                                               : scene_.analysis.start_time;
+  }
+
+  Scene& scene() { return scene_; }
+  const Model& model() const { return scene_.model; }
+  Data& data() { return data_; }
+  const Integrator& integrator() const { return integrator_; }
+  bool initialized() const { return initialized_; }
+
+  void Initialize(const std::optional<DynamicOptions>& options) {
+    const DynamicOptions o = options ? *options : scene_.analysis.dynamic;
+    if (!(o.rho_inf >= 0.0 && o.rho_inf <= 1.0))
+      throw InputError("DynamicOptions.rho_inf: must lie in [0, 1]");
+    if (o.max_iterations < 1) throw InputError("DynamicOptions.max_iterations: must be at least 1");
+    if (o.max_halvings < 0) throw InputError("DynamicOptions.max_halvings: must be >= 0");
+    initialized_ = false;
+    std::string why;
+    if (!InitializeDynamics(model(), data_, integrator_, o, &why)) {
+      char when[96];
+      std::snprintf(when, sizeof when,
+                    "cannot start the dynamic analysis at t = %.9g s: ", data_.time);
+      RaiseSolverError(when + why, py::none());
+    }
+    initialized_ = true;
+  }
+
+  StepResult Advance(double h) {
+    if (!initialized_)
+      throw std::logic_error("Simulation.step: call initialize() first (again after solve_static)");
+    if (!(std::isfinite(h) && h > 0.0)) throw InputError("Simulation.step: h must be a time > 0 s");
+    StepResult r = Step(model(), data_, integrator_, h);
+    if (!r.ok) RaiseSolverError(r.message, py::cast(r));
+    return r;
+  }
+
+  StaticResult Statics(const std::optional<StaticOptions>& options) {
+    StaticOptions o = scene_.analysis.statics;
+    o.time = data_.time;
+    if (options) o = *options;
+    if (!std::isfinite(o.time)) throw InputError("StaticOptions.time: must be finite");
+    data_.time = o.time;
+    initialized_ = false;
+    StaticResult r = SolveStatic(model(), data_, o);
+    if (!r.converged) {
+      char head[96];
+      std::snprintf(head, sizeof head,
+                    "static solution failed at load factor %.6g: ", r.load_factor);
+      RaiseSolverError(head + r.message, py::cast(r));
+    }
+    return r;
+  }
+
+  // Index lookups for arguments given as an index or a name.
+  int Node(long i) const { return CheckIndex(i, model().nodes.size(), "node"); }
+  int Node(const std::string& name) const { return Named(model().FindNode(name), "node", name); }
+  int Rod(long i) const { return CheckIndex(i, model().rods.size(), "rod"); }
+  int Rod(const std::string& name) const { return Named(model().FindRod(name), "rod", name); }
+  int JointIndex(long i) const { return CheckIndex(i, model().joints.size(), "joint"); }
+  int JointIndex(const std::string& name) const {
+    return Named(model().FindJoint(name), "joint", name);
+  }
+  // Velocity index of coordinate c of a joint.
+  int JointDof(int joint, int c) const {
+    const Joint& j = model().joints[static_cast<std::size_t>(joint)];
+    CheckIndex(c, static_cast<std::size_t>(j.k()),
+               ("coordinate of joint '" + j.name + "'").c_str());
+    return j.coord + c;
+  }
+
+  const OutputPoint& OutputPointNamed(const std::string& name) const {
+    for (const OutputPoint& p : scene_.outputs.points)
+      if (p.name == name) return p;
+    throw py::key_error("no output point named '" + name + "' in the scene's outputs.points");
+  }
+
+ private:
+  static int Named(int index, const char* what, const std::string& name) {
+    if (index < 0) throw py::key_error(std::string("no ") + what + " named '" + name + "'");
+    return index;
+  }
+
+  Scene scene_;
+  Data data_;
+  Integrator integrator_;
+  bool initialized_ = false;
+};
+
+using Vector = Eigen::VectorXd;
+
+// The row of CalcPointRow / CalcJointRow as a NumPy array (a copy).
+Vector ToVector(const std::vector<double>& row) {
+  return Eigen::Map<const Vector>(row.data(), static_cast<Eigen::Index>(row.size()));
+}
+
+void BindResults(py::module_& m) {
+  py::class_<StepResult>(m, "StepResult", "Outcome of one Simulation.step (dynamics.h).")
+      .def_readonly("ok", &StepResult::ok)
+      .def_readonly("iterations", &StepResult::iterations,
+                    "Newton iterations of this step (all substeps).")
+      .def_readonly("substeps", &StepResult::substeps, "1 unless the step was halved.")
+      .def_readonly("message", &StepResult::message, "On failure: when and why.")
+      .def("__repr__", [](const StepResult& r) {
+        return std::string("<screwfem.StepResult ok=") + (r.ok ? "True" : "False") +
+               " iterations=" + std::to_string(r.iterations) + ">";
+      });
+
+  py::class_<StaticStep>(m, "StaticStep", "One accepted load step of solve_static.")
+      .def_readonly("load_factor", &StaticStep::load_factor)
+      .def_readonly("iterations", &StaticStep::iterations)
+      .def_readonly("residual_norms", &StaticStep::residual_norms,
+                    "|R|_inf before each Newton solve, then at convergence [N, N m].");
+
+  py::class_<StaticResult>(m, "StaticResult", "Outcome of Simulation.solve_static (statics.h).")
+      .def_readonly("converged", &StaticResult::converged)
+      .def_readonly("load_factor", &StaticResult::load_factor,
+                    "Last converged load factor (1 when converged).")
+      .def_readonly("load_steps", &StaticResult::load_steps, "Accepted load steps.")
+      .def_readonly("total_iterations", &StaticResult::total_iterations)
+      .def_readonly("halvings", &StaticResult::halvings,
+                    "Failed load steps retried with half the increment.")
+      .def_readonly("steps", &StaticResult::steps, "List of StaticStep (copies).")
+      .def_readonly("message", &StaticResult::message, "Why it failed (empty on success).");
+
+  py::class_<Energy>(m, "Energy", "Energies of a state [J] (dynamics.h, CalcEnergy).")
+      .def_readonly("kinetic", &Energy::kinetic,
+                    "Rigid bodies and rods (consistent with the model's rod inertia).")
+      .def_readonly("strain", &Energy::strain, "Rods.")
+      .def_readonly("spring", &Energy::spring,
+                    "Joint springs (towards their rest, incl. series-elastic drives).")
+      .def_readonly("gravity", &Energy::gravity, "Potential of gravity, zero at the world origin.")
+      .def("total", &Energy::total, "kinetic + strain + spring + gravity [J].");
+
+  py::class_<PointMotion>(m, "PointMotion",
+                          "World position [m], velocity [m/s] and acceleration [m/s^2] of a point "
+                          "(outputs.h); read-only views into this object.")
+      .def_readonly("position", &PointMotion::position)
+      .def_readonly("velocity", &PointMotion::velocity)
+      .def_readonly("acceleration", &PointMotion::acceleration);
+
+  py::class_<RodPoint>(m, "RodPoint", "Section frame and motion of a point on a rod (outputs.h).")
+      .def_property_readonly(
+          "frame", [](const RodPoint& p) { return p.frame.Matrix(); },
+          "Section frame H(xi) as a 4x4 matrix [R x; 0 1] in the world frame [m] (a copy).")
+      .def_readonly("motion", &RodPoint::motion, "PointMotion of the centre-line point.")
+      .def_readonly("element", &RodPoint::element, "Global element index.")
+      .def_readonly("xi", &RodPoint::xi, "Position in the element, in [0, 1].");
+}
+
+void BindSimulationClass(py::module_& m) {
+  using S = Simulation;
+  py::class_<S>(m, "Simulation", R"doc(Simulation(scene)
+
+A Model, its Data and a generalized-alpha Integrator (screwfem::Model, Data, Integrator) for
+stepping a scene from Python. The scene is copied: later changes to `scene` do not affect the
+simulation (edit `Simulation.scene` instead). The state starts in the reference configuration,
+at rest, at analysis.start_time (static analyses: analysis.statics.time).
+
+Typical use: sim.initialize(); then sim.step(h) repeatedly. run_scene does the same, plus the
+optional static preload (here: call solve_static() before initialize()), breakpoint-aligned
+step ends (StepSchedule) and the files.
+
+Units are SI; point quantities are in the world frame. The arrays v, vdot, lambda_ and
+q_joint are NumPy views of the simulation's Data (no copy): they keep the Simulation alive,
+stay valid for its whole life and change as it steps; copy them (numpy.copy) to keep a value.
+v is writable (to set initial velocities; call initialize() afterwards), the others are
+read-only.
+
+Failures: numerical failures raise SolverError (step and solve_static attach their result as
+SolverError.result); invalid arguments raise InputError (a ValueError), unknown names KeyError
+and indices out of range IndexError.)doc")
+      .def(py::init<const Scene&>(), py::arg("scene"))
+      .def_property_readonly("scene", &S::scene,
+                             "The simulation's copy of the scene (a reference; its analysis "
+                             "settings are the defaults of initialize and solve_static).")
+      .def_property_readonly("model", &S::model, "The Model (a read-only reference).")
+      .def_property(
+          "time", [](S& s) { return s.data().time; },
+          [](S& s, double t) {
+            if (!std::isfinite(t)) throw InputError("Simulation.time: must be finite");
+            s.data().time = t;
+          },
+          "Simulated time [s]. step(h) advances it by h; assigning it changes only the clock at "
+          "which profiles are evaluated, not the state (run_scene sets it to each step end of "
+          "its StepSchedule this way, so that round-off in t does not accumulate).")
+      .def_property(
+          "v", [](S& s) -> Vector& { return s.data().v; },
+          [](S& s, const Eigen::Ref<const Vector>& v) {
+            if (v.size() != s.data().v.size())
+              throw InputError("Simulation.v: expected " + std::to_string(s.data().v.size()) +
+                               " values, got " + std::to_string(v.size()));
+            s.data().v = v;
+          },
+          "Velocities (nv; writable view): per free node the body velocity [v (m/s); w (rad/s)] "
+          "in the node frame, then the joint-coordinate rates [m/s or rad/s] (Model docs). "
+          "Assigning copies into the existing array.")
+      .def_property_readonly(
+          "vdot", [](S& s) -> const Vector& { return s.data().vdot; },
+          "Accelerations (nv; read-only view): time derivatives of v [m/s^2, rad/s^2], same "
+          "layout and frames as v.")
+      .def_property_readonly(
+          "lambda_", [](S& s) -> const Vector& { return s.data().lambda; },
+          "Lagrange multipliers (nc; read-only view): generalised constraint forces [N, N m] "
+          "conjugate to the constraint rows (6 relative-frame rows per joint from Joint.row, "
+          "one row per prescribed drive from Joint.drive_row; method.md §4.3-4.4).")
+      .def_property_readonly(
+          "q_joint", [](S& s) -> const Vector& { return s.data().q_joint; },
+          "Joint coordinates (nv - nv_nodes; read-only view) [m or rad], in velocity order "
+          "offset by Model.nv_nodes; exact for abelian joints.")
+      .def_property_readonly("initialized", &S::initialized,
+                             "initialize() has succeeded since construction or the last "
+                             "solve_static().")
+      .def_property_readonly(
+          "steps", [](const S& s) { return s.integrator().steps; }, "Accepted time steps.")
+      .def_property_readonly(
+          "iterations", [](const S& s) { return s.integrator().iterations; },
+          "Newton iterations of all steps.")
+      .def_property_readonly(
+          "halvings", [](const S& s) { return s.integrator().halvings; }, "Halved time steps.")
+      .def_property_readonly("max_iterations_in_step",
+                             [](const S& s) { return s.integrator().max_iterations_in_step; })
+
+      .def("initialize", &S::Initialize, py::arg("options") = py::none(),
+           R"doc(initialize(options=None)
+
+InitializeDynamics: consistent initial accelerations and multipliers (method.md §5.4) at the
+current time from the current configuration and velocities; allocates the integrator.
+`options` (DynamicOptions) defaults to scene.analysis.dynamic. Raises SolverError if the
+saddle-point system is singular, InputError for invalid options.)doc")
+      .def("step", &S::Advance, py::arg("h"),
+           R"doc(step(h) -> StepResult
+
+Advances the state by h [s] (generalized-alpha, possibly in halved substeps). Returns the
+StepResult on success. On failure the state is left at the start of the step and SolverError
+is raised, with the StepResult (ok False, message) as its `result`. Requires initialize().)doc")
+      .def("solve_static", &S::Statics, py::arg("options") = py::none(),
+           R"doc(solve_static(options=None) -> StaticResult
+
+SolveStatic: brings the model from the current state to equilibrium under the full loads, with
+load stepping (statics.h). `options` (StaticOptions) defaults to scene.analysis.statics with
+time = the current time; the simulation's time is set to options.time. Velocities are left as
+they were; call initialize() before stepping again. Raises SolverError (result: the
+StaticResult) if it does not converge; the state then holds the last converged load step.)doc")
+
+      .def(
+          "node_frame", [](S& s, long i) { return s.data().H[s.Node(i)].Matrix(); },
+          py::arg("node"))
+      .def(
+          "node_frame", [](S& s, const std::string& n) { return s.data().H[s.Node(n)].Matrix(); },
+          py::arg("node"),
+          "node_frame(node) -> 4x4 array\n\nCurrent frame H of a node (index or name) as a "
+          "homogeneous matrix [R x; 0 1]: orientation and position [m] in the world frame "
+          "(a copy).")
+      .def(
+          "joint_relative_frame",
+          [](S& s, long j) {
+            return JointRelativeFrame(s.model(), s.data(), s.JointIndex(j)).Matrix();
+          },
+          py::arg("joint"))
+      .def(
+          "joint_relative_frame",
+          [](S& s, const std::string& j) {
+            return JointRelativeFrame(s.model(), s.data(), s.JointIndex(j)).Matrix();
+          },
+          py::arg("joint"),
+          "joint_relative_frame(joint) -> 4x4 array\n\nRelative frame H_J of a joint (index or "
+          "name), from the joint frame on side A to the one on side B [m] (a copy).")
+
+      .def(
+          "calc_node_point_motion",
+          [](S& s, long node, const Vec3& p) {
+            return CalcNodePointMotion(s.model(), s.data(), s.Node(node), p);
+          },
+          py::arg("node"), py::arg("p") = Vec3::Zero().eval())
+      .def(
+          "calc_node_point_motion",
+          [](S& s, const std::string& node, const Vec3& p) {
+            return CalcNodePointMotion(s.model(), s.data(), s.Node(node), p);
+          },
+          py::arg("node"), py::arg("p") = Vec3::Zero().eval(),
+          "calc_node_point_motion(node, p=[0, 0, 0]) -> PointMotion\n\nWorld position [m], "
+          "velocity [m/s] and acceleration [m/s^2] of the point p given in the frame of "
+          "`node` (index or name) [m] (outputs.h; a fixed node has zero velocity).")
+      .def(
+          "calc_rod_point_motion",
+          [](S& s, long rod, double arc) {
+            return CalcRodPointMotion(s.model(), s.data(), s.Rod(rod), arc);
+          },
+          py::arg("rod"), py::arg("s"))
+      .def(
+          "calc_rod_point_motion",
+          [](S& s, const std::string& rod, double arc) {
+            return CalcRodPointMotion(s.model(), s.data(), s.Rod(rod), arc);
+          },
+          py::arg("rod"), py::arg("s"),
+          "calc_rod_point_motion(rod, s) -> RodPoint\n\nSection frame and world motion of the "
+          "centre-line point of `rod` (index or name) at reference arc length s [m] from its "
+          "first node, clamped to [0, length] (outputs.h).")
+      .def(
+          "point_motion",
+          [](S& s, const std::string& name) {
+            const OutputPoint& p = s.OutputPointNamed(name);
+            return p.rod >= 0 ? CalcRodPointMotion(s.model(), s.data(), p.rod, p.arc_length).motion
+                              : CalcNodePointMotion(s.model(), s.data(), p.node, p.offset);
+          },
+          py::arg("name"),
+          "point_motion(name) -> PointMotion\n\nWorld motion of the scene's output point `name` "
+          "(outputs.points), the values of its points.csv columns.")
+      .def(
+          "calc_point_row",
+          [](S& s) {
+            std::vector<double> row;
+            CalcPointRow(s.model(), s.data(), s.scene().outputs.points, &row);
+            return ToVector(row);
+          },
+          "calc_point_row() -> array\n\nOne points.csv row without t, for the scene's output "
+          "points at the current state (columns: point_columns()); world frame, SI (a copy).")
+      .def(
+          "calc_joint_row",
+          [](S& s) {
+            std::vector<double> row;
+            CalcJointRow(s.model(), s.data(), s.scene().outputs.joints, &row);
+            return ToVector(row);
+          },
+          "calc_joint_row() -> array\n\nOne joints.csv row without t, for the scene's output "
+          "joints (columns: joint_columns()); coordinates [m or rad], their first and second "
+          "time derivatives and efforts [N or N m] (a copy).")
+      .def(
+          "point_columns", [](S& s) { return PointColumns(s.scene().outputs.points); },
+          "Column names of calc_point_row (those of points.csv after 't').")
+      .def(
+          "joint_columns", [](S& s) { return JointColumns(s.model(), s.scene().outputs.joints); },
+          "Column names of calc_joint_row (those of joints.csv after 't').")
+
+      .def(
+          "joint_coordinate",
+          [](S& s, long j, int c) {
+            return s.data().q_joint(s.JointDof(s.JointIndex(j), c) - s.model().nv_nodes);
+          },
+          py::arg("joint"), py::arg("c") = 0)
+      .def(
+          "joint_coordinate",
+          [](S& s, const std::string& j, int c) {
+            return s.data().q_joint(s.JointDof(s.JointIndex(j), c) - s.model().nv_nodes);
+          },
+          py::arg("joint"), py::arg("c") = 0,
+          "joint_coordinate(joint, c=0) -> float\n\nCoordinate c of a joint (index or name) "
+          "[m or rad].")
+      .def(
+          "joint_velocity",
+          [](S& s, long j, int c) { return s.data().v(s.JointDof(s.JointIndex(j), c)); },
+          py::arg("joint"), py::arg("c") = 0)
+      .def(
+          "joint_velocity",
+          [](S& s, const std::string& j, int c) {
+            return s.data().v(s.JointDof(s.JointIndex(j), c));
+          },
+          py::arg("joint"), py::arg("c") = 0,
+          "joint_velocity(joint, c=0) -> float\n\nRate of coordinate c [m/s or rad/s].")
+      .def(
+          "joint_acceleration",
+          [](S& s, long j, int c) { return s.data().vdot(s.JointDof(s.JointIndex(j), c)); },
+          py::arg("joint"), py::arg("c") = 0)
+      .def(
+          "joint_acceleration",
+          [](S& s, const std::string& j, int c) {
+            return s.data().vdot(s.JointDof(s.JointIndex(j), c));
+          },
+          py::arg("joint"), py::arg("c") = 0,
+          "joint_acceleration(joint, c=0) -> float\n\nSecond time derivative of coordinate c "
+          "[m/s^2 or rad/s^2].")
+      .def(
+          "joint_effort",
+          [](S& s, long j, int c) {
+            const int jj = s.JointIndex(j);
+            s.JointDof(jj, c);
+            return JointCoordinateEffort(s.model(), s.data(), jj, c);
+          },
+          py::arg("joint"), py::arg("c") = 0)
+      .def(
+          "joint_effort",
+          [](S& s, const std::string& j, int c) {
+            const int jj = s.JointIndex(j);
+            s.JointDof(jj, c);
+            return JointCoordinateEffort(s.model(), s.data(), jj, c);
+          },
+          py::arg("joint"), py::arg("c") = 0,
+          "joint_effort(joint, c=0) -> float\n\nGeneralised force on coordinate c [N or N m] "
+          "(writers.h, JointCoordinateEffort): the drive's effort on the driven coordinate, "
+          "otherwise -(K (alpha - rest) + D alpha_dot) of the joint's spring and damper, "
+          "otherwise 0.")
+
+      .def(
+          "calc_energy", [](S& s) { return CalcEnergy(s.model(), s.data()); },
+          "calc_energy() -> Energy\n\nKinetic, strain, spring and gravity energies of the "
+          "current state [J] (CalcEnergy).")
+      .def(
+          "max_constraint_violation",
+          [](S& s) { return MaxConstraintViolation(s.model(), s.data(), s.data().time, 1.0); },
+          "max_constraint_violation() -> float\n\nLargest |phi| over all constraint rows at the "
+          "current state and time [m or rad] (MaxConstraintViolation; overwrites only the "
+          "residual workspace).");
+}
+
+}  // namespace
+
+void BindSimulation(py::module_& m) {
+  BindResults(m);
+  BindSimulationClass(m);
+}
+
+}  // namespace screwfem::python

@@ -1,0 +1,19 @@
+"""screwfem: geometrically exact screw-based finite elements for articulated soft robots.
+
+A thin package over the compiled module ``screwfem._screwfem`` (pybind11 bindings of the C++
+library, include/screwfem). Names follow the C++ API in snake_case: ``load_scene``
+(LoadScene), ``run_scene`` (RunScene), ``Simulation`` (Model + Data + Integrator, with
+``initialize`` = InitializeDynamics, ``step`` = Step, ``solve_static`` = SolveStatic,
+``calc_energy`` = CalcEnergy, ``calc_node_point_motion`` = CalcNodePointMotion, ...).
+
+Units are SI (m, kg, s, N, rad). Point positions, velocities and accelerations are in the
+world frame; node velocities in ``Simulation.v`` are body velocities [v; w] in the node frame.
+Invalid input raises ``InputError`` (a ValueError), numerical failure ``SolverError`` (a
+RuntimeError).
+"""
+
+from . import _screwfem
+from ._screwfem import *  # noqa: F401,F403  (the package re-exports the module)
+from ._screwfem import __version__
+
+__all__ = [name for name in dir(_screwfem) if not name.startswith("_")]

@@ -1,0 +1,514 @@
+"""Tests of the Python bindings (python/): physics through the bindings, not just calls.
+
+Run by ctest (python/CMakeLists.txt, test python_bindings) as
+    /usr/bin/python3 -m unittest -v test_bindings
+from tests/python with PYTHONPATH=<build>/python. SCREWFEM_TEST_DATA_DIR names tests/data (the
+default is the directory next to this one).
+
+The pendulum (tests/data/pendulum.yaml) is a rigid link of mass m = 0.2 kg with its centre of
+mass at d = 0.2 m from a revolute joint about the world y axis, released at rest from the
+horizontal under g = 9.81 m/s^2 along -z. Its pivot inertia is I_O = J_yy + m d^2 and
+w0 = sqrt(m g d / I_O). The joint angle alpha rotates the link about +y, so the tip E = (0.4,
+0, 0) moves to (0.4 cos alpha, 0, -0.4 sin alpha) and the link hangs down at alpha = pi/2.
+Exact period for the amplitude pi/2: T = 4 K(k^2) / w0 with k = sin(pi/4), K the complete
+elliptic integral of the first kind (by the arithmetic-geometric mean).
+"""
+
+import csv
+import math
+import os
+import pathlib
+import re
+import tempfile
+import unittest
+
+import numpy as np
+
+import screwfem as sf
+
+DATA_DIR = pathlib.Path(
+    os.environ.get("SCREWFEM_TEST_DATA_DIR", pathlib.Path(__file__).resolve().parents[1] / "data"))
+PENDULUM = str(DATA_DIR / "pendulum.yaml")
+TIP = np.array([0.4, 0.0, 0.0])  # point E in the link's frame [m]
+
+
+def elliptic_k(m):
+    """Complete elliptic integral of the first kind K(m), m = k^2 < 1 (AGM, converged)."""
+    a, b = 1.0, math.sqrt(1.0 - m)
+    for _ in range(40):  # quadratic convergence: exact to round-off long before 40 rounds
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+    return math.pi / (2.0 * a)
+
+
+def pendulum_constants(model):
+    """(m, d, I_O, g, w0) of the pendulum, read from the compiled model."""
+    body = model.bodies[0]
+    m = body.mass
+    d = float(np.linalg.norm(body.com))
+    inertia_pivot = body.inertia[1, 1] + m * d * d
+    g = -model.gravity[2]
+    return m, d, inertia_pivot, g, math.sqrt(m * g * d / inertia_pivot)
+
+
+def rotation_y(angle):
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def undamped(sim):
+    """Initializes with rho_inf = 1 (no numerical damping)."""
+    options = sf.DynamicOptions()
+    options.rho_inf = 1.0
+    sim.initialize(options)
+
+
+_SWINGS = {}
+
+
+def swing(h):
+    """One period of the undamped pendulum with step h: the times of the zero crossings of
+    the joint rate at T/2 and T (linear interpolation over the bracketing step; its error is
+    O(h^3) because d^2(alpha_dot)/dt^2 vanishes at a turning point) and the largest energy
+    error |E(t) - E(0)| [J]. Cached: the period and energy tests share the runs."""
+    if h not in _SWINGS:
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        undamped(sim)
+        _, _, _, _, w0 = pendulum_constants(sim.model)
+        period = 4.0 * elliptic_k(0.5) / w0
+        e0 = sim.calc_energy().total()
+        crossings, energy_error = [], 0.0
+        while len(crossings) < 2 and sim.time < 1.2 * period:
+            t0, v0 = sim.time, sim.joint_velocity("hinge")
+            sim.step(h)
+            v1 = sim.joint_velocity("hinge")
+            energy_error = max(energy_error, abs(sim.calc_energy().total() - e0))
+            if t0 > 0.25 * period and (v0 > 0.0) != (v1 > 0.0):
+                crossings.append(t0 + h * v0 / (v0 - v1))
+        _SWINGS[h] = (crossings, energy_error)
+    return _SWINGS[h]
+
+
+def read_csv(path):
+    """{t: row values} of a points.csv / joints.csv (written with %.17g: exact doubles)."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], {float(r[0]): np.array([float(x) for x in r[1:]]) for r in rows[1:]}
+
+
+class SceneAndModelTest(unittest.TestCase):
+    def test_load_scene_compiles_the_pendulum(self):
+        scene = sf.load_scene(PENDULUM)
+        self.assertEqual(scene.name, "pendulum")
+        self.assertEqual(scene.source, PENDULUM)
+        model = scene.model
+        # One free node (6 body-velocity components) and one revolute coordinate; the joint
+        # adds its 6 relative-frame constraint rows.
+        self.assertEqual((model.nv, model.nv_nodes, model.nc), (7, 6, 6))
+        self.assertEqual(model.num_unknowns(), 13)
+        self.assertEqual((model.num_nodes, model.num_elements, model.num_rods), (1, 0, 0))
+        self.assertEqual((model.num_bodies, model.num_joints), (1, 1))
+        np.testing.assert_array_equal(model.gravity, [0.0, 0.0, -9.81])
+        body = model.bodies[0]
+        self.assertEqual(body.name, "link")
+        self.assertEqual(body.mass, 0.2)
+        np.testing.assert_array_equal(body.com, [0.2, 0.0, 0.0])  # midpoint of O, E
+        np.testing.assert_array_equal(body.inertia, np.diag([1e-4, 2.7e-3, 2.7e-3]))
+
+    def test_entities_and_lookups_by_name(self):
+        model = sf.load_scene(PENDULUM).model
+        self.assertEqual(model.find_joint("hinge"), 0)
+        self.assertEqual(model.find_joint("hinj"), -1)
+        self.assertEqual(model.find_body("link"), 0)
+        node = model.nodes[model.bodies[0].node]
+        self.assertEqual(model.find_node(node.name), model.bodies[0].node)
+        self.assertFalse(node.fixed)
+        np.testing.assert_array_equal(node.reference, np.eye(4))  # at O, world-aligned
+        joint = model.joints[0]
+        self.assertEqual(joint.name, "hinge")
+        self.assertEqual(joint.type, sf.JointType.kRevolute)
+        self.assertEqual(sf.joint_type_name(joint.type), "revolute")
+        self.assertEqual((joint.node_a, joint.node_b), (sf.kGround, 0))
+        self.assertEqual((joint.k(), joint.coord, joint.row), (1, 6, 0))
+        self.assertEqual(joint.drive, sf.DriveKind.kNone)
+        np.testing.assert_array_equal(joint.basis[:, 0], [0, 0, 0, 0, 1, 0])  # rotation about y
+
+    def test_analysis_settings_are_readable_and_writable(self):
+        scene = sf.load_scene(PENDULUM)
+        a = scene.analysis
+        self.assertEqual(a.kind, sf.AnalysisKind.kDynamic)
+        self.assertEqual((a.start_time, a.end_time, a.step, a.rho_inf), (0.0, 0.5, 1e-3, 0.9))
+        a.end_time, a.step, a.rho_inf = 0.25, 5e-4, 1.0
+        self.assertEqual((scene.analysis.end_time, scene.analysis.step), (0.25, 5e-4))
+        self.assertEqual(scene.analysis.dynamic.rho_inf, 1.0)  # rho_inf is dynamic.rho_inf
+        scene.analysis.dynamic.max_iterations = 7
+        self.assertEqual(scene.analysis.dynamic.max_iterations, 7)
+
+    def test_overrides_are_applied_before_compilation(self):
+        scene = sf.load_scene(PENDULUM, ["analysis.step=5e-4", "bodies.link.mass=0.3"])
+        self.assertEqual(scene.analysis.step, 5e-4)
+        self.assertEqual(scene.model.bodies[0].mass, 0.3)
+        self.assertEqual([p.name for p in scene.outputs.points], ["tip"])
+        self.assertEqual([j.name for j in scene.outputs.joints], ["hinge"])
+
+
+class InputErrorTest(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        with open(PENDULUM) as f:
+            self.text = f.read()
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def write(self, text):
+        path = os.path.join(self.dir.name, "bad.yaml")
+        with open(path, "w") as f:
+            f.write(text)
+        return path
+
+    def location(self, text, needle):
+        """1-based (line, column) of the first occurrence of needle."""
+        for number, line in enumerate(text.splitlines(), start=1):
+            if needle in line:
+                return number, line.index(needle) + 1
+        raise AssertionError(needle)
+
+    def test_unknown_key_raises_input_error_with_file_line_and_column(self):
+        text = self.text.replace("mass: 0.2", "mas: 0.2")
+        path = self.write(text)
+        line, column = self.location(text, "mas: 0.2")
+        with self.assertRaises(sf.InputError) as caught:
+            sf.load_scene(path)
+        self.assertIsInstance(caught.exception, ValueError)
+        self.assertEqual(
+            str(caught.exception),
+            f"{path}:{line}:{column}: bodies.link.mas: unknown key 'mas' (did you mean 'mass'?)")
+
+    def test_invalid_value_names_the_field_at_its_line(self):
+        text = self.text.replace("mass: 0.2", "mass: -0.2")
+        path = self.write(text)
+        line, _ = self.location(text, "mass: -0.2")
+        with self.assertRaisesRegex(sf.InputError,
+                                    "^" + re.escape(f"{path}:{line}:") + r"\d+: bodies\.link\.mass: "):
+            sf.load_scene(path)
+
+    def test_parse_scene_and_overrides_report_their_source(self):
+        with self.assertRaisesRegex(sf.InputError, r"^inline\.yaml:\d+:\d+: "):
+            sf.parse_scene(self.text.replace("axis: [0, 1, 0]", "axis: [0, 2, 0]"), "inline.yaml")
+        with self.assertRaisesRegex(
+                sf.InputError, re.escape(f"{PENDULUM}: override 'analysis.stepp=1e-3': analysis.stepp")):
+            sf.load_scene(PENDULUM, ["analysis.stepp=1e-3"])
+
+    def test_misuse_of_a_simulation_raises(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        with self.assertRaisesRegex(RuntimeError, "initialize"):
+            sim.step(1e-3)
+        options = sf.DynamicOptions()
+        options.rho_inf = 1.5
+        with self.assertRaisesRegex(sf.InputError, "rho_inf"):
+            sim.initialize(options)
+        sim.initialize()
+        for h in (0.0, -1e-3, math.nan, math.inf):
+            with self.assertRaises(sf.InputError):
+                sim.step(h)
+        with self.assertRaises(IndexError):
+            sim.node_frame(1)
+        with self.assertRaises(IndexError):
+            sim.joint_coordinate("hinge", 1)
+        with self.assertRaises(KeyError):
+            sim.joint_coordinate("hinj")
+        with self.assertRaises(KeyError):
+            sim.point_motion("top")
+        with self.assertRaises(sf.InputError):
+            sim.v = np.zeros(3)
+
+
+class NumpyArraysTest(unittest.TestCase):
+    def test_state_arrays_have_the_model_sizes(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        model = sim.model
+        for name, size in (("v", model.nv), ("vdot", model.nv), ("lambda_", model.nc),
+                           ("q_joint", model.nv - model.nv_nodes)):
+            array = getattr(sim, name)
+            self.assertEqual(array.shape, (size,), name)
+            self.assertEqual(array.dtype, np.float64, name)
+        self.assertEqual(sim.node_frame(0).shape, (4, 4))
+        self.assertEqual(sim.joint_relative_frame("hinge").shape, (4, 4))
+        self.assertEqual(sim.calc_point_row().shape, (9,))
+        self.assertEqual(len(sim.point_columns()), 9)
+        self.assertEqual(sim.calc_joint_row().shape, (4,))
+        self.assertEqual(sim.joint_columns(), ["hinge.q", "hinge.qd", "hinge.qdd", "hinge.effort"])
+        motion = sim.point_motion("tip")
+        for v in (motion.position, motion.velocity, motion.acceleration):
+            self.assertEqual(v.shape, (3,))
+
+    def test_arrays_are_views_of_the_simulation_state(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        sim.initialize()
+        v, vdot, lam, q = sim.v, sim.vdot, sim.lambda_, sim.q_joint
+        self.assertTrue(v.flags.writeable)
+        for array in (vdot, lam, q):
+            self.assertFalse(array.flags.writeable)
+        for _ in range(20):
+            sim.step(1e-3)
+        # The arrays taken before stepping show the state after it, without a copy.
+        for name, array in (("v", v), ("vdot", vdot), ("lambda_", lam), ("q_joint", q)):
+            self.assertTrue(np.shares_memory(array, getattr(sim, name)), name)
+            np.testing.assert_array_equal(array, getattr(sim, name))
+        self.assertNotEqual(q[0], 0.0)
+        self.assertEqual(q[0], sim.joint_coordinate("hinge"))
+        # A view keeps its simulation alive.
+        del sim
+        self.assertEqual(q.shape, (1,))
+        self.assertTrue(np.isfinite(v).all())
+
+    def test_writing_v_sets_the_initial_velocities(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        rate = 2.0  # [rad/s] about the hinge: node body rotation rate w_y and the joint rate
+        sim.v = np.array([0, 0, 0, 0, rate, 0, rate])
+        sim.initialize()
+        m, d, inertia_pivot, g, _ = pendulum_constants(sim.model)
+        energy = sim.calc_energy()
+        self.assertAlmostEqual(energy.kinetic, 0.5 * inertia_pivot * rate ** 2, delta=1e-15)
+        # The tip moves with w x r = (0, rate, 0) x (0.4, 0, 0) = (0, 0, -0.4 rate).
+        np.testing.assert_allclose(sim.point_motion("tip").velocity, [0, 0, -0.4 * rate],
+                                   rtol=0, atol=1e-15)
+
+
+class PendulumDynamicsTest(unittest.TestCase):
+    def test_initial_acceleration_is_the_gravity_torque_over_the_pivot_inertia(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        sim.initialize()
+        m, d, inertia_pivot, g, _ = pendulum_constants(sim.model)
+        alpha_ddot = m * g * d / inertia_pivot
+        self.assertAlmostEqual(sim.joint_acceleration("hinge") / alpha_ddot, 1.0, delta=1e-12)
+        # Tip acceleration w' x r = (0, alpha_ddot, 0) x (0.4, 0, 0) in the world frame.
+        np.testing.assert_allclose(sim.point_motion("tip").acceleration,
+                                   [0.0, 0.0, -0.4 * alpha_ddot], rtol=0, atol=1e-11)
+
+    def test_period_matches_the_closed_form_at_second_order(self):
+        # Generalized-alpha with rho_inf = 1 has a phase error O((w0 h)^2); its measured
+        # coefficient here is 0.057 (h = 1e-3: relative period error 2.1e-6).
+        _, _, _, _, w0 = pendulum_constants(sf.load_scene(PENDULUM).model)
+        period = 4.0 * elliptic_k(0.5) / w0
+        errors = []
+        for h in (1e-3, 5e-4):
+            (half, full), _ = swing(h)
+            error = (full - period) / period
+            self.assertLess(abs(error), 0.1 * (w0 * h) ** 2, f"h = {h}: period error {error}")
+            self.assertLess(abs((2.0 * half - period) / period), 0.1 * (w0 * h) ** 2)
+            errors.append(error)
+        self.assertGreater(errors[0] / errors[1], 3.8)
+        self.assertLess(errors[0] / errors[1], 4.2)
+        # Richardson extrapolation removes the h^2 term.
+        richardson = (4.0 * errors[1] - errors[0]) / 3.0
+        self.assertLess(abs(richardson), 1e-8)
+
+    def test_energy_is_conserved_to_second_order_without_numerical_damping(self):
+        # The largest energy error over a period is O((w0 h)^2) (coefficient measured 0.083 of
+        # m g d) and it does not drift: halving h divides it by 4.
+        m, d, _, g, w0 = pendulum_constants(sf.load_scene(PENDULUM).model)
+        errors = [swing(h)[1] / (m * g * d) for h in (1e-3, 5e-4)]
+        for h, error in zip((1e-3, 5e-4), errors):
+            self.assertLess(error, 0.15 * (w0 * h) ** 2, f"h = {h}")
+        self.assertGreater(errors[0] / errors[1], 3.8)
+        self.assertLess(errors[0] / errors[1], 4.2)
+
+    def test_numerical_damping_dissipates_energy_when_rho_inf_is_below_one(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM, ["analysis.rho_inf=0"]))
+        sim.initialize()
+        m, d, _, g, _ = pendulum_constants(sim.model)
+        for _ in range(1000):
+            sim.step(1e-3)
+        self.assertLess(sim.calc_energy().total(), -1e-6 * m * g * d)
+
+    def test_tip_is_at_the_bottom_with_the_energy_speed_after_a_quarter_period(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        undamped(sim)
+        m, d, inertia_pivot, g, w0 = pendulum_constants(sim.model)
+        quarter = elliptic_k(0.5) / w0
+        h = 5e-4
+        while sim.time < quarter - h:
+            sim.step(h)
+        sim.step(quarter - sim.time)
+        self.assertAlmostEqual(sim.time, quarter, delta=1e-15)
+        motion = sim.point_motion("tip")
+        # At the bottom alpha = pi/2 and I_O alpha_dot^2 / 2 = m g d.
+        rate = math.sqrt(2.0 * m * g * d / inertia_pivot)
+        speed = 0.4 * rate
+        # The relative phase error of the period test, 0.1 (w0 h)^2, turns into an angle error
+        # of rate * quarter * phase at the bottom; the tip moves by 0.4 m times it and its
+        # velocity turns by it (the speed is stationary there; its O(h^2) energy error is
+        # smaller).
+        angle_tolerance = rate * quarter * 0.1 * (w0 * h) ** 2
+        self.assertAlmostEqual(sim.joint_coordinate("hinge"), math.pi / 2, delta=angle_tolerance)
+        np.testing.assert_allclose(motion.position, [0.0, 0.0, -0.4], rtol=0,
+                                   atol=0.4 * angle_tolerance)
+        np.testing.assert_allclose(motion.velocity, [-speed, 0.0, 0.0], rtol=0,
+                                   atol=speed * angle_tolerance)
+
+    def test_frames_points_and_joint_coordinates_agree(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        sim.initialize()
+        for _ in range(150):
+            sim.step(1e-3)
+        alpha = sim.joint_coordinate("hinge")
+        rate = sim.joint_velocity("hinge")
+        accel = sim.joint_acceleration("hinge")
+        frame = sim.node_frame("link")
+        np.testing.assert_allclose(frame[:3, :3], rotation_y(alpha), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(frame[:3, 3], 0.0, rtol=0, atol=1e-12)  # the pivot stays
+        np.testing.assert_allclose(sim.joint_relative_frame("hinge")[:3, :3], rotation_y(alpha),
+                                   rtol=0, atol=1e-12)
+        r = rotation_y(alpha) @ TIP  # world vector from the pivot to the tip
+        w, w_dot = np.array([0.0, rate, 0.0]), np.array([0.0, accel, 0.0])
+        motion = sim.calc_node_point_motion("link", TIP)
+        np.testing.assert_allclose(motion.position, r, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(motion.velocity, np.cross(w, r), rtol=0, atol=1e-11)
+        # The joint's and the node's accelerations are separate unknowns of the Newton solve,
+        # consistent to its stopping test (amplified by 1/(beta h^2) in vdot), not to round-off.
+        np.testing.assert_allclose(motion.acceleration,
+                                   np.cross(w_dot, r) + np.cross(w, np.cross(w, r)),
+                                   rtol=1e-8, atol=0)
+        np.testing.assert_array_equal(sim.point_motion("tip").position, motion.position)
+        self.assertLess(sim.max_constraint_violation(), 1e-12)
+
+    def test_stepping_from_python_reproduces_run_scene_outputs(self):
+        scene = sf.load_scene(PENDULUM)
+        scene.outputs.vtk = False
+        with tempfile.TemporaryDirectory() as outdir:
+            result = sf.run_scene(scene, outdir)
+            point_header, points = read_csv(os.path.join(outdir, "points.csv"))
+            joint_header, joints = read_csv(os.path.join(outdir, "joints.csv"))
+        self.assertTrue(result.ok, result.message)
+        self.assertEqual(result.message, "")
+        self.assertEqual(result.steps, 500)
+        self.assertAlmostEqual(result.end_time, 0.5, delta=1e-12)
+        self.assertEqual(len(points), 51)  # t = 0, 0.01, ..., 0.5
+        # The same loop as run_scene: the scene's settings and its step schedule.
+        sim = sf.Simulation(scene)
+        sim.initialize()
+        self.assertEqual(point_header[1:], sim.point_columns())
+        self.assertEqual(joint_header[1:], sim.joint_columns())
+        a = scene.analysis
+        schedule = sf.StepSchedule(a.start_time, a.end_time, a.step)
+        compared = 0
+        largest = 0.0
+
+        def compare():
+            nonlocal compared, largest
+            if sim.time in points:
+                largest = max(largest, np.abs(sim.calc_point_row() - points[sim.time]).max(),
+                              np.abs(sim.calc_joint_row() - joints[sim.time]).max())
+                compared += 1
+
+        compare()
+        while not schedule.done(sim.time):
+            t_next = schedule.next(sim.time)
+            sim.step(t_next - sim.time)
+            sim.time = t_next
+            compare()
+        self.assertEqual(compared, len(points))
+        self.assertLessEqual(largest, 1e-12)
+        self.assertEqual((sim.steps, sim.iterations, sim.halvings),
+                         (result.steps, result.newton_iterations, result.halvings))
+        self.assertLess(result.max_constraint_residual, 1e-10)
+
+    def test_failed_step_raises_solver_error_and_keeps_the_state(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        options = sf.DynamicOptions()
+        options.max_iterations, options.max_halvings = 1, 0
+        sim.initialize(options)
+        v = sim.v.copy()
+        with self.assertRaises(sf.SolverError) as caught:
+            sim.step(1e-2)
+        self.assertIsInstance(caught.exception, RuntimeError)
+        self.assertFalse(caught.exception.result.ok)
+        self.assertIn("step failed at t = 0 s", str(caught.exception))
+        self.assertEqual(caught.exception.result.message, str(caught.exception))
+        self.assertEqual(sim.time, 0.0)
+        np.testing.assert_array_equal(sim.v, v)
+        np.testing.assert_array_equal(sim.node_frame(0), np.eye(4))
+
+
+class StaticsTest(unittest.TestCase):
+    def test_pendulum_with_a_hinge_spring_balances_gravity(self):
+        # Equilibrium k alpha = m g d cos(alpha) (a scalar Newton solve for the reference).
+        k = 1.0  # [N m/rad]
+        sim = sf.Simulation(sf.load_scene(PENDULUM, [f"joints.hinge.stiffness={k}"]))
+        m, d, _, g, _ = pendulum_constants(sim.model)
+        alpha = 0.0
+        for _ in range(50):
+            alpha -= (k * alpha - m * g * d * math.cos(alpha)) / (k + m * g * d * math.sin(alpha))
+        result = sim.solve_static()
+        self.assertTrue(result.converged)
+        self.assertEqual(result.load_factor, 1.0)
+        self.assertAlmostEqual(sim.joint_coordinate("hinge"), alpha, delta=1e-10)
+        self.assertAlmostEqual(sim.joint_effort("hinge"), -k * alpha, delta=1e-9)
+        energy = sim.calc_energy()
+        self.assertAlmostEqual(energy.spring, 0.5 * k * alpha ** 2, delta=1e-10)
+        self.assertAlmostEqual(energy.gravity, -m * g * d * math.sin(alpha), delta=1e-10)
+        self.assertEqual(energy.kinetic, 0.0)
+        self.assertFalse(sim.initialized)
+
+    def test_rod_rolls_up_into_a_circular_arc_under_a_tip_moment(self):
+        # A clamped rod of length L under a tip moment M about y bends into an arc of
+        # curvature M / EI: the point at arc length s is at (sin(ks)/k, 0, -(1 - cos(ks))/k)
+        # with k = M / EI, exact for helical elements (constant strain) at any mesh.
+        length, ei = 0.5, 2.0
+        moment = 0.5 * math.pi * ei / length  # a quarter circle
+        text = f"""
+name: quarter roll-up
+points: {{O: [0, 0, 0], TIP: [{length}, 0, 0]}}
+sections:
+  s: {{stiffness: [1e4, 1e4, 1e4, 3, {ei}, {ei}]}}
+bodies:
+  arm: {{type: soft, from: O, to: TIP, section: s, elements: 4}}
+joints:
+  clamp: {{type: fixed, at: O, between: [ground, arm]}}
+loads:
+  tip: {{body: arm, at: TIP, moment: [0, {moment}, 0]}}
+analysis: {{type: static, load_steps: 4}}
+outputs:
+  points:
+    tip: {{body: arm, at: TIP}}
+    third: {{rod: arm, s: {length / 3}}}
+  vtk: false
+"""
+        scene = sf.parse_scene(text, "rollup.yaml")
+        self.assertEqual((scene.model.num_rods, scene.model.num_elements, scene.model.num_nodes),
+                         (1, 4, 5))
+        self.assertEqual(scene.model.rods[0].nodes, [0, 1, 2, 3, 4])
+        sim = sf.Simulation(scene)
+        result = sim.solve_static()
+        self.assertTrue(result.converged)
+        self.assertEqual(result.load_steps, 4)
+        curvature = moment / ei
+
+        def arc(s):
+            return [math.sin(curvature * s) / curvature, 0.0,
+                    -(1.0 - math.cos(curvature * s)) / curvature]
+
+        np.testing.assert_allclose(sim.point_motion("tip").position, arc(length), rtol=0, atol=1e-12)
+        rod_point = sim.calc_rod_point_motion("arm", length / 3)
+        np.testing.assert_allclose(rod_point.motion.position, arc(length / 3), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(rod_point.frame[:3, :3], rotation_y(curvature * length / 3),
+                                   rtol=0, atol=1e-12)
+        self.assertEqual(rod_point.element, 1)
+        self.assertAlmostEqual(rod_point.xi, 1.0 / 3.0, delta=1e-12)
+        np.testing.assert_allclose(sim.node_frame("arm.4")[:3, :3], rotation_y(math.pi / 2),
+                                   rtol=0, atol=1e-12)
+        self.assertAlmostEqual(sim.calc_energy().strain / (0.5 * moment ** 2 * length / ei), 1.0,
+                               delta=1e-12)
+        # run_scene solves the same problem and records the same row.
+        with tempfile.TemporaryDirectory() as outdir:
+            run = sf.run_scene(scene, outdir)
+            _, rows = read_csv(os.path.join(outdir, "points.csv"))
+        self.assertTrue(run.ok, run.message)
+        self.assertEqual(list(rows), [scene.analysis.statics.time])
+        np.testing.assert_allclose(rows[scene.analysis.statics.time], sim.calc_point_row(),
+                                   rtol=0, atol=1e-14)
+
+
+if __name__ == "__main__":
+    unittest.main()
