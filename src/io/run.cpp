@@ -135,12 +135,18 @@ class Run {
   void Finish(const char* status, std::string message) {
     if (finished_) return;
     finished_ = true;
+    // The rows still collected by the writers go to disk before the summary that counts them.
+    const bool points_closed = points_.Close();
+    const std::string& unwritten = points_closed ? joints_.path() : points_.path();
+    if ((!points_closed || !joints_.Close()) && std::string(status) != "failed") {
+      status = "failed";
+      message = Format("cannot write at t = %.9g s: ", data_.time) + unwritten + ": " +
+                std::strerror(errno);
+    }
     status_ = status;
     message_ = std::move(message);
     if (progress_) progress_->Finish(data_.time, integ_.steps);
     WriteSummary();
-    points_.Close();
-    joints_.Close();
   }
 
   RunResult Result() const {
@@ -178,7 +184,10 @@ class Run {
     }
     max_constraint_ = MaxConstraint(model_, data_, so.time);
     if (!Record(so.time, true, true)) return;
-    if (options_.on_step) options_.on_step(so.time);
+    if (options_.on_step) {
+      if (!FlushRows(so.time)) return;
+      options_.on_step(so.time);
+    }
     Finish("completed", {});
   }
 
@@ -240,9 +249,15 @@ class Run {
         if (row) rows.Recorded(t_next);
         if (frame) frames.Recorded(t_next);
       }
-      if (options_.on_step) options_.on_step(t_next);
+      if (options_.on_step) {
+        if (!FlushRows(t_next)) return;
+        options_.on_step(t_next);
+      }
       if (progress_) progress_->Update(t_next, integ_.steps);
-      if (Clock::now() - last_summary_ > std::chrono::seconds(2)) WriteSummary();
+      if (Clock::now() - last_summary_ > std::chrono::seconds(2)) {
+        if (!FlushRows(t_next)) return;
+        WriteSummary();
+      }
     }
     Finish("completed", {});
   }
@@ -259,6 +274,13 @@ class Run {
     }
     if (frame && vtk_ && !vtk_->WriteFrame(model_, data_, t))
       return WriteFailed(vtk_->dir() + "/frame files", t);
+    return true;
+  }
+
+  // Writes the rows collected so far to the files; on a write error ends the run as failed.
+  bool FlushRows(double t) {
+    if (!points_.Flush()) return WriteFailed(points_.path(), t);
+    if (!joints_.Flush()) return WriteFailed(joints_.path(), t);
     return true;
   }
 

@@ -1,6 +1,7 @@
 #include "screwfem/io/vtk.h"
 
 #include <cerrno>
+#include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -100,62 +101,95 @@ Geometry BuildGeometry(const Model& model, const Data& data) {
   return g;
 }
 
-void WriteCells(std::FILE* f, const char* tag, const std::vector<Geometry::Cell>& cells) {
+// The file is composed in memory (numbers through AppendNumber, the printf formats of the
+// format strings noted) and written at once.
+void AppendInt(std::string* text, long value) {
+  char buf[24];
+  text->append(buf, std::to_chars(buf, buf + sizeof buf, value).ptr);
+}
+
+void WriteCells(std::string* f, const char* tag, const std::vector<Geometry::Cell>& cells) {
   if (cells.empty()) return;
-  std::fprintf(f, "      <%s>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n", tag);
+  *f += "      <";
+  *f += tag;
+  *f += ">\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
   for (const Geometry::Cell& c : cells) {
-    std::fputs("         ", f);
-    for (int p : c.points) std::fprintf(f, " %d", p);
-    std::fputc('\n', f);
+    *f += "         ";
+    for (int p : c.points) {
+      *f += ' ';
+      AppendInt(f, p);
+    }
+    *f += '\n';
   }
-  std::fputs("        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n         ", f);
+  *f += "        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n         ";
   long offset = 0;
   for (const Geometry::Cell& c : cells) {
     offset += static_cast<long>(c.points.size());
-    std::fprintf(f, " %ld", offset);
+    *f += ' ';
+    AppendInt(f, offset);
   }
-  std::fprintf(f, "\n        </DataArray>\n      </%s>\n", tag);
+  *f += "\n        </DataArray>\n      </";
+  *f += tag;
+  *f += ">\n";
 }
 
-void WriteVectors(std::FILE* f, const char* name, const std::vector<Vec3>& values) {
-  std::fprintf(f, "        <DataArray type=\"Float64\" Name=\"%s\" NumberOfComponents=\"3\" format=\"ascii\">\n", name);
-  for (const Vec3& v : values) std::fprintf(f, "          %.10g %.10g %.10g\n", v.x(), v.y(), v.z());
-  std::fputs("        </DataArray>\n", f);
+void WriteVectors(std::string* f, const char* name, const std::vector<Vec3>& values) {
+  *f += "        <DataArray type=\"Float64\" Name=\"";
+  *f += name;
+  *f += "\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  for (const Vec3& v : values) {  // "          %.10g %.10g %.10g\n"
+    *f += "         ";
+    for (int i = 0; i < 3; ++i) {
+      *f += ' ';
+      AppendNumber(f, v(i), 10);
+    }
+    *f += '\n';
+  }
+  *f += "        </DataArray>\n";
 }
 
-void WriteInts(std::FILE* f, const char* name, const std::vector<int>& values) {
-  std::fprintf(f, "        <DataArray type=\"Int32\" Name=\"%s\" format=\"ascii\">\n         ", name);
-  for (int v : values) std::fprintf(f, " %d", v);
-  std::fputs("\n        </DataArray>\n", f);
+void WriteInts(std::string* f, const char* name, const std::vector<int>& values) {
+  *f += "        <DataArray type=\"Int32\" Name=\"";
+  *f += name;
+  *f += "\" format=\"ascii\">\n         ";
+  for (int v : values) {
+    *f += ' ';
+    AppendInt(f, v);
+  }
+  *f += "\n        </DataArray>\n";
 }
 
 bool WriteVtp(const std::string& path, const Geometry& g, double time) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) return false;
-  std::fputs("<?xml version=\"1.0\"?>\n"
-             "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-             "  <PolyData>\n"
-             "    <FieldData>\n"
-             "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">\n",
-             f);
-  std::fprintf(f, "        %.17g\n      </DataArray>\n    </FieldData>\n", time);
-  std::fprintf(f,
-               "    <Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"%zu\" NumberOfLines=\"%zu\" "
-               "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n",
-               g.position.size(), g.verts.size(), g.lines.size());
+  std::string f;
+  f.reserve(4096 + 160 * g.position.size());
+  f += "<?xml version=\"1.0\"?>\n"
+       "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+       "  <PolyData>\n"
+       "    <FieldData>\n"
+       "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">\n";
+  f += "        ";
+  AppendNumber(&f, time, 17);
+  f += "\n      </DataArray>\n    </FieldData>\n";
+  f += "    <Piece NumberOfPoints=\"";
+  AppendInt(&f, static_cast<long>(g.position.size()));
+  f += "\" NumberOfVerts=\"";
+  AppendInt(&f, static_cast<long>(g.verts.size()));
+  f += "\" NumberOfLines=\"";
+  AppendInt(&f, static_cast<long>(g.lines.size()));
+  f += "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n";
 
-  std::fputs("      <PointData Vectors=\"velocity\">\n", f);
+  f += "      <PointData Vectors=\"velocity\">\n";
   for (int axis = 0; axis < 3; ++axis) {
     std::vector<Vec3> column(g.frame.size());
     for (std::size_t i = 0; i < g.frame.size(); ++i) column[i] = g.frame[i].col(axis);
-    WriteVectors(f, axis == 0 ? "frame_x" : axis == 1 ? "frame_y" : "frame_z", column);
+    WriteVectors(&f, axis == 0 ? "frame_x" : axis == 1 ? "frame_y" : "frame_z", column);
   }
-  WriteVectors(f, "velocity", g.velocity);
-  WriteInts(f, "joint_id", g.point_joint);
-  std::fputs("      </PointData>\n", f);
+  WriteVectors(&f, "velocity", g.velocity);
+  WriteInts(&f, "joint_id", g.point_joint);
+  f += "      </PointData>\n";
 
   // Cell data in the order VTK stores the cells: vertices, then lines.
-  std::fputs("      <CellData Scalars=\"rod_id\">\n", f);
+  f += "      <CellData Scalars=\"rod_id\">\n";
   std::vector<int> rod, body, joint;
   for (const auto* cells : {&g.verts, &g.lines})
     for (const Geometry::Cell& c : *cells) {
@@ -163,20 +197,23 @@ bool WriteVtp(const std::string& path, const Geometry& g, double time) {
       body.push_back(c.body);
       joint.push_back(c.joint);
     }
-  WriteInts(f, "rod_id", rod);
-  WriteInts(f, "body_id", body);
-  WriteInts(f, "joint_id", joint);
-  std::fputs("      </CellData>\n", f);
+  WriteInts(&f, "rod_id", rod);
+  WriteInts(&f, "body_id", body);
+  WriteInts(&f, "joint_id", joint);
+  f += "      </CellData>\n";
 
-  std::fputs("      <Points>\n", f);
-  WriteVectors(f, "position", g.position);
-  std::fputs("      </Points>\n", f);
-  WriteCells(f, "Verts", g.verts);
-  WriteCells(f, "Lines", g.lines);
-  std::fputs("    </Piece>\n  </PolyData>\n</VTKFile>\n", f);
-  const bool ok = !std::ferror(f);
+  f += "      <Points>\n";
+  WriteVectors(&f, "position", g.position);
+  f += "      </Points>\n";
+  WriteCells(&f, "Verts", g.verts);
+  WriteCells(&f, "Lines", g.lines);
+  f += "    </Piece>\n  </PolyData>\n</VTKFile>\n";
+
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (!file) return false;
+  const bool ok = std::fwrite(f.data(), 1, f.size(), file) == f.size() && !std::ferror(file);
   const int saved = errno;
-  const bool closed = std::fclose(f) == 0;
+  const bool closed = std::fclose(file) == 0;
   errno = saved;
   return ok && closed;
 }

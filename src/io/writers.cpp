@@ -1,6 +1,7 @@
 #include "screwfem/io/writers.h"
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 
@@ -112,6 +113,17 @@ double JointCoordinateEffort(const Model& model, const Data& data, int joint, in
 
 // ---- CSV ---------------------------------------------------------------------------------------
 
+void AppendNumber(std::string* text, double value, int precision) {
+  char buf[64];
+  const std::to_chars_result r =
+      std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, precision);
+  text->append(buf, r.ptr);
+}
+
+namespace {
+constexpr std::size_t kCsvBufferBytes = 64 * 1024;  // rows collected before a write
+}  // namespace
+
 CsvWriter::~CsvWriter() { Close(); }
 
 void CsvWriter::Open(const std::string& path, const std::vector<std::string>& columns) {
@@ -120,6 +132,8 @@ void CsvWriter::Open(const std::string& path, const std::vector<std::string>& co
   if (!file_) throw InputError("cannot create " + path + ": " + std::strerror(errno));
   path_ = path;
   rows_ = 0;
+  pending_.clear();
+  pending_.reserve(kCsvBufferBytes + 4096);
   std::fputs("t", file_);
   for (const std::string& c : columns) {
     std::fputc(',', file_);
@@ -132,17 +146,30 @@ void CsvWriter::Open(const std::string& path, const std::vector<std::string>& co
 
 bool CsvWriter::WriteRow(double t, const std::vector<double>& values) {
   if (!file_) return false;
-  std::fprintf(file_, "%.17g", t);
-  for (double v : values) std::fprintf(file_, ",%.17g", v);
-  std::fputc('\n', file_);
-  if (std::fflush(file_) != 0 || std::ferror(file_)) return false;
+  AppendNumber(&pending_, t, 17);
+  for (double v : values) {
+    pending_ += ',';
+    AppendNumber(&pending_, v, 17);
+  }
+  pending_ += '\n';
   ++rows_;
-  return true;
+  return pending_.size() < kCsvBufferBytes || Flush();
 }
 
-void CsvWriter::Close() {
-  if (file_) std::fclose(file_);
+bool CsvWriter::Flush() {
+  if (!file_) return false;
+  const bool written = pending_.empty() ||
+                       std::fwrite(pending_.data(), 1, pending_.size(), file_) == pending_.size();
+  pending_.clear();
+  return written && std::fflush(file_) == 0 && !std::ferror(file_);
+}
+
+bool CsvWriter::Close() {
+  if (!file_) return true;
+  const bool flushed = Flush();
+  const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
+  return flushed && closed;
 }
 
 // ---- JSON --------------------------------------------------------------------------------------

@@ -6,8 +6,11 @@
 // OUTDIR/summary.json resolved settings, counts, steps, Newton iterations, halvings, wall time,
 //                     largest constraint residual, status and message
 // OUTDIR/vtk/frame_NNNNN.vtp and OUTDIR/vtk/motion.pvd (ParaView)
-// Files are written as the run goes and flushed at every output row, so an interrupted run
-// leaves valid files up to the last completed output step.
+// Files are written as the run goes, in whole rows: the CSV rows are collected and flushed
+// when 64 KiB have accumulated, at least every 2 s of wall time (with the summary), before
+// every on_step callback and at the end of the run. An interrupted run (stop request) leaves
+// valid files up to the last completed output step; the files of a killed process end with
+// a complete row.
 #pragma once
 
 #include <atomic>
@@ -22,7 +25,8 @@ struct RunOptions {
   bool progress = false;                    // progress bar on stderr
   const std::atomic<bool>* stop = nullptr;  // set asynchronously (e.g. SIGINT) to stop cleanly
   // Called after every completed time step (and after the static solution) with the
-  // simulated time [s], once the step's output rows are on disk. For tests and embedding.
+  // simulated time [s], once the step's output rows are written to the files (flushed). For
+  // tests and embedding.
   std::function<void(double t)> on_step;
 };
 

@@ -1,5 +1,5 @@
 // Result tables and the run summary (see run.h for the files): the columns and values of
-// points.csv and joints.csv, a CSV writer that flushes every row, a small JSON text builder
+// points.csv and joints.csv, a CSV writer that writes whole rows, a small JSON text builder
 // and an atomic file replacement.
 #pragma once
 
@@ -42,8 +42,13 @@ double JointCoordinateEffort(const Model& model, const Data& data, int joint, in
 
 // ---- files -----------------------------------------------------------------------------------
 
+// Appends `value` formatted as printf("%.*g", precision, value) would (std::to_chars with a
+// precision is specified to match printf, and is several times faster).
+void AppendNumber(std::string* text, double value, int precision);
+
 // A CSV table: header "t,<columns>", then one row per call, each written with full double
-// precision (%.17g) and flushed, so that the file always ends with a complete line.
+// precision (%.17g). Rows are collected and written to the file whole, when 64 KiB have
+// accumulated and on Flush() and Close(), so that the file always ends with a complete line.
 class CsvWriter {
  public:
   CsvWriter() = default;
@@ -53,15 +58,20 @@ class CsvWriter {
 
   // Creates (truncates) the file and writes the header. Throws InputError when it cannot.
   void Open(const std::string& path, const std::vector<std::string>& columns);
-  // Appends "t,values..." and flushes. Returns false on a write error (errno is kept).
+  // Appends "t,values..." (to the file once enough rows have accumulated). Returns false on a
+  // write error (errno is kept).
   bool WriteRow(double t, const std::vector<double>& values);
-  void Close();
+  // Writes the collected rows to the file and flushes it. Returns false on a write error.
+  bool Flush();
+  // Flushes and closes. Returns false on a write error.
+  bool Close();
   const std::string& path() const { return path_; }
   long rows() const { return rows_; }
 
  private:
   std::FILE* file_ = nullptr;
   std::string path_;
+  std::string pending_;  // complete rows not yet written
   long rows_ = 0;
 };
 
