@@ -8,91 +8,101 @@ namespace screwfem {
 
 namespace {
 
-// 3-point Gauss-Legendre rule on [0, 1] (option A, method.md §2.5).
-constexpr double kGauss3Xi[3] = {0.5 - 0.3872983346207417, 0.5, 0.5 + 0.3872983346207417};
-constexpr double kGauss3W[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
 // 2-point rule (option B: every integrand is a polynomial of degree <= 3 in xi).
 constexpr double kGauss2Xi[2] = {0.5 - 0.28867513459481287, 0.5 + 0.28867513459481287};
 
-// Quantities shared by the Gauss points of one element in option A.
-struct ExactFieldBasis {
-  Mat6 Ti_m, Ti_p;    // T^-1(-d), T^-1(d)
-  Mat6 dTi_m, dTi_p;  // their time derivatives along d_dot
-  Vec6 d_dot;         // P(d) eta_AB
+// Sums over Gauss points of w N^T H N for N = [I - B, B] (RodGeometry), kept as the four
+// 6 x 6 sums of w H, w H B, w B^T H and w B^T H B:
+//   N^T H N = [H - HB - B^T H + B^T H B,  HB - B^T H B;  B^T H - B^T H B,  B^T H B].
+struct NtHNSum {
+  Mat6 H = Mat6::Zero(), HB = Mat6::Zero(), BtH = Mat6::Zero(), BtHB = Mat6::Zero();
+  void Expand(Mat12* out) const {
+    out->topLeftCorner<6, 6>() = H - HB - BtH + BtHB;
+    out->topRightCorner<6, 6>() = HB - BtHB;
+    out->bottomLeftCorner<6, 6>() = BtH - BtHB;
+    out->bottomRightCorner<6, 6>() = BtHB;
+  }
 };
-
-void CalcExactFieldBasis(const Vec6& d, const Vec12& eta_ab, ExactFieldBasis* b) {
-  b->Ti_m = TSE3Inv(-d);
-  b->Ti_p = TSE3Inv(d);
-  // d_dot = P eta_AB = T^-1(d) eta_B - T^-1(-d) eta_A   (method.md §2.3)
-  b->d_dot.noalias() = b->Ti_p * eta_ab.tail<6>();
-  b->d_dot.noalias() -= b->Ti_m * eta_ab.head<6>();
-  b->dTi_m = TSE3InvDirectional(-d, -b->d_dot);
-  b->dTi_p = TSE3InvDirectional(d, b->d_dot);
-}
-
-// N(xi, d) and the velocity-dependent part of the acceleration field, (dN/dt) eta_AB.
-//   N = [Ad(exp(-xi d)) - xi T(xi d) T^-1(-d),   xi T(xi d) T^-1(d)]     (method.md §2.5)
-// With X = xi d and the identity Ad(exp(-X)) T(-X) = T(X) (method.md §1.3):
-//   d/dt Ad(exp(-X)) = -xi ad(T(X) d_dot) Ad(exp(-X)),
-//   d/dt [xi T(X)]   = xi dT(X; xi d_dot) = -xi^2 T(X) dT^-1(X; d_dot) T(X),
-// and T^-1(d) eta_B - T^-1(-d) eta_A = d_dot, so
-//   (dN/dt) eta_AB = -xi ad(T d_dot) Ad(exp(-X)) eta_A - xi^2 T dT^-1(X; d_dot) T d_dot
-//                    + xi T (dT^-1(d; d_dot) eta_B - dT^-1(-d; -d_dot) eta_A).
-// (CalcRodNDirectional gives the same matrix; this form needs only one directional derivative
-// per Gauss point.)
-void CalcExactField(double xi, const Vec6& d, const ExactFieldBasis& b, const Vec12& eta_ab,
-                    Mat6x12* N, Vec6* N_dot_eta) {
-  const Vec6 X = xi * d;
-  const Mat6 T = TSE3(X);
-  const Mat6 Ad_m = Ad(ExpSE3(-X));
-  const Mat6 xT = xi * T;
-  N->leftCols<6>() = Ad_m;
-  N->leftCols<6>().noalias() -= xT * b.Ti_m;
-  N->rightCols<6>().noalias() = xT * b.Ti_p;
-
-  const Vec6 T_dd = T * b.d_dot;
-  const Vec6 Ad_eta_a = Ad_m * eta_ab.head<6>();
-  Vec6 inner = b.dTi_p * eta_ab.tail<6>();
-  inner.noalias() -= b.dTi_m * eta_ab.head<6>();
-  *N_dot_eta = -xi * (ad(T_dd) * Ad_eta_a);
-  N_dot_eta->noalias() -= (xi * xi) * (T * (TSE3InvDirectional(X, b.d_dot) * T_dd));
-  N_dot_eta->noalias() += xT * inner;
-}
 
 }  // namespace
 
-void CalcRodInertiaExact(const RodElement& element, const Section& section, const Vec6& d,
-                         const Vec12& eta_ab, const Vec12& eta_dot_ab, RodInertiaTerms* out) {
+void CalcRodInertiaExact(const RodElement& element, const Section& section,
+                         const RodGeometry& geometry, const Vec12& eta_ab,
+                         const Vec12& eta_dot_ab, bool tangent, RodInertiaTerms* out) {
+  // Exact field (method.md §2.5) with N = [I - N_B, N_B], N_B = xi T(X) T^-1(d), X = xi d:
+  //   eta(xi)     = eta_A + xi T(X) y,                 y = T^-1(d) (eta_B - eta_A),
+  //   eta_dot(xi) = eta_dot_A + xi T(X) T^-1(d) (eta_dot_B - eta_dot_A) + (dN_B/dt)(eta_B - eta_A),
+  //   (dN_B/dt) v = xi T(X) [dT^-1(d; d_dot) v - xi dT^-1(X; d_dot) T(X) T^-1(d) v],
+  // from d/dt T(X) = -T(X) dT^-1(X; xi d_dot) T(X) and the linearity of dT^-1 in its direction,
+  // with d_dot = P eta_AB = y + ad(d) eta_A (method.md §2.3).
+  // Force L int N^T f dxi, f = M eta_dot - ad(eta)^T M eta: with N_B^T f = T^-T(d) xi T^T f,
+  //   g_B = T^-T(d) Phi,  g_A = L sum w_i f_i - g_B,  Phi = L sum w_i xi_i T_i^T f_i.
   const double L = element.length;
-  const auto M = section.inertia.asDiagonal();
-  ExactFieldBasis basis;
-  CalcExactFieldBasis(d, eta_ab, &basis);
-  out->force.setZero();
-  out->mass.setZero();
-  out->gyroscopic.setZero();
+  const Vec6& Mdiag = section.inertia;
+  const auto M = Mdiag.asDiagonal();
+  const Vec6& d = geometry.d;
+  const Vec6 eta_a = eta_ab.head<6>(), acc_a = eta_dot_ab.head<6>();
+  const Vec6 y = geometry.Ti * (eta_ab.tail<6>() - eta_a);
+  const Vec6 ya = geometry.Ti * (eta_dot_ab.tail<6>() - acc_a);
+  const Vec6 d_dot = y + Bracket(d, eta_a);
+  const Vec6 c0 = TSE3InvDirectionalTimes(d, d_dot, eta_ab.tail<6>() - eta_a);
+  Vec6 f_sum = Vec6::Zero(), phi = Vec6::Zero();
+  NtHNSum mass, gyro;
   out->kinetic_energy = 0.0;
-  Mat6x12 N, MN, GN;
-  Vec6 N_dot_eta;
-  for (int i = 0; i < 3; ++i) {
-    const double w = L * kGauss3W[i];
-    CalcExactField(kGauss3Xi[i], d, basis, eta_ab, &N, &N_dot_eta);
-    const Vec6 eta = N * eta_ab;
-    Vec6 eta_dot = N_dot_eta;
-    eta_dot.noalias() += N * eta_dot_ab;
+  for (int i = 0; i < kRodGaussPoints; ++i) {
+    const double xi = kRodGaussXi[i], w = L * kRodGaussW[i];
+    const Mat6& T = geometry.T[i];
+    const Vec6 Ty = T * y;
+    const Vec6 eta = eta_a + xi * Ty;
+    Vec6 inner = c0 - xi * TSE3InvDirectionalTimes(xi * d, d_dot, Ty);
+    inner += ya;
+    const Vec6 eta_dot = acc_a + xi * (T * inner);
     const Vec6 M_eta = M * eta;
     // Inertia force density M eta_dot - ad(eta)^T M eta, weighted by the virtual field N.
-    Vec6 f = M * eta_dot;
-    f.noalias() -= ad(eta).transpose() * M_eta;
-    out->force.noalias() += w * (N.transpose() * f);
-    MN.noalias() = M * N;
-    out->mass.noalias() += w * (N.transpose() * MN);
-    // Quasi-Newton gyroscopic block: the option-B form with the exact N and eta (see rod.h).
-    const Mat6 G = -(ad(eta).transpose() * M + Star(M_eta));
-    GN.noalias() = G * N;
-    out->gyroscopic.noalias() += w * (N.transpose() * GN);
+    const Vec6 f = M * eta_dot - CoBracket(eta, M_eta);
+    f_sum += w * f;
+    phi.noalias() += (w * xi) * (T.transpose() * f);
     out->kinetic_energy += 0.5 * w * eta.dot(M_eta);
+    if (!tangent) continue;
+    const Mat6& B = geometry.NB[i];
+    // w B^T, stored column-major so that the products below run on columns (packets).
+    const Mat6 wBt = w * B.transpose();
+    // Mass: H = M (diagonal).
+    const Mat6 MB = M * B;
+    mass.HB += w * MB;
+    mass.BtHB.noalias() += wBt * MB;
+    // Quasi-Newton gyroscopic block: the option-B form with the exact N and eta (see rod.h),
+    // G = -(ad(eta)^T M + Star(M eta)) in 3x3 blocks, with ad(eta)^T = [-W 0; -U -W]:
+    //   G = [W M_t  -Skew(y_t);  U M_t - Skew(y_t)  W M_r - Skew(y_r)],  y = M eta.
+    Mat6 G;
+    const Mat3 W = Skew(eta.tail<3>()), U = Skew(eta.head<3>()), Sy = Skew(M_eta.head<3>());
+    G.topLeftCorner<3, 3>().noalias() = W * Mdiag.head<3>().asDiagonal();
+    G.topRightCorner<3, 3>() = -Sy;
+    G.bottomLeftCorner<3, 3>().noalias() = U * Mdiag.head<3>().asDiagonal();
+    G.bottomLeftCorner<3, 3>() -= Sy;
+    G.bottomRightCorner<3, 3>().noalias() = W * Mdiag.tail<3>().asDiagonal();
+    G.bottomRightCorner<3, 3>() -= Skew(M_eta.tail<3>());
+    const Mat6 GB = G * B;
+    gyro.H += w * G;
+    gyro.HB += w * GB;
+    gyro.BtH.noalias() += wBt * G;
+    gyro.BtHB.noalias() += wBt * GB;
   }
+  const Vec6 g_b = geometry.Ti.transpose() * phi;
+  out->force.head<6>() = f_sum - g_b;
+  out->force.tail<6>() = g_b;
+  if (!tangent) return;
+  mass.H = L * Mat6(M);
+  mass.BtH = mass.HB.transpose();
+  mass.Expand(&out->mass);
+  gyro.Expand(&out->gyroscopic);
+}
+
+void CalcRodInertiaExact(const RodElement& element, const Section& section, const Vec6& d,
+                         const Vec12& eta_ab, const Vec12& eta_dot_ab, RodInertiaTerms* out) {
+  RodGeometry geometry;
+  CalcRodGeometry(d, true, true, &geometry);
+  CalcRodInertiaExact(element, section, geometry, eta_ab, eta_dot_ab, true, out);
 }
 
 void CalcRodInertiaConstant(const RodElement& element, const Section& section,
@@ -122,6 +132,15 @@ void CalcRodInertiaConstant(const RodElement& element, const Section& section,
 }
 
 void CalcRodInertia(RodInertia option, const RodElement& element, const Section& section,
+                    const RodGeometry& geometry, const Vec12& eta_ab, const Vec12& eta_dot_ab,
+                    bool tangent, RodInertiaTerms* out) {
+  if (option == RodInertia::kExact)
+    CalcRodInertiaExact(element, section, geometry, eta_ab, eta_dot_ab, tangent, out);
+  else
+    CalcRodInertiaConstant(element, section, eta_ab, eta_dot_ab, out);
+}
+
+void CalcRodInertia(RodInertia option, const RodElement& element, const Section& section,
                     const Vec6& d, const Vec12& eta_ab, const Vec12& eta_dot_ab,
                     RodInertiaTerms* out) {
   if (option == RodInertia::kExact)
@@ -142,29 +161,35 @@ double CalcRodKineticEnergy(RodInertia option, const RodElement& element, const 
     }
     return energy;
   }
-  for (int i = 0; i < 3; ++i) {
-    const Vec6 eta = CalcRodN(kGauss3Xi[i], d) * eta_ab;
-    energy += 0.5 * L * kGauss3W[i] * eta.dot(section.inertia.cwiseProduct(eta));
+  for (int i = 0; i < kRodGaussPoints; ++i) {
+    const Vec6 eta = CalcRodN(kRodGaussXi[i], d) * eta_ab;
+    energy += 0.5 * L * kRodGaussW[i] * eta.dot(section.inertia.cwiseProduct(eta));
   }
   return energy;
 }
 
-void AddRodDamping(const RodElement& element, const Section& section, const Vec6& d,
+void AddRodDamping(const RodElement& element, const Section& section, const Mat6x12& P,
                    const Vec12& eta_ab, const Mat12& mass, Vec12* force, Mat12* damping) {
   const Vec6 strain_damping = section.damping + section.rayleigh_stiffness * section.stiffness;
   if (strain_damping.squaredNorm() > 0.0) {
     // sigma_v = D_s d_dot / L, d_dot = P eta_AB; force P^T sigma_v (virtual work of sigma_v).
-    const Mat6x12 P = CalcRodP(d);
     const Vec6 scaled = strain_damping / element.length;
     const Vec6 sigma_v = scaled.cwiseProduct(P * eta_ab);
     force->noalias() += P.transpose() * sigma_v;
-    const Mat6x12 DP = scaled.asDiagonal() * P;
-    damping->noalias() += P.transpose() * DP;
+    if (damping) {
+      const Mat6x12 DP = scaled.asDiagonal() * P;
+      damping->noalias() += P.transpose().lazyProduct(DP);
+    }
   }
   if (section.rayleigh_mass > 0.0) {
     force->noalias() += section.rayleigh_mass * (mass * eta_ab);
-    *damping += section.rayleigh_mass * mass;
+    if (damping) *damping += section.rayleigh_mass * mass;
   }
+}
+
+void AddRodDamping(const RodElement& element, const Section& section, const Vec6& d,
+                   const Vec12& eta_ab, const Mat12& mass, Vec12* force, Mat12* damping) {
+  AddRodDamping(element, section, CalcRodP(d), eta_ab, mass, force, damping);
 }
 
 }  // namespace screwfem

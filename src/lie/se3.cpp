@@ -140,12 +140,6 @@ Mat4 SE3::Matrix() const {
   return M;
 }
 
-Mat3 Skew(const Vec3& a) {
-  Mat3 S;
-  S << 0.0, -a(2), a(1), a(2), 0.0, -a(0), -a(1), a(0), 0.0;
-  return S;
-}
-
 Vec3 Unskew(const Mat3& A) {
   return 0.5 * Vec3(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
 }
@@ -171,26 +165,6 @@ Mat6 Ad(const SE3& H) {
   A.bottomLeftCorner<3, 3>().setZero();
   A.bottomRightCorner<3, 3>() = H.R;
   return A;
-}
-
-Mat6 ad(const Vec6& xi) {
-  Mat6 A;
-  const Mat3 W = Skew(xi.tail<3>());
-  A.topLeftCorner<3, 3>() = W;
-  A.topRightCorner<3, 3>() = Skew(xi.head<3>());
-  A.bottomLeftCorner<3, 3>().setZero();
-  A.bottomRightCorner<3, 3>() = W;
-  return A;
-}
-
-Mat6 Star(const Vec6& y) {
-  Mat6 S;
-  const Mat3 F = Skew(y.head<3>());
-  S.topLeftCorner<3, 3>().setZero();
-  S.topRightCorner<3, 3>() = F;
-  S.bottomLeftCorner<3, 3>() = F;
-  S.bottomRightCorner<3, 3>() = Skew(y.tail<3>());
-  return S;
 }
 
 Mat3 ExpSO3(const Vec3& w) {
@@ -281,20 +255,62 @@ Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref) {
   return xi;
 }
 
+namespace {
+// Blocks of the powers of A = ad(xi) = [W U; 0 W] (W = Skew(w), U = Skew(u)), which are
+// A^k = [W^k C_k; 0 W^k] with W^3 = -theta^2 W, W^4 = -theta^2 W^2 and, from
+// Skew(a) Skew(b) = b a^T - (a.b) I,
+//   C_1 = U,  C_2 = W U + U W = u w^T + w u^T - 2 c I,  C_3 = -2 c W - theta^2 U,
+//   C_4 = -2 c W^2 - theta^2 C_2,  c = w.u.
+// A series sum_k a_k A^k then costs a few 3x3 sums instead of 6x6 products.
+struct AdPowers {
+  Mat3 W, W2, U, C2;
+  double theta2, c;
+};
+AdPowers CalcAdPowers(const Vec6& xi) {
+  const Vec3 u = xi.head<3>(), w = xi.tail<3>();
+  AdPowers p;
+  p.theta2 = w.squaredNorm();
+  p.c = w.dot(u);
+  p.W = Skew(w);
+  p.U = Skew(u);
+  p.W2.noalias() = w * w.transpose();
+  p.W2.diagonal().array() -= p.theta2;
+  p.C2.noalias() = u * w.transpose();
+  p.C2 += p.C2.transpose().eval();
+  p.C2.diagonal().array() -= 2.0 * p.c;
+  return p;
+}
+}  // namespace
+
 Mat6 TSE3(const Vec6& xi) {
+  // I + t1 A + t2 A^2 + t3 A^3 + t4 A^4 in blocks (see AdPowers):
+  //   diagonal   I + a W + b W^2,                       a = t1 - theta^2 t3, b = t2 - theta^2 t4
+  //   upper right a U + b C_2 - 2 c (t3 W + t4 W^2).
   const TCoeffs t = TCoefficients(xi.tail<3>().norm());
-  const Mat6 A = ad(xi);
-  const Mat6 A2 = A * A;
-  const Mat6 A3 = A2 * A;
-  const Mat6 A4 = A2 * A2;
-  return Mat6::Identity() + t.t1 * A + t.t2 * A2 + t.t3 * A3 + t.t4 * A4;
+  const AdPowers p = CalcAdPowers(xi);
+  const double a = t.t1 - p.theta2 * t.t3, b = t.t2 - p.theta2 * t.t4;
+  Mat6 T;
+  T.topLeftCorner<3, 3>() = a * p.W + b * p.W2;
+  T.topLeftCorner<3, 3>().diagonal().array() += 1.0;
+  T.bottomRightCorner<3, 3>() = T.topLeftCorner<3, 3>();
+  T.bottomLeftCorner<3, 3>().setZero();
+  T.topRightCorner<3, 3>() = a * p.U + b * p.C2 - (2.0 * p.c) * (t.t3 * p.W + t.t4 * p.W2);
+  return T;
 }
 
 Mat6 TSE3Inv(const Vec6& xi) {
+  // I + A/2 + s2 A^2 + s4 A^4 in blocks (see AdPowers), e = s2 - theta^2 s4:
+  //   diagonal I + W/2 + e W^2,  upper right U/2 + e C_2 - 2 c s4 W^2.
   const TInvCoeffs s = TInvCoefficients(xi.tail<3>().norm());
-  const Mat6 A = ad(xi);
-  const Mat6 A2 = A * A;
-  return Mat6::Identity() + 0.5 * A + s.s2 * A2 + s.s4 * (A2 * A2);
+  const AdPowers p = CalcAdPowers(xi);
+  const double e = s.s2 - p.theta2 * s.s4;
+  Mat6 Ti;
+  Ti.topLeftCorner<3, 3>() = 0.5 * p.W + e * p.W2;
+  Ti.topLeftCorner<3, 3>().diagonal().array() += 1.0;
+  Ti.bottomRightCorner<3, 3>() = Ti.topLeftCorner<3, 3>();
+  Ti.bottomLeftCorner<3, 3>().setZero();
+  Ti.topRightCorner<3, 3>() = 0.5 * p.U + e * p.C2 - (2.0 * p.c * s.s4) * p.W2;
+  return Ti;
 }
 
 Mat6 TSE3InvDirectional(const Vec6& xi, const Vec6& dxi) {
@@ -310,30 +326,73 @@ Mat6 TSE3InvDirectional(const Vec6& xi, const Vec6& dxi) {
          s.s4 * (dA * A3 + A_dA * A2 + A2 * dA_A + A3 * dA);
 }
 
+Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v) {
+  // The terms of TSE3InvDirectional applied to v with brackets only: v_k = A^k v,
+  // e_k = A' v_k (A = ad(xi), A' = ad(dxi)), and the s4 group in Horner form
+  //   A' A^3 + A A' A^2 + A^2 A' A + A^3 A' = e_3 + A (e_2 + A (e_1 + A e_0)).
+  const double phi = xi.tail<3>().norm();
+  const TInvCoeffs s = TInvCoefficients(phi);
+  const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
+  const double wdw = xi.tail<3>().dot(dxi.tail<3>());
+  const Vec6 v1 = Bracket(xi, v), v2 = Bracket(xi, v1), v3 = Bracket(xi, v2);
+  const Vec6 v4 = Bracket(xi, v3);
+  const Vec6 e0 = Bracket(dxi, v), e1 = Bracket(dxi, v1), e2 = Bracket(dxi, v2);
+  const Vec6 e3 = Bracket(dxi, v3);
+  const Vec6 group2 = e1 + Bracket(xi, e0);  // A' A + A A'
+  const Vec6 group4 = e3 + Bracket(xi, Vec6(e2 + Bracket(xi, group2)));
+  return 0.5 * e0 + (ds.s2 * wdw) * v2 + s.s2 * group2 + (ds.s4 * wdw) * v4 + s.s4 * group4;
+}
+
 Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi) {
   const Mat6 T = TSE3(xi);
   return -T * TSE3InvDirectional(xi, dxi) * T;
 }
 
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma) {
-  const double phi = xi.tail<3>().norm();
+  // method.md §1.4 evaluated in the blocks of the form-B series (see TSE3Inv):
+  //   T^-T = [Dg^T 0; Q^T Dg^T],  Dg^T x = x - (w x x)/2 + e W^2 x,
+  //   Q^T x = -(u x x)/2 + e C_2 x - 2 c s4 W^2 x,
+  // e = s2 - theta^2 s4, c = w.u, W^2 x = w (w.x) - theta^2 x, C_2 x = u (w.x) + w (u.x) - 2 c x,
+  // so with sigma = [f; m], T^-T sigma = [Dg^T f; Q^T f + Dg^T m]. Its derivatives in u and w,
+  // with d s_k / dw = hat_s_k w^T and hat_e = (1/phi) de/dphi = hat_s2 - 2 s4 - theta^2 hat_s4:
+  //   d/dw [Dg^T x]   = Skew(x)/2 + (W^2 x) hat_e w^T + e (w x^T + (w.x) I - 2 x w^T)
+  //   d/du [Q^T f]    = Skew(f)/2 + e ((w.f) I + w f^T - 2 f w^T) - 2 s4 (W^2 f) w^T
+  //   d/dw [Q^T f]    = (C_2 f) hat_e w^T + e (u f^T + (u.f) I - 2 f u^T)
+  //                     - 2 (W^2 f) (s4 u^T + c hat_s4 w^T) - 2 c s4 (w f^T + (w.f) I - 2 f w^T).
+  const Vec3 u = xi.head<3>(), w = xi.tail<3>();
+  const Vec3 f = sigma.head<3>(), m = sigma.tail<3>();
+  const double phi = w.norm();
+  const double theta2 = w.squaredNorm();
   const TInvCoeffs s = TInvCoefficients(phi);
   const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
-  const Mat6 At = ad(xi).transpose();
-  const Vec6 y1 = At * sigma;
-  const Vec6 y2 = At * y1;
-  const Vec6 y3 = At * y2;
-  const Vec6 y4 = At * y3;
-  const Mat6 S0 = Star(sigma);
-  const Mat6 At_S0 = At * S0;
-  const Mat6 At2_S0 = At * At_S0;
-  const Mat6 S1 = Star(y1);
-  const Mat6 At_S1 = At * S1;
-  Mat6 D = 0.5 * S0 + s.s2 * (S1 + At_S0) +
-           s.s4 * (Star(y3) + At * Star(y2) + At * At_S1 + At * At2_S0);
-  // Derivative of the coefficients through phi = |w|: (hat_s2 y2 + hat_s4 y4) [0 w^T].
-  const Vec6 g = ds.s2 * y2 + ds.s4 * y4;
-  D.rightCols<3>().noalias() += g * xi.tail<3>().transpose();
+  const double e = s.s2 - theta2 * s.s4;
+  const double e_hat = ds.s2 - 2.0 * s.s4 - theta2 * ds.s4;
+  const double c = w.dot(u), wf = w.dot(f), wm = w.dot(m), uf = u.dot(f);
+  const Vec3 W2f = wf * w - theta2 * f;
+  const Vec3 C2f = wf * u + uf * w - (2.0 * c) * f;
+  // w x^T + (w.x) I - 2 x w^T, the derivative of W^2 x in w.
+  const auto dW2 = [&w](const Vec3& x, double wx) {
+    Mat3 J = w * x.transpose() - 2.0 * x * w.transpose();
+    J.diagonal().array() += wx;
+    return J;
+  };
+  const auto dDg = [&](const Vec3& x, double wx) {
+    const Vec3 W2x = wx * w - theta2 * x;
+    Mat3 J = 0.5 * Skew(x) + e * dW2(x, wx);
+    J.noalias() += (e_hat * W2x) * w.transpose();
+    return J;
+  };
+  Mat6 D;
+  D.topLeftCorner<3, 3>().setZero();
+  D.topRightCorner<3, 3>() = dDg(f, wf);
+  D.bottomLeftCorner<3, 3>() = 0.5 * Skew(f) + e * dW2(f, wf);
+  D.bottomLeftCorner<3, 3>().noalias() -= (2.0 * s.s4 * W2f) * w.transpose();
+  Mat3 J = dDg(m, wm) + e * (u * f.transpose() - 2.0 * f * u.transpose()) -
+           (2.0 * c * s.s4) * dW2(f, wf);
+  J.diagonal().array() += e * uf;
+  J.noalias() += C2f * (e_hat * w).transpose();
+  J.noalias() -= (2.0 * W2f) * (s.s4 * u + (c * ds.s4) * w).transpose();
+  D.bottomRightCorner<3, 3>() = J;
   return D;
 }
 

@@ -115,6 +115,37 @@ Mat12 FdInConfiguration(RodInertia option, const Case& c) {
   return J;
 }
 
+TEST(RodInertia, OptionAResidualDoesNotDependOnWhetherTheTangentIsComputed) {
+  // The Newton loop assembles the residual alone once the correction is small (TryStep): the
+  // forces must be the same, bit for bit, with and without the tangent blocks.
+  for (double rotation : {0.0, 0.4, 2.5}) {
+    const Case c = MakeCase(31, rotation);
+    RodGeometry with, without;
+    CalcRodGeometry(c.d, true, true, &with);
+    CalcRodGeometry(c.d, true, false, &without);
+    RodInertiaTerms a, b;
+    CalcRodInertiaExact(c.element, c.section, with, c.eta, c.acc, true, &a);
+    CalcRodInertiaExact(c.element, c.section, without, c.eta, c.acc, false, &b);
+    for (int i = 0; i < 12; ++i) EXPECT_EQ(a.force(i), b.force(i)) << "rotation " << rotation;
+    EXPECT_EQ(a.kinetic_energy, b.kinetic_energy);
+  }
+}
+
+TEST(RodInertia, OptionAInterpolationHalvesSumToTheIdentity) {
+  // RodGeometry's N = [I - N_B, N_B] (method.md §2.5): CalcRodN's left half is I - N_B.
+  for (double rotation : {0.0, 1e-7, 0.4, 2.5, 4.0}) {
+    const Case c = MakeCase(32, rotation);
+    RodGeometry g;
+    CalcRodGeometry(c.d, true, true, &g);
+    for (int i = 0; i < kRodGaussPoints; ++i) {
+      const Mat6x12 N = CalcRodN(kRodGaussXi[i], c.d);
+      EXPECT_LT((N.rightCols<6>() - g.NB[i]).norm(), 1e-13 * N.norm()) << "rotation " << rotation;
+      EXPECT_LT((N.leftCols<6>() + g.NB[i] - Mat6::Identity()).norm(), 1e-13 * N.norm())
+          << "rotation " << rotation;
+    }
+  }
+}
+
 TEST(RodInertia, MassBlockIsTheExactDerivativeInTheAccelerationsForBothOptions) {
   for (const double rotation : {0.0, 1.0, 2.8, 4.2}) {
     const Case c = MakeCase(101, rotation);

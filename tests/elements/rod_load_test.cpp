@@ -86,5 +86,32 @@ TEST(RodSectionLoad, NodalForcesAreStaticallyEquivalentToTheAppliedLoad) {
   }
 }
 
+TEST(RodDistributedDeadForce, EqualsTheSectionLoadsAtTheGaussPointsWithTheirTangent) {
+  // CalcRodDistributedDeadForce (through AddRodDistributedDeadForce and RodGeometry) against the
+  // three section loads it stands for, L w_i N_i^T F_i, computed by AddRodSectionLoad.
+  std::mt19937 rng(13);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Config c = RandomBentElement(rng);
+    const Vec6 d = CalcRodRelativeMotion(c.A, c.B, c.w_ref);
+    RodElement el;
+    el.length = 0.8 + 0.1 * trial;
+    const Vec3 f(0.2, -0.5, -9.81);
+    Vec12 g, g_ref = Vec12::Zero();
+    Mat12 K, K_ref = Mat12::Zero();
+    CalcRodDistributedDeadForce(el, c.A, d, f, &g, &K);
+    for (int i = 0; i < kRodGaussPoints; ++i)
+      AddRodSectionLoad(kRodGaussXi[i], el.length * kRodGaussW[i], c.A, d, LoadFrame::kWorld, f,
+                        Vec3::Zero(), &g_ref, &K_ref);
+    EXPECT_LT((g - g_ref).norm(), 1e-13 * g_ref.norm()) << "trial " << trial;
+    EXPECT_LT((K - K_ref).norm(), 1e-12 * K_ref.norm()) << "trial " << trial;
+    // Without the tangent, the same force.
+    RodGeometry geometry;
+    CalcRodGeometry(d, true, false, &geometry);
+    Vec12 g_only = Vec12::Zero();
+    AddRodDistributedDeadForce(el, geometry, c.A, f, &g_only, nullptr);
+    for (int i = 0; i < 12; ++i) EXPECT_EQ(g_only(i), g(i)) << "trial " << trial;
+  }
+}
+
 }  // namespace
 }  // namespace screwfem

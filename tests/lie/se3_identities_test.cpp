@@ -121,6 +121,19 @@ TEST_P(Se3AtAngle, VeeInvertsWedgeAndSkewIsCrossProductAndStarIsDualOfAd) {
   }
 }
 
+TEST_P(Se3AtAngle, BracketAndCoBracketAreAdAndAdTransposeTimesTheVector) {
+  const std::vector<Vec6> ys = Others(11);
+  const std::vector<Vec6> xis = Samples();
+  for (std::size_t i = 0; i < xis.size(); ++i) {
+    const Vec6& xi = xis[i];
+    const Vec6& y = ys[i];
+    SCOPED_TRACE(::testing::Message() << "xi = " << xi.transpose() << ", y = " << y.transpose());
+    EXPECT_TRUE(MatrixNear(Bracket(xi, y), Vec6(ad(xi) * y), 4e-16 * Scale(xi) * Scale(y)));
+    EXPECT_TRUE(
+        MatrixNear(CoBracket(xi, y), Vec6(ad(xi).transpose() * y), 4e-16 * Scale(xi) * Scale(y)));
+  }
+}
+
 TEST_P(Se3AtAngle, AdOfTwistAnnihilatesTheTwist) {
   for (const Vec6& xi : Samples()) {
     SCOPED_TRACE(::testing::Message() << "xi = " << xi.transpose());

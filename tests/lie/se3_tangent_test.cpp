@@ -46,6 +46,17 @@ TEST_P(Se3TangentAtAngle, TSE3FixesItsOwnTwist) {
   }
 }
 
+TEST_P(Se3TangentAtAngle, TSE3InvDirectionalTimesIsTheDirectionalDerivativeAppliedToTheVector) {
+  std::mt19937 rng = test::MakeRng(static_cast<std::uint32_t>(1000.0 * GetParam().phi) + 29u);
+  for (const Vec6& xi : Samples()) {
+    const Vec6 dxi = test::RandomVec6(rng, 1.0), v = test::RandomVec6(rng, 1.0);
+    SCOPED_TRACE(::testing::Message() << "xi = " << xi.transpose());
+    const Vec6 expected = TSE3InvDirectional(xi, dxi) * v;
+    EXPECT_TRUE(MatrixNear(TSE3InvDirectionalTimes(xi, dxi, v), expected,
+                           1e-14 * (1.0 + expected.norm()) * Scale(xi) * Scale(xi)));
+  }
+}
+
 TEST_P(Se3TangentAtAngle, TSE3InvFixesItsOwnTwist) {
   for (const Vec6& xi : Samples()) {
     SCOPED_TRACE(::testing::Message() << "xi = " << xi.transpose());

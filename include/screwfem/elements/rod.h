@@ -8,6 +8,12 @@ namespace screwfem {
 
 using Mat6x12 = Eigen::Matrix<double, 6, 12>;
 
+// 3-point Gauss-Legendre rule on [0, 1]: inertia (option A) and distributed loads (§2.5, §2.6).
+inline constexpr int kRodGaussPoints = 3;
+inline constexpr double kRodGaussXi[kRodGaussPoints] = {0.5 - 0.3872983346207417, 0.5,
+                                                        0.5 + 0.3872983346207417};
+inline constexpr double kRodGaussW[kRodGaussPoints] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+
 // Relative motion d = log(H_A^-1 H_B) on the branch closest to w_ref (method.md §2.7).
 Vec6 CalcRodRelativeMotion(const SE3& H_A, const SE3& H_B, const Vec3& w_ref);
 
@@ -17,6 +23,27 @@ Mat6x12 CalcRodP(const Vec6& d);
 // Exact velocity / virtual-displacement interpolation of the helical element (§2.5):
 // eta(xi) = N(xi, d) [eta_A; eta_B], xi in [0, 1].
 Mat6x12 CalcRodN(double xi, const Vec6& d);
+
+// What the kernels of one element share, computed once per element and assembly (the
+// kernels below that take it are the ones the assembly calls; the overloads taking H or d
+// compute it themselves):
+//  * d on the current branch, T^-1(d) and P(d) = [-T^-1(-d)  T^-1(d)], with
+//    T^-1(-d) = T^-1(d) - ad(d) (the series of T^-1 is even but for its ad/2 term; §1.3);
+//  * at the Gauss points xi_i (kRodGaussXi), T(xi_i d) and, for tangents,
+//    N_B(xi_i) = xi_i T(xi_i d) T^-1(d). The interpolation of §2.5 is N = [I - N_B, N_B]:
+//    its halves sum to Ad(exp(-X)) + xi T(X) ad(d) = Ad(exp(-X)) + T(X) ad(X) = I (X = xi d,
+//    T(X) ad(X) = I - exp(-ad(X)) for the right tangent), so eta(xi) = eta_A + N_B (eta_B - eta_A).
+struct RodGeometry {
+  Vec6 d;
+  Mat6 Ti;                    // T^-1(d)
+  Mat6x12 P;
+  bool gauss_points = false;  // T below is set
+  bool tangents = false;      // NB below is set
+  Mat6 T[kRodGaussPoints];    // T(xi_i d)
+  Mat6 NB[kRodGaussPoints];   // N_B(xi_i)
+};
+// From d; `gauss_points` adds T(xi_i d), `tangents` also N_B(xi_i).
+void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometry* out);
 
 struct RodInternal {
   Vec6 d;            // relative motion on the current branch
@@ -30,6 +57,10 @@ struct RodInternal {
 // Internal forces and consistent tangent of one element (§2.4).
 void CalcRodInternal(const RodElement& element, const Section& section, const SE3& H_A,
                      const SE3& H_B, const Vec3& w_ref, RodInternal* out);
+// The same from the element's geometry (out->d is copied from it); without `tangent` the
+// stiffness is left unset.
+void CalcRodInternal(const RodElement& element, const Section& section, const RodGeometry& geometry,
+                     bool tangent, RodInternal* out);
 
 // Directional derivative of N(xi, d) along dd: d/de N(xi, d + e dd) (for d/dt N, dd = d_dot).
 Mat6x12 CalcRodNDirectional(double xi, const Vec6& d, const Vec6& dd);
@@ -61,6 +92,11 @@ struct RodInertiaTerms {
 // with a rate that vanishes as h -> 0 (tests/elements/rod_inertia_test.cpp measures both).
 void CalcRodInertiaExact(const RodElement& element, const Section& section, const Vec6& d,
                          const Vec12& eta_ab, const Vec12& eta_dot_ab, RodInertiaTerms* out);
+// The same from the element's geometry (with Gauss points; with N_B when `tangent`). Without
+// `tangent`, mass and gyroscopic are left unset.
+void CalcRodInertiaExact(const RodElement& element, const Section& section,
+                         const RodGeometry& geometry, const Vec12& eta_ab,
+                         const Vec12& eta_dot_ab, bool tangent, RodInertiaTerms* out);
 
 // Option B (RodInertia::kConstant): velocities and virtual displacements interpolated linearly
 // in the inertia term only, N = [(1 - xi) I, xi I]: M_e = L [M/3 M/6; M/6 M/3] constant,
@@ -73,6 +109,9 @@ void CalcRodInertiaConstant(const RodElement& element, const Section& section,
 void CalcRodInertia(RodInertia option, const RodElement& element, const Section& section,
                     const Vec6& d, const Vec12& eta_ab, const Vec12& eta_dot_ab,
                     RodInertiaTerms* out);
+void CalcRodInertia(RodInertia option, const RodElement& element, const Section& section,
+                    const RodGeometry& geometry, const Vec12& eta_ab, const Vec12& eta_dot_ab,
+                    bool tangent, RodInertiaTerms* out);
 
 // Kinetic energy 1/2 eta_AB^T M_e eta_AB of one element for either option [J] (the same
 // quadrature as the inertia forces, so that the power of g_ine is its exact time derivative).
@@ -91,6 +130,9 @@ double CalcRodKineticEnergy(RodInertia option, const RodElement& element, const 
 // The configuration derivatives of both are omitted from the iteration matrix.
 void AddRodDamping(const RodElement& element, const Section& section, const Vec6& d,
                    const Vec12& eta_ab, const Mat12& mass, Vec12* force, Mat12* damping);
+// The same with P(d) given; damping may be null (no tangent).
+void AddRodDamping(const RodElement& element, const Section& section, const Mat6x12& P,
+                   const Vec12& eta_ab, const Mat12& mass, Vec12* force, Mat12* damping);
 
 // A force and a moment acting on the section at xi, consistent with the exact virtual
 // displacement field: g += weight * N(xi, d)^T F, with F = [R(xi)^T f; R(xi)^T m] for a world
@@ -105,5 +147,9 @@ void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, 
 // g and the tangent of -g (both overwritten).
 void CalcRodDistributedDeadForce(const RodElement& element, const SE3& H_A, const Vec6& d,
                                  const Vec3& f_w, Vec12* g, Mat12* tangent);
+// The same from the element's geometry (with Gauss points; with N_B when tangent is not null),
+// added to *g and *tangent (tangent may be null).
+void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& geometry,
+                                const SE3& H_A, const Vec3& f_w, Vec12* g, Mat12* tangent);
 
 }  // namespace screwfem

@@ -42,13 +42,57 @@ struct SE3 {
 };
 
 // --- algebra operators (method.md §1.1) -------------------------------------------------------
-Mat3 Skew(const Vec3& a);          // Skew(a) b = a x b
+// The small ones are inline: they sit in the inner loops of the element kernels.
+inline Mat3 Skew(const Vec3& a) {  // Skew(a) b = a x b
+  Mat3 S;
+  S << 0.0, -a(2), a(1), a(2), 0.0, -a(0), -a(1), a(0), 0.0;
+  return S;
+}
 Vec3 Unskew(const Mat3& A);        // inverse of Skew (uses the skew-symmetric part)
 Mat4 Wedge(const Vec6& xi);        // 4x4 algebra matrix [Skew(w) u; 0 0]
 Vec6 Vee(const Mat4& X);           // inverse of Wedge
 Mat6 Ad(const SE3& H);             // H wedge(z) H^-1 = wedge(Ad(H) z)
-Mat6 ad(const Vec6& xi);           // wedge(ad(xi) z) = [wedge(xi), wedge(z)]
-Mat6 Star(const Vec6& y);          // ad(xi)^T y = Star(y) xi,  y = [force; moment]
+inline Mat6 ad(const Vec6& xi) {   // wedge(ad(xi) z) = [wedge(xi), wedge(z)]
+  Mat6 A;
+  const Mat3 W = Skew(xi.tail<3>());
+  A.topLeftCorner<3, 3>() = W;
+  A.topRightCorner<3, 3>() = Skew(xi.head<3>());
+  A.bottomLeftCorner<3, 3>().setZero();
+  A.bottomRightCorner<3, 3>() = W;
+  return A;
+}
+inline Mat6 Star(const Vec6& y) {  // ad(xi)^T y = Star(y) xi,  y = [force; moment]
+  Mat6 S;
+  const Mat3 F = Skew(y.head<3>());
+  S.topLeftCorner<3, 3>().setZero();
+  S.topRightCorner<3, 3>() = F;
+  S.bottomLeftCorner<3, 3>() = F;
+  S.bottomRightCorner<3, 3>() = Skew(y.tail<3>());
+  return S;
+}
+// ad(xi) y, the Lie bracket [xi, y] = [w x y_u + u x y_w; w x y_w], without forming ad(xi)
+// (inline: it sits in the inner loops of the rod kernels).
+inline Vec6 Bracket(const Vec6& xi, const Vec6& y) {
+  const auto cross = [](double a0, double a1, double a2, double b0, double b1, double b2) {
+    return Vec3(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0);
+  };
+  Vec6 r;
+  r.head<3>() = cross(xi(3), xi(4), xi(5), y(0), y(1), y(2)) +
+                cross(xi(0), xi(1), xi(2), y(3), y(4), y(5));
+  r.tail<3>() = cross(xi(3), xi(4), xi(5), y(3), y(4), y(5));
+  return r;
+}
+// ad(xi)^T y = Star(y) xi = [y_u x w; y_u x u + y_w x w], without forming a matrix.
+inline Vec6 CoBracket(const Vec6& xi, const Vec6& y) {
+  const auto cross = [](double a0, double a1, double a2, double b0, double b1, double b2) {
+    return Vec3(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0);
+  };
+  Vec6 r;
+  r.head<3>() = cross(y(0), y(1), y(2), xi(3), xi(4), xi(5));
+  r.tail<3>() = cross(y(0), y(1), y(2), xi(0), xi(1), xi(2)) +
+                cross(y(3), y(4), y(5), xi(3), xi(4), xi(5));
+  return r;
+}
 
 // --- SO(3) -----------------------------------------------------------------------------------
 Mat3 ExpSO3(const Vec3& w);
@@ -68,6 +112,9 @@ Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma);
 // Directional derivative d/de TSE3Inv(xi + e dxi) at e = 0 (from form B: with A = ad(xi),
 // A' = ad(dxi), d s_k = hat_s_k (w . dw)).
 Mat6 TSE3InvDirectional(const Vec6& xi, const Vec6& dxi);
+// The same derivative applied to a vector, [d/de TSE3Inv(xi + e dxi)] v, without forming the
+// matrix (brackets only).
+Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v);
 // Directional derivative of TSE3: -T (dT^-1) T.
 Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi);
 
