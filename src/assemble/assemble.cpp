@@ -27,18 +27,29 @@ class Scatter {
   void Rows(int dof, const Eigen::MatrixBase<V>& r) {
     if (dof < 0) return;
     d_.residual.segment(dof, r.size()) += o_.s_rows * r;
-    d_.force_scale = std::max(d_.force_scale, o_.s_rows * r.cwiseAbs().maxCoeff());
+    Force(r.cwiseAbs().maxCoeff());
   }
-  // matrix(rows at global index gi, cols at global index gj) += scale * B
+  // Records the size of a generalised force term that entered the residual (the scale of the
+  // relative convergence test).
+  void Force(double magnitude) {
+    d_.force_scale = std::max(d_.force_scale, o_.s_rows * magnitude);
+  }
+  // matrix(rows at global index gi, cols at global index gj) += scale * B. The rows (and the
+  // columns) of a block are consecutive in the permuted order (model.h), so each column of
+  // the block is a contiguous piece of a band column.
   template <typename B>
   void Block(int gi, int gj, const Eigen::MatrixBase<B>& block, double scale) {
     if (gi < 0 || gj < 0 || !o_.assemble_matrix) return;
+    const int pi = m_.permutation[static_cast<std::size_t>(gi)];
+    const int pj = m_.permutation[static_cast<std::size_t>(gj)];
+    // The factorisation relies on the model's sparsity pattern (pattern_last is constant over
+    // a block of unknowns, so the first row and column stand for all).
+    SCREWFEM_CHECK(m_.pattern_last.empty() ||
+                   (pj + block.cols() - 1 <= m_.pattern_last[static_cast<std::size_t>(pi)] &&
+                    pi + block.rows() - 1 <= m_.pattern_last[static_cast<std::size_t>(pj)]));
     for (Eigen::Index j = 0; j < block.cols(); ++j) {
-      const int pj = m_.permutation[static_cast<std::size_t>(gj + j)];
-      for (Eigen::Index i = 0; i < block.rows(); ++i) {
-        const int pi = m_.permutation[static_cast<std::size_t>(gi + i)];
-        d_.matrix.At(pi, pj) += scale * block(i, j);
-      }
+      double* const col = &d_.matrix.At(pi, pj + static_cast<int>(j));
+      for (Eigen::Index i = 0; i < block.rows(); ++i) col[i] += scale * block(i, j);
     }
   }
   // Element matrix over nodes: rows/cols in 6-blocks. S = s_R (c_K K T + c_M M + c_C C).
@@ -77,7 +88,7 @@ class Scatter {
     const int gr = m_.nv + row;
     Block(gj, gr, B.transpose(), o_.s_rows * o_.s_multipliers);
     if (T && o_.use_node_tangent)
-      Block(gr, gj, B * *T, o_.s_constraints);
+      Block(gr, gj, typename BT::PlainObject(B * *T), o_.s_constraints);
     else
       Block(gr, gj, B, o_.s_constraints);
   }
@@ -110,13 +121,28 @@ void AddDeadForce(const Vec3& f, const Vec3& p, Vec6* g, Mat6* K) {
 }
 
 bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
+  const bool tangent = o.assemble_matrix;
   for (std::size_t e = 0; e < m.elements.size(); ++e) {
     const RodElement& el = m.elements[e];
     const Section& sec = m.rods[static_cast<std::size_t>(el.rod)].section;
     const SE3& HA = d.H[static_cast<std::size_t>(el.node_a)];
     const SE3& HB = d.H[static_cast<std::size_t>(el.node_b)];
+    const double rhoA = sec.inertia(0);
+    const bool has_gravity = rhoA > 0.0 && m.gravity.squaredNorm() > 0.0;
+    // Inertia (option A or B, method.md §2.5) and damping: forces and the M, C blocks.
+    const bool has_inertia = o.dynamics && sec.inertia.squaredNorm() > 0.0;
+    const bool has_damping =
+        o.dynamics && (sec.damping.squaredNorm() > 0.0 || sec.rayleigh_stiffness > 0.0 ||
+                       (has_inertia && sec.rayleigh_mass > 0.0));
+    // Mass-proportional damping needs M_e in the residual as well.
+    const bool inertia_tangent = tangent || (has_damping && sec.rayleigh_mass > 0.0);
+    const bool exact_inertia = has_inertia && m.rod_inertia == RodInertia::kExact;
+    // The kernels share d, T^-1(d), P(d) and the Gauss-point operators (RodGeometry).
+    RodGeometry geo;
+    CalcRodGeometry(CalcRodRelativeMotion(HA, HB, d.w_ref[e]), has_gravity || exact_inertia,
+                    (tangent && has_gravity) || (inertia_tangent && exact_inertia), &geo);
     RodInternal in;
-    CalcRodInternal(el, sec, HA, HB, d.w_ref[e], &in);
+    CalcRodInternal(el, sec, geo, tangent, &in);
     const double rotation = in.d.tail<3>().norm();
     if (!(rotation < m.max_element_rotation) || !in.force.allFinite()) {
       d.failed_element = static_cast<int>(e);
@@ -129,21 +155,13 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     magnitude.head<3>().array() += std::max(HA.x.norm(), HB.x.norm());
     s.Term((sec.stiffness.cwiseProduct(magnitude) / el.length).maxCoeff());
     Vec12 r = in.force;
-    Mat12 K = in.stiffness;
-    const double rhoA = sec.inertia(0);
-    if (rhoA > 0.0 && m.gravity.squaredNorm() > 0.0) {
-      Vec12 g;
-      Mat12 Kg;
-      CalcRodDistributedDeadForce(el, HA, in.d, o.load_factor * rhoA * m.gravity, &g, &Kg);
+    if (has_gravity) {
+      Vec12 g = Vec12::Zero();
+      AddRodDistributedDeadForce(el, geo, HA, o.load_factor * rhoA * m.gravity, &g,
+                                 tangent ? &in.stiffness : nullptr);
       r -= g;
-      K += Kg;
     }
     const int nodes[2] = {el.node_a, el.node_b};
-    // Inertia (option A or B, method.md §2.5) and damping: forces and the M, C blocks.
-    const bool has_inertia = o.dynamics && sec.inertia.squaredNorm() > 0.0;
-    const bool has_damping =
-        o.dynamics && (sec.damping.squaredNorm() > 0.0 || sec.rayleigh_stiffness > 0.0 ||
-                       (has_inertia && sec.rayleigh_mass > 0.0));
     RodInertiaTerms ine;
     if (has_inertia || has_damping) {
       const int da = s.NodeDof(el.node_a), db = s.NodeDof(el.node_b);
@@ -157,15 +175,17 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
         acc_ab.tail<6>() = d.vdot.segment<6>(db);
       }
       if (has_inertia) {
-        CalcRodInertia(m.rod_inertia, el, sec, in.d, eta_ab, acc_ab, &ine);
+        CalcRodInertia(m.rod_inertia, el, sec, geo, eta_ab, acc_ab, inertia_tangent, &ine);
         r += ine.force;
       }
-      if (has_damping) AddRodDamping(el, sec, in.d, eta_ab, ine.mass, &r, &ine.gyroscopic);
+      if (has_damping)
+        AddRodDamping(el, sec, geo.P, eta_ab, ine.mass, &r, tangent ? &ine.gyroscopic : nullptr);
     }
     s.Rows(s.NodeDof(el.node_a), r.head<6>());
     s.Rows(s.NodeDof(el.node_b), r.tail<6>());
-    s.NodeMatrix<2>(nodes, &K, has_inertia ? &ine.mass : nullptr,
-                    has_inertia || has_damping ? &ine.gyroscopic : nullptr);
+    if (tangent)
+      s.NodeMatrix<2>(nodes, &in.stiffness, has_inertia ? &ine.mass : nullptr,
+                      has_inertia || has_damping ? &ine.gyroscopic : nullptr);
   }
   return true;
 }
@@ -184,9 +204,17 @@ void AddBodies(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       const Mat6 M = RigidMass(b);
       const Vec6 eta = d.v.segment<6>(dof);
       const Vec6 Meta = M * eta;
-      r.noalias() += M * d.vdot.segment<6>(dof) - ad(eta).transpose() * Meta;
-      const Mat6 C = -(ad(eta).transpose() * M + Star(Meta));
-      s.NodeMatrix<1>(nodes, &K, &M, &C);
+      const Vec6 M_vdot = M * d.vdot.segment<6>(dof);
+      const Vec6 gyroscopic = ad(eta).transpose() * Meta;
+      r += M_vdot - gyroscopic;
+      // The scale of the convergence test is the size of the terms, not of their sum: for a
+      // body without joints or loads the sum is the residual itself and tends to zero.
+      s.Force(std::max({M_vdot.cwiseAbs().maxCoeff(), gyroscopic.cwiseAbs().maxCoeff(),
+                        g.cwiseAbs().maxCoeff()}));
+      if (o.assemble_matrix) {
+        const Mat6 C = -(ad(eta).transpose() * M + Star(Meta));
+        s.NodeMatrix<1>(nodes, &K, &M, &C);
+      }
     } else {
       s.NodeMatrix<1>(nodes, &K, nullptr, nullptr);
     }
@@ -282,7 +310,7 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
         s.Gradient(j.row, s.NodeDof(j.node_b), BB, &s.NodeT(j.node_b), lam);
       }
       if (k > 0) {
-        const Mat6X BJ = -TSE3Inv(-phi) * A * TJ;
+        const Mat6X BJ = -(Tinv - ad(phi)) * A * TJ;  // T^-1(-phi) = T^-1(phi) - ad(phi)
         s.Gradient(j.row, j.coord, BJ, nullptr, lam);
       }
     }

@@ -485,7 +485,12 @@ Model ModelBuilder::Build() const {
   }
   FindRedundantConstraints(m);
 
-  // Block graph: a block is a contiguous range of unknowns that always couple together.
+  // Block graph: a block is a contiguous range of unknowns that always couple together; an
+  // edge is a block of the iteration matrix that the assembly writes (rod elements couple
+  // their nodes, joints their constraint rows with both nodes and their coordinates, drives
+  // their row with the coordinates). The term d(B^T lambda)/dq, which would couple the two
+  // nodes of a joint, is not assembled (method.md §5.2). The permuted matrix has these blocks
+  // only: model.pattern_last, checked by the assembly.
   struct Block {
     int start, size;
   };
@@ -515,7 +520,6 @@ Model ModelBuilder::Build() const {
       link(cb, nb(j.node_a));
       link(cb, nb(j.node_b));
       link(cb, coord_block);
-      link(nb(j.node_a), nb(j.node_b));  // through d(B^T lambda)/dq
     }
     if (j.drive_row >= 0) link(add_block(m.nv + j.drive_row, 1), coord_block);
   }
@@ -542,15 +546,21 @@ Model ModelBuilder::Build() const {
   }
   SCREWFEM_CHECK(pos == m.num_unknowns());
   m.bandwidth = 0;
+  m.pattern_last.assign(static_cast<std::size_t>(m.num_unknowns()), 0);
   for (std::size_t b = 0; b < blocks.size(); ++b) {
     m.bandwidth = std::max(m.bandwidth, blocks[b].size - 1);
+    int last = block_pos[b] + blocks[b].size - 1;
     for (int c : adj[b]) {
       const int lo = std::min(block_pos[b], block_pos[static_cast<std::size_t>(c)]);
       const int hi = std::max(block_pos[b] + blocks[b].size,
                               block_pos[static_cast<std::size_t>(c)] +
                                   blocks[static_cast<std::size_t>(c)].size);
       m.bandwidth = std::max(m.bandwidth, hi - 1 - lo);
+      last = std::max(last, block_pos[static_cast<std::size_t>(c)] +
+                                blocks[static_cast<std::size_t>(c)].size - 1);
     }
+    for (int i = 0; i < blocks[b].size; ++i)
+      m.pattern_last[static_cast<std::size_t>(block_pos[b] + i)] = last;
   }
 
   // Characteristic length: the diagonal of the bounding box of all node positions.
@@ -580,6 +590,8 @@ Data MakeData(const Model& model) {
   d.increment = Eigen::VectorXd::Zero(model.num_unknowns());
   d.node_tangent.assign(model.nodes.size(), Mat6::Identity());
   d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
+  if (static_cast<int>(model.pattern_last.size()) == model.num_unknowns())
+    d.matrix.SetPattern(model.pattern_last, model.pattern_last);
   return d;
 }
 

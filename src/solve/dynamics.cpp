@@ -125,13 +125,10 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::st
   o.s_multipliers = 1.0 / bh2;
   o.use_node_tangent = opt.use_tangent_operator;
 
-  double last_increment = INFINITY;
-  for (int it = 0; it <= opt.max_iterations; ++it) {
-    // q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
-    RestoreState(integ.q_start, data);
-    data.increment.head(nv) = h * integ.dq;
-    Retract(model, data, data.increment.head(nv));
-    if (opt.use_tangent_operator) {
+  // Assembles at the current iterate; the iteration matrix (and the tangent operators it
+  // needs) only when `with_matrix`.
+  const auto assemble = [&](bool with_matrix) {
+    if (with_matrix && opt.use_tangent_operator) {
       for (const Node& n : model.nodes)
         if (n.dof >= 0)
           data.node_tangent[static_cast<std::size_t>(&n - model.nodes.data())] =
@@ -149,20 +146,34 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::st
         TJ.topLeftCorner(k, k) = j.basis.transpose() * TSE3(xi) * j.basis;
       }
     }
-    if (!Assemble(model, data, o)) {
-      if (why) {
-        char buf[200];
-        if (data.failed_element >= 0)
-          std::snprintf(buf, sizeof buf,
-                        "element %d rotates by %.4g rad, beyond what one helical element "
-                        "represents (2 pi); use more elements",
-                        data.failed_element, data.failed_rotation);
-        else
-          std::snprintf(buf, sizeof buf, "the residual is not finite");
-        *why = buf;
-      }
-      return -1;
+    o.assemble_matrix = with_matrix;
+    if (Assemble(model, data, o)) return true;
+    if (why) {
+      char buf[200];
+      if (data.failed_element >= 0)
+        std::snprintf(buf, sizeof buf,
+                      "element %d rotates by %.4g rad, beyond what one helical element "
+                      "represents (2 pi); use more elements",
+                      data.failed_element, data.failed_rotation);
+      else
+        std::snprintf(buf, sizeof buf, "the residual is not finite");
+      *why = buf;
     }
+    return false;
+  };
+
+  double last_increment = INFINITY;
+  for (int it = 0; it <= opt.max_iterations; ++it) {
+    // q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
+    RestoreState(integ.q_start, data);
+    data.increment.head(nv) = h * integ.dq;
+    Retract(model, data, data.increment.head(nv));
+    // The matrix is needed only by iterations that solve. Once the last correction passed
+    // the increment test the step usually converges here: assemble the residual alone, and
+    // the matrix only if the residual test then fails (the residual does not depend on it).
+    const bool may_converge = last_increment <= opt.increment_tolerance;
+    const bool with_matrix = !may_converge && it < opt.max_iterations;
+    if (!assemble(with_matrix)) return -1;
     const double res = data.residual.head(nv).cwiseAbs().maxCoeff();
     const double con =
         model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() : 0.0;
@@ -176,6 +187,7 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::st
       return it;
     }
     if (it == opt.max_iterations) break;
+    if (!with_matrix && !assemble(true)) return -1;
     if (!SolveAssembledSystem(model, data)) {
       if (why) *why = "the iteration matrix is singular";
       return -1;

@@ -62,7 +62,7 @@ struct FreeBody {
   Integrator integ;
 };
 
-void MakeFreeBody(FreeBody* b, bool relaxed_residual_test = true) {
+void MakeFreeBody(FreeBody* b) {
   ModelBuilder mb;
   const int node = mb.AddNode(SE3::Identity(), "body");
   mb.AddRigidBody("body", node, 1.0, Vec3::Zero(), kI.asDiagonal());
@@ -70,12 +70,7 @@ void MakeFreeBody(FreeBody* b, bool relaxed_residual_test = true) {
   b->data = MakeData(b->model);
   b->data.v.segment<3>(3) = kOmega0;
   DynamicOptions opt;
-  opt.rho_inf = 1.0;
-  // Workaround (library bug, see FreeBodyStepsConvergeWithDefaultTolerances): the residual of
-  // a free body is measured against the body's own net residual, which vanishes at
-  // convergence, so the relative residual test cannot pass. With residual_tolerance = 1 the
-  // test reduces to the position increment (1e-10) and constraint tolerances.
-  opt.residual_tolerance = relaxed_residual_test ? 1.0 : opt.residual_tolerance;
+  opt.rho_inf = 1.0;  // default Newton tolerances (see FreeBodyStepsConvergeWithDefaultTolerances)
   ASSERT_TRUE(InitializeDynamics(b->model, b->data, b->integ, opt));
 }
 
@@ -152,19 +147,14 @@ TEST(TorqueFreeM3, BodyAngularVelocityFollowsTheEllipticSolutionThroughTwoFlips)
   EXPECT_LT(std::abs(r2.flips[1] - r2.flips[0] - period) / period, 1e-6);  // measured 1.4e-7
 }
 
-// A free body must converge with the default Newton tolerances. It does not: AddBodies records
-// only the body's net residual r = M vdot - ad(eta)^T M eta - g as data.force_scale (through
-// Scatter::Rows), not the size of its terms, so for a body without joints or loads the scale
-// tends to zero with the residual and the test |R| <= residual_tolerance * force_scale (or
-// the 32 eps round-off floor of the same scale) never passes unless |R| is exactly 0: steps
-// are halved 8 times and fail at t = 0.966 s with h = 1e-3 ("Newton did not converge in 20
-// iterations"). Fix (in AddBodies, not owned here): register max(|M vdot|, |ad^T M eta|, |g|)
-// as a term/force scale.
+// A free body converges with the default Newton tolerances: AddBodies registers the size of
+// the body's terms, max(|M vdot|, |ad^T M eta|, |g|), as the force scale of the relative
+// residual test. (It used to register only the net residual r = M vdot - ad(eta)^T M eta - g,
+// which for a body without joints or loads tends to zero with the residual itself, so the test
+// never passed: steps were halved 8 times and failed at t = 0.966 s with h = 1e-3.)
 TEST(TorqueFreeM3, FreeBodyStepsConvergeWithDefaultTolerances) {
-  GTEST_SKIP() << "enable when AddBodies registers the size of the inertia terms as the force "
-                  "scale of the convergence test (see the comment above this test)";
   FreeBody b;
-  MakeFreeBody(&b, false);
+  MakeFreeBody(&b);
   for (int n = 0; n < 2000; ++n) {
     const StepResult r = Step(b.model, b.data, b.integ, 1e-3);
     ASSERT_TRUE(r.ok) << r.message;

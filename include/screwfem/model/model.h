@@ -142,8 +142,14 @@ struct Model {
   int nv_nodes = 0;      // the first nv_nodes of them belong to nodes
   int nc = 0;            // multipliers
   int num_unknowns() const { return nv + nc; }
-  std::vector<int> permutation;  // global unknown index -> position in the banded system
+  // Global unknown index -> position in the banded system. The unknowns of one node, of one
+  // joint's coordinates and of one joint's constraint rows stay consecutive (in order), so a
+  // block of the iteration matrix maps to a contiguous block of the band.
+  std::vector<int> permutation;
   int bandwidth = 0;             // half-bandwidth of the permuted system
+  // Sparsity pattern of the permuted iteration matrix (symmetric): position i couples with
+  // positions up to pattern_last[i] (the last unknown of any block adjacent to its own).
+  std::vector<int> pattern_last;
   double length_scale = 1.0;     // characteristic length (bounding box diagonal) [m]
 
   // Constraint rows found linearly dependent at build time (redundant constraints, e.g. a
