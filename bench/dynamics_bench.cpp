@@ -64,20 +64,6 @@ Scene LoadGrm(int index) {
                           "analysis.step=1e-3"});
 }
 
-// Every breakpoint of a load or drive profile (as RunScene aligns its steps).
-std::vector<double> ProfileBreakpoints(const Model& model) {
-  std::vector<double> b;
-  const auto add = [&b](const Profile& p) {
-    const std::vector<double> t = p.Breakpoints();
-    b.insert(b.end(), t.begin(), t.end());
-  };
-  for (const PointLoad& l : model.point_loads) add(l.profile);
-  for (const RodLoad& l : model.rod_loads) add(l.profile);
-  for (const Joint& j : model.joints)
-    if (j.drive != DriveKind::kNone) add(j.drive_profile);
-  return b;
-}
-
 struct GrmTotals {
   double simulated = 0.0, wall = 0.0;
   long runs = 0, steps = 0, iterations = 0, halvings = 0;

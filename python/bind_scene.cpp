@@ -197,6 +197,11 @@ void BindScenesAndRuns(py::module_& m) {
       .def("done", &StepSchedule::Done, py::arg("t"), "True once t [s] has reached the end.")
       .def("next", &StepSchedule::Next, py::arg("t"),
            "The step end following t [s] (start or an earlier step end); requires not done(t).");
+
+  m.def("profile_breakpoints", &ProfileBreakpoints, py::arg("model"),
+        "profile_breakpoints(model) -> list of float\n\n"
+        "Every breakpoint [s] of the model's load and drive profiles (unsorted): pass them to\n"
+        "StepSchedule to put them on step ends, as run_scene does with align_steps.");
 }
 
 }  // namespace

@@ -69,25 +69,6 @@ class OutputClock {
   double start_, interval_, tolerance_, next_;
 };
 
-// Every breakpoint of a load or drive profile.
-std::vector<double> ProfileBreakpoints(const Model& model) {
-  std::vector<double> b;
-  for (const PointLoad& l : model.point_loads) {
-    const std::vector<double> p = l.profile.Breakpoints();
-    b.insert(b.end(), p.begin(), p.end());
-  }
-  for (const RodLoad& l : model.rod_loads) {
-    const std::vector<double> p = l.profile.Breakpoints();
-    b.insert(b.end(), p.begin(), p.end());
-  }
-  for (const Joint& j : model.joints)
-    if (j.drive != DriveKind::kNone) {
-      const std::vector<double> p = j.drive_profile.Breakpoints();
-      b.insert(b.end(), p.begin(), p.end());
-    }
-  return b;
-}
-
 // Largest |phi| over the constraint rows: the relative-frame constraints of the joints
 // (JointConstraint, method.md §4.3) and the prescribed drives alpha - q(t) (§4.4). The same
 // value as MaxConstraintViolation, which assembles the whole residual (about 15% of a GRM

@@ -5,6 +5,24 @@
 
 namespace screwfem {
 
+std::vector<double> ProfileBreakpoints(const Model& model) {
+  std::vector<double> b;
+  for (const PointLoad& l : model.point_loads) {
+    const std::vector<double> p = l.profile.Breakpoints();
+    b.insert(b.end(), p.begin(), p.end());
+  }
+  for (const RodLoad& l : model.rod_loads) {
+    const std::vector<double> p = l.profile.Breakpoints();
+    b.insert(b.end(), p.begin(), p.end());
+  }
+  for (const Joint& j : model.joints)
+    if (j.drive != DriveKind::kNone) {
+      const std::vector<double> p = j.drive_profile.Breakpoints();
+      b.insert(b.end(), p.begin(), p.end());
+    }
+  return b;
+}
+
 StepSchedule::StepSchedule(double start, double end, double step, std::vector<double> breakpoints)
     : start_(start), end_(end), step_(step), tolerance_(1e-9 * step) {
   std::sort(breakpoints.begin(), breakpoints.end());

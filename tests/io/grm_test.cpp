@@ -566,13 +566,8 @@ EnergyAudit AuditEnergy(const std::string& scene) {
   Integrator integrator;
   EnergyAudit audit;
   if (!InitializeDynamics(m, d, integrator, s.analysis.dynamic, &audit.message)) return audit;
-  std::vector<double> breakpoints;
-  for (const Joint& j : m.joints)
-    for (const double b : j.drive_profile.Breakpoints()) breakpoints.push_back(b);
-  for (const PointLoad& l : m.point_loads)
-    for (const double b : l.profile.Breakpoints()) breakpoints.push_back(b);
   const StepSchedule schedule(s.analysis.start_time, s.analysis.end_time, s.analysis.step,
-                              breakpoints);
+                              ProfileBreakpoints(m));
 
   // The powers below cover what the GRM soft cases have: dead forces, series-elastic drives.
   for (const PointLoad& l : m.point_loads) {

@@ -391,7 +391,8 @@ class PendulumDynamicsTest(unittest.TestCase):
         self.assertEqual(point_header[1:], sim.point_columns())
         self.assertEqual(joint_header[1:], sim.joint_columns())
         a = scene.analysis
-        schedule = sf.StepSchedule(a.start_time, a.end_time, a.step)
+        schedule = sf.StepSchedule(a.start_time, a.end_time, a.step,
+                                   sf.profile_breakpoints(scene.model))
         compared = 0
         largest = 0.0
 

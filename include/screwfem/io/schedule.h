@@ -5,7 +5,12 @@
 
 #include <vector>
 
+#include "screwfem/model/model.h"
+
 namespace screwfem {
+
+// Every breakpoint (Profile::Breakpoints) of the model's load and drive profiles, unsorted.
+std::vector<double> ProfileBreakpoints(const Model& model);
 
 class StepSchedule {
  public:
