@@ -68,6 +68,7 @@ def joint_names(columns):
 def plot_point(name, runs, figdir):
     fig, axes = plt.subplots(3, 3, figsize=(13, 9), sharex=True, squeeze=False)
     quantities = (("displacement", "", "m"), ("velocity", "v", "m/s"), ("acceleration", "a", "m/s²"))
+    row_scale = [0.0, 0.0, 0.0]  # largest magnitude of each quantity over components and runs
     for label, (columns, data) in runs:
         t = data[:, 0]
         for row, (title, prefix, unit) in enumerate(quantities):
@@ -75,11 +76,20 @@ def plot_point(name, runs, figdir):
                 values = data[:, columns.index(f"{name}.{prefix}{axis}")]
                 if row == 0 and len(values):
                     values = values - values[0]
+                if len(values):
+                    row_scale[row] = max(row_scale[row], float(np.max(np.abs(values))))
                 ax = axes[row][col]
                 ax.plot(t, values, label=label, marker="o" if len(t) == 1 else None)
                 ax.set_title(f"{name} {title} {axis}", fontsize=10)
                 ax.set_ylabel(unit)
                 ax.grid(True, alpha=0.3)
+    # A component that stays at round-off level (e.g. the z motion of a planar chain) is shown
+    # on the scale of the other components, not magnified into noise.
+    for row, scale in enumerate(row_scale):
+        for ax in axes[row]:
+            low, high = ax.get_ylim()
+            if scale > 0.0 and high - low < 1e-9 * scale:
+                ax.set_ylim(-0.05 * scale, 0.05 * scale)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     axes[0][0].legend(fontsize=8)
