@@ -47,25 +47,6 @@ std::string FormatVec(const Vec3& v) {
   return s.str();
 }
 
-// Frame with x along `axis` and z as close as possible to `up` (the convention of
-// ModelBuilder::AddStraightRod, used here for rods through a path of points).
-Mat3 FrameAlong(const Vec3& axis, const Vec3& up) {
-  const Vec3 ex = axis.normalized();
-  Vec3 ez = up - up.dot(ex) * ex;
-  if (ez.norm() < 1e-8 * std::max(1.0, up.norm())) {
-    Eigen::Index i = 0;
-    ex.cwiseAbs().minCoeff(&i);
-    const Vec3 alt = Vec3::Unit(i);
-    ez = alt - alt.dot(ex) * ex;
-  }
-  ez.normalize();
-  Mat3 R;
-  R.col(0) = ex;
-  R.col(1) = ez.cross(ex);
-  R.col(2) = ez;
-  return R;
-}
-
 struct BodyEntry {
   std::string name;
   std::string path;   // "bodies.NAME"

@@ -33,25 +33,6 @@ bool IsRotation(const Mat3& R) {
   return (R.transpose() * R - Mat3::Identity()).norm() < 1e-9 && R.determinant() > 0.0;
 }
 
-// Frame with x along `axis` and z as close as possible to `up`.
-Mat3 FrameAlong(const Vec3& axis, const Vec3& up) {
-  const Vec3 ex = axis.normalized();
-  Vec3 ez = up - up.dot(ex) * ex;
-  if (ez.norm() < 1e-8 * std::max(1.0, up.norm())) {
-    // `up` parallel to the axis: take the world axis least aligned with it.
-    Eigen::Index i = 0;
-    ex.cwiseAbs().minCoeff(&i);
-    const Vec3 alt = Vec3::Unit(i);
-    ez = alt - alt.dot(ex) * ex;
-  }
-  ez.normalize();
-  Mat3 R;
-  R.col(0) = ex;
-  R.col(1) = ez.cross(ex);
-  R.col(2) = ez;
-  return R;
-}
-
 // Rank of the constraint gradient B at the reference configuration (phi = 0, T = I): rows of
 // [B_A B_B B_J] = [-Ad(C_B^-1 H_B^-1 H_A)  Ad(C_B^-1)  -A_J] per joint and e_alpha per
 // prescribed drive. Linearly dependent rows are recorded in model.redundant_rows (their
@@ -106,6 +87,24 @@ void FindRedundantConstraints(Model& m) {
 }
 
 }  // namespace
+
+Mat3 FrameAlong(const Vec3& axis, const Vec3& up) {
+  const Vec3 ex = axis.normalized();
+  Vec3 ez = up - up.dot(ex) * ex;
+  if (ez.norm() < 1e-8 * std::max(1.0, up.norm())) {
+    // `up` parallel to the axis: take the world axis least aligned with it.
+    Eigen::Index i = 0;
+    ex.cwiseAbs().minCoeff(&i);
+    const Vec3 alt = Vec3::Unit(i);
+    ez = alt - alt.dot(ex) * ex;
+  }
+  ez.normalize();
+  Mat3 R;
+  R.col(0) = ex;
+  R.col(1) = ez.cross(ex);
+  R.col(2) = ez;
+  return R;
+}
 
 int Model::FindNode(const std::string& name) const { return FindByName(nodes, name); }
 int Model::FindRod(const std::string& name) const { return FindByName(rods, name); }

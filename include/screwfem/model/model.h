@@ -213,6 +213,10 @@ class ModelBuilder {
 // second. Returns 6 x k.
 Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2 = Vec3::Zero(), double pitch = 0.0);
 const char* JointTypeName(JointType type);
+// Rotation whose x axis is `axis` (normalised) and whose z axis is as close as possible to
+// `up`; when `up` is parallel to `axis`, the world axis least aligned with `axis` stands in.
+// The section-frame convention of rods (AddStraightRod, scene paths).
+Mat3 FrameAlong(const Vec3& axis, const Vec3& up);
 
 // ------------------------------------------------------------------------------------------
 // Data: the state and every workspace of one simulation, allocated once from a Model.
