@@ -9,17 +9,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 build_dir=build/release
 jobs=$(nproc 2> /dev/null || echo 2)
 
-# Phase timing (bash's EPOCHREALTIME; no external tools).
-now_us() { echo "${EPOCHREALTIME//[.,]/}"; }
-timings=()
-phase_start=0
-begin() { echo "== $1"; phase_start=$(now_us); }
-end() {
-  local us=$(($(now_us) - phase_start)) t
-  t=$(printf '%d.%01d s' $((us / 1000000)) $((us % 1000000 / 100000)))
-  timings+=("$(printf '%-30s %10s' "$1" "$t")")
-  echo "== $1: $t"
-}
+source scripts/phase-timing.sh
 
 begin "dependencies"
 bash scripts/setup-deps.sh
