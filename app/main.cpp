@@ -64,9 +64,10 @@ int Run(const std::string& scene_path, const std::string& outdir,
     const screwfem::RunResult r = screwfem::RunScene(scene, outdir, options);
     const char* status = r.ok ? "completed" : r.interrupted ? "interrupted" : "failed";
     std::printf("%s: t = %.6g s, %ld steps, %ld Newton iterations (at most %d per step), %ld halvings, "
-                "%.3g s wall, max |phi| %.2g -> %s\n",
+                "%.3g s wall, max |phi| %.2g, max element rotation %.3g rad -> %s\n",
                 status, r.end_time, r.steps, r.newton_iterations, r.max_iterations_per_step,
-                r.halvings, r.wall_seconds, r.max_constraint_residual, outdir.c_str());
+                r.halvings, r.wall_seconds, r.max_constraint_residual, r.max_element_rotation,
+                outdir.c_str());
     if (!r.ok) std::fprintf(stderr, "%s\n", r.message.c_str());
     return r.ok ? 0 : r.interrupted ? kExitInterrupted : kExitFailed;
   } catch (const screwfem::InputError& e) {

@@ -158,6 +158,9 @@ void BindScenesAndRuns(py::module_& m) {
       .def_readonly("wall_seconds", &RunResult::wall_seconds, "[s]")
       .def_readonly("max_constraint_residual", &RunResult::max_constraint_residual,
                     "Largest |phi| over the run [m or rad].")
+      .def_readonly("max_element_rotation", &RunResult::max_element_rotation,
+                    "Largest relative rotation of one rod element over the run [rad] (a helical "
+                    "element is valid below 2 pi).")
       .def_readonly("message", &RunResult::message, "Why it stopped early, with the time.")
       .def("__repr__", [](const RunResult& r) {
         return std::string("<screwfem.RunResult ok=") + (r.ok ? "True" : "False") +

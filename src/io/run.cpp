@@ -69,6 +69,14 @@ class OutputClock {
   double start_, interval_, tolerance_, next_;
 };
 
+// Largest relative rotation |w| of one rod element [rad], on its continued branch (method.md
+// §2.7): the branch references are the accepted state's rotations.
+double MaxElementRotation(const Data& data) {
+  double m = 0.0;
+  for (const Vec3& w : data.w_ref) m = std::max(m, w.norm());
+  return m;
+}
+
 // Largest |phi| over the constraint rows: the relative-frame constraints of the joints
 // (JointConstraint, method.md §4.3) and the prescribed drives alpha - q(t) (§4.4). The same
 // value as MaxConstraintViolation, which assembles the whole residual (about 15% of a GRM
@@ -144,6 +152,7 @@ class Run {
     r.halvings = integ_.halvings + static_.halvings;
     r.wall_seconds = WallSeconds();
     r.max_constraint_residual = max_constraint_;
+    r.max_element_rotation = max_rotation_;
     r.message = message_;
     return r;
   }
@@ -164,6 +173,7 @@ class Run {
       return;
     }
     max_constraint_ = MaxConstraint(model_, data_, so.time);
+    max_rotation_ = MaxElementRotation(data_);
     if (!Record(so.time, true, true)) return;
     if (options_.on_step) {
       if (!FlushRows(so.time)) return;
@@ -194,6 +204,7 @@ class Run {
       return;
     }
     max_constraint_ = MaxConstraint(model_, data_, data_.time);
+    max_rotation_ = MaxElementRotation(data_);
 
     const OutputSpec& o = scene_.outputs;
     OutputClock rows(a.start_time, o.interval, a.step);
@@ -222,6 +233,7 @@ class Run {
       }
       data_.time = t_next;
       max_constraint_ = std::max(max_constraint_, MaxConstraint(model_, data_, t_next));
+      max_rotation_ = std::max(max_rotation_, MaxElementRotation(data_));
 
       const bool last = schedule.Done(t_next);
       const bool row = last || rows.Due(t_next), frame = last || frames.Due(t_next);
@@ -354,6 +366,7 @@ class Run {
     j.Field("wall_seconds", wall);
     j.Field("real_time_factor", wall > 0.0 && !statics ? simulated / wall : 0.0);
     j.Field("max_constraint_residual", max_constraint_);
+    j.Field("max_element_rotation", max_rotation_);
     j.Key("warnings").BeginArray();
     for (const std::string& w : model_.warnings) j.String(w);
     j.EndArray();
@@ -375,6 +388,7 @@ class Run {
   std::vector<double> row_;
   Clock::time_point wall_start_, last_summary_;
   double max_constraint_ = 0.0;
+  double max_rotation_ = 0.0;  // largest relative rotation of one rod element so far [rad]
   double last_row_time_ = NAN;
   std::string status_ = "running", message_;
   bool finished_ = false;

@@ -4,6 +4,7 @@
 // OUTDIR/joints.csv   t, then per joint J (per coordinate i for multi-DOF joints: J.i.q ...):
 //                     J.q J.qd J.qdd J.effort
 // OUTDIR/summary.json resolved settings, counts, steps, Newton iterations, halvings, wall time,
+//                     largest element rotation,
 //                     largest constraint residual, status and message
 // OUTDIR/vtk/frame_NNNNN.vtp and OUTDIR/vtk/motion.pvd (ParaView)
 // Files are written as the run goes, in whole rows: the CSV rows are collected and flushed
@@ -40,6 +41,9 @@ struct RunResult {
   long halvings = 0;            // halved time steps, or halved load increments in statics
   double wall_seconds = 0.0;
   double max_constraint_residual = 0.0;
+  // Largest relative rotation of one rod element over the run [rad], on its continued branch;
+  // one helical element is valid below 2 pi (method.md §2.7).
+  double max_element_rotation = 0.0;
   std::string message;          // why it stopped early, with the time
 };
 
