@@ -86,20 +86,22 @@ def main():
     print("| refinement | difference | ratio to the previous |")
     print("|---|---|---|")
     for h in STEPS:
-        previous = None
-        for coarse, fine in zip(ELEMENTS, ELEMENTS[1:]):
-            d = distance(results[(coarse, h)][t], results[(fine, h)][t])
-            ratio = f"{previous / d:.2f}" if previous else ""
-            print(f"| elements {coarse} -> {fine} (h = {h:g} s) | {d:.3e} | {ratio} |")
-            previous = d
-    previous = None
+        print_differences([(f"elements {a} -> {b} (h = {h:g} s)", results[(a, h)][t], results[(b, h)][t])
+                           for a, b in zip(ELEMENTS, ELEMENTS[1:])])
     e = TIME_ORDER_ELEMENTS
-    for coarse, fine in zip(TIME_ORDER_STEPS, TIME_ORDER_STEPS[1:]):
-        d = distance(results[(e, coarse)][t], results[(e, fine)][t])
-        ratio = f"{previous / d:.2f}" if previous else ""
-        print(f"| h {coarse:g} -> {fine:g} s ({e} elements) | {d:.3e} | {ratio} |")
-        previous = d
+    print_differences([(f"h {a:g} -> {b:g} s ({e} elements)", results[(e, a)][t], results[(e, b)][t])
+                       for a, b in zip(TIME_ORDER_STEPS, TIME_ORDER_STEPS[1:])])
 
+
+def print_differences(refinements):
+    """Table rows of successive refinements (label, coarse, fine) with the ratio of each
+    difference to the previous one."""
+    previous = None
+    for label, coarse, fine in refinements:
+        d = distance(coarse, fine)
+        ratio = f"{previous / d:.2f}" if previous else ""
+        print(f"| {label} | {d:.3e} | {ratio} |")
+        previous = d
 
 if __name__ == "__main__":
     main()

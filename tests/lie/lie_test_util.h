@@ -12,6 +12,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "screwfem/lie/se3.h"
 
@@ -92,6 +93,15 @@ inline Vec6 SampleTwist(const AngleCase& c, int i, std::mt19937& rng) {
   return xi;
 }
 inline constexpr int kSamplesPerAngle = 16;
+
+// kSamplesPerAngle twists of angle case c; the seed depends only on the angle and `salt`, so
+// every test of a suite sees the same set.
+inline std::vector<Vec6> SamplesAtAngle(const AngleCase& c, std::uint32_t salt) {
+  std::mt19937 rng = MakeRng(static_cast<std::uint32_t>(1000.0 * c.phi) + salt);
+  std::vector<Vec6> out;
+  for (int i = 0; i < kSamplesPerAngle; ++i) out.push_back(SampleTwist(c, i, rng));
+  return out;
+}
 
 // --- comparison ----------------------------------------------------------------------------------
 

@@ -90,13 +90,7 @@ TEST(Se3Algebra, InverseOfSe3ComposesToIdentity) {
 class Se3AtAngle : public ::testing::TestWithParam<AngleCase> {
  protected:
   // Samples of this angle case; the seed depends only on the angle so each test sees the same set.
-  std::vector<Vec6> Samples() const {
-    std::mt19937 rng = test::MakeRng(static_cast<std::uint32_t>(1000.0 * GetParam().phi) + 7u);
-    std::vector<Vec6> out;
-    for (int i = 0; i < test::kSamplesPerAngle; ++i)
-      out.push_back(test::SampleTwist(GetParam(), i, rng));
-    return out;
-  }
+  std::vector<Vec6> Samples() const { return test::SamplesAtAngle(GetParam(), 7u); }
   // A second, independent set of vectors (z, y, ...).
   static std::vector<Vec6> Others(std::uint32_t salt) {
     std::mt19937 rng = test::MakeRng(salt);

@@ -29,13 +29,7 @@ double RelativeError(const Mat6& a, const Mat6& reference) {
 
 class Se3TangentAtAngle : public ::testing::TestWithParam<AngleCase> {
  protected:
-  std::vector<Vec6> Samples() const {
-    std::mt19937 rng = test::MakeRng(static_cast<std::uint32_t>(1000.0 * GetParam().phi) + 17u);
-    std::vector<Vec6> out;
-    for (int i = 0; i < test::kSamplesPerAngle; ++i)
-      out.push_back(test::SampleTwist(GetParam(), i, rng));
-    return out;
-  }
+  std::vector<Vec6> Samples() const { return test::SamplesAtAngle(GetParam(), 17u); }
   static double Scale(const Vec6& xi) { return 1.0 + xi.norm(); }
 };
 
