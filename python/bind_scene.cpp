@@ -34,6 +34,17 @@ void BindSettings(py::module_& m) {
       .def_static("from_spectral_radius", &GeneralizedAlpha::FromSpectralRadius, py::arg("rho_inf"),
                   "Chung-Hulbert parameters from the spectral radius at infinity rho in [0, 1].");
 
+  py::enum_<NewtonMatrix>(m, "NewtonMatrix",
+                         "When the dynamic iteration matrix is factorised (dynamics.h).")
+      .value("EVERY_ITERATION", NewtonMatrix::kEveryIteration, "Full Newton.")
+      .value("ONCE_PER_STEP", NewtonMatrix::kOncePerStep,
+             "Simplified Newton: at a step's first iteration, reused by its later ones.");
+  py::enum_<Predictor>(m, "Predictor", "Acceleration each step's iteration starts from.")
+      .value("ZERO_ACCELERATION", Predictor::kZeroAcceleration, "vdot = 0 (Arnold and Bruls).")
+      .value("LAST_ACCELERATION", Predictor::kLastAcceleration, "vdot = the last step's.")
+      .value("ADAPTIVE", Predictor::kAdaptive,
+             "Per step, whichever of the two was closer at the previous step.");
+
   py::class_<DynamicOptions>(m, "DynamicOptions",
                              "Settings of the generalized-alpha integrator (dynamics.h).")
       .def(py::init<>())
@@ -51,7 +62,13 @@ void BindSettings(py::module_& m) {
       .def_readwrite("residual_tolerance", &DynamicOptions::residual_tolerance,
                      "Residual relative to its largest force term.")
       .def_readwrite("use_tangent_operator", &DynamicOptions::use_tangent_operator,
-                     "T(h dq) on node columns of the iteration matrix.");
+                     "T(h dq) on node columns of the iteration matrix.")
+      .def_readwrite("newton_matrix", &DynamicOptions::newton_matrix,
+                     "Full or simplified Newton (NewtonMatrix).")
+      .def_readwrite("refresh_ratio", &DynamicOptions::refresh_ratio,
+                     "Simplified Newton switches to full Newton for the rest of a step when a "
+                     "correction shrinks by less than this factor.")
+      .def_readwrite("predictor", &DynamicOptions::predictor, "Start of each step (Predictor).");
 
   py::class_<StaticOptions>(m, "StaticOptions",
                             "Settings of the static Newton solver with load stepping (statics.h).")

@@ -49,6 +49,8 @@ class Simulation {
       throw InputError("DynamicOptions.rho_inf: must lie in [0, 1]");
     if (o.max_iterations < 1) throw InputError("DynamicOptions.max_iterations: must be at least 1");
     if (o.max_halvings < 0) throw InputError("DynamicOptions.max_halvings: must be >= 0");
+    if (!(o.refresh_ratio > 0.0 && o.refresh_ratio < 1.0))
+      throw InputError("DynamicOptions.refresh_ratio: must lie in (0, 1)");
     initialized_ = false;
     std::string why;
     if (!InitializeDynamics(model(), data_, integrator_, o, &why)) {
@@ -252,6 +254,12 @@ and indices out of range IndexError.)doc")
           "Newton iterations of all steps.")
       .def_property_readonly(
           "halvings", [](const S& s) { return s.integrator().halvings; }, "Halved time steps.")
+      .def_property_readonly(
+          "factorizations", [](const S& s) { return s.integrator().factorizations; },
+          "Factorisations of the iteration matrix.")
+      .def_property_readonly(
+          "retries", [](const S& s) { return s.integrator().retries; },
+          "Steps redone with full Newton from the zero-acceleration start.")
       .def_property_readonly("max_iterations_in_step",
                              [](const S& s) { return s.integrator().max_iterations_in_step; })
 

@@ -308,6 +308,11 @@ class Run {
       j.Field("constraint_tolerance", d.constraint_tolerance);
       j.Field("residual_tolerance", d.residual_tolerance);
       j.Field("use_tangent_operator", d.use_tangent_operator);
+      j.Field("newton", d.newton_matrix == NewtonMatrix::kEveryIteration ? "full" : "simplified");
+      j.Field("refresh_ratio", d.refresh_ratio);
+      j.Field("predictor", d.predictor == Predictor::kZeroAcceleration   ? "zero"
+                           : d.predictor == Predictor::kLastAcceleration ? "last"
+                                                                          : "adaptive");
     }
     if (statics || a.static_preload) {
       j.Key("statics").BeginObject();
@@ -356,6 +361,8 @@ class Run {
     j.Field("newton_iterations", integ_.iterations);
     j.Field("max_iterations_per_step", integ_.max_iterations_in_step);
     j.Field("step_halvings", integ_.halvings);
+    j.Field("matrix_factorizations", integ_.factorizations);
+    j.Field("step_retries", integ_.retries);
     if (has_static_) {
       j.Key("static_solution").BeginObject();
       j.Field("converged", static_.converged).Field("load_factor", static_.load_factor);

@@ -873,7 +873,8 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
   const std::string path = "analysis";
   r_.CheckKeys(*node, path,
                {"type", "start_time", "end_time", "step", "rho_inf", "tolerances", "max_iterations",
-                "max_halvings", "align_steps", "static_preload", "load_steps", "rod_inertia"});
+                "max_halvings", "align_steps", "static_preload", "load_steps", "rod_inertia",
+                "newton", "predictor"});
   auto find = [&](const char* key) { return node->Find(key); };
   if (const Node* t = find("type"))
     a->kind = r_.Choice(*t, Join(path, "type"), {"static", "dynamic"}) == "static"
@@ -915,6 +916,17 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
   if (const Node* t = find("max_halvings"))
     a->dynamic.max_halvings = a->statics.max_halvings =
         r_.Integer(*t, Join(path, "max_halvings"), 0, 30);
+  if (const Node* t = find("newton"))
+    a->dynamic.newton_matrix =
+        r_.Choice(*t, Join(path, "newton"), {"simplified", "full"}) == "full"
+            ? NewtonMatrix::kEveryIteration
+            : NewtonMatrix::kOncePerStep;
+  if (const Node* t = find("predictor")) {
+    const std::string v = r_.Choice(*t, Join(path, "predictor"), {"adaptive", "last", "zero"});
+    a->dynamic.predictor = v == "zero"   ? Predictor::kZeroAcceleration
+                           : v == "last" ? Predictor::kLastAcceleration
+                                         : Predictor::kAdaptive;
+  }
   if (const Node* t = find("load_steps"))
     a->statics.load_steps = r_.Integer(*t, Join(path, "load_steps"), 1, 1000000);
   if (const Node* t = find("align_steps")) a->align_steps = r_.Bool(*t, Join(path, "align_steps"));

@@ -42,7 +42,8 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   integ.params = GeneralizedAlpha::FromSpectralRadius(options.rho_inf);
   const int nv = model.nv, nc = model.nc;
   integ.a = Eigen::VectorXd::Zero(nv);
-  integ.v_start = integ.vdot_start = integ.a_start = integ.dq = Eigen::VectorXd::Zero(nv);
+  integ.v_start = integ.vdot_start = integ.a_start = integ.dq = integ.a_base =
+      Eigen::VectorXd::Zero(nv);
   integ.lambda_start = Eigen::VectorXd::Zero(nc);
   SaveState(data, &integ.q_start);
   // One tangent operator per node, then one per joint (used by spherical, planar and free
@@ -90,14 +91,18 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   data.vdot = data.increment.head(nv);
   data.lambda = data.increment.tail(nc);
   integ.a = data.vdot;
+  integ.use_last_acceleration = options.predictor != Predictor::kZeroAcceleration;
   return true;
 }
 
 namespace {
 
 // One generalized-alpha step of size h from the current state (method.md §5.2). Returns the
-// number of Newton iterations, or -1 on failure (state then undefined: caller restores).
-int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::string* why) {
+// number of Newton corrections, or -1 on failure (state then undefined: caller restores).
+// `conservative`: full Newton from the zero-acceleration start, whatever the options (the
+// retry of a step the faster settings could not do).
+int TryStep(const Model& model, Data& data, Integrator& integ, double h, bool conservative,
+            std::string* why) {
   const GeneralizedAlpha& p = integ.params;
   const DynamicOptions& opt = integ.options;
   const int nv = model.nv;
@@ -106,11 +111,19 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::st
   const double gamma_p = p.gamma / (h * p.beta);
   const double bh2 = p.beta * h * h;
 
-  // Predictor.
-  integ.a = (p.alpha_f * integ.vdot_start - p.alpha_m * integ.a_start) / (1.0 - p.alpha_m);
+  // Predictor. The auxiliary acceleration is a_{n+1} = a_base + c_a vdot_{n+1}; the Newton
+  // corrections below keep v, dq and a consistent with it (gamma' dx = h gamma c_a beta' dx,
+  // dx / h = h beta c_a beta' dx), so the iteration may start from any vdot_{n+1}.
+  const double c_a = (1.0 - p.alpha_f) / (1.0 - p.alpha_m);
+  integ.a_base = (p.alpha_f * integ.vdot_start - p.alpha_m * integ.a_start) / (1.0 - p.alpha_m);
+  bool full_newton = conservative || opt.newton_matrix == NewtonMatrix::kEveryIteration;
+  if (integ.use_last_acceleration && !conservative)
+    data.vdot = integ.vdot_start;
+  else
+    data.vdot.setZero();
+  integ.a = integ.a_base + c_a * data.vdot;
   data.v = integ.v_start + h * (1.0 - p.gamma) * integ.a_start + h * p.gamma * integ.a;
   integ.dq = integ.v_start + h * (0.5 - p.beta) * integ.a_start + h * p.beta * integ.a;
-  data.vdot.setZero();
   data.lambda = integ.lambda_start;
   data.time = t_new;
 
@@ -161,18 +174,32 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::st
     }
     return false;
   };
-
-  double last_increment = INFINITY;
-  for (int it = 0; it <= opt.max_iterations; ++it) {
-    // q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
+  // q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
+  const auto configure = [&] {
     RestoreState(integ.q_start, data);
     data.increment.head(nv) = h * integ.dq;
     Retract(model, data, data.increment.head(nv));
-    // The matrix is needed only by iterations that solve. Once the last correction passed
-    // the increment test the step usually converges here: assemble the residual alone, and
-    // the matrix only if the residual test then fails (the residual does not depend on it).
+  };
+  const auto accept = [&] {
+    integ.a = integ.a_base + c_a * data.vdot;
+    // The adaptive predictor starts the next step from whichever start would have been
+    // closer for this one: vdot_n (smooth motion) or 0 (undamped high-frequency content,
+    // which flips the sign of vdot from step to step).
+    if (opt.predictor == Predictor::kAdaptive)
+      integ.use_last_acceleration =
+          (data.vdot - integ.vdot_start).squaredNorm() <= data.vdot.squaredNorm();
+  };
+
+  double last_increment = INFINITY;
+  bool factorized = false;  // data.matrix holds a factorisation from this step
+  for (int it = 0; it <= opt.max_iterations; ++it) {
+    configure();
+    const bool need_matrix = full_newton || !factorized;
+    // Once the last correction passed the increment test the step usually converges here:
+    // assemble the residual alone, and the matrix only if the residual test then fails (the
+    // residual does not depend on it).
     const bool may_converge = last_increment <= opt.increment_tolerance;
-    const bool with_matrix = !may_converge && it < opt.max_iterations;
+    const bool with_matrix = need_matrix && !may_converge && it < opt.max_iterations;
     if (!assemble(with_matrix)) return -1;
     const double res = data.residual.head(nv).cwiseAbs().maxCoeff();
     const double con =
@@ -180,15 +207,23 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::st
     const double scale = std::max(data.force_scale, 1e-300);
     const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
                          std::max(data.term_scale, data.force_scale);
-    if (it > 0 && con <= opt.constraint_tolerance && last_increment <= opt.increment_tolerance &&
-        (res <= opt.residual_tolerance * scale || res <= floor)) {
-      // a_{n+1} += (1 - alpha_f)/(1 - alpha_m) vdot_{n+1}
-      integ.a += (1.0 - p.alpha_f) / (1.0 - p.alpha_m) * data.vdot;
+    const bool residual_ok = con <= opt.constraint_tolerance &&
+                             (res <= opt.residual_tolerance * scale || res <= floor);
+    if (it > 0 && residual_ok && may_converge) {
+      accept();
       return it;
     }
     if (it == opt.max_iterations) break;
-    if (!with_matrix && !assemble(true)) return -1;
-    if (!SolveAssembledSystem(model, data)) {
+    if (need_matrix && !with_matrix && !assemble(true)) return -1;
+    bool solved;
+    if (need_matrix) {
+      ++integ.factorizations;
+      solved = SolveAssembledSystem(model, data);
+      factorized = solved;
+    } else {
+      solved = SolveFactorizedSystem(model, data);
+    }
+    if (!solved) {
       if (why) *why = "the iteration matrix is singular";
       return -1;
     }
@@ -197,7 +232,18 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, std::st
     data.v += gamma_p * dx;
     data.vdot += beta_p * dx;
     data.lambda += data.increment.tail(model.nc) / bh2;
-    last_increment = ScaledIncrementSize(model, dx);
+    const double increment = ScaledIncrementSize(model, dx);
+    // Converged: the residual passed at this iterate and its correction is below the
+    // increment tolerance (the corrected state is only closer to the solution).
+    if (residual_ok && increment <= opt.increment_tolerance) {
+      configure();
+      accept();
+      return it + 1;
+    }
+    // A reused matrix that contracts too little: rebuild it, and from then on at every
+    // iteration of this step (the step is too nonlinear for the simplified iteration).
+    if (!need_matrix && increment > opt.refresh_ratio * last_increment) full_newton = true;
+    last_increment = increment;
   }
   if (why) {
     char buf[200];
@@ -235,11 +281,21 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h) {
   const double h_min = h * std::ldexp(1.0, -integ.options.max_halvings);
   double hs = h;
   std::string why;
+  const DynamicOptions& opt = integ.options;
+  const bool conservative = opt.newton_matrix == NewtonMatrix::kEveryIteration &&
+                            opt.predictor == Predictor::kZeroAcceleration;
   while (data.time < t_end - 1e-12 * h) {
     hs = std::min(hs, t_end - data.time);
     const double t0 = data.time;
     SaveStepStart(data, integ);
-    const int its = TryStep(model, data, integ, hs, &why);
+    int its = TryStep(model, data, integ, hs, false, &why);
+    if (its < 0 && !conservative) {
+      // The simplified iteration or the predictor failed: retry the same step with full
+      // Newton from the zero-acceleration start before halving.
+      RestoreStepStart(model, data, integ, t0);
+      ++integ.retries;
+      its = TryStep(model, data, integ, hs, true, &why);
+    }
     if (its >= 0) {
       UpdateBranchReferences(model, data);
       result.iterations += its;

@@ -10,10 +10,14 @@
 namespace screwfem {
 
 bool SolveAssembledSystem(const Model& model, Data& data) {
+  if (data.matrix.Factorize() >= 0) return false;
+  return SolveFactorizedSystem(model, data);
+}
+
+bool SolveFactorizedSystem(const Model& model, Data& data) {
   const int n = model.num_unknowns();
   for (int i = 0; i < n; ++i)
     data.rhs(model.permutation[static_cast<std::size_t>(i)]) = -data.residual(i);
-  if (data.matrix.Factorize() >= 0) return false;
   data.matrix.Solve(data.rhs);
   for (int i = 0; i < n; ++i)
     data.increment(i) = data.rhs(model.permutation[static_cast<std::size_t>(i)]);

@@ -298,6 +298,17 @@ TEST(BadInput, SpectralRadiusOutsideTheUnitInterval) {
               "bad.yaml:6:12", "analysis.rho_inf: expected a spectral radius in [0, 1]");
 }
 
+TEST(BadInput, UnknownNewtonVariantOrPredictor) {
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis:\n  newton: modified\n",
+              "bad.yaml:6:11", "analysis.newton: expected one of simplified or full, got 'modified'");
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis:\n  predictor: [last]\n",
+              "bad.yaml:6:14", "analysis.predictor: expected one of adaptive, last or zero, got a list");
+}
+
 TEST(BadInput, NonScalarMapKey) {
   ExpectError("points:\n  [1, 2]: [0, 0, 0]\n", "bad.yaml:2:3", "map keys must be plain names");
 }

@@ -142,7 +142,7 @@ TEST(Cli, FailedStepExitsOneAndSaysWhen) {
   const ScopedDir tmp("cli_failed");
   const std::string out = tmp.path() + "/out";
   const Outcome o = RunCli({"run", kPendulum, "-o", out, "--set", "analysis.max_iterations=1",
-                            "--set", "analysis.max_halvings=1"},
+                            "--set", "analysis.predictor=zero", "--set", "analysis.max_halvings=1"},
                            tmp.path());
   EXPECT_EQ(o.code, 1);
   EXPECT_EQ(o.out.rfind("failed: ", 0), 0u) << o.out;

@@ -401,6 +401,8 @@ analysis:
   align_steps: false
   static_preload: true
   rod_inertia: exact
+  newton: full
+  predictor: zero
 outputs:
   points:
     tip: {body: r, at: [2, 0, 0]}
@@ -427,6 +429,8 @@ outputs:
   EXPECT_TRUE(a.static_preload);
   EXPECT_EQ(a.statics.time, 0.5);
   EXPECT_EQ(scene.model.rod_inertia, RodInertia::kExact);
+  EXPECT_EQ(a.dynamic.newton_matrix, NewtonMatrix::kEveryIteration);
+  EXPECT_EQ(a.dynamic.predictor, Predictor::kZeroAcceleration);
   const OutputSpec& o = scene.outputs;
   ASSERT_EQ(o.points.size(), 3u);
   EXPECT_EQ(o.points[0].name, "tip");

@@ -199,6 +199,28 @@ class InputErrorTest(unittest.TestCase):
                 sf.InputError, re.escape(f"{PENDULUM}: override 'analysis.stepp=1e-3': analysis.stepp")):
             sf.load_scene(PENDULUM, ["analysis.stepp=1e-3"])
 
+    def test_newton_variants_reach_the_same_state(self):
+        # Full Newton from vdot = 0 against the defaults (simplified Newton, adaptive start):
+        # the same solution, with fewer factorisations than iterations for the defaults.
+        runs = []
+        for newton, predictor in ((sf.NewtonMatrix.EVERY_ITERATION, sf.Predictor.ZERO_ACCELERATION),
+                                  (sf.NewtonMatrix.ONCE_PER_STEP, sf.Predictor.ADAPTIVE)):
+            sim = sf.Simulation(sf.load_scene(PENDULUM))
+            options = sf.DynamicOptions()
+            options.newton_matrix = newton
+            options.predictor = predictor
+            sim.initialize(options)
+            for _ in range(100):
+                sim.step(1e-3)
+            runs.append((sim.joint_coordinate("hinge"), sim.factorizations, sim.iterations))
+        self.assertAlmostEqual(runs[0][0], runs[1][0], delta=1e-9)
+        self.assertEqual(runs[0][1], runs[0][2])
+        self.assertLess(runs[1][1], runs[1][2])
+        options = sf.DynamicOptions()
+        options.refresh_ratio = 1.0
+        with self.assertRaisesRegex(sf.InputError, "refresh_ratio"):
+            sf.Simulation(sf.load_scene(PENDULUM)).initialize(options)
+
     def test_misuse_of_a_simulation_raises(self):
         sim = sf.Simulation(sf.load_scene(PENDULUM))
         with self.assertRaisesRegex(RuntimeError, "initialize"):

@@ -239,6 +239,7 @@ TEST(CantileverFrequency, FreeVibrationPeriodsAfterReleasingATipLoadMatchTheLine
                 static_cast<double>(integ.iterations) / steps);
     EXPECT_LT(std::abs(period / eb - 1.0), 5e-3) << "mode " << n + 1;
     EXPECT_LT(std::abs(period / trapezoidal - 1.0), 2e-6) << "mode " << n + 1;
+    EXPECT_EQ(integ.halvings, 0) << "mode " << n + 1;  // every step at h: the trapezoidal rule
   }
 }
 

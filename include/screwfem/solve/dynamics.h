@@ -19,6 +19,9 @@ struct GeneralizedAlpha {
   static GeneralizedAlpha FromSpectralRadius(double rho_inf);
 };
 
+enum class NewtonMatrix { kEveryIteration, kOncePerStep };
+enum class Predictor { kZeroAcceleration, kLastAcceleration, kAdaptive };
+
 struct DynamicOptions {
   double rho_inf = 0.9;          // spectral radius at infinity (1: no numerical damping)
   int max_iterations = 20;       // Newton iterations per step
@@ -31,6 +34,20 @@ struct DynamicOptions {
   double constraint_tolerance = 1e-11;
   double residual_tolerance = 1e-8;
   bool use_tangent_operator = true;  // T(h dq) on node columns of the iteration matrix
+  // When the iteration matrix is assembled and factorised (docs/numerics.md, "Newton"):
+  //   kEveryIteration: full Newton (quadratic convergence, one factorisation per iteration);
+  //   kOncePerStep:    simplified Newton: at the first iteration of each step, reused by the
+  //                    step's later iterations, and rebuilt at the current iterate when an
+  //                    iteration contracts the correction by less than refresh_ratio.
+  // Both converge to the same solution (the residual and the tests do not change).
+  NewtonMatrix newton_matrix = NewtonMatrix::kOncePerStep;
+  double refresh_ratio = 0.1;
+  // The acceleration vdot_{n+1} the Newton iteration starts from (method.md §5.2):
+  //   kZeroAcceleration:  vdot_{n+1} = 0 (Arnold & Bruls 2007);
+  //   kLastAcceleration:  vdot_{n+1} = vdot_n, an O(h) closer start for smooth motions;
+  //   kAdaptive:          per step, whichever of the two was closer at the previous step
+  //                       (vdot_n unless undamped high frequencies make vdot alternate).
+  Predictor predictor = Predictor::kAdaptive;
 };
 
 // Per-simulation integrator workspace (allocated once by InitializeDynamics).
@@ -40,9 +57,12 @@ struct Integrator {
   Eigen::VectorXd a;             // auxiliary acceleration (nv)
   // Step workspace.
   State q_start;
-  Eigen::VectorXd v_start, vdot_start, a_start, lambda_start, dq;
+  Eigen::VectorXd v_start, vdot_start, a_start, lambda_start, dq, a_base;
+  bool use_last_acceleration = true;  // predictor of the next step (DynamicOptions::predictor)
   // Statistics.
   long steps = 0, iterations = 0, halvings = 0;
+  long factorizations = 0;       // of the iteration matrix (including failed attempts)
+  long retries = 0;              // steps redone with full Newton from the zero start
   int max_iterations_in_step = 0;
 };
 

@@ -11,6 +11,9 @@ namespace screwfem {
 // Solves data.matrix * x = -data.residual (the system left by Assemble) into data.increment
 // (global order). Returns false when the matrix is singular.
 bool SolveAssembledSystem(const Model& model, Data& data);
+// The same with the factorisation data.matrix already holds (from an earlier
+// SolveAssembledSystem): only data.residual is read.
+bool SolveFactorizedSystem(const Model& model, Data& data);
 
 struct StaticOptions {
   double time = 0.0;                  // profiles of loads and drives are evaluated at this time
