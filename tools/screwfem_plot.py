@@ -65,6 +65,15 @@ def joint_names(columns):
     return [c[:-2] for c in columns if c.endswith(".q")]
 
 
+def save_figure(fig, figdir, filename):
+    """Lays out, writes figdir/filename (PNG, 120 dpi) and closes fig; returns the path."""
+    fig.tight_layout()
+    path = os.path.join(figdir, filename)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
 def plot_point(name, runs, figdir):
     fig, axes = plt.subplots(3, 3, figsize=(13, 9), sharex=True, squeeze=False)
     quantities = (("displacement", "", "m"), ("velocity", "v", "m/s"), ("acceleration", "a", "m/s²"))
@@ -93,11 +102,7 @@ def plot_point(name, runs, figdir):
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     axes[0][0].legend(fontsize=8)
-    fig.tight_layout()
-    path = os.path.join(figdir, f"point_{name}.png")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, figdir, f"point_{name}.png")
 
 
 def plot_joint(name, runs, figdir):
@@ -113,11 +118,7 @@ def plot_joint(name, runs, figdir):
             ax.grid(True, alpha=0.3)
     axes[-1].set_xlabel("t [s]")
     axes[0].legend(fontsize=8)
-    fig.tight_layout()
-    path = os.path.join(figdir, f"joint_{name}.png")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, figdir, f"joint_{name}.png")
 
 
 def read_collection(outdir):
@@ -211,11 +212,7 @@ def plot_snapshots(outdir, times, figdir):
     ax.set_zlabel("z [m]")
     ax.set_title(f"{label}: snapshots")
     ax.legend(fontsize=8, loc="upper left")
-    fig.tight_layout()
-    path = os.path.join(figdir, f"snapshots_{label}.png")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, figdir, f"snapshots_{label}.png")
 
 
 def parse_list(text, kind, what):

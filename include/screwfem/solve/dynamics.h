@@ -34,12 +34,13 @@ struct DynamicOptions {
   double constraint_tolerance = 1e-11;
   double residual_tolerance = 1e-8;
   bool use_tangent_operator = true;  // T(h dq) on node columns of the iteration matrix
-  // When the iteration matrix is assembled and factorised (docs/numerics.md, "Newton"):
+  // When the iteration matrix is assembled and factorised (docs/numerics.md, "Newton
+  // iteration"):
   //   kEveryIteration: full Newton (quadratic convergence, one factorisation per iteration);
   //   kOncePerStep:    simplified Newton: at the first iteration of each step, reused by the
-  //                    step's later iterations, and rebuilt at the current iterate when an
-  //                    iteration contracts the correction by less than refresh_ratio.
-  // Both converge to the same solution (the residual and the tests do not change).
+  //                    step's later iterations; when a reused matrix shrinks a correction by
+  //                    less than refresh_ratio, the rest of the step is full Newton.
+  // Both converge to the same solution (they solve the same residual to the same tolerances).
   NewtonMatrix newton_matrix = NewtonMatrix::kOncePerStep;
   double refresh_ratio = 0.1;
   // The acceleration vdot_{n+1} the Newton iteration starts from (method.md §5.2):
