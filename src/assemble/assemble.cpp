@@ -139,8 +139,8 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     const bool exact_inertia = has_inertia && m.rod_inertia == RodInertia::kExact;
     // The kernels share d, T^-1(d), P(d) and the Gauss-point operators (RodGeometry).
     RodGeometry geo;
-    CalcRodGeometry(CalcRodRelativeMotion(HA, HB, d.w_ref[e]), has_gravity || exact_inertia,
-                    (tangent && has_gravity) || (inertia_tangent && exact_inertia), &geo);
+    CalcRodGeometry(CalcRodRelativeMotion(HA, HB, d.w_ref[e]), exact_inertia,
+                    inertia_tangent && exact_inertia, &geo);
     RodInternal in;
     CalcRodInternal(el, sec, geo, tangent, &in);
     const double rotation = in.d.tail<3>().norm();

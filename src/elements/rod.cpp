@@ -135,72 +135,164 @@ void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, 
   if (frame == LoadFrame::kWorld) tangent->noalias() -= weight * (N.transpose() * S * N);
 }
 
+namespace {
+// J(v) = I + A1 V + A2 V^2 (V = Skew(v), phi = |v|): the translation of exp(X) is J(w_X) u_X.
+// With hat = (1/phi) d/dphi and breve = (1/phi) d/dphi of hat (A0 = sin(phi)/phi):
+//   hat A0 = (cos - A0)/phi^2, hat A1 = (A0 - 2 A1)/phi^2, hat A2 = (A1 - 3 A2)/phi^2,
+//   breve A1 = (hat A0 - 4 hat A1)/phi^2, breve A2 = (hat A1 - 5 hat A2)/phi^2.
+// Each step divides a difference by phi^2, so below phi = 1 the Taylor series are used.
+struct JCoeffs {
+  double a1, a2, a1h, a2h, a1b, a2b;
+};
+
+// sum_j c_j x^j with c_j = sign * num(j) / (2 j + first)!, for the series of JCoeffs.
+struct JSeries {
+  static constexpr int kTerms = 10;
+  double a1[kTerms], a2[kTerms], a1h[kTerms], a2h[kTerms], a1b[kTerms], a2b[kTerms];
+  constexpr JSeries() : a1(), a2(), a1h(), a2h(), a1b(), a2b() {
+    // A1 = sum (-1)^k x^k / (2k+2)!, A2 = sum (-1)^k x^k / (2k+3)!, and their term-wise
+    // derivatives: hat (sum c_k x^k) = sum 2 k c_k x^(k-1), breve = sum 2k (2k - 2) c_k x^(k-2).
+    double f[2 * kTerms + 8] = {1.0};
+    for (int i = 1; i < 2 * kTerms + 8; ++i) f[i] = f[i - 1] * i;
+    for (int j = 0; j < kTerms; ++j) {
+      const double sj = j % 2 == 0 ? 1.0 : -1.0;
+      a1[j] = sj / f[2 * j + 2];
+      a2[j] = sj / f[2 * j + 3];
+      a1h[j] = -sj * 2.0 * (j + 1) / f[2 * j + 4];
+      a2h[j] = -sj * 2.0 * (j + 1) / f[2 * j + 5];
+      a1b[j] = sj * 4.0 * (j + 2) * (j + 1) / f[2 * j + 6];
+      a2b[j] = sj * 4.0 * (j + 2) * (j + 1) / f[2 * j + 7];
+    }
+  }
+};
+constexpr JSeries kJSeries;
+
+double Horner(const double (&c)[JSeries::kTerms], double x) {
+  double r = c[JSeries::kTerms - 1];
+  for (int k = JSeries::kTerms - 1; k-- > 0;) r = r * x + c[k];
+  return r;
+}
+
+JCoeffs JCoefficients(double phi) {
+  const double x = phi * phi;
+  if (phi < 1.0) {
+    const JSeries& s = kJSeries;
+    return {Horner(s.a1, x),  Horner(s.a2, x),  Horner(s.a1h, x),
+            Horner(s.a2h, x), Horner(s.a1b, x), Horner(s.a2b, x)};
+  }
+  const double sn = std::sin(phi), cs = std::cos(phi);
+  const double a0 = sn / phi, a1 = (1.0 - cs) / x, a2 = (phi - sn) / (x * phi);
+  const double a0h = (cs - a0) / x, a1h = (a0 - 2.0 * a1) / x, a2h = (a1 - 3.0 * a2) / x;
+  return {a1, a2, a1h, a2h, (a0h - 4.0 * a1h) / x, (a1h - 5.0 * a2h) / x};
+}
+
+// d/dv [J(v) x] for J(v) x = x + A1 v x x + A2 v x (v x x):
+//   -A1 Skew(x) + hat A1 (v x x) v^T + A2 (v x^T + (v.x) I - 2 x v^T) + hat A2 (v x (v x x)) v^T.
+// With `transpose`, the same for J(v)^T x = x - A1 v x x + A2 v x (v x x).
+Mat3 DJTimes(const JCoeffs& k, const Vec3& v, const Vec3& x, bool transpose) {
+  const double sign = transpose ? -1.0 : 1.0;
+  const Vec3 vx = v.cross(x);
+  const Vec3 vvx = v.cross(vx);
+  Mat3 J = (-sign * k.a1) * Skew(x);
+  J.noalias() += (sign * k.a1h * vx + k.a2h * vvx) * v.transpose();
+  J.noalias() += k.a2 * (v * x.transpose() - 2.0 * x * v.transpose());
+  J.diagonal().array() += k.a2 * v.dot(x);
+  return J;
+}
+}  // namespace
+
 void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& geometry,
                                 const SE3& H_A, const Vec3& f_w, Vec12* g, Mat12* tangent) {
-  // g = L sum_i w_i N_i^T F_i, F_i = [R_i^T f_w; 0] with R_i the section rotation at xi_i
-  // (method.md §2.6). With N = [I - N_B, N_B] and N_B^T F = T^-T(d) z, z = xi T(xi d)^T F:
-  //   g_B = T^-T(d) Z,  g_A = sum w_i F_i - g_B,  Z = L sum_i w_i z_i.
-  // Tangent of -g (as AddRodSectionLoad, summed over the points): the derivative of N^T F at
-  // fixed F is [-G_B; G_B] (the halves of N sum to I for every d), with
-  //   sum_i w_i G_B,i = D(d, Z) + T^-T(d) S,  S = L sum_i w_i dz_i/dd,
-  //   dz_i/dd = -xi_i^2 T_i^T D(xi_i d, T_i^T F_i),
-  // plus the rotation of F with the section, -L sum_i w_i N_i^T [0 Skew(f_i); 0 0] N_i.
+  // A dead force density f_w on the centreline x(xi) = x_A + R_A p(xi d), p(X) = J(w_X) u_X the
+  // translation of exp(X), has the potential V = -L sum_i w_i f_w . x(xi_i) (3-point Gauss).
+  // With f = R_A^T f_w (node-A components) and d = [u; w]:
+  //   V = -L f_w . x_A - L f . pbar(d),   pbar = sum_i w_i xi_i J(xi_i w) u,
+  // so g = -dV/dh (the same as L sum_i w_i N_i^T [R_i^T f_w; 0] at the same points) is
+  //   g = L [f; pbar x f; 0] + L P^T s,   s = d(f . pbar)/dd = [Jbar^T f; Pw^T f],
+  // Jbar = d pbar / du = sum w_i xi_i J(xi_i w), Pw = d pbar / dw. f . pbar is linear in u, so
+  // its Hessian in d is Hs = [0 Qw; Qw^T Hww], Qw = d(Jbar^T f)/dw, Hww = d^2(f . pbar)/dw^2.
+  // The tangent of -g, with delta f = Skew(f) delta theta_A and delta d = P delta h:
+  //   -L ([D(-d, s); D(d, s)] + P^T Hs + E_A [0; -Skew(f) [Jbar Pw]]) P
+  //   -L (P^T S_f Skew(f) + E_A [Skew(f); Skew(pbar) Skew(f)]) Theta_A,
+  // S_f = [Jbar^T; Pw^T] (s = S_f f), E_A the rows of node A, Theta_A its rotation columns,
+  // and D(-d, s) = Star(s) - D(d, s) as in CalcRodInternal.
   const double L = element.length;
-  const Vec3 f_A = H_A.R.transpose() * f_w;  // node-A components of the force
-  Vec3 F_sum = Vec3::Zero();
-  Vec6 Z = Vec6::Zero();
-  Mat6 S = Mat6::Zero();
-  // Sums of the rotation term: w Skew(f_i) [N_B]_rot, w [N_B]_trans^T Skew(f_i) and their product.
-  Eigen::Matrix<double, 3, 6> SkB = Eigen::Matrix<double, 3, 6>::Zero();
-  Eigen::Matrix<double, 6, 3> BtSk = Eigen::Matrix<double, 6, 3>::Zero();
-  Mat6 BtSkB = Mat6::Zero();
-  Mat3 Sk_sum = Mat3::Zero();
+  const Vec6& d = geometry.d;
+  const Vec3 u = d.head<3>(), w = d.tail<3>();
+  const Vec3 f = H_A.R.transpose() * f_w;
+  const double w_norm = w.norm();
+  Vec3 pbar = Vec3::Zero();
+  Mat3 Jbar = Mat3::Zero(), Pw = Mat3::Zero(), Qw = Mat3::Zero(), Hww = Mat3::Zero();
+  const Vec3 m = u.cross(f);
+  const double fu = f.dot(u);
+  Vec6 s = Vec6::Zero();  // [Jbar^T f; Pw^T f]
   for (int i = 0; i < kRodGaussPoints; ++i) {
-    const double xi = kRodGaussXi[i], w = L * kRodGaussW[i];
-    const Mat6& T = geometry.T[i];
-    const Vec3 f = ExpSO3(xi * geometry.d.tail<3>()).transpose() * f_A;  // section frame
-    F_sum += w * f;
-    Vec6 F;
-    F << f, Vec3::Zero();
-    const Vec6 tF = T.topRows<3>().transpose() * f;  // T^T F
-    Z += (w * xi) * tF;
+    const double xi = kRodGaussXi[i], wx = kRodGaussW[i] * xi;
+    const Vec3 v = xi * w;
+    const JCoeffs k = JCoefficients(xi * w_norm);
+    const Vec3 vu = v.cross(u), vf = v.cross(f);
+    const Vec3 vvu = v.cross(vu), vvf = v.cross(vf);
+    pbar += wx * (u + k.a1 * vu + k.a2 * vvu);
+    // J(v)^T f = f - A1 v x f + A2 v x (v x f), and the gradient in v of h = f . J(v) u =
+    // f.u + A1 v.m + A2 b, m = u x f, b = (v.f)(v.u) - phi^2 (f.u):
+    //   grad h = A1 m + hat A1 (v.m) v + A2 grad b + hat A2 b v,
+    //   grad b = f (v.u) + u (v.f) - 2 (f.u) v.
+    const double phi2 = v.squaredNorm();
+    const double vm = v.dot(m), vdf = v.dot(f), vdu = v.dot(u);
+    const double b = vdf * vdu - phi2 * fu;
+    const Vec3 gb = vdu * f + vdf * u - (2.0 * fu) * v;
+    s.head<3>() += wx * (f - k.a1 * vf + k.a2 * vvf);
+    s.tail<3>() += (wx * xi) * (k.a1 * m + k.a2 * gb + (k.a1h * vm + k.a2h * b) * v);
     if (!tangent) continue;
-    S.noalias() -= (w * xi * xi) * (T.transpose() * DTSE3InvT(xi * geometry.d, tF));
-    const Mat3 Sk = w * Skew(f);
-    const Mat6& B = geometry.NB[i];
-    const Eigen::Matrix<double, 3, 6> SkBi = Sk * B.bottomRows<3>();
-    Sk_sum += Sk;
-    SkB += SkBi;
-    BtSk.noalias() += B.topRows<3>().transpose() * Sk;
-    BtSkB.noalias() += B.topRows<3>().transpose() * SkBi;
+    // J(v) = I + A1 V + A2 V^2, V^2 = v v^T - phi^2 I.
+    Mat3 J = (wx * k.a1) * Skew(v);
+    J.noalias() += (wx * k.a2) * (v * v.transpose());
+    J.diagonal().array() += wx * (1.0 - k.a2 * phi2);
+    Jbar += J;
+    Pw += (wx * xi) * DJTimes(k, v, u, false);
+    Qw += (wx * xi) * DJTimes(k, v, f, true);
+    // Hessian of h in v:
+    //   hat A1 (m v^T + v m^T + (v.m) I) + breve A1 (v.m) v v^T
+    //   + A2 (f u^T + u f^T - 2 (f.u) I) + hat A2 (grad b v^T + v grad b^T + b I) + breve A2 b v v^T.
+    const Vec3 c1 = k.a1h * m + k.a2h * gb;
+    Mat3 H = c1 * v.transpose();
+    H += H.transpose().eval();
+    H.noalias() += (k.a1b * vm + k.a2b * b) * (v * v.transpose());
+    H.noalias() += k.a2 * (f * u.transpose() + u * f.transpose());
+    H.diagonal().array() += k.a1h * vm + k.a2h * b - 2.0 * k.a2 * fu;
+    Hww += (wx * xi * xi) * H;
   }
-  const Vec6 g_B = geometry.Ti.transpose() * Z;
-  g->head<3>() += F_sum - g_B.head<3>();
-  g->segment<3>(3) -= g_B.tail<3>();
-  g->tail<6>() += g_B;
+  const Mat6x12& P = geometry.P;
+  g->head<3>() += L * f;
+  g->segment<3>(3) += L * pbar.cross(f);
+  g->noalias() += L * (P.transpose() * s);
   if (!tangent) return;
-  Mat6 G_B = DTSE3InvT(geometry.d, Z);
-  G_B.noalias() += geometry.Ti.transpose() * S;
-  const Mat6x12 GP = G_B * geometry.P;
-  tangent->topRows<6>() += GP;
-  tangent->bottomRows<6>() -= GP;
-  // sum w N^T H N, N = [I - B, B], H = [0 Sk; 0 0]:
-  //   AA = H - HB - B^T H + B^T H B,  AB = HB - B^T H B,  BA = B^T H - B^T H B,  BB = B^T H B,
-  // HB = [Sk B_rot; 0], B^T H = [0  B_trans^T Sk], B^T H B = B_trans^T Sk B_rot.
-  Mat6 HB = Mat6::Zero(), BtH = Mat6::Zero(), H = Mat6::Zero();
-  HB.topRows<3>() = SkB;
-  BtH.rightCols<3>() = BtSk;
-  H.topRightCorner<3, 3>() = Sk_sum;
-  tangent->topLeftCorner<6, 6>() -= H - HB - BtH + BtSkB;
-  tangent->topRightCorner<6, 6>() -= HB - BtSkB;
-  tangent->bottomLeftCorner<6, 6>() -= BtH - BtSkB;
-  tangent->bottomRightCorner<6, 6>() -= BtSkB;
+  const Mat6 D = DTSE3InvT(d, s);
+  Mat6 Hs;
+  Hs.topLeftCorner<3, 3>().setZero();
+  Hs.topRightCorner<3, 3>() = Qw;
+  Hs.bottomLeftCorner<3, 3>() = Qw.transpose();
+  Hs.bottomRightCorner<3, 3>() = Hww;
+  Eigen::Matrix<double, 12, 6> Y = P.transpose() * Hs;
+  Y.topRows<6>() += Star(s) - D;
+  Y.bottomRows<6>() += D;
+  const Mat3 Sf = Skew(f);
+  Y.block<3, 3>(3, 0).noalias() -= Sf * Jbar;
+  Y.block<3, 3>(3, 3).noalias() -= Sf * Pw;
+  tangent->noalias() -= L * Y.lazyProduct(P);
+  Eigen::Matrix<double, 6, 3> SfSk;
+  SfSk.topRows<3>().noalias() = Jbar.transpose() * Sf;
+  SfSk.bottomRows<3>().noalias() = Pw.transpose() * Sf;
+  Eigen::Matrix<double, 12, 3> C = P.transpose() * SfSk;
+  C.topRows<3>() += Sf;
+  C.middleRows<3>(3).noalias() += Skew(pbar) * Sf;
+  tangent->middleCols<3>(3) -= L * C;
 }
 
 void CalcRodDistributedDeadForce(const RodElement& element, const SE3& H_A, const Vec6& d,
                                  const Vec3& f_w, Vec12* g, Mat12* tangent) {
   RodGeometry geometry;
-  CalcRodGeometry(d, true, true, &geometry);
+  CalcRodGeometry(d, false, false, &geometry);
   g->setZero();
   tangent->setZero();
   AddRodDistributedDeadForce(element, geometry, H_A, f_w, g, tangent);

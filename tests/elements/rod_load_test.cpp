@@ -113,5 +113,32 @@ TEST(RodDistributedDeadForce, EqualsTheSectionLoadsAtTheGaussPointsWithTheirTang
   }
 }
 
+TEST(RodDistributedDeadForce, AgreesWithTheSectionLoadsOverTheWholeRotationRange) {
+  // The kernel works from the potential of the load (closed forms of J(v) and its derivatives
+  // above |v| = 1, Taylor series below): straight, nearly straight, either side of the switch
+  // at the Gauss points (xi_i |w| = 1) and large rotations, against the section loads.
+  const double angles[] = {0.0, 1e-7, 1e-3, 0.3, 1.0 / kRodGaussXi[0], 1.0 / kRodGaussXi[1],
+                           0.999 / kRodGaussXi[2], 1.001 / kRodGaussXi[2], 3.0, 5.5, 6.2};
+  const Vec3 axis = Vec3(0.3, -0.8, 0.5).normalized();
+  for (double angle : angles) {
+    SE3 A;
+    A.R = ExpSO3(Vec3(0.4, 0.1, -0.7));
+    A.x = Vec3(0.2, -0.1, 0.3);
+    Vec6 d;
+    d << 0.9, 0.05, -0.1, angle * axis;
+    RodElement el;
+    el.length = 0.9;
+    const Vec3 f(0.2, -0.5, -9.81);
+    Vec12 g, g_ref = Vec12::Zero();
+    Mat12 K, K_ref = Mat12::Zero();
+    CalcRodDistributedDeadForce(el, A, d, f, &g, &K);
+    for (int i = 0; i < kRodGaussPoints; ++i)
+      AddRodSectionLoad(kRodGaussXi[i], el.length * kRodGaussW[i], A, d, LoadFrame::kWorld, f,
+                        Vec3::Zero(), &g_ref, &K_ref);
+    EXPECT_LT((g - g_ref).norm(), 1e-13 * g_ref.norm()) << "angle " << angle;
+    EXPECT_LT((K - K_ref).norm(), 1e-12 * K_ref.norm()) << "angle " << angle;
+  }
+}
+
 }  // namespace
 }  // namespace screwfem

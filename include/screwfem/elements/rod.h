@@ -144,11 +144,15 @@ void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, 
                        const Vec3& force, const Vec3& moment, Vec12* g, Mat12* tangent);
 
 // A dead force f_w per unit length (e.g. rho A g) over the element, 3-point Gauss:
-// g and the tangent of -g (both overwritten).
+// g and the tangent of -g (both overwritten). The same as the section loads
+// L w_i N_i^T [R_i^T f_w; 0] at the Gauss points (AddRodSectionLoad), computed from the
+// potential V = -L sum_i w_i f_w . x(xi_i) of the load: the centreline x(xi) = x_A + R_A J(xi w)
+// xi u is linear in u, so g and its tangent need J(v) = TSO3(v)^T and its first and second
+// derivatives at the Gauss points, in 3 x 3 blocks, instead of 6 x 6 products (rod.cpp).
 void CalcRodDistributedDeadForce(const RodElement& element, const SE3& H_A, const Vec6& d,
                                  const Vec3& f_w, Vec12* g, Mat12* tangent);
-// The same from the element's geometry (with Gauss points; with N_B when tangent is not null),
-// added to *g and *tangent (tangent may be null).
+// The same from the element's geometry (d, T^-1(d) and P; the Gauss-point operators are not
+// used), added to *g and *tangent (tangent may be null).
 void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& geometry,
                                 const SE3& H_A, const Vec3& f_w, Vec12* g, Mat12* tangent);
 
