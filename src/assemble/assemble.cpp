@@ -10,6 +10,8 @@ namespace screwfem {
 
 namespace {
 
+const Mat6 kIdentity6 = Mat6::Identity();
+
 // Writes element contributions into the global residual and the permuted band matrix.
 class Scatter {
  public:
@@ -52,8 +54,9 @@ class Scatter {
       for (Eigen::Index i = 0; i < block.rows(); ++i) col[i] += scale * block(i, j);
     }
   }
-  // Element matrix over nodes: rows/cols in 6-blocks. S = s_R (c_K K T + c_M M + c_C C).
-  template <int N>
+  // Element matrix over nodes: rows/cols in 6-blocks. S = s_R (c_K K T + c_M M + c_C C);
+  // with `kHasNodeTangent`, K already holds K T (or K when the iteration does not use T).
+  template <int N, bool kHasNodeTangent = false>
   void NodeMatrix(const int (&nodes)[N], const Eigen::Matrix<double, 6 * N, 6 * N>* K,
                   const Eigen::Matrix<double, 6 * N, 6 * N>* M,
                   const Eigen::Matrix<double, 6 * N, 6 * N>* C) {
@@ -66,7 +69,7 @@ class Scatter {
         if (gi < 0) continue;
         Mat6 S = Mat6::Zero();
         if (K) {
-          if (o_.use_node_tangent)
+          if (o_.use_node_tangent && !kHasNodeTangent)
             S.noalias() += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b) * NodeT(nodes[b]);
           else
             S += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b);
@@ -141,27 +144,29 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     RodGeometry geo;
     CalcRodGeometry(CalcRodRelativeMotion(HA, HB, d.w_ref[e]), exact_inertia,
                     inertia_tangent && exact_inertia, &geo);
-    RodInternal in;
-    CalcRodInternal(el, sec, geo, tangent, &in);
-    const double rotation = in.d.tail<3>().norm();
-    if (!(rotation < m.max_element_rotation) || !in.force.allFinite()) {
+    // Internal forces and weight, with the stiffness already right-multiplied by the node
+    // tangent operators when the iteration uses them.
+    const int nodes[2] = {el.node_a, el.node_b};
+    const bool node_tangent = tangent && o.use_node_tangent;
+    const Mat6& TA = node_tangent && s.NodeDof(el.node_a) >= 0 ? s.NodeT(el.node_a) : kIdentity6;
+    const Mat6& TB = node_tangent && s.NodeDof(el.node_b) >= 0 ? s.NodeT(el.node_b) : kIdentity6;
+    Vec12 r;
+    Mat12 stiffness;
+    CalcRodConservative(el, sec, geo, HA,
+                        has_gravity ? Vec3(o.load_factor * rhoA * m.gravity) : Vec3::Zero(),
+                        node_tangent ? &TA : nullptr, node_tangent ? &TB : nullptr, &r,
+                        tangent ? &stiffness : nullptr);
+    const double rotation = geo.d.tail<3>().norm();
+    if (!(rotation < m.max_element_rotation) || !r.allFinite()) {
       d.failed_element = static_cast<int>(e);
       d.failed_rotation = rotation;
       return false;
     }
     // Round-off in sigma = K (d - d0) / L: the translation of d comes from R_A^T (x_B - x_A),
     // whose absolute error is ~eps max(|x_A|, |x_B|) however short the element is.
-    Vec6 magnitude = in.d.cwiseAbs() + el.d0.cwiseAbs();
+    Vec6 magnitude = geo.d.cwiseAbs() + el.d0.cwiseAbs();
     magnitude.head<3>().array() += std::max(HA.x.norm(), HB.x.norm());
     s.Term((sec.stiffness.cwiseProduct(magnitude) / el.length).maxCoeff());
-    Vec12 r = in.force;
-    if (has_gravity) {
-      Vec12 g = Vec12::Zero();
-      AddRodDistributedDeadForce(el, geo, HA, o.load_factor * rhoA * m.gravity, &g,
-                                 tangent ? &in.stiffness : nullptr);
-      r -= g;
-    }
-    const int nodes[2] = {el.node_a, el.node_b};
     RodInertiaTerms ine;
     if (has_inertia || has_damping) {
       const int da = s.NodeDof(el.node_a), db = s.NodeDof(el.node_b);
@@ -184,8 +189,8 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     s.Rows(s.NodeDof(el.node_a), r.head<6>());
     s.Rows(s.NodeDof(el.node_b), r.tail<6>());
     if (tangent)
-      s.NodeMatrix<2>(nodes, &in.stiffness, has_inertia ? &ine.mass : nullptr,
-                      has_inertia || has_damping ? &ine.gyroscopic : nullptr);
+      s.NodeMatrix<2, true>(nodes, &stiffness, has_inertia ? &ine.mass : nullptr,
+                            has_inertia || has_damping ? &ine.gyroscopic : nullptr);
   }
   return true;
 }

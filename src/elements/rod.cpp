@@ -201,6 +201,108 @@ Mat3 DJTimes(const JCoeffs& k, const Vec3& v, const Vec3& x, bool transpose) {
 }
 }  // namespace
 
+namespace {
+// The dead-force potential of one element and its derivatives (see AddRodDistributedDeadForce).
+struct DeadForcePieces {
+  Vec3 f, pbar;
+  Vec6 s;                   // [Jbar^T f; Pw^T f]
+  Mat3 Jbar, Pw, Qw, Hww;   // with `tangent` only
+};
+
+DeadForcePieces CalcDeadForcePieces(const Vec6& d, const SE3& H_A, const Vec3& f_w,
+                                    bool tangent) {
+  DeadForcePieces p;
+  const Vec3 u = d.head<3>(), w = d.tail<3>();
+  const Vec3 f = H_A.R.transpose() * f_w;
+  p.f = f;
+  const double w_norm = w.norm();
+  p.pbar.setZero();
+  p.s.setZero();
+  p.Jbar.setZero();
+  p.Pw.setZero();
+  p.Qw.setZero();
+  p.Hww.setZero();
+  const Vec3 m = u.cross(f);
+  const double fu = f.dot(u);
+  for (int i = 0; i < kRodGaussPoints; ++i) {
+    const double xi = kRodGaussXi[i], wx = kRodGaussW[i] * xi;
+    const Vec3 v = xi * w;
+    const JCoeffs k = JCoefficients(xi * w_norm);
+    const Vec3 vu = v.cross(u), vf = v.cross(f);
+    const Vec3 vvu = v.cross(vu), vvf = v.cross(vf);
+    p.pbar += wx * (u + k.a1 * vu + k.a2 * vvu);
+    // J(v)^T f = f - A1 v x f + A2 v x (v x f), and the gradient in v of h = f . J(v) u =
+    // f.u + A1 v.m + A2 b, m = u x f, b = (v.f)(v.u) - phi^2 (f.u):
+    //   grad h = A1 m + hat A1 (v.m) v + A2 grad b + hat A2 b v,
+    //   grad b = f (v.u) + u (v.f) - 2 (f.u) v.
+    const double phi2 = v.squaredNorm();
+    const double vm = v.dot(m), vdf = v.dot(f), vdu = v.dot(u);
+    const double b = vdf * vdu - phi2 * fu;
+    const Vec3 gb = vdu * f + vdf * u - (2.0 * fu) * v;
+    p.s.head<3>() += wx * (f - k.a1 * vf + k.a2 * vvf);
+    p.s.tail<3>() += (wx * xi) * (k.a1 * m + k.a2 * gb + (k.a1h * vm + k.a2h * b) * v);
+    if (!tangent) continue;
+    // J(v) = I + A1 V + A2 V^2, V^2 = v v^T - phi^2 I.
+    Mat3 J = (wx * k.a1) * Skew(v);
+    J.noalias() += (wx * k.a2) * (v * v.transpose());
+    J.diagonal().array() += wx * (1.0 - k.a2 * phi2);
+    p.Jbar += J;
+    p.Pw += (wx * xi) * DJTimes(k, v, u, false);
+    p.Qw += (wx * xi) * DJTimes(k, v, f, true);
+    // Hessian of h in v:
+    //   hat A1 (m v^T + v m^T + (v.m) I) + breve A1 (v.m) v v^T
+    //   + A2 (f u^T + u f^T - 2 (f.u) I) + hat A2 (grad b v^T + v grad b^T + b I) + breve A2 b v v^T.
+    const Vec3 c1 = k.a1h * m + k.a2h * gb;
+    Mat3 H = c1 * v.transpose();
+    H += H.transpose().eval();
+    H.noalias() += (k.a1b * vm + k.a2b * b) * (v * v.transpose());
+    H.noalias() += k.a2 * (f * u.transpose() + u * f.transpose());
+    H.diagonal().array() += k.a1h * vm + k.a2h * b - 2.0 * k.a2 * fu;
+    p.Hww += (wx * xi * xi) * H;
+  }
+  return p;
+}
+
+// The d-Hessian of f . pbar, [0 Qw; Qw^T Hww].
+Mat6 DeadForceHessian(const DeadForcePieces& p) {
+  Mat6 Hs;
+  Hs.topLeftCorner<3, 3>().setZero();
+  Hs.topRightCorner<3, 3>() = p.Qw;
+  Hs.bottomLeftCorner<3, 3>() = p.Qw.transpose();
+  Hs.bottomRightCorner<3, 3>() = p.Hww;
+  return Hs;
+}
+
+// -L times the tangent columns of node A's rotation (12 x 3, see AddRodDistributedDeadForce):
+// P^T S_f Skew(f) + E_A [Skew(f); Skew(pbar) Skew(f)].
+Eigen::Matrix<double, 12, 3> DeadForceRotationColumns(const DeadForcePieces& p,
+                                                      const Mat6x12& P) {
+  const Mat3 Sf = Skew(p.f);
+  Eigen::Matrix<double, 6, 3> SfSk;
+  SfSk.topRows<3>().noalias() = p.Jbar.transpose() * Sf;
+  SfSk.bottomRows<3>().noalias() = p.Pw.transpose() * Sf;
+  Eigen::Matrix<double, 12, 3> C = P.transpose() * SfSk;
+  C.topRows<3>() += Sf;
+  C.middleRows<3>(3).noalias() += Skew(p.pbar) * Sf;
+  return C;
+}
+
+// Rows 3-5 (node A's moment) of the d-part of the tangent: -Skew(f) [Jbar Pw].
+Eigen::Matrix<double, 3, 6> DeadForceMomentRows(const DeadForcePieces& p) {
+  const Mat3 Sf = Skew(p.f);
+  Eigen::Matrix<double, 3, 6> R;
+  R.leftCols<3>().noalias() = -Sf * p.Jbar;
+  R.rightCols<3>().noalias() = -Sf * p.Pw;
+  return R;
+}
+
+void AddDeadForce(double L, const DeadForcePieces& p, const Mat6x12& P, Vec12* g) {
+  g->head<3>() += L * p.f;
+  g->segment<3>(3) += L * p.pbar.cross(p.f);
+  g->noalias() += L * (P.transpose() * p.s);
+}
+}  // namespace
+
 void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& geometry,
                                 const SE3& H_A, const Vec3& f_w, Vec12* g, Mat12* tangent) {
   // A dead force density f_w on the centreline x(xi) = x_A + R_A p(xi d), p(X) = J(w_X) u_X the
@@ -218,75 +320,69 @@ void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& ge
   // and D(-d, s) = Star(s) - D(d, s) as in CalcRodInternal.
   const double L = element.length;
   const Vec6& d = geometry.d;
-  const Vec3 u = d.head<3>(), w = d.tail<3>();
-  const Vec3 f = H_A.R.transpose() * f_w;
-  const double w_norm = w.norm();
-  Vec3 pbar = Vec3::Zero();
-  Mat3 Jbar = Mat3::Zero(), Pw = Mat3::Zero(), Qw = Mat3::Zero(), Hww = Mat3::Zero();
-  const Vec3 m = u.cross(f);
-  const double fu = f.dot(u);
-  Vec6 s = Vec6::Zero();  // [Jbar^T f; Pw^T f]
-  for (int i = 0; i < kRodGaussPoints; ++i) {
-    const double xi = kRodGaussXi[i], wx = kRodGaussW[i] * xi;
-    const Vec3 v = xi * w;
-    const JCoeffs k = JCoefficients(xi * w_norm);
-    const Vec3 vu = v.cross(u), vf = v.cross(f);
-    const Vec3 vvu = v.cross(vu), vvf = v.cross(vf);
-    pbar += wx * (u + k.a1 * vu + k.a2 * vvu);
-    // J(v)^T f = f - A1 v x f + A2 v x (v x f), and the gradient in v of h = f . J(v) u =
-    // f.u + A1 v.m + A2 b, m = u x f, b = (v.f)(v.u) - phi^2 (f.u):
-    //   grad h = A1 m + hat A1 (v.m) v + A2 grad b + hat A2 b v,
-    //   grad b = f (v.u) + u (v.f) - 2 (f.u) v.
-    const double phi2 = v.squaredNorm();
-    const double vm = v.dot(m), vdf = v.dot(f), vdu = v.dot(u);
-    const double b = vdf * vdu - phi2 * fu;
-    const Vec3 gb = vdu * f + vdf * u - (2.0 * fu) * v;
-    s.head<3>() += wx * (f - k.a1 * vf + k.a2 * vvf);
-    s.tail<3>() += (wx * xi) * (k.a1 * m + k.a2 * gb + (k.a1h * vm + k.a2h * b) * v);
-    if (!tangent) continue;
-    // J(v) = I + A1 V + A2 V^2, V^2 = v v^T - phi^2 I.
-    Mat3 J = (wx * k.a1) * Skew(v);
-    J.noalias() += (wx * k.a2) * (v * v.transpose());
-    J.diagonal().array() += wx * (1.0 - k.a2 * phi2);
-    Jbar += J;
-    Pw += (wx * xi) * DJTimes(k, v, u, false);
-    Qw += (wx * xi) * DJTimes(k, v, f, true);
-    // Hessian of h in v:
-    //   hat A1 (m v^T + v m^T + (v.m) I) + breve A1 (v.m) v v^T
-    //   + A2 (f u^T + u f^T - 2 (f.u) I) + hat A2 (grad b v^T + v grad b^T + b I) + breve A2 b v v^T.
-    const Vec3 c1 = k.a1h * m + k.a2h * gb;
-    Mat3 H = c1 * v.transpose();
-    H += H.transpose().eval();
-    H.noalias() += (k.a1b * vm + k.a2b * b) * (v * v.transpose());
-    H.noalias() += k.a2 * (f * u.transpose() + u * f.transpose());
-    H.diagonal().array() += k.a1h * vm + k.a2h * b - 2.0 * k.a2 * fu;
-    Hww += (wx * xi * xi) * H;
-  }
   const Mat6x12& P = geometry.P;
-  g->head<3>() += L * f;
-  g->segment<3>(3) += L * pbar.cross(f);
-  g->noalias() += L * (P.transpose() * s);
+  const DeadForcePieces p = CalcDeadForcePieces(d, H_A, f_w, tangent != nullptr);
+  AddDeadForce(L, p, P, g);
   if (!tangent) return;
-  const Mat6 D = DTSE3InvT(d, s);
-  Mat6 Hs;
-  Hs.topLeftCorner<3, 3>().setZero();
-  Hs.topRightCorner<3, 3>() = Qw;
-  Hs.bottomLeftCorner<3, 3>() = Qw.transpose();
-  Hs.bottomRightCorner<3, 3>() = Hww;
-  Eigen::Matrix<double, 12, 6> Y = P.transpose() * Hs;
-  Y.topRows<6>() += Star(s) - D;
+  const Mat6 D = DTSE3InvT(d, p.s);
+  Eigen::Matrix<double, 12, 6> Y = P.transpose() * DeadForceHessian(p);
+  Y.topRows<6>() += Star(p.s) - D;
   Y.bottomRows<6>() += D;
-  const Mat3 Sf = Skew(f);
-  Y.block<3, 3>(3, 0).noalias() -= Sf * Jbar;
-  Y.block<3, 3>(3, 3).noalias() -= Sf * Pw;
+  Y.middleRows<3>(3) += DeadForceMomentRows(p);
   tangent->noalias() -= L * Y.lazyProduct(P);
-  Eigen::Matrix<double, 6, 3> SfSk;
-  SfSk.topRows<3>().noalias() = Jbar.transpose() * Sf;
-  SfSk.bottomRows<3>().noalias() = Pw.transpose() * Sf;
-  Eigen::Matrix<double, 12, 3> C = P.transpose() * SfSk;
-  C.topRows<3>() += Sf;
-  C.middleRows<3>(3).noalias() += Skew(pbar) * Sf;
-  tangent->middleCols<3>(3) -= L * C;
+  tangent->middleCols<3>(3) -= L * DeadForceRotationColumns(p, P);
+}
+
+void CalcRodConservative(const RodElement& element, const Section& section,
+                         const RodGeometry& geometry, const SE3& H_A, const Vec3& f_w,
+                         const Mat6* T_A, const Mat6* T_B, Vec12* force, Mat12* stiffness) {
+  // force = P^T sigma - g_dead = P^T (sigma - L s) - L [f; pbar x f; 0], and the tangent
+  //   (P^T (K/L - L Hs) + [Star(st) - D(d, st); D(d, st)] + L E_A [0; Skew(f) [Jbar Pw]]) P
+  //   - L (P^T S_f Skew(f) + E_A [Skew(f); Skew(pbar) Skew(f)]) Theta_A,   st = sigma - L s
+  // (CalcRodInternal, AddRodDistributedDeadForce), right-multiplied by blockdiag(T_A, T_B):
+  // P blockdiag(T_A, T_B) = [P_A T_A, P_B T_B] and Theta_A T = rows 3-5 of T_A.
+  const double L = element.length;
+  const Vec6& d = geometry.d;
+  const Mat6x12& P = geometry.P;
+  const Vec6 strain = (d - element.d0) / L;
+  Vec6 stress = section.stiffness.cwiseProduct(strain);
+  const bool weight = f_w.squaredNorm() > 0.0;
+  DeadForcePieces p;
+  if (weight) {
+    p = CalcDeadForcePieces(d, H_A, f_w, stiffness != nullptr);
+    stress -= L * p.s;
+    force->head<3>() = -L * p.f;
+    force->segment<3>(3) = -L * p.pbar.cross(p.f);
+    force->tail<6>().setZero();
+    force->noalias() += P.transpose() * stress;
+  } else {
+    force->noalias() = P.transpose() * stress;
+  }
+  if (!stiffness) return;
+  const Mat6 D = DTSE3InvT(d, stress);
+  Eigen::Matrix<double, 12, 6> Y;
+  if (weight) {
+    Mat6 H = -L * DeadForceHessian(p);
+    H.diagonal() += section.stiffness / L;
+    Y.noalias() = P.transpose() * H;
+    Y.middleRows<3>(3) -= L * DeadForceMomentRows(p);
+  } else {
+    Y = P.transpose() * (section.stiffness / L).asDiagonal();
+  }
+  Y.topRows<6>() += Star(stress) - D;
+  Y.bottomRows<6>() += D;
+  if (T_A && T_B) {
+    Mat6x12 PT;
+    PT.leftCols<6>().noalias() = P.leftCols<6>() * *T_A;
+    PT.rightCols<6>().noalias() = P.rightCols<6>() * *T_B;
+    stiffness->noalias() = Y.lazyProduct(PT);
+    if (weight)
+      stiffness->leftCols<6>().noalias() -=
+          L * (DeadForceRotationColumns(p, P) * T_A->middleRows<3>(3));
+  } else {
+    stiffness->noalias() = Y.lazyProduct(P);
+    if (weight) stiffness->middleCols<3>(3) -= L * DeadForceRotationColumns(p, P);
+  }
 }
 
 void CalcRodDistributedDeadForce(const RodElement& element, const SE3& H_A, const Vec6& d,

@@ -140,5 +140,49 @@ TEST(RodDistributedDeadForce, AgreesWithTheSectionLoadsOverTheWholeRotationRange
   }
 }
 
+TEST(RodConservative, EqualsInternalMinusDeadForceWithTheNodeTangentsApplied) {
+  // CalcRodConservative (the assembly's kernel) against its two parts computed separately,
+  // with and without weight, with and without the node tangent operators T_A, T_B.
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 6; ++trial) {
+    const Config c = RandomBentElement(rng);
+    const Vec6 d = CalcRodRelativeMotion(c.A, c.B, c.w_ref);
+    RodElement el;
+    el.length = 0.7 + 0.1 * trial;
+    el.d0 << el.length, 0.0, 0.0, 0.1, 0.0, -0.2;
+    Section sec;
+    sec.stiffness << 3e3, 1e3, 2e3, 4.0, 5.0, 6.0;
+    const Vec3 f = trial % 3 == 0 ? Vec3::Zero() : Vec3(0.3, -0.2, -9.81);
+    RodGeometry geo;
+    CalcRodGeometry(d, false, false, &geo);
+    RodInternal in;
+    CalcRodInternal(el, sec, geo, true, &in);
+    Vec12 g = Vec12::Zero();
+    Mat12 Kg = Mat12::Zero();
+    AddRodDistributedDeadForce(el, geo, c.A, f, &g, &Kg);
+    const Vec12 force_ref = in.force - g;
+    Mat12 K_ref = in.stiffness + Kg;
+    Vec6 xa, xb;
+    for (int i = 0; i < 6; ++i) {
+      xa(i) = 0.3 * u(rng);
+      xb(i) = 0.3 * u(rng);
+    }
+    const Mat6 TA = TSE3(xa), TB = TSE3(xb);
+    Vec12 force;
+    Mat12 K, KT;
+    CalcRodConservative(el, sec, geo, c.A, f, nullptr, nullptr, &force, &K);
+    EXPECT_LT((force - force_ref).norm(), 1e-13 * force_ref.norm()) << "trial " << trial;
+    EXPECT_LT((K - K_ref).norm(), 1e-13 * K_ref.norm()) << "trial " << trial;
+    CalcRodConservative(el, sec, geo, c.A, f, &TA, &TB, &force, &KT);
+    K_ref.leftCols<6>() = K_ref.leftCols<6>() * TA;
+    K_ref.rightCols<6>() = K_ref.rightCols<6>() * TB;
+    EXPECT_LT((KT - K_ref).norm(), 1e-13 * K_ref.norm()) << "trial " << trial;
+    Vec12 force_only;
+    CalcRodConservative(el, sec, geo, c.A, f, nullptr, nullptr, &force_only, nullptr);
+    for (int i = 0; i < 12; ++i) EXPECT_EQ(force_only(i), force(i)) << "trial " << trial;
+  }
+}
+
 }  // namespace
 }  // namespace screwfem

@@ -156,4 +156,15 @@ void CalcRodDistributedDeadForce(const RodElement& element, const SE3& H_A, cons
 void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& geometry,
                                 const SE3& H_A, const Vec3& f_w, Vec12* g, Mat12* tangent);
 
+// The conservative part of one element in one pass, as the assembly calls it: internal forces
+// minus the distributed dead force f_w per unit length (f_w may be zero),
+//   force = g_int - g_dead,
+// and, with `stiffness`, its tangent (CalcRodInternal's plus AddRodDistributedDeadForce's),
+// right-multiplied by blockdiag(T_A, T_B) when both are given (the node tangent operators of
+// the dynamic iteration). The two share one geometric term D(d, sigma - L s), s the dead
+// force's d-gradient, and one product with P (tests/elements/rod_load_test.cpp compares).
+void CalcRodConservative(const RodElement& element, const Section& section,
+                         const RodGeometry& geometry, const SE3& H_A, const Vec3& f_w,
+                         const Mat6* T_A, const Mat6* T_B, Vec12* force, Mat12* stiffness);
+
 }  // namespace screwfem
