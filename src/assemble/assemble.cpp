@@ -11,6 +11,7 @@ namespace screwfem {
 namespace {
 
 const Mat6 kIdentity6 = Mat6::Identity();
+const Mat12 kZero12 = Mat12::Zero();
 
 // Writes element contributions into the global residual and the permuted band matrix.
 class Scatter {
@@ -80,6 +81,19 @@ class Scatter {
       }
     }
   }
+  // An element matrix already combined (S = c_K K T + c_M M + c_C C): adds s_R S.
+  template <int N>
+  void ElementMatrix(const int (&nodes)[N], const Eigen::Matrix<double, 6 * N, 6 * N>& S) {
+    if (!o_.assemble_matrix) return;
+    for (int b = 0; b < N; ++b) {
+      const int gj = NodeDof(nodes[b]);
+      if (gj < 0) continue;
+      for (int a = 0; a < N; ++a) {
+        const int gi = NodeDof(nodes[a]);
+        if (gi >= 0) Block(gi, gj, S.template block<6, 6>(6 * a, 6 * b), o_.s_rows);
+      }
+    }
+  }
   // Constraint gradient block B (rows: constraint rows starting at `row`, cols: unknowns
   // starting at gj): adds s_C B T to the constraint rows and s_R s_L B^T to the equilibrium
   // rows, and B^T lambda to the residual.
@@ -121,6 +135,22 @@ void AddDeadForce(const Vec3& f, const Vec3& p, Vec6* g, Mat6* K) {
   const Mat3 Sf = Skew(f);
   K->topRightCorner<3, 3>() -= Sf;
   K->bottomRightCorner<3, 3>() -= Skew(p) * Sf;
+}
+
+// Body velocities and accelerations of an element's nodes (zero for a fixed node).
+void NodeVelocities(const Scatter& s, const Data& d, const RodElement& el, Vec12* eta_ab,
+                    Vec12* acc_ab) {
+  const int da = s.NodeDof(el.node_a), db = s.NodeDof(el.node_b);
+  eta_ab->setZero();
+  acc_ab->setZero();
+  if (da >= 0) {
+    eta_ab->head<6>() = d.v.segment<6>(da);
+    acc_ab->head<6>() = d.vdot.segment<6>(da);
+  }
+  if (db >= 0) {
+    eta_ab->tail<6>() = d.v.segment<6>(db);
+    acc_ab->tail<6>() = d.vdot.segment<6>(db);
+  }
 }
 
 bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
@@ -167,18 +197,32 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     Vec6 magnitude = geo.d.cwiseAbs() + el.d0.cwiseAbs();
     magnitude.head<3>().array() += std::max(HA.x.norm(), HB.x.norm());
     s.Term((sec.stiffness.cwiseProduct(magnitude) / el.length).maxCoeff());
+    // Option A without mass-proportional damping: the kernel forms c_M M_e + c_C C_t itself
+    // (one set of Gauss-point products), and the element matrix is scattered as one.
+    const bool combined = tangent && exact_inertia && !(has_damping && sec.rayleigh_mass > 0.0);
+    if (combined) {
+      Vec12 eta_ab, acc_ab;
+      NodeVelocities(s, d, el, &eta_ab, &acc_ab);
+      Vec12 force;
+      Mat12 matrix;
+      CalcRodInertiaExactMatrix(el, sec, geo, eta_ab, acc_ab, o.c_mass, o.c_damping, &force,
+                                &matrix);
+      r += force;
+      matrix.noalias() += o.c_stiffness * stiffness;
+      if (has_damping) {
+        Mat12 damping = Mat12::Zero();
+        AddRodDamping(el, sec, geo.P, eta_ab, kZero12, &r, &damping);
+        matrix.noalias() += o.c_damping * damping;
+      }
+      s.Rows(s.NodeDof(el.node_a), r.head<6>());
+      s.Rows(s.NodeDof(el.node_b), r.tail<6>());
+      s.ElementMatrix<2>(nodes, matrix);
+      continue;
+    }
     RodInertiaTerms ine;
     if (has_inertia || has_damping) {
-      const int da = s.NodeDof(el.node_a), db = s.NodeDof(el.node_b);
-      Vec12 eta_ab = Vec12::Zero(), acc_ab = Vec12::Zero();
-      if (da >= 0) {
-        eta_ab.head<6>() = d.v.segment<6>(da);
-        acc_ab.head<6>() = d.vdot.segment<6>(da);
-      }
-      if (db >= 0) {
-        eta_ab.tail<6>() = d.v.segment<6>(db);
-        acc_ab.tail<6>() = d.vdot.segment<6>(db);
-      }
+      Vec12 eta_ab, acc_ab;
+      NodeVelocities(s, d, el, &eta_ab, &acc_ab);
       if (has_inertia) {
         CalcRodInertia(m.rod_inertia, el, sec, geo, eta_ab, acc_ab, inertia_tangent, &ine);
         r += ine.force;

@@ -24,11 +24,14 @@ struct NtHNSum {
   }
 };
 
-}  // namespace
+// Option A with the tangent: none (kNone), M_e and C_t (kSeparate), or c_mass M_e + c_gyro C_t
+// in out->mass (kCombined: one set of products per Gauss point).
+enum class InertiaTangent { kNone, kSeparate, kCombined };
 
-void CalcRodInertiaExact(const RodElement& element, const Section& section,
-                         const RodGeometry& geometry, const Vec12& eta_ab,
-                         const Vec12& eta_dot_ab, bool tangent, RodInertiaTerms* out) {
+template <InertiaTangent kTangent>
+void InertiaExact(const RodElement& element, const Section& section, const RodGeometry& geometry,
+                  const Vec12& eta_ab, const Vec12& eta_dot_ab, double c_mass, double c_gyro,
+                  Vec12* force, Mat12* mass_out, Mat12* gyro_out, double* kinetic_energy) {
   // Exact field (method.md §2.5) with N = [I - N_B, N_B], N_B = xi T(X) T^-1(d), X = xi d:
   //   eta(xi)     = eta_A + xi T(X) y,                 y = T^-1(d) (eta_B - eta_A),
   //   eta_dot(xi) = eta_dot_A + xi T(X) T^-1(d) (eta_dot_B - eta_dot_A) + (dN_B/dt)(eta_B - eta_A),
@@ -48,7 +51,7 @@ void CalcRodInertiaExact(const RodElement& element, const Section& section,
   const Vec6 c0 = TSE3InvDirectionalTimes(d, d_dot, eta_ab.tail<6>() - eta_a);
   Vec6 f_sum = Vec6::Zero(), phi = Vec6::Zero();
   NtHNSum mass, gyro;
-  out->kinetic_energy = 0.0;
+  double energy = 0.0;
   for (int i = 0; i < kRodGaussPoints; ++i) {
     const double xi = kRodGaussXi[i], w = L * kRodGaussW[i];
     const Mat6& T = geometry.T[i];
@@ -62,15 +65,17 @@ void CalcRodInertiaExact(const RodElement& element, const Section& section,
     const Vec6 f = M * eta_dot - CoBracket(eta, M_eta);
     f_sum += w * f;
     phi.noalias() += (w * xi) * (T.transpose() * f);
-    out->kinetic_energy += 0.5 * w * eta.dot(M_eta);
-    if (!tangent) continue;
+    energy += 0.5 * w * eta.dot(M_eta);
+    if constexpr (kTangent == InertiaTangent::kNone) continue;
     const Mat6& B = geometry.NB[i];
     // w B^T, stored column-major so that the products below run on columns (packets).
     const Mat6 wBt = w * B.transpose();
-    // Mass: H = M (diagonal).
-    const Mat6 MB = M * B;
-    mass.HB += w * MB;
-    mass.BtHB.noalias() += wBt * MB;
+    if constexpr (kTangent == InertiaTangent::kSeparate) {
+      // Mass: H = M (diagonal).
+      const Mat6 MB = M * B;
+      mass.HB += w * MB;
+      mass.BtHB.noalias() += wBt * MB;
+    }
     // Quasi-Newton gyroscopic block: the option-B form with the exact N and eta (see rod.h),
     // G = -(ad(eta)^T M + Star(M eta)) in 3x3 blocks, with ad(eta)^T = [-W 0; -U -W]:
     //   G = [W M_t  -Skew(y_t);  U M_t - Skew(y_t)  W M_r - Skew(y_r)],  y = M eta.
@@ -82,6 +87,10 @@ void CalcRodInertiaExact(const RodElement& element, const Section& section,
     G.bottomLeftCorner<3, 3>() -= Sy;
     G.bottomRightCorner<3, 3>().noalias() = W * Mdiag.tail<3>().asDiagonal();
     G.bottomRightCorner<3, 3>() -= Skew(M_eta.tail<3>());
+    if constexpr (kTangent == InertiaTangent::kCombined) {
+      G *= c_gyro;
+      G.diagonal() += c_mass * Mdiag;
+    }
     const Mat6 GB = G * B;
     gyro.H += w * G;
     gyro.HB += w * GB;
@@ -89,13 +98,39 @@ void CalcRodInertiaExact(const RodElement& element, const Section& section,
     gyro.BtHB.noalias() += wBt * GB;
   }
   const Vec6 g_b = geometry.Ti.transpose() * phi;
-  out->force.head<6>() = f_sum - g_b;
-  out->force.tail<6>() = g_b;
-  if (!tangent) return;
-  mass.H = L * Mat6(M);
-  mass.BtH = mass.HB.transpose();
-  mass.Expand(&out->mass);
-  gyro.Expand(&out->gyroscopic);
+  force->head<6>() = f_sum - g_b;
+  force->tail<6>() = g_b;
+  if (kinetic_energy) *kinetic_energy = energy;
+  if constexpr (kTangent == InertiaTangent::kSeparate) {
+    mass.H = L * Mat6(M);
+    mass.BtH = mass.HB.transpose();
+    mass.Expand(mass_out);
+    gyro.Expand(gyro_out);
+  } else if constexpr (kTangent == InertiaTangent::kCombined) {
+    gyro.Expand(mass_out);
+  }
+}
+
+}  // namespace
+
+void CalcRodInertiaExact(const RodElement& element, const Section& section,
+                         const RodGeometry& geometry, const Vec12& eta_ab,
+                         const Vec12& eta_dot_ab, bool tangent, RodInertiaTerms* out) {
+  if (tangent)
+    InertiaExact<InertiaTangent::kSeparate>(element, section, geometry, eta_ab, eta_dot_ab, 0.0,
+                                            0.0, &out->force, &out->mass, &out->gyroscopic,
+                                            &out->kinetic_energy);
+  else
+    InertiaExact<InertiaTangent::kNone>(element, section, geometry, eta_ab, eta_dot_ab, 0.0, 0.0,
+                                        &out->force, nullptr, nullptr, &out->kinetic_energy);
+}
+
+void CalcRodInertiaExactMatrix(const RodElement& element, const Section& section,
+                               const RodGeometry& geometry, const Vec12& eta_ab,
+                               const Vec12& eta_dot_ab, double c_mass, double c_gyro,
+                               Vec12* force, Mat12* matrix) {
+  InertiaExact<InertiaTangent::kCombined>(element, section, geometry, eta_ab, eta_dot_ab, c_mass,
+                                          c_gyro, force, matrix, nullptr, nullptr);
 }
 
 void CalcRodInertiaExact(const RodElement& element, const Section& section, const Vec6& d,

@@ -131,6 +131,30 @@ TEST(RodInertia, OptionAResidualDoesNotDependOnWhetherTheTangentIsComputed) {
   }
 }
 
+TEST(RodInertia, OptionACombinedMatrixIsTheWeightedSumOfMassAndGyroscopicBlocks) {
+  // CalcRodInertiaExactMatrix (the assembly's kernel) forms c_M M_e + c_C C_t in one pass: the
+  // same force bit for bit, and the same matrix to round-off.
+  for (double rotation : {0.0, 0.4, 2.5}) {
+    const Case c = MakeCase(32, rotation);
+    RodGeometry g;
+    CalcRodGeometry(c.d, true, true, &g);
+    RodInertiaTerms t;
+    CalcRodInertiaExact(c.element, c.section, g, c.eta, c.acc, true, &t);
+    const double c_mass = 3.7e6, c_gyro = 2.1e3;
+    Vec12 force;
+    Mat12 matrix;
+    CalcRodInertiaExactMatrix(c.element, c.section, g, c.eta, c.acc, c_mass, c_gyro, &force,
+                              &matrix);
+    for (int i = 0; i < 12; ++i) EXPECT_EQ(force(i), t.force(i)) << "rotation " << rotation;
+    const Mat12 ref = c_mass * t.mass + c_gyro * t.gyroscopic;
+    EXPECT_LT((matrix - ref).norm(), 1e-14 * ref.norm()) << "rotation " << rotation;
+    // The gyroscopic part (a small fraction of the sum) is resolved too.
+    const Mat12 gyro = c_gyro * t.gyroscopic;
+    EXPECT_GT(gyro.norm(), 1e-6 * ref.norm());
+    EXPECT_LT((matrix - c_mass * t.mass - gyro).norm(), 1e-9 * gyro.norm());
+  }
+}
+
 TEST(RodInertia, OptionAInterpolationHalvesSumToTheIdentity) {
   // RodGeometry's N = [I - N_B, N_B] (method.md §2.5): CalcRodN's left half is I - N_B.
   for (double rotation : {0.0, 1e-7, 0.4, 2.5, 4.0}) {

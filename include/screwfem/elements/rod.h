@@ -98,6 +98,13 @@ void CalcRodInertiaExact(const RodElement& element, const Section& section,
                          const RodGeometry& geometry, const Vec12& eta_ab,
                          const Vec12& eta_dot_ab, bool tangent, RodInertiaTerms* out);
 
+// The same force, with the iteration-matrix block c_mass M_e + c_gyro C_t in place of the two
+// matrices (what the assembly scatters): one set of Gauss-point products instead of two.
+void CalcRodInertiaExactMatrix(const RodElement& element, const Section& section,
+                               const RodGeometry& geometry, const Vec12& eta_ab,
+                               const Vec12& eta_dot_ab, double c_mass, double c_gyro,
+                               Vec12* force, Mat12* matrix);
+
 // Option B (RodInertia::kConstant): velocities and virtual displacements interpolated linearly
 // in the inertia term only, N = [(1 - xi) I, xi I]: M_e = L [M/3 M/6; M/6 M/3] constant,
 // g_ine = M_e eta_dot_AB - L int N^T ad(eta)^T M eta dxi (2-point Gauss, exact), and the
