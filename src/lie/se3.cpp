@@ -327,20 +327,44 @@ Mat6 TSE3InvDirectional(const Vec6& xi, const Vec6& dxi) {
 }
 
 Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v) {
-  // The terms of TSE3InvDirectional applied to v with brackets only: v_k = A^k v,
-  // e_k = A' v_k (A = ad(xi), A' = ad(dxi)), and the s4 group in Horner form
-  //   A' A^3 + A A' A^2 + A^2 A' A + A^3 A' = e_3 + A (e_2 + A (e_1 + A e_0)).
-  const double phi = xi.tail<3>().norm();
+  // ad(xi) = [W U; 0 W] is the dual number W + eps U, so every series in it is
+  // F(W + eps U) = F(W) + eps DF(W)[U]: T^-1(xi) = [Phi(w)  DPhi(w)[u]; 0  Phi(w)], with
+  // Phi(w) = TSO3Inv(w) = I + W/2 + C W^2 (C = s2 - theta^2 s4, and hat C = C'/phi = -2 s4,
+  // breve C = hat C'/phi = -2 hat s4 from the coefficients above). Then, for v = [x; y] and
+  // the direction dxi = [a; b],
+  //   d/de T^-1(xi + e dxi) v = [DPhi[b] x + DPhi[a] y + D2Phi[u, b] y;  DPhi[b] y],
+  //   DPhi[p] z    = p x z / 2 + C (p x (w x z) + w x (p x z)) + hat C (w.p) w x (w x z),
+  //   D2Phi[p, q] z = C (p x (q x z) + q x (p x z)) + hat C (w.q) (p x (w x z) + w x (p x z))
+  //                 + hat C (w.p) (q x (w x z) + w x (q x z))
+  //                 + (hat C (p.q) + breve C (w.p)(w.q)) w x (w x z),
+  // 18 cross products instead of the 36 of twelve 6-vector brackets.
+  const Vec3 u = xi.head<3>(), w = xi.tail<3>();
+  const Vec3 a = dxi.head<3>(), b = dxi.tail<3>();
+  const Vec3 x = v.head<3>(), y = v.tail<3>();
+  const double theta2 = w.squaredNorm();
+  const double phi = std::sqrt(theta2);
   const TInvCoeffs s = TInvCoefficients(phi);
   const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
-  const double wdw = xi.tail<3>().dot(dxi.tail<3>());
-  const Vec6 v1 = Bracket(xi, v), v2 = Bracket(xi, v1), v3 = Bracket(xi, v2);
-  const Vec6 v4 = Bracket(xi, v3);
-  const Vec6 e0 = Bracket(dxi, v), e1 = Bracket(dxi, v1), e2 = Bracket(dxi, v2);
-  const Vec6 e3 = Bracket(dxi, v3);
-  const Vec6 group2 = e1 + Bracket(xi, e0);  // A' A + A A'
-  const Vec6 group4 = e3 + Bracket(xi, Vec6(e2 + Bracket(xi, group2)));
-  return 0.5 * e0 + (ds.s2 * wdw) * v2 + s.s2 * group2 + (ds.s4 * wdw) * v4 + s.s4 * group4;
+  const double C = s.s2 - theta2 * s.s4, C_hat = -2.0 * s.s4, C_breve = -2.0 * ds.s4;
+  const double wa = w.dot(a), wb = w.dot(b), wu = w.dot(u), ub = u.dot(b);
+  // DPhi[b] x
+  const Vec3 wx = w.cross(x), bx = b.cross(x);
+  const Vec3 out_x =
+      0.5 * bx + C * (b.cross(wx) + w.cross(bx)) + (C_hat * wb) * w.cross(wx);
+  // The y terms share w x y, b x y, w x (w x y), b x (w x y), w x (b x y).
+  const Vec3 wy = w.cross(y), by = b.cross(y), ay = a.cross(y), uy = u.cross(y);
+  const Vec3 wwy = w.cross(wy);
+  const Vec3 b_wy_w_by = b.cross(wy) + w.cross(by);
+  const Vec3 a_wy_w_ay = a.cross(wy) + w.cross(ay);
+  const Vec3 u_wy_w_uy = u.cross(wy) + w.cross(uy);
+  const Vec3 Db_y = 0.5 * by + C * b_wy_w_by + (C_hat * wb) * wwy;
+  const Vec3 Da_y = 0.5 * ay + C * a_wy_w_ay + (C_hat * wa) * wwy;
+  const Vec3 D2_y = C * (u.cross(by) + b.cross(uy)) + (C_hat * wb) * u_wy_w_uy +
+                    (C_hat * wu) * b_wy_w_by + (C_hat * ub + C_breve * wu * wb) * wwy;
+  Vec6 out;
+  out.head<3>() = out_x + Da_y + D2_y;
+  out.tail<3>() = Db_y;
+  return out;
 }
 
 Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi) {
