@@ -42,7 +42,9 @@ Mat6 ScaledTangentProduct(double s, const Mat6& X, const Mat6& Y) {
 
 void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometry* out) {
   out->d = d;
-  out->Ti = TSE3Inv(d);
+  const double phi = d.tail<3>().norm();
+  out->series = CalcTSeries(phi);
+  out->Ti = TSE3Inv(d, out->series);
   // P = [-T^-1(-d)  T^-1(d)] with T^-1(-d) = T^-1(d) - ad(d) (method.md §2.3).
   out->P.leftCols<6>() = ad(d) - out->Ti;
   out->P.rightCols<6>() = out->Ti;
@@ -51,7 +53,8 @@ void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometr
   if (!out->gauss_points) return;
   for (int i = 0; i < kRodGaussPoints; ++i) {
     const double xi = kRodGaussXi[i];
-    out->T[i] = TSE3(xi * d);
+    out->series_gp[i] = CalcTSeries(xi * phi);
+    out->T[i] = TSE3(xi * d, out->series_gp[i]);
     if (tangents) out->NB[i] = ScaledTangentProduct(xi, out->T[i], out->Ti);
   }
 }
@@ -69,7 +72,7 @@ void CalcRodInternal(const RodElement& element, const Section& section, const Ro
   // K_t = (1/L) P^T K P + [D(-d, sigma); D(d, sigma)] P   (method.md §2.4), with
   // D(-d, sigma) = Star(sigma) - D(d, sigma) (derivative of T^-T(-d) sigma =
   // T^-T(d) sigma - Star(sigma) d), as one product Y P, Y = (1/L) P^T K + [D(-d); D(d)].
-  const Mat6 D = DTSE3InvT(out->d, out->stress);
+  const Mat6 D = DTSE3InvT(out->d, out->stress, geometry.series);
   Eigen::Matrix<double, 12, 6> Y = P.transpose() * (section.stiffness / L).asDiagonal();
   Y.topRows<6>() += Star(out->stress) - D;
   Y.bottomRows<6>() += D;
@@ -324,7 +327,7 @@ void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& ge
   const DeadForcePieces p = CalcDeadForcePieces(d, H_A, f_w, tangent != nullptr);
   AddDeadForce(L, p, P, g);
   if (!tangent) return;
-  const Mat6 D = DTSE3InvT(d, p.s);
+  const Mat6 D = DTSE3InvT(d, p.s, geometry.series);
   Eigen::Matrix<double, 12, 6> Y = P.transpose() * DeadForceHessian(p);
   Y.topRows<6>() += Star(p.s) - D;
   Y.bottomRows<6>() += D;
@@ -359,7 +362,7 @@ void CalcRodConservative(const RodElement& element, const Section& section,
     force->noalias() = P.transpose() * stress;
   }
   if (!stiffness) return;
-  const Mat6 D = DTSE3InvT(d, stress);
+  const Mat6 D = DTSE3InvT(d, stress, geometry.series);
   Eigen::Matrix<double, 12, 6> Y;
   if (weight) {
     Mat6 H = -L * DeadForceHessian(p);

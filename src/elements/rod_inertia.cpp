@@ -48,7 +48,7 @@ void InertiaExact(const RodElement& element, const Section& section, const RodGe
   const Vec6 y = geometry.Ti * (eta_ab.tail<6>() - eta_a);
   const Vec6 ya = geometry.Ti * (eta_dot_ab.tail<6>() - acc_a);
   const Vec6 d_dot = y + Bracket(d, eta_a);
-  const Vec6 c0 = TSE3InvDirectionalTimes(d, d_dot, eta_ab.tail<6>() - eta_a);
+  const Vec6 c0 = TSE3InvDirectionalTimes(d, d_dot, eta_ab.tail<6>() - eta_a, geometry.series);
   Vec6 f_sum = Vec6::Zero(), phi = Vec6::Zero();
   NtHNSum mass, gyro;
   double energy = 0.0;
@@ -57,7 +57,7 @@ void InertiaExact(const RodElement& element, const Section& section, const RodGe
     const Mat6& T = geometry.T[i];
     const Vec6 Ty = T * y;
     const Vec6 eta = eta_a + xi * Ty;
-    Vec6 inner = c0 - xi * TSE3InvDirectionalTimes(xi * d, d_dot, Ty);
+    Vec6 inner = c0 - xi * TSE3InvDirectionalTimes(xi * d, d_dot, Ty, geometry.series_gp[i]);
     inner += ya;
     const Vec6 eta_dot = acc_a + xi * (T * inner);
     const Vec6 M_eta = M * eta;

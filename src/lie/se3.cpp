@@ -98,6 +98,42 @@ TInvCoeffs TInvCoefficientDerivatives(double phi) {
 
 }  // namespace
 
+TSeries CalcTSeries(double phi) {
+  // The closed forms of TCoefficients, TInvCoefficients and TInvCoefficientDerivatives with
+  // sin(phi) = 2 sh ch, 1 - cos(phi) = 2 sh^2 and tan(phi/2) = sh/ch, (sh, ch) of phi/2; the
+  // series below the same switches.
+  TSeries c{};
+  if (phi < 0.25) {
+    const TCoeffs t = TCoefficients(phi);
+    const TInvCoeffs s = TInvCoefficients(phi);
+    const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
+    return {t.t1, t.t2, t.t3, t.t4, s.s2, s.s4, ds.s2, ds.s4};
+  }
+  const double sh = std::sin(0.5 * phi), ch = std::cos(0.5 * phi);
+  const double sn = 2.0 * sh * ch, omc = 2.0 * sh * sh, cs = 1.0 - omc;
+  const double p2 = phi * phi, p3 = p2 * phi, p4 = p2 * p2, p5 = p4 * phi;
+  c.t1 = (phi * sn - 4.0 * omc) / (2.0 * p2);
+  c.t2 = (4.0 * phi + phi * cs - 5.0 * sn) / (2.0 * p3);
+  c.t3 = (phi * sn - 2.0 * omc) / (2.0 * p4);
+  c.t4 = (2.0 * phi + phi * cs - 3.0 * sn) / (2.0 * p5);
+  const double kappa = 0.5 * phi * ch / sh;
+  c.s4 = ((1.0 - 0.5 * kappa) / p2 - 1.0 / (4.0 * omc)) / p2;
+  c.s2 = (1.0 - kappa) / p2 + c.s4 * p2;
+  if (phi < 0.9) {
+    const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
+    c.s2_hat = ds.s2;
+    c.s4_hat = ds.s4;
+    return c;
+  }
+  const double dkappa = (kappa - kappa * kappa - 0.25 * p2) / phi;
+  const double ds4 =
+      (-dkappa / (2.0 * p2) - (2.0 - kappa) / p3 + sn / (4.0 * omc * omc)) / p2 - 2.0 * c.s4 / phi;
+  const double ds2 = -dkappa / p2 - 2.0 * (1.0 - kappa) / p3 + ds4 * p2 + 2.0 * c.s4 * phi;
+  c.s2_hat = ds2 / phi;
+  c.s4_hat = ds4 / phi;
+  return c;
+}
+
 namespace lie_detail {
 double A0(double phi) {
   if (phi < 0.2) {
@@ -283,10 +319,19 @@ AdPowers CalcAdPowers(const Vec6& xi) {
 }  // namespace
 
 Mat6 TSE3(const Vec6& xi) {
+  const TCoeffs t = TCoefficients(xi.tail<3>().norm());
+  TSeries c{};
+  c.t1 = t.t1;
+  c.t2 = t.t2;
+  c.t3 = t.t3;
+  c.t4 = t.t4;
+  return TSE3(xi, c);
+}
+
+Mat6 TSE3(const Vec6& xi, const TSeries& t) {
   // I + t1 A + t2 A^2 + t3 A^3 + t4 A^4 in blocks (see AdPowers):
   //   diagonal   I + a W + b W^2,                       a = t1 - theta^2 t3, b = t2 - theta^2 t4
   //   upper right a U + b C_2 - 2 c (t3 W + t4 W^2).
-  const TCoeffs t = TCoefficients(xi.tail<3>().norm());
   const AdPowers p = CalcAdPowers(xi);
   const double a = t.t1 - p.theta2 * t.t3, b = t.t2 - p.theta2 * t.t4;
   Mat6 T;
@@ -299,9 +344,16 @@ Mat6 TSE3(const Vec6& xi) {
 }
 
 Mat6 TSE3Inv(const Vec6& xi) {
+  const TInvCoeffs s = TInvCoefficients(xi.tail<3>().norm());
+  TSeries c{};
+  c.s2 = s.s2;
+  c.s4 = s.s4;
+  return TSE3Inv(xi, c);
+}
+
+Mat6 TSE3Inv(const Vec6& xi, const TSeries& s) {
   // I + A/2 + s2 A^2 + s4 A^4 in blocks (see AdPowers), e = s2 - theta^2 s4:
   //   diagonal I + W/2 + e W^2,  upper right U/2 + e C_2 - 2 c s4 W^2.
-  const TInvCoeffs s = TInvCoefficients(xi.tail<3>().norm());
   const AdPowers p = CalcAdPowers(xi);
   const double e = s.s2 - p.theta2 * s.s4;
   Mat6 Ti;
@@ -327,6 +379,17 @@ Mat6 TSE3InvDirectional(const Vec6& xi, const Vec6& dxi) {
 }
 
 Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v) {
+  const double phi = xi.tail<3>().norm();
+  const TInvCoeffs s = TInvCoefficients(phi);
+  const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
+  TSeries c{};
+  c.s2 = s.s2;
+  c.s4 = s.s4;
+  c.s4_hat = ds.s4;
+  return TSE3InvDirectionalTimes(xi, dxi, v, c);
+}
+
+Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v, const TSeries& c) {
   // ad(xi) = [W U; 0 W] is the dual number W + eps U, so every series in it is
   // F(W + eps U) = F(W) + eps DF(W)[U]: T^-1(xi) = [Phi(w)  DPhi(w)[u]; 0  Phi(w)], with
   // Phi(w) = TSO3Inv(w) = I + W/2 + C W^2 (C = s2 - theta^2 s4, and hat C = C'/phi = -2 s4,
@@ -342,10 +405,7 @@ Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v) {
   const Vec3 a = dxi.head<3>(), b = dxi.tail<3>();
   const Vec3 x = v.head<3>(), y = v.tail<3>();
   const double theta2 = w.squaredNorm();
-  const double phi = std::sqrt(theta2);
-  const TInvCoeffs s = TInvCoefficients(phi);
-  const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
-  const double C = s.s2 - theta2 * s.s4, C_hat = -2.0 * s.s4, C_breve = -2.0 * ds.s4;
+  const double C = c.s2 - theta2 * c.s4, C_hat = -2.0 * c.s4, C_breve = -2.0 * c.s4_hat;
   const double wa = w.dot(a), wb = w.dot(b), wu = w.dot(u), ub = u.dot(b);
   // DPhi[b] x
   const Vec3 wx = w.cross(x), bx = b.cross(x);
@@ -373,6 +433,18 @@ Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi) {
 }
 
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma) {
+  const double phi = xi.tail<3>().norm();
+  const TInvCoeffs s = TInvCoefficients(phi);
+  const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
+  TSeries c{};
+  c.s2 = s.s2;
+  c.s4 = s.s4;
+  c.s2_hat = ds.s2;
+  c.s4_hat = ds.s4;
+  return DTSE3InvT(xi, sigma, c);
+}
+
+Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma, const TSeries& series) {
   // method.md §1.4 evaluated in the blocks of the form-B series (see TSE3Inv):
   //   T^-T = [Dg^T 0; Q^T Dg^T],  Dg^T x = x - (w x x)/2 + e W^2 x,
   //   Q^T x = -(u x x)/2 + e C_2 x - 2 c s4 W^2 x,
@@ -385,10 +457,8 @@ Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma) {
   //                     - 2 (W^2 f) (s4 u^T + c hat_s4 w^T) - 2 c s4 (w f^T + (w.f) I - 2 f w^T).
   const Vec3 u = xi.head<3>(), w = xi.tail<3>();
   const Vec3 f = sigma.head<3>(), m = sigma.tail<3>();
-  const double phi = w.norm();
   const double theta2 = w.squaredNorm();
-  const TInvCoeffs s = TInvCoefficients(phi);
-  const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
+  const TInvCoeffs s{series.s2, series.s4}, ds{series.s2_hat, series.s4_hat};
   const double e = s.s2 - theta2 * s.s4;
   const double e_hat = ds.s2 - 2.0 * s.s4 - theta2 * ds.s4;
   const double c = w.dot(u), wf = w.dot(f), wm = w.dot(m), uf = u.dot(f);

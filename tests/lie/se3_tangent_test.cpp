@@ -51,6 +51,24 @@ TEST_P(Se3TangentAtAngle, TSE3InvDirectionalTimesIsTheDirectionalDerivativeAppli
   }
 }
 
+TEST_P(Se3TangentAtAngle, SharedSeriesCoefficientsGiveTheSameOperators) {
+  // CalcTSeries evaluates the coefficients of T, T^-1 and the derivatives of T^-1 together
+  // (one sincos of phi/2); the overloads that take them agree with the standalone operators.
+  std::mt19937 rng = test::MakeRng(static_cast<std::uint32_t>(1000.0 * GetParam().phi) + 31u);
+  for (const Vec6& xi : Samples()) {
+    const Vec6 dxi = test::RandomVec6(rng, 1.0), v = test::RandomVec6(rng, 1.0);
+    SCOPED_TRACE(::testing::Message() << "xi = " << xi.transpose());
+    const TSeries c = CalcTSeries(xi.tail<3>().norm());
+    const double tol = 1e-14 * Scale(xi) * Scale(xi);
+    EXPECT_LT(RelativeError(TSE3(xi, c), TSE3(xi)), tol);
+    EXPECT_LT(RelativeError(TSE3Inv(xi, c), TSE3Inv(xi)), tol);
+    EXPECT_LT(RelativeError(DTSE3InvT(xi, v, c), DTSE3InvT(xi, v)), tol);
+    const Vec6 expected = TSE3InvDirectionalTimes(xi, dxi, v);
+    EXPECT_TRUE(MatrixNear(TSE3InvDirectionalTimes(xi, dxi, v, c), expected,
+                           tol * (1.0 + expected.norm())));
+  }
+}
+
 TEST_P(Se3TangentAtAngle, TSE3InvFixesItsOwnTwist) {
   for (const Vec6& xi : Samples()) {
     SCOPED_TRACE(::testing::Message() << "xi = " << xi.transpose());

@@ -35,10 +35,12 @@ Mat6x12 CalcRodN(double xi, const Vec6& d);
 //    T(X) ad(X) = I - exp(-ad(X)) for the right tangent), so eta(xi) = eta_A + N_B (eta_B - eta_A).
 struct RodGeometry {
   Vec6 d;
+  TSeries series;             // series coefficients at |w| of d
   Mat6 Ti;                    // T^-1(d)
   Mat6x12 P;
   bool gauss_points = false;  // T below is set
   bool tangents = false;      // NB below is set
+  TSeries series_gp[kRodGaussPoints];  // at xi_i |w|
   Mat6 T[kRodGaussPoints];    // T(xi_i d)
   Mat6 NB[kRodGaussPoints];   // N_B(xi_i)
 };

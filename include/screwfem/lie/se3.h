@@ -118,6 +118,21 @@ Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v);
 // Directional derivative of TSE3: -T (dT^-1) T.
 Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi);
 
+// The scalar coefficients of the series of T and T^-1 at one angle phi = |w| (method.md §1.3
+// form B, §1.4), for the kernels that evaluate several operators at the same xi: one call
+// (one sincos of phi/2) instead of one set of trigonometric functions per operator.
+struct TSeries {
+  double t1, t2, t3, t4;  // T(xi) = I + t1 A + t2 A^2 + t3 A^3 + t4 A^4, A = ad(xi)
+  double s2, s4;          // T^-1(xi) = I + A/2 + s2 A^2 + s4 A^4
+  double s2_hat, s4_hat;  // (1/phi) d s_k / d phi
+};
+TSeries CalcTSeries(double phi);
+// The operators above with the coefficients of |w| given (the same values to round-off).
+Mat6 TSE3(const Vec6& xi, const TSeries& c);
+Mat6 TSE3Inv(const Vec6& xi, const TSeries& c);
+Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma, const TSeries& c);
+Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v, const TSeries& c);
+
 // Logarithm on a continuous branch (method.md §2.7): of all rotation vectors representing the
 // rotation of H, w_k = (theta + 2 pi k) n, returns the one closest to w_ref, with the
 // translation part recomputed on that branch. The caller must reject |w| near 2 pi.
