@@ -189,19 +189,6 @@ JCoeffs JCoefficients(double phi) {
   return {a1, a2, a1h, a2h, (a0h - 4.0 * a1h) / x, (a1h - 5.0 * a2h) / x};
 }
 
-// d/dv [J(v) x] for J(v) x = x + A1 v x x + A2 v x (v x x):
-//   -A1 Skew(x) + hat A1 (v x x) v^T + A2 (v x^T + (v.x) I - 2 x v^T) + hat A2 (v x (v x x)) v^T.
-// With `transpose`, the same for J(v)^T x = x - A1 v x x + A2 v x (v x x).
-Mat3 DJTimes(const JCoeffs& k, const Vec3& v, const Vec3& x, bool transpose) {
-  const double sign = transpose ? -1.0 : 1.0;
-  const Vec3 vx = v.cross(x);
-  const Vec3 vvx = v.cross(vx);
-  Mat3 J = (-sign * k.a1) * Skew(x);
-  J.noalias() += (sign * k.a1h * vx + k.a2h * vvx) * v.transpose();
-  J.noalias() += k.a2 * (v * x.transpose() - 2.0 * x * v.transpose());
-  J.diagonal().array() += k.a2 * v.dot(x);
-  return J;
-}
 }  // namespace
 
 namespace {
@@ -214,55 +201,68 @@ struct DeadForcePieces {
 
 DeadForcePieces CalcDeadForcePieces(const Vec6& d, const SE3& H_A, const Vec3& f_w,
                                     bool tangent) {
+  // At the Gauss points v = xi w, so every sum over them is a few scalar sums of
+  // coefficient functions of xi_i |w| times fixed vectors and matrices of u, w, f. With
+  // wx_i = w_i xi_i and S0 = sum wx_i (= 1/2):
+  //   A = sum wx xi A1, D = sum wx xi^2 A2, B = sum wx xi^3 hat A1, Cc = sum wx xi^4 hat A2,
+  //   G = sum wx xi^5 breve A1, Hh = sum wx xi^6 breve A2,
+  // and, from J(v) x = x + A1 v x x + A2 v x (v x x), h(v) = f . J(v) u = f.u + A1 v.m + A2 b
+  // (m = u x f, b = (v.f)(v.u) - |v|^2 f.u = xi^2 b0, grad b = xi gb0):
+  //   pbar = S0 u + A w x u + D w x (w x u),    Jbar^T f = S0 f - A w x f + D w x (w x f),
+  //   Pw^T f = A m + D gb0 + (B w.m + Cc b0) w,
+  //   Jbar = (S0 - D |w|^2) I + A Skew(w) + D w w^T,
+  //   Pw = -A Skew(u) + (B w x u + Cc w x (w x u)) w^T + D (w u^T + (w.u) I - 2 u w^T),
+  //   Qw =  A Skew(f) + (-B w x f + Cc w x (w x f)) w^T + D (w f^T + (w.f) I - 2 f w^T),
+  //   Hww = c w^T + w c^T + (G w.m + Hh b0) w w^T + D (f u^T + u f^T)
+  //         + (B w.m + Cc b0 - 2 D f.u) I,   c = B m + Cc gb0.
   DeadForcePieces p;
   const Vec3 u = d.head<3>(), w = d.tail<3>();
   const Vec3 f = H_A.R.transpose() * f_w;
   p.f = f;
   const double w_norm = w.norm();
-  p.pbar.setZero();
-  p.s.setZero();
-  p.Jbar.setZero();
-  p.Pw.setZero();
-  p.Qw.setZero();
-  p.Hww.setZero();
-  const Vec3 m = u.cross(f);
-  const double fu = f.dot(u);
+  double S0 = 0.0, A = 0.0, D = 0.0, B = 0.0, Cc = 0.0, G = 0.0, Hh = 0.0;
   for (int i = 0; i < kRodGaussPoints; ++i) {
     const double xi = kRodGaussXi[i], wx = kRodGaussW[i] * xi;
-    const Vec3 v = xi * w;
     const JCoeffs k = JCoefficients(xi * w_norm);
-    const Vec3 vu = v.cross(u), vf = v.cross(f);
-    const Vec3 vvu = v.cross(vu), vvf = v.cross(vf);
-    p.pbar += wx * (u + k.a1 * vu + k.a2 * vvu);
-    // J(v)^T f = f - A1 v x f + A2 v x (v x f), and the gradient in v of h = f . J(v) u =
-    // f.u + A1 v.m + A2 b, m = u x f, b = (v.f)(v.u) - phi^2 (f.u):
-    //   grad h = A1 m + hat A1 (v.m) v + A2 grad b + hat A2 b v,
-    //   grad b = f (v.u) + u (v.f) - 2 (f.u) v.
-    const double phi2 = v.squaredNorm();
-    const double vm = v.dot(m), vdf = v.dot(f), vdu = v.dot(u);
-    const double b = vdf * vdu - phi2 * fu;
-    const Vec3 gb = vdu * f + vdf * u - (2.0 * fu) * v;
-    p.s.head<3>() += wx * (f - k.a1 * vf + k.a2 * vvf);
-    p.s.tail<3>() += (wx * xi) * (k.a1 * m + k.a2 * gb + (k.a1h * vm + k.a2h * b) * v);
-    if (!tangent) continue;
-    // J(v) = I + A1 V + A2 V^2, V^2 = v v^T - phi^2 I.
-    Mat3 J = (wx * k.a1) * Skew(v);
-    J.noalias() += (wx * k.a2) * (v * v.transpose());
-    J.diagonal().array() += wx * (1.0 - k.a2 * phi2);
-    p.Jbar += J;
-    p.Pw += (wx * xi) * DJTimes(k, v, u, false);
-    p.Qw += (wx * xi) * DJTimes(k, v, f, true);
-    // Hessian of h in v:
-    //   hat A1 (m v^T + v m^T + (v.m) I) + breve A1 (v.m) v v^T
-    //   + A2 (f u^T + u f^T - 2 (f.u) I) + hat A2 (grad b v^T + v grad b^T + b I) + breve A2 b v v^T.
-    const Vec3 c1 = k.a1h * m + k.a2h * gb;
-    Mat3 H = c1 * v.transpose();
-    H += H.transpose().eval();
-    H.noalias() += (k.a1b * vm + k.a2b * b) * (v * v.transpose());
-    H.noalias() += k.a2 * (f * u.transpose() + u * f.transpose());
-    H.diagonal().array() += k.a1h * vm + k.a2h * b - 2.0 * k.a2 * fu;
-    p.Hww += (wx * xi * xi) * H;
+    const double x2 = xi * xi, x3 = x2 * xi, x4 = x2 * x2;
+    S0 += wx;
+    A += wx * xi * k.a1;
+    D += wx * x2 * k.a2;
+    B += wx * x3 * k.a1h;
+    Cc += wx * x4 * k.a2h;
+    G += wx * x4 * xi * k.a1b;
+    Hh += wx * x4 * x2 * k.a2b;
   }
+  const double theta2 = w.squaredNorm();
+  const double wu = w.dot(u), wf = w.dot(f), fu = f.dot(u);
+  const Vec3 m = u.cross(f);
+  const double wm = w.dot(m);
+  const Vec3 wxu = w.cross(u), wxf = w.cross(f);
+  const Vec3 wwu = w.cross(wxu), wwf = w.cross(wxf);
+  const double b0 = wf * wu - theta2 * fu;
+  const Vec3 gb0 = wu * f + wf * u - (2.0 * fu) * w;
+  p.pbar = S0 * u + A * wxu + D * wwu;
+  p.s.head<3>() = S0 * f - A * wxf + D * wwf;
+  p.s.tail<3>() = A * m + D * gb0 + (B * wm + Cc * b0) * w;
+  if (!tangent) return p;
+  p.Jbar = A * Skew(w);
+  p.Jbar.noalias() += D * (w * w.transpose());
+  p.Jbar.diagonal().array() += S0 - D * theta2;
+  const auto dw2 = [&w](const Vec3& x, double w_x) {  // w x^T + (w.x) I - 2 x w^T
+    Mat3 J = w * x.transpose() - 2.0 * x * w.transpose();
+    J.diagonal().array() += w_x;
+    return J;
+  };
+  p.Pw = -A * Skew(u) + D * dw2(u, wu);
+  p.Pw.noalias() += (B * wxu + Cc * wwu) * w.transpose();
+  p.Qw = A * Skew(f) + D * dw2(f, wf);
+  p.Qw.noalias() += (Cc * wwf - B * wxf) * w.transpose();
+  const Vec3 c = B * m + Cc * gb0;
+  p.Hww = c * w.transpose();
+  p.Hww += p.Hww.transpose().eval();
+  p.Hww.noalias() += (G * wm + Hh * b0) * (w * w.transpose());
+  p.Hww.noalias() += D * (f * u.transpose() + u * f.transpose());
+  p.Hww.diagonal().array() += B * wm + Cc * b0 - 2.0 * D * fu;
   return p;
 }
 
