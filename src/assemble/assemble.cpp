@@ -197,9 +197,21 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     Vec6 magnitude = geo.d.cwiseAbs() + el.d0.cwiseAbs();
     magnitude.head<3>().array() += std::max(HA.x.norm(), HB.x.norm());
     s.Term((sec.stiffness.cwiseProduct(magnitude) / el.length).maxCoeff());
-    // Option A without mass-proportional damping: the kernel forms c_M M_e + c_C C_t itself
-    // (one set of Gauss-point products), and the element matrix is scattered as one.
-    const bool combined = tangent && exact_inertia && !(has_damping && sec.rayleigh_mass > 0.0);
+    // Option A without mass-proportional damping: the force alone for a residual, or with
+    // c_M M_e + c_C C_t formed by the kernel (one set of Gauss-point products), the element
+    // matrix scattered as one.
+    const bool combined = exact_inertia && !(has_damping && sec.rayleigh_mass > 0.0);
+    if (combined && !tangent) {
+      Vec12 eta_ab, acc_ab;
+      NodeVelocities(s, d, el, &eta_ab, &acc_ab);
+      Vec12 force;
+      CalcRodInertiaExactForce(el, sec, geo, eta_ab, acc_ab, &force);
+      r += force;
+      if (has_damping) AddRodDamping(el, sec, geo.P, eta_ab, kZero12, &r, nullptr);
+      s.Rows(s.NodeDof(el.node_a), r.head<6>());
+      s.Rows(s.NodeDof(el.node_b), r.tail<6>());
+      continue;
+    }
     if (combined) {
       Vec12 eta_ab, acc_ab;
       NodeVelocities(s, d, el, &eta_ab, &acc_ab);

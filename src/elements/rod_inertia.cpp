@@ -1,6 +1,7 @@
 // Velocity-dependent forces of the helical rod element: inertia (method.md §2.5, options A and
 // B) and damping (strain-rate and Rayleigh). Stateless, fixed-size, allocation-free kernels.
 #include <cmath>
+#include <type_traits>
 
 #include "screwfem/elements/rod.h"
 
@@ -50,7 +51,10 @@ void InertiaExact(const RodElement& element, const Section& section, const RodGe
   const Vec6 d_dot = y + Bracket(d, eta_a);
   const Vec6 c0 = TSE3InvDirectionalTimes(d, d_dot, eta_ab.tail<6>() - eta_a, geometry.series);
   Vec6 f_sum = Vec6::Zero(), phi = Vec6::Zero();
-  NtHNSum mass, gyro;
+  // The sums exist only for the tangents computed (no zeroing of unused 6 x 6 blocks).
+  struct None {};
+  std::conditional_t<kTangent == InertiaTangent::kSeparate, NtHNSum, None> mass;
+  std::conditional_t<kTangent != InertiaTangent::kNone, NtHNSum, None> gyro;
   double energy = 0.0;
   for (int i = 0; i < kRodGaussPoints; ++i) {
     const double xi = kRodGaussXi[i], w = L * kRodGaussW[i];
@@ -66,7 +70,7 @@ void InertiaExact(const RodElement& element, const Section& section, const RodGe
     f_sum += w * f;
     phi.noalias() += (w * xi) * (T.transpose() * f);
     energy += 0.5 * w * eta.dot(M_eta);
-    if constexpr (kTangent == InertiaTangent::kNone) continue;
+    if constexpr (kTangent != InertiaTangent::kNone) {
     const Mat6& B = geometry.NB[i];
     // w B^T, stored column-major so that the products below run on columns (packets).
     const Mat6 wBt = w * B.transpose();
@@ -96,6 +100,7 @@ void InertiaExact(const RodElement& element, const Section& section, const RodGe
     gyro.HB += w * GB;
     gyro.BtH.noalias() += wBt * G;
     gyro.BtHB.noalias() += wBt * GB;
+    }
   }
   const Vec6 g_b = geometry.Ti.transpose() * phi;
   force->head<6>() = f_sum - g_b;
@@ -123,6 +128,13 @@ void CalcRodInertiaExact(const RodElement& element, const Section& section,
   else
     InertiaExact<InertiaTangent::kNone>(element, section, geometry, eta_ab, eta_dot_ab, 0.0, 0.0,
                                         &out->force, nullptr, nullptr, &out->kinetic_energy);
+}
+
+void CalcRodInertiaExactForce(const RodElement& element, const Section& section,
+                              const RodGeometry& geometry, const Vec12& eta_ab,
+                              const Vec12& eta_dot_ab, Vec12* force) {
+  InertiaExact<InertiaTangent::kNone>(element, section, geometry, eta_ab, eta_dot_ab, 0.0, 0.0,
+                                      force, nullptr, nullptr, nullptr);
 }
 
 void CalcRodInertiaExactMatrix(const RodElement& element, const Section& section,

@@ -100,6 +100,10 @@ void CalcRodInertiaExact(const RodElement& element, const Section& section,
                          const RodGeometry& geometry, const Vec12& eta_ab,
                          const Vec12& eta_dot_ab, bool tangent, RodInertiaTerms* out);
 
+// The force alone (what a residual-only assembly needs).
+void CalcRodInertiaExactForce(const RodElement& element, const Section& section,
+                              const RodGeometry& geometry, const Vec12& eta_ab,
+                              const Vec12& eta_dot_ab, Vec12* force);
 // The same force, with the iteration-matrix block c_mass M_e + c_gyro C_t in place of the two
 // matrices (what the assembly scatters): one set of Gauss-point products instead of two.
 void CalcRodInertiaExactMatrix(const RodElement& element, const Section& section,
