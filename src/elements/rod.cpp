@@ -27,16 +27,15 @@ Mat6x12 CalcRodN(double xi, const Vec6& d) {
 namespace {
 // s X Y for X, Y of the block form [A B; 0 A] of T and T^-1 (method.md §1.3):
 // s [A_x A_y, A_x B_y + B_x A_y; 0, A_x A_y], three 3x3 products instead of a 6x6 one.
-Mat6 ScaledTangentProduct(double s, const Mat6& X, const Mat6& Y) {
+void ScaledTangentProduct(double s, const Mat6& X, const Mat6& Y, Mat6* out) {
   const Mat3 Ax = s * X.topLeftCorner<3, 3>();
   const Mat3 Bx = s * X.topRightCorner<3, 3>();
-  Mat6 Z;
+  Mat6& Z = *out;
   Z.topLeftCorner<3, 3>().noalias() = Ax * Y.topLeftCorner<3, 3>();
   Z.topRightCorner<3, 3>().noalias() = Ax * Y.topRightCorner<3, 3>();
   Z.topRightCorner<3, 3>().noalias() += Bx * Y.topLeftCorner<3, 3>();
   Z.bottomLeftCorner<3, 3>().setZero();
   Z.bottomRightCorner<3, 3>() = Z.topLeftCorner<3, 3>();
-  return Z;
 }
 }  // namespace
 
@@ -44,19 +43,20 @@ void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometr
   out->d = d;
   const double phi = d.tail<3>().norm();
   out->series = CalcTSeries(phi);
-  out->Ti = TSE3Inv(d, out->series);
+  out->gauss_points = gauss_points || tangents;
+  out->tangents = tangents;
+  int n = 0;
+  if (out->gauss_points) {
+    n = kRodGaussPoints;
+    for (int i = 0; i < n; ++i) out->series_gp[i] = CalcTSeries(kRodGaussXi[i] * phi);
+  }
+  TSE3InvAndScaledTSE3(d, out->series, n, kRodGaussXi, out->series_gp, &out->Ti, out->T);
   // P = [-T^-1(-d)  T^-1(d)] with T^-1(-d) = T^-1(d) - ad(d) (method.md §2.3).
   out->P.leftCols<6>() = ad(d) - out->Ti;
   out->P.rightCols<6>() = out->Ti;
-  out->gauss_points = gauss_points || tangents;
-  out->tangents = tangents;
-  if (!out->gauss_points) return;
-  for (int i = 0; i < kRodGaussPoints; ++i) {
-    const double xi = kRodGaussXi[i];
-    out->series_gp[i] = CalcTSeries(xi * phi);
-    out->T[i] = TSE3(xi * d, out->series_gp[i]);
-    if (tangents) out->NB[i] = ScaledTangentProduct(xi, out->T[i], out->Ti);
-  }
+  if (tangents)
+    for (int i = 0; i < n; ++i)
+      ScaledTangentProduct(kRodGaussXi[i], out->T[i], out->Ti, &out->NB[i]);
 }
 
 void CalcRodInternal(const RodElement& element, const Section& section, const RodGeometry& geometry,

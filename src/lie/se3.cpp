@@ -343,6 +343,33 @@ Mat6 TSE3(const Vec6& xi, const TSeries& t) {
   return T;
 }
 
+void TSE3InvAndScaledTSE3(const Vec6& xi, const TSeries& c, int n, const double* scales,
+                          const TSeries* scaled, Mat6* Ti, Mat6* T) {
+  // The powers of ad(s xi) are those of ad(xi) scaled: W, U by s, W^2, C_2, theta^2, c by
+  // s^2 (see AdPowers, TSE3 and TSE3Inv).
+  const AdPowers p = CalcAdPowers(xi);
+  const double e = c.s2 - p.theta2 * c.s4;
+  Ti->topLeftCorner<3, 3>() = 0.5 * p.W + e * p.W2;
+  Ti->topLeftCorner<3, 3>().diagonal().array() += 1.0;
+  Ti->bottomRightCorner<3, 3>() = Ti->topLeftCorner<3, 3>();
+  Ti->bottomLeftCorner<3, 3>().setZero();
+  Ti->topRightCorner<3, 3>() = 0.5 * p.U + e * p.C2 - (2.0 * p.c * c.s4) * p.W2;
+  for (int i = 0; i < n; ++i) {
+    const double sc = scales[i], s2 = sc * sc;
+    const TSeries& t = scaled[i];
+    const double th2 = s2 * p.theta2;
+    const double a = sc * (t.t1 - th2 * t.t3), b = s2 * (t.t2 - th2 * t.t4);
+    Mat6& Tx = T[i];
+    Tx.topLeftCorner<3, 3>() = a * p.W + b * p.W2;
+    Tx.topLeftCorner<3, 3>().diagonal().array() += 1.0;
+    Tx.bottomRightCorner<3, 3>() = Tx.topLeftCorner<3, 3>();
+    Tx.bottomLeftCorner<3, 3>().setZero();
+    const double c2 = 2.0 * s2 * p.c;
+    Tx.topRightCorner<3, 3>() =
+        a * p.U + b * p.C2 - (c2 * sc * t.t3) * p.W - (c2 * s2 * t.t4) * p.W2;
+  }
+}
+
 Mat6 TSE3Inv(const Vec6& xi) {
   const TInvCoeffs s = TInvCoefficients(xi.tail<3>().norm());
   TSeries c{};

@@ -66,6 +66,14 @@ TEST_P(Se3TangentAtAngle, SharedSeriesCoefficientsGiveTheSameOperators) {
     const Vec6 expected = TSE3InvDirectionalTimes(xi, dxi, v);
     EXPECT_TRUE(MatrixNear(TSE3InvDirectionalTimes(xi, dxi, v, c), expected,
                            tol * (1.0 + expected.norm())));
+    // T at several points along the twist from the powers of ad(xi) once.
+    const double scales[3] = {0.1127, 0.5, 0.8873};
+    TSeries scaled[3];
+    for (int i = 0; i < 3; ++i) scaled[i] = CalcTSeries(scales[i] * xi.tail<3>().norm());
+    Mat6 Ti, T[3];
+    TSE3InvAndScaledTSE3(xi, c, 3, scales, scaled, &Ti, T);
+    EXPECT_LT(RelativeError(Ti, TSE3Inv(xi)), tol);
+    for (int i = 0; i < 3; ++i) EXPECT_LT(RelativeError(T[i], TSE3(scales[i] * xi)), tol);
   }
 }
 

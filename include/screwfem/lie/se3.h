@@ -132,6 +132,11 @@ Mat6 TSE3(const Vec6& xi, const TSeries& c);
 Mat6 TSE3Inv(const Vec6& xi, const TSeries& c);
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma, const TSeries& c);
 Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v, const TSeries& c);
+// *Ti = TSE3Inv(xi) and T[i] = TSE3(scales[i] xi), i < n, with c = CalcTSeries(|w|) and
+// scaled[i] = CalcTSeries(scales[i] |w|): the powers of ad(xi) formed once (the Gauss points
+// of a rod element), written in place.
+void TSE3InvAndScaledTSE3(const Vec6& xi, const TSeries& c, int n, const double* scales,
+                          const TSeries* scaled, Mat6* Ti, Mat6* T);
 
 // Logarithm on a continuous branch (method.md §2.7): of all rotation vectors representing the
 // rotation of H, w_k = (theta + 2 pi k) n, returns the one closest to w_ref, with the
