@@ -172,7 +172,7 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     const bool exact_inertia = has_inertia && m.rod_inertia == RodInertia::kExact;
     // The kernels share d, T^-1(d), P(d) and the Gauss-point operators (RodGeometry).
     RodGeometry geo;
-    CalcRodGeometry(CalcRodRelativeMotion(HA, HB, d.w_ref[e]), exact_inertia,
+    CalcRodGeometry(HA, HB, d.w_ref[e], exact_inertia,
                     inertia_tangent && exact_inertia, &geo);
     // Internal forces and weight, with the stiffness already right-multiplied by the node
     // tangent operators when the iteration uses them.

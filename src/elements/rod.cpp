@@ -37,12 +37,11 @@ void ScaledTangentProduct(double s, const Mat6& X, const Mat6& Y, Mat6* out) {
   Z.bottomLeftCorner<3, 3>().setZero();
   Z.bottomRightCorner<3, 3>() = Z.topLeftCorner<3, 3>();
 }
-}  // namespace
 
-void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometry* out) {
-  out->d = d;
+// From out->d and out->series: T^-1(d), P and the Gauss-point operators.
+void CompleteRodGeometry(bool gauss_points, bool tangents, RodGeometry* out) {
+  const Vec6& d = out->d;
   const double phi = d.tail<3>().norm();
-  out->series = CalcTSeries(phi);
   out->gauss_points = gauss_points || tangents;
   out->tangents = tangents;
   int n = 0;
@@ -57,6 +56,20 @@ void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometr
   if (tangents)
     for (int i = 0; i < n; ++i)
       ScaledTangentProduct(kRodGaussXi[i], out->T[i], out->Ti, &out->NB[i]);
+}
+
+}  // namespace
+
+void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometry* out) {
+  out->series = CalcTSeries(d.tail<3>().norm());
+  out->d = d;
+  CompleteRodGeometry(gauss_points, tangents, out);
+}
+
+void CalcRodGeometry(const SE3& H_A, const SE3& H_B, const Vec3& w_ref, bool gauss_points,
+                     bool tangents, RodGeometry* out) {
+  out->d = LogSE3Near(H_A.Inverse() * H_B, w_ref, &out->series);
+  CompleteRodGeometry(gauss_points, tangents, out);
 }
 
 void CalcRodInternal(const RodElement& element, const Section& section, const RodGeometry& geometry,

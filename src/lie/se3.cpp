@@ -267,8 +267,10 @@ Vec6 LogSE3(const SE3& H) {
   return xi;
 }
 
-Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref) {
-  const Vec3 w0 = LogSO3(H.R);
+namespace {
+// The rotation vector of R on the branch closest to w_ref (see LogSE3Near).
+Vec3 RotationNear(const Mat3& R, const Vec3& w_ref) {
+  const Vec3 w0 = LogSO3(R);
   const double theta = w0.norm();
   Vec3 w = w0;
   if (theta > 1e-12 || w_ref.norm() > kPi) {
@@ -285,9 +287,25 @@ Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref) {
       }
     }
   }
+  return w;
+}
+}  // namespace
+
+Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref) {
+  Vec6 xi;
+  xi.tail<3>() = RotationNear(H.R, w_ref);
+  xi.head<3>() = LogTranslation(xi.tail<3>(), H.x);
+  return xi;
+}
+
+Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref, TSeries* series) {
+  // LogTranslation with C = s2 - theta^2 s4 (TSO3Inv is the diagonal block of TSE3Inv).
+  const Vec3 w = RotationNear(H.R, w_ref);
+  *series = CalcTSeries(w.norm());
+  const Vec3 Wx = w.cross(H.x);
   Vec6 xi;
   xi.tail<3>() = w;
-  xi.head<3>() = LogTranslation(w, H.x);
+  xi.head<3>() = H.x - 0.5 * Wx + (series->s2 - w.squaredNorm() * series->s4) * w.cross(Wx);
   return xi;
 }
 

@@ -70,6 +70,27 @@ TEST(Se3LogNear, IsContinuousAsTheRotationAngleCrossesPi) {
   }
 }
 
+TEST(Se3LogNear, WithSeriesGivesTheSameLogAndTheCoefficientsOfItsAngle) {
+  // The overload used by the rod kernels: the translation from C = s2 - theta^2 s4 of the
+  // shared coefficients instead of lie_detail::C, on every branch up to 2 pi - 0.1.
+  std::mt19937 rng = test::MakeRng(44);
+  std::uniform_real_distribution<double> angle(0.0, kTwoPi - 0.1);
+  for (int s = 0; s < 200; ++s) {
+    const double phi = s < 4 ? std::vector<double>{0.0, 1e-9, 0.2, 0.3}[s] : angle(rng);
+    const Vec6 xi = test::RandomTwist(rng, phi, 2.0);
+    const SE3 H = ExpSE3(xi);
+    SCOPED_TRACE(::testing::Message() << "xi = " << xi.transpose());
+    TSeries c;
+    const Vec6 log_h = LogSE3Near(H, xi.tail<3>(), &c);
+    const Vec6 reference = LogSE3Near(H, xi.tail<3>());
+    // |T_SO3^-1| grows like 1/(2 pi - phi) towards 2 pi.
+    EXPECT_TRUE(MatrixNear(log_h, reference, 1e-14 * (1.0 + xi.norm()) / (kTwoPi - phi)));
+    const TSeries e = CalcTSeries(log_h.tail<3>().norm());
+    EXPECT_EQ(c.s2, e.s2);
+    EXPECT_EQ(c.t1, e.t1);
+  }
+}
+
 TEST(Se3LogNear, WithZeroReferenceReturnsThePrincipalLogNearTheIdentity) {
   std::mt19937 rng = test::MakeRng(42);
   for (double phi : {0.0, 1e-12, 1e-8, 1e-4, 1e-3, 0.5, 2.0}) {

@@ -46,6 +46,9 @@ struct RodGeometry {
 };
 // From d; `gauss_points` adds T(xi_i d), `tangents` also N_B(xi_i).
 void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometry* out);
+// The same with d = CalcRodRelativeMotion(H_A, H_B, w_ref) (one series evaluation for both).
+void CalcRodGeometry(const SE3& H_A, const SE3& H_B, const Vec3& w_ref, bool gauss_points,
+                     bool tangents, RodGeometry* out);
 
 struct RodInternal {
   Vec6 d;            // relative motion on the current branch

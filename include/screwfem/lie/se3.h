@@ -142,6 +142,8 @@ void TSE3InvAndScaledTSE3(const Vec6& xi, const TSeries& c, int n, const double*
 // rotation of H, w_k = (theta + 2 pi k) n, returns the one closest to w_ref, with the
 // translation part recomputed on that branch. The caller must reject |w| near 2 pi.
 Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref);
+// The same, with *series = CalcTSeries(|w|) of the result (used for its translation part).
+Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref, TSeries* series);
 
 // Scalar coefficient functions of phi = |w| (exposed for tests).
 namespace lie_detail {
