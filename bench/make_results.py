@@ -83,6 +83,13 @@ class Entry:
         return float(value) if value is not None else float("nan")
 
 
+ISA = {
+    "native-no-avx512": "`-march=native -mno-avx512f` (`SCREWFEM_NATIVE=ON`)",
+    "native": "`-march=native` (`SCREWFEM_NATIVE=ON`)",
+    "portable": "the compiler's default target (`SCREWFEM_NATIVE=OFF`)",
+}
+
+
 def load(paths, default_revision):
     """Returns ({(family, arg): Entry}, [source description per file], has_errors)."""
     entries, sources, errors = {}, [], []
@@ -102,6 +109,7 @@ def load(paths, default_revision):
             "revision": context.get("revision", default_revision),
             "load": ", ".join(f"{x:.2f}" for x in context.get("load_avg", [])) or "unknown",
             "library_build_type": context.get("library_build_type", "unknown"),
+            "isa": ISA.get(context.get("isa", ""), "unknown"),
         }
         sources.append(source)
         has_aggregates = any(b.get("run_type") == "aggregate" for b in benchmarks)
@@ -289,7 +297,7 @@ def main():
     for s in sources:
         runs.append(
             f"- `{s['file']}` (`{s['program']}`): {s['date']}, revision {s['revision']}, "
-            f"load average {s['load']}"
+            f"load average {s['load']}, instruction set {s['isa']}"
         )
         build_types.add(s["library_build_type"])
     files = ", ".join(f"`{s['file']}`" for s in sources)

@@ -29,6 +29,18 @@ for p in $programs; do targets+=("screwfem_bench_$p"); done
 cmake --build "$build_dir" -j"$jobs" --target "${targets[@]}"
 
 revision=$(git describe --always --dirty 2> /dev/null || echo unknown)
+# The instruction set the build used (CMakeLists.txt, SCREWFEM_NATIVE), as one word for the
+# benchmark context (its values take no '=' or ','); make_results.py spells it out.
+cache=$build_dir/CMakeCache.txt
+if ! grep -q '^SCREWFEM_NATIVE:BOOL=ON' "$cache"; then
+  isa=portable
+elif grep -q '^SCREWFEM_HAS_MARCH_NATIVE_NO_AVX512:INTERNAL=1' "$cache"; then
+  isa=native-no-avx512
+elif grep -q '^SCREWFEM_HAS_MARCH_NATIVE:INTERNAL=1' "$cache"; then
+  isa=native
+else
+  isa=portable
+fi
 for p in $programs; do
   out=bench/results_$p.json
   tmp=bench/results_$p.json.tmp
@@ -40,7 +52,7 @@ for p in $programs; do
   if [[ $p == statics ]]; then repetitions=(--benchmark_repetitions=5); fi
   "$build_dir/bench/screwfem_bench_$p" --benchmark_format=console \
     --benchmark_out="$tmp" --benchmark_out_format=json \
-    --benchmark_context=revision="$revision" \
+    --benchmark_context=revision="$revision",isa="$isa" \
     "${repetitions[@]}" --benchmark_report_aggregates_only=true "$@"
   # An empty file: the filter matched nothing in this program; keep its previous results.
   if [[ -s $tmp ]]; then mv "$tmp" "$out"; else rm -f "$tmp"; fi

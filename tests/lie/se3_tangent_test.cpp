@@ -204,8 +204,10 @@ TEST(Se3TangentAccuracy, TSE3AndTSE3InvAreContinuousAcrossTheirSeriesSwitchAtPhi
   const Vec3 n = Vec3(1.0, 2.0, -2.0) / 3.0;
   const Vec3 u(0.7, -0.4, 1.1);
   Vec6 below, at;
-  below << u, std::nextafter(0.25, 0.0) * n;
-  at << u, 0.25 * n;
+  below.head<3>() = u;
+  below.tail<3>() = std::nextafter(0.25, 0.0) * n;
+  at.head<3>() = u;
+  at.tail<3>() = 0.25 * n;
   // The true change over one ulp of phi is ~1e-17; the jump is the disagreement of the branches.
   EXPECT_LE(RelativeError(TSE3(below), TSE3(at)), 2e-14);
   EXPECT_LE(RelativeError(TSE3Inv(below), TSE3Inv(at)), 2e-14);
@@ -398,8 +400,10 @@ TEST(Se3TangentAccuracy, DTSE3InvTIsContinuousAcrossItsSeriesSwitchAtPhi0p9) {
   const Vec3 n = Vec3(2.0, -1.0, 2.0) / 3.0;
   const Vec3 u(0.3, 1.2, -0.8);
   Vec6 below, at, sigma;
-  below << u, std::nextafter(0.9, 0.0) * n;
-  at << u, 0.9 * n;
+  below.head<3>() = u;
+  below.tail<3>() = std::nextafter(0.9, 0.0) * n;
+  at.head<3>() = u;
+  at.tail<3>() = 0.9 * n;
   sigma << 1.0, -2.0, 3.0, 0.5, 4.0, -1.5;
   EXPECT_LE(test::MaxAbs(DTSE3InvT(below, sigma) - DTSE3InvT(at, sigma)) /
                 test::MaxAbs(DTSE3InvT(at, sigma)),

@@ -325,7 +325,8 @@ TEST(EquilibriumTangent, WorldAndFollowerPointLoadsAtBodyPoints) {
     const Vec3 mom =
         frame == LoadFrame::kWorld ? Vec3(H.R.transpose() * load.moment) : load.moment;
     Vec6 g;
-    g << 0.8 * f, 0.8 * (load.point.cross(f) + mom);
+    g.head<3>() = 0.8 * f;
+    g.tail<3>() = 0.8 * (load.point.cross(f) + mom);
     // Residual = inertia + internal - external (+ B^T lambda = 0); the body has no gravity.
     EXPECT_LT((d.residual.segment<6>(m.nodes[0].dof) + g).norm(), 1e-13);
   }
