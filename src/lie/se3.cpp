@@ -243,12 +243,24 @@ Mat3 TSO3Inv(const Vec3& w) {
 SE3 ExpSE3(const Vec6& xi) {
   const Vec3 w = xi.tail<3>();
   const double phi = w.norm();
+  // A0, A1, A2 from one sincos above the series switch of A0 .. A2 (0.2).
+  double a0, a1, a2;
+  if (phi < 0.2) {
+    a0 = A0(phi);
+    a1 = A1(phi);
+    a2 = A2(phi);
+  } else {
+    const double sn = std::sin(phi), cs = std::cos(phi), p2 = phi * phi;
+    a0 = sn / phi;
+    a1 = (1.0 - cs) / p2;
+    a2 = (phi - sn) / (p2 * phi);
+  }
   const Mat3 W = Skew(w);
   const Mat3 W2 = W * W;
   SE3 H;
-  H.R = Mat3::Identity() + A0(phi) * W + A1(phi) * W2;
+  H.R = Mat3::Identity() + a0 * W + a1 * W2;
   // TSO3(w)^T = I + a1 W + a2 W^2
-  H.x = xi.head<3>() + A1(phi) * (W * xi.head<3>()) + A2(phi) * (W2 * xi.head<3>());
+  H.x = xi.head<3>() + a1 * (W * xi.head<3>()) + a2 * (W2 * xi.head<3>());
   return H;
 }
 

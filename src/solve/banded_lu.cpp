@@ -179,23 +179,23 @@ int BandedLU::Factorize() {
 
 void BandedLU::Solve(Eigen::Ref<Eigen::VectorXd> b) const {
   assert(b.size() == n_);
+  double* const x = b.data();
   // Forward: apply the interchanges and L (nonzero multipliers of column j only).
   for (int j = 0; j < n_ - 1; ++j) {
     const std::size_t sj = static_cast<std::size_t>(j);
     const int p = ipiv_[sj];
-    if (p != j) std::swap(b(p), b(j));
-    const double bj = b(j);
+    if (p != j) std::swap(x[p], x[j]);
+    const double bj = x[j];
     if (bj == 0.0) continue;
-    const double* const col = &ab_[Index(0, j)];  // entry (i, j) is col[i]
-    for (int i = l_first_[sj]; i <= l_last_[sj]; ++i) b(i) -= col[i] * bj;
+    const int first = l_first_[sj];
+    SubtractScaled(x + first, &ab_[Index(first, j)], bj, l_last_[sj] - first + 1);
   }
   // Backward: U has up to kl + ku super-diagonals; column j is nonzero from row u_first_[j].
   for (int j = n_ - 1; j >= 0; --j) {
-    if (b(j) == 0.0) continue;
-    const double* const col = &ab_[Index(0, j)];
-    b(j) /= col[j];
-    const double bj = b(j);
-    for (int i = u_first_[static_cast<std::size_t>(j)]; i < j; ++i) b(i) -= col[i] * bj;
+    if (x[j] == 0.0) continue;
+    x[j] /= ab_[Index(j, j)];
+    const int first = u_first_[static_cast<std::size_t>(j)];
+    SubtractScaled(x + first, &ab_[Index(first, j)], x[j], j - first);
   }
 }
 
