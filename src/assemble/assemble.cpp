@@ -102,6 +102,12 @@ class Scatter {
                 const Eigen::Ref<const Eigen::VectorXd>& lambda) {
     if (gj < 0) return;
     d_.residual.segment(gj, B.cols()).noalias() += o_.s_rows * (B.transpose() * lambda);
+    GradientMatrix(row, gj, B, T);
+  }
+  // The matrix blocks of Gradient alone (the caller adds B^T lambda to the residual).
+  template <typename BT>
+  void GradientMatrix(int row, int gj, const Eigen::MatrixBase<BT>& B, const Mat6* T) {
+    if (gj < 0 || !o_.assemble_matrix) return;
     const int gr = m_.nv + row;
     Block(gj, gr, B.transpose(), o_.s_rows * o_.s_multipliers);
     if (T && o_.use_node_tangent)
@@ -362,13 +368,21 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       const Mat6 Tinv = TSE3Inv(phi);
       const Eigen::Ref<const Eigen::VectorXd> lam = d.lambda.segment(j.row, 6);
       d.residual.segment<6>(m.nv + j.row) += o.s_constraints * phi;
-      if (j.node_a != kGround) {
-        const Mat6 BA = -Tinv * Ad(CBinv * HB.Inverse() * HA);
-        s.Gradient(j.row, s.NodeDof(j.node_a), BA, &s.NodeT(j.node_a), lam);
+      // B_A = -T^-1 Ad(C_B^-1 H_B^-1 H_A), B_B = T^-1 Ad(C_B^-1): the residual gets B^T lambda
+      // as transposed products applied to the vector (the same with and without the matrix),
+      // the matrix the blocks themselves.
+      const Vec6 tl = Tinv.transpose() * lam;
+      const int da = j.node_a != kGround ? s.NodeDof(j.node_a) : -1;
+      const int db = j.node_b != kGround ? s.NodeDof(j.node_b) : -1;
+      if (da >= 0) {
+        const Mat6 AdA = Ad(CBinv * HB.Inverse() * HA);
+        d.residual.segment<6>(da).noalias() -= o.s_rows * (AdA.transpose() * tl);
+        if (o.assemble_matrix) s.GradientMatrix(j.row, da, Mat6(-Tinv * AdA), &s.NodeT(j.node_a));
       }
-      if (j.node_b != kGround) {
-        const Mat6 BB = Tinv * Ad(CBinv);
-        s.Gradient(j.row, s.NodeDof(j.node_b), BB, &s.NodeT(j.node_b), lam);
+      if (db >= 0) {
+        const Mat6 AdB = Ad(CBinv);
+        d.residual.segment<6>(db).noalias() += o.s_rows * (AdB.transpose() * tl);
+        if (o.assemble_matrix) s.GradientMatrix(j.row, db, Mat6(Tinv * AdB), &s.NodeT(j.node_b));
       }
       if (k > 0) {
         const Mat6X BJ = -(Tinv - ad(phi)) * A * TJ;  // T^-1(-phi) = T^-1(phi) - ad(phi)
