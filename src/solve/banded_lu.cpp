@@ -32,6 +32,7 @@ void BandedLU::Resize(int n, int kl, int ku) {
   const std::size_t size = static_cast<std::size_t>(std::max(n, 1));
   ab_.assign(static_cast<std::size_t>(ldab_) * size, 0.0);
   ipiv_.assign(size, 0);
+  inv_pivot_.assign(size, 0.0);
   l_first_.assign(size, 0);
   l_last_.assign(size, -1);
   u_first_.assign(size, 0);
@@ -132,8 +133,9 @@ int BandedLU::Factorize() {
     }
     // Multipliers, and the span [j+first, j+last] of the nonzero ones.
     int first = km + 1, last = 0;
+    const double inv = 1.0 / diag[0];
+    inv_pivot_[sj] = inv;
     if (km > 0) {
-      const double inv = 1.0 / diag[0];
       for (int i = 1; i <= km; ++i) {
         if (diag[i] == 0.0) continue;
         diag[i] *= inv;
@@ -193,7 +195,7 @@ void BandedLU::Solve(Eigen::Ref<Eigen::VectorXd> b) const {
   // Backward: U has up to kl + ku super-diagonals; column j is nonzero from row u_first_[j].
   for (int j = n_ - 1; j >= 0; --j) {
     if (x[j] == 0.0) continue;
-    x[j] /= ab_[Index(j, j)];
+    x[j] *= inv_pivot_[static_cast<std::size_t>(j)];
     const int first = u_first_[static_cast<std::size_t>(j)];
     SubtractScaled(x + first, &ab_[Index(first, j)], x[j], j - first);
   }

@@ -64,6 +64,7 @@ class BandedLU {
   int n_ = 0, kl_ = 0, ku_ = 0, kv_ = 0, ldab_ = 0;
   std::vector<double> ab_;
   std::vector<int> ipiv_;
+  std::vector<double> inv_pivot_;  // 1 / U_jj: the backward solve multiplies (no divisions)
   // Nonzero extents of the factors, per column j: rows [l_first_[j], l_last_[j]] of L below
   // the diagonal (empty when l_last_[j] < l_first_[j]) and rows [u_first_[j], j] of U.
   std::vector<int> l_first_, l_last_, u_first_;
