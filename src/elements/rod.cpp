@@ -189,12 +189,17 @@ double Horner(const double (&c)[JSeries::kTerms], double x) {
   return r;
 }
 
-JCoeffs JCoefficients(double phi) {
+// The breve (second-derivative) coefficients only with `second` (zero otherwise).
+JCoeffs JCoefficients(double phi, bool second) {
   const double x = phi * phi;
   if (phi < 1.0) {
     const JSeries& s = kJSeries;
-    return {Horner(s.a1, x),  Horner(s.a2, x),  Horner(s.a1h, x),
-            Horner(s.a2h, x), Horner(s.a1b, x), Horner(s.a2b, x)};
+    return {Horner(s.a1, x),
+            Horner(s.a2, x),
+            Horner(s.a1h, x),
+            Horner(s.a2h, x),
+            second ? Horner(s.a1b, x) : 0.0,
+            second ? Horner(s.a2b, x) : 0.0};
   }
   const double sn = std::sin(phi), cs = std::cos(phi);
   const double a0 = sn / phi, a1 = (1.0 - cs) / x, a2 = (phi - sn) / (x * phi);
@@ -236,7 +241,7 @@ DeadForcePieces CalcDeadForcePieces(const Vec6& d, const SE3& H_A, const Vec3& f
   double S0 = 0.0, A = 0.0, D = 0.0, B = 0.0, Cc = 0.0, G = 0.0, Hh = 0.0;
   for (int i = 0; i < kRodGaussPoints; ++i) {
     const double xi = kRodGaussXi[i], wx = kRodGaussW[i] * xi;
-    const JCoeffs k = JCoefficients(xi * w_norm);
+    const JCoeffs k = JCoefficients(xi * w_norm, tangent);
     const double x2 = xi * xi, x3 = x2 * xi, x4 = x2 * x2;
     S0 += wx;
     A += wx * xi * k.a1;
