@@ -8,7 +8,7 @@
 # its own date and revision. Extra arguments go to every program run, e.g.
 # SCREWFEM_BENCH=dynamics bash scripts/run-bench.sh --benchmark_filter=Rod.
 # Run as root if dependencies may be missing.
-# Takes about 4 minutes on 2 cores (plus the build).
+# Takes about 1 minute on 2 cores (plus the build).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
