@@ -61,36 +61,37 @@ class Scatter {
   void NodeMatrix(const int (&nodes)[N], const Eigen::Matrix<double, 6 * N, 6 * N>* K,
                   const Eigen::Matrix<double, 6 * N, 6 * N>* M,
                   const Eigen::Matrix<double, 6 * N, 6 * N>* C) {
-    if (!o_.assemble_matrix) return;
-    for (int b = 0; b < N; ++b) {
-      const int gj = NodeDof(nodes[b]);
-      if (gj < 0) continue;
-      for (int a = 0; a < N; ++a) {
-        const int gi = NodeDof(nodes[a]);
-        if (gi < 0) continue;
-        Mat6 S = Mat6::Zero();
-        if (K) {
-          if (o_.use_node_tangent && !kHasNodeTangent)
-            S.noalias() += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b) * NodeT(nodes[b]);
-          else
-            S += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b);
-        }
-        if (M) S += o_.c_mass * M->template block<6, 6>(6 * a, 6 * b);
-        if (C) S += o_.c_damping * C->template block<6, 6>(6 * a, 6 * b);
-        Block(gi, gj, S, o_.s_rows);
+    ForEachNodeBlock(nodes, [&](int a, int b, int gi, int gj) {
+      Mat6 S = Mat6::Zero();
+      if (K) {
+        if (o_.use_node_tangent && !kHasNodeTangent)
+          S.noalias() += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b) * NodeT(nodes[b]);
+        else
+          S += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b);
       }
-    }
+      if (M) S += o_.c_mass * M->template block<6, 6>(6 * a, 6 * b);
+      if (C) S += o_.c_damping * C->template block<6, 6>(6 * a, 6 * b);
+      Block(gi, gj, S, o_.s_rows);
+    });
   }
   // An element matrix already combined (S = c_K K T + c_M M + c_C C): adds s_R S.
   template <int N>
   void ElementMatrix(const int (&nodes)[N], const Eigen::Matrix<double, 6 * N, 6 * N>& S) {
+    ForEachNodeBlock(nodes, [&](int a, int b, int gi, int gj) {
+      Block(gi, gj, S.template block<6, 6>(6 * a, 6 * b), o_.s_rows);
+    });
+  }
+  // f(a, b, gi, gj) for the 6 x 6 blocks (a, b) of an element matrix over `nodes` whose nodes
+  // both have unknowns (gi, gj their first global indices); nothing without the matrix.
+  template <int N, typename F>
+  void ForEachNodeBlock(const int (&nodes)[N], F&& f) {
     if (!o_.assemble_matrix) return;
     for (int b = 0; b < N; ++b) {
       const int gj = NodeDof(nodes[b]);
       if (gj < 0) continue;
       for (int a = 0; a < N; ++a) {
         const int gi = NodeDof(nodes[a]);
-        if (gi >= 0) Block(gi, gj, S.template block<6, 6>(6 * a, 6 * b), o_.s_rows);
+        if (gi >= 0) f(a, b, gi, gj);
       }
     }
   }

@@ -435,15 +435,24 @@ Mat6 TSE3InvDirectional(const Vec6& xi, const Vec6& dxi) {
          s.s4 * (dA * A3 + A_dA * A2 + A2 * dA_A + A3 * dA);
 }
 
-Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v) {
+namespace {
+// The T^-1 part of TSeries (s2, s4 and their derivatives) at |w| of xi, for the operators
+// below that need no T.
+TSeries TInvSeries(const Vec6& xi) {
   const double phi = xi.tail<3>().norm();
   const TInvCoeffs s = TInvCoefficients(phi);
   const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
   TSeries c{};
   c.s2 = s.s2;
   c.s4 = s.s4;
+  c.s2_hat = ds.s2;
   c.s4_hat = ds.s4;
-  return TSE3InvDirectionalTimes(xi, dxi, v, c);
+  return c;
+}
+}  // namespace
+
+Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v) {
+  return TSE3InvDirectionalTimes(xi, dxi, v, TInvSeries(xi));
 }
 
 Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v, const TSeries& c) {
@@ -489,17 +498,7 @@ Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi) {
   return -T * TSE3InvDirectional(xi, dxi) * T;
 }
 
-Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma) {
-  const double phi = xi.tail<3>().norm();
-  const TInvCoeffs s = TInvCoefficients(phi);
-  const TInvCoeffs ds = TInvCoefficientDerivatives(phi);
-  TSeries c{};
-  c.s2 = s.s2;
-  c.s4 = s.s4;
-  c.s2_hat = ds.s2;
-  c.s4_hat = ds.s4;
-  return DTSE3InvT(xi, sigma, c);
-}
+Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma) { return DTSE3InvT(xi, sigma, TInvSeries(xi)); }
 
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma, const TSeries& series) {
   // method.md §1.4 evaluated in the blocks of the form-B series (see TSE3Inv):

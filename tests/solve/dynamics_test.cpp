@@ -145,6 +145,20 @@ void SetSpinningArmVelocities(const Model& model, Data& data) {
   for (int i = 0; i < model.nv; ++i) data.v(i) = 0.3 * std::sin(1.7 * i);
 }
 
+// Options of a dynamic assembly as TryStep sets them (iteration-matrix coefficients and
+// scalings of a step of about 1e-3 s), at time t.
+AssemblyOptions DynamicAssemblyOptions(double t) {
+  AssemblyOptions o;
+  o.time = t;
+  o.dynamics = true;
+  o.c_mass = 2e6;
+  o.c_damping = 2e3;
+  o.s_rows = 3e-7;
+  o.s_multipliers = 1.0 / 3e-7;
+  o.use_node_tangent = true;
+  return o;
+}
+
 TEST(GeneralizedAlpha, ResidualWithoutTheMatrixIsTheResidualOfTheFullAssembly) {
   const Model model = SpinningArm();
   Data data = MakeData(model);
@@ -156,14 +170,7 @@ TEST(GeneralizedAlpha, ResidualWithoutTheMatrixIsTheResidualOfTheFullAssembly) {
   for (RodInertia option : {RodInertia::kExact, RodInertia::kConstant}) {
     Model m = model;
     m.rod_inertia = option;
-    AssemblyOptions o;
-    o.time = data.time;
-    o.dynamics = true;
-    o.c_mass = 2e6;
-    o.c_damping = 2e3;
-    o.s_rows = 3e-7;
-    o.s_multipliers = 1.0 / 3e-7;
-    o.use_node_tangent = true;
+    AssemblyOptions o = DynamicAssemblyOptions(data.time);
     ASSERT_TRUE(Assemble(m, data, o));
     const Eigen::VectorXd full = data.residual;
     const double force_scale = data.force_scale, term_scale = data.term_scale;
@@ -197,14 +204,7 @@ TEST(GeneralizedAlpha, ResidualWithoutTheMatrixIsBitIdenticalWithJointsBetweenMo
   ASSERT_TRUE(InitializeDynamics(model, data, integ, DynamicOptions{}));
   for (int n = 0; n < 20; ++n) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
   ASSERT_GT(data.lambda.cwiseAbs().maxCoeff(), 1e-3);
-  AssemblyOptions o;
-  o.time = data.time;
-  o.dynamics = true;
-  o.c_mass = 2e6;
-  o.c_damping = 2e3;
-  o.s_rows = 3e-7;
-  o.s_multipliers = 1.0 / 3e-7;
-  o.use_node_tangent = true;
+  AssemblyOptions o = DynamicAssemblyOptions(data.time);
   ASSERT_TRUE(Assemble(model, data, o));
   const Eigen::VectorXd full = data.residual;
   o.assemble_matrix = false;
