@@ -208,34 +208,27 @@ bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
     // c_M M_e + c_C C_t formed by the kernel (one set of Gauss-point products), the element
     // matrix scattered as one.
     const bool combined = exact_inertia && !(has_damping && sec.rayleigh_mass > 0.0);
-    if (combined && !tangent) {
-      Vec12 eta_ab, acc_ab;
-      NodeVelocities(s, d, el, &eta_ab, &acc_ab);
-      Vec12 force;
-      CalcRodInertiaExactForce(el, sec, geo, eta_ab, acc_ab, &force);
-      r += force;
-      if (has_damping) AddRodDamping(el, sec, geo.P, eta_ab, kZero12, &r, nullptr);
-      s.Rows(s.NodeDof(el.node_a), r.head<6>());
-      s.Rows(s.NodeDof(el.node_b), r.tail<6>());
-      continue;
-    }
     if (combined) {
-      Vec12 eta_ab, acc_ab;
+      Vec12 eta_ab, acc_ab, force;
       NodeVelocities(s, d, el, &eta_ab, &acc_ab);
-      Vec12 force;
-      Mat12 matrix;
-      CalcRodInertiaExactMatrix(el, sec, geo, eta_ab, acc_ab, o.c_mass, o.c_damping, &force,
-                                &matrix);
+      Mat12 matrix, damping;
+      if (tangent)
+        CalcRodInertiaExactMatrix(el, sec, geo, eta_ab, acc_ab, o.c_mass, o.c_damping, &force,
+                                  &matrix);
+      else
+        CalcRodInertiaExactForce(el, sec, geo, eta_ab, acc_ab, &force);
       r += force;
-      matrix.noalias() += o.c_stiffness * stiffness;
       if (has_damping) {
-        Mat12 damping = Mat12::Zero();
-        AddRodDamping(el, sec, geo.P, eta_ab, kZero12, &r, &damping);
-        matrix.noalias() += o.c_damping * damping;
+        if (tangent) damping.setZero();
+        AddRodDamping(el, sec, geo.P, eta_ab, kZero12, &r, tangent ? &damping : nullptr);
+      }
+      if (tangent) {
+        matrix.noalias() += o.c_stiffness * stiffness;
+        if (has_damping) matrix.noalias() += o.c_damping * damping;
+        s.ElementMatrix<2>(nodes, matrix);
       }
       s.Rows(s.NodeDof(el.node_a), r.head<6>());
       s.Rows(s.NodeDof(el.node_b), r.tail<6>());
-      s.ElementMatrix<2>(nodes, matrix);
       continue;
     }
     RodInertiaTerms ine;

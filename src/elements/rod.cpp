@@ -207,9 +207,6 @@ JCoeffs JCoefficients(double phi, bool second) {
   return {a1, a2, a1h, a2h, (a0h - 4.0 * a1h) / x, (a1h - 5.0 * a2h) / x};
 }
 
-}  // namespace
-
-namespace {
 // The dead-force potential of one element and its derivatives (see AddRodDistributedDeadForce).
 struct DeadForcePieces {
   Vec3 f, pbar;

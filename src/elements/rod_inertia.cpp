@@ -25,8 +25,8 @@ struct NtHNSum {
   }
 };
 
-// Option A with the tangent: none (kNone), M_e and C_t (kSeparate), or c_mass M_e + c_gyro C_t
-// in out->mass (kCombined: one set of products per Gauss point).
+// Option A with the tangent: none (kNone), M_e and C_t (kSeparate: *mass_out, *gyro_out), or
+// c_mass M_e + c_gyro C_t (kCombined: *mass_out, one set of products per Gauss point).
 enum class InertiaTangent { kNone, kSeparate, kCombined };
 
 template <InertiaTangent kTangent>
@@ -71,35 +71,35 @@ void InertiaExact(const RodElement& element, const Section& section, const RodGe
     phi.noalias() += (w * xi) * (T.transpose() * f);
     energy += 0.5 * w * eta.dot(M_eta);
     if constexpr (kTangent != InertiaTangent::kNone) {
-    const Mat6& B = geometry.NB[i];
-    // w B^T, stored column-major so that the products below run on columns (packets).
-    const Mat6 wBt = w * B.transpose();
-    if constexpr (kTangent == InertiaTangent::kSeparate) {
-      // Mass: H = M (diagonal).
-      const Mat6 MB = M * B;
-      mass.HB += w * MB;
-      mass.BtHB.noalias() += wBt * MB;
-    }
-    // Quasi-Newton gyroscopic block: the option-B form with the exact N and eta (see rod.h),
-    // G = -(ad(eta)^T M + Star(M eta)) in 3x3 blocks, with ad(eta)^T = [-W 0; -U -W]:
-    //   G = [W M_t  -Skew(y_t);  U M_t - Skew(y_t)  W M_r - Skew(y_r)],  y = M eta.
-    Mat6 G;
-    const Mat3 W = Skew(eta.tail<3>()), U = Skew(eta.head<3>()), Sy = Skew(M_eta.head<3>());
-    G.topLeftCorner<3, 3>().noalias() = W * Mdiag.head<3>().asDiagonal();
-    G.topRightCorner<3, 3>() = -Sy;
-    G.bottomLeftCorner<3, 3>().noalias() = U * Mdiag.head<3>().asDiagonal();
-    G.bottomLeftCorner<3, 3>() -= Sy;
-    G.bottomRightCorner<3, 3>().noalias() = W * Mdiag.tail<3>().asDiagonal();
-    G.bottomRightCorner<3, 3>() -= Skew(M_eta.tail<3>());
-    if constexpr (kTangent == InertiaTangent::kCombined) {
-      G *= c_gyro;
-      G.diagonal() += c_mass * Mdiag;
-    }
-    const Mat6 GB = G * B;
-    gyro.H += w * G;
-    gyro.HB += w * GB;
-    gyro.BtH.noalias() += wBt * G;
-    gyro.BtHB.noalias() += wBt * GB;
+      const Mat6& B = geometry.NB[i];
+      // w B^T, stored column-major so that the products below run on columns (packets).
+      const Mat6 wBt = w * B.transpose();
+      if constexpr (kTangent == InertiaTangent::kSeparate) {
+        // Mass: H = M (diagonal).
+        const Mat6 MB = M * B;
+        mass.HB += w * MB;
+        mass.BtHB.noalias() += wBt * MB;
+      }
+      // Quasi-Newton gyroscopic block: the option-B form with the exact N and eta (see rod.h),
+      // G = -(ad(eta)^T M + Star(M eta)) in 3x3 blocks, with ad(eta)^T = [-W 0; -U -W]:
+      //   G = [W M_t  -Skew(y_t);  U M_t - Skew(y_t)  W M_r - Skew(y_r)],  y = M eta.
+      Mat6 G;
+      const Mat3 W = Skew(eta.tail<3>()), U = Skew(eta.head<3>()), Sy = Skew(M_eta.head<3>());
+      G.topLeftCorner<3, 3>().noalias() = W * Mdiag.head<3>().asDiagonal();
+      G.topRightCorner<3, 3>() = -Sy;
+      G.bottomLeftCorner<3, 3>().noalias() = U * Mdiag.head<3>().asDiagonal();
+      G.bottomLeftCorner<3, 3>() -= Sy;
+      G.bottomRightCorner<3, 3>().noalias() = W * Mdiag.tail<3>().asDiagonal();
+      G.bottomRightCorner<3, 3>() -= Skew(M_eta.tail<3>());
+      if constexpr (kTangent == InertiaTangent::kCombined) {
+        G *= c_gyro;
+        G.diagonal() += c_mass * Mdiag;
+      }
+      const Mat6 GB = G * B;
+      gyro.H += w * G;
+      gyro.HB += w * GB;
+      gyro.BtH.noalias() += wBt * G;
+      gyro.BtHB.noalias() += wBt * GB;
     }
   }
   const Vec6 g_b = geometry.Ti.transpose() * phi;

@@ -265,11 +265,13 @@ SE3 ExpSE3(const Vec6& xi) {
 }
 
 namespace {
-// Translation part of the logarithm on the branch w: u = TSO3Inv(w)^T x = (I - W/2 + c W^2) x.
-Vec3 LogTranslation(const Vec3& w, const Vec3& x) {
-  const Mat3 W = Skew(w);
-  return x - 0.5 * (W * x) + C(w.norm()) * (W * (W * x));
+// Translation part of the logarithm on the branch w: u = TSO3Inv(w)^T x = (I - W/2 + c W^2) x,
+// c = C(|w|).
+Vec3 LogTranslation(const Vec3& w, const Vec3& x, double c) {
+  const Vec3 wx = w.cross(x);
+  return x - 0.5 * wx + c * w.cross(wx);
 }
+Vec3 LogTranslation(const Vec3& w, const Vec3& x) { return LogTranslation(w, x, C(w.norm())); }
 }  // namespace
 
 Vec6 LogSE3(const SE3& H) {
@@ -312,12 +314,11 @@ Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref) {
 
 Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref, TSeries* series) {
   // LogTranslation with C = s2 - theta^2 s4 (TSO3Inv is the diagonal block of TSE3Inv).
-  const Vec3 w = RotationNear(H.R, w_ref);
-  *series = CalcTSeries(w.norm());
-  const Vec3 Wx = w.cross(H.x);
   Vec6 xi;
-  xi.tail<3>() = w;
-  xi.head<3>() = H.x - 0.5 * Wx + (series->s2 - w.squaredNorm() * series->s4) * w.cross(Wx);
+  xi.tail<3>() = RotationNear(H.R, w_ref);
+  const Vec3 w = xi.tail<3>();
+  *series = CalcTSeries(w.norm());
+  xi.head<3>() = LogTranslation(w, H.x, series->s2 - w.squaredNorm() * series->s4);
   return xi;
 }
 
@@ -358,46 +359,46 @@ Mat6 TSE3(const Vec6& xi) {
   return TSE3(xi, c);
 }
 
+namespace {
+// T(s xi) in blocks from the powers of ad(xi) (the powers of ad(s xi) are those of ad(xi)
+// scaled: W, U by s; W^2, C_2, theta^2, c by s^2), t = CalcTSeries(s |w|):
+//   I + t1 A + t2 A^2 + t3 A^3 + t4 A^4, A = ad(s xi), is
+//   diagonal   I + a W + b W^2,                       a = t1 - theta^2 t3, b = t2 - theta^2 t4
+//   upper right a U + b C_2 - 2 c (t3 W + t4 W^2)      (W .. c those of s xi).
+void FillTSE3(const AdPowers& p, double s, const TSeries& t, Mat6* T) {
+  const double s2 = s * s, theta2 = s2 * p.theta2;
+  const double a = s * (t.t1 - theta2 * t.t3), b = s2 * (t.t2 - theta2 * t.t4);
+  T->topLeftCorner<3, 3>() = a * p.W + b * p.W2;
+  T->topLeftCorner<3, 3>().diagonal().array() += 1.0;
+  T->bottomRightCorner<3, 3>() = T->topLeftCorner<3, 3>();
+  T->bottomLeftCorner<3, 3>().setZero();
+  T->topRightCorner<3, 3>() =
+      a * p.U + b * p.C2 - (2.0 * s2 * p.c) * ((s * t.t3) * p.W + (s2 * t.t4) * p.W2);
+}
+
+// T^-1(xi) = I + A/2 + s2 A^2 + s4 A^4 in blocks, e = s2 - theta^2 s4:
+//   diagonal I + W/2 + e W^2,  upper right U/2 + e C_2 - 2 c s4 W^2.
+void FillTSE3Inv(const AdPowers& p, const TSeries& s, Mat6* Ti) {
+  const double e = s.s2 - p.theta2 * s.s4;
+  Ti->topLeftCorner<3, 3>() = 0.5 * p.W + e * p.W2;
+  Ti->topLeftCorner<3, 3>().diagonal().array() += 1.0;
+  Ti->bottomRightCorner<3, 3>() = Ti->topLeftCorner<3, 3>();
+  Ti->bottomLeftCorner<3, 3>().setZero();
+  Ti->topRightCorner<3, 3>() = 0.5 * p.U + e * p.C2 - (2.0 * p.c * s.s4) * p.W2;
+}
+}  // namespace
+
 Mat6 TSE3(const Vec6& xi, const TSeries& t) {
-  // I + t1 A + t2 A^2 + t3 A^3 + t4 A^4 in blocks (see AdPowers):
-  //   diagonal   I + a W + b W^2,                       a = t1 - theta^2 t3, b = t2 - theta^2 t4
-  //   upper right a U + b C_2 - 2 c (t3 W + t4 W^2).
-  const AdPowers p = CalcAdPowers(xi);
-  const double a = t.t1 - p.theta2 * t.t3, b = t.t2 - p.theta2 * t.t4;
   Mat6 T;
-  T.topLeftCorner<3, 3>() = a * p.W + b * p.W2;
-  T.topLeftCorner<3, 3>().diagonal().array() += 1.0;
-  T.bottomRightCorner<3, 3>() = T.topLeftCorner<3, 3>();
-  T.bottomLeftCorner<3, 3>().setZero();
-  T.topRightCorner<3, 3>() = a * p.U + b * p.C2 - (2.0 * p.c) * (t.t3 * p.W + t.t4 * p.W2);
+  FillTSE3(CalcAdPowers(xi), 1.0, t, &T);
   return T;
 }
 
 void TSE3InvAndScaledTSE3(const Vec6& xi, const TSeries& c, int n, const double* scales,
                           const TSeries* scaled, Mat6* Ti, Mat6* T) {
-  // The powers of ad(s xi) are those of ad(xi) scaled: W, U by s, W^2, C_2, theta^2, c by
-  // s^2 (see AdPowers, TSE3 and TSE3Inv).
   const AdPowers p = CalcAdPowers(xi);
-  const double e = c.s2 - p.theta2 * c.s4;
-  Ti->topLeftCorner<3, 3>() = 0.5 * p.W + e * p.W2;
-  Ti->topLeftCorner<3, 3>().diagonal().array() += 1.0;
-  Ti->bottomRightCorner<3, 3>() = Ti->topLeftCorner<3, 3>();
-  Ti->bottomLeftCorner<3, 3>().setZero();
-  Ti->topRightCorner<3, 3>() = 0.5 * p.U + e * p.C2 - (2.0 * p.c * c.s4) * p.W2;
-  for (int i = 0; i < n; ++i) {
-    const double sc = scales[i], s2 = sc * sc;
-    const TSeries& t = scaled[i];
-    const double th2 = s2 * p.theta2;
-    const double a = sc * (t.t1 - th2 * t.t3), b = s2 * (t.t2 - th2 * t.t4);
-    Mat6& Tx = T[i];
-    Tx.topLeftCorner<3, 3>() = a * p.W + b * p.W2;
-    Tx.topLeftCorner<3, 3>().diagonal().array() += 1.0;
-    Tx.bottomRightCorner<3, 3>() = Tx.topLeftCorner<3, 3>();
-    Tx.bottomLeftCorner<3, 3>().setZero();
-    const double c2 = 2.0 * s2 * p.c;
-    Tx.topRightCorner<3, 3>() =
-        a * p.U + b * p.C2 - (c2 * sc * t.t3) * p.W - (c2 * s2 * t.t4) * p.W2;
-  }
+  FillTSE3Inv(p, c, Ti);
+  for (int i = 0; i < n; ++i) FillTSE3(p, scales[i], scaled[i], &T[i]);
 }
 
 Mat6 TSE3Inv(const Vec6& xi) {
@@ -409,16 +410,8 @@ Mat6 TSE3Inv(const Vec6& xi) {
 }
 
 Mat6 TSE3Inv(const Vec6& xi, const TSeries& s) {
-  // I + A/2 + s2 A^2 + s4 A^4 in blocks (see AdPowers), e = s2 - theta^2 s4:
-  //   diagonal I + W/2 + e W^2,  upper right U/2 + e C_2 - 2 c s4 W^2.
-  const AdPowers p = CalcAdPowers(xi);
-  const double e = s.s2 - p.theta2 * s.s4;
   Mat6 Ti;
-  Ti.topLeftCorner<3, 3>() = 0.5 * p.W + e * p.W2;
-  Ti.topLeftCorner<3, 3>().diagonal().array() += 1.0;
-  Ti.bottomRightCorner<3, 3>() = Ti.topLeftCorner<3, 3>();
-  Ti.bottomLeftCorner<3, 3>().setZero();
-  Ti.topRightCorner<3, 3>() = 0.5 * p.U + e * p.C2 - (2.0 * p.c * s.s4) * p.W2;
+  FillTSE3Inv(CalcAdPowers(xi), s, &Ti);
   return Ti;
 }
 
