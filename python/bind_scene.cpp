@@ -44,6 +44,12 @@ void BindSettings(py::module_& m) {
       .value("LAST_ACCELERATION", Predictor::kLastAcceleration, "vdot = the last step's.")
       .value("ADAPTIVE", Predictor::kAdaptive,
              "Per step, whichever of the two was closer at the previous step.");
+  py::enum_<ConvergenceTest>(m, "ConvergenceTest",
+                             "Where the residual and constraint tests of a step are applied.")
+      .value("MEASURED", ConvergenceTest::kMeasured, "At assembled iterates only.")
+      .value("ESTIMATED", ConvergenceTest::kEstimated,
+             "Also at the iterate after a small correction, estimated from the contraction of "
+             "the last two corrections.");
 
   py::class_<DynamicOptions>(m, "DynamicOptions",
                              "Settings of the generalized-alpha integrator (dynamics.h).")
@@ -68,7 +74,9 @@ void BindSettings(py::module_& m) {
       .def_readwrite("refresh_ratio", &DynamicOptions::refresh_ratio,
                      "Simplified Newton switches to full Newton for the rest of a step when a "
                      "correction shrinks by less than this factor.")
-      .def_readwrite("predictor", &DynamicOptions::predictor, "Start of each step (Predictor).");
+      .def_readwrite("predictor", &DynamicOptions::predictor, "Start of each step (Predictor).")
+      .def_readwrite("convergence", &DynamicOptions::convergence,
+                     "Where the residual tests apply (ConvergenceTest).");
 
   py::class_<StaticOptions>(m, "StaticOptions",
                             "Settings of the static Newton solver with load stepping (statics.h).")

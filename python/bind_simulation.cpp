@@ -260,6 +260,10 @@ and indices out of range IndexError.)doc")
       .def_property_readonly(
           "retries", [](const S& s) { return s.integrator().retries; },
           "Steps redone with full Newton from the zero-acceleration start.")
+      .def_property_readonly(
+          "estimated_convergences",
+          [](const S& s) { return s.integrator().estimated_convergences; },
+          "Steps accepted by ConvergenceTest.ESTIMATED without a residual at their last iterate.")
       .def_property_readonly("max_iterations_in_step",
                              [](const S& s) { return s.integrator().max_iterations_in_step; })
 

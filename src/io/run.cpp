@@ -313,6 +313,8 @@ class Run {
       j.Field("predictor", d.predictor == Predictor::kZeroAcceleration   ? "zero"
                            : d.predictor == Predictor::kLastAcceleration ? "last"
                                                                           : "adaptive");
+      j.Field("convergence",
+              d.convergence == ConvergenceTest::kMeasured ? "measured" : "estimated");
     }
     if (statics || a.static_preload) {
       j.Key("statics").BeginObject();
@@ -363,6 +365,7 @@ class Run {
     j.Field("step_halvings", integ_.halvings);
     j.Field("matrix_factorizations", integ_.factorizations);
     j.Field("step_retries", integ_.retries);
+    j.Field("estimated_convergences", integ_.estimated_convergences);
     if (has_static_) {
       j.Key("static_solution").BeginObject();
       j.Field("converged", static_.converged).Field("load_factor", static_.load_factor);

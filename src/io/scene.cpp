@@ -874,7 +874,7 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
   r_.CheckKeys(*node, path,
                {"type", "start_time", "end_time", "step", "rho_inf", "tolerances", "max_iterations",
                 "max_halvings", "align_steps", "static_preload", "load_steps", "rod_inertia",
-                "newton", "predictor"});
+                "newton", "predictor", "convergence"});
   auto find = [&](const char* key) { return node->Find(key); };
   if (const Node* t = find("type"))
     a->kind = r_.Choice(*t, Join(path, "type"), {"static", "dynamic"}) == "static"
@@ -927,6 +927,11 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
                            : v == "last" ? Predictor::kLastAcceleration
                                          : Predictor::kAdaptive;
   }
+  if (const Node* t = find("convergence"))
+    a->dynamic.convergence =
+        r_.Choice(*t, Join(path, "convergence"), {"estimated", "measured"}) == "measured"
+            ? ConvergenceTest::kMeasured
+            : ConvergenceTest::kEstimated;
   if (const Node* t = find("load_steps"))
     a->statics.load_steps = r_.Integer(*t, Join(path, "load_steps"), 1, 1000000);
   if (const Node* t = find("align_steps")) a->align_steps = r_.Bool(*t, Join(path, "align_steps"));

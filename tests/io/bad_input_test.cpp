@@ -307,6 +307,11 @@ TEST(BadInput, UnknownNewtonVariantOrPredictor) {
                   "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
                   "analysis:\n  predictor: [last]\n",
               "bad.yaml:6:14", "analysis.predictor: expected one of adaptive, last or zero, got a list");
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis:\n  convergence: 1e-8\n",
+              "bad.yaml:6:16",
+              "analysis.convergence: expected one of estimated or measured, got '1e-8'");
 }
 
 TEST(BadInput, NonScalarMapKey) {

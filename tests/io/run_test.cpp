@@ -429,6 +429,9 @@ TEST(RunScene, SummaryIsValidJsonWithSettingsCountsAndStatistics) {
   EXPECT_GE(number("newton_iterations"), 50.0);
   EXPECT_EQ(number("max_iterations_per_step"), r.max_iterations_per_step);
   EXPECT_EQ(number("step_halvings"), 0.0);
+  EXPECT_EQ(j->Find("settings.convergence")->string, "estimated");
+  EXPECT_GE(number("estimated_convergences"), 0.0);
+  EXPECT_LE(number("estimated_convergences"), number("steps"));
   EXPECT_EQ(number("outputs.rows"), 51.0);
   EXPECT_EQ(number("time"), 0.1);
   EXPECT_GT(number("wall_seconds"), 0.0);

@@ -403,6 +403,7 @@ analysis:
   rod_inertia: exact
   newton: full
   predictor: zero
+  convergence: measured
 outputs:
   points:
     tip: {body: r, at: [2, 0, 0]}
@@ -431,6 +432,7 @@ outputs:
   EXPECT_EQ(scene.model.rod_inertia, RodInertia::kExact);
   EXPECT_EQ(a.dynamic.newton_matrix, NewtonMatrix::kEveryIteration);
   EXPECT_EQ(a.dynamic.predictor, Predictor::kZeroAcceleration);
+  EXPECT_EQ(a.dynamic.convergence, ConvergenceTest::kMeasured);
   const OutputSpec& o = scene.outputs;
   ASSERT_EQ(o.points.size(), 3u);
   EXPECT_EQ(o.points[0].name, "tip");

@@ -213,6 +213,17 @@ class InputErrorTest(unittest.TestCase):
             for _ in range(100):
                 sim.step(1e-3)
             runs.append((sim.joint_coordinate("hinge"), sim.factorizations, sim.iterations))
+        # Measured convergence tests (a residual at every accepted iterate): the same state,
+        # and no step accepted by estimate.
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        options = sf.DynamicOptions()
+        self.assertEqual(options.convergence, sf.ConvergenceTest.ESTIMATED)
+        options.convergence = sf.ConvergenceTest.MEASURED
+        sim.initialize(options)
+        for _ in range(100):
+            sim.step(1e-3)
+        self.assertAlmostEqual(sim.joint_coordinate("hinge"), runs[1][0], delta=1e-9)
+        self.assertEqual(sim.estimated_convergences, 0)
         self.assertAlmostEqual(runs[0][0], runs[1][0], delta=1e-9)
         self.assertEqual(runs[0][1], runs[0][2])
         self.assertLess(runs[1][1], runs[1][2])

@@ -21,6 +21,7 @@ struct GeneralizedAlpha {
 
 enum class NewtonMatrix { kEveryIteration, kOncePerStep };
 enum class Predictor { kZeroAcceleration, kLastAcceleration, kAdaptive };
+enum class ConvergenceTest { kMeasured, kEstimated };
 
 struct DynamicOptions {
   double rho_inf = 0.9;          // spectral radius at infinity (1: no numerical damping)
@@ -49,7 +50,24 @@ struct DynamicOptions {
   //   kAdaptive:          per step, whichever of the two was closer at the previous step
   //                       (vdot_n unless undamped high frequencies make vdot alternate).
   Predictor predictor = Predictor::kAdaptive;
+  // Where the residual and constraint tests are applied (docs/numerics.md, "Convergence test"):
+  //   kMeasured:  at an assembled iterate: the step ends at it, or at its correction when that
+  //               correction is below increment_tolerance;
+  //   kEstimated: also after a correction below increment_tolerance whose iterate failed the
+  //               residual tests, when the iterate it leads to passes them by estimate: its
+  //               residual and constraints taken as theta times those of the corrected
+  //               iterate, theta = |dx_k| / |dx_k-1| <= kMaxEstimateContraction the measured
+  //               contraction of the last two corrections. Saves one residual assembly per
+  //               step where the quasi-Newton matrix leaves the first corrected residual just
+  //               above residual_tolerance.
+  ConvergenceTest convergence = ConvergenceTest::kEstimated;
 };
+
+// Largest contraction of two consecutive corrections for which ConvergenceTest::kEstimated
+// accepts a step without assembling the residual at its last iterate, and the fraction of
+// the tolerances the estimated residual and constraints must stay below.
+inline constexpr double kMaxEstimateContraction = 1e-2;
+inline constexpr double kEstimateSafety = 0.1;
 
 // Per-simulation integrator workspace (allocated once by InitializeDynamics).
 struct Integrator {
@@ -64,6 +82,7 @@ struct Integrator {
   long steps = 0, iterations = 0, halvings = 0;
   long factorizations = 0;       // of the iteration matrix (including failed attempts)
   long retries = 0;              // steps redone with full Newton from the zero start
+  long estimated_convergences = 0;  // steps accepted by ConvergenceTest::kEstimated
   int max_iterations_in_step = 0;
 };
 
