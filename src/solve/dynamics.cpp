@@ -235,28 +235,29 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, bool co
     const double increment = ScaledIncrementSize(model, dx);
     // Converged: the residual passed at this iterate and its correction is below the
     // increment tolerance (the corrected state is only closer to the solution).
-    if (increment <= opt.increment_tolerance) {
-      bool converged = residual_ok;
-      // Estimated: the iterate after this correction has the residual and constraints of
-      // this one times the contraction of the iteration (simplified or quasi-Newton, linear
-      // convergence), the larger of those of the last two corrections and of the last two
-      // residuals (constraint maxima), with the margin kEstimateSafety.
-      if (!converged && opt.convergence == ConvergenceTest::kEstimated && it > 0) {
-        const auto ratio = [](double now, double before) { return now > 0.0 ? now / before : 0.0; };
-        const double theta = ratio(increment, last_increment);
-        const double c_res = std::max(theta, ratio(res, last_res));
-        const double c_con = std::max(theta, ratio(con, last_con));
-        const double r = kEstimateSafety * opt.residual_tolerance * scale;
-        converged = c_res <= kMaxEstimateContraction && c_con <= kMaxEstimateContraction &&
-                    c_con * con <= kEstimateSafety * opt.constraint_tolerance &&
-                    (c_res * res <= r || c_res * res <= floor);
-        if (converged) ++integ.estimated_convergences;
-      }
-      if (converged) {
-        configure();
-        accept();
-        return it + 1;
-      }
+    const bool increment_ok = increment <= opt.increment_tolerance;
+    bool converged = increment_ok && residual_ok;
+    // Estimated: the iterate after this correction has the residual, constraints and
+    // correction of this one times the contraction of the iteration (simplified or
+    // quasi-Newton, linear convergence): the larger of those of the last two corrections and
+    // of the last two residuals (constraint maxima). What this iterate fails, the next one
+    // must pass by estimate, with the margin kEstimateSafety.
+    if (!converged && opt.convergence == ConvergenceTest::kEstimated && it > 0) {
+      const auto ratio = [](double now, double before) { return now > 0.0 ? now / before : 0.0; };
+      const double theta = ratio(increment, last_increment);
+      const double c_res = std::max(theta, ratio(res, last_res));
+      const double c_con = std::max(theta, ratio(con, last_con));
+      const double r = kEstimateSafety * opt.residual_tolerance * scale;
+      converged = std::max({theta, c_res, c_con}) <= kMaxEstimateContraction &&
+                  (increment_ok || theta * increment <= kEstimateSafety * opt.increment_tolerance) &&
+                  (residual_ok || (c_con * con <= kEstimateSafety * opt.constraint_tolerance &&
+                                   (c_res * res <= r || c_res * res <= floor)));
+      if (converged) ++integ.estimated_convergences;
+    }
+    if (converged) {
+      configure();
+      accept();
+      return it + 1;
     }
     // A reused matrix that contracts too little: rebuild it, and from then on at every
     // iteration of this step (the step is too nonlinear for the simplified iteration).
