@@ -213,6 +213,10 @@ Vec3 LogSO3(const Mat3& R) {
   const Vec3 v = Unskew(R);  // = sin(phi) n
   const double sn = v.norm();
   const double cs = 0.5 * (R.trace() - 1.0);
+  // Near the identity (the joint constraints, phi ~ their violation) without the atan2:
+  // phi = asin(sn) = sn (1 + sn^2 / 6 + ...), so phi^2 / 6 and sn^2 / 6 differ by sn^4 / 18
+  // < 6e-18, below the rounding of the factor.
+  if (cs > 0.0 && sn < 9.9e-5) return (1.0 + sn * sn / 6.0) * v;
   const double phi = std::atan2(sn, cs);
   if (phi < 1e-4) return (1.0 + phi * phi / 6.0) * v;
   // The axis v/|v| has an absolute error ~eps/sin(phi) (v is a difference of O(1) entries of R),
