@@ -170,9 +170,12 @@ int BandedLU::Factorize() {
         SubtractScaled(c1 + first, l, c1[0], len);
       }
     }
+    // The update fills rows j+first .. j+last at the updated columns only: their extents
+    // grow to the last of these (not to the end of row j, whose zeros fill nothing).
+    const int fill_end = nu > 0 ? j + update_cols_[static_cast<std::size_t>(nu) - 1] : j;
     for (int i = j + first; i <= j + last; ++i) {
       int& rl = row_last_[static_cast<std::size_t>(i)];
-      rl = std::max(rl, row_end);
+      rl = std::max(rl, fill_end);
     }
   }
   extents_valid_ = true;
