@@ -259,12 +259,15 @@ SE3 ExpSE3(const Vec6& xi) {
     a1 = (1.0 - cs) / p2;
     a2 = (phi - sn) / (p2 * phi);
   }
-  const Mat3 W = Skew(w);
-  const Mat3 W2 = W * W;
+  // W^2 = w w^T - |w|^2 I, and W^k x by cross and dot products.
+  const Vec3 u = xi.head<3>();
+  const double p2 = w.squaredNorm();
   SE3 H;
-  H.R = Mat3::Identity() + a0 * W + a1 * W2;
+  H.R.noalias() = a1 * (w * w.transpose());
+  H.R.diagonal().array() += 1.0 - a1 * p2;
+  H.R += a0 * Skew(w);
   // TSO3(w)^T = I + a1 W + a2 W^2
-  H.x = xi.head<3>() + a1 * (W * xi.head<3>()) + a2 * (W2 * xi.head<3>());
+  H.x = u + a1 * w.cross(u) + a2 * (w.dot(u) * w - p2 * u);
   return H;
 }
 
