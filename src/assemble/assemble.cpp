@@ -369,14 +369,15 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       const int da = j.node_a != kGround ? s.NodeDof(j.node_a) : -1;
       const int db = j.node_b != kGround ? s.NodeDof(j.node_b) : -1;
       if (da >= 0) {
-        const Mat6 AdA = Ad(CBinv * HB.Inverse() * HA);
-        d.residual.segment<6>(da).noalias() -= o.s_rows * (AdA.transpose() * tl);
-        if (o.assemble_matrix) s.GradientMatrix(j.row, da, Mat6(-Tinv * AdA), &s.NodeT(j.node_a));
+        const SE3 GA = CBinv * HB.Inverse() * HA;
+        d.residual.segment<6>(da).noalias() -= o.s_rows * AdTransposeTimes(GA, tl);
+        if (o.assemble_matrix)
+          s.GradientMatrix(j.row, da, Mat6(-Tinv * Ad(GA)), &s.NodeT(j.node_a));
       }
       if (db >= 0) {
-        const Mat6 AdB = Ad(CBinv);
-        d.residual.segment<6>(db).noalias() += o.s_rows * (AdB.transpose() * tl);
-        if (o.assemble_matrix) s.GradientMatrix(j.row, db, Mat6(Tinv * AdB), &s.NodeT(j.node_b));
+        d.residual.segment<6>(db).noalias() += o.s_rows * AdTransposeTimes(CBinv, tl);
+        if (o.assemble_matrix)
+          s.GradientMatrix(j.row, db, Mat6(Tinv * Ad(CBinv)), &s.NodeT(j.node_b));
       }
       if (k > 0) {
         const Mat6X BJ = -(Tinv - ad(phi)) * A * TJ;  // T^-1(-phi) = T^-1(phi) - ad(phi)

@@ -73,6 +73,15 @@ TEST(Se3Algebra, StarIsDefinedByAdTransposeTimesDualVector) {
   }
 }
 
+TEST(Se3Algebra, AdTransposeTimesIsTheTransposedAdjointApplied) {
+  std::mt19937 rng = test::MakeRng(6);
+  for (int i = 0; i < 100; ++i) {
+    const SE3 H = ExpSE3(test::RandomVec6(rng, 3.0));
+    const Vec6 f = test::RandomVec6(rng, 4.0);
+    EXPECT_TRUE(MatrixNear(AdTransposeTimes(H, f), Ad(H).transpose() * f, 1e-13));
+  }
+}
+
 TEST(Se3Algebra, InverseOfSe3ComposesToIdentity) {
   std::mt19937 rng = test::MakeRng(5);
   for (int i = 0; i < 50; ++i) {

@@ -52,6 +52,13 @@ Vec3 Unskew(const Mat3& A);        // inverse of Skew (uses the skew-symmetric p
 Mat4 Wedge(const Vec6& xi);        // 4x4 algebra matrix [Skew(w) u; 0 0]
 Vec6 Vee(const Mat4& X);           // inverse of Wedge
 Mat6 Ad(const SE3& H);             // H wedge(z) H^-1 = wedge(Ad(H) z)
+// Ad(H)^T f = [R^T a; R^T (b - x x a)] for f = [a; b], without forming Ad(H).
+inline Vec6 AdTransposeTimes(const SE3& H, const Vec6& f) {
+  Vec6 r;
+  r.head<3>().noalias() = H.R.transpose() * f.head<3>();
+  r.tail<3>().noalias() = H.R.transpose() * (f.tail<3>() - H.x.cross(f.head<3>()));
+  return r;
+}
 inline Mat6 ad(const Vec6& xi) {   // wedge(ad(xi) z) = [wedge(xi), wedge(z)]
   Mat6 A;
   const Mat3 W = Skew(xi.tail<3>());
