@@ -537,12 +537,11 @@ double ScaledIncrementSize(const Model& model, const Eigen::Ref<const Eigen::Vec
 }
 
 void UpdateBranchReferences(const Model& model, Data& data) {
+  // The rotation of CalcRodRelativeMotion alone: R_A^T R_B formed as (H_A^-1 H_B).R is.
   for (std::size_t e = 0; e < model.elements.size(); ++e) {
     const RodElement& el = model.elements[e];
-    data.w_ref[e] = CalcRodRelativeMotion(data.H[static_cast<std::size_t>(el.node_a)],
-                                          data.H[static_cast<std::size_t>(el.node_b)],
-                                          data.w_ref[e])
-                        .tail<3>();
+    const Mat3 RAt = data.H[static_cast<std::size_t>(el.node_a)].R.transpose();
+    data.w_ref[e] = LogSO3Near(RAt * data.H[static_cast<std::size_t>(el.node_b)].R, data.w_ref[e]);
   }
 }
 

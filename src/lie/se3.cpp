@@ -312,6 +312,8 @@ Vec3 RotationNear(const Mat3& R, const Vec3& w_ref) {
 }
 }  // namespace
 
+Vec3 LogSO3Near(const Mat3& R, const Vec3& w_ref) { return RotationNear(R, w_ref); }
+
 Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref) {
   Vec6 xi;
   xi.tail<3>() = RotationNear(H.R, w_ref);

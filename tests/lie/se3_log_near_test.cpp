@@ -40,6 +40,22 @@ TEST(Se3LogNear, ReturnsTheRotationPastPiWhenTheReferenceIsCloseToIt) {
   }
 }
 
+TEST(Se3LogNear, RotationAloneIsTheRotationPartBitForBit) {
+  std::mt19937 rng = test::MakeRng(47);
+  for (double theta : {0.0, 1e-9, 1e-5, 0.3, 2.0, kPi - 1e-7, kPi + 1e-6, 4.5, kTwoPi - 0.1}) {
+    for (int s = 0; s < 8; ++s) {
+      Vec6 xi;
+      xi << test::RandomVec6(rng, 2.0).head<3>(), theta * test::RandomUnitVector(rng);
+      const SE3 H = ExpSE3(xi);
+      for (const Vec3& w_ref : {Vec3(Vec3::Zero()), Vec3(xi.tail<3>()),
+                                Vec3(xi.tail<3>() + 0.3 * test::RandomUnitVector(rng))}) {
+        const Vec3 w = LogSO3Near(H.R, w_ref), full = LogSE3Near(H, w_ref).tail<3>();
+        for (int i = 0; i < 3; ++i) EXPECT_EQ(w(i), full(i)) << "theta " << theta;
+      }
+    }
+  }
+}
+
 TEST(Se3LogNear, IsContinuousAsTheRotationAngleCrossesPi) {
   // Continuation: each call uses the previous result as reference, as a load-stepping loop would.
   const Vec3 n = Vec3(2.0, -3.0, 6.0) / 7.0;

@@ -151,6 +151,8 @@ void TSE3InvAndScaledTSE3(const Vec6& xi, const TSeries& c, int n, const double*
 Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref);
 // The same, with *series = CalcTSeries(|w|) of the result (used for its translation part).
 Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref, TSeries* series);
+// The rotation part alone: LogSE3Near(H, w_ref).tail<3>() for H.R = R, bit for bit.
+Vec3 LogSO3Near(const Mat3& R, const Vec3& w_ref);
 
 // Scalar coefficient functions of phi = |w| (exposed for tests).
 namespace lie_detail {
