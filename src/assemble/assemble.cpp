@@ -366,8 +366,7 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       // as transposed products applied to the vector (the same with and without the matrix),
       // the matrix the blocks themselves.
       const Vec6 tl = Tinv.transpose() * lam;
-      const int da = j.node_a != kGround ? s.NodeDof(j.node_a) : -1;
-      const int db = j.node_b != kGround ? s.NodeDof(j.node_b) : -1;
+      const int da = s.NodeDof(j.node_a), db = s.NodeDof(j.node_b);  // -1: ground or fixed
       if (da >= 0) {
         const SE3 GA = CBinv * HB.Inverse() * HA;
         d.residual.segment<6>(da).noalias() -= o.s_rows * AdTransposeTimes(GA, tl);

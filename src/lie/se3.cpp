@@ -288,9 +288,7 @@ Vec6 LogSE3(const SE3& H) {
   return xi;
 }
 
-namespace {
-// The rotation vector of R on the branch closest to w_ref (see LogSE3Near).
-Vec3 RotationNear(const Mat3& R, const Vec3& w_ref) {
+Vec3 LogSO3Near(const Mat3& R, const Vec3& w_ref) {
   const Vec3 w0 = LogSO3(R);
   const double theta = w0.norm();
   Vec3 w = w0;
@@ -310,13 +308,10 @@ Vec3 RotationNear(const Mat3& R, const Vec3& w_ref) {
   }
   return w;
 }
-}  // namespace
-
-Vec3 LogSO3Near(const Mat3& R, const Vec3& w_ref) { return RotationNear(R, w_ref); }
 
 Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref) {
   Vec6 xi;
-  xi.tail<3>() = RotationNear(H.R, w_ref);
+  xi.tail<3>() = LogSO3Near(H.R, w_ref);
   xi.head<3>() = LogTranslation(xi.tail<3>(), H.x);
   return xi;
 }
@@ -324,7 +319,7 @@ Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref) {
 Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref, TSeries* series) {
   // LogTranslation with C = s2 - theta^2 s4 (TSO3Inv is the diagonal block of TSE3Inv).
   Vec6 xi;
-  xi.tail<3>() = RotationNear(H.R, w_ref);
+  xi.tail<3>() = LogSO3Near(H.R, w_ref);
   const Vec3 w = xi.tail<3>();
   *series = CalcTSeries(w.norm());
   xi.head<3>() = LogTranslation(w, H.x, series->s2 - w.squaredNorm() * series->s4);

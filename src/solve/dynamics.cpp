@@ -248,7 +248,7 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, bool co
       const double c_res = std::max(theta, ratio(res, last_res));
       const double c_con = std::max(theta, ratio(con, last_con));
       const double r = kEstimateSafety * opt.residual_tolerance * scale;
-      converged = std::max({theta, c_res, c_con}) <= kMaxEstimateContraction &&
+      converged = std::max(c_res, c_con) <= kMaxEstimateContraction &&
                   (increment_ok || theta * increment <= kEstimateSafety * opt.increment_tolerance) &&
                   (residual_ok || (c_con * con <= kEstimateSafety * opt.constraint_tolerance &&
                                    (c_res * res <= r || c_res * res <= floor)));

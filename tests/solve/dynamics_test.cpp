@@ -184,10 +184,9 @@ TEST(GeneralizedAlpha, ResidualWithoutTheMatrixIsTheResidualOfTheFullAssembly) {
   }
 }
 
-TEST(GeneralizedAlpha, ResidualWithoutTheMatrixIsBitIdenticalWithJointsBetweenMovingBodies) {
-  // The joint gradients reach the residual as transposed products applied to lambda in both
-  // assemblies: two bodies on revolute joints away from their node origins (non-trivial
-  // adjoints on both sides), in motion, with non-zero multipliers.
+// Two bodies on revolute joints away from their node origins (non-trivial adjoints on both
+// sides of the second joint), in gravity.
+Model TwoBodiesOnRevoluteJoints() {
   ModelBuilder b;
   SE3 f1 = SE3::Identity(), f2 = SE3::Identity();
   f1.x = Vec3(0.3, 0.1, 0.0);
@@ -199,7 +198,14 @@ TEST(GeneralizedAlpha, ResidualWithoutTheMatrixIsBitIdenticalWithJointsBetweenMo
   b.AddJointAt("j2", JointType::kRevolute, n1, n2, Vec3(0.55, 0.0, 0.02),
                Vec3(0.0, 0.6, 0.8));
   b.SetGravity(Vec3(0.0, 0.0, -9.81));
-  const Model model = b.Build();
+  return b.Build();
+}
+
+TEST(GeneralizedAlpha, ResidualWithoutTheMatrixIsBitIdenticalWithJointsBetweenMovingBodies) {
+  // The joint gradients reach the residual as transposed products applied to lambda in both
+  // assemblies: two bodies on revolute joints away from their node origins (non-trivial
+  // adjoints on both sides), in motion, with non-zero multipliers.
+  const Model model = TwoBodiesOnRevoluteJoints();
   Data data = MakeData(model);
   for (int i = 0; i < model.nv; ++i) data.v(i) = 0.4 * std::cos(1.3 * i);
   Integrator integ;
@@ -338,18 +344,7 @@ double NextCorrection(const Model& model, const Data& state, double h, double rh
 // increment test decides); the spinning arm moving in all its modes and from rest, and two
 // bodies on revolute joints between moving bodies (non-zero multipliers).
 TEST(GeneralizedAlpha, EstimatedConvergenceAcceptsOnlyStatesThatPassTheTolerances) {
-  ModelBuilder b;
-  SE3 f1 = SE3::Identity(), f2 = SE3::Identity();
-  f1.x = Vec3(0.3, 0.1, 0.0);
-  f2.x = Vec3(0.8, -0.1, 0.05);
-  const int n1 = b.AddNode(f1, "b1"), n2 = b.AddNode(f2, "b2");
-  b.AddRigidBody("b1", n1, 0.7, Vec3(0.05, 0.0, 0.0), 2e-3 * Mat3::Identity());
-  b.AddRigidBody("b2", n2, 0.4, Vec3(0.0, 0.02, 0.0), 1e-3 * Mat3::Identity());
-  b.AddJointAt("j1", JointType::kRevolute, kGround, n1, Vec3(0.0, 0.0, 0.0), Vec3::UnitY());
-  b.AddJointAt("j2", JointType::kRevolute, n1, n2, Vec3(0.55, 0.0, 0.02),
-               Vec3(0.0, 0.6, 0.8));
-  b.SetGravity(Vec3(0.0, 0.0, -9.81));
-  const Model bodies = b.Build();
+  const Model bodies = TwoBodiesOnRevoluteJoints();
   const Model arm = SpinningArm();
   struct Case {
     const Model* model;
@@ -360,54 +355,55 @@ TEST(GeneralizedAlpha, EstimatedConvergenceAcceptsOnlyStatesThatPassTheTolerance
     double increment, residual;
   };
   long estimated_total = 0;
-  for (const Tolerances tol : {Tolerances{1e-10, 1e-8}, Tolerances{1e-6, 1e-8},
-                               Tolerances{1e-10, 1e-4}})
-  for (const Case& c : {Case{&arm, true, "arm moving"}, Case{&arm, false, "arm from rest"},
-                        Case{&bodies, true, "two bodies"}}) {
-    SCOPED_TRACE(::testing::Message() << c.name << ", increment tolerance " << tol.increment
-                                      << ", residual tolerance " << tol.residual);
-    const Model& model = *c.model;
-    Data est = MakeData(model), ref = MakeData(model);
-    if (c.moving) {
-      SetSpinningArmVelocities(model, est);
-      SetSpinningArmVelocities(model, ref);
+  for (const Tolerances tol :
+       {Tolerances{1e-10, 1e-8}, Tolerances{1e-6, 1e-8}, Tolerances{1e-10, 1e-4}}) {
+    for (const Case& c : {Case{&arm, true, "arm moving"}, Case{&arm, false, "arm from rest"},
+                          Case{&bodies, true, "two bodies"}}) {
+      SCOPED_TRACE(::testing::Message() << c.name << ", increment tolerance " << tol.increment
+                                        << ", residual tolerance " << tol.residual);
+      const Model& model = *c.model;
+      Data est = MakeData(model), ref = MakeData(model);
+      if (c.moving) {
+        SetSpinningArmVelocities(model, est);
+        SetSpinningArmVelocities(model, ref);
+      }
+      DynamicOptions opt;
+      opt.rho_inf = 0.8;
+      opt.increment_tolerance = tol.increment;
+      opt.residual_tolerance = tol.residual;
+      Integrator ie, ir;
+      ASSERT_TRUE(InitializeDynamics(model, est, ie, opt));
+      opt.convergence = ConvergenceTest::kMeasured;
+      ASSERT_TRUE(InitializeDynamics(model, ref, ir, opt));
+      double worst_residual = 0.0, worst_constraint = 0.0, worst_correction = 0.0;
+      for (int n = 0; n < 200; ++n) {
+        const long before = ie.estimated_convergences;
+        ASSERT_TRUE(Step(model, est, ie, 1e-3).ok);
+        ASSERT_TRUE(Step(model, ref, ir, 1e-3).ok);
+        if (ie.estimated_convergences == before) continue;
+        const ResidualTests r = MeasureResidualTests(model, est);
+        worst_residual = std::max(worst_residual, r.relative_residual);
+        worst_constraint = std::max(worst_constraint, r.constraint);
+        worst_correction =
+            std::max(worst_correction, NextCorrection(model, est, 1e-3, opt.rho_inf));
+      }
+      std::printf(
+          "[ Newton ] %s: %ld of 200 steps accepted by estimate; there: residual %.2g of the "
+          "force scale (tolerance %.0e), constraints %.2g (%.0e), next correction %.2g (%.0e)\n",
+          c.name, ie.estimated_convergences, worst_residual, opt.residual_tolerance,
+          worst_constraint, opt.constraint_tolerance, worst_correction, opt.increment_tolerance);
+      EXPECT_LE(worst_residual, opt.residual_tolerance);
+      EXPECT_LE(worst_constraint, opt.constraint_tolerance);
+      EXPECT_LE(worst_correction, opt.increment_tolerance);
+      EXPECT_EQ(ir.estimated_convergences, 0);
+      EXPECT_EQ(ie.retries, 0);
+      estimated_total += ie.estimated_convergences;
+      for (std::size_t i = 0; i < model.nodes.size(); ++i) {
+        EXPECT_LT((est.H[i].x - ref.H[i].x).norm(), 1e-8) << "node " << i;
+        EXPECT_LT((est.H[i].R - ref.H[i].R).norm(), 1e-8) << "node " << i;
+      }
+      EXPECT_LE(ie.iterations, ir.iterations);
     }
-    DynamicOptions opt;
-    opt.rho_inf = 0.8;
-    opt.increment_tolerance = tol.increment;
-    opt.residual_tolerance = tol.residual;
-    Integrator ie, ir;
-    ASSERT_TRUE(InitializeDynamics(model, est, ie, opt));
-    opt.convergence = ConvergenceTest::kMeasured;
-    ASSERT_TRUE(InitializeDynamics(model, ref, ir, opt));
-    double worst_residual = 0.0, worst_constraint = 0.0, worst_correction = 0.0;
-    for (int n = 0; n < 200; ++n) {
-      const long before = ie.estimated_convergences;
-      ASSERT_TRUE(Step(model, est, ie, 1e-3).ok);
-      ASSERT_TRUE(Step(model, ref, ir, 1e-3).ok);
-      if (ie.estimated_convergences == before) continue;
-      const ResidualTests r = MeasureResidualTests(model, est);
-      worst_residual = std::max(worst_residual, r.relative_residual);
-      worst_constraint = std::max(worst_constraint, r.constraint);
-      worst_correction = std::max(worst_correction, NextCorrection(model, est, 1e-3, opt.rho_inf));
-    }
-    std::printf("[ Newton ] %s: %ld of 200 steps accepted by estimate; there: residual %.2g of "
-                "the force scale (tolerance %.0e), constraints %.2g (%.0e), next correction "
-                "%.2g (%.0e)\n",
-                c.name, ie.estimated_convergences, worst_residual, opt.residual_tolerance,
-                worst_constraint, opt.constraint_tolerance, worst_correction,
-                opt.increment_tolerance);
-    EXPECT_LE(worst_residual, opt.residual_tolerance);
-    EXPECT_LE(worst_constraint, opt.constraint_tolerance);
-    EXPECT_LE(worst_correction, opt.increment_tolerance);
-    EXPECT_EQ(ir.estimated_convergences, 0);
-    EXPECT_EQ(ie.retries, 0);
-    estimated_total += ie.estimated_convergences;
-    for (std::size_t i = 0; i < model.nodes.size(); ++i) {
-      EXPECT_LT((est.H[i].x - ref.H[i].x).norm(), 1e-8) << "node " << i;
-      EXPECT_LT((est.H[i].R - ref.H[i].R).norm(), 1e-8) << "node " << i;
-    }
-    EXPECT_LE(ie.iterations, ir.iterations);
   }
   EXPECT_GT(estimated_total, 200);
 }
