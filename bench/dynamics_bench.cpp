@@ -38,6 +38,7 @@
 #include "screwfem/io/scene.h"
 #include "screwfem/io/schedule.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/build/model_builder.h"
 
 #ifndef SCREWFEM_SOURCE_DIR
 #error "SCREWFEM_SOURCE_DIR must name the source tree (examples/grm)"

@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
+#include <type_traits>
 
+#include "screwfem/elements/loads.h"
+#include "screwfem/elements/rigid_body.h"
 #include "screwfem/elements/rod.h"
 #include "screwfem/model/errors.h"
 
@@ -11,7 +15,6 @@ namespace screwfem {
 namespace {
 
 const Mat6 kIdentity6 = Mat6::Identity();
-const Mat12 kZero12 = Mat12::Zero();
 
 // Writes element contributions into the global residual and the permuted band matrix.
 class Scatter {
@@ -95,6 +98,26 @@ class Scatter {
       }
     }
   }
+  // An item's terms (elements/element.h): its node rows, and its matrix blocks combined by the
+  // kernel or here.
+  template <int N>
+  void Add(const int (&nodes)[N], const ElementTerms<N>& t) {
+    if (!t.active) return;
+    Force(t.force_scale);
+    Term(t.term_scale);
+    for (int i = 0; i < N; ++i) Rows(NodeDof(nodes[i]), t.residual.template segment<6>(6 * i));
+    if (!o_.assemble_matrix) return;
+    using M = typename ElementTerms<N>::Matrix;
+    const M* K = t.has_stiffness ? &t.stiffness : nullptr;
+    const M* Ms = t.has_mass ? &t.mass : nullptr;
+    const M* C = t.has_damping ? &t.damping : nullptr;
+    if (t.combined)
+      ElementMatrix<N>(nodes, t.matrix);
+    else if (t.stiffness_has_node_tangent)
+      NodeMatrix<N, true>(nodes, K, Ms, C);
+    else
+      NodeMatrix<N, false>(nodes, K, Ms, C);
+  }
   // Constraint gradient block B (rows: constraint rows starting at `row`, cols: unknowns
   // starting at gj): adds s_C B T to the constraint rows and s_R s_L B^T to the equilibrium
   // rows, and B^T lambda to the residual.
@@ -123,375 +146,140 @@ class Scatter {
   const AssemblyOptions& o_;
 };
 
-// Rigid-body mass matrix about the node origin (method.md §3).
-Mat6 RigidMass(const RigidBody& b) {
-  const Mat3 S = Skew(b.com);
-  Mat6 M;
-  M.topLeftCorner<3, 3>() = b.mass * Mat3::Identity();
-  M.topRightCorner<3, 3>() = -b.mass * S;
-  M.bottomLeftCorner<3, 3>() = b.mass * S;
-  M.bottomRightCorner<3, 3>() = b.inertia - b.mass * S * S;
-  return M;
-}
-
-// World force F (node-frame components f) at body point p: generalised force and the
-// tangent of -g (method.md §3).
-void AddDeadForce(const Vec3& f, const Vec3& p, Vec6* g, Mat6* K) {
-  g->head<3>() += f;
-  g->tail<3>() += p.cross(f);
-  const Mat3 Sf = Skew(f);
-  K->topRightCorner<3, 3>() -= Sf;
-  K->bottomRightCorner<3, 3>() -= Skew(p) * Sf;
-}
-
-// Body velocities and accelerations of an element's nodes (zero for a fixed node).
-void NodeVelocities(const Scatter& s, const Data& d, const RodElement& el, Vec12* eta_ab,
-                    Vec12* acc_ab) {
-  const int da = s.NodeDof(el.node_a), db = s.NodeDof(el.node_b);
-  eta_ab->setZero();
-  acc_ab->setZero();
-  if (da >= 0) {
-    eta_ab->head<6>() = d.v.segment<6>(da);
-    acc_ab->head<6>() = d.vdot.segment<6>(da);
+// The node state of one item, as its kernel reads it (elements/element.h, NodeMotion).
+template <int N>
+void GatherItem(const Model& m, const Data& d, const AssemblyOptions& o, const int (&nodes)[N],
+                NodeMotion<N>* x) {
+  const bool node_tangent = o.use_node_tangent && o.assemble_matrix;
+  for (int i = 0; i < N; ++i) {
+    x->H[i] = &NodeFrame(d, nodes[i]);
+    const bool free = nodes[i] != kGround && m.nodes[static_cast<std::size_t>(nodes[i])].dof >= 0;
+    x->T[i] = node_tangent && free ? &d.node_tangent[static_cast<std::size_t>(nodes[i])]
+                                   : &kIdentity6;
   }
-  if (db >= 0) {
-    eta_ab->tail<6>() = d.v.segment<6>(db);
-    acc_ab->tail<6>() = d.vdot.segment<6>(db);
-  }
+  if (o.dynamics) GatherNodeMotion<N>(m, d, nodes, &x->eta, &x->eta_dot);
 }
 
-bool AddRods(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
-  const bool tangent = o.assemble_matrix;
-  for (std::size_t e = 0; e < m.elements.size(); ++e) {
-    const RodElement& el = m.elements[e];
-    const Section& sec = m.rods[static_cast<std::size_t>(el.rod)].section;
-    const SE3& HA = d.H[static_cast<std::size_t>(el.node_a)];
-    const SE3& HB = d.H[static_cast<std::size_t>(el.node_b)];
-    const double rhoA = sec.inertia(0);
-    const bool has_gravity = rhoA > 0.0 && m.gravity.squaredNorm() > 0.0;
-    // Inertia (option A or B, method.md §2.5) and damping: forces and the M, C blocks.
-    const bool has_inertia = o.dynamics && sec.inertia.squaredNorm() > 0.0;
-    const bool has_damping =
-        o.dynamics && (sec.damping.squaredNorm() > 0.0 || sec.rayleigh_stiffness > 0.0 ||
-                       (has_inertia && sec.rayleigh_mass > 0.0));
-    // Mass-proportional damping needs M_e in the residual as well.
-    const bool inertia_tangent = tangent || (has_damping && sec.rayleigh_mass > 0.0);
-    const bool exact_inertia = has_inertia && m.rod_inertia == RodInertia::kExact;
-    // The kernels share d, T^-1(d), P(d) and the Gauss-point operators (RodGeometry).
-    RodGeometry geo;
-    CalcRodGeometry(HA, HB, d.w_ref[e], exact_inertia,
-                    inertia_tangent && exact_inertia, &geo);
-    // Internal forces and weight, with the stiffness already right-multiplied by the node
-    // tangent operators when the iteration uses them.
-    const int nodes[2] = {el.node_a, el.node_b};
-    const bool node_tangent = tangent && o.use_node_tangent;
-    const Mat6& TA = node_tangent && s.NodeDof(el.node_a) >= 0 ? s.NodeT(el.node_a) : kIdentity6;
-    const Mat6& TB = node_tangent && s.NodeDof(el.node_b) >= 0 ? s.NodeT(el.node_b) : kIdentity6;
-    Vec12 r;
-    Mat12 stiffness;
-    CalcRodConservative(el, sec, geo, HA,
-                        has_gravity ? Vec3(o.load_factor * rhoA * m.gravity) : Vec3::Zero(),
-                        node_tangent ? &TA : nullptr, node_tangent ? &TB : nullptr, &r,
-                        tangent ? &stiffness : nullptr);
-    const double rotation = geo.d.tail<3>().norm();
-    if (!(rotation < m.max_element_rotation) || !r.allFinite()) {
-      d.failed_element = static_cast<int>(e);
-      d.failed_rotation = rotation;
-      return false;
-    }
-    // Round-off in sigma = K (d - d0) / L: the translation of d comes from R_A^T (x_B - x_A),
-    // whose absolute error is ~eps max(|x_A|, |x_B|) however short the element is.
-    Vec6 magnitude = geo.d.cwiseAbs() + el.d0.cwiseAbs();
-    magnitude.head<3>().array() += std::max(HA.x.norm(), HB.x.norm());
-    s.Term((sec.stiffness.cwiseProduct(magnitude) / el.length).maxCoeff());
-    // Option A without mass-proportional damping: the force alone for a residual, or with
-    // c_M M_e + c_C C_t formed by the kernel (one set of Gauss-point products), the element
-    // matrix scattered as one.
-    const bool combined = exact_inertia && !(has_damping && sec.rayleigh_mass > 0.0);
-    if (combined) {
-      Vec12 eta_ab, acc_ab, force;
-      NodeVelocities(s, d, el, &eta_ab, &acc_ab);
-      Mat12 matrix, damping;
-      if (tangent)
-        CalcRodInertiaExactMatrix(el, sec, geo, eta_ab, acc_ab, o.c_mass, o.c_damping, &force,
-                                  &matrix);
-      else
-        CalcRodInertiaExactForce(el, sec, geo, eta_ab, acc_ab, &force);
-      r += force;
-      if (has_damping) {
-        if (tangent) damping.setZero();
-        AddRodDamping(el, sec, geo.P, eta_ab, kZero12, &r, tangent ? &damping : nullptr);
-      }
-      if (tangent) {
-        matrix.noalias() += o.c_stiffness * stiffness;
-        if (has_damping) matrix.noalias() += o.c_damping * damping;
-        s.ElementMatrix<2>(nodes, matrix);
-      }
-      s.Rows(s.NodeDof(el.node_a), r.head<6>());
-      s.Rows(s.NodeDof(el.node_b), r.tail<6>());
-      continue;
-    }
-    RodInertiaTerms ine;
-    if (has_inertia || has_damping) {
-      Vec12 eta_ab, acc_ab;
-      NodeVelocities(s, d, el, &eta_ab, &acc_ab);
-      if (has_inertia) {
-        CalcRodInertia(m.rod_inertia, el, sec, geo, eta_ab, acc_ab, inertia_tangent, &ine);
-        r += ine.force;
-      }
-      if (has_damping)
-        AddRodDamping(el, sec, geo.P, eta_ab, ine.mass, &r, tangent ? &ine.gyroscopic : nullptr);
-    }
-    s.Rows(s.NodeDof(el.node_a), r.head<6>());
-    s.Rows(s.NodeDof(el.node_b), r.tail<6>());
-    if (tangent)
-      s.NodeMatrix<2, true>(nodes, &stiffness, has_inertia ? &ine.mass : nullptr,
-                            has_inertia || has_damping ? &ine.gyroscopic : nullptr);
-  }
-  return true;
+KernelOptions MakeKernelOptions(const AssemblyOptions& o) {
+  KernelOptions k;
+  k.time = o.time;
+  k.load_factor = o.load_factor;
+  k.dynamics = o.dynamics;
+  k.tangent = o.assemble_matrix;
+  k.c_mass = o.c_mass;
+  k.c_damping = o.c_damping;
+  k.c_stiffness = o.c_stiffness;
+  k.node_tangent = o.use_node_tangent && o.assemble_matrix;
+  return k;
 }
 
-void AddBodies(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
-  for (const RigidBody& b : m.bodies) {
-    const int dof = s.NodeDof(b.node);
-    if (dof < 0) continue;
-    const SE3& H = d.H[static_cast<std::size_t>(b.node)];
-    Vec6 g = Vec6::Zero();
-    Mat6 K = Mat6::Zero();
-    AddDeadForce(o.load_factor * b.mass * (H.R.transpose() * m.gravity), b.com, &g, &K);
-    Vec6 r = -g;
-    const int nodes[1] = {b.node};
-    if (o.dynamics) {
-      const Mat6 M = RigidMass(b);
-      const Vec6 eta = d.v.segment<6>(dof);
-      const Vec6 Meta = M * eta;
-      const Vec6 M_vdot = M * d.vdot.segment<6>(dof);
-      const Vec6 gyroscopic = ad(eta).transpose() * Meta;
-      r += M_vdot - gyroscopic;
-      // The scale of the convergence test is the size of the terms, not of their sum: for a
-      // body without joints or loads the sum is the residual itself and tends to zero.
-      s.Force(std::max({M_vdot.cwiseAbs().maxCoeff(), gyroscopic.cwiseAbs().maxCoeff(),
-                        g.cwiseAbs().maxCoeff()}));
-      if (o.assemble_matrix) {
-        const Mat6 C = -(ad(eta).transpose() * M + Star(Meta));
-        s.NodeMatrix<1>(nodes, &K, &M, &C);
-      }
-    } else {
-      s.NodeMatrix<1>(nodes, &K, nullptr, nullptr);
+// Every item of one element kind: gather, compute, scatter. Stops at the first item whose
+// kernel fails (a rod element past its rotation limit) and records it in data.
+template <class Kind>
+bool AddKind(const Model& m, Data& d, const AssemblyOptions& o, const KernelOptions& ko,
+             Scatter& s) {
+  constexpr int N = Kind::kNodes;
+  bool ok = true;
+  Kind::ForEach(m, [&](const typename Kind::Item& item, const int (&nodes)[N]) {
+    if (!ok) return;
+    NodeMotion<N> x;
+    GatherItem<N>(m, d, o, nodes, &x);
+    ElementTerms<N> t;
+    if (!Kind::Calc(m, d, item, x, ko, &t)) {
+      ok = false;
+      if constexpr (std::is_same_v<typename Kind::Item, int>) d.failed_element = item;
+      d.failed_rotation = t.failure;
+      return;
     }
-    s.Rows(dof, r);
-  }
+    s.Add(nodes, t);
+  });
+  return ok;
 }
 
-void AddPointLoads(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
-  for (const PointLoad& l : m.point_loads) {
-    const int dof = s.NodeDof(l.node);
-    if (dof < 0) continue;
-    const double scale = o.load_factor * l.profile(o.time);
-    if (scale == 0.0) continue;
-    const SE3& H = d.H[static_cast<std::size_t>(l.node)];
-    Vec6 g = Vec6::Zero();
-    Mat6 K = Mat6::Zero();
-    if (l.frame == LoadFrame::kWorld) {
-      AddDeadForce(scale * (H.R.transpose() * l.force), l.point, &g, &K);
-      const Vec3 mb = scale * (H.R.transpose() * l.moment);
-      g.tail<3>() += mb;
-      K.bottomRightCorner<3, 3>() -= Skew(mb);
-    } else {
-      g.head<3>() += scale * l.force;
-      g.tail<3>() += scale * (l.point.cross(l.force) + l.moment);
-    }
-    s.Rows(dof, Vec6(-g));
-    const int nodes[1] = {l.node};
-    s.NodeMatrix<1>(nodes, &K, nullptr, nullptr);
-  }
+template <class... Kinds>
+bool AddKinds(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s,
+              std::tuple<Kinds...>*) {
+  const KernelOptions ko = MakeKernelOptions(o);
+  return (AddKind<Kinds>(m, d, o, ko, s) && ...);
 }
 
-// Distributed and concentrated loads on rods (consistent with the exact interpolation).
-void AddRodLoads(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
-  constexpr double kXi[3] = {0.5 - 0.3872983346207417, 0.5, 0.5 + 0.3872983346207417};
-  constexpr double kW[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
-  for (const RodLoad& l : m.rod_loads) {
-    const double scale = o.load_factor * l.profile(o.time);
-    if (scale == 0.0) continue;
-    const Rod& rod = m.rods[static_cast<std::size_t>(l.rod)];
-    const int first = l.distributed ? rod.first_element : l.element;
-    const int last = l.distributed ? rod.first_element + rod.num_elements - 1 : l.element;
-    for (int e = first; e <= last; ++e) {
-      const RodElement& el = m.elements[static_cast<std::size_t>(e)];
-      const SE3& HA = d.H[static_cast<std::size_t>(el.node_a)];
-      const Vec6 dd = CalcRodRelativeMotion(HA, d.H[static_cast<std::size_t>(el.node_b)],
-                                            d.w_ref[static_cast<std::size_t>(e)]);
-      Vec12 g = Vec12::Zero();
-      Mat12 K = Mat12::Zero();
-      if (l.distributed) {
-        for (int i = 0; i < 3; ++i)
-          AddRodSectionLoad(kXi[i], el.length * kW[i], HA, dd, l.frame, scale * l.force,
-                            scale * l.moment, &g, &K);
-      } else {
-        AddRodSectionLoad(l.xi, 1.0, HA, dd, l.frame, scale * l.force, scale * l.moment, &g, &K);
-      }
-      s.Rows(s.NodeDof(el.node_a), Vec6(-g.head<6>()));
-      s.Rows(s.NodeDof(el.node_b), Vec6(-g.tail<6>()));
-      const int nodes[2] = {el.node_a, el.node_b};
-      s.NodeMatrix<2>(nodes, &K, nullptr, nullptr);
-    }
-  }
+template <class... Kinds>
+void AddKindEnergies(const Model& m, const Data& d, Energy* E, std::tuple<Kinds...>*) {
+  (Kinds::ForEach(m, [&](const typename Kinds::Item& item, const int(&)[Kinds::kNodes]) {
+     Kinds::AddEnergy(m, d, item, E);
+   }),
+   ...);
 }
 
+// Joints (method.md §4): the constraint rows and their gradient, and the forces of springs,
+// dampers and drives on the coordinates, from the joint kernel (elements/joint.h).
 void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
   for (std::size_t jj = 0; jj < m.joints.size(); ++jj) {
     const Joint& j = m.joints[jj];
     const int ji = static_cast<int>(jj);
     const int k = j.k();
-    const Mat6X A = JointCurrentBasis(m, d, ji);
-    // In dynamics the coordinates of group joints (spherical, planar, free) retract as
-    // H_J = H_J,n exp(A_J x), x = h dq_J, so their matrix columns carry the subgroup's tangent
-    // operator A_J^T T(A_J x) A_J (method.md §5.2), stored after the node tangents by the
-    // integrator. Abelian and universal joints retract additively: no tangent.
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> TJ =
-        Mat6::Identity().topLeftCorner(k, k);
+    // In dynamics the coordinates of joints without global coordinates (spherical, planar,
+    // free) retract as H_J = H_J,n exp(A_J x), x = h dq_J, so their matrix columns carry the
+    // subgroup's tangent operator A_J^T T(A_J x) A_J (method.md §5.2), stored after the node
+    // tangents by the integrator. Global coordinates retract additively: no tangent.
+    JointMatrix TJ = Mat6::Identity().topLeftCorner(k, k);
     if (o.use_node_tangent && !JointHasGlobalCoordinates(j.type) &&
         d.node_tangent.size() > m.nodes.size() + jj)
       TJ = d.node_tangent[m.nodes.size() + jj].topLeftCorner(k, k);
     if (j.row >= 0) {
-      const SE3 HA = j.node_a == kGround ? SE3::Identity() : d.H[static_cast<std::size_t>(j.node_a)];
-      const SE3 HB = j.node_b == kGround ? SE3::Identity() : d.H[static_cast<std::size_t>(j.node_b)];
-      const SE3 CBinv = j.offset_b.Inverse();
-      const Vec6 phi = JointConstraint(m, d, ji);
-      const Mat6 Tinv = TSE3Inv(phi);
+      JointGradient g;
+      CalcJointGradient(j, NodeFrame(d, j.node_a), NodeFrame(d, j.node_b),
+                        JointRelativeFrame(m, d, ji), &g);
       const Eigen::Ref<const Eigen::VectorXd> lam = d.lambda.segment(j.row, 6);
-      d.residual.segment<6>(m.nv + j.row) += o.s_constraints * phi;
-      // B_A = -T^-1 Ad(C_B^-1 H_B^-1 H_A), B_B = T^-1 Ad(C_B^-1): the residual gets B^T lambda
-      // as transposed products applied to the vector (the same with and without the matrix),
-      // the matrix the blocks themselves.
-      const Vec6 tl = Tinv.transpose() * lam;
+      d.residual.segment<6>(m.nv + j.row) += o.s_constraints * g.phi;
+      // The residual gets B^T lambda as transposed products applied to the vector (the same
+      // with and without the matrix), the matrix the blocks themselves.
+      Vec6 bt_a, bt_b;
+      JointGradientTransposeTimes(g, lam, &bt_a, &bt_b);
       const int da = s.NodeDof(j.node_a), db = s.NodeDof(j.node_b);  // -1: ground or fixed
       if (da >= 0) {
-        const SE3 GA = CBinv * HB.Inverse() * HA;
-        d.residual.segment<6>(da).noalias() -= o.s_rows * AdTransposeTimes(GA, tl);
-        if (o.assemble_matrix)
-          s.GradientMatrix(j.row, da, Mat6(-Tinv * Ad(GA)), &s.NodeT(j.node_a));
+        d.residual.segment<6>(da).noalias() += o.s_rows * bt_a;
+        if (o.assemble_matrix) s.GradientMatrix(j.row, da, JointGradientA(g), &s.NodeT(j.node_a));
       }
       if (db >= 0) {
-        d.residual.segment<6>(db).noalias() += o.s_rows * AdTransposeTimes(CBinv, tl);
-        if (o.assemble_matrix)
-          s.GradientMatrix(j.row, db, Mat6(Tinv * Ad(CBinv)), &s.NodeT(j.node_b));
+        d.residual.segment<6>(db).noalias() += o.s_rows * bt_b;
+        if (o.assemble_matrix) s.GradientMatrix(j.row, db, JointGradientB(g), &s.NodeT(j.node_b));
       }
-      if (k > 0) {
-        const Mat6X BJ = -(Tinv - ad(phi)) * A * TJ;  // T^-1(-phi) = T^-1(phi) - ad(phi)
-        s.Gradient(j.row, j.coord, BJ, nullptr, lam);
-      }
+      if (k > 0)
+        s.Gradient(j.row, j.coord, JointGradientCoordinates(g, JointCurrentBasis(m, d, ji), TJ),
+                   nullptr, lam);
     }
     if (k == 0) continue;
-    // Joint springs, dampers and drives act on the coordinates.
-    const int q0 = j.coord - m.nv_nodes;
-    const auto alpha = d.q_joint.segment(q0, k);
-    const auto alpha_dot = d.v.segment(j.coord, k);
-    Vec6 rest = j.rest, rest_rate = Vec6::Zero();
-    ProfileValue drive{};
-    if (j.drive != DriveKind::kNone) drive = j.drive_profile.Eval(o.time);
-    if (j.drive == DriveKind::kSeriesElastic) {
-      rest(j.drive_coord) += o.load_factor * drive.value;
-      rest_rate(j.drive_coord) = o.load_factor * drive.rate;
-    }
-    Eigen::Matrix<double, 6, 1> f = Vec6::Zero();
-    Mat6 Kq = Mat6::Zero(), Dq = Mat6::Zero();
-    if (JointHasGlobalCoordinates(j.type)) {
-      for (int c = 0; c < k; ++c) {
-        s.Term(j.stiffness(c) * (std::abs(alpha(c)) + std::abs(rest(c))));
-        f(c) = j.stiffness(c) * (alpha(c) - rest(c));
-        Kq(c, c) = j.stiffness(c);
-        if (o.dynamics) {
-          f(c) += j.damping(c) * (alpha_dot(c) - rest_rate(c));
-          Dq(c, c) = j.damping(c);
-        }
-      }
-    } else if (j.stiffness.head(k).squaredNorm() > 0.0 || j.damping.head(k).squaredNorm() > 0.0) {
-      // Group joints: energy 1/2 delta^T K delta, delta = A^T log(H_J) (method.md §4.5).
-      const Vec6 xi = LogSE3(d.HJ[jj]);
-      const Mat6 Ti = TSE3Inv(xi);
-      const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1> delta = A.transpose() * xi;
-      const Vec6 Kd_alg = A * j.stiffness.head(k).cwiseProduct(delta);
-      f.head(k) = A.transpose() * Ti.transpose() * Kd_alg;
-      Kq.topLeftCorner(k, k) =
-          A.transpose() * (Ti.transpose() * A * j.stiffness.head(k).asDiagonal() * A.transpose() * Ti +
-                           DTSE3InvT(xi, Kd_alg) * Ti) * A;
-      if (o.dynamics) {
-        for (int c = 0; c < k; ++c) {
-          f(c) += j.damping(c) * alpha_dot(c);
-          Dq(c, c) = j.damping(c);
-        }
-      }
-    }
-    if (j.drive == DriveKind::kForce) f(j.drive_coord) -= o.load_factor * drive.value;
+    // Springs, dampers and drives act on the coordinates.
+    JointCoordinateTerms c;
+    CalcJointCoordinateTerms(m, d, ji, o.time, o.load_factor, o.dynamics, o.assemble_matrix, &c);
+    s.Term(c.term_scale);
     if (j.drive == DriveKind::kPrescribed) {
-      const double lam_act = d.lambda(j.drive_row);
-      f(j.drive_coord) += lam_act;  // B_act^T lambda_act
-      d.residual(m.nv + j.drive_row) +=
-          o.s_constraints * (alpha(j.drive_coord) - o.load_factor * drive.value);
+      d.residual(m.nv + j.drive_row) += o.s_constraints * c.drive_constraint;
       s.Block(j.coord + j.drive_coord, m.nv + j.drive_row, Eigen::Matrix<double, 1, 1>::Ones(),
               o.s_rows * o.s_multipliers);
       s.Block(m.nv + j.drive_row, j.coord + j.drive_coord, Eigen::Matrix<double, 1, 1>::Ones(),
               o.s_constraints);
     }
-    s.Rows(j.coord, f.head(k));
-    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6> S =
-        o.c_stiffness * Kq.topLeftCorner(k, k) * TJ + o.c_damping * Dq.topLeftCorner(k, k);
+    s.Rows(j.coord, c.force.head(k));
+    const JointMatrix S = o.c_stiffness * c.stiffness.topLeftCorner(k, k) * TJ +
+                          o.c_damping * c.damping.topLeftCorner(k, k);
     s.Block(j.coord, j.coord, S, o.s_rows);
   }
 }
 
+// The element kinds the assembly calls, in this order (docs/architecture.md, "Add an element
+// kind"); joints follow them.
+using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind>;
+constexpr ElementKinds* kElementKinds = nullptr;
 }  // namespace
 
-bool JointHasGlobalCoordinates(JointType t) {
-  return t != JointType::kSpherical && t != JointType::kPlanar && t != JointType::kFree;
-}
-
-SE3 JointRelativeFrame(const Model& model, const Data& data, int joint) {
-  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
-  if (!JointHasGlobalCoordinates(j.type)) return data.HJ[static_cast<std::size_t>(joint)];
-  const auto alpha = data.q_joint.segment(j.coord - model.nv_nodes, j.k());
-  if (j.type == JointType::kUniversal)
-    return ExpSE3(j.basis.col(0) * alpha(0)) * ExpSE3(j.basis.col(1) * alpha(1));
-  return ExpSE3(j.basis * alpha);
-}
-
-Mat6X JointCurrentBasis(const Model& model, const Data& data, int joint) {
-  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
-  if (j.type != JointType::kUniversal) return j.basis;
-  const double a2 = data.q_joint(j.coord - model.nv_nodes + 1);
-  Mat6X A = j.basis;
-  A.col(0) = Ad(ExpSE3(-a2 * j.basis.col(1))) * j.basis.col(0);
-  return A;
-}
-
-Vec6 JointConstraint(const Model& model, const Data& data, int joint) {
-  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
-  const SE3 HA = j.node_a == kGround ? SE3::Identity() : data.H[static_cast<std::size_t>(j.node_a)];
-  const SE3 HB = j.node_b == kGround ? SE3::Identity() : data.H[static_cast<std::size_t>(j.node_b)];
-  const SE3 G = j.offset_a.Inverse() * HA.Inverse() * HB * j.offset_b;
-  return LogSE3(JointRelativeFrame(model, data, joint).Inverse() * G);
-}
-
-double JointDriveEffort(const Model& model, const Data& data, int joint) {
-  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
-  switch (j.drive) {
-    case DriveKind::kNone:
-      return 0.0;
-    case DriveKind::kPrescribed:
-      return -data.lambda(j.drive_row);
-    case DriveKind::kForce:
-      return j.drive_profile(data.time);
-    case DriveKind::kSeriesElastic: {
-      const int c = j.coord + j.drive_coord;
-      const ProfileValue q = j.drive_profile.Eval(data.time);
-      const double alpha = data.q_joint(c - model.nv_nodes);
-      return j.stiffness(j.drive_coord) * (q.value + j.rest(j.drive_coord) - alpha) +
-             j.damping(j.drive_coord) * (q.rate - data.v(c));
-    }
-  }
-  return 0.0;
+Energy CalcEnergy(const Model& model, const Data& data) {
+  Energy E;
+  AddKindEnergies(model, data, &E, kElementKinds);
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj)
+    E.spring += JointSpringEnergy(model, data, static_cast<int>(jj));
+  return E;
 }
 
 void SaveState(const Data& data, State* state) {
@@ -513,14 +301,7 @@ void Retract(const Model& model, Data& data, const Eigen::Ref<const Eigen::Vecto
   }
   for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
     const Joint& j = model.joints[jj];
-    const int k = j.k();
-    if (k == 0) continue;
-    if (JointHasGlobalCoordinates(j.type)) {
-      data.q_joint.segment(j.coord - model.nv_nodes, k) += dx.segment(j.coord, k);
-    } else {
-      data.HJ[jj] = data.HJ[jj] * ExpSE3(j.basis * dx.segment(j.coord, k));
-      data.q_joint.segment(j.coord - model.nv_nodes, k) += dx.segment(j.coord, k);
-    }
+    if (j.k() > 0) RetractJoint(model, data, static_cast<int>(jj), dx.segment(j.coord, j.k()));
   }
 }
 
@@ -551,10 +332,7 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   data.force_scale = 0.0;
   data.term_scale = 0.0;
   Scatter s(model, data, options);
-  if (!AddRods(model, data, options, s)) return false;
-  AddBodies(model, data, options, s);
-  AddPointLoads(model, data, options, s);
-  AddRodLoads(model, data, options, s);
+  if (!AddKinds(model, data, options, s, kElementKinds)) return false;
   AddJoints(model, data, options, s);
   // Redundant constraint rows (found at build time): the row becomes dmu_r = -lambda_r / s_L,
   // which holds their multipliers at zero.

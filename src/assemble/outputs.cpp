@@ -40,17 +40,9 @@ RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod_index,
   const SE3& HA = data.H[static_cast<std::size_t>(el.node_a)];
   const SE3& HB = data.H[static_cast<std::size_t>(el.node_b)];
   const Vec6 d = CalcRodRelativeMotion(HA, HB, data.w_ref[static_cast<std::size_t>(e)]);
-  Vec12 eta_ab = Vec12::Zero(), acc_ab = Vec12::Zero();
-  const int da = model.nodes[static_cast<std::size_t>(el.node_a)].dof;
-  const int db = model.nodes[static_cast<std::size_t>(el.node_b)].dof;
-  if (da >= 0) {
-    eta_ab.head<6>() = data.v.segment<6>(da);
-    acc_ab.head<6>() = data.vdot.segment<6>(da);
-  }
-  if (db >= 0) {
-    eta_ab.tail<6>() = data.v.segment<6>(db);
-    acc_ab.tail<6>() = data.vdot.segment<6>(db);
-  }
+  const int nodes[2] = {el.node_a, el.node_b};
+  Vec12 eta_ab, acc_ab;
+  GatherNodeMotion<2>(model, data, nodes, &eta_ab, &acc_ab);
   const Vec6 d_dot = CalcRodP(d) * eta_ab;
   const Mat6x12 N = CalcRodN(xi, d);
   const Mat6x12 N_dot = CalcRodNDirectional(xi, d, d_dot);  // d/dt N(xi, d(t))

@@ -9,9 +9,6 @@ namespace screwfem {
 
 namespace {
 
-// 2-point rule (option B: every integrand is a polynomial of degree <= 3 in xi).
-constexpr double kGauss2Xi[2] = {0.5 - 0.28867513459481287, 0.5 + 0.28867513459481287};
-
 // Sums over Gauss points of w N^T H N for N = [I - B, B] (RodGeometry), kept as the four
 // 6 x 6 sums of w H, w H B, w B^T H and w B^T H B:
 //   N^T H N = [H - HB - B^T H + B^T H B,  HB - B^T H B;  B^T H - B^T H B,  B^T H B].
@@ -163,7 +160,7 @@ void CalcRodInertiaConstant(const RodElement& element, const Section& section,
   }
   out->force.noalias() = out->mass * eta_dot_ab;
   out->gyroscopic.setZero();
-  for (double xi : kGauss2Xi) {
+  for (double xi : kGauss2Xi) {  // option B: integrands of degree <= 3 in xi
     const double n[2] = {1.0 - xi, xi};
     const Vec6 eta = n[0] * eta_ab.head<6>() + n[1] * eta_ab.tail<6>();
     const Vec6 M_eta = M * eta;

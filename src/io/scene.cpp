@@ -14,6 +14,7 @@
 
 #include "scene_yaml.h"
 #include "screwfem/model/errors.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 
@@ -683,19 +684,10 @@ void SceneCompiler::ReadJoints(const Node* node) {
     r_.CheckKeys(value, path,
                  {"type", "at", "between", "axis", "axis2", "pitch", "stiffness", "damping", "rest",
                   "drive"});
-    const std::string type_name = r_.Choice(r_.Require(value, path, "type"), Join(path, "type"),
-                                            {"revolute", "prismatic", "helical", "cylindrical",
-                                             "spherical", "planar", "universal", "fixed", "free"});
-    const std::map<std::string, JointType> types = {{"revolute", JointType::kRevolute},
-                                                    {"prismatic", JointType::kPrismatic},
-                                                    {"helical", JointType::kHelical},
-                                                    {"cylindrical", JointType::kCylindrical},
-                                                    {"spherical", JointType::kSpherical},
-                                                    {"planar", JointType::kPlanar},
-                                                    {"universal", JointType::kUniversal},
-                                                    {"fixed", JointType::kFixed},
-                                                    {"free", JointType::kFree}};
-    const JointType type = types.at(type_name);
+    const std::string type_name =
+        r_.Choice(r_.Require(value, path, "type"), Join(path, "type"), JointTypeNameList());
+    const JointTypeInfo& info = *FindJointType(type_name);
+    const JointType type = info.type;
     const std::string who = type_name + " joints";
     const Vec3 at = Point(r_.Require(value, path, "at"), Join(path, "at"));
 
@@ -723,16 +715,14 @@ void SceneCompiler::ReadJoints(const Node* node) {
       r_.Fail(bn.location, bp, "both sides are the same body '" + side_bodies[0]->name + "'");
 
     // Axes.
-    const bool needs_axis =
-        type != JointType::kSpherical && type != JointType::kFixed && type != JointType::kFree;
     Vec3 axis = Vec3::UnitZ(), axis2 = Vec3::Zero();
     double pitch = 0.0;
-    if (needs_axis) {
+    if (info.uses_axis) {
       axis = UnitAxis(r_.Require(value, path, "axis"), Join(path, "axis"));
     } else {
       NotUsedBy(value, path, {"axis"}, who);
     }
-    if (type == JointType::kUniversal) {
+    if (info.uses_axis2) {
       const Node& a2 = r_.Require(value, path, "axis2");
       axis2 = UnitAxis(a2, Join(path, "axis2"));
       if (std::abs(axis.dot(axis2)) > 1e-6)
@@ -741,7 +731,7 @@ void SceneCompiler::ReadJoints(const Node* node) {
     } else {
       NotUsedBy(value, path, {"axis2"}, who);
     }
-    if (type == JointType::kHelical) {
+    if (info.uses_pitch) {
       pitch = r_.Number(r_.Require(value, path, "pitch"), Join(path, "pitch"));
     } else {
       NotUsedBy(value, path, {"pitch"}, who);
@@ -754,8 +744,7 @@ void SceneCompiler::ReadJoints(const Node* node) {
 
     // Springs, dampers, drive (method.md §4.4, §4.5).
     const int k = j.k();
-    const bool global =
-        type != JointType::kSpherical && type != JointType::kPlanar && type != JointType::kFree;
+    const bool global = info.global_coordinates;
     if (k == 0) NotUsedBy(value, path, {"stiffness", "damping", "rest", "drive"}, who);
     if (!global) NotUsedBy(value, path, {"rest", "drive"}, who + " (no global coordinates)");
     if (const Node* s = value.Find("stiffness"))

@@ -92,25 +92,6 @@ void CalcJointRow(const Model& model, const Data& data, const std::vector<Output
   }
 }
 
-double JointCoordinateEffort(const Model& model, const Data& data, int joint, int c) {
-  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
-  if (j.drive != DriveKind::kNone && c == j.drive_coord) return JointDriveEffort(model, data, joint);
-  const double K = j.stiffness(c), D = j.damping(c);
-  if (K == 0.0 && D == 0.0) return 0.0;
-  const int dof = j.coord + c;
-  const double damper = D * data.v(dof);
-  if (JointHasGlobalCoordinates(j.type))
-    return -(K * (data.q_joint(dof - model.nv_nodes) - j.rest(c)) + damper);
-  // Group joints: energy 1/2 delta^T K delta with delta = A^T log(H_J); its gradient with
-  // respect to the coordinates is A^T T^-T(xi) A K delta (method.md §4.5, as in the assembly).
-  const int k = j.k();
-  const Vec6 xi = LogSE3(data.HJ[static_cast<std::size_t>(joint)]);
-  Vec6 k_delta_alg = Vec6::Zero();
-  for (int i = 0; i < k; ++i) k_delta_alg += j.basis.col(i) * (j.stiffness(i) * j.basis.col(i).dot(xi));
-  const double spring = j.basis.col(c).dot(TSE3Inv(xi).transpose() * k_delta_alg);
-  return -(spring + damper);
-}
-
 // ---- CSV ---------------------------------------------------------------------------------------
 
 void AppendNumber(std::string* text, double value, int precision) {

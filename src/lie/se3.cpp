@@ -543,4 +543,22 @@ Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma, const TSeries& series) {
   return D;
 }
 
+Mat3 FrameAlong(const Vec3& axis, const Vec3& up) {
+  const Vec3 ex = axis.normalized();
+  Vec3 ez = up - up.dot(ex) * ex;
+  if (ez.norm() < 1e-8 * std::max(1.0, up.norm())) {
+    // `up` parallel to the axis: take the world axis least aligned with it.
+    Eigen::Index i = 0;
+    ex.cwiseAbs().minCoeff(&i);
+    const Vec3 alt = Vec3::Unit(i);
+    ez = alt - alt.dot(ex) * ex;
+  }
+  ez.normalize();
+  Mat3 R;
+  R.col(0) = ex;
+  R.col(1) = ez.cross(ex);
+  R.col(2) = ez;
+  return R;
+}
+
 }  // namespace screwfem

@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <limits>
 
-#include "screwfem/elements/rod.h"
 #include "screwfem/solve/statics.h"
 
 namespace screwfem {
@@ -151,12 +150,9 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, bool co
       // columns).
       for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
         const Joint& j = model.joints[jj];
-        const int k = j.k();
-        if (k == 0 || JointHasGlobalCoordinates(j.type)) continue;
-        const Vec6 xi = j.basis * data.increment.segment(j.coord, k);
-        Mat6& TJ = data.node_tangent[model.nodes.size() + jj];
-        TJ.setIdentity();
-        TJ.topLeftCorner(k, k) = j.basis.transpose() * TSE3(xi) * j.basis;
+        if (j.k() == 0 || JointHasGlobalCoordinates(j.type)) continue;
+        CalcJointCoordinateTangent(j, data.increment.segment(j.coord, j.k()),
+                                   &data.node_tangent[model.nodes.size() + jj]);
       }
     }
     o.assemble_matrix = with_matrix;
@@ -341,64 +337,6 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h) {
   ++integ.steps;
   result.ok = true;
   return result;
-}
-
-Energy CalcEnergy(const Model& model, const Data& data) {
-  Energy E;
-  for (const RigidBody& b : model.bodies) {
-    const SE3& H = data.H[static_cast<std::size_t>(b.node)];
-    const int dof = model.nodes[static_cast<std::size_t>(b.node)].dof;
-    if (dof >= 0) {
-      const Vec6 eta = data.v.segment<6>(dof);
-      const Vec3 vc = eta.head<3>() + eta.tail<3>().cross(b.com);
-      E.kinetic += 0.5 * b.mass * vc.squaredNorm() + 0.5 * eta.tail<3>().dot(b.inertia * eta.tail<3>());
-    }
-    E.gravity -= b.mass * model.gravity.dot(H.Act(b.com));
-  }
-  constexpr double kXi[3] = {0.5 - 0.3872983346207417, 0.5, 0.5 + 0.3872983346207417};
-  constexpr double kW[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
-  for (std::size_t e = 0; e < model.elements.size(); ++e) {
-    const RodElement& el = model.elements[e];
-    const Section& sec = model.rods[static_cast<std::size_t>(el.rod)].section;
-    const SE3& HA = data.H[static_cast<std::size_t>(el.node_a)];
-    const SE3& HB = data.H[static_cast<std::size_t>(el.node_b)];
-    const Vec6 d = CalcRodRelativeMotion(HA, HB, data.w_ref[e]);
-    const Vec6 strain = (d - el.d0) / el.length;
-    E.strain += 0.5 * el.length * strain.dot(sec.stiffness.cwiseProduct(strain));
-    const int da = model.nodes[static_cast<std::size_t>(el.node_a)].dof;
-    const int db = model.nodes[static_cast<std::size_t>(el.node_b)].dof;
-    Vec12 eta_ab = Vec12::Zero();
-    if (da >= 0) eta_ab.head<6>() = data.v.segment<6>(da);
-    if (db >= 0) eta_ab.tail<6>() = data.v.segment<6>(db);
-    // 1/2 eta_AB^T M_e eta_AB of the model's inertia option (M_e(d) for option A).
-    E.kinetic += CalcRodKineticEnergy(model.rod_inertia, el, sec, d, eta_ab);
-    for (int i = 0; i < 3; ++i) {
-      const Vec3 x = (HA * ExpSE3(kXi[i] * d)).x;
-      E.gravity -= el.length * kW[i] * sec.inertia(0) * model.gravity.dot(x);
-    }
-  }
-  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
-    const Joint& j = model.joints[jj];
-    const int k = j.k();
-    if (k == 0) continue;
-    const auto alpha = data.q_joint.segment(j.coord - model.nv_nodes, k);
-    if (!JointHasGlobalCoordinates(j.type)) {
-      const Vec6 xi = LogSE3(data.HJ[jj]);
-      for (int c = 0; c < k; ++c) {
-        const double delta = j.basis.col(c).dot(xi);
-        E.spring += 0.5 * j.stiffness(c) * delta * delta;
-      }
-      continue;
-    }
-    for (int c = 0; c < k; ++c) {
-      double rest = j.rest(c);
-      if (j.drive == DriveKind::kSeriesElastic && c == j.drive_coord)
-        rest += j.drive_profile(data.time);
-      const double delta = alpha(c) - rest;
-      E.spring += 0.5 * j.stiffness(c) * delta * delta;
-    }
-  }
-  return E;
 }
 
 }  // namespace screwfem

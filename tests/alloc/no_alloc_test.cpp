@@ -14,6 +14,7 @@
 #include <new>
 
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace {
 std::atomic<bool> g_counting{false};

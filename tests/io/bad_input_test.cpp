@@ -11,6 +11,7 @@
 
 #include "screwfem/io/scene.h"
 #include "screwfem/model/errors.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

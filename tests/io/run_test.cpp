@@ -18,6 +18,7 @@
 #include "screwfem/io/schedule.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

@@ -13,6 +13,7 @@
 
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

@@ -11,6 +11,7 @@
 #include "screwfem/model/model.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/statics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

@@ -14,6 +14,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/model.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

@@ -5,6 +5,7 @@
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/elements/rod.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "screwfem/solve/statics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

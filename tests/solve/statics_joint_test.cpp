@@ -15,6 +15,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/model.h"
 #include "screwfem/solve/statics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

@@ -23,6 +23,7 @@
 
 #include "screwfem/model/model.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

@@ -25,6 +25,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/modal.h"
 #include "screwfem/solve/statics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

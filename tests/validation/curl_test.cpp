@@ -17,6 +17,7 @@
 #include <numbers>
 
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

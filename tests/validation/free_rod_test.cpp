@@ -28,6 +28,7 @@
 #include "screwfem/elements/rod.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/modal.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

@@ -22,6 +22,7 @@
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/model/model.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

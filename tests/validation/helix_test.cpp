@@ -17,6 +17,7 @@
 
 #include "screwfem/model/model.h"
 #include "screwfem/solve/statics.h"
+#include "screwfem/build/model_builder.h"
 
 namespace screwfem {
 namespace {

@@ -18,6 +18,7 @@
 
 #include "screwfem/model/model.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/build/model_builder.h"
 #include "validation/elliptic.h"
 
 namespace screwfem {

@@ -13,6 +13,9 @@
 // s_L = 1 / (beta h^2).
 #pragma once
 
+#include "screwfem/elements/element.h"
+#include "screwfem/elements/joint.h"
+#include "screwfem/model/data.h"
 #include "screwfem/model/model.h"
 
 namespace screwfem {
@@ -52,19 +55,9 @@ double ScaledIncrementSize(const Model& model, const Eigen::Ref<const Eigen::Vec
 // accepted step; method.md §2.7).
 void UpdateBranchReferences(const Model& model, Data& data);
 
-// Joint coordinate helpers.
-// Joints whose coordinates alpha are global (H_J is a function of alpha): the abelian
-// subgroups and the universal joint (a product of two one-parameter subgroups). The others
-// (spherical, planar, free) store H_J and update it by the exponential.
-bool JointHasGlobalCoordinates(JointType type);
-SE3 JointRelativeFrame(const Model& model, const Data& data, int joint);  // H_J
-// Configuration-dependent basis: A_J for subgroups, the universal joint's moving basis.
-Mat6X JointCurrentBasis(const Model& model, const Data& data, int joint);
-// Constraint value phi_J = log(H_J^-1 C_A^-1 H_A^-1 H_B C_B) (6) of a joint.
-Vec6 JointConstraint(const Model& model, const Data& data, int joint);
-// Effort of a joint's drive: the generalised force the drive applies along its coordinate
-// (actuator torque or force; for a series-elastic drive the spring-damper force).
-double JointDriveEffort(const Model& model, const Data& data, int joint);
+// Energies of the current state (for balances and tests): the sum of the element kinds'
+// energies and the joints' springs.
+Energy CalcEnergy(const Model& model, const Data& data);
 
 // Largest |phi| over all constraint rows at the current state (global order residual rows).
 double MaxConstraintViolation(const Model& model, Data& data, double time, double load_factor);

@@ -1,7 +1,7 @@
 // Output quantities (method.md §6).
 #pragma once
 
-#include "screwfem/model/model.h"
+#include "screwfem/model/data.h"
 
 namespace screwfem {
 

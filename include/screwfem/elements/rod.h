@@ -1,6 +1,8 @@
 // The two-node helical Cosserat rod element (method.md §2.2-2.6): a stateless kernel.
 #pragma once
 
+#include "screwfem/elements/element.h"
+#include "screwfem/elements/quadrature.h"
 #include "screwfem/lie/se3.h"
 #include "screwfem/model/model.h"
 
@@ -8,11 +10,11 @@ namespace screwfem {
 
 using Mat6x12 = Eigen::Matrix<double, 6, 12>;
 
-// 3-point Gauss-Legendre rule on [0, 1]: inertia (option A) and distributed loads (§2.5, §2.6).
-inline constexpr int kRodGaussPoints = 3;
-inline constexpr double kRodGaussXi[kRodGaussPoints] = {0.5 - 0.3872983346207417, 0.5,
-                                                        0.5 + 0.3872983346207417};
-inline constexpr double kRodGaussW[kRodGaussPoints] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+// The rod's Gauss rule: 3 points (elements/quadrature.h) for inertia (option A) and
+// distributed loads (§2.5, §2.6).
+inline constexpr int kRodGaussPoints = kGauss3Points;
+inline constexpr const double (&kRodGaussXi)[kRodGaussPoints] = kGauss3Xi;
+inline constexpr const double (&kRodGaussW)[kRodGaussPoints] = kGauss3W;
 
 // Relative motion d = log(H_A^-1 H_B) on the branch closest to w_ref (method.md §2.7).
 Vec6 CalcRodRelativeMotion(const SE3& H_A, const SE3& H_B, const Vec3& w_ref);
@@ -182,5 +184,30 @@ void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& ge
 void CalcRodConservative(const RodElement& element, const Section& section,
                          const RodGeometry& geometry, const SE3& H_A, const Vec3& f_w,
                          const Mat6* T_A, const Mat6* T_B, Vec12* force, Mat12* stiffness);
+
+// ---- the rod element as an element kind (elements/element.h) --------------------------------
+
+// One helical element: internal forces, the weight of the rod (gravity times rhoA), inertia
+// (the model's option, §2.5) and damping, with the element matrix. Calc fails when the
+// element's relative rotation leaves the admissible range (model.max_element_rotation, §2.7)
+// or its forces are not finite (terms->failure: the rotation).
+struct RodElementKind {
+  static constexpr int kNodes = 2;
+  using Item = int;  // global element index
+  template <class F>
+  static void ForEach(const Model& model, F&& f) {
+    for (std::size_t e = 0; e < model.elements.size(); ++e) {
+      const int nodes[2] = {model.elements[e].node_a, model.elements[e].node_b};
+      f(static_cast<int>(e), nodes);
+    }
+  }
+  static bool Calc(const Model& model, const Data& data, const Item& element,
+                   const NodeMotion<2>& motion, const KernelOptions& options,
+                   ElementTerms<2>* terms);
+  // Strain energy, kinetic energy of the model's inertia option and the gravity potential of
+  // the element (3-point Gauss over the exact centreline).
+  static void AddEnergy(const Model& model, const Data& data, const Item& element,
+                        Energy* energy);
+};
 
 }  // namespace screwfem

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "screwfem/model/model.h"
+#include "screwfem/model/data.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/statics.h"
 

@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "screwfem/model/model.h"
+#include "screwfem/model/data.h"
 
 namespace screwfem {
 

@@ -18,7 +18,7 @@
 #include <utility>
 #include <vector>
 
-#include "screwfem/model/model.h"
+#include "screwfem/model/data.h"
 
 namespace screwfem {
 

@@ -34,11 +34,7 @@ void CalcPointRow(const Model& model, const Data& data, const std::vector<Output
 void CalcJointRow(const Model& model, const Data& data, const std::vector<OutputJoint>& joints,
                   std::vector<double>* row);
 
-// Generalised force acting on coordinate c of a joint [N or N m]: the drive's effort
-// (JointDriveEffort) on the driven coordinate, otherwise the force of the joint's spring and
-// damper on the coordinate, -(K (alpha - rest) + D alpha_dot) (method.md §4.5; for spherical,
-// planar and free joints the spring acts on log(H_J) as in the assembly), otherwise 0.
-double JointCoordinateEffort(const Model& model, const Data& data, int joint, int c);
+// (The effort column is JointCoordinateEffort, elements/joint.h.)
 
 // ---- files -----------------------------------------------------------------------------------
 

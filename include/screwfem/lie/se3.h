@@ -162,4 +162,9 @@ double A2(double phi);  // (phi - sin(phi))/phi^3
 double C(double phi);   // (1 - (phi/2) cot(phi/2))/phi^2
 }  // namespace lie_detail
 
+// Rotation whose x axis is `axis` (normalised) and whose z axis is as close as possible to
+// `up`; when `up` is parallel to `axis`, the world axis least aligned with `axis` stands in.
+// The section-frame convention of rods (AddStraightRod, scene paths).
+Mat3 FrameAlong(const Vec3& axis, const Vec3& up);
+
 }  // namespace screwfem

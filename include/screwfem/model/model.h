@@ -1,4 +1,5 @@
-// The compiled model (constant) and its workspace (Data); see style.md "Model and Data".
+// The compiled model (constant); its workspace is Data (model/data.h), its builder
+// ModelBuilder (build/model_builder.h); see docs/architecture.md.
 //
 // Unknowns. Velocities v (size nv) stack 6 body-velocity components per free node (translation
 // first) and then k joint-coordinate rates per joint. Multipliers lambda (size nc) stack the 6
@@ -14,7 +15,6 @@
 #include "screwfem/model/errors.h"
 #include "screwfem/model/profile.h"
 #include "screwfem/model/section.h"
-#include "screwfem/solve/banded_lu.h"
 
 namespace screwfem {
 
@@ -167,83 +167,11 @@ struct Model {
   int FindJoint(const std::string& name) const;
 };
 
-// Builds a Model through a small C++ API; Build() validates everything and computes the layout.
-class ModelBuilder {
- public:
-  // A node with a frame. Names must be unique when given.
-  int AddNode(const SE3& frame, std::string name = {});
-  void FixNode(int node);
-  // A straight rod from p0 to p1 with n elements. Node frames have x along the rod and z as
-  // close as possible to `up` (any vector not parallel to the rod). Optional existing end
-  // nodes are shared (their positions must coincide with p0/p1; the rod is then rigidly joined
-  // there).
-  int AddStraightRod(std::string name, const Vec3& p0, const Vec3& p1, int num_elements,
-                     const Section& section, const Vec3& up = Vec3::UnitZ(), int start_node = -1,
-                     int end_node = -1);
-  // A straight rod of given length along the x axis of `root` (root.R gives all node frames).
-  int AddStraightRodFromFrame(std::string name, const SE3& root, double length, int num_elements,
-                              const Section& section, int start_node = -1, int end_node = -1);
-  // A rod through existing nodes (curved references allowed: element references are
-  // log(H_a^-1 H_b) of the nodes' reference frames).
-  int AddRodThroughNodes(std::string name, const std::vector<int>& nodes, const Section& section);
-  int AddRigidBody(std::string name, int node, double mass, const Vec3& com, const Mat3& inertia);
-  int AddJoint(const Joint& joint);  // offsets, basis and names filled by the caller
-  // A joint at world point `point` with world axis `axis` (plane normal for planar joints;
-  // `axis2` is the second axis of a universal joint), between node_a and node_b (either may be
-  // kGround). The joint frame is world-aligned in the reference configuration, so H_J = I and
-  // the coordinates are 0 there (method.md §4.2). Returns the joint index; edit
-  // model().joints[i] to add stiffness, damping or a drive.
-  int AddJointAt(std::string name, JointType type, int node_a, int node_b, const Vec3& point,
-                 const Vec3& axis = Vec3::UnitZ(), const Vec3& axis2 = Vec3::Zero(),
-                 double pitch = 0.0);
-  int AddPointLoad(const PointLoad& load);
-  int AddRodLoad(const RodLoad& load);
-  void SetGravity(const Vec3& g);
-  Model& model() { return model_; }
-
-  // Validates and computes sizes and the ordering. Throws InputError.
-  Model Build() const;
-
- private:
-  Model model_;
-};
-
-// Joint basis A_J of each joint type (method.md §4.2), for axis e (unit) and pitch p. For a
-// planar joint e is the plane normal; for universal joints e is the first axis and e2 the
-// second. Returns 6 x k.
-Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2 = Vec3::Zero(), double pitch = 0.0);
-const char* JointTypeName(JointType type);
-// Rotation whose x axis is `axis` (normalised) and whose z axis is as close as possible to
-// `up`; when `up` is parallel to `axis`, the world axis least aligned with `axis` stands in.
-// The section-frame convention of rods (AddStraightRod, scene paths).
-Mat3 FrameAlong(const Vec3& axis, const Vec3& up);
-
-// ------------------------------------------------------------------------------------------
-// Data: the state and every workspace of one simulation, allocated once from a Model.
-struct Data {
-  double time = 0.0;
-  std::vector<SE3> H;              // node frames
-  std::vector<SE3> HJ;             // joint relative frames H_J
-  Eigen::VectorXd q_joint;         // joint coordinates (nv - nv_nodes); exact for abelian joints
-  Eigen::VectorXd v, vdot;         // velocities and accelerations (nv)
-  Eigen::VectorXd lambda;          // multipliers (nc)
-  std::vector<Vec3> w_ref;         // per rod element: rotation vector on the current branch
-
-  // Workspaces of the Newton solvers.
-  Eigen::VectorXd residual;        // global order, size nv + nc
-  Eigen::VectorXd rhs;             // permuted order
-  Eigen::VectorXd increment;       // global order, size nv + nc
-  std::vector<Mat6> node_tangent;  // T(h dq_i) per node for the dynamic iteration matrix
-  BandedLU matrix;                 // permuted, banded iteration matrix
-
-  // Diagnostics of the last assembly.
-  double force_scale = 0.0;        // largest generalised-force term that entered the residual
-  double term_scale = 0.0;         // largest term cancelling inside one (e.g. K d/L in sigma)
-  int failed_element = -1;         // element whose rotation left the admissible range
-  double failed_rotation = 0.0;
-};
-
-// Allocates Data for a model and sets the reference state (at rest).
-Data MakeData(const Model& model);
+// The reference frame H_0 of a node, or the identity for kGround (the one ground-or-node
+// lookup of reference frames; model/data.h has the current-frame one).
+inline const SE3& NodeReferenceFrame(const Model& model, int node) {
+  static const SE3 kWorld = SE3::Identity();
+  return node == kGround ? kWorld : model.nodes[static_cast<std::size_t>(node)].reference;
+}
 
 }  // namespace screwfem

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "screwfem/assemble/assemble.h"
-#include "screwfem/model/model.h"
+#include "screwfem/model/data.h"
 
 namespace screwfem {
 
@@ -105,14 +105,5 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integrator,
 // the step.
 StepResult Step(const Model& model, Data& data, Integrator& integrator, double h);
 
-// Energies of the current state (for balances and tests).
-struct Energy {
-  double kinetic = 0.0;   // rigid bodies and rods (consistent with the model's rod inertia)
-  double strain = 0.0;    // rods
-  double spring = 0.0;    // joint springs (towards their rest, incl. series-elastic drives)
-  double gravity = 0.0;   // potential of gravity, zero at the world origin
-  double total() const { return kinetic + strain + spring + gravity; }
-};
-Energy CalcEnergy(const Model& model, const Data& data);
 
 }  // namespace screwfem

@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "screwfem/model/model.h"
+#include "screwfem/model/data.h"
 
 namespace screwfem {
 

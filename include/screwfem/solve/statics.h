@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "screwfem/model/model.h"
+#include "screwfem/model/data.h"
 
 namespace screwfem {
 

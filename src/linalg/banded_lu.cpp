@@ -1,4 +1,4 @@
-#include "screwfem/solve/banded_lu.h"
+#include "screwfem/linalg/banded_lu.h"
 
 #include <algorithm>
 #include <cassert>

@@ -1,6 +1,6 @@
 // Tests of the banded LU factorisation (checked against Eigen's dense PartialPivLU) and of the
 // reverse Cuthill-McKee ordering.
-#include "screwfem/solve/banded_lu.h"
+#include "screwfem/linalg/banded_lu.h"
 
 #include <gtest/gtest.h>
 

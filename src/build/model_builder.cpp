@@ -1,4 +1,4 @@
-#include "screwfem/model/model.h"
+#include "screwfem/build/model_builder.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -13,13 +13,6 @@
 namespace screwfem {
 
 namespace {
-
-template <typename T>
-int FindByName(const std::vector<T>& items, const std::string& name) {
-  for (std::size_t i = 0; i < items.size(); ++i)
-    if (items[i].name == name) return static_cast<int>(i);
-  return -1;
-}
 
 std::string NodeLabel(const Model& m, int node) {
   if (node == kGround) return "ground";
@@ -87,100 +80,6 @@ void FindRedundantConstraints(Model& m) {
 }
 
 }  // namespace
-
-Mat3 FrameAlong(const Vec3& axis, const Vec3& up) {
-  const Vec3 ex = axis.normalized();
-  Vec3 ez = up - up.dot(ex) * ex;
-  if (ez.norm() < 1e-8 * std::max(1.0, up.norm())) {
-    // `up` parallel to the axis: take the world axis least aligned with it.
-    Eigen::Index i = 0;
-    ex.cwiseAbs().minCoeff(&i);
-    const Vec3 alt = Vec3::Unit(i);
-    ez = alt - alt.dot(ex) * ex;
-  }
-  ez.normalize();
-  Mat3 R;
-  R.col(0) = ex;
-  R.col(1) = ez.cross(ex);
-  R.col(2) = ez;
-  return R;
-}
-
-int Model::FindNode(const std::string& name) const { return FindByName(nodes, name); }
-int Model::FindRod(const std::string& name) const { return FindByName(rods, name); }
-int Model::FindBody(const std::string& name) const { return FindByName(bodies, name); }
-int Model::FindJoint(const std::string& name) const { return FindByName(joints, name); }
-
-const char* JointTypeName(JointType type) {
-  switch (type) {
-    case JointType::kRevolute: return "revolute";
-    case JointType::kPrismatic: return "prismatic";
-    case JointType::kHelical: return "helical";
-    case JointType::kCylindrical: return "cylindrical";
-    case JointType::kSpherical: return "spherical";
-    case JointType::kPlanar: return "planar";
-    case JointType::kUniversal: return "universal";
-    case JointType::kFixed: return "fixed";
-    case JointType::kFree: return "free";
-  }
-  return "?";
-}
-
-Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2, double pitch) {
-  Mat6X A;
-  auto rot = [](const Vec3& a) { Vec6 c; c << Vec3::Zero(), a; return c; };
-  auto tra = [](const Vec3& a) { Vec6 c; c << a, Vec3::Zero(); return c; };
-  switch (type) {
-    case JointType::kRevolute:
-      A.resize(6, 1);
-      A.col(0) = rot(e);
-      break;
-    case JointType::kPrismatic:
-      A.resize(6, 1);
-      A.col(0) = tra(e);
-      break;
-    case JointType::kHelical: {
-      A.resize(6, 1);
-      Vec6 c;
-      c << pitch * e, e;
-      A.col(0) = c;
-      break;
-    }
-    case JointType::kCylindrical:
-      A.resize(6, 2);
-      A.col(0) = tra(e);
-      A.col(1) = rot(e);
-      break;
-    case JointType::kSpherical:
-      A.resize(6, 3);
-      A.col(0) = rot(Vec3::UnitX());
-      A.col(1) = rot(Vec3::UnitY());
-      A.col(2) = rot(Vec3::UnitZ());
-      break;
-    case JointType::kPlanar: {
-      const Mat3 R = FrameAlong(e, Vec3::UnitZ().cross(e).norm() > 1e-6 ? Vec3::UnitZ()
-                                                                           : Vec3::UnitX());
-      // R.col(0) = normal; in-plane axes R.col(1), R.col(2).
-      A.resize(6, 3);
-      A.col(0) = tra(R.col(1));
-      A.col(1) = tra(R.col(2));
-      A.col(2) = rot(e);
-      break;
-    }
-    case JointType::kUniversal:
-      A.resize(6, 2);
-      A.col(0) = rot(e);
-      A.col(1) = rot(e2);
-      break;
-    case JointType::kFixed:
-      A.resize(6, 0);
-      break;
-    case JointType::kFree:
-      A = Mat6::Identity();
-      break;
-  }
-  return A;
-}
 
 int ModelBuilder::AddNode(const SE3& frame, std::string name) {
   Node n;
@@ -270,11 +169,10 @@ int ModelBuilder::AddJointAt(std::string name, JointType type, int node_a, int n
   };
   check(node_a);
   check(node_b);
-  const bool needs_axis = type != JointType::kSpherical && type != JointType::kFixed &&
-                          type != JointType::kFree;
-  if (needs_axis && !(std::abs(axis.norm() - 1.0) < 1e-9))
+  const JointTypeInfo& info = GetJointTypeInfo(type);
+  if (info.uses_axis && !(std::abs(axis.norm() - 1.0) < 1e-9))
     throw InputError("joint '" + name + "': axis must be a unit vector");
-  if (type == JointType::kUniversal &&
+  if (info.uses_axis2 &&
       (!(std::abs(axis2.norm() - 1.0) < 1e-9) || std::abs(axis.dot(axis2)) > 1e-9))
     throw InputError("joint '" + name + "': universal joint axes must be orthogonal unit vectors");
   Joint j;
@@ -404,8 +302,7 @@ Model ModelBuilder::Build() const {
       if (j.drive != DriveKind::kNone) {
         if (j.drive_coord < 0 || j.drive_coord >= j.k())
           throw InputError(label + ": drive coordinate out of range");
-        if (j.type == JointType::kSpherical || j.type == JointType::kPlanar ||
-            j.type == JointType::kFree)
+        if (!JointHasGlobalCoordinates(j.type))
           throw InputError(label + ": drives need a joint with global coordinates (not " +
                            JointTypeName(j.type) + ")");
         j.drive_profile.Validate(label.c_str());
@@ -461,7 +358,7 @@ Model ModelBuilder::Build() const {
     j.coord = m.nv;
     m.nv += j.k();
     j.row = -1;
-    if (j.type != JointType::kFree) {
+    if (GetJointTypeInfo(j.type).constrained) {
       j.row = m.nc;
       m.nc += 6;
     }
@@ -571,27 +468,6 @@ Model ModelBuilder::Build() const {
   m.length_scale = num_nodes > 0 ? std::max((hi - lo).norm(), 1e-3) : 1.0;
   for (const Rod& r : m.rods) m.length_scale = std::max(m.length_scale, r.length);
   return m;
-}
-
-Data MakeData(const Model& model) {
-  Data d;
-  d.H.resize(model.nodes.size());
-  for (std::size_t i = 0; i < model.nodes.size(); ++i) d.H[i] = model.nodes[i].reference;
-  d.HJ.assign(model.joints.size(), SE3::Identity());
-  d.q_joint = Eigen::VectorXd::Zero(model.nv - model.nv_nodes);
-  d.v = Eigen::VectorXd::Zero(model.nv);
-  d.vdot = Eigen::VectorXd::Zero(model.nv);
-  d.lambda = Eigen::VectorXd::Zero(model.nc);
-  d.w_ref.resize(model.elements.size());
-  for (std::size_t e = 0; e < model.elements.size(); ++e) d.w_ref[e] = model.elements[e].d0.tail<3>();
-  d.residual = Eigen::VectorXd::Zero(model.num_unknowns());
-  d.rhs = Eigen::VectorXd::Zero(model.num_unknowns());
-  d.increment = Eigen::VectorXd::Zero(model.num_unknowns());
-  d.node_tangent.assign(model.nodes.size(), Mat6::Identity());
-  d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
-  if (static_cast<int>(model.pattern_last.size()) == model.num_unknowns())
-    d.matrix.SetPattern(model.pattern_last, model.pattern_last);
-  return d;
 }
 
 }  // namespace screwfem

@@ -1,0 +1,139 @@
+// Joints (method.md §4): the joint-type table and the joint kernel.
+//
+// A joint is a relative frame H_J in a Lie subgroup between frame A (node a, or the ground)
+// and frame B (node b), placed by constant offsets: H_B C_B = H_A C_A H_J (model.h, Joint).
+// Everything that depends on the joint's type is a row of the joint-type table (joint.cpp);
+// everything else is one implementation for all types: the constraint and its gradient, the
+// spring/damper law on the coordinates, drives, the retraction of the coordinates, energy and
+// efforts. The assembly, the build-time redundancy check, the energy and the outputs call these
+// functions (docs/architecture.md, "Add a joint type").
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "screwfem/model/data.h"
+
+namespace screwfem {
+
+// A k x k matrix over a joint's coordinates (k <= 6).
+using JointMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+
+// ---- the joint-type table ---------------------------------------------------------------------
+
+// The law of a soft joint's springs (method.md §4.5):
+//   kCoordinates: force K (alpha - rest) on each global coordinate alpha;
+//   kLogarithm:   energy 1/2 delta^T K delta with delta = A_J^T log(H_J), for subgroups without
+//                 global coordinates (spherical, planar, free); no rest value.
+enum class JointSpringLaw { kCoordinates, kLogarithm };
+
+struct JointTypeInfo {
+  JointType type;
+  const char* name;   // in scene files, outputs and messages
+  int dof;            // k, the number of coordinates
+  // Global coordinates: H_J is a function of the coordinates alpha (the abelian subgroups, and
+  // the universal joint as a product of two one-parameter subgroups); they retract additively
+  // and may be driven. Otherwise H_J is stored and retracts by the exponential,
+  // H_J <- H_J exp(A_J dx) (method.md §5.2).
+  bool global_coordinates;
+  bool constrained;   // 6 relative-frame constraint rows (a free joint has none)
+  // Scene keys the type uses: `axis` (the plane normal of a planar joint), `axis2` (orthogonal
+  // to `axis`), `pitch` [m/rad].
+  bool uses_axis, uses_axis2, uses_pitch;
+  JointSpringLaw spring_law;
+  // A_J (6 x dof) for the unit axis e, the second axis e2 and the pitch (method.md §4.2).
+  Mat6X (*basis)(const Vec3& e, const Vec3& e2, double pitch);
+  // Global coordinates only: H_J(alpha) and the configuration-dependent basis A_J(alpha), the
+  // columns of d H_J = H_J wedge(A_J(alpha) d alpha) (method.md §4.2; the constant A_J for
+  // abelian subgroups).
+  SE3 (*relative_frame)(const Mat6X& basis, const double* alpha);
+  void (*current_basis)(const Mat6X& basis, const double* alpha, Mat6X* out);
+};
+
+// The row of a type; the type of a name (nullptr for an unknown name).
+const JointTypeInfo& GetJointTypeInfo(JointType type);
+const JointTypeInfo* FindJointType(std::string_view name);
+// Every type's name, in table order.
+std::vector<std::string> JointTypeNameList();
+const char* JointTypeName(JointType type);
+// Joint basis A_J of a type (method.md §4.2), for axis e (unit) and pitch p. For a planar
+// joint e is the plane normal; for universal joints e is the first axis and e2 the second.
+// Returns 6 x k.
+Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2 = Vec3::Zero(), double pitch = 0.0);
+bool JointHasGlobalCoordinates(JointType type);
+
+// ---- the joint kernel -------------------------------------------------------------------------
+
+// H_J of a joint in the current state.
+SE3 JointRelativeFrame(const Model& model, const Data& data, int joint);
+// Configuration-dependent basis: A_J for subgroups, the universal joint's moving basis.
+Mat6X JointCurrentBasis(const Model& model, const Data& data, int joint);
+// Constraint value phi_J = log(H_J^-1 C_A^-1 H_A^-1 H_B C_B) (6) of a joint.
+Vec6 JointConstraint(const Model& model, const Data& data, int joint);
+
+// The constraint gradient of one joint (method.md §4.3) in factored form, for frames H_A, H_B
+// (identity for the ground) and H_J:
+//   B_A = -T^-1(phi) Ad(G_A),  G_A = C_B^-1 H_B^-1 H_A,
+//   B_B =  T^-1(phi) Ad(C_B^-1),
+//   B_J = -T^-1(-phi) A_J T_J = -(T^-1(phi) - ad(phi)) A_J T_J,
+// T_J the coordinates' tangent operator in dynamics (identity otherwise).
+struct JointGradient {
+  Vec6 phi = Vec6::Zero();
+  Mat6 Tinv = Mat6::Identity();  // T^-1(phi)
+  SE3 G_A;
+  SE3 Cb_inv;
+};
+void CalcJointGradient(const Joint& joint, const SE3& H_A, const SE3& H_B, const SE3& H_J,
+                       JointGradient* out);
+// The same at the model's reference configuration (phi = 0, H_J = I): the build-time rank
+// check of the constraints uses it.
+void CalcJointReferenceGradient(const Model& model, const Joint& joint, JointGradient* out);
+// The blocks B_A, B_B (6 x 6) and B_J (6 x k) of the gradient.
+Mat6 JointGradientA(const JointGradient& g);
+Mat6 JointGradientB(const JointGradient& g);
+Mat6X JointGradientCoordinates(const JointGradient& g, const Mat6X& basis, const JointMatrix& T_J);
+// B_A^T lambda and B_B^T lambda as transposed products applied to the vector (no 6 x 6 matrix
+// is formed): -Ad(G_A)^T T^-T lambda and Ad(C_B^-1)^T T^-T lambda.
+void JointGradientTransposeTimes(const JointGradient& g, const Vec6& lambda, Vec6* bt_a,
+                                 Vec6* bt_b);
+
+// Springs, dampers and the drive on a joint's coordinates (method.md §4.4, §4.5): the
+// generalised force f (k) that enters the coordinate rows of the residual, and its derivatives
+// K_q = df/dalpha and D_q = df/d(alpha_dot) (top-left k x k). `dynamics` adds the dampers;
+// `load_factor` scales drives (statics). A prescribed drive adds its multiplier lambda to its
+// coordinate (B_act^T lambda_act) and gives its constraint value alpha - q(t) in
+// `drive_constraint`. term_scale: the largest spring term cancelling inside f (the round-off
+// floor of the convergence test).
+struct JointCoordinateTerms {
+  Vec6 force = Vec6::Zero();
+  Mat6 stiffness = Mat6::Zero();
+  Mat6 damping = Mat6::Zero();
+  double drive_constraint = 0.0;
+  double term_scale = 0.0;
+};
+void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, double time,
+                              double load_factor, bool dynamics, bool tangent,
+                              JointCoordinateTerms* out);
+
+// Tangent operator of the coordinates of a joint without global coordinates, whose H_J
+// retracts by H_J exp(A_J x) with x = h dq_J (method.md §5.2): T_k = A_J^T T(A_J x) A_J in the
+// top-left k x k of *out (identity elsewhere). A_J spans a subalgebra with orthonormal columns.
+void CalcJointCoordinateTangent(const Joint& joint, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                Mat6* out);
+// The retraction of a joint's coordinates by dx (k): alpha += dx, and H_J <- H_J exp(A_J dx)
+// for joints without global coordinates.
+void RetractJoint(const Model& model, Data& data, int joint,
+                  const Eigen::Ref<const Eigen::VectorXd>& dx);
+
+// Effort of a joint's drive: the generalised force the drive applies along its coordinate
+// (actuator torque or force; for a series-elastic drive the spring-damper force).
+double JointDriveEffort(const Model& model, const Data& data, int joint);
+// The generalised force on coordinate c of a joint in the current state: the drive's effort on
+// a driven coordinate, otherwise minus the spring-damper force (the force the joint's soft
+// elements apply along the coordinate).
+double JointCoordinateEffort(const Model& model, const Data& data, int joint, int c);
+// Energy stored in a joint's springs [J] (towards their rest, incl. series-elastic drives).
+double JointSpringEnergy(const Model& model, const Data& data, int joint);
+
+}  // namespace screwfem

@@ -1,0 +1,60 @@
+// Data: the state and every workspace of one simulation, allocated once from a Model (see
+// docs/architecture.md, "Model and Data"). Algorithms read the Model and write Data.
+#pragma once
+
+#include <vector>
+
+#include "screwfem/linalg/banded_lu.h"
+#include "screwfem/model/model.h"
+
+namespace screwfem {
+
+struct Data {
+  double time = 0.0;
+  std::vector<SE3> H;              // node frames
+  std::vector<SE3> HJ;             // joint relative frames H_J
+  Eigen::VectorXd q_joint;         // joint coordinates (nv - nv_nodes); exact for abelian joints
+  Eigen::VectorXd v, vdot;         // velocities and accelerations (nv)
+  Eigen::VectorXd lambda;          // multipliers (nc)
+  std::vector<Vec3> w_ref;         // per rod element: rotation vector on the current branch
+
+  // Workspaces of the Newton solvers.
+  Eigen::VectorXd residual;        // global order, size nv + nc
+  Eigen::VectorXd rhs;             // permuted order
+  Eigen::VectorXd increment;       // global order, size nv + nc
+  std::vector<Mat6> node_tangent;  // T(h dq_i) per node for the dynamic iteration matrix
+  BandedLU matrix;                 // permuted, banded iteration matrix
+
+  // Diagnostics of the last assembly.
+  double force_scale = 0.0;        // largest generalised-force term that entered the residual
+  double term_scale = 0.0;         // largest term cancelling inside one (e.g. K d/L in sigma)
+  int failed_element = -1;         // element whose rotation left the admissible range
+  double failed_rotation = 0.0;
+};
+
+// Allocates Data for a model and sets the reference state (at rest).
+Data MakeData(const Model& model);
+
+// The current frame of a node, or the identity for kGround (the one ground-or-node lookup).
+inline const SE3& NodeFrame(const Data& data, int node) {
+  static const SE3 kWorld = SE3::Identity();
+  return node == kGround ? kWorld : data.H[static_cast<std::size_t>(node)];
+}
+
+// Body velocities and accelerations of N nodes stacked (node 0 first), zero for a fixed node
+// or the ground: the one gathering of node motion for kernels and outputs.
+template <int N>
+void GatherNodeMotion(const Model& model, const Data& data, const int (&nodes)[N],
+                      Eigen::Matrix<double, 6 * N, 1>* eta,
+                      Eigen::Matrix<double, 6 * N, 1>* eta_dot) {
+  if (eta) eta->setZero();
+  if (eta_dot) eta_dot->setZero();
+  for (int i = 0; i < N; ++i) {
+    const int dof = nodes[i] == kGround ? -1 : model.nodes[static_cast<std::size_t>(nodes[i])].dof;
+    if (dof < 0) continue;
+    if (eta) eta->template segment<6>(6 * i) = data.v.segment<6>(dof);
+    if (eta_dot) eta_dot->template segment<6>(6 * i) = data.vdot.segment<6>(dof);
+  }
+}
+
+}  // namespace screwfem

@@ -1,0 +1,338 @@
+#include "screwfem/elements/joint.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "screwfem/model/errors.h"
+
+namespace screwfem {
+
+namespace {
+
+Vec6 Rotation(const Vec3& a) {
+  Vec6 c;
+  c << Vec3::Zero(), a;
+  return c;
+}
+Vec6 Translation(const Vec3& a) {
+  Vec6 c;
+  c << a, Vec3::Zero();
+  return c;
+}
+
+// ---- per-type functions of the table (method.md §4.2) ------------------------------------------
+
+Mat6X RevoluteBasis(const Vec3& e, const Vec3&, double) {
+  Mat6X A(6, 1);
+  A.col(0) = Rotation(e);
+  return A;
+}
+Mat6X PrismaticBasis(const Vec3& e, const Vec3&, double) {
+  Mat6X A(6, 1);
+  A.col(0) = Translation(e);
+  return A;
+}
+Mat6X HelicalBasis(const Vec3& e, const Vec3&, double pitch) {
+  Mat6X A(6, 1);
+  Vec6 c;
+  c << pitch * e, e;
+  A.col(0) = c;
+  return A;
+}
+Mat6X CylindricalBasis(const Vec3& e, const Vec3&, double) {
+  Mat6X A(6, 2);
+  A.col(0) = Translation(e);
+  A.col(1) = Rotation(e);
+  return A;
+}
+Mat6X SphericalBasis(const Vec3&, const Vec3&, double) {
+  Mat6X A(6, 3);
+  A.col(0) = Rotation(Vec3::UnitX());
+  A.col(1) = Rotation(Vec3::UnitY());
+  A.col(2) = Rotation(Vec3::UnitZ());
+  return A;
+}
+// Normal e: the in-plane axes are the y and z axes of the frame whose x axis is e.
+Mat6X PlanarBasis(const Vec3& e, const Vec3&, double) {
+  const Mat3 R = FrameAlong(e, Vec3::UnitZ().cross(e).norm() > 1e-6 ? Vec3::UnitZ() : Vec3::UnitX());
+  Mat6X A(6, 3);
+  A.col(0) = Translation(R.col(1));
+  A.col(1) = Translation(R.col(2));
+  A.col(2) = Rotation(e);
+  return A;
+}
+Mat6X UniversalBasis(const Vec3& e, const Vec3& e2, double) {
+  Mat6X A(6, 2);
+  A.col(0) = Rotation(e);
+  A.col(1) = Rotation(e2);
+  return A;
+}
+Mat6X FixedBasis(const Vec3&, const Vec3&, double) { return Mat6X(6, 0); }
+Mat6X FreeBasis(const Vec3&, const Vec3&, double) { return Mat6::Identity(); }
+
+// H_J = exp(A_J alpha) for abelian subgroups.
+SE3 SubgroupFrame(const Mat6X& A, const double* alpha) {
+  return ExpSE3(A * Eigen::Map<const Eigen::VectorXd>(alpha, A.cols()));
+}
+void ConstantBasis(const Mat6X& A, const double*, Mat6X* out) { *out = A; }
+// Universal joint: H_J = exp(a1 A_1) exp(a2 A_2); d H_J = H_J wedge(Ad(exp(-a2 A_2)) A_1 da1 +
+// A_2 da2).
+SE3 UniversalFrame(const Mat6X& A, const double* alpha) {
+  return ExpSE3(A.col(0) * alpha[0]) * ExpSE3(A.col(1) * alpha[1]);
+}
+void UniversalCurrentBasis(const Mat6X& A, const double* alpha, Mat6X* out) {
+  *out = A;
+  out->col(0) = Ad(ExpSE3(-alpha[1] * A.col(1))) * A.col(0);
+}
+
+// The joint-type table: one row per JointType, in the enum's order.
+constexpr bool kYes = true, kNo = false;
+const std::array<JointTypeInfo, 9> kJointTypes = {{
+    // type                   name           k  global constr. axis axis2 pitch  spring law
+    {JointType::kRevolute, "revolute", 1, kYes, kYes, kYes, kNo, kNo, JointSpringLaw::kCoordinates,
+     RevoluteBasis, SubgroupFrame, ConstantBasis},
+    {JointType::kPrismatic, "prismatic", 1, kYes, kYes, kYes, kNo, kNo,
+     JointSpringLaw::kCoordinates, PrismaticBasis, SubgroupFrame, ConstantBasis},
+    {JointType::kHelical, "helical", 1, kYes, kYes, kYes, kNo, kYes, JointSpringLaw::kCoordinates,
+     HelicalBasis, SubgroupFrame, ConstantBasis},
+    {JointType::kCylindrical, "cylindrical", 2, kYes, kYes, kYes, kNo, kNo,
+     JointSpringLaw::kCoordinates, CylindricalBasis, SubgroupFrame, ConstantBasis},
+    {JointType::kSpherical, "spherical", 3, kNo, kYes, kNo, kNo, kNo, JointSpringLaw::kLogarithm,
+     SphericalBasis, nullptr, nullptr},
+    {JointType::kPlanar, "planar", 3, kNo, kYes, kYes, kNo, kNo, JointSpringLaw::kLogarithm,
+     PlanarBasis, nullptr, nullptr},
+    {JointType::kUniversal, "universal", 2, kYes, kYes, kYes, kYes, kNo,
+     JointSpringLaw::kCoordinates, UniversalBasis, UniversalFrame, UniversalCurrentBasis},
+    {JointType::kFixed, "fixed", 0, kYes, kYes, kNo, kNo, kNo, JointSpringLaw::kCoordinates,
+     FixedBasis, SubgroupFrame, ConstantBasis},
+    {JointType::kFree, "free", 6, kNo, kNo, kNo, kNo, kNo, JointSpringLaw::kLogarithm, FreeBasis,
+     nullptr, nullptr},
+}};
+
+}  // namespace
+
+// ---- the table ---------------------------------------------------------------------------------
+
+const JointTypeInfo& GetJointTypeInfo(JointType type) {
+  const auto i = static_cast<std::size_t>(type);
+  SCREWFEM_CHECK(i < kJointTypes.size() && kJointTypes[i].type == type);
+  return kJointTypes[i];
+}
+
+const JointTypeInfo* FindJointType(std::string_view name) {
+  for (const JointTypeInfo& t : kJointTypes)
+    if (name == t.name) return &t;
+  return nullptr;
+}
+
+std::vector<std::string> JointTypeNameList() {
+  std::vector<std::string> names;
+  for (const JointTypeInfo& t : kJointTypes) names.emplace_back(t.name);
+  return names;
+}
+
+const char* JointTypeName(JointType type) { return GetJointTypeInfo(type).name; }
+
+Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2, double pitch) {
+  return GetJointTypeInfo(type).basis(e, e2, pitch);
+}
+
+bool JointHasGlobalCoordinates(JointType type) {
+  return GetJointTypeInfo(type).global_coordinates;
+}
+
+// ---- the kernel --------------------------------------------------------------------------------
+
+SE3 JointRelativeFrame(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  const JointTypeInfo& t = GetJointTypeInfo(j.type);
+  if (!t.global_coordinates) return data.HJ[static_cast<std::size_t>(joint)];
+  return t.relative_frame(j.basis, data.q_joint.data() + (j.coord - model.nv_nodes));
+}
+
+Mat6X JointCurrentBasis(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  const JointTypeInfo& t = GetJointTypeInfo(j.type);
+  if (!t.global_coordinates) return j.basis;
+  Mat6X A;
+  t.current_basis(j.basis, data.q_joint.data() + (j.coord - model.nv_nodes), &A);
+  return A;
+}
+
+Vec6 JointConstraint(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  const SE3 G = j.offset_a.Inverse() * NodeFrame(data, j.node_a).Inverse() *
+                NodeFrame(data, j.node_b) * j.offset_b;
+  return LogSE3(JointRelativeFrame(model, data, joint).Inverse() * G);
+}
+
+void CalcJointGradient(const Joint& joint, const SE3& H_A, const SE3& H_B, const SE3& H_J,
+                       JointGradient* out) {
+  const SE3 G = joint.offset_a.Inverse() * H_A.Inverse() * H_B * joint.offset_b;
+  out->phi = LogSE3(H_J.Inverse() * G);
+  out->Tinv = TSE3Inv(out->phi);
+  out->Cb_inv = joint.offset_b.Inverse();
+  out->G_A = out->Cb_inv * H_B.Inverse() * H_A;
+}
+
+void CalcJointReferenceGradient(const Model& model, const Joint& joint, JointGradient* out) {
+  out->phi.setZero();
+  out->Tinv.setIdentity();
+  out->Cb_inv = joint.offset_b.Inverse();
+  out->G_A = out->Cb_inv * NodeReferenceFrame(model, joint.node_b).Inverse() *
+             NodeReferenceFrame(model, joint.node_a);
+}
+
+Mat6 JointGradientA(const JointGradient& g) { return Mat6(-g.Tinv * Ad(g.G_A)); }
+Mat6 JointGradientB(const JointGradient& g) { return Mat6(g.Tinv * Ad(g.Cb_inv)); }
+Mat6X JointGradientCoordinates(const JointGradient& g, const Mat6X& basis, const JointMatrix& T_J) {
+  return -(g.Tinv - ad(g.phi)) * basis * T_J;  // T^-1(-phi) = T^-1(phi) - ad(phi)
+}
+
+void JointGradientTransposeTimes(const JointGradient& g, const Vec6& lambda, Vec6* bt_a,
+                                 Vec6* bt_b) {
+  const Vec6 tl = g.Tinv.transpose() * lambda;
+  *bt_a = -AdTransposeTimes(g.G_A, tl);
+  *bt_b = AdTransposeTimes(g.Cb_inv, tl);
+}
+
+void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, double time,
+                              double load_factor, bool dynamics, bool tangent,
+                              JointCoordinateTerms* out) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  const int k = j.k();
+  out->force.setZero();
+  out->stiffness.setZero();
+  out->damping.setZero();
+  out->drive_constraint = 0.0;
+  out->term_scale = 0.0;
+  if (k == 0) return;
+  const auto alpha = data.q_joint.segment(j.coord - model.nv_nodes, k);
+  const auto alpha_dot = data.v.segment(j.coord, k);
+  // A series-elastic drive moves the rest of its coordinate to q(t) (method.md §4.5).
+  Vec6 rest = j.rest, rest_rate = Vec6::Zero();
+  ProfileValue drive{};
+  if (j.drive != DriveKind::kNone) drive = j.drive_profile.Eval(time);
+  if (j.drive == DriveKind::kSeriesElastic) {
+    rest(j.drive_coord) += load_factor * drive.value;
+    rest_rate(j.drive_coord) = load_factor * drive.rate;
+  }
+  Vec6& f = out->force;
+  if (GetJointTypeInfo(j.type).spring_law == JointSpringLaw::kCoordinates) {
+    for (int c = 0; c < k; ++c) {
+      out->term_scale =
+          std::max(out->term_scale, j.stiffness(c) * (std::abs(alpha(c)) + std::abs(rest(c))));
+      f(c) = j.stiffness(c) * (alpha(c) - rest(c));
+      out->stiffness(c, c) = j.stiffness(c);
+      if (dynamics) {
+        f(c) += j.damping(c) * (alpha_dot(c) - rest_rate(c));
+        out->damping(c, c) = j.damping(c);
+      }
+    }
+  } else if (j.stiffness.head(k).squaredNorm() > 0.0 || j.damping.head(k).squaredNorm() > 0.0) {
+    // Energy 1/2 delta^T K delta, delta = A^T log(H_J) (method.md §4.5): f = A^T T^-T(xi) A K
+    // delta, and its derivative along the retraction H_J exp(A dx).
+    const Mat6X& A = j.basis;
+    const Vec6 xi = LogSE3(data.HJ[static_cast<std::size_t>(joint)]);
+    const Mat6 Ti = TSE3Inv(xi);
+    const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1> delta = A.transpose() * xi;
+    const Vec6 Kd_alg = A * j.stiffness.head(k).cwiseProduct(delta);
+    f.head(k) = A.transpose() * Ti.transpose() * Kd_alg;
+    if (tangent)
+      out->stiffness.topLeftCorner(k, k) =
+          A.transpose() *
+          (Ti.transpose() * A * j.stiffness.head(k).asDiagonal() * A.transpose() * Ti +
+           DTSE3InvT(xi, Kd_alg) * Ti) *
+          A;
+    if (dynamics) {
+      for (int c = 0; c < k; ++c) {
+        f(c) += j.damping(c) * alpha_dot(c);
+        out->damping(c, c) = j.damping(c);
+      }
+    }
+  }
+  if (j.drive == DriveKind::kForce) f(j.drive_coord) -= load_factor * drive.value;
+  if (j.drive == DriveKind::kPrescribed) {
+    f(j.drive_coord) += data.lambda(j.drive_row);  // B_act^T lambda_act (method.md §4.4)
+    out->drive_constraint = alpha(j.drive_coord) - load_factor * drive.value;
+  }
+}
+
+void CalcJointCoordinateTangent(const Joint& joint, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                Mat6* out) {
+  const int k = joint.k();
+  out->setIdentity();
+  const Vec6 xi = joint.basis * x.head(k);
+  out->topLeftCorner(k, k) = joint.basis.transpose() * TSE3(xi) * joint.basis;
+}
+
+void RetractJoint(const Model& model, Data& data, int joint,
+                  const Eigen::Ref<const Eigen::VectorXd>& dx) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  const int k = j.k();
+  if (k == 0) return;
+  if (!GetJointTypeInfo(j.type).global_coordinates) {
+    SE3& HJ = data.HJ[static_cast<std::size_t>(joint)];
+    HJ = HJ * ExpSE3(j.basis * dx.head(k));
+  }
+  data.q_joint.segment(j.coord - model.nv_nodes, k) += dx.head(k);
+}
+
+double JointDriveEffort(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  switch (j.drive) {
+    case DriveKind::kNone:
+      return 0.0;
+    case DriveKind::kPrescribed:
+      return -data.lambda(j.drive_row);
+    case DriveKind::kForce:
+      return j.drive_profile(data.time);
+    case DriveKind::kSeriesElastic: {
+      const int c = j.coord + j.drive_coord;
+      const ProfileValue q = j.drive_profile.Eval(data.time);
+      const double alpha = data.q_joint(c - model.nv_nodes);
+      return j.stiffness(j.drive_coord) * (q.value + j.rest(j.drive_coord) - alpha) +
+             j.damping(j.drive_coord) * (q.rate - data.v(c));
+    }
+  }
+  return 0.0;
+}
+
+double JointCoordinateEffort(const Model& model, const Data& data, int joint, int c) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  if (j.drive != DriveKind::kNone && c == j.drive_coord) return JointDriveEffort(model, data, joint);
+  if (j.stiffness(c) == 0.0 && j.damping(c) == 0.0 &&
+      GetJointTypeInfo(j.type).spring_law == JointSpringLaw::kCoordinates)
+    return 0.0;
+  // The force the assembly puts on the coordinate's residual row, with its sign turned.
+  JointCoordinateTerms terms;
+  CalcJointCoordinateTerms(model, data, joint, data.time, 1.0, true, false, &terms);
+  return -terms.force(c);
+}
+
+double JointSpringEnergy(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  const int k = j.k();
+  double energy = 0.0;
+  if (k == 0) return energy;
+  if (GetJointTypeInfo(j.type).spring_law == JointSpringLaw::kLogarithm) {
+    const Vec6 xi = LogSE3(data.HJ[static_cast<std::size_t>(joint)]);
+    for (int c = 0; c < k; ++c) {
+      const double delta = j.basis.col(c).dot(xi);
+      energy += 0.5 * j.stiffness(c) * delta * delta;
+    }
+    return energy;
+  }
+  const auto alpha = data.q_joint.segment(j.coord - model.nv_nodes, k);
+  for (int c = 0; c < k; ++c) {
+    double rest = j.rest(c);
+    if (j.drive == DriveKind::kSeriesElastic && c == j.drive_coord)
+      rest += j.drive_profile(data.time);
+    const double delta = alpha(c) - rest;
+    energy += 0.5 * j.stiffness(c) * delta * delta;
+  }
+  return energy;
+}
+
+}  // namespace screwfem

@@ -1,0 +1,26 @@
+#include "screwfem/model/data.h"
+
+namespace screwfem {
+
+Data MakeData(const Model& model) {
+  Data d;
+  d.H.resize(model.nodes.size());
+  for (std::size_t i = 0; i < model.nodes.size(); ++i) d.H[i] = model.nodes[i].reference;
+  d.HJ.assign(model.joints.size(), SE3::Identity());
+  d.q_joint = Eigen::VectorXd::Zero(model.nv - model.nv_nodes);
+  d.v = Eigen::VectorXd::Zero(model.nv);
+  d.vdot = Eigen::VectorXd::Zero(model.nv);
+  d.lambda = Eigen::VectorXd::Zero(model.nc);
+  d.w_ref.resize(model.elements.size());
+  for (std::size_t e = 0; e < model.elements.size(); ++e) d.w_ref[e] = model.elements[e].d0.tail<3>();
+  d.residual = Eigen::VectorXd::Zero(model.num_unknowns());
+  d.rhs = Eigen::VectorXd::Zero(model.num_unknowns());
+  d.increment = Eigen::VectorXd::Zero(model.num_unknowns());
+  d.node_tangent.assign(model.nodes.size(), Mat6::Identity());
+  d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
+  if (static_cast<int>(model.pattern_last.size()) == model.num_unknowns())
+    d.matrix.SetPattern(model.pattern_last, model.pattern_last);
+  return d;
+}
+
+}  // namespace screwfem
