@@ -102,11 +102,22 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
   }
 }
 
+// A tool script of screwfem: $env_var when set, otherwise <dir of this program>/../share/
+// screwfem/<name>, where the build tree and an installation both put them
+// (cmake/ScrewfemInstall.cmake).
+std::string ToolScript(const char* env_var, const char* name) {
+  const char* env = std::getenv(env_var);
+  if (env && *env) return env;
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return name;
+  return (exe.parent_path().parent_path() / "share" / "screwfem" / name).string();
+}
+
 // Runs the plotting script with Debian's python (full path, no PATH lookup).
 int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
          const std::string& points, const std::string& times) {
-  const char* env_script = std::getenv("SCREWFEM_PLOT_SCRIPT");
-  const std::string script = env_script && *env_script ? env_script : SCREWFEM_PLOT_SCRIPT;
+  const std::string script = ToolScript("SCREWFEM_PLOT_SCRIPT", "screwfem_plot.py");
   if (!std::filesystem::is_regular_file(script)) {
     std::fprintf(stderr, "error: plotting script %s not found (set SCREWFEM_PLOT_SCRIPT)\n",
                  script.c_str());

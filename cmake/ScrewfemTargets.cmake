@@ -40,7 +40,11 @@ function(screwfem_add_library name)
   set_target_properties(screwfem_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
   target_include_directories(screwfem_${name} PUBLIC
     $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:include>)
-  target_link_libraries(screwfem_${name} PUBLIC ${ARG_DEPS} PRIVATE screwfem_options)
+  # The compile settings stay in the build tree (an installed library's users do not get them).
+  target_link_libraries(screwfem_${name} PUBLIC ${ARG_DEPS}
+                        PRIVATE $<BUILD_INTERFACE:screwfem_options>)
+  set_target_properties(screwfem_${name} PROPERTIES EXPORT_NAME ${name})
+  set_property(GLOBAL APPEND PROPERTY SCREWFEM_LIBRARIES screwfem_${name})
   if(SCREWFEM_SANITIZE)
     target_link_options(screwfem_${name} PUBLIC -fsanitize=address,undefined)
   endif()

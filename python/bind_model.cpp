@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bind.h"
+#include "screwfem/elements/joint.h"
 #include "screwfem/model/model.h"
 
 namespace py = pybind11;
