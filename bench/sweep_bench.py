@@ -62,25 +62,42 @@ def same_bits(a, b):
                        np.asarray(b[c], np.float64).view(np.uint64)) for c in cols)
 
 
+def cpu_seconds():
+    """CPU time [s] (user + system) of this process and all its live descendants: the client,
+    the LocalCluster's scheduler (a thread here), its nannies and workers."""
+    import psutil
+
+    me = psutil.Process()
+    total = sum(me.cpu_times()[:2])
+    for child in me.children(recursive=True):
+        try:
+            total += sum(child.cpu_times()[:2])
+        except psutil.NoSuchProcess:
+            pass
+    return total
+
+
 def timed(f):
-    t0 = time.perf_counter()
+    """(wall s, CPU s of the process tree, f())."""
+    c0, t0 = cpu_seconds(), time.perf_counter()
     out = f()
-    return time.perf_counter() - t0, out
+    return time.perf_counter() - t0, cpu_seconds() - c0, out
 
 
 def interleaved(scene, grid, metrics, client, rounds):
-    """[(serial s, parallel s, serial task sums, parallel task sums)] per round, task sums
-    being (wall, CPU) seconds of the tasks themselves, and whether all metrics matched bit
-    for bit."""
+    """[(serial s, parallel s, serial task sums, parallel task sums, serial CPU s, parallel
+    CPU s)] per round, task sums being (wall, CPU) seconds of the tasks themselves and CPU
+    that of the whole process tree, and whether all metrics matched bit for bit."""
     pairs, identical = [], True
     for _ in range(rounds):
-        ts, serial = timed(lambda: sf.sweep(str(scene), grid, metrics=metrics, scheduler="serial"))
-        tp, parallel = timed(lambda: sf.sweep(str(scene), grid, metrics=metrics, client=client,
-                                              timeout=600))
+        ts, cs, serial = timed(lambda: sf.sweep(str(scene), grid, metrics=metrics,
+                                                scheduler="serial"))
+        tp, cp, parallel = timed(lambda: sf.sweep(str(scene), grid, metrics=metrics,
+                                                  client=client, timeout=600))
         assert (serial["status"] == "completed").all() and (parallel["status"] == "completed").all()
         identical &= same_bits(serial, parallel)
         pairs.append((ts, tp, (serial["wall_seconds"].sum(), serial["cpu_seconds"].sum()),
-                      (parallel["wall_seconds"].sum(), parallel["cpu_seconds"].sum())))
+                      (parallel["wall_seconds"].sum(), parallel["cpu_seconds"].sum()), cs, cp))
     return pairs, identical
 
 
@@ -102,11 +119,11 @@ def main():
     from distributed import Client
 
     load_before = os.getloadavg()
-    t_start, cluster = timed(lambda: _sweep._local_cluster(args.workers))
+    t_start, _, cluster = timed(lambda: _sweep._local_cluster(args.workers))
     client = Client(cluster, timeout=120)
     try:
         client.wait_for_workers(args.workers, timeout=120)
-        t_warm, _ = timed(lambda: sf.sweep(str(PENDULUM), {"analysis.end_time": [0.001, 0.002]},
+        t_warm, _, _ = timed(lambda: sf.sweep(str(PENDULUM), {"analysis.end_time": [0.001, 0.002]},
                                            client=client, timeout=300))
         grm, grm_same = interleaved(GRM, GRM_GRID, GRM_METRICS, client, args.rounds)
         tiny, tiny_same = interleaved(PENDULUM, TINY_GRID, TINY_METRICS, client, args.rounds)
@@ -118,6 +135,11 @@ def main():
     n_tiny = len(sf.variants(TINY_GRID))
     ratios = [p[1] / p[0] for p in grm]
     overheads = [(args.workers * p[1] - p[0]) / n_tiny for p in tiny]
+    cpu_overheads = [(p[5] - p[4]) / n_tiny for p in tiny]
+    cpu_ratios = [p[5] / p[4] for p in grm]
+    # What the same sweep would take with `workers` idle cores: the CPU time of the Dask
+    # path spread over the workers, against the serial CPU time.
+    idle_ratios = [p[5] / args.workers / p[4] for p in grm]
     met = max(ratios) <= 0.6
     stamp = datetime.datetime.now(datetime.timezone.utc).replace(microsecond=0).isoformat()
     lines = [
@@ -129,15 +151,15 @@ def main():
         f"{t_warm:.2f} s.",
         "",
         f"| Sweep | Round | Serial | Dask, {args.workers} workers | Ratio | Task wall, serial "
-        "| Task CPU, serial | Task wall, Dask | Task CPU, Dask |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| Task CPU, serial | Task wall, Dask | Task CPU, Dask | CPU, serial | CPU, Dask |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for name, n, rows in ((f"{n_grm} GRM variants", n_grm, grm),
                           (f"{n_tiny} one-step pendulums", n_tiny, tiny)):
-        for k, (ts, tp, (sw, sc), (pw, pc)) in enumerate(rows):
+        for k, (ts, tp, (sw, sc), (pw, pc), cs, cp) in enumerate(rows):
             lines.append(f"| {name} | {k + 1} | {ts:.2f} s | {tp:.2f} s | {tp / ts:.3f} | "
                          f"{1e3 * sw / n:.1f} ms | {1e3 * sc / n:.1f} ms | {1e3 * pw / n:.1f} ms | "
-                         f"{1e3 * pc / n:.1f} ms |")
+                         f"{1e3 * pc / n:.1f} ms | {cs:.2f} s | {cp:.2f} s |")
     lines += [
         "",
         f"GRM ratio parallel / serial: median {statistics.median(ratios):.3f}, worst "
@@ -146,6 +168,15 @@ def main():
         f"time per task (rounds: {', '.join(f'{1e3 * o:.1f}' for o in overheads)} ms). Metrics "
         f"of every parallel sweep identical to the serial ones bit for bit: "
         f"{'yes' if grm_same and tiny_same else 'NO'}.",
+        "",
+        f"CPU accounting (independent of how much of the machine this session got): the Dask "
+        f"sweep of the GRM used {statistics.median(cpu_ratios):.3f}x the CPU time of the serial "
+        f"one (median; rounds {', '.join(f'{r:.3f}' for r in cpu_ratios)}), so with "
+        f"{args.workers} idle cores its wall time would be about "
+        f"{statistics.median(idle_ratios):.2f}x the serial one. Dask CPU overhead per task "
+        f"(client, scheduler, nannies and workers, beyond the task's own work): median "
+        f"{1e3 * statistics.median(cpu_overheads):.1f} ms (rounds "
+        f"{', '.join(f'{1e3 * o:.1f}' for o in cpu_overheads)} ms).",
         "",
     ]
     text = "\n".join(lines)
@@ -174,6 +205,11 @@ The cluster is started once before the timed sweeps; its start is listed separat
   (about a millisecond of work each). Per-task overhead = (workers x Dask wall - serial wall)
   / tasks: the worker time a task costs beyond its own work.
 
+*CPU, serial* and *CPU, Dask* are the CPU time (user + system) of the whole process tree
+during the sweep: the client, the cluster's scheduler (a thread of the client process), the
+nannies and the workers. Their ratio, and the CPU overhead per task derived from it, do not
+depend on how much of the machine the sweep got; CPU, Dask / workers / CPU, serial is the
+ratio the sweep would reach with that many idle cores.
 *Task wall* and *Task CPU* are per-variant means measured inside the task (load, compile and
 run; `screwfem.WallTime`): equal CPU times with a longer wall time on the workers mean the
 workers waited for a processor. On Linux with autogroup scheduling
