@@ -423,7 +423,7 @@ def _table(rows, names, order):
 
 
 def _write_table(df, outdir):
-    df.to_csv(outdir / TABLE_FILE, index=False, float_format="%.17g")
+    df.to_csv(outdir / TABLE_FILE, index=False)  # shortest repr: reads back to the same doubles
     try:
         import pyarrow  # noqa: F401
     except ImportError:
@@ -448,7 +448,9 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
                 a LocalCluster of `workers` processes (default: os.cpu_count()) on 127.0.0.1,
                 closed at the end. Workers of a remote cluster need screwfem importable.
     outdir      writes OUTDIR/rows.jsonl (a row per variant as it completes), results.csv
-                (also results.parquet when pyarrow is present) and sweep.json. `resume=True`
+                (shortest round-trip decimals: pandas.read_csv(..., float_precision=
+                "round_trip") reads the exact doubles; also results.parquet when pyarrow is
+                present) and sweep.json. `resume=True`
                 keeps the rows already in OUTDIR/rows.jsonl and runs only the missing
                 variants (the scene file must be unchanged). `keep_outputs` keeps each
                 variant's files in OUTDIR/runs/<variant_id>/ (ParaView files only with `vtk`).
