@@ -398,12 +398,24 @@ def _local_cluster(workers):
     """A LocalCluster of `workers` single-threaded worker processes, every socket on the
     loopback interface (scheduler, workers, nannies and their HTTP servers)."""
     import logging
+    import signal
+    import threading
 
     from distributed import LocalCluster
 
-    return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                        host="127.0.0.1", dashboard_address="127.0.0.1:0",
-                        worker_dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
+    # Ctrl-C is the client's to handle (it stops the sweep, keeps the rows and closes the
+    # cluster): the worker processes started now ignore SIGINT, a disposition inherited
+    # through exec, instead of each printing a KeyboardInterrupt traceback.
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                            host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                            worker_dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
 
 
 def _table(rows, names, order):
