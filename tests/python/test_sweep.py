@@ -167,6 +167,16 @@ class ClusterSweepTest(unittest.TestCase):
         workers = set(df["worker_pid"])
         self.assertIn(pids[0], workers)
         self.assertGreaterEqual(len(workers), 2)
+        # The scheduler sent the variants the dead worker held back to be run again.
+        def lost_tasks(dask_scheduler):
+            return sorted({t.key for t in dask_scheduler.transition_log
+                           if t.key.startswith("screwfem-variant-") and t.start == "processing"
+                           and t.finish == "released"})
+
+        lost = self.client.run_on_scheduler(lost_tasks)
+        self.assertGreaterEqual(len(lost), 1)
+        for key in lost:  # screwfem-variant-<variant_id>-<nonce>: one row each
+            self.assertEqual(list(df["variant_id"]).count(key.split("-")[2]), 1)
         serial = sf.sweep(PENDULUM, grid, metrics=METRICS, scheduler="serial")
         assert_same_bits(self, df, serial, REPRODUCIBLE)
         table = __import__("pandas").read_csv(outdir / _sweep.TABLE_FILE)
