@@ -375,6 +375,7 @@ class _Progress:
         self.t0 = time.monotonic()
 
     def update(self, row):
+        """Counts a finished row ('failed' counts every status but 'completed') and redraws."""
         self.done += 1
         if row["status"] != "completed":
             self.failed += 1
@@ -384,7 +385,7 @@ class _Progress:
         remaining = self.total - finished
         elapsed = time.monotonic() - self.t0
         eta = elapsed / self.done * remaining
-        sys.stderr.write(f"\rsweep: {finished}/{self.total} done ({self.failed} not completed), "
+        sys.stderr.write(f"\rsweep: {finished}/{self.total} done, {self.failed} failed, "
                          f"{remaining} remaining, about {eta:.0f} s left   ")
         if remaining == 0:
             sys.stderr.write("\n")
