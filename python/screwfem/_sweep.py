@@ -459,7 +459,9 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
     client      a distributed.Client to run on; or `scheduler`: 'tcp://host:8786' (connect to
                 it), or 'serial' (no Dask: one variant after another in this process). Default:
                 a LocalCluster of `workers` processes (default: os.cpu_count()) on 127.0.0.1,
-                closed at the end. Workers of a remote cluster need screwfem importable.
+                closed at the end (in a script, call sweep under `if __name__ ==
+                "__main__":`: the workers are spawned processes, which import the main
+                module). Workers of a remote cluster need screwfem importable.
     outdir      writes OUTDIR/rows.jsonl (a row per variant as it completes), results.csv
                 (shortest round-trip decimals: pandas.read_csv(..., float_precision=
                 "round_trip") reads the exact doubles; also results.parquet when pyarrow is
