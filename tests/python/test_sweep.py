@@ -133,8 +133,8 @@ class ClusterSweepTest(unittest.TestCase):
         self.assertEqual(row["analysis.rho_inf"], 1.0)
 
     def test_a_killed_worker_loses_no_row_and_duplicates_none(self):
-        def slow_metric(run):  # half a second per task: a kill lands mid-task
-            time.sleep(0.5)
+        def slow_metric(run):  # 0.3 s per task: a kill lands mid-task
+            time.sleep(0.3)
             return {"worker_pid": os.getpid()}
 
         grid = {"analysis.end_time": [0.1], "bodies.link.mass": [0.1, 0.15, 0.2, 0.25],
