@@ -38,7 +38,6 @@ __all__ = [
 ROWS_FILE = "rows.jsonl"      # the journal: one JSON row per finished variant
 TABLE_FILE = "results.csv"    # the table, rewritten from the journal at the end of a sweep
 MANIFEST_FILE = "sweep.json"  # scene file, its hash and the variant list of the sweep
-STATUSES = ("completed", "failed", "invalid", "error")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -330,7 +329,8 @@ def run_variant(scene_text, scene_source, overrides, metrics=DEFAULT_METRICS, ke
 # The journal (OUTDIR/rows.jsonl)
 
 def _read_journal(path):
-    """Rows of a journal keyed by variant_id; a last line cut short by a kill is ignored."""
+    """Rows of a journal keyed by variant_id; a last line cut short by a kill is ignored. A row
+    with status 'error' (which a resumed sweep runs again) gives way to a later row."""
     rows = {}
     if not path.exists():
         return rows
@@ -342,7 +342,9 @@ def _read_journal(path):
                 row = json.loads(line)
             except ValueError:
                 continue
-            rows.setdefault(row["variant_id"], row)
+            old = rows.get(row["variant_id"])
+            if old is None or old.get("status") == "error":
+                rows[row["variant_id"]] = row
     return rows
 
 
@@ -467,8 +469,10 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
                 "round_trip") reads the exact doubles; also results.parquet when pyarrow is
                 present) and sweep.json. `resume=True`
                 keeps the rows already in OUTDIR/rows.jsonl and runs only the missing
-                variants (the scene file must be unchanged). `keep_outputs` keeps each
-                variant's files in OUTDIR/runs/<variant_id>/ (ParaView files only with `vtk`).
+                variants and those whose row has status 'error' (e.g. a task lost with too
+                many workers); the scene file must be unchanged. `keep_outputs` keeps each
+                variant's files in OUTDIR/runs/<variant_id>/ on the worker's file system
+                (ParaView files only with `vtk`).
     timeout     seconds to wait for the whole sweep (None: no limit); raises TimeoutError.
 
     Columns: variant (index in the variant list), variant_id, one per parameter, overrides,
@@ -507,7 +511,8 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
                 if previous.get("scene_sha256") != manifest["scene_sha256"]:
                     raise ValueError(f"sweep: cannot resume in {outdir}: the scene file changed "
                                      "since the rows there were computed")
-            rows = {v: r for v, r in _read_journal(journal_path).items() if v in params_of}
+            rows = {v: r for v, r in _read_journal(journal_path).items()
+                    if v in params_of and r.get("status") != "error"}
         elif journal_path.exists() and journal_path.stat().st_size > 0:
             raise FileExistsError(f"sweep: {journal_path} exists (resume=True continues it; or "
                                   "choose another outdir)")

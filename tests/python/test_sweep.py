@@ -83,6 +83,31 @@ class VariantsTest(unittest.TestCase):
         self.assertEqual(len(sf.variant_id([])), 16)
 
 
+class JournalTest(unittest.TestCase):
+    """OUTDIR/rows.jsonl across an interruption (serial sweeps: no cluster)."""
+
+    def test_resume_drops_a_cut_line_and_reruns_error_rows_only(self):
+        grid = {"analysis.end_time": [0.05], "bodies.link.mass": [0.1, 0.2, 0.3]}
+        with tempfile.TemporaryDirectory() as tmp:
+            first = sf.sweep(PENDULUM, grid, metrics=METRICS[1:], scheduler="serial", outdir=tmp)
+            lines = journal_lines(tmp)
+            row = json.loads(lines[1])
+            row["status"] = "error"  # as if its task had been lost
+            lines[1] = json.dumps(row)
+            # ... and a kill cut the journal in the middle of a fourth line.
+            (pathlib.Path(tmp) / _sweep.ROWS_FILE).write_text("\n".join(lines) + '\n{"varia')
+            with self.assertRaises(FileExistsError):  # without resume: refuses to overwrite
+                sf.sweep(PENDULUM, grid, scheduler="serial", outdir=tmp)
+            again = sf.sweep(PENDULUM, grid, metrics=METRICS[1:], scheduler="serial",
+                             outdir=tmp, resume=True)
+            after = journal_lines(tmp)
+            self.assertEqual(after[:3], lines)  # kept; the cut line is gone
+            self.assertEqual(len(after), 4)     # only the error row ran again
+            self.assertEqual(json.loads(after[3])["variant_id"], row["variant_id"])
+            self.assertEqual(list(again["status"]), ["completed"] * 3)
+            assert_same_bits(self, first, again, REPRODUCIBLE[6:])
+
+
 class ClusterSweepTest(unittest.TestCase):
     """Sweeps on one LocalCluster of 2 worker processes, shared by the tests of this class."""
 
