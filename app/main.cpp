@@ -122,10 +122,12 @@ int RunPython(std::vector<std::string> args, const std::string& python_path) {
   argv.push_back(nullptr);
   std::vector<std::string> env_strings;
   for (char** e = environ; *e != nullptr; ++e)
-    if (python_path.empty() || std::strncmp(*e, "PYTHONPATH=", 11) != 0) env_strings.emplace_back(*e);
+    if (python_path.empty() || std::strncmp(*e, "PYTHONPATH=", 11) != 0)
+      env_strings.emplace_back(*e);
   if (!python_path.empty()) {
     const char* old = std::getenv("PYTHONPATH");
-    env_strings.push_back("PYTHONPATH=" + python_path + (old && *old ? std::string(":") + old : ""));
+    const std::string rest = old && *old ? std::string(":") + old : "";
+    env_strings.push_back("PYTHONPATH=" + python_path + rest);
   }
   std::vector<char*> envp;
   for (std::string& e : env_strings) envp.push_back(e.data());

@@ -19,9 +19,9 @@ command line.
 from . import _screwfem
 from ._screwfem import *  # noqa: F401,F403  (the package re-exports the module)
 from ._screwfem import __version__
-from ._sweep import (DEFAULT_METRICS, Counters, MaxConstraintResidual, PeakJointEffort,  # noqa: F401
-                     PointPosition, Run, WallTime, format_overrides, run_variant, sweep,
-                     variant_id, variants)
+from ._sweep import (  # noqa: F401  (sweeps: python/screwfem/_sweep.py)
+    DEFAULT_METRICS, Counters, MaxConstraintResidual, PeakJointEffort, PointPosition, Run,
+    WallTime, format_overrides, run_variant, sweep, variant_id, variants)
 
 __all__ = [name for name in dir(_screwfem) if not name.startswith("_")] + [
     "sweep", "variants", "format_overrides", "variant_id", "run_variant", "Run", "PointPosition",

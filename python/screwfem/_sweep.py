@@ -101,7 +101,8 @@ def variants(parameters, samples=None, seed=0):
         import numpy as np
 
         if not isinstance(parameters, dict):
-            raise TypeError("sweep: random samples need a dict {key: (low, high) | list | callable}")
+            raise TypeError("sweep: random samples need a dict "
+                            "{key: (low, high) | list | callable}")
         rng = np.random.default_rng(seed)
         out = []
         for _ in range(int(samples)):
@@ -114,20 +115,22 @@ def variants(parameters, samples=None, seed=0):
                 elif isinstance(spec, list) and spec:
                     row[key] = spec[int(rng.integers(len(spec)))]
                 else:
-                    raise TypeError(f"sweep: sample spec of '{_key_name(key)}' must be (low, high), "
-                                    "a non-empty list or a callable")
+                    raise TypeError(f"sweep: sample spec of '{_key_name(key)}' must be "
+                                    "(low, high), a non-empty list or a callable")
             out.append(row)
         return out
     if isinstance(parameters, dict):
         keys = list(parameters)
         for key in keys:
             if not isinstance(parameters[key], (list, tuple)) or len(parameters[key]) == 0:
-                raise TypeError(f"sweep: grid values of '{_key_name(key)}' must be a non-empty list")
-        return [dict(zip(keys, combo)) for combo in itertools.product(*(parameters[k] for k in keys))]
-    out = [dict(v) for v in parameters]
+                raise TypeError(f"sweep: grid values of '{_key_name(key)}' must be a "
+                                "non-empty list")
+        combos = itertools.product(*(parameters[k] for k in keys))
+        return [dict(zip(keys, combo)) for combo in combos]
+    parameters = list(parameters)
     if not all(isinstance(v, dict) for v in parameters):
         raise TypeError("sweep: parameters must be a grid dict or a list of override dicts")
-    return out
+    return [dict(v) for v in parameters]
 
 
 # ---------------------------------------------------------------------------------------------
