@@ -164,7 +164,10 @@ class Run:
             path = self.outdir / f"{name}.csv"
             with open(path) as f:
                 header = f.readline().strip().split(",")
-            data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+                body = f.read()
+            data = np.empty((0, len(header)))
+            if body.strip():  # no rows when the first step failed
+                data = np.loadtxt(body.splitlines(), delimiter=",", ndmin=2)
             self._tables[name] = (header, data.reshape(-1, len(header)))
         return self._tables[name]
 
