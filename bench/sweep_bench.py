@@ -219,7 +219,7 @@ that share among themselves and parallel runs cannot beat serial ones. The load 
 listed for this reason: the target applies to an otherwise idle machine.
 
 Reproduce with `PYTHONPATH=build/release/python /usr/bin/python3 bench/sweep_bench.py`
-(about a minute on 2 cores; `--rounds N` for more pairs)."""
+(1 to 2 minutes on 2 cores with the default 2 rounds; `--rounds N` for more pairs)."""
 
 
 if __name__ == "__main__":
