@@ -3,6 +3,10 @@
 //   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet]
 //   screwfem check SCENE.yaml [--set key=value]...
 //   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1]
+//   screwfem sweep SCENE.yaml --grid key=v1,v2 [--grid ...] -o DIR [--resume] [...]
+//
+// `plot` and `sweep` run Python (Debian's /usr/bin/python3): tools/screwfem_plot.py, and
+// `python3 -m screwfem sweep` with the package of the build tree (python/screwfem).
 //
 // Exit codes: 0 success, 1 a failed step or static solution, 2 invalid input or usage,
 // 130 interrupted (SIGINT).
@@ -102,7 +106,52 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
   }
 }
 
-// Runs the plotting script with Debian's python (full path, no PATH lookup).
+// Runs Debian's python (full path, no PATH lookup) with `args` after the interpreter, and with
+// `python_path` first on PYTHONPATH when it is not empty; returns its exit code (128 + signal
+// when killed). While it runs, SIGINT (Ctrl-C reaches the whole foreground process group) is
+// left to the child: this process waits for it to exit.
+int RunPython(std::vector<std::string> args, const std::string& python_path) {
+  if (access(kPython, X_OK) != 0) {
+    std::fprintf(stderr, "error: %s not found (install python3 and the packages in the README)\n",
+                 kPython);
+    return kExitInput;
+  }
+  args.insert(args.begin(), kPython);
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::vector<std::string> env_strings;
+  for (char** e = environ; *e != nullptr; ++e)
+    if (python_path.empty() || std::strncmp(*e, "PYTHONPATH=", 11) != 0)
+      env_strings.emplace_back(*e);
+  if (!python_path.empty()) {
+    const char* old = std::getenv("PYTHONPATH");
+    const std::string rest = old && *old ? std::string(":") + old : "";
+    env_strings.push_back("PYTHONPATH=" + python_path + rest);
+  }
+  std::vector<char*> envp;
+  for (std::string& e : env_strings) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  // A handler (not SIG_IGN) so that the child starts with the default disposition.
+  struct sigaction action {};
+  action.sa_handler = OnSigint;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  pid_t pid = 0;
+  const int err = posix_spawn(&pid, kPython, nullptr, nullptr, argv.data(), envp.data());
+  if (err != 0) {
+    std::fprintf(stderr, "error: cannot start %s: %s\n", kPython, std::strerror(err));
+    return kExitFailed;
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return kExitFailed;
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
+  return kExitFailed;
+}
+
+// Runs the plotting script (SCREWFEM_PLOT_SCRIPT overrides its compiled-in path).
 int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
          const std::string& points, const std::string& times) {
   const char* env_script = std::getenv("SCREWFEM_PLOT_SCRIPT");
@@ -112,30 +161,29 @@ int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
                  script.c_str());
     return kExitInput;
   }
-  if (access(kPython, X_OK) != 0) {
-    std::fprintf(stderr, "error: %s not found (install python3-matplotlib and python3-numpy)\n",
-                 kPython);
-    return kExitInput;
-  }
-  std::vector<std::string> args = {kPython, script};
+  std::vector<std::string> args = {script};
   args.insert(args.end(), outdirs.begin(), outdirs.end());
   args.insert(args.end(), {"-o", figdir});
   if (!points.empty()) args.insert(args.end(), {"--points", points});
   if (!times.empty()) args.insert(args.end(), {"--times", times});
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int err = posix_spawn(&pid, kPython, nullptr, nullptr, argv.data(), environ);
-  if (err != 0) {
-    std::fprintf(stderr, "error: cannot start %s: %s\n", kPython, std::strerror(err));
-    return kExitFailed;
+  return RunPython(args, "");
+}
+
+// Runs `python3 -m screwfem sweep ARGS...` with the build tree's package (SCREWFEM_PYTHONPATH
+// overrides its compiled-in directory; it must hold screwfem/__init__.py).
+int Sweep(const std::vector<std::string>& sweep_args) {
+  const char* env_dir = std::getenv("SCREWFEM_PYTHONPATH");
+  const std::string dir = env_dir && *env_dir ? env_dir : SCREWFEM_PYTHON_DIR;
+  if (!std::filesystem::is_regular_file(std::filesystem::path(dir) / "screwfem" / "__init__.py")) {
+    std::fprintf(stderr,
+                 "error: Python package screwfem not found in %s (build the target _screwfem, or "
+                 "set SCREWFEM_PYTHONPATH)\n",
+                 dir.c_str());
+    return kExitInput;
   }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) return kExitFailed;
-  if (WIFEXITED(status)) return WEXITSTATUS(status);
-  return kExitFailed;
+  std::vector<std::string> args = {"-m", "screwfem", "sweep"};
+  args.insert(args.end(), sweep_args.begin(), sweep_args.end());
+  return RunPython(args, dir);
 }
 
 }  // namespace
@@ -169,6 +217,13 @@ int main(int argc, char** argv) {
   plot->add_option("--points", points, "comma-separated point names (default: all)");
   plot->add_option("--times", times, "comma-separated snapshot times [s] (default: 5 evenly spaced)");
 
+  // Everything after `sweep` goes to the Python front end (python/screwfem/__main__.py), which
+  // parses and documents it (`screwfem sweep --help`).
+  CLI::App* sweep = app.add_subcommand(
+      "sweep", "run many variants of a scene on a Dask cluster (python3 -m screwfem sweep)");
+  sweep->prefix_command();
+  sweep->set_help_flag();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -176,5 +231,6 @@ int main(int argc, char** argv) {
   }
   if (run->parsed()) return Run(scene_path, outdir, overrides, quiet);
   if (check->parsed()) return Check(scene_path, overrides);
+  if (sweep->parsed()) return Sweep(sweep->remaining());
   return Plot(outdirs, figdir, points, times);
 }
