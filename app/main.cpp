@@ -3,6 +3,10 @@
 //   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet]
 //   screwfem check SCENE.yaml [--set key=value]...
 //   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1]
+//   screwfem sweep SCENE.yaml --grid key=v1,v2 [--grid ...] -o DIR [--resume] [...]
+//
+// `plot` and `sweep` run Python (Debian's /usr/bin/python3): tools/screwfem_plot.py, and
+// `python3 -m screwfem sweep` with the package of the build tree (python/screwfem).
 //
 // Exit codes: 0 success, 1 a failed step or static solution, 2 invalid input or usage,
 // 130 interrupted (SIGINT).
@@ -102,42 +106,66 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
   }
 }
 
-// A tool script of screwfem: $env_var when set, otherwise <dir of this program>/../share/
-// screwfem/<name>, where the build tree and an installation both put them
-// (cmake/ScrewfemInstall.cmake).
+// The directory above the one this program is in: the build directory in a build tree, the
+// prefix in an installation (cmake/ScrewfemInstall.cmake).
+std::filesystem::path ProgramPrefix() {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::filesystem::path() : exe.parent_path().parent_path();
+}
+
+// A tool script of screwfem: $env_var when set, otherwise <prefix>/share/screwfem/<name>,
+// where the build tree and an installation both put them.
 std::string ToolScript(const char* env_var, const char* name) {
   const char* env = std::getenv(env_var);
   if (env && *env) return env;
-  std::error_code ec;
-  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (ec) return name;
-  return (exe.parent_path().parent_path() / "share" / "screwfem" / name).string();
+  return (ProgramPrefix() / "share" / "screwfem" / name).string();
 }
 
-// Runs the plotting script with Debian's python (full path, no PATH lookup).
-int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
-         const std::string& points, const std::string& times) {
-  const std::string script = ToolScript("SCREWFEM_PLOT_SCRIPT", "screwfem_plot.py");
-  if (!std::filesystem::is_regular_file(script)) {
-    std::fprintf(stderr, "error: plotting script %s not found (set SCREWFEM_PLOT_SCRIPT)\n",
-                 script.c_str());
-    return kExitInput;
-  }
+// The directory holding the Python package screwfem: $SCREWFEM_PYTHONPATH when set, otherwise
+// <prefix>/python in a build tree or <prefix>/share/screwfem/python in an installation.
+std::string PythonPackageDir() {
+  const char* env = std::getenv("SCREWFEM_PYTHONPATH");
+  if (env && *env) return env;
+  const std::filesystem::path build_tree = ProgramPrefix() / "python";
+  if (std::filesystem::is_regular_file(build_tree / "screwfem" / "__init__.py"))
+    return build_tree.string();
+  return (ProgramPrefix() / "share" / "screwfem" / "python").string();
+}
+
+// Runs Debian's python (full path, no PATH lookup) with `args` after the interpreter, and with
+// `python_path` first on PYTHONPATH when it is not empty; returns its exit code (128 + signal
+// when killed). While it runs, SIGINT (Ctrl-C reaches the whole foreground process group) is
+// left to the child: this process waits for it to exit.
+int RunPython(std::vector<std::string> args, const std::string& python_path) {
   if (access(kPython, X_OK) != 0) {
-    std::fprintf(stderr, "error: %s not found (install python3-matplotlib and python3-numpy)\n",
+    std::fprintf(stderr, "error: %s not found (install python3 and the packages in the README)\n",
                  kPython);
     return kExitInput;
   }
-  std::vector<std::string> args = {kPython, script};
-  args.insert(args.end(), outdirs.begin(), outdirs.end());
-  args.insert(args.end(), {"-o", figdir});
-  if (!points.empty()) args.insert(args.end(), {"--points", points});
-  if (!times.empty()) args.insert(args.end(), {"--times", times});
+  args.insert(args.begin(), kPython);
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
+  std::vector<std::string> env_strings;
+  for (char** e = environ; *e != nullptr; ++e)
+    if (python_path.empty() || std::strncmp(*e, "PYTHONPATH=", 11) != 0)
+      env_strings.emplace_back(*e);
+  if (!python_path.empty()) {
+    const char* old = std::getenv("PYTHONPATH");
+    const std::string rest = old && *old ? std::string(":") + old : "";
+    env_strings.push_back("PYTHONPATH=" + python_path + rest);
+  }
+  std::vector<char*> envp;
+  for (std::string& e : env_strings) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  // A handler (not SIG_IGN) so that the child starts with the default disposition.
+  struct sigaction action {};
+  action.sa_handler = OnSigint;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
   pid_t pid = 0;
-  const int err = posix_spawn(&pid, kPython, nullptr, nullptr, argv.data(), environ);
+  const int err = posix_spawn(&pid, kPython, nullptr, nullptr, argv.data(), envp.data());
   if (err != 0) {
     std::fprintf(stderr, "error: cannot start %s: %s\n", kPython, std::strerror(err));
     return kExitFailed;
@@ -146,7 +174,41 @@ int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
   while (waitpid(pid, &status, 0) < 0)
     if (errno != EINTR) return kExitFailed;
   if (WIFEXITED(status)) return WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
   return kExitFailed;
+}
+
+// Runs the plotting script (ToolScript; SCREWFEM_PLOT_SCRIPT overrides its location).
+int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
+         const std::string& points, const std::string& times) {
+  const std::string script = ToolScript("SCREWFEM_PLOT_SCRIPT", "screwfem_plot.py");
+  if (!std::filesystem::is_regular_file(script)) {
+    std::fprintf(stderr, "error: plotting script %s not found (set SCREWFEM_PLOT_SCRIPT)\n",
+                 script.c_str());
+    return kExitInput;
+  }
+  std::vector<std::string> args = {script};
+  args.insert(args.end(), outdirs.begin(), outdirs.end());
+  args.insert(args.end(), {"-o", figdir});
+  if (!points.empty()) args.insert(args.end(), {"--points", points});
+  if (!times.empty()) args.insert(args.end(), {"--times", times});
+  return RunPython(args, "");
+}
+
+// Runs `python3 -m screwfem sweep ARGS...` with the package of PythonPackageDir (it must hold
+// screwfem/__init__.py).
+int Sweep(const std::vector<std::string>& sweep_args) {
+  const std::string dir = PythonPackageDir();
+  if (!std::filesystem::is_regular_file(std::filesystem::path(dir) / "screwfem" / "__init__.py")) {
+    std::fprintf(stderr,
+                 "error: Python package screwfem not found in %s (build the target _screwfem, or "
+                 "set SCREWFEM_PYTHONPATH)\n",
+                 dir.c_str());
+    return kExitInput;
+  }
+  std::vector<std::string> args = {"-m", "screwfem", "sweep"};
+  args.insert(args.end(), sweep_args.begin(), sweep_args.end());
+  return RunPython(args, dir);
 }
 
 }  // namespace
@@ -180,6 +242,13 @@ int main(int argc, char** argv) {
   plot->add_option("--points", points, "comma-separated point names (default: all)");
   plot->add_option("--times", times, "comma-separated snapshot times [s] (default: 5 evenly spaced)");
 
+  // Everything after `sweep` goes to the Python front end (python/screwfem/__main__.py), which
+  // parses and documents it (`screwfem sweep --help`).
+  CLI::App* sweep = app.add_subcommand(
+      "sweep", "run many variants of a scene on a Dask cluster (python3 -m screwfem sweep)");
+  sweep->prefix_command();
+  sweep->set_help_flag();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -187,5 +256,6 @@ int main(int argc, char** argv) {
   }
   if (run->parsed()) return Run(scene_path, outdir, overrides, quiet);
   if (check->parsed()) return Check(scene_path, overrides);
+  if (sweep->parsed()) return Sweep(sweep->remaining());
   return Plot(outdirs, figdir, points, times);
 }

@@ -12,6 +12,8 @@ is missing or empty is skipped. One table per benchmark family:
 Each JSON's revision comes from its context (the script passes --benchmark_context=revision=...),
 else from REVISION. Uses the median over repetitions when the JSON holds aggregates, else the
 single run. Times are real time (wall clock; manual time where the benchmark times itself).
+The section "Parameter sweeps on Dask" of an existing OUTPUT_MD (written by
+bench/sweep_bench.py, a history of its runs) is kept, at the end.
 A failed benchmark is listed as failed and makes the exit status 1 (after writing the file).
 Standard library only.
 """
@@ -297,6 +299,9 @@ def rod_statics_section(entries):
     ]
 
 
+SWEEP_SECTION = "## Parameter sweeps on Dask"
+
+
 def main():
     if len(sys.argv) < 5:
         sys.exit(__doc__)
@@ -338,8 +343,15 @@ def main():
         "```",
         "",
     ]
+    # The section bench/sweep_bench.py appends to (its runs' history) is kept as it is.
+    kept = ""
+    if os.path.exists(out_path):
+        with open(out_path, encoding="utf-8") as f:
+            old = f.read()
+        if SWEEP_SECTION in old:
+            kept = "\n" + old[old.index(SWEEP_SECTION):]
     with open(out_path, "w", encoding="utf-8") as f:
-        f.write("\n".join(lines))
+        f.write("\n".join(lines) + kept)
     if errors:
         sys.exit("make_results.py: failed benchmarks (listed in the tables):\n  "
                  + "\n  ".join(errors))

@@ -200,13 +200,17 @@ void BindScenesAndRuns(py::module_& m) {
         return RunScene(scene, outdir, options);
       },
       py::arg("scene"), py::arg("outdir"), py::arg("progress") = false,
+      // The run touches no Python object: other Python threads (a Dask worker's event loop
+      // and heartbeats) go on while it computes.
+      py::call_guard<py::gil_scoped_release>(),
       "run_scene(scene, outdir, progress=False) -> RunResult\n\n"
       "Runs the scene's analysis and writes its outputs into `outdir` (created if needed):\n"
       "points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az; world frame,\n"
       "SI), joints.csv, summary.json and vtk/ (run.h). `progress` draws a progress bar on\n"
       "stderr. A numerical failure ends the run and is reported in the result (ok False,\n"
       "message), not raised; raises InputError for invalid settings or outputs and when\n"
-      "outdir or its files cannot be created.");
+      "outdir or its files cannot be created. Releases the GIL while it runs (do not modify\n"
+      "`scene` from another thread meanwhile).");
 
   py::class_<StepSchedule>(
       m, "StepSchedule",

@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libyaml-cpp-dev libcli11-dev
   googletest libgtest-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-matplotlib
+  python3-dask python3-distributed python3-pandas
 )
 
 if ! command -v dpkg-query > /dev/null 2>&1; then

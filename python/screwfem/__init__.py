@@ -10,10 +10,19 @@ Units are SI (m, kg, s, N, rad). Point positions, velocities and accelerations a
 world frame; node velocities in ``Simulation.v`` are body velocities [v; w] in the node frame.
 Invalid input raises ``InputError`` (a ValueError), numerical failure ``SolverError`` (a
 RuntimeError).
+
+``sweep`` runs many variants of a scene (a grid, a list or random samples of overrides) as Dask
+tasks and returns a pandas DataFrame (screwfem/_sweep.py); ``python3 -m screwfem sweep`` is its
+command line.
 """
 
 from . import _screwfem
 from ._screwfem import *  # noqa: F401,F403  (the package re-exports the module)
 from ._screwfem import __version__
+from ._sweep import (  # noqa: F401  (sweeps: python/screwfem/_sweep.py)
+    DEFAULT_METRICS, Counters, MaxConstraintResidual, PeakJointEffort, PointPosition, Run,
+    WallTime, format_overrides, run_variant, sweep, variant_id, variants)
 
-__all__ = [name for name in dir(_screwfem) if not name.startswith("_")]
+__all__ = [name for name in dir(_screwfem) if not name.startswith("_")] + [
+    "sweep", "variants", "format_overrides", "variant_id", "run_variant", "Run", "PointPosition",
+    "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort", "DEFAULT_METRICS"]

@@ -1,7 +1,7 @@
 # The test `install_consumer`: installs the build tree BUILD_DIR into a fresh prefix, configures
 # and builds tests/install/consumer against it with find_package(screwfem), runs the program,
 # and checks that the installed CLI finds its plot tool. Fails on the first step that fails.
-#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -P run_consumer.cmake
+#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... [-DPYTHON=/usr/bin/python3] -P ...
 foreach(var BUILD_DIR SOURCE_DIR WORK_DIR)
   if(NOT ${var})
     message(FATAL_ERROR "run_consumer: pass -D${var}=...")
@@ -31,5 +31,10 @@ endif()
 run(${prefix}/bin/screwfem check ${SOURCE_DIR}/tests/data/pendulum.yaml)
 if(NOT EXISTS ${prefix}/share/screwfem/screwfem_plot.py)
   message(FATAL_ERROR "run_consumer: share/screwfem/screwfem_plot.py was not installed")
+endif()
+# The installed Python package imports with the installed extension (when it was built).
+if(PYTHON)
+  run(${CMAKE_COMMAND} -E env PYTHONPATH=${prefix}/share/screwfem/python PYTHONDONTWRITEBYTECODE=1
+      ${PYTHON} -c "import screwfem, sys; print('consumer: python', screwfem.__file__); sys.exit(0 if screwfem.__file__.startswith('${prefix}') else 1)")
 endif()
 message(STATUS "run_consumer: installed, built and ran the consumer")

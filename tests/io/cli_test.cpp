@@ -1,6 +1,7 @@
 // The screwfem program (app/main.cpp), run as a child process on tests/data/pendulum.yaml:
 // files and exit codes of run (0 completed, 1 failed step, 2 input error, 130 SIGINT),
-// check, and plot (which runs tools/screwfem_plot.py with /usr/bin/python3).
+// check, and plot (which runs tools/screwfem_plot.py with /usr/bin/python3); sweep's package
+// lookup.
 #include <gtest/gtest.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -230,6 +231,21 @@ TEST(Cli, PlotScriptCanBeOverriddenByTheEnvironment) {
                            {"SCREWFEM_PLOT_SCRIPT=" + tmp.path() + "/no_such_script.py"});
   EXPECT_EQ(o.code, 2);
   EXPECT_NE(o.err.find("no_such_script.py not found"), std::string::npos) << o.err;
+}
+
+// `screwfem sweep` runs `python3 -m screwfem sweep` (tests/python/test_sweep.py covers it); the
+// package directory is compiled in and overridable, with a clear error when it is wrong.
+TEST(Cli, SweepPackageDirectoryCanBeOverriddenByTheEnvironment) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_sweep_env");
+  const Outcome o = RunCli({"sweep", kPendulum, "--grid", "analysis.rho_inf=0.8,1", "-o",
+                            tmp.path() + "/sweep"},
+                           tmp.path(), {"SCREWFEM_PYTHONPATH=" + tmp.path() + "/no_such_dir"});
+  EXPECT_EQ(o.code, 2);
+  EXPECT_NE(o.err.find("Python package screwfem not found in " + tmp.path() + "/no_such_dir"),
+            std::string::npos)
+      << o.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp.path() + "/sweep"));
 }
 
 }  // namespace
