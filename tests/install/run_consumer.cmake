@@ -35,6 +35,8 @@ endif()
 # The installed Python package imports with the installed extension (when it was built).
 if(PYTHON)
   run(${CMAKE_COMMAND} -E env PYTHONPATH=${prefix}/share/screwfem/python PYTHONDONTWRITEBYTECODE=1
-      ${PYTHON} -c "import screwfem, sys; print('consumer: python', screwfem.__file__); sys.exit(0 if screwfem.__file__.startswith('${prefix}') else 1)")
+      ${PYTHON} -c "import screwfem, sys
+print('consumer: python package', screwfem.__file__)
+sys.exit(0 if screwfem.__file__.startswith('${prefix}') else 1)")
 endif()
 message(STATUS "run_consumer: installed, built and ran the consumer")
