@@ -96,171 +96,222 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
 
 namespace {
 
-// One generalized-alpha step of size h from the current state (method.md §5.2). Returns the
-// number of Newton corrections, or -1 on failure (state then undefined: caller restores).
-// `conservative`: full Newton from the zero-acceleration start, whatever the options (the
-// retry of a step the faster settings could not do).
-int TryStep(const Model& model, Data& data, Integrator& integ, double h, bool conservative,
-            std::string* why) {
-  const GeneralizedAlpha& p = integ.params;
-  const DynamicOptions& opt = integ.options;
-  const int nv = model.nv;
-  const double t_new = data.time + h;
-  const double beta_p = (1.0 - p.alpha_m) / (h * h * p.beta * (1.0 - p.alpha_f));
-  const double gamma_p = p.gamma / (h * p.beta);
-  const double bh2 = p.beta * h * h;
+// ---- the stages of one generalized-alpha step (method.md §5.2) -------------------------------
 
-  // Predictor. The auxiliary acceleration is a_{n+1} = a_base + c_a vdot_{n+1}; the Newton
-  // corrections below keep v, dq and a consistent with it (gamma' dx = h gamma c_a beta' dx,
-  // dx / h = h beta c_a beta' dx), so the iteration may start from any vdot_{n+1}.
-  const double c_a = (1.0 - p.alpha_f) / (1.0 - p.alpha_m);
+// The step's constants: h, the iteration-matrix coefficients beta' and gamma', the residual
+// scale beta h^2 and c_a, with the auxiliary acceleration a_{n+1} = a_base + c_a vdot_{n+1}.
+struct StepConstants {
+  double h, beta_p, gamma_p, bh2, c_a;
+};
+
+StepConstants MakeStepConstants(const GeneralizedAlpha& p, double h) {
+  StepConstants c;
+  c.h = h;
+  c.beta_p = (1.0 - p.alpha_m) / (h * h * p.beta * (1.0 - p.alpha_f));
+  c.gamma_p = p.gamma / (h * p.beta);
+  c.bh2 = p.beta * h * h;
+  c.c_a = (1.0 - p.alpha_f) / (1.0 - p.alpha_m);
+  return c;
+}
+
+// Predict: the start of the Newton iteration at t + h. The Newton corrections keep v, dq and a
+// consistent with the auxiliary acceleration (gamma' dx = h gamma c_a beta' dx,
+// dx / h = h beta c_a beta' dx), so the iteration may start from any vdot_{n+1}: vdot_n or 0
+// (DynamicOptions::predictor).
+void Predict(Data& data, Integrator& integ, const StepConstants& c, bool from_last) {
+  const GeneralizedAlpha& p = integ.params;
+  const double h = c.h;
   integ.a_base = (p.alpha_f * integ.vdot_start - p.alpha_m * integ.a_start) / (1.0 - p.alpha_m);
-  bool full_newton = conservative || opt.newton_matrix == NewtonMatrix::kEveryIteration;
-  if (integ.use_last_acceleration && !conservative)
+  if (from_last)
     data.vdot = integ.vdot_start;
   else
     data.vdot.setZero();
-  integ.a = integ.a_base + c_a * data.vdot;
+  integ.a = integ.a_base + c.c_a * data.vdot;
   data.v = integ.v_start + h * (1.0 - p.gamma) * integ.a_start + h * p.gamma * integ.a;
   integ.dq = integ.v_start + h * (0.5 - p.beta) * integ.a_start + h * p.beta * integ.a;
   data.lambda = integ.lambda_start;
-  data.time = t_new;
+  data.time += h;
+}
 
+// Update the configuration: q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
+void UpdateConfiguration(const Model& model, Data& data, const Integrator& integ, double h) {
+  RestoreState(integ.q_start, data);
+  data.increment.head(model.nv) = h * integ.dq;
+  Retract(model, data, data.increment.head(model.nv));
+}
+
+// The assembly options of the dynamic iteration (Bottasso scaling, assemble.h).
+AssemblyOptions DynamicAssemblyOptions(const DynamicOptions& opt, const StepConstants& c,
+                                       double time) {
   AssemblyOptions o;
-  o.time = t_new;
+  o.time = time;
   o.dynamics = true;
-  o.c_mass = beta_p;
-  o.c_damping = gamma_p;
+  o.c_mass = c.beta_p;
+  o.c_damping = c.gamma_p;
   o.c_stiffness = 1.0;
-  o.s_rows = bh2;
+  o.s_rows = c.bh2;
   o.s_constraints = 1.0;
-  o.s_multipliers = 1.0 / bh2;
+  o.s_multipliers = 1.0 / c.bh2;
   o.use_node_tangent = opt.use_tangent_operator;
+  return o;
+}
 
-  // Assembles at the current iterate; the iteration matrix (and the tangent operators it
-  // needs) only when `with_matrix`.
-  const auto assemble = [&](bool with_matrix) {
-    if (with_matrix && opt.use_tangent_operator) {
-      for (const Node& n : model.nodes)
-        if (n.dof >= 0)
-          data.node_tangent[static_cast<std::size_t>(&n - model.nodes.data())] =
-              TSE3(data.increment.segment<6>(n.dof));
-      // Group joints: H_J = H_J,n exp(A_J x) with x = h dq_J; the correction of x moves H_J
-      // by A_J T_k dx with T_k = A_J^T T(A_J x) A_J (A_J spans a subalgebra, orthonormal
-      // columns).
-      for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
-        const Joint& j = model.joints[jj];
-        if (j.k() == 0 || JointHasGlobalCoordinates(j.type)) continue;
-        CalcJointCoordinateTangent(j, data.increment.segment(j.coord, j.k()),
-                                   &data.node_tangent[model.nodes.size() + jj]);
-      }
+// Assemble at the current iterate; the iteration matrix (and the tangent operators T(h dq) of
+// the nodes and of joints whose H_J retracts by the exponential) only `with_matrix`.
+bool AssembleIterate(const Model& model, Data& data, const DynamicOptions& opt,
+                     AssemblyOptions& o, bool with_matrix, std::string* why) {
+  if (with_matrix && opt.use_tangent_operator) {
+    for (std::size_t i = 0; i < model.nodes.size(); ++i)
+      if (model.nodes[i].dof >= 0)
+        data.node_tangent[i] = TSE3(data.increment.segment<6>(model.nodes[i].dof));
+    for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+      const Joint& j = model.joints[jj];
+      if (j.k() == 0 || JointHasGlobalCoordinates(j.type)) continue;
+      CalcJointCoordinateTangent(j, data.increment.segment(j.coord, j.k()),
+                                 &data.node_tangent[model.nodes.size() + jj]);
     }
-    o.assemble_matrix = with_matrix;
-    if (Assemble(model, data, o)) return true;
-    if (why) {
-      char buf[200];
-      if (data.failed_element >= 0)
-        std::snprintf(buf, sizeof buf,
-                      "element %d rotates by %.4g rad, beyond what one helical element "
-                      "represents (2 pi); use more elements",
-                      data.failed_element, data.failed_rotation);
-      else
-        std::snprintf(buf, sizeof buf, "the residual is not finite");
-      *why = buf;
-    }
-    return false;
-  };
-  // q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
-  const auto configure = [&] {
-    RestoreState(integ.q_start, data);
-    data.increment.head(nv) = h * integ.dq;
-    Retract(model, data, data.increment.head(nv));
-  };
-  const auto accept = [&] {
-    integ.a = integ.a_base + c_a * data.vdot;
-    // The adaptive predictor starts the next step from whichever start would have been
-    // closer for this one: vdot_n (smooth motion) or 0 (undamped high-frequency content,
-    // which flips the sign of vdot from step to step).
-    if (opt.predictor == Predictor::kAdaptive)
-      integ.use_last_acceleration =
-          (data.vdot - integ.vdot_start).squaredNorm() <= data.vdot.squaredNorm();
-  };
+  }
+  o.assemble_matrix = with_matrix;
+  if (Assemble(model, data, o)) return true;
+  if (why) {
+    char buf[200];
+    if (data.failed_element >= 0)
+      std::snprintf(buf, sizeof buf,
+                    "element %d rotates by %.4g rad, beyond what one helical element "
+                    "represents (2 pi); use more elements",
+                    data.failed_element, data.failed_rotation);
+    else
+      std::snprintf(buf, sizeof buf, "the residual is not finite");
+    *why = buf;
+  }
+  return false;
+}
+
+// The convergence measures of an assembled iterate: largest residual and constraint entries,
+// the residual's scale and round-off floor, and whether the residual test passes.
+struct IterateMeasures {
+  double res, con, scale, floor;
+  bool residual_ok;
+};
+
+IterateMeasures MeasureIterate(const Model& model, const Data& data, const DynamicOptions& opt) {
+  IterateMeasures m;
+  m.res = data.residual.head(model.nv).cwiseAbs().maxCoeff();
+  m.con = model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() : 0.0;
+  m.scale = std::max(data.force_scale, 1e-300);
+  m.floor = 32.0 * std::numeric_limits<double>::epsilon() *
+            std::max(data.term_scale, data.force_scale);
+  m.residual_ok = m.con <= opt.constraint_tolerance &&
+                  (m.res <= opt.residual_tolerance * m.scale || m.res <= m.floor);
+  return m;
+}
+
+// ConvergenceTest::kEstimated: the iterate after this correction has the residual,
+// constraints and correction of this one times the contraction of the iteration (simplified
+// or quasi-Newton, linear convergence): the larger of those of the last two corrections and
+// of the last two residuals (constraint maxima). What this iterate fails, the next one must
+// pass by estimate, with the margin kEstimateSafety.
+bool ConvergedByEstimate(const DynamicOptions& opt, const IterateMeasures& m, double increment,
+                         bool increment_ok, double last_increment, double last_res,
+                         double last_con) {
+  const auto ratio = [](double now, double before) { return now > 0.0 ? now / before : 0.0; };
+  const double theta = ratio(increment, last_increment);
+  const double c_res = std::max(theta, ratio(m.res, last_res));
+  const double c_con = std::max(theta, ratio(m.con, last_con));
+  const double r = kEstimateSafety * opt.residual_tolerance * m.scale;
+  return std::max(c_res, c_con) <= kMaxEstimateContraction &&
+         (increment_ok || theta * increment <= kEstimateSafety * opt.increment_tolerance) &&
+         (m.residual_ok || (c_con * m.con <= kEstimateSafety * opt.constraint_tolerance &&
+                            (c_res * m.res <= r || c_res * m.res <= m.floor)));
+}
+
+// Correct: solve the iteration matrix for the Newton correction (factorising it when
+// `factorize`) and apply it to dq, v, vdot and lambda. Returns false if the matrix is singular.
+bool Correct(const Model& model, Data& data, Integrator& integ, const StepConstants& c,
+             bool factorize) {
+  bool solved;
+  if (factorize) {
+    ++integ.factorizations;
+    solved = SolveAssembledSystem(model, data);
+  } else {
+    solved = SolveFactorizedSystem(model, data);
+  }
+  if (!solved) return false;
+  const auto dx = data.increment.head(model.nv);
+  integ.dq += dx / c.h;
+  data.v += c.gamma_p * dx;
+  data.vdot += c.beta_p * dx;
+  data.lambda += data.increment.tail(model.nc) / c.bh2;
+  return true;
+}
+
+// Accept: the auxiliary acceleration of the converged state, and the next step's predictor:
+// whichever start would have been closer for this step, vdot_n (smooth motion) or 0
+// (undamped high-frequency content, which flips the sign of vdot from step to step).
+void Accept(Data& data, Integrator& integ, const StepConstants& c) {
+  integ.a = integ.a_base + c.c_a * data.vdot;
+  if (integ.options.predictor == Predictor::kAdaptive)
+    integ.use_last_acceleration =
+        (data.vdot - integ.vdot_start).squaredNorm() <= data.vdot.squaredNorm();
+}
+
+// One generalized-alpha step of size h from the current state (method.md §5.2): predict, then
+// Newton iterations of update configuration -> assemble -> check convergence -> correct, then
+// accept. Returns the number of Newton corrections, or -1 on failure (state then undefined:
+// the caller restores). `conservative`: full Newton from the zero-acceleration start, whatever
+// the options (the retry of a step the faster settings could not do).
+int TryStep(const Model& model, Data& data, Integrator& integ, double h, bool conservative,
+            std::string* why) {
+  const DynamicOptions& opt = integ.options;
+  const StepConstants c = MakeStepConstants(integ.params, h);
+  bool full_newton = conservative || opt.newton_matrix == NewtonMatrix::kEveryIteration;
+  Predict(data, integ, c, integ.use_last_acceleration && !conservative);
+  AssemblyOptions o = DynamicAssemblyOptions(opt, c, data.time);
 
   double last_increment = INFINITY, last_res = INFINITY, last_con = INFINITY;
   bool factorized = false;  // data.matrix holds a factorisation from this step
   for (int it = 0; it <= opt.max_iterations; ++it) {
-    configure();
+    UpdateConfiguration(model, data, integ, h);
     const bool need_matrix = full_newton || !factorized;
     // Once the last correction passed the increment test the step usually converges here:
     // assemble the residual alone, and the matrix only if the residual test then fails (the
     // residual does not depend on it).
     const bool may_converge = last_increment <= opt.increment_tolerance;
     const bool with_matrix = need_matrix && !may_converge && it < opt.max_iterations;
-    if (!assemble(with_matrix)) return -1;
-    const double res = data.residual.head(nv).cwiseAbs().maxCoeff();
-    const double con =
-        model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() : 0.0;
-    const double scale = std::max(data.force_scale, 1e-300);
-    const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
-                         std::max(data.term_scale, data.force_scale);
-    const bool residual_ok = con <= opt.constraint_tolerance &&
-                             (res <= opt.residual_tolerance * scale || res <= floor);
-    if (it > 0 && residual_ok && may_converge) {
-      accept();
+    if (!AssembleIterate(model, data, opt, o, with_matrix, why)) return -1;
+    const IterateMeasures m = MeasureIterate(model, data, opt);
+    if (it > 0 && m.residual_ok && may_converge) {
+      Accept(data, integ, c);
       return it;
     }
     if (it == opt.max_iterations) break;
-    if (need_matrix && !with_matrix && !assemble(true)) return -1;
-    bool solved;
-    if (need_matrix) {
-      ++integ.factorizations;
-      solved = SolveAssembledSystem(model, data);
-      factorized = solved;
-    } else {
-      solved = SolveFactorizedSystem(model, data);
-    }
-    if (!solved) {
+    if (need_matrix && !with_matrix && !AssembleIterate(model, data, opt, o, true, why)) return -1;
+    if (!Correct(model, data, integ, c, need_matrix)) {
       if (why) *why = "the iteration matrix is singular";
       return -1;
     }
-    const auto dx = data.increment.head(nv);
-    integ.dq += dx / h;
-    data.v += gamma_p * dx;
-    data.vdot += beta_p * dx;
-    data.lambda += data.increment.tail(model.nc) / bh2;
-    const double increment = ScaledIncrementSize(model, dx);
+    if (need_matrix) factorized = true;
+    const double increment = ScaledIncrementSize(model, data.increment.head(model.nv));
     // Converged: the residual passed at this iterate and its correction is below the
     // increment tolerance (the corrected state is only closer to the solution).
     const bool increment_ok = increment <= opt.increment_tolerance;
-    bool converged = increment_ok && residual_ok;
-    // Estimated: the iterate after this correction has the residual, constraints and
-    // correction of this one times the contraction of the iteration (simplified or
-    // quasi-Newton, linear convergence): the larger of those of the last two corrections and
-    // of the last two residuals (constraint maxima). What this iterate fails, the next one
-    // must pass by estimate, with the margin kEstimateSafety.
+    bool converged = increment_ok && m.residual_ok;
     if (!converged && opt.convergence == ConvergenceTest::kEstimated && it > 0) {
-      const auto ratio = [](double now, double before) { return now > 0.0 ? now / before : 0.0; };
-      const double theta = ratio(increment, last_increment);
-      const double c_res = std::max(theta, ratio(res, last_res));
-      const double c_con = std::max(theta, ratio(con, last_con));
-      const double r = kEstimateSafety * opt.residual_tolerance * scale;
-      converged = std::max(c_res, c_con) <= kMaxEstimateContraction &&
-                  (increment_ok || theta * increment <= kEstimateSafety * opt.increment_tolerance) &&
-                  (residual_ok || (c_con * con <= kEstimateSafety * opt.constraint_tolerance &&
-                                   (c_res * res <= r || c_res * res <= floor)));
+      converged = ConvergedByEstimate(opt, m, increment, increment_ok, last_increment, last_res,
+                                      last_con);
       if (converged) ++integ.estimated_convergences;
     }
     if (converged) {
-      configure();
-      accept();
+      UpdateConfiguration(model, data, integ, h);
+      Accept(data, integ, c);
       return it + 1;
     }
     // A reused matrix that contracts too little: rebuild it, and from then on at every
     // iteration of this step (the step is too nonlinear for the simplified iteration).
     if (!need_matrix && increment > opt.refresh_ratio * last_increment) full_newton = true;
     last_increment = increment;
-    last_res = res;
-    last_con = con;
+    last_res = m.res;
+    last_con = m.con;
   }
   if (why) {
     char buf[200];
