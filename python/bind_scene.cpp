@@ -194,37 +194,53 @@ void BindScenesAndRuns(py::module_& m) {
 
   m.def(
       "run_scene",
-      [](const Scene& scene, const std::string& outdir, bool progress) {
+      [](const Scene& scene, const std::string& outdir, bool progress, bool force) {
         RunOptions options;
         options.progress = progress;
-        return RunScene(scene, outdir, options);
+        options.replace_results = force;
+        PythonSignals signals;
+        options.stop = signals.request();
+        RunResult r = RunScene(scene, outdir, options);
+        signals.ThrowIfRaised();
+        return r;
       },
-      py::arg("scene"), py::arg("outdir"), py::arg("progress") = false,
-      "run_scene(scene, outdir, progress=False) -> RunResult\n\n"
+      py::arg("scene"), py::arg("outdir"), py::arg("progress") = false, py::arg("force") = false,
+      "run_scene(scene, outdir, progress=False, force=False) -> RunResult\n\n"
       "Runs the scene's analysis and writes its outputs into `outdir` (created if needed):\n"
       "points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az; world frame,\n"
       "SI), joints.csv, summary.json and vtk/ (run.h). `progress` draws a progress bar on\n"
       "stderr. A numerical failure ends the run and is reported in the result (ok False,\n"
       "message), not raised; raises InputError for invalid settings or outputs and when\n"
-      "outdir or its files cannot be created.");
+      "outdir or its files cannot be created, when another run holds outdir, and when it\n"
+      "holds an earlier run's results unless `force` (then screwfem's files, and only\n"
+      "those, are removed first). A signal (Ctrl-C) ends the run cleanly, with\n"
+      "summary.json status 'interrupted' and complete files, then raises KeyboardInterrupt.");
 
   py::class_<StepSchedule>(
       m, "StepSchedule",
       "The step ends of a dynamic run (schedule.h): start + n step for n >= 1, "
       "every breakpoint in (start, end), and end.")
       .def(py::init([](double start, double end, double step, std::vector<double> breakpoints) {
-             if (!(std::isfinite(start) && std::isfinite(end) && end >= start))
-               throw py::value_error("StepSchedule: start and end must be finite, end >= start");
-             if (!(std::isfinite(step) && step > 0.0))
-               throw py::value_error("StepSchedule: step must be a finite time > 0 s");
+             ValidateTimeGrid(start, end, step, "StepSchedule");
              return StepSchedule(start, end, step, std::move(breakpoints));
            }),
            py::arg("start"), py::arg("end"), py::arg("step"),
            py::arg("breakpoints") = std::vector<double>{},
-           "Times in [s]. Raises ValueError unless step > 0 and end >= start (all finite).")
+           "Times in [s]. Raises InputError (a ValueError) unless start and end are finite, "
+           "end >= start, step > 0, at most 1e9 steps, and the step ends representable to a "
+           "relative accuracy of 1e-6 (docs/scene-format.md, 'analysis').")
       .def("done", &StepSchedule::Done, py::arg("t"), "True once t [s] has reached the end.")
-      .def("next", &StepSchedule::Next, py::arg("t"),
-           "The step end following t [s] (start or an earlier step end); requires not done(t).");
+      .def(
+          "next",
+          [](const StepSchedule& s, double t) {
+            if (!s.Accepts(t))
+              throw InputError("StepSchedule.next: t must be finite, not before start and not "
+                               "done(t)");
+            return s.Next(t);
+          },
+          py::arg("t"),
+          "The step end following t [s] (start or an earlier step end). Raises InputError (a "
+          "ValueError) unless t is finite, not before start and not done(t).");
 
   m.def("profile_breakpoints", &ProfileBreakpoints, py::arg("model"),
         "profile_breakpoints(model) -> list of float\n\n"
