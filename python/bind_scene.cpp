@@ -52,14 +52,17 @@ void BindSettings(py::module_& m) {
              "the last two corrections.");
 
   py::class_<DynamicOptions>(m, "DynamicOptions",
-                             "Settings of the generalized-alpha integrator (dynamics.h).")
+                             "Settings of the generalized-alpha integrator (dynamics.h). Checked "
+                             "when used (ValidateDynamicOptions): out-of-range values, tolerances "
+                             "that are not finite and > 0, and unknown enum values raise "
+                             "InputError.")
       .def(py::init<>())
       .def_readwrite("rho_inf", &DynamicOptions::rho_inf,
                      "Spectral radius at infinity in [0, 1] (1: no numerical damping).")
       .def_readwrite("max_iterations", &DynamicOptions::max_iterations,
-                     "Newton iterations per step.")
+                     "Newton iterations per step, in [1, 1000].")
       .def_readwrite("max_halvings", &DynamicOptions::max_halvings,
-                     "A failed step is retried as 2, 4, ... 2^max_halvings substeps.")
+                     "A failed step is retried as 2, 4, ... 2^max_halvings substeps; in [0, 30].")
       .def_readwrite("increment_tolerance", &DynamicOptions::increment_tolerance,
                      "Last Newton correction of the positions (translations relative to the "
                      "model's length scale, rotations [rad] and joint coordinates as they are).")
@@ -79,16 +82,17 @@ void BindSettings(py::module_& m) {
                      "Where the residual tests apply (ConvergenceTest).");
 
   py::class_<StaticOptions>(m, "StaticOptions",
-                            "Settings of the static Newton solver with load stepping (statics.h).")
+                            "Settings of the static Newton solver with load stepping (statics.h). "
+                            "Checked when used (ValidateStaticOptions), raising InputError.")
       .def(py::init<>())
       .def_readwrite("time", &StaticOptions::time,
                      "Time at which the profiles of loads and drives are evaluated [s].")
       .def_readwrite("load_steps", &StaticOptions::load_steps,
-                     "Initial number of equal load increments.")
+                     "Initial number of equal load increments, in [1, 1000000].")
       .def_readwrite("max_halvings", &StaticOptions::max_halvings,
-                     "Consecutive halvings of the load increment.")
+                     "Consecutive halvings of the load increment, in [0, 30].")
       .def_readwrite("max_iterations", &StaticOptions::max_iterations,
-                     "Newton iterations per load step.")
+                     "Newton iterations per load step, in [1, 1000].")
       .def_readwrite("residual_tolerance", &StaticOptions::residual_tolerance,
                      "|R|_inf relative to the largest force term in R.")
       .def_readwrite("increment_tolerance", &StaticOptions::increment_tolerance,

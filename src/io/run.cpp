@@ -193,14 +193,22 @@ class Run {
     lock_.Acquire(outdir);
     PrepareOutputDirectory(outdir, options.replace_results);
     summary_path_ = outdir + "/summary.json";
-    points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
-    joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
-    if (scene.outputs.vtk) {
-      vtk_.emplace();
-      vtk_->Open(outdir + "/vtk");
+    try {
+      points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
+      joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
+      if (scene.outputs.vtk) {
+        vtk_.emplace();
+        vtk_->Open(outdir + "/vtk");
+      }
+      if (!WriteSummary())
+        throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
+    } catch (const InputError&) {
+      // No header-only tables without a summary that explains them.
+      points_.Close();
+      joints_.Close();
+      PrepareOutputDirectory(outdir, true);
+      throw;
     }
-    if (!WriteSummary())
-      throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
   }
 
   void Execute() {

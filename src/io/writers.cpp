@@ -125,6 +125,12 @@ void AppendNumber(std::string* text, double value, int precision) {
   text->append(buf, r.ptr);
 }
 
+void AppendShortest(std::string* text, double value) {
+  char buf[64];
+  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, value);
+  text->append(buf, r.ptr);
+}
+
 namespace {
 
 constexpr std::size_t kCsvBatchBytes = 64 * 1024;  // batch capacity reserved at Open
@@ -172,10 +178,10 @@ void CsvWriter::Open(const std::string& path, const std::vector<std::string>& co
 
 bool CsvWriter::WriteRow(double t, const std::vector<double>& values) {
   if (fd_ < 0 || failed_) return false;
-  AppendNumber(&batch_, t, 17);
+  AppendShortest(&batch_, t);
   for (double v : values) {
     batch_ += ',';
-    AppendNumber(&batch_, v, 17);
+    AppendShortest(&batch_, v);
   }
   batch_ += '\n';
   row_ends_.push_back(batch_.size());
@@ -340,9 +346,7 @@ JsonWriter& JsonWriter::Number(double value) {
     text_ += "null";
     return *this;
   }
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", value);
-  text_ += buf;
+  AppendShortest(&text_, value);
   return *this;
 }
 

@@ -300,6 +300,19 @@ TEST(Cli, WriteErrorLeavesCompleteRowsAndASummaryThatSaysSo) {
   EXPECT_LE(std::filesystem::file_size(out + "/points.csv"), 30000u);
 }
 
+// When not even the first summary fits (200 bytes), the run stops before it starts and
+// leaves no header-only tables that no summary explains.
+TEST(Cli, WriteErrorBeforeTheFirstSummaryLeavesNoTables) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_full_start");
+  const std::string out = tmp.path() + "/out";
+  const Outcome o = RunCliWithLimit({"run", kPendulum, "-o", out}, tmp.path(), RLIMIT_FSIZE, 200);
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("summary.json: File too large"), std::string::npos) << o.err;
+  for (const char* file : {"/points.csv", "/joints.csv", "/summary.json", "/vtk"})
+    EXPECT_FALSE(std::filesystem::exists(out + file)) << file;
+}
+
 // Waits until the run writing `out` has recorded a few rows.
 void WaitForRows(const std::string& out) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);

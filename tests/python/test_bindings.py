@@ -92,7 +92,7 @@ def swing(h):
 
 
 def read_csv(path):
-    """{t: row values} of a points.csv / joints.csv (written with %.17g: exact doubles)."""
+    """{t: row values} of a points.csv / joints.csv (shortest round-trip text: exact doubles)."""
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
     return rows[0], {float(r[0]): np.array([float(x) for x in r[1:]]) for r in rows[1:]}

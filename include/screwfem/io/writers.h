@@ -47,9 +47,13 @@ double JointCoordinateEffort(const Model& model, const Data& data, int joint, in
 // Appends `value` formatted as printf("%.*g", precision, value) would (std::to_chars with a
 // precision is specified to match printf, and is several times faster).
 void AppendNumber(std::string* text, double value, int precision);
+// Appends the shortest decimal text that reads back (strtod, Python float) as exactly `value`
+// (std::to_chars without a precision): "0.1" for 0.1, where %.17g writes
+// "0.10000000000000001"; infinities and NaN as "inf", "-inf", "nan".
+void AppendShortest(std::string* text, double value);
 
-// A CSV table: header "t,<columns>", then one row per call, each written with full double
-// precision (%.17g). Rows are collected in memory (a batch) and written to the file by Flush
+// A CSV table: header "t,<columns>", then one row per call, each value written as the
+// shortest text that reads back as the same double (AppendShortest). Rows are collected in memory (a batch) and written to the file by Flush
 // or FlushTogether, so that the file ends with a complete row: when a write fails (a full
 // disk, a file size limit) the torn last row is cut off, and the writer accepts no more rows.
 class CsvWriter {
@@ -98,7 +102,7 @@ class CsvWriter {
   bool failed_ = false;
 };
 
-// Builds JSON text: objects, arrays, strings (escaped), numbers (%.17g; NaN and infinities
+// Builds JSON text: objects, arrays, strings (escaped), numbers (AppendShortest; NaN and infinities
 // become null), integers, booleans. Commas and indentation are inserted automatically.
 class JsonWriter {
  public:
