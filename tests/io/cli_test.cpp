@@ -209,6 +209,7 @@ TEST(Cli, SigtermAndSighupEndTheRunWithConsistentFilesAndSayWhichSignal) {
     const auto summary = ParseJsonFile(out + "/summary.json");
     ASSERT_TRUE(summary);
     EXPECT_EQ(summary->Find("status")->string, "terminated");
+    ASSERT_NE(summary->Find("signal"), nullptr);
     EXPECT_EQ(summary->Find("signal")->string, name);
     const Table points = ReadCsv(out + "/points.csv"), joints = ReadCsv(out + "/joints.csv");
     ASSERT_TRUE(points.well_formed) << points.problem;
