@@ -254,9 +254,9 @@ Outcome RunCliWithLimit(const std::vector<std::string>& args, const std::string&
   return Wait(pid, dir);
 }
 
-// Any exception main() did not expect (here: out of memory under a 512 MiB address-space
-// limit, building a GRM with 100000 elements per soft body) is reported with exit code 3,
-// never an abort.
+// Any exception main() did not expect (here: out of memory under a 48 MiB address-space
+// limit, in which the pendulum runs, building a GRM with 10000 elements per soft body) is
+// reported with exit code 3, never an abort.
 TEST(Cli, OutOfMemoryIsReportedWithExitCodeThree) {
   REQUIRE_CLI();
 #if defined(__SANITIZE_ADDRESS__)
@@ -264,9 +264,14 @@ TEST(Cli, OutOfMemoryIsReportedWithExitCodeThree) {
 #endif
   const ScopedDir tmp("cli_oom");
   const std::string grm = std::string(SCREWFEM_SOURCE_DIR) + "/examples/grm/grm_rigid.yaml";
+  const rlim_t limit = rlim_t{48} << 20;
+  const Outcome fits = RunCliWithLimit(
+      {"run", kPendulum, "-o", tmp.path() + "/small", "--set", "analysis.end_time=0.01"},
+      tmp.path(), RLIMIT_AS, limit);
+  ASSERT_EQ(fits.code, 0) << "the limit leaves no room for a small run: " << fits.err;
   const Outcome o = RunCliWithLimit({"run", grm, "-o", tmp.path() + "/out", "--set",
-                                     "defaults.elements=100000", "--set", "outputs.vtk=false"},
-                                    tmp.path(), RLIMIT_AS, rlim_t{512} << 20);
+                                     "defaults.elements=10000", "--set", "outputs.vtk=false"},
+                                    tmp.path(), RLIMIT_AS, limit);
   EXPECT_EQ(o.code, 3) << o.err;
   EXPECT_NE(o.err.find("internal error: out of memory"), std::string::npos) << o.err;
 }
