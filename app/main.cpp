@@ -1,6 +1,6 @@
 // The screwfem command-line program (thin: parse arguments, call the library).
 //
-//   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet]
+//   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet] [--force]
 //   screwfem check SCENE.yaml [--set key=value]...
 //   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1]
 //   screwfem sweep SCENE.yaml --grid key=v1,v2 [--grid ...] -o DIR [--resume] [...]
@@ -8,8 +8,10 @@
 // `plot` and `sweep` run Python (Debian's /usr/bin/python3): tools/screwfem_plot.py, and
 // `python3 -m screwfem sweep` with the package of the build tree (python/screwfem).
 //
-// Exit codes: 0 success, 1 a failed step or static solution, 2 invalid input or usage,
-// 130 interrupted (SIGINT).
+// Exit codes: 0 success, 1 a failed step or static solution, 2 invalid input or usage, or
+// an output directory that cannot be used or written (in use, earlier results, a full disk),
+// 3 an internal error (any exception the program did not expect, e.g. out of memory),
+// 128 + the signal number when a signal stopped the run: 130 SIGINT, 143 SIGTERM, 129 SIGHUP.
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <cerrno>
@@ -17,7 +19,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <filesystem>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -38,18 +42,22 @@ constexpr int kExitInput = 2;
 constexpr int kExitInterrupted = 130;
 constexpr const char* kPython = "/usr/bin/python3";
 
-std::atomic<bool> g_stop{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the SIGINT handler needs a lock-free flag");
+constexpr int kExitInternal = 3;
 
-extern "C" void OnSigint(int) { g_stop.store(true); }
+// The number of the first signal that asked the run to stop (0: none).
+std::atomic<int> g_stop{0};
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free flag");
 
-// The first SIGINT asks the run to stop cleanly; a second one ends the program at once.
-void InstallSigintHandler() {
+extern "C" void OnStopSignal(int signal) { g_stop.store(signal); }
+
+// SIGINT, SIGTERM and SIGHUP ask the run to stop cleanly (files flushed, summary saying which
+// signal); a second one of the same kind ends the program at once.
+void InstallStopHandlers() {
   struct sigaction action {};
-  action.sa_handler = OnSigint;
+  action.sa_handler = OnStopSignal;
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESETHAND;
-  sigaction(SIGINT, &action, nullptr);
+  for (int signal : {SIGINT, SIGTERM, SIGHUP}) sigaction(signal, &action, nullptr);
 }
 
 void PrintWarnings(const screwfem::Model& model) {
@@ -57,23 +65,28 @@ void PrintWarnings(const screwfem::Model& model) {
 }
 
 int Run(const std::string& scene_path, const std::string& outdir,
-        const std::vector<std::string>& overrides, bool quiet) {
+        const std::vector<std::string>& overrides, bool quiet, bool force) {
   try {
     const screwfem::Scene scene = screwfem::LoadScene(scene_path, overrides);
     PrintWarnings(scene.model);
     screwfem::RunOptions options;
     options.progress = !quiet && isatty(STDERR_FILENO);
-    options.stop = &g_stop;
-    InstallSigintHandler();
+    options.stop.flag = &g_stop;
+    options.replace_results = force;
     const screwfem::RunResult r = screwfem::RunScene(scene, outdir, options);
-    const char* status = r.ok ? "completed" : r.interrupted ? "interrupted" : "failed";
+    const char* status = r.ok            ? "completed"
+                         : !r.interrupted ? "failed"
+                         : r.signal == SIGTERM || r.signal == SIGHUP ? "terminated"
+                                                                     : "interrupted";
     std::printf("%s: t = %.6g s, %ld steps, %ld Newton iterations (at most %d per step), %ld halvings, "
                 "%.3g s wall, max |phi| %.2g, max element rotation %.3g rad -> %s\n",
                 status, r.end_time, r.steps, r.newton_iterations, r.max_iterations_per_step,
                 r.halvings, r.wall_seconds, r.max_constraint_residual, r.max_element_rotation,
                 outdir.c_str());
     if (!r.ok) std::fprintf(stderr, "%s\n", r.message.c_str());
-    return r.ok ? 0 : r.interrupted ? kExitInterrupted : kExitFailed;
+    if (r.ok) return 0;
+    if (r.interrupted) return r.signal > 0 ? 128 + r.signal : kExitInterrupted;
+    return r.io_error ? kExitInput : kExitFailed;
   } catch (const screwfem::InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitInput;
@@ -159,9 +172,10 @@ int RunPython(std::vector<std::string> args, const std::string& python_path) {
   std::vector<char*> envp;
   for (std::string& e : env_strings) envp.push_back(e.data());
   envp.push_back(nullptr);
-  // A handler (not SIG_IGN) so that the child starts with the default disposition.
+  // A handler (not SIG_IGN) so that the child starts with the default disposition; Ctrl-C
+  // is the child's to act on, this process waits for it.
   struct sigaction action {};
-  action.sa_handler = OnSigint;
+  action.sa_handler = OnStopSignal;
   sigemptyset(&action.sa_mask);
   sigaction(SIGINT, &action, nullptr);
   pid_t pid = 0;
@@ -211,15 +225,13 @@ int Sweep(const std::vector<std::string>& sweep_args) {
   return RunPython(args, dir);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int Main(int argc, char** argv) {
   CLI::App app{"screwfem: geometrically exact screw-based FEM for articulated soft robots"};
   app.require_subcommand(1);
 
   std::string scene_path, outdir, figdir, points, times;
   std::vector<std::string> overrides, outdirs;
-  bool quiet = false;
+  bool quiet = false, force = false;
   const auto add_overrides = [&](CLI::App* cmd) {
     cmd->add_option("--set", overrides, "override a scene value, e.g. analysis.step=5e-4 (repeatable)")
         ->type_name("KEY=VALUE")
@@ -231,6 +243,8 @@ int main(int argc, char** argv) {
   run->add_option("-o,--output", outdir, "output directory (created if needed)")->required();
   add_overrides(run);
   run->add_flag("-q,--quiet", quiet, "no progress bar");
+  run->add_flag("-f,--force", force,
+                "replace the results of an earlier run in OUTDIR (removes screwfem's files only)");
 
   CLI::App* check = app.add_subcommand("check", "validate a scene and print its size");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
@@ -254,8 +268,27 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : kExitInput;
   }
-  if (run->parsed()) return Run(scene_path, outdir, overrides, quiet);
+  if (run->parsed()) {
+    InstallStopHandlers();
+    return Run(scene_path, outdir, overrides, quiet, force);
+  }
   if (check->parsed()) return Check(scene_path, overrides);
   if (sweep->parsed()) return Sweep(sweep->remaining());
   return Plot(outdirs, figdir, points, times);
+}
+
+}  // namespace
+
+// Every exception ends the program with a message and exit code 3, never an abort.
+int main(int argc, char** argv) {
+  try {
+    return Main(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fputs("internal error: out of memory\n", stderr);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: %s\n", e.what());
+  } catch (...) {
+    std::fputs("internal error: an unknown exception\n", stderr);
+  }
+  return kExitInternal;
 }

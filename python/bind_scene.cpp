@@ -52,14 +52,17 @@ void BindSettings(py::module_& m) {
              "the last two corrections.");
 
   py::class_<DynamicOptions>(m, "DynamicOptions",
-                             "Settings of the generalized-alpha integrator (dynamics.h).")
+                             "Settings of the generalized-alpha integrator (dynamics.h). Checked "
+                             "when used (ValidateDynamicOptions): out-of-range values, tolerances "
+                             "that are not finite and > 0, and unknown enum values raise "
+                             "InputError.")
       .def(py::init<>())
       .def_readwrite("rho_inf", &DynamicOptions::rho_inf,
                      "Spectral radius at infinity in [0, 1] (1: no numerical damping).")
       .def_readwrite("max_iterations", &DynamicOptions::max_iterations,
-                     "Newton iterations per step.")
+                     "Newton iterations per step, in [1, 1000].")
       .def_readwrite("max_halvings", &DynamicOptions::max_halvings,
-                     "A failed step is retried as 2, 4, ... 2^max_halvings substeps.")
+                     "A failed step is retried as 2, 4, ... 2^max_halvings substeps; in [0, 30].")
       .def_readwrite("increment_tolerance", &DynamicOptions::increment_tolerance,
                      "Last Newton correction of the positions (translations relative to the "
                      "model's length scale, rotations [rad] and joint coordinates as they are).")
@@ -79,16 +82,17 @@ void BindSettings(py::module_& m) {
                      "Where the residual tests apply (ConvergenceTest).");
 
   py::class_<StaticOptions>(m, "StaticOptions",
-                            "Settings of the static Newton solver with load stepping (statics.h).")
+                            "Settings of the static Newton solver with load stepping (statics.h). "
+                            "Checked when used (ValidateStaticOptions), raising InputError.")
       .def(py::init<>())
       .def_readwrite("time", &StaticOptions::time,
                      "Time at which the profiles of loads and drives are evaluated [s].")
       .def_readwrite("load_steps", &StaticOptions::load_steps,
-                     "Initial number of equal load increments.")
+                     "Initial number of equal load increments, in [1, 1000000].")
       .def_readwrite("max_halvings", &StaticOptions::max_halvings,
-                     "Consecutive halvings of the load increment.")
+                     "Consecutive halvings of the load increment, in [0, 30].")
       .def_readwrite("max_iterations", &StaticOptions::max_iterations,
-                     "Newton iterations per load step.")
+                     "Newton iterations per load step, in [1, 1000].")
       .def_readwrite("residual_tolerance", &StaticOptions::residual_tolerance,
                      "|R|_inf relative to the largest force term in R.")
       .def_readwrite("increment_tolerance", &StaticOptions::increment_tolerance,
@@ -194,41 +198,63 @@ void BindScenesAndRuns(py::module_& m) {
 
   m.def(
       "run_scene",
-      [](const Scene& scene, const std::string& outdir, bool progress) {
+      [](const Scene& scene, const std::string& outdir, bool progress, bool force) {
         RunOptions options;
         options.progress = progress;
+        options.replace_results = force;
+        // On Python's main thread the run polls for signals (Ctrl-C), which needs the GIL. On
+        // another thread (a Dask worker's) no signal is ever delivered: the run releases the
+        // GIL, so other Python threads (the worker's event loop and heartbeats) go on.
+        const py::module_ threading = py::module_::import("threading");
+        if (threading.attr("current_thread")().is(threading.attr("main_thread")())) {
+          PythonSignals signals;
+          options.stop = signals.request();
+          RunResult r = RunScene(scene, outdir, options);
+          signals.ThrowIfRaised();
+          return r;
+        }
+        py::gil_scoped_release release;
         return RunScene(scene, outdir, options);
       },
-      py::arg("scene"), py::arg("outdir"), py::arg("progress") = false,
-      // The run touches no Python object: other Python threads (a Dask worker's event loop
-      // and heartbeats) go on while it computes.
-      py::call_guard<py::gil_scoped_release>(),
-      "run_scene(scene, outdir, progress=False) -> RunResult\n\n"
+      py::arg("scene"), py::arg("outdir"), py::arg("progress") = false, py::arg("force") = false,
+      "run_scene(scene, outdir, progress=False, force=False) -> RunResult\n\n"
       "Runs the scene's analysis and writes its outputs into `outdir` (created if needed):\n"
       "points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az; world frame,\n"
       "SI), joints.csv, summary.json and vtk/ (run.h). `progress` draws a progress bar on\n"
       "stderr. A numerical failure ends the run and is reported in the result (ok False,\n"
       "message), not raised; raises InputError for invalid settings or outputs and when\n"
-      "outdir or its files cannot be created. Releases the GIL while it runs (do not modify\n"
-      "`scene` from another thread meanwhile).");
+      "outdir or its files cannot be created, when another run holds outdir, and when it\n"
+      "holds an earlier run's results unless `force` (then screwfem's files, and only\n"
+      "those, are removed first). On the main thread a signal (Ctrl-C) ends the run cleanly,\n"
+      "with summary.json status 'interrupted' and complete files, then raises\n"
+      "KeyboardInterrupt; on other threads the run releases the GIL (do not modify `scene`\n"
+      "from another thread meanwhile).");
 
   py::class_<StepSchedule>(
       m, "StepSchedule",
       "The step ends of a dynamic run (schedule.h): start + n step for n >= 1, "
       "every breakpoint in (start, end), and end.")
       .def(py::init([](double start, double end, double step, std::vector<double> breakpoints) {
-             if (!(std::isfinite(start) && std::isfinite(end) && end >= start))
-               throw py::value_error("StepSchedule: start and end must be finite, end >= start");
-             if (!(std::isfinite(step) && step > 0.0))
-               throw py::value_error("StepSchedule: step must be a finite time > 0 s");
+             ValidateTimeGrid(start, end, step, "StepSchedule");
              return StepSchedule(start, end, step, std::move(breakpoints));
            }),
            py::arg("start"), py::arg("end"), py::arg("step"),
            py::arg("breakpoints") = std::vector<double>{},
-           "Times in [s]. Raises ValueError unless step > 0 and end >= start (all finite).")
+           "Times in [s]. Raises InputError (a ValueError) unless start and end are finite, "
+           "end >= start, step > 0, at most 1e9 steps, and the step ends representable to a "
+           "relative accuracy of 1e-6 (docs/scene-format.md, 'analysis').")
       .def("done", &StepSchedule::Done, py::arg("t"), "True once t [s] has reached the end.")
-      .def("next", &StepSchedule::Next, py::arg("t"),
-           "The step end following t [s] (start or an earlier step end); requires not done(t).");
+      .def(
+          "next",
+          [](const StepSchedule& s, double t) {
+            if (!s.Accepts(t))
+              throw InputError("StepSchedule.next: t must be finite, not before start and not "
+                               "done(t)");
+            return s.Next(t);
+          },
+          py::arg("t"),
+          "The step end following t [s] (start or an earlier step end). Raises InputError (a "
+          "ValueError) unless t is finite, not before start and not done(t).");
 
   m.def("profile_breakpoints", &ProfileBreakpoints, py::arg("model"),
         "profile_breakpoints(model) -> list of float\n\n"

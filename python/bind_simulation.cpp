@@ -45,12 +45,7 @@ class Simulation {
 
   void Initialize(const std::optional<DynamicOptions>& options) {
     const DynamicOptions o = options ? *options : scene_.analysis.dynamic;
-    if (!(o.rho_inf >= 0.0 && o.rho_inf <= 1.0))
-      throw InputError("DynamicOptions.rho_inf: must lie in [0, 1]");
-    if (o.max_iterations < 1) throw InputError("DynamicOptions.max_iterations: must be at least 1");
-    if (o.max_halvings < 0) throw InputError("DynamicOptions.max_halvings: must be >= 0");
-    if (!(o.refresh_ratio > 0.0 && o.refresh_ratio < 1.0))
-      throw InputError("DynamicOptions.refresh_ratio: must lie in (0, 1)");
+    ValidateDynamicOptions(o, "DynamicOptions");
     initialized_ = false;
     std::string why;
     if (!InitializeDynamics(model(), data_, integrator_, o, &why)) {
@@ -66,7 +61,9 @@ class Simulation {
     if (!initialized_)
       throw std::logic_error("Simulation.step: call initialize() first (again after solve_static)");
     if (!(std::isfinite(h) && h > 0.0)) throw InputError("Simulation.step: h must be a time > 0 s");
-    StepResult r = Step(model(), data_, integrator_, h);
+    PythonSignals signals;
+    StepResult r = Step(model(), data_, integrator_, h, signals.request());
+    signals.ThrowIfRaised();
     if (!r.ok) RaiseSolverError(r.message, py::cast(r));
     return r;
   }
@@ -75,10 +72,12 @@ class Simulation {
     StaticOptions o = scene_.analysis.statics;
     o.time = data_.time;
     if (options) o = *options;
-    if (!std::isfinite(o.time)) throw InputError("StaticOptions.time: must be finite");
+    ValidateStaticOptions(o, "StaticOptions");
     data_.time = o.time;
     initialized_ = false;
-    StaticResult r = SolveStatic(model(), data_, o);
+    PythonSignals signals;
+    StaticResult r = SolveStatic(model(), data_, o, signals.request());
+    signals.ThrowIfRaised();
     if (!r.converged) {
       char head[96];
       std::snprintf(head, sizeof head,
@@ -279,7 +278,9 @@ saddle-point system is singular, InputError for invalid options.)doc")
 
 Advances the state by h [s] (generalized-alpha, possibly in halved substeps). Returns the
 StepResult on success. On failure the state is left at the start of the step and SolverError
-is raised, with the StepResult (ok False, message) as its `result`. Requires initialize().)doc")
+is raised, with the StepResult (ok False, message) as its `result`. Requires initialize().
+A signal (Ctrl-C) between substeps ends the call with the signal's exception
+(KeyboardInterrupt), the state at the end of the last completed substep.)doc")
       .def("solve_static", &S::Statics, py::arg("options") = py::none(),
            R"doc(solve_static(options=None) -> StaticResult
 
@@ -287,7 +288,9 @@ SolveStatic: brings the model from the current state to equilibrium under the fu
 load stepping (statics.h). `options` (StaticOptions) defaults to scene.analysis.statics with
 time = the current time; the simulation's time is set to options.time. Velocities are left as
 they were; call initialize() before stepping again. Raises SolverError (result: the
-StaticResult) if it does not converge; the state then holds the last converged load step.)doc")
+StaticResult) if it does not converge; the state then holds the last converged load step.
+A signal (Ctrl-C) between Newton iterations ends the call with the signal's exception
+(KeyboardInterrupt), the state at the last converged load step.)doc")
 
       .def(
           "node_frame", [](S& s, long i) { return s.data().H[s.Node(i)].Matrix(); },

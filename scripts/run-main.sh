@@ -42,7 +42,7 @@ cases=(rigid soft_k soft_kd)
 run_dirs=()
 for c in "${cases[@]}"; do
   begin "GRM $c (0 to 2 s)"
-  "$screwfem" run "examples/grm/grm_$c.yaml" -o "out/grm_$c" --quiet
+  "$screwfem" run "examples/grm/grm_$c.yaml" -o "out/grm_$c" --quiet --force
   end "GRM $c (0 to 2 s)"
   run_dirs+=("out/grm_$c")
 done

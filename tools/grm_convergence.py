@@ -30,7 +30,7 @@ POINT = "P8"
 def run(program, scene, outdir, elements, step):
     """Runs one case and returns ({t: (x, y, z)} at TIMES, wall seconds)."""
     os.makedirs(outdir, exist_ok=True)
-    args = [program, "run", scene, "-o", outdir, "--quiet",
+    args = [program, "run", scene, "-o", outdir, "--quiet", "--force",
             "--set", f"defaults.elements={elements}", "--set", f"analysis.step={step:g}",
             "--set", "outputs.vtk=false", "--set", "outputs.interval=0"]
     start = time.monotonic()

@@ -279,6 +279,19 @@ void RetractJoint(const Model& model, Data& data, int joint,
   data.q_joint.segment(j.coord - model.nv_nodes, k) += dx.head(k);
 }
 
+double CalcMaxJointConstraint(const Model& model, const Data& data, double time) {
+  double r = 0.0;
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    if (j.row >= 0)
+      r = std::max(r, JointConstraint(model, data, static_cast<int>(jj)).cwiseAbs().maxCoeff());
+    if (j.drive == DriveKind::kPrescribed)
+      r = std::max(r, std::abs(data.q_joint(j.coord + j.drive_coord - model.nv_nodes) -
+                               j.drive_profile(time)));
+  }
+  return r;
+}
+
 double JointDriveEffort(const Model& model, const Data& data, int joint) {
   const Joint& j = model.joints[static_cast<std::size_t>(joint)];
   switch (j.drive) {

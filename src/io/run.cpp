@@ -5,10 +5,16 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <optional>
+#include <vector>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/io/progress.h"
@@ -39,18 +45,23 @@ void ValidateSettings(const Scene& scene) {
           "must be a finite time >= 0 s");
   require(std::isfinite(o.vtk_interval) && o.vtk_interval >= 0.0, "outputs.vtk_interval",
           "must be a finite time >= 0 s");
-  if (a.kind == AnalysisKind::kStatic) {
-    require(std::isfinite(a.statics.time), "analysis.statics.time", "must be finite");
-    return;
+  require(a.kind == AnalysisKind::kStatic || a.kind == AnalysisKind::kDynamic, "analysis.kind",
+          "must be static or dynamic");
+  if (a.kind == AnalysisKind::kStatic || a.static_preload)
+    ValidateStaticOptions(a.statics, "analysis.statics");
+  if (a.kind == AnalysisKind::kStatic) return;
+  ValidateTimeGrid(a.start_time, a.end_time, a.step, "analysis");
+  ValidateDynamicOptions(a.dynamic, "analysis.dynamic");
+}
+
+// "SIGINT", ... for the signals a run is stopped by; nullptr for others and 0.
+const char* SignalName(int signal) {
+  switch (signal) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGHUP: return "SIGHUP";
+    default: return nullptr;
   }
-  require(std::isfinite(a.start_time), "analysis.start_time", "must be finite");
-  require(std::isfinite(a.end_time) && a.end_time >= a.start_time, "analysis.end_time",
-          "must be finite and not before start_time");
-  require(std::isfinite(a.step) && a.step > 0.0, "analysis.step", "must be a time > 0 s");
-  require(a.dynamic.rho_inf >= 0.0 && a.dynamic.rho_inf <= 1.0, "analysis.rho_inf",
-          "must lie in [0, 1]");
-  require(a.dynamic.max_iterations >= 1, "analysis.max_iterations", "must be at least 1");
-  require(a.dynamic.max_halvings >= 0, "analysis.max_halvings", "must be >= 0");
 }
 
 // Times of rows (or frames) every `interval` from `start`; every step when interval is 0.
@@ -77,20 +88,82 @@ double MaxElementRotation(const Data& data) {
   return m;
 }
 
-// Largest |phi| over the constraint rows: the relative-frame constraints of the joints
-// (JointConstraint, method.md §4.3) and the prescribed drives alpha - q(t) (§4.4). The same
-// value as MaxConstraintViolation, which assembles the whole residual (about 15% of a GRM
-// time step); this costs one logarithm per joint and is evaluated after every step.
-double MaxConstraint(const Model& model, const Data& data, double time) {
-  double r = 0.0;
-  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
-    const Joint& j = model.joints[jj];
-    if (j.row >= 0) r = std::max(r, JointConstraint(model, data, static_cast<int>(jj)).cwiseAbs().maxCoeff());
-    if (j.drive == DriveKind::kPrescribed)
-      r = std::max(r, std::abs(data.q_joint(j.coord + j.drive_coord - model.nv_nodes) -
-                               j.drive_profile(time)));
+
+// Rows collected before the tables are written (writers.h, CsvWriter).
+constexpr std::size_t kRowBatchBytes = 64 * 1024;
+
+// OUTDIR/.screwfem.lock: an exclusive flock(2) held by the running run, with its process id
+// as the file's text. The kernel releases it when the file is closed, also when the process
+// dies (a crash, SIGKILL), so a stale lock file never blocks a run.
+class OutputLock {
+ public:
+  OutputLock() = default;
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+  ~OutputLock() {
+    if (fd_ >= 0) ::close(fd_);
   }
-  return r;
+
+  // Throws InputError naming the other process when another run holds the directory.
+  void Acquire(const std::string& dir) {
+    const std::string path = dir + "/" + kOutputLockFile;
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw InputError("cannot create " + path + ": " + std::strerror(errno));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      const int error = errno;
+      char pid[32] = {};
+      const ssize_t n = ::pread(fd_, pid, sizeof pid - 1, 0);
+      std::string holder = n > 0 ? std::string(pid, static_cast<std::size_t>(n)) : "";
+      while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+      ::close(fd_);
+      fd_ = -1;
+      if (error == EWOULDBLOCK)
+        throw InputError("output directory " + dir + " is in use by another screwfem run (process " +
+                         (holder.empty() ? std::string("unknown") : holder) +
+                         "); wait for it to end, stop it, or choose another directory");
+      throw InputError("cannot lock " + path + ": " + std::strerror(error));
+    }
+    const std::string pid = std::to_string(::getpid()) + "\n";
+    if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
+      // The lock holds without the process id; only the message of a second run loses it.
+    }
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+// Refuses a directory that holds the files of an earlier run, unless `replace`: then removes
+// them (screwfem's own files only: the tables, the summary, the ParaView frames and
+// collection, and vtk/ when that leaves it empty), so no stale frame or table survives.
+void PrepareOutputDirectory(const std::string& dir, bool replace) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> own;
+  std::error_code ec;
+  for (const char* name : {"summary.json", "summary.json.tmp", "points.csv", "joints.csv"})
+    if (fs::exists(fs::path(dir) / name, ec)) own.push_back(fs::path(dir) / name);
+  const fs::path vtk = fs::path(dir) / "vtk";
+  if (fs::is_directory(vtk, ec))
+    for (const fs::directory_entry& e : fs::directory_iterator(vtk, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name == "motion.pvd" || name == "motion.pvd.tmp" ||
+          (name.rfind("frame_", 0) == 0 && e.path().extension() == ".vtp"))
+        own.push_back(e.path());
+    }
+  if (own.empty()) return;
+  if (!replace) {
+    std::string list;
+    for (std::size_t i = 0; i < own.size() && i < 4; ++i)
+      list += (i > 0 ? ", " : "") + fs::relative(own[i], dir, ec).string();
+    if (own.size() > 4) list += ", ...";
+    throw InputError("output directory " + dir + " holds the results of an earlier run (" + list +
+                     "); choose another directory, or replace them with --force (Python: "
+                     "run_scene(..., force=True)), which removes screwfem's files only");
+  }
+  for (const fs::path& p : own)
+    if (!fs::remove(p, ec) && ec)
+      throw InputError("cannot remove " + p.string() + ": " + ec.message());
+  if (fs::is_directory(vtk, ec) && fs::is_empty(vtk, ec)) fs::remove(vtk, ec);
 }
 
 // One call of RunScene: the state, the files and the counters.
@@ -102,15 +175,25 @@ class Run {
     std::error_code ec;
     std::filesystem::create_directories(outdir, ec);
     if (ec) throw InputError("cannot create the output directory " + outdir + ": " + ec.message());
+    lock_.Acquire(outdir);
+    PrepareOutputDirectory(outdir, options.replace_results);
     summary_path_ = outdir + "/summary.json";
-    points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
-    joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
-    if (scene.outputs.vtk) {
-      vtk_.emplace();
-      vtk_->Open(outdir + "/vtk");
+    try {
+      points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
+      joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
+      if (scene.outputs.vtk) {
+        vtk_.emplace();
+        vtk_->Open(outdir + "/vtk");
+      }
+      if (!WriteSummary())
+        throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
+    } catch (const InputError&) {
+      // No header-only tables without a summary that explains them.
+      points_.Close();
+      joints_.Close();
+      PrepareOutputDirectory(outdir, true);
+      throw;
     }
-    if (!WriteSummary())
-      throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
   }
 
   void Execute() {
@@ -120,20 +203,33 @@ class Run {
       RunDynamic();
   }
 
-  // Ends the run (if it has not ended yet) and rewrites the summary.
+  // Ends the run (if it has not ended yet): the rows still collected go to disk, then the
+  // ParaView collection (listing the frames on disk) and the summary that counts them.
   void Finish(const char* status, std::string message) {
     if (finished_) return;
     finished_ = true;
-    // The rows still collected by the writers go to disk before the summary that counts them.
-    const bool points_closed = points_.Close();
-    const std::string& unwritten = points_closed ? joints_.path() : points_.path();
-    if ((!points_closed || !joints_.Close()) && std::string(status) != "failed") {
+    const bool failed_before = io_error_ || std::string(status) == "failed";
+    if (const CsvWriter* w = CsvWriter::FlushTogether({&points_, &joints_}); w && !failed_before) {
       status = "failed";
-      message = Format("cannot write at t = %.9g s: ", data_.time) + unwritten + ": " +
+      message = Format("cannot write at t = %.9g s: ", data_.time) + w->path() + ": " +
                 std::strerror(errno);
+      io_error_ = true;
+    }
+    if ((!points_.Close() || !joints_.Close()) && !failed_before && !io_error_) {
+      status = "failed";
+      message = "cannot close the tables: " + std::string(std::strerror(errno));
+      io_error_ = true;
+    }
+    if (vtk_ && !vtk_->WriteCollection() && std::string(status) != "failed") {
+      status = "failed";
+      message = "cannot write " + vtk_->dir() + "/motion.pvd: " + std::strerror(errno);
+      io_error_ = true;
     }
     status_ = status;
     message_ = std::move(message);
+    if (io_error_ && points_.failed())
+      message_ += Format("; the tables hold the %g rows up to t = %.9g s",
+                         static_cast<double>(points_.rows()), points_.last_time());
     if (progress_) progress_->Finish(data_.time, integ_.steps);
     WriteSummary();
   }
@@ -141,7 +237,8 @@ class Run {
   RunResult Result() const {
     RunResult r;
     r.ok = status_ == std::string("completed");
-    r.interrupted = status_ == std::string("interrupted");
+    r.interrupted = status_ == std::string("interrupted") || status_ == std::string("terminated");
+    r.signal = signal_;
     r.end_time = data_.time;
     const bool statics = scene_.analysis.kind == AnalysisKind::kStatic;
     r.steps = statics ? static_.load_steps : integ_.steps;
@@ -154,6 +251,7 @@ class Run {
     r.max_constraint_residual = max_constraint_;
     r.max_element_rotation = max_rotation_;
     r.message = message_;
+    r.io_error = io_error_;
     return r;
   }
 
@@ -165,14 +263,18 @@ class Run {
   void RunStatic() {
     const StaticOptions& so = scene_.analysis.statics;
     data_.time = so.time;
-    static_ = SolveStatic(model_, data_, so);
+    static_ = SolveStatic(model_, data_, so, options_.stop);
     has_static_ = true;
+    if (static_.interrupted) {
+      Interrupted(Format("static solution interrupted at load factor %.6g", static_.load_factor));
+      return;
+    }
     if (!static_.converged) {
       Finish("failed", Format("static solution failed at load factor %.6g: ", static_.load_factor) +
                            static_.message);
       return;
     }
-    max_constraint_ = MaxConstraint(model_, data_, so.time);
+    max_constraint_ = CalcMaxJointConstraint(model_, data_, so.time);
     max_rotation_ = MaxElementRotation(data_);
     if (!Record(so.time, true, true)) return;
     if (options_.on_step) {
@@ -188,8 +290,13 @@ class Run {
     if (a.static_preload) {
       StaticOptions so = a.statics;
       so.time = a.start_time;
-      static_ = SolveStatic(model_, data_, so);
+      static_ = SolveStatic(model_, data_, so, options_.stop);
       has_static_ = true;
+      if (static_.interrupted) {
+        Interrupted(Format("static preload at t = %.9g s interrupted at load factor %.6g",
+                           a.start_time, static_.load_factor));
+        return;
+      }
       if (!static_.converged) {
         Finish("failed", Format("static preload at t = %.9g s failed at load factor %.6g: ",
                                 a.start_time, static_.load_factor) +
@@ -203,7 +310,7 @@ class Run {
       Finish("failed", Format("cannot start the dynamic analysis at t = %.9g s: ", a.start_time) + why);
       return;
     }
-    max_constraint_ = MaxConstraint(model_, data_, data_.time);
+    max_constraint_ = CalcMaxJointConstraint(model_, data_, data_.time);
     max_rotation_ = MaxElementRotation(data_);
 
     const OutputSpec& o = scene_.outputs;
@@ -220,19 +327,25 @@ class Run {
     const StepSchedule schedule(a.start_time, a.end_time, a.step,
                                 a.align_steps ? ProfileBreakpoints(model_) : std::vector<double>{});
     while (!schedule.Done(data_.time)) {
-      if (options_.stop && options_.stop->load()) {
-        Finish("interrupted", Format("interrupted at t = %.9g s; the last recorded row is at t = %.9g s",
-                                     data_.time, last_row_time_));
+      if (options_.stop.Requested()) {
+        Interrupted(Format("at t = %.9g s; the last recorded row is at t = %.9g s", data_.time,
+                           last_row_time_));
         return;
       }
       const double t_next = schedule.Next(data_.time);
-      const StepResult step = Step(model_, data_, integ_, t_next - data_.time);
+      const StepResult step = Step(model_, data_, integ_, t_next - data_.time, options_.stop);
+      if (step.interrupted) {
+        Interrupted(Format("at t = %.9g s (within a halved step); the last recorded row is at "
+                           "t = %.9g s",
+                           data_.time, last_row_time_));
+        return;
+      }
       if (!step.ok) {
         Finish("failed", step.message);
         return;
       }
       data_.time = t_next;
-      max_constraint_ = std::max(max_constraint_, MaxConstraint(model_, data_, t_next));
+      max_constraint_ = std::max(max_constraint_, CalcMaxJointConstraint(model_, data_, t_next));
       max_rotation_ = std::max(max_rotation_, MaxElementRotation(data_));
 
       const bool last = schedule.Done(t_next);
@@ -255,29 +368,45 @@ class Run {
     Finish("completed", {});
   }
 
+  // Ends the run after a stop request: "interrupted" (SIGINT, a Python KeyboardInterrupt or a
+  // flag without a signal number) or "terminated" (SIGTERM, SIGHUP), naming the signal.
+  void Interrupted(const std::string& when) {
+    signal_ = options_.stop.Signal();
+    const char* name = SignalName(signal_);
+    const bool terminated = signal_ == SIGTERM || signal_ == SIGHUP;
+    std::string message = terminated ? "terminated" : "interrupted";
+    if (name != nullptr) message += std::string(" by ") + name;
+    Finish(terminated ? "terminated" : "interrupted", message + " " + when);
+  }
+
   // Writes the rows (and the ParaView frame) of the current state; on a write error ends the
   // run as failed and returns false.
   bool Record(double t, bool row, bool frame) {
     if (row) {
       CalcPointRow(model_, data_, scene_.outputs.points, &row_);
-      if (!points_.WriteRow(t, row_)) return WriteFailed(points_.path(), t);
+      points_.WriteRow(t, row_);
       CalcJointRow(model_, data_, scene_.outputs.joints, &row_);
-      if (!joints_.WriteRow(t, row_)) return WriteFailed(joints_.path(), t);
+      joints_.WriteRow(t, row_);
       last_row_time_ = t;
+      if (std::max(points_.batch_bytes(), joints_.batch_bytes()) >= kRowBatchBytes &&
+          !FlushRows(t))
+        return false;
     }
     if (frame && vtk_ && !vtk_->WriteFrame(model_, data_, t))
       return WriteFailed(vtk_->dir() + "/frame files", t);
     return true;
   }
 
-  // Writes the rows collected so far to the files; on a write error ends the run as failed.
+  // Writes the rows collected so far to the files, keeping the tables at the same row; on a
+  // write error ends the run as failed.
   bool FlushRows(double t) {
-    if (!points_.Flush()) return WriteFailed(points_.path(), t);
-    if (!joints_.Flush()) return WriteFailed(joints_.path(), t);
+    if (const CsvWriter* w = CsvWriter::FlushTogether({&points_, &joints_}))
+      return WriteFailed(w->path(), t);
     return true;
   }
 
   bool WriteFailed(const std::string& path, double t) {
+    io_error_ = true;
     Finish("failed", Format("cannot write at t = %.9g s: ", t) + path + ": " + std::strerror(errno));
     return false;
   }
@@ -296,6 +425,10 @@ class Run {
     j.Field("format", "screwfem run summary 1");
     j.Key("scene").BeginObject().Field("source", scene_.source).Field("name", scene_.name).EndObject();
     j.Field("status", status_).Field("message", message_);
+    if (const char* name = SignalName(signal_))
+      j.Field("signal", name);
+    else
+      j.Key("signal").Null();
 
     j.Key("settings").BeginObject();
     j.Field("analysis", statics ? "static" : "dynamic");
@@ -354,7 +487,8 @@ class Run {
     j.Key("joints").BeginArray();
     for (const OutputJoint& oj : scene_.outputs.joints) j.String(oj.name);
     j.EndArray();
-    j.Field("rows", points_.rows()).Field("last_row_time", last_row_time_);
+    // The rows on disk (the summary is written after the tables are flushed).
+    j.Field("rows", points_.rows()).Field("last_row_time", points_.last_time());
     j.Field("vtk_frames", vtk_ ? vtk_->frames() : 0);
     j.EndObject();
 
@@ -399,14 +533,20 @@ class Run {
   Clock::time_point wall_start_, last_summary_;
   double max_constraint_ = 0.0;
   double max_rotation_ = 0.0;  // largest relative rotation of one rod element so far [rad]
-  double last_row_time_ = NAN;
+  double last_row_time_ = NAN;  // of the last row recorded (in the files once flushed)
   std::string status_ = "running", message_;
+  int signal_ = 0;  // the stop request's signal number
+  bool io_error_ = false;  // the run failed writing its files
+  OutputLock lock_;
   bool finished_ = false;
 };
 
 }  // namespace
 
 RunResult RunScene(const Scene& scene, const std::string& outdir, const RunOptions& options) {
+  if (outdir.find('\0') != std::string::npos)
+    throw InputError("output directory '" + std::string(outdir.c_str()) +
+                     "...': contains a NUL character (not a directory name)");
   ValidateSettings(scene);
   ValidateOutputs(scene.model, scene.outputs);
   Run run(scene, outdir, options);

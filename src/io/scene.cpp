@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "scene_yaml.h"
+#include "screwfem/io/schedule.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/build/model_builder.h"
 
@@ -87,7 +88,8 @@ class SceneCompiler {
   void ReadLoads(const Node* node);
   void CheckConnections() const;
   void ReadAnalysis(const Node* node, AnalysisSettings* analysis);
-  void ReadOutputs(const Node* node, const Model& model, OutputSpec* outputs);
+  void ReadOutputs(const Node* node, const Model& model, const AnalysisSettings& analysis,
+                   OutputSpec* outputs);
 
   // Values.
   Vec3 Point(const Node& node, const std::string& path) const;
@@ -881,6 +883,15 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
   if (a->kind == AnalysisKind::kDynamic && (a->end_time - a->start_time) / a->step > kMaxSteps)
     r_.Fail(find("step") != nullptr ? find("step")->location : node->location, Join(path, "step"),
             "more than 1e9 time steps from start_time to end_time");
+  if (a->kind == AnalysisKind::kDynamic) {
+    // Times so large that their doubles are coarser than the step (schedule.h).
+    const std::string problem = TimeGridProblem(a->start_time, a->end_time, a->step);
+    if (!problem.empty()) {
+      const char* key = std::abs(a->start_time) > std::abs(a->end_time) ? "start_time" : "end_time";
+      const Node* at = find(key) != nullptr ? find(key) : find("step") != nullptr ? find("step") : node;
+      r_.Fail(at->location, Join(path, key), problem);
+    }
+  }
   if (const Node* t = find("rho_inf")) {
     a->dynamic.rho_inf = r_.Number(*t, Join(path, "rho_inf"));
     if (!(a->dynamic.rho_inf >= 0.0 && a->dynamic.rho_inf <= 1.0))
@@ -901,10 +912,10 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
   }
   if (const Node* t = find("max_iterations"))
     a->dynamic.max_iterations = a->statics.max_iterations =
-        r_.Integer(*t, Join(path, "max_iterations"), 1, 1000);
+        r_.Integer(*t, Join(path, "max_iterations"), 1, kMaxNewtonIterations);
   if (const Node* t = find("max_halvings"))
     a->dynamic.max_halvings = a->statics.max_halvings =
-        r_.Integer(*t, Join(path, "max_halvings"), 0, 30);
+        r_.Integer(*t, Join(path, "max_halvings"), 0, kMaxHalvings);
   if (const Node* t = find("newton"))
     a->dynamic.newton_matrix =
         r_.Choice(*t, Join(path, "newton"), {"simplified", "full"}) == "full"
@@ -922,7 +933,7 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
             ? ConvergenceTest::kMeasured
             : ConvergenceTest::kEstimated;
   if (const Node* t = find("load_steps"))
-    a->statics.load_steps = r_.Integer(*t, Join(path, "load_steps"), 1, 1000000);
+    a->statics.load_steps = r_.Integer(*t, Join(path, "load_steps"), 1, kMaxLoadSteps);
   if (const Node* t = find("align_steps")) a->align_steps = r_.Bool(*t, Join(path, "align_steps"));
   if (const Node* t = find("static_preload"))
     a->static_preload = r_.Bool(*t, Join(path, "static_preload"));
@@ -931,7 +942,17 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
   a->statics.time = a->kind == AnalysisKind::kStatic ? a->end_time : a->start_time;
 }
 
-void SceneCompiler::ReadOutputs(const Node* node, const Model& model, OutputSpec* out) {
+// A whole number of steps, about (end - start) / count long (one step at least).
+double DefaultOutputInterval(const AnalysisSettings& a, int count) {
+  if (a.kind == AnalysisKind::kStatic) return 0.0;
+  const double steps = (a.end_time - a.start_time) / a.step;
+  return a.step * std::max(1.0, std::round(steps / count));
+}
+
+void SceneCompiler::ReadOutputs(const Node* node, const Model& model,
+                                const AnalysisSettings& analysis, OutputSpec* out) {
+  out->interval = DefaultOutputInterval(analysis, kDefaultOutputRows);
+  out->vtk_interval = DefaultOutputInterval(analysis, kDefaultVtkFrames);
   auto all_joints = [&] {
     out->joints.clear();
     for (std::size_t j = 0; j < model.joints.size(); ++j)
@@ -1020,6 +1041,8 @@ void SceneCompiler::ReadOutputs(const Node* node, const Model& model, OutputSpec
   if (const Node* v = node->Find("vtk")) out->vtk = r_.Bool(*v, Join(path, "vtk"));
   if (const Node* v = node->Find("vtk_interval"))
     out->vtk_interval = r_.NonNegativeNumber(*v, Join(path, "vtk_interval"));
+  else if (node->Find("interval") != nullptr)
+    out->vtk_interval = 0.0;  // the same as the given interval
 }
 
 void SceneCompiler::RethrowBuildError(const InputError& e) const {
@@ -1074,7 +1097,7 @@ Scene SceneCompiler::Compile(const Node& root, const std::string& default_name) 
   } catch (const InputError& e) {
     RethrowBuildError(e);
   }
-  ReadOutputs(root.Find("outputs"), scene.model, &scene.outputs);
+  ReadOutputs(root.Find("outputs"), scene.model, scene.analysis, &scene.outputs);
   scene.named_points = points_;
   return scene;
 }
@@ -1096,6 +1119,9 @@ Scene ParseScene(const std::string& yaml_text, const std::string& source_name,
 }
 
 Scene LoadScene(const std::string& path, const std::vector<std::string>& overrides) {
+  if (path.find('\0') != std::string::npos)
+    throw InputError("scene path '" + std::string(path.c_str()) +
+                     "...': contains a NUL character (not a file name)");
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError(path + ": is a directory, not a scene file");

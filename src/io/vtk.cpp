@@ -226,18 +226,20 @@ void VtkWriter::Open(const std::string& dir) {
   if (ec) throw InputError("cannot create directory " + dir + ": " + ec.message());
   dir_ = dir;
   frames_.clear();
-  if (!WriteCollection())
-    throw InputError("cannot write " + dir + "/motion.pvd: " + std::strerror(errno));
 }
 
 bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time) {
   char name[32];
   std::snprintf(name, sizeof name, "frame_%05d.vtp", frames());
-  if (!WriteVtp(dir_ + "/" + name, BuildGeometry(model, data), time)) return false;
+  const std::string path = dir_ + "/" + name;
+  if (!WriteVtp(path, BuildGeometry(model, data), time)) {
+    const int saved = errno;
+    std::remove(path.c_str());
+    errno = saved;
+    return false;
+  }
   frames_.emplace_back(time, name);
-  if (WriteCollection()) return true;
-  frames_.pop_back();
-  return false;
+  return true;
 }
 
 bool VtkWriter::WriteCollection() const {

@@ -1,9 +1,14 @@
 #include "screwfem/io/writers.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
@@ -101,55 +106,124 @@ void AppendNumber(std::string* text, double value, int precision) {
   text->append(buf, r.ptr);
 }
 
+void AppendShortest(std::string* text, double value) {
+  char buf[64];
+  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, value);
+  text->append(buf, r.ptr);
+}
+
 namespace {
-constexpr std::size_t kCsvBufferBytes = 64 * 1024;  // rows collected before a write
+
+constexpr std::size_t kCsvBatchBytes = 64 * 1024;  // batch capacity reserved at Open
+
+// write(2) until all of `size` bytes are written or an error; returns the bytes written.
+std::size_t WriteAll(int fd, const char* data, std::size_t size) {
+  std::size_t done = 0;
+  while (done < size) {
+    const ssize_t n = ::write(fd, data + done, size - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (n == 0) errno = EIO;
+      break;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  return done;
+}
+
 }  // namespace
 
 CsvWriter::~CsvWriter() { Close(); }
 
 void CsvWriter::Open(const std::string& path, const std::vector<std::string>& columns) {
   Close();
-  file_ = std::fopen(path.c_str(), "w");
-  if (!file_) throw InputError("cannot create " + path + ": " + std::strerror(errno));
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw InputError("cannot create " + path + ": " + std::strerror(errno));
   path_ = path;
   rows_ = 0;
-  pending_.clear();
-  pending_.reserve(kCsvBufferBytes + 4096);
-  std::fputs("t", file_);
-  for (const std::string& c : columns) {
-    std::fputc(',', file_);
-    std::fputs(c.c_str(), file_);
-  }
-  std::fputc('\n', file_);
-  if (std::fflush(file_) != 0 || std::ferror(file_))
+  last_time_ = std::numeric_limits<double>::quiet_NaN();
+  failed_ = false;
+  batch_.clear();
+  batch_.reserve(kCsvBatchBytes + 4096);
+  row_ends_.clear();
+  row_ends_.reserve(4096);
+  row_times_.clear();
+  row_times_.reserve(4096);
+  std::string header = "t";
+  for (const std::string& c : columns) header += "," + c;
+  header += '\n';
+  if (WriteAll(fd_, header.data(), header.size()) != header.size())
     throw InputError("cannot write " + path + ": " + std::strerror(errno));
+  file_bytes_ = static_cast<long long>(header.size());
 }
 
 bool CsvWriter::WriteRow(double t, const std::vector<double>& values) {
-  if (!file_) return false;
-  AppendNumber(&pending_, t, 17);
+  if (fd_ < 0 || failed_) return false;
+  AppendShortest(&batch_, t);
   for (double v : values) {
-    pending_ += ',';
-    AppendNumber(&pending_, v, 17);
+    batch_ += ',';
+    AppendShortest(&batch_, v);
   }
-  pending_ += '\n';
-  ++rows_;
-  return pending_.size() < kCsvBufferBytes || Flush();
+  batch_ += '\n';
+  row_ends_.push_back(batch_.size());
+  row_times_.push_back(t);
+  return true;
 }
 
-bool CsvWriter::Flush() {
-  if (!file_) return false;
-  const bool written = pending_.empty() ||
-                       std::fwrite(pending_.data(), 1, pending_.size(), file_) == pending_.size();
-  pending_.clear();
-  return written && std::fflush(file_) == 0 && !std::ferror(file_);
+std::size_t CsvWriter::WriteBatch() {
+  if (fd_ < 0 || failed_) return 0;
+  const std::size_t written = WriteAll(fd_, batch_.data(), batch_.size());
+  if (written == batch_.size()) return row_ends_.size();
+  failed_ = true;
+  return static_cast<std::size_t>(
+      std::upper_bound(row_ends_.begin(), row_ends_.end(), written) - row_ends_.begin());
+}
+
+void CsvWriter::KeepBatchRows(std::size_t n) {
+  n = std::min(n, row_ends_.size());
+  const long long end = file_bytes_ + static_cast<long long>(n > 0 ? row_ends_[n - 1] : 0);
+  if (failed_ || n < row_ends_.size()) {
+    const int saved = errno;
+    if (::ftruncate(fd_, static_cast<off_t>(end)) != 0) failed_ = true;
+    ::lseek(fd_, static_cast<off_t>(end), SEEK_SET);
+    errno = saved;
+  }
+  file_bytes_ = end;
+  rows_ += static_cast<long>(n);
+  if (n > 0) last_time_ = row_times_[n - 1];
+  batch_.clear();
+  row_ends_.clear();
+  row_times_.clear();
+}
+
+bool CsvWriter::Flush() { return FlushTogether({this}) == nullptr; }
+
+const CsvWriter* CsvWriter::FlushTogether(std::initializer_list<CsvWriter*> writers) {
+  std::size_t keep = static_cast<std::size_t>(-1);
+  const CsvWriter* failed = nullptr;
+  int failed_errno = 0;
+  for (CsvWriter* w : writers) {
+    const bool was_failed = w->failed_ || w->fd_ < 0;
+    keep = std::min(keep, w->WriteBatch());
+    if ((w->failed_ || w->fd_ < 0) && failed == nullptr) {
+      failed = w;
+      failed_errno = was_failed ? EIO : errno;
+    }
+  }
+  for (CsvWriter* w : writers) {
+    if (w->fd_ < 0) continue;
+    if (failed != nullptr) w->failed_ = true;  // the tables stay at the same row
+    w->KeepBatchRows(keep);
+  }
+  if (failed != nullptr) errno = failed_errno;
+  return failed;
 }
 
 bool CsvWriter::Close() {
-  if (!file_) return true;
-  const bool flushed = Flush();
-  const bool closed = std::fclose(file_) == 0;
-  file_ = nullptr;
+  if (fd_ < 0) return true;
+  const bool flushed = batch_.empty() ? !failed_ : Flush();
+  const bool closed = ::close(fd_) == 0;
+  fd_ = -1;
   return flushed && closed;
 }
 
@@ -253,9 +327,7 @@ JsonWriter& JsonWriter::Number(double value) {
     text_ += "null";
     return *this;
   }
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", value);
-  text_ += buf;
+  AppendShortest(&text_, value);
   return *this;
 }
 
@@ -271,21 +343,38 @@ JsonWriter& JsonWriter::Bool(bool value) {
   return *this;
 }
 
+JsonWriter& JsonWriter::Null() {
+  BeforeValue();
+  text_ += "null";
+  return *this;
+}
+
 // ---- files -------------------------------------------------------------------------------------
 
 bool WriteFileAtomically(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
   std::FILE* f = std::fopen(tmp.c_str(), "w");
-  if (!f) return false;
-  const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-  const bool closed = std::fclose(f) == 0;
-  if (!written || !closed) {
-    const int saved = errno;
-    std::remove(tmp.c_str());
+  bool written = false, closed = false;
+  if (f != nullptr) {
+    written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+    closed = std::fclose(f) == 0;
+  }
+  if (written && closed) return std::rename(tmp.c_str(), path.c_str()) == 0;
+  // No room for a second copy (a full disk): overwrite the existing file in place, which
+  // reuses its blocks (a summary is rewritten with about its earlier size).
+  const int saved = errno;
+  std::remove(tmp.c_str());
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd < 0) {
     errno = saved;
     return false;
   }
-  return std::rename(tmp.c_str(), path.c_str()) == 0;
+  const bool in_place = WriteAll(fd, text.data(), text.size()) == text.size() &&
+                        ::ftruncate(fd, static_cast<off_t>(text.size())) == 0;
+  const int in_place_errno = errno;
+  ::close(fd);
+  errno = in_place ? 0 : in_place_errno;
+  return in_place;
 }
 
 }  // namespace screwfem

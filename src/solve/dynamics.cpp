@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
+#include "screwfem/model/errors.h"
 #include "screwfem/solve/statics.h"
 
 namespace screwfem {
@@ -34,6 +36,31 @@ void ConstraintsAlong(const Model& model, Data& data, const State& base, double 
 }
 
 }  // namespace
+
+void ValidateDynamicOptions(const DynamicOptions& o, const std::string& owner) {
+  const auto require = [&](bool ok, const char* field, const char* what) {
+    if (!ok) throw InputError(owner + "." + field + ": " + what);
+  };
+  require(o.rho_inf >= 0.0 && o.rho_inf <= 1.0, "rho_inf", "must lie in [0, 1]");
+  require(o.max_iterations >= 1 && o.max_iterations <= kMaxNewtonIterations, "max_iterations",
+          "must lie in [1, 1000]");
+  require(o.max_halvings >= 0 && o.max_halvings <= kMaxHalvings, "max_halvings",
+          "must lie in [0, 30]");
+  for (const auto& [value, field] : {std::pair{o.increment_tolerance, "increment_tolerance"},
+                                     std::pair{o.constraint_tolerance, "constraint_tolerance"},
+                                     std::pair{o.residual_tolerance, "residual_tolerance"}})
+    require(std::isfinite(value) && value > 0.0, field, "must be finite and > 0");
+  require(o.refresh_ratio > 0.0 && o.refresh_ratio < 1.0, "refresh_ratio", "must lie in (0, 1)");
+  require(o.newton_matrix == NewtonMatrix::kEveryIteration ||
+              o.newton_matrix == NewtonMatrix::kOncePerStep,
+          "newton_matrix", "must be EVERY_ITERATION or ONCE_PER_STEP");
+  require(o.predictor == Predictor::kZeroAcceleration ||
+              o.predictor == Predictor::kLastAcceleration || o.predictor == Predictor::kAdaptive,
+          "predictor", "must be ZERO_ACCELERATION, LAST_ACCELERATION or ADAPTIVE");
+  require(o.convergence == ConvergenceTest::kMeasured ||
+              o.convergence == ConvergenceTest::kEstimated,
+          "convergence", "must be MEASURED or ESTIMATED");
+}
 
 bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
                         const DynamicOptions& options, std::string* message) {
@@ -342,7 +369,8 @@ void RestoreStepStart(const Model& model, Data& data, Integrator& integ, double 
 
 }  // namespace
 
-StepResult Step(const Model& model, Data& data, Integrator& integ, double h) {
+StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
+                const StopRequest& stop) {
   StepResult result;
   result.substeps = 0;
   const double t_end = data.time + h;
@@ -355,6 +383,13 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h) {
   while (data.time < t_end - 1e-12 * h) {
     hs = std::min(hs, t_end - data.time);
     const double t0 = data.time;
+    if (stop.Requested()) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "step interrupted at t = %.9g s", t0);
+      result.interrupted = true;
+      result.message = buf;
+      return result;
+    }
     SaveStepStart(data, integ);
     int its = TryStep(model, data, integ, hs, false, &why);
     if (its < 0 && !conservative) {

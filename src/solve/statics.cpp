@@ -4,8 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 #include "screwfem/assemble/assemble.h"
+#include "screwfem/model/errors.h"
+#include "screwfem/solve/dynamics.h"
 
 namespace screwfem {
 
@@ -42,7 +45,25 @@ enum class NewtonOutcome { kConverged, kDiverged, kBranch, kSingular };
 
 }  // namespace
 
-StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options) {
+void ValidateStaticOptions(const StaticOptions& o, const std::string& owner) {
+  const auto require = [&](bool ok, const char* field, const char* what) {
+    if (!ok) throw InputError(owner + "." + field + ": " + what);
+  };
+  require(std::isfinite(o.time), "time", "must be finite");
+  require(o.load_steps >= 1 && o.load_steps <= kMaxLoadSteps, "load_steps",
+          "must lie in [1, 1000000]");
+  require(o.max_halvings >= 0 && o.max_halvings <= kMaxHalvings, "max_halvings",
+          "must lie in [0, 30]");
+  require(o.max_iterations >= 1 && o.max_iterations <= kMaxNewtonIterations, "max_iterations",
+          "must lie in [1, 1000]");
+  for (const auto& [value, field] : {std::pair{o.residual_tolerance, "residual_tolerance"},
+                                     std::pair{o.increment_tolerance, "increment_tolerance"},
+                                     std::pair{o.constraint_tolerance, "constraint_tolerance"}})
+    require(std::isfinite(value) && value > 0.0, field, "must be finite and > 0");
+}
+
+StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options,
+                         const StopRequest& stop) {
   StaticResult result;
   State saved;
   SaveState(data, &saved);
@@ -72,6 +93,14 @@ StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& op
     NewtonOutcome outcome = NewtonOutcome::kDiverged;
     double last_increment = INFINITY;
     for (int it = 0; it <= options.max_iterations; ++it) {
+      if (stop.Requested()) {
+        RestoreState(saved, data);
+        data.lambda = saved_lambda;
+        UpdateBranchReferences(model, data);
+        result.interrupted = true;
+        result.message = Format("static solve interrupted at load factor %.6g", s);
+        return result;
+      }
       if (!Assemble(model, data, opt)) {
         if (data.failed_element >= 0) {
           outcome = NewtonOutcome::kBranch;

@@ -292,6 +292,31 @@ TEST(BadInput, AnalysisEndBeforeStart) {
               "bad.yaml:5:37", "analysis.end_time: expected end_time > start_time");
 }
 
+// Near t = 1e15 s doubles are 0.125 s apart: a 1 ms step would silently become 0.125 s.
+TEST(BadInput, TimesTooLargeForTheStepAreRefusedNamingTheField) {
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis:\n  start_time: 1e15\n  end_time: 1.0000000000001e15\n",
+              "bad.yaml:7:13",
+              "analysis.end_time: doubles near t = 1e+15 s are 0.125 s apart, so steps of "
+              "0.001 s cannot be taken");
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis:\n  start_time: -1e15\n  end_time: -0.9999999999999e15\n",
+              "bad.yaml:6:15", "analysis.start_time: doubles near t = 1e+15 s");
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis:\n  start_time: 1e7\n  end_time: 1.00001e7\n",
+              "bad.yaml:7:13", "analysis.end_time: doubles near t = 1.00001e+07 s are 1.86e-09 s "
+              "apart, so steps of 0.001 s cannot be taken to a relative accuracy of 1e-06 (the "
+              "step would silently change); use a step of at least 0.00186 s");
+  // At the limit: a 1 ms step is representable to 1e-6 up to t = 4.5e6 s (spacing 9.3e-10 s).
+  EXPECT_EQ(Error(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis:\n  start_time: 4e6\n  end_time: 4.000001e6\n"),
+            "(no error)");
+}
+
 TEST(BadInput, SpectralRadiusOutsideTheUnitInterval) {
   ExpectError(kHead +
                   "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"

@@ -6,11 +6,13 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -172,13 +174,217 @@ TEST(Cli, SigintStopsCleanlyWithExitCode130) {
   const Outcome o = Wait(pid, tmp.path());
   EXPECT_EQ(o.code, 130) << o.err;
   EXPECT_EQ(o.out.rfind("interrupted: ", 0), 0u) << o.out;
-  EXPECT_NE(o.err.find("interrupted at t = "), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("interrupted by SIGINT at t = "), std::string::npos) << o.err;
   const Table points = ReadCsv(out + "/points.csv");
   ASSERT_TRUE(points.well_formed) << points.problem;
   EXPECT_GE(points.rows.size(), 3u);
   const auto summary = ParseJsonFile(out + "/summary.json");
   ASSERT_TRUE(summary);
   EXPECT_EQ(summary->Find("status")->string, "interrupted");
+}
+
+// A scheduler's SIGTERM (or a closed terminal's SIGHUP) ends the run like Ctrl-C: every row
+// collected is flushed, both tables end at the same row, and the summary states the signal,
+// the current counts and that row count.
+TEST(Cli, SigtermAndSighupEndTheRunWithConsistentFilesAndSayWhichSignal) {
+  REQUIRE_CLI();
+  for (const int signal : {SIGTERM, SIGHUP}) {
+    const ScopedDir tmp("cli_sigterm");
+    const std::string out = tmp.path() + "/out";
+    const pid_t pid = Spawn(kCli,
+                            {"run", kPendulum, "-o", out, "--set", "analysis.step=1e-5", "--set",
+                             "analysis.end_time=1000", "--set", "outputs.vtk=false", "--set",
+                             "outputs.interval=1e-4"},
+                            tmp.path());
+    ASSERT_GT(pid, 0);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (ReadCsv(out + "/points.csv").rows.size() < 3 &&
+           std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    kill(pid, signal);
+    const Outcome o = Wait(pid, tmp.path());
+    const std::string name = signal == SIGTERM ? "SIGTERM" : "SIGHUP";
+    EXPECT_EQ(o.code, 128 + signal) << name << ": " << o.err;
+    EXPECT_EQ(o.out.rfind("terminated: ", 0), 0u) << o.out;
+    EXPECT_NE(o.err.find("terminated by " + name + " at t = "), std::string::npos) << o.err;
+    const auto summary = ParseJsonFile(out + "/summary.json");
+    ASSERT_TRUE(summary);
+    EXPECT_EQ(summary->Find("status")->string, "terminated");
+    ASSERT_NE(summary->Find("signal"), nullptr);
+    EXPECT_EQ(summary->Find("signal")->string, name);
+    const Table points = ReadCsv(out + "/points.csv"), joints = ReadCsv(out + "/joints.csv");
+    ASSERT_TRUE(points.well_formed) << points.problem;
+    ASSERT_TRUE(joints.well_formed) << joints.problem;
+    const double rows = summary->Find("outputs.rows")->number;
+    EXPECT_GE(rows, 3.0);
+    EXPECT_EQ(static_cast<double>(points.rows.size()), rows);
+    EXPECT_EQ(static_cast<double>(joints.rows.size()), rows);
+    EXPECT_EQ(points.rows.back()[0], summary->Find("outputs.last_row_time")->number);
+    EXPECT_EQ(joints.rows.back()[0], points.rows.back()[0]);
+    // Current counts: the steps up to the stop (rows every 10 steps of 1e-5 s).
+    const double steps = summary->Find("steps")->number;
+    EXPECT_GE(steps, 10.0 * (rows - 1.0));
+    EXPECT_LT(steps, 10.0 * rows);
+    EXPECT_NEAR(summary->Find("time")->number, 1e-5 * steps, 1e-12);
+  }
+}
+
+// Starts the program in a child process with a resource limit (and SIGXFSZ ignored, so that
+// writes beyond RLIMIT_FSIZE fail with EFBIG instead of killing it).
+Outcome RunCliWithLimit(const std::vector<std::string>& args, const std::string& dir, int resource,
+                        rlim_t limit) {
+  std::filesystem::create_directories(dir);
+  std::vector<std::string> argv_text = {kCli};
+  argv_text.insert(argv_text.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_text) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
+  const pid_t pid = fork();
+  if (pid == 0) {  // only async-signal-safe calls until exec
+    const int fo = open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int fe = open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fo < 0 || fe < 0 || dup2(fo, 1) < 0 || dup2(fe, 2) < 0) _exit(127);
+    const rlimit r{limit, limit};
+    if (setrlimit(resource, &r) != 0) _exit(127);
+    signal(SIGXFSZ, SIG_IGN);
+    execv(kCli, argv.data());
+    _exit(127);
+  }
+  EXPECT_GT(pid, 0);
+  return Wait(pid, dir);
+}
+
+// Any exception main() did not expect (here: out of memory under a 48 MiB address-space
+// limit, in which the pendulum runs, building a GRM with 10000 elements per soft body) is
+// reported with exit code 3, never an abort.
+TEST(Cli, OutOfMemoryIsReportedWithExitCodeThree) {
+  REQUIRE_CLI();
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves more address space than the limit";
+#endif
+  const ScopedDir tmp("cli_oom");
+  const std::string grm = std::string(SCREWFEM_SOURCE_DIR) + "/examples/grm/grm_rigid.yaml";
+  const rlim_t limit = rlim_t{48} << 20;
+  const Outcome fits = RunCliWithLimit(
+      {"run", kPendulum, "-o", tmp.path() + "/small", "--set", "analysis.end_time=0.01"},
+      tmp.path(), RLIMIT_AS, limit);
+  ASSERT_EQ(fits.code, 0) << "the limit leaves no room for a small run: " << fits.err;
+  const Outcome o = RunCliWithLimit({"run", grm, "-o", tmp.path() + "/out", "--set",
+                                     "defaults.elements=10000", "--set", "outputs.vtk=false"},
+                                    tmp.path(), RLIMIT_AS, limit);
+  EXPECT_EQ(o.code, 3) << o.err;
+  EXPECT_NE(o.err.find("internal error: out of memory"), std::string::npos) << o.err;
+}
+
+// A full disk, made deterministic by a 30000-byte file size limit: the first batch of rows
+// (64 KiB) does not fit. Both tables end on a complete row, at the same row, and the summary
+// says which file failed, why and how many rows the tables hold; exit code 2.
+TEST(Cli, WriteErrorLeavesCompleteRowsAndASummaryThatSaysSo) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_full");
+  const std::string out = tmp.path() + "/out";
+  const Outcome o = RunCliWithLimit({"run", kPendulum, "-o", out, "--set", "outputs.interval=0",
+                                     "--set", "outputs.vtk=false"},
+                                    tmp.path(), RLIMIT_FSIZE, 30000);
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_EQ(o.out.rfind("failed: ", 0), 0u) << o.out;
+  EXPECT_NE(o.err.find("points.csv: File too large"), std::string::npos) << o.err;
+  const auto summary = ParseJsonFile(out + "/summary.json");
+  ASSERT_TRUE(summary);
+  EXPECT_EQ(summary->Find("status")->string, "failed");
+  EXPECT_NE(summary->Find("message")->string.find("points.csv: File too large"), std::string::npos);
+  const Table points = ReadCsv(out + "/points.csv"), joints = ReadCsv(out + "/joints.csv");
+  ASSERT_TRUE(points.well_formed) << points.problem;
+  ASSERT_TRUE(joints.well_formed) << joints.problem;
+  const double rows = summary->Find("outputs.rows")->number;
+  EXPECT_GT(rows, 10.0);
+  EXPECT_LT(rows, 501.0);
+  EXPECT_EQ(static_cast<double>(points.rows.size()), rows);
+  EXPECT_EQ(static_cast<double>(joints.rows.size()), rows);
+  EXPECT_EQ(points.rows.back()[0], summary->Find("outputs.last_row_time")->number);
+  EXPECT_EQ(joints.rows.back()[0], points.rows.back()[0]);
+  EXPECT_LE(std::filesystem::file_size(out + "/points.csv"), 30000u);
+}
+
+// When not even the first summary fits (200 bytes), the run stops before it starts and
+// leaves no header-only tables that no summary explains.
+TEST(Cli, WriteErrorBeforeTheFirstSummaryLeavesNoTables) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_full_start");
+  const std::string out = tmp.path() + "/out";
+  const Outcome o = RunCliWithLimit({"run", kPendulum, "-o", out}, tmp.path(), RLIMIT_FSIZE, 200);
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("summary.json: File too large"), std::string::npos) << o.err;
+  for (const char* file : {"/points.csv", "/joints.csv", "/summary.json", "/vtk"})
+    EXPECT_FALSE(std::filesystem::exists(out + file)) << file;
+}
+
+// Waits until the run writing `out` has recorded a few rows.
+void WaitForRows(const std::string& out) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (ReadCsv(out + "/points.csv").rows.size() < 3 && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+}
+
+// A second run into the folder of a running run is refused with exit code 2, naming the
+// process; the lock dies with its process, even when that is killed.
+TEST(Cli, OutputDirectoryInUseByARunningRunIsRefusedNamingItsProcess) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_lock");
+  const std::string out = tmp.path() + "/out";
+  std::filesystem::create_directories(tmp.path() + "/first");
+  const pid_t pid = Spawn(kCli,
+                          {"run", kPendulum, "-o", out, "--set", "analysis.step=1e-5", "--set",
+                           "analysis.end_time=1000", "--set", "outputs.vtk=false"},
+                          tmp.path() + "/first");
+  ASSERT_GT(pid, 0);
+  WaitForRows(out);
+  const std::vector<std::string> second = {"run", kPendulum, "-o", out, "--force", "--set",
+                                           "analysis.end_time=0.01"};
+  Outcome o = RunCli(second, tmp.path() + "/second");
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_NE(o.err.find("is in use by another screwfem run (process " + std::to_string(pid) + ")"),
+            std::string::npos)
+      << o.err;
+  EXPECT_GE(ReadCsv(out + "/points.csv").rows.size(), 3u);  // the first run's files untouched
+  kill(pid, SIGKILL);
+  Wait(pid, tmp.path() + "/first");
+  o = RunCli(second, tmp.path() + "/second");
+  EXPECT_EQ(o.code, 0) << o.err;
+}
+
+// A folder with an earlier run's results is refused unless --force, which removes
+// screwfem's files only: no stale frames or tables survive, and vtk/ goes with vtk: false.
+TEST(Cli, EarlierResultsAreReplacedOnlyWithForce) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_force");
+  const std::string out = tmp.path() + "/out";
+  Outcome o = RunCli({"run", kPendulum, "-o", out, "--set", "outputs.vtk_interval=0.01"}, tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  ASSERT_TRUE(std::filesystem::exists(out + "/vtk/frame_00050.vtp"));
+  std::ofstream(out + "/notes.txt") << "mine\n";
+  std::ofstream(out + "/vtk/camera.pvsm") << "mine\n";
+  o = RunCli({"run", kPendulum, "-o", out, "--set", "analysis.end_time=0.1"}, tmp.path());
+  EXPECT_EQ(o.code, 2);
+  EXPECT_NE(o.err.find("holds the results of an earlier run"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("--force"), std::string::npos) << o.err;
+  EXPECT_EQ(ReadCsv(out + "/points.csv").rows.size(), 51u);  // untouched
+  // --force: the new run's 2 frames only (t = 0, 0.1), listed and on disk.
+  o = RunCli({"run", kPendulum, "-o", out, "--force", "--set", "analysis.end_time=0.1"}, tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  int frames = 0;
+  for (const auto& e : std::filesystem::directory_iterator(out + "/vtk"))
+    frames += e.path().extension() == ".vtp" ? 1 : 0;
+  EXPECT_EQ(frames, 2);
+  EXPECT_EQ(ReadCsv(out + "/points.csv").rows.size(), 11u);
+  // vtk: false leaves no frames of the earlier run behind.
+  o = RunCli({"run", kPendulum, "-o", out, "--force", "--set", "outputs.vtk=false"}, tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_FALSE(std::filesystem::exists(out + "/vtk/motion.pvd"));
+  EXPECT_FALSE(std::filesystem::exists(out + "/vtk/frame_00000.vtp"));
+  EXPECT_TRUE(std::filesystem::exists(out + "/vtk/camera.pvsm"));  // not screwfem's
+  EXPECT_EQ(ReadFile(out + "/notes.txt"), "mine\n");
 }
 
 TEST(Cli, CheckPrintsCountsWithoutRunning) {

@@ -9,10 +9,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "run_test_util.h"
 #include "screwfem/io/schedule.h"
@@ -499,15 +501,88 @@ TEST(RunScene, CollectionReferencesEveryFrameFileAndFramesHoldTheMechanism) {
   EXPECT_NE(pvd.find("timestep=\"0.29999999999999999\""), std::string::npos);
 }
 
+// Frame files named in motion.pvd, in order.
+std::vector<std::string> CollectionFiles(const std::string& pvd) {
+  std::vector<std::string> files;
+  for (std::size_t at = pvd.find("file=\""); at != std::string::npos; at = pvd.find("file=\"", at + 1)) {
+    const std::size_t start = at + 6, end = pvd.find('"', start);
+    files.push_back(pvd.substr(start, end - start));
+  }
+  return files;
+}
+
+std::vector<std::string> FrameFilesOnDisk(const std::string& vtk_dir) {
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(vtk_dir))
+    if (e.path().extension() == ".vtp") files.push_back(e.path().filename().string());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// The default outputs of a scene file without an outputs section: a 20 s pendulum (20000 steps)
+// records about kDefaultOutputRows rows and kDefaultVtkFrames frames, and motion.pvd is written
+// once at the end, not after every frame (which made the run quadratic: 90 s instead of 0.06).
+TEST(RunScene, DefaultOutputsRecordAboutAThousandRowsAndAHundredFramesAndThePvdOnce) {
+  std::string text = ReadFile(std::string(SCREWFEM_TEST_DATA_DIR) + "/pendulum.yaml");
+  text = text.substr(0, text.find("outputs:"));
+  const Scene s = ParseScene(text, "pendulum.yaml", {"analysis.end_time=20"});
+  EXPECT_DOUBLE_EQ(s.outputs.interval, 0.02);
+  EXPECT_DOUBLE_EQ(s.outputs.vtk_interval, 0.2);
+  const ScopedDir scoped_dir("default_outputs");
+  const std::string& dir = scoped_dir.path();
+  std::atomic<int> stop{0};
+  int pvd_seen_during_run = 0;
+  RunOptions options;
+  options.stop.flag = &stop;
+  options.on_step = [&](double) {
+    if (std::filesystem::exists(dir + "/vtk/motion.pvd") && ++pvd_seen_during_run > 0)
+      stop = SIGINT;
+  };
+  const RunResult r = RunScene(s, dir, options);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(pvd_seen_during_run, 0) << "motion.pvd was written before the run ended";
+  EXPECT_EQ(r.steps, 20000);
+  const Table joints = ReadCsv(dir + "/joints.csv");
+  ASSERT_TRUE(joints.well_formed) << joints.problem;
+  EXPECT_EQ(joints.rows.size(), 1001u);  // every 20 steps
+  const std::vector<std::string> listed = CollectionFiles(ReadFile(dir + "/vtk/motion.pvd"));
+  EXPECT_EQ(listed.size(), 101u);  // every 200 steps
+  EXPECT_EQ(listed, FrameFilesOnDisk(dir + "/vtk"));
+  // Output work per step: at most one frame per 100 steps and one row per 10 steps.
+  EXPECT_LE(100 * listed.size(), static_cast<std::size_t>(r.steps) + 100);
+  EXPECT_LE(10 * joints.rows.size(), static_cast<std::size_t>(r.steps) + 10);
+}
+
+TEST(RunScene, CollectionOfAnInterruptedRunListsExactlyTheFramesOnDisk) {
+  Scene s = Pendulum(1e-3, 0.5);
+  s.outputs.vtk_interval = 0.01;
+  std::atomic<int> stop{0};
+  RunOptions options;
+  options.stop.flag = &stop;
+  options.on_step = [&](double t) {
+    if (t > 0.0545) stop = SIGINT;
+  };
+  const ScopedDir scoped_dir("vtk_interrupted");
+  const std::string& dir = scoped_dir.path();
+  const RunResult r = RunScene(s, dir, options);
+  ASSERT_TRUE(r.interrupted);
+  const std::vector<std::string> listed = CollectionFiles(ReadFile(dir + "/vtk/motion.pvd"));
+  EXPECT_EQ(listed.size(), 6u);  // t = 0, 0.01, ..., 0.05
+  EXPECT_EQ(listed, FrameFilesOnDisk(dir + "/vtk"));
+  const std::optional<Json> j = ParseJsonFile(dir + "/summary.json");
+  ASSERT_TRUE(j);
+  EXPECT_EQ(j->Find("outputs.vtk_frames")->number, 6.0);
+}
+
 // --- clean ends ---------------------------------------------------------------------------------------
 
 TEST(RunScene, StopRequestEndsTheRunWithCompleteFilesAndStatusInterrupted) {
-  std::atomic<bool> stop{false};
+  std::atomic<int> stop{0};
   int steps = 0;
   RunOptions options;
-  options.stop = &stop;
+  options.stop.flag = &stop;
   options.on_step = [&](double) {
-    if (++steps == 25) stop = true;
+    if (++steps == 25) stop = SIGINT;
   };
   const ScopedDir scoped_dir("interrupted");
   const std::string& dir = scoped_dir.path();
@@ -516,7 +591,8 @@ TEST(RunScene, StopRequestEndsTheRunWithCompleteFilesAndStatusInterrupted) {
   EXPECT_TRUE(r.interrupted);
   EXPECT_EQ(r.steps, 25);
   EXPECT_NEAR(r.end_time, 0.025, 1e-12);
-  EXPECT_NE(r.message.find("interrupted at t = 0.025"), std::string::npos) << r.message;
+  EXPECT_EQ(r.signal, SIGINT);
+  EXPECT_NE(r.message.find("interrupted by SIGINT at t = 0.025"), std::string::npos) << r.message;
   for (const char* file : {"/points.csv", "/joints.csv"}) {
     const Table t = ReadCsv(dir + file);
     ASSERT_TRUE(t.well_formed) << file << ": " << t.problem;
@@ -528,6 +604,54 @@ TEST(RunScene, StopRequestEndsTheRunWithCompleteFilesAndStatusInterrupted) {
   EXPECT_EQ(j->Find("status")->string, "interrupted");
   EXPECT_EQ(j->Find("message")->string, r.message);
   EXPECT_EQ(j->Find("steps")->number, 25.0);
+}
+
+// A stop request also ends static solutions and the static preload (between Newton
+// iterations), as "interrupted", not "failed".
+TEST(RunScene, StopRequestEndsStaticSolutionsAndPreloadsAsInterrupted) {
+  for (const bool preload : {false, true}) {
+    Scene s = Cantilever();
+    if (preload)
+      s.analysis.static_preload = true;
+    else
+      s.analysis.kind = AnalysisKind::kStatic;
+    s.analysis.statics.time = 1.0;
+    s.analysis.statics.load_steps = 1000000;  // about a minute
+    int polls = 0;
+    RunOptions options;
+    options.stop.poll = [](void* count) { return ++*static_cast<int*>(count) > 50; };
+    options.stop.context = &polls;
+    const ScopedDir scoped_dir("static_interrupted");
+    const RunResult r = RunScene(s, scoped_dir.path(), options);
+    EXPECT_FALSE(r.ok);
+    EXPECT_TRUE(r.interrupted) << r.message;
+    EXPECT_EQ(polls, 51);
+    EXPECT_NE(r.message.find("interrupted at load factor"), std::string::npos) << r.message;
+    const std::optional<Json> j = ParseJsonFile(scoped_dir.path() + "/summary.json");
+    ASSERT_TRUE(j);
+    EXPECT_EQ(j->Find("status")->string, "interrupted");
+    EXPECT_FALSE(j->Find("static_solution.converged")->boolean);
+    EXPECT_GT(j->Find("static_solution.load_steps")->number, 0.0);
+  }
+}
+
+// SIGTERM and SIGHUP (as the flag's value) end the run as "terminated", naming the signal.
+TEST(RunScene, StopBySigtermEndsTheRunAsTerminatedAndNamesTheSignal) {
+  std::atomic<int> stop{0};
+  RunOptions options;
+  options.stop.flag = &stop;
+  options.on_step = [&](double t) {
+    if (t > 0.0095) stop = SIGTERM;
+  };
+  const ScopedDir scoped_dir("terminated");
+  const RunResult r = RunScene(Pendulum(1e-3, 0.5), scoped_dir.path(), options);
+  EXPECT_TRUE(r.interrupted);
+  EXPECT_EQ(r.signal, SIGTERM);
+  EXPECT_EQ(r.message.rfind("terminated by SIGTERM at t = 0.01", 0), 0u) << r.message;
+  const std::optional<Json> j = ParseJsonFile(scoped_dir.path() + "/summary.json");
+  ASSERT_TRUE(j);
+  EXPECT_EQ(j->Find("status")->string, "terminated");
+  EXPECT_EQ(j->Find("signal")->string, "SIGTERM");
 }
 
 TEST(RunScene, SummaryReadsRunningWhileTheRunIsUnderWay) {

@@ -365,15 +365,16 @@ TEST(SceneDefaults, EveryDocumentedDefault) {
   EXPECT_EQ(a.statics.max_halvings, sta.max_halvings);
   EXPECT_EQ(a.statics.residual_tolerance, sta.residual_tolerance);
   EXPECT_EQ(a.statics.time, 0.0);  // the preload is solved at start_time
-  // Outputs: no points, every joint with coordinates (not the fixed k), every step, VTK on.
+  // Outputs: no points, every joint with coordinates (not the fixed k), about 1000 rows and
+  // 100 VTK frames per run in whole steps (1000 steps of 1 ms: every step and every 10 steps).
   EXPECT_TRUE(scene.outputs.points.empty());
   ASSERT_EQ(scene.outputs.joints.size(), 2u);
   EXPECT_EQ(scene.outputs.joints[0].name, "j");
   EXPECT_EQ(scene.outputs.joints[1].name, "d");
   EXPECT_EQ(scene.outputs.joints[1].joint, m.FindJoint("d"));
-  EXPECT_EQ(scene.outputs.interval, 0.0);
+  EXPECT_EQ(scene.outputs.interval, 1e-3);
   EXPECT_TRUE(scene.outputs.vtk);
-  EXPECT_EQ(scene.outputs.vtk_interval, 0.0);
+  EXPECT_EQ(scene.outputs.vtk_interval, 1e-2);
   ASSERT_EQ(scene.named_points.size(), 2u);
   EXPECT_EQ(scene.named_points[1].first, "B");
   EXPECT_EQ(scene.named_points[1].second, Vec3(1, 0, 0));

@@ -14,11 +14,14 @@ Exact period for the amplitude pi/2: T = 4 K(k^2) / w0 with k = sin(pi/4), K the
 elliptic integral of the first kind (by the arithmetic-geometric mean).
 """
 
+import contextlib
 import csv
+import json
 import math
 import os
 import pathlib
 import re
+import signal
 import tempfile
 import unittest
 
@@ -89,7 +92,7 @@ def swing(h):
 
 
 def read_csv(path):
-    """{t: row values} of a points.csv / joints.csv (written with %.17g: exact doubles)."""
+    """{t: row values} of a points.csv / joints.csv (shortest round-trip text: exact doubles)."""
     with open(path, newline="") as f:
         rows = list(csv.reader(f))
     return rows[0], {float(r[0]): np.array([float(x) for x in r[1:]]) for r in rows[1:]}
@@ -542,6 +545,125 @@ outputs:
         self.assertEqual(list(rows), [scene.analysis.statics.time])
         np.testing.assert_allclose(rows[scene.analysis.statics.time], sim.calc_point_row(),
                                    rtol=0, atol=1e-14)
+
+
+@contextlib.contextmanager
+def keyboard_interrupt_after(seconds):
+    """SIGALRM after `seconds`, handled like Ctrl-C (KeyboardInterrupt)."""
+    previous = signal.signal(signal.SIGALRM, signal.default_int_handler)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+class InterruptTest(unittest.TestCase):
+    """A signal (Ctrl-C) during a long C++ call ends it, instead of waiting for it to finish."""
+
+    def test_keyboard_interrupt_ends_run_scene_with_an_interrupted_summary(self):
+        # 2e6 steps: about 10 s when nothing polls the signal.
+        scene = sf.load_scene(PENDULUM, ["analysis.end_time=20", "analysis.step=1e-5",
+                                         "outputs.vtk=false"])
+        with tempfile.TemporaryDirectory() as outdir:
+            with self.assertRaises(KeyboardInterrupt):
+                with keyboard_interrupt_after(0.3):
+                    sf.run_scene(scene, outdir)
+            with open(os.path.join(outdir, "summary.json")) as f:
+                summary = json.load(f)
+            header, rows = read_csv(os.path.join(outdir, "points.csv"))
+        self.assertEqual(summary["status"], "interrupted")
+        self.assertLess(summary["time"], 20.0)
+        self.assertEqual(len(rows), summary["outputs"]["rows"])
+
+    def test_keyboard_interrupt_ends_solve_static_at_a_converged_load_step(self):
+        overrides = ["joints.hinge.stiffness=1", "analysis.type=static"]
+        reference = sf.Simulation(sf.load_scene(PENDULUM, overrides))
+        reference.solve_static()
+        equilibrium = reference.joint_coordinate("hinge")
+        self.assertGreater(abs(equilibrium), 0.1)
+        # A million load steps: several seconds when nothing polls the signal.
+        sim = sf.Simulation(sf.load_scene(PENDULUM, overrides + ["analysis.load_steps=1000000"]))
+        with self.assertRaises(KeyboardInterrupt):
+            with keyboard_interrupt_after(0.2):
+                sim.solve_static()
+        self.assertLess(abs(sim.joint_coordinate("hinge")), 0.5 * abs(equilibrium))
+
+
+class ValidationTest(unittest.TestCase):
+    """Python reaches the C++ validation of every setting (ValueError), never a hang."""
+
+    def test_halvings_iterations_and_tolerances_are_range_checked(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        for field, value in (("max_halvings", 31), ("max_halvings", 10 ** 6), ("max_halvings", -1),
+                             ("max_iterations", 0), ("max_iterations", 1001),
+                             ("increment_tolerance", math.nan), ("constraint_tolerance", math.inf),
+                             ("residual_tolerance", 0.0), ("rho_inf", math.nan)):
+            options = sf.DynamicOptions()
+            setattr(options, field, value)
+            with self.assertRaisesRegex(ValueError, "DynamicOptions." + field, msg=field):
+                sim.initialize(options)
+        for field, value in (("max_halvings", 31), ("load_steps", 0), ("time", math.inf),
+                             ("residual_tolerance", math.nan), ("increment_tolerance", -1.0)):
+            options = sf.StaticOptions()
+            setattr(options, field, value)
+            with self.assertRaisesRegex(ValueError, "StaticOptions." + field, msg=field):
+                sim.solve_static(options)
+        # run_scene checks the scene's settings with the same function.
+        scene = sf.load_scene(PENDULUM)
+        scene.analysis.dynamic.max_halvings = 10 ** 6
+        with tempfile.TemporaryDirectory() as outdir:
+            with self.assertRaisesRegex(ValueError, "max_halvings"):
+                sf.run_scene(scene, outdir)
+
+    def test_enum_values_out_of_range_are_rejected(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        for field, enum in (("predictor", sf.Predictor), ("newton_matrix", sf.NewtonMatrix),
+                            ("convergence", sf.ConvergenceTest)):
+            options = sf.DynamicOptions()
+            try:
+                setattr(options, field, enum(7))
+            except (ValueError, TypeError):
+                continue  # refused already
+            with self.assertRaisesRegex(ValueError, "DynamicOptions." + field):
+                sim.initialize(options)
+        scene = sf.load_scene(PENDULUM)
+        try:
+            scene.analysis.kind = sf.AnalysisKind(5)
+        except (ValueError, TypeError):
+            return
+        with tempfile.TemporaryDirectory() as outdir:
+            with self.assertRaisesRegex(ValueError, "analysis.kind"):
+                sf.run_scene(scene, outdir)
+
+    def test_step_schedule_rejects_times_it_cannot_step_through(self):
+        schedule = sf.StepSchedule(0.0, 1.0, 1e-3)
+        self.assertAlmostEqual(schedule.next(0.0), 1e-3, delta=1e-15)
+        for t in (-1e308, -1.0, math.nan, math.inf, 1.0, 2.0):
+            with self.assertRaises(ValueError, msg=str(t)):
+                schedule.next(t)
+        with self.assertRaisesRegex(ValueError, "relative accuracy"):
+            sf.StepSchedule(1e15, 1e15 + 1.0, 1e-3)
+        with self.assertRaisesRegex(ValueError, "1e9"):
+            sf.StepSchedule(0.0, 1e9, 1e-3)
+
+    def test_paths_with_an_embedded_nul_are_rejected(self):
+        with self.assertRaisesRegex(ValueError, "NUL"):
+            sf.load_scene(PENDULUM + "\0.backup")
+        scene = sf.load_scene(PENDULUM, ["analysis.end_time=0.01"])
+        with tempfile.TemporaryDirectory() as parent:
+            with self.assertRaisesRegex(ValueError, "NUL"):
+                sf.run_scene(scene, os.path.join(parent, "out\0x"))
+            self.assertEqual(os.listdir(parent), [])
+
+    def test_a_folder_with_results_is_replaced_only_with_force(self):
+        scene = sf.load_scene(PENDULUM, ["analysis.end_time=0.01"])
+        with tempfile.TemporaryDirectory() as outdir:
+            self.assertTrue(sf.run_scene(scene, outdir).ok)
+            with self.assertRaisesRegex(ValueError, "results of an earlier run"):
+                sf.run_scene(scene, outdir)
+            self.assertTrue(sf.run_scene(scene, outdir, force=True).ok)
 
 
 if __name__ == "__main__":

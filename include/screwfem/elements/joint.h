@@ -126,6 +126,12 @@ void CalcJointCoordinateTangent(const Joint& joint, const Eigen::Ref<const Eigen
 void RetractJoint(const Model& model, Data& data, int joint,
                   const Eigen::Ref<const Eigen::VectorXd>& dx);
 
+// Largest |phi| over all constraint rows at `time`: the relative-frame constraints of the
+// joints (JointConstraint) and the prescribed drives alpha - q(t) (§4.4). The value
+// MaxConstraintViolation (assemble.h) computes from a whole residual assembly, for one
+// logarithm per joint.
+double CalcMaxJointConstraint(const Model& model, const Data& data, double time);
+
 // Effort of a joint's drive: the generalised force the drive applies along its coordinate
 // (actuator torque or force; for a series-elastic drive the spring-damper force).
 double JointDriveEffort(const Model& model, const Data& data, int joint);

@@ -6,12 +6,16 @@
 // OUTDIR/summary.json resolved settings, counts, steps, Newton iterations, halvings, wall time,
 //                     largest element rotation,
 //                     largest constraint residual, status and message
-// OUTDIR/vtk/frame_NNNNN.vtp and OUTDIR/vtk/motion.pvd (ParaView)
-// Files are written as the run goes, in whole rows: the CSV rows are collected and flushed
+// OUTDIR/vtk/frame_NNNNN.vtp and OUTDIR/vtk/motion.pvd (ParaView; the collection is written
+//                     once, when the run ends, also when it is interrupted or fails)
+// OUTDIR/.screwfem.lock  held (flock) by the running run, with its process id
+// Files are written as the run goes, in whole rows: the CSV rows are collected and written
 // when 64 KiB have accumulated, at least every 2 s of wall time (with the summary), before
-// every on_step callback and at the end of the run. An interrupted run (stop request) leaves
-// valid files up to the last completed output step; the files of a killed process end with
-// a complete row.
+// every on_step callback and at the end of the run; points.csv and joints.csv always hold
+// the same rows. An interrupted run (stop request) leaves valid files up to the last
+// completed output step; the files of a killed process end with a complete row; a write
+// error (a full disk) cuts a torn row off, and the summary says which file failed and how
+// many rows the tables hold.
 #pragma once
 
 #include <atomic>
@@ -19,21 +23,33 @@
 #include <string>
 
 #include "screwfem/io/scene.h"
+#include "screwfem/solve/stop.h"
 
 namespace screwfem {
 
+// The lock file of an output directory (see above).
+inline constexpr const char* kOutputLockFile = ".screwfem.lock";
+
 struct RunOptions {
   bool progress = false;                    // progress bar on stderr
-  const std::atomic<bool>* stop = nullptr;  // set asynchronously (e.g. SIGINT) to stop cleanly
+  // Polled before every time step, (sub)step attempt and static Newton iteration: a request
+  // ends the run cleanly (status "interrupted", or "terminated" when the flag holds SIGTERM
+  // or SIGHUP; RunResult::signal is the flag's value).
+  StopRequest stop;
   // Called after every completed time step (and after the static solution) with the
   // simulated time [s], once the step's output rows are written to the files (flushed). For
   // tests and embedding.
   std::function<void(double t)> on_step;
+  // An outdir that holds the files of an earlier run (summary.json, points.csv, joints.csv,
+  // vtk/ frames) is refused unless this is set; then those files (and no others) are removed
+  // first. The CLI's --force.
+  bool replace_results = false;
 };
 
 struct RunResult {
   bool ok = false;
-  bool interrupted = false;
+  bool interrupted = false;     // ended by RunOptions::stop
+  int signal = 0;               // then the value of its flag (the signal number), else 0
   double end_time = 0.0;        // simulated time reached [s]
   long steps = 0;               // time steps (static analyses: accepted load steps)
   long newton_iterations = 0;   // dynamic steps and static solves (incl. a preload)
@@ -45,6 +61,7 @@ struct RunResult {
   // one helical element is valid below 2 pi (method.md §2.7).
   double max_element_rotation = 0.0;
   std::string message;          // why it stopped early, with the time
+  bool io_error = false;        // it failed writing its files (message: which and why)
 };
 
 // Runs the scene's analysis and writes the outputs into outdir (created if needed).
@@ -57,8 +74,9 @@ struct RunResult {
 // last step end. Static analyses: SolveStatic at statics.time, one row.
 // Numerical failure, a stop request and write errors end the run with a result (and
 // summary.json status "failed" or "interrupted"), never an exception.
-// Throws InputError for invalid settings or outputs (naming the field) and when outdir or its
-// files cannot be created.
+// Throws InputError for invalid settings or outputs (naming the field), when outdir or its
+// files cannot be created, when another run holds outdir (naming its process id) and when
+// outdir holds an earlier run's results without replace_results.
 RunResult RunScene(const Scene& scene, const std::string& outdir, const RunOptions& options = {});
 
 }  // namespace screwfem

@@ -41,6 +41,14 @@ struct OutputJoint {
   int joint = -1;
 };
 
+// Scene files without outputs.interval (vtk_interval) record rows (ParaView frames) every
+// whole number of steps closest to (end_time - start_time) / kDefaultOutputRows
+// (kDefaultVtkFrames), at least every step: smooth curves, and a ParaView animation, at a cost
+// that does not grow with the number of steps (docs/scene-format.md, "outputs"). A scene that
+// gives interval but not vtk_interval writes frames at that interval.
+inline constexpr int kDefaultOutputRows = 1000;
+inline constexpr int kDefaultVtkFrames = 100;
+
 struct OutputSpec {
   std::vector<OutputPoint> points;
   std::vector<OutputJoint> joints;

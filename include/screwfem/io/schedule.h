@@ -3,6 +3,8 @@
 // (method.md §5.5).
 #pragma once
 
+#include <cmath>
+#include <string>
 #include <vector>
 
 #include "screwfem/model/data.h"
@@ -11,6 +13,24 @@ namespace screwfem {
 
 // Every breakpoint (Profile::Breakpoints) of the model's load and drive profiles, unsorted.
 std::vector<double> ProfileBreakpoints(const Model& model);
+
+// Relative accuracy to which the step ends of a dynamic run must be representable. A time t
+// is a double, and consecutive doubles near t are u(t) = 2^(floor(log2 |t|) - 52) apart (about
+// 2.2e-16 |t|); a step end start + n h is rounded to that grid, so every step taken differs
+// from h by up to u(t_max), t_max = max(|start|, |end|). A grid is accepted when
+// u(t_max) <= kTimeGridAccuracy h, i.e. roughly h >= 2.2e-10 t_max: a 1 ms step is fine up
+// to t = 4.5e6 s, and start_time 1e15 s (u = 0.125 s) needs h >= 1.25e5 s.
+inline constexpr double kTimeGridAccuracy = 1e-6;
+
+// Empty when [start, end] with steps of `step` passes the check above, else the reason (the
+// spacing of doubles, the least step and what to do). Requires finite start <= end, step > 0.
+std::string TimeGridProblem(double start, double end, double step);
+
+// Throws InputError "<owner>.<field>: ..." unless start and end are finite, end >= start,
+// step is finite and > 0, there are at most 1e9 steps and TimeGridProblem is empty (field:
+// start_time or end_time, whichever is larger in magnitude, for the last). The check shared
+// by runs, scenes and the Python StepSchedule.
+void ValidateTimeGrid(double start, double end, double step, const std::string& owner);
 
 class StepSchedule {
  public:
@@ -25,8 +45,13 @@ class StepSchedule {
 
   // True once t has reached the end (within round-off).
   bool Done(double t) const { return t >= end_ - tolerance_; }
-  // The step end following t (t is start or an earlier step end). Requires !Done(t).
+  // The step end following t (t is start or an earlier step end). Requires start <= t and
+  // !Done(t) (Accepts(t)).
   double Next(double t) const;
+  // True when t is finite, not before start and not Done: a valid argument of Next.
+  bool Accepts(double t) const {
+    return std::isfinite(t) && t >= start_ - tolerance_ && !Done(t);
+  }
 
  private:
   double start_, end_, step_, tolerance_;

@@ -10,8 +10,10 @@
 //               the joint frame at joints), velocity [m/s], joint_id (-1 except at joints).
 //   Cell data:  rod_id, body_id, joint_id (-1 where they do not apply).
 //   Field data: TimeValue [s].
-// DIR/motion.pvd         the Collection; rewritten (atomically) after every frame, so it is
-//                        always valid and references only complete frame files.
+// DIR/motion.pvd         the Collection, written once (atomically) when the run ends, also
+//                        when it is interrupted or fails: it lists exactly the complete frame
+//                        files on disk. (Rewriting it after every frame made a run quadratic
+//                        in its number of frames.)
 #pragma once
 
 #include <string>
@@ -24,16 +26,17 @@ namespace screwfem {
 
 class VtkWriter {
  public:
-  // Creates the directory if needed and an empty collection. Throws InputError if it cannot.
+  // Creates the directory if needed. Throws InputError if it cannot.
   void Open(const std::string& dir);
-  // Writes the next frame of data's current state at `time` and rewrites the collection.
-  // Returns false on a write error (errno kept; the collection still lists the earlier frames).
+  // Writes the next frame of data's current state at `time`. Returns false on a write error
+  // (errno kept; the incomplete frame file is removed and not counted).
   bool WriteFrame(const Model& model, const Data& data, double time);
+  // Writes motion.pvd listing the frames written so far. Returns false on a write error.
+  bool WriteCollection() const;
   int frames() const { return static_cast<int>(frames_.size()); }
   const std::string& dir() const { return dir_; }
 
  private:
-  bool WriteCollection() const;
   std::string dir_;
   std::vector<std::pair<double, std::string>> frames_;  // time, file name
 };

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdio>
+#include <initializer_list>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -41,10 +43,15 @@ void CalcJointRow(const Model& model, const Data& data, const std::vector<Output
 // Appends `value` formatted as printf("%.*g", precision, value) would (std::to_chars with a
 // precision is specified to match printf, and is several times faster).
 void AppendNumber(std::string* text, double value, int precision);
+// Appends the shortest decimal text that reads back (strtod, Python float) as exactly `value`
+// (std::to_chars without a precision): "0.1" for 0.1, where %.17g writes
+// "0.10000000000000001"; infinities and NaN as "inf", "-inf", "nan".
+void AppendShortest(std::string* text, double value);
 
-// A CSV table: header "t,<columns>", then one row per call, each written with full double
-// precision (%.17g). Rows are collected and written to the file whole, when 64 KiB have
-// accumulated and on Flush() and Close(), so that the file always ends with a complete line.
+// A CSV table: header "t,<columns>", then one row per call, each value written as the
+// shortest text that reads back as the same double (AppendShortest). Rows are collected in memory (a batch) and written to the file by Flush
+// or FlushTogether, so that the file ends with a complete row: when a write fails (a full
+// disk, a file size limit) the torn last row is cut off, and the writer accepts no more rows.
 class CsvWriter {
  public:
   CsvWriter() = default;
@@ -54,24 +61,44 @@ class CsvWriter {
 
   // Creates (truncates) the file and writes the header. Throws InputError when it cannot.
   void Open(const std::string& path, const std::vector<std::string>& columns);
-  // Appends "t,values..." (to the file once enough rows have accumulated). Returns false on a
-  // write error (errno is kept).
+  // Appends "t,values..." to the batch (no file access). Returns false once a write has failed.
   bool WriteRow(double t, const std::vector<double>& values);
-  // Writes the collected rows to the file and flushes it. Returns false on a write error.
+  // Writes the batch. Returns false on a write error (errno kept): the rows that reached the
+  // file whole stay, a torn row is cut off, the rest of the batch is dropped.
   bool Flush();
+  // Flushes tables that collect the same rows (points.csv and joints.csv) so that they keep
+  // the same number of rows: after a write error in any of them, every one is cut back to the
+  // rows all of them hold whole, and none accepts more rows. Returns nullptr, or the first
+  // writer whose write failed (errno kept).
+  static const CsvWriter* FlushTogether(std::initializer_list<CsvWriter*> writers);
   // Flushes and closes. Returns false on a write error.
   bool Close();
   const std::string& path() const { return path_; }
+  // Rows in the file (after the last flush) and the time of the last one (NaN: none).
   long rows() const { return rows_; }
+  double last_time() const { return last_time_; }
+  std::size_t batch_bytes() const { return batch_.size(); }
+  bool failed() const { return failed_; }
 
  private:
-  std::FILE* file_ = nullptr;
+  // Writes the batch; returns the number of its rows written whole (the file may end with a
+  // torn row after them), sets failed_ on an error.
+  std::size_t WriteBatch();
+  // Cuts the file to its rows before the batch plus the batch's first n rows, drops the batch.
+  void KeepBatchRows(std::size_t n);
+
+  int fd_ = -1;
   std::string path_;
-  std::string pending_;  // complete rows not yet written
+  std::string batch_;                   // complete rows not yet written
+  std::vector<std::size_t> row_ends_;   // end offset of each batch row in batch_
+  std::vector<double> row_times_;       // t of each batch row
+  long long file_bytes_ = 0;            // bytes in the file before the batch
   long rows_ = 0;
+  double last_time_ = std::numeric_limits<double>::quiet_NaN();
+  bool failed_ = false;
 };
 
-// Builds JSON text: objects, arrays, strings (escaped), numbers (%.17g; NaN and infinities
+// Builds JSON text: objects, arrays, strings (escaped), numbers (AppendShortest; NaN and infinities
 // become null), integers, booleans. Commas and indentation are inserted automatically.
 class JsonWriter {
  public:
@@ -84,6 +111,7 @@ class JsonWriter {
   JsonWriter& Number(double value);
   JsonWriter& Int(long value);
   JsonWriter& Bool(bool value);
+  JsonWriter& Null();
   // Key followed by a value, for brevity.
   JsonWriter& Field(std::string_view key, std::string_view value) { return Key(key).String(value); }
   JsonWriter& Field(std::string_view key, const char* value) { return Key(key).String(value); }
@@ -106,7 +134,9 @@ class JsonWriter {
 std::string JsonEscape(std::string_view text);
 
 // Replaces the file at path by text through a temporary file in the same directory and a
-// rename, so a reader never sees a partial file. Returns false (errno kept) on failure.
+// rename, so a reader never sees a partial file. When the temporary file cannot be written
+// (a full disk) an existing file is overwritten in place instead. Returns false (errno kept)
+// on failure.
 bool WriteFileAtomically(const std::string& path, const std::string& text);
 
 }  // namespace screwfem

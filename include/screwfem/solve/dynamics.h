@@ -10,6 +10,7 @@
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/data.h"
+#include "screwfem/solve/stop.h"
 
 namespace screwfem {
 
@@ -64,6 +65,17 @@ struct DynamicOptions {
   ConvergenceTest convergence = ConvergenceTest::kEstimated;
 };
 
+// Ranges of the iteration limits (scene files: analysis.max_iterations, max_halvings).
+inline constexpr int kMaxNewtonIterations = 1000;
+inline constexpr int kMaxHalvings = 30;
+
+// Throws InputError "<owner>.<field>: what is expected" unless every setting is in range:
+// rho_inf in [0, 1]; max_iterations in [1, kMaxNewtonIterations]; max_halvings in
+// [0, kMaxHalvings] (a step is never cut below 2^-30 of itself, so a failing step ends);
+// tolerances finite and > 0; refresh_ratio in (0, 1); enums one of their values. The one
+// check of these settings, for scenes, runs and the Python bindings.
+void ValidateDynamicOptions(const DynamicOptions& options, const std::string& owner);
+
 // Largest contraction of two consecutive corrections for which ConvergenceTest::kEstimated
 // accepts a step without assembling the residual at its last iterate, and the fraction of
 // the tolerances the estimated residual and constraints must stay below.
@@ -89,6 +101,7 @@ struct Integrator {
 
 struct StepResult {
   bool ok = false;
+  bool interrupted = false;  // ended by a StopRequest (then not ok)
   int iterations = 0;      // Newton iterations of this step (all substeps)
   int substeps = 1;        // 1 unless the step was halved
   std::string message;     // on failure: when and why (allocated only on failure)
@@ -102,8 +115,11 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integrator,
                         const DynamicOptions& options, std::string* message = nullptr);
 
 // Advances data by h (possibly in halved substeps). On failure data is left at the start of
-// the step.
-StepResult Step(const Model& model, Data& data, Integrator& integrator, double h);
+// the step. `stop` is polled before every attempt at a (sub)step: when it is requested the
+// step ends with interrupted = true, data at the end of the last completed substep (the start
+// of the step unless the step was halved). No allocation unless it fails or is interrupted.
+StepResult Step(const Model& model, Data& data, Integrator& integrator, double h,
+                const StopRequest& stop = {});
 
 
 }  // namespace screwfem

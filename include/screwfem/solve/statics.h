@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "screwfem/model/data.h"
+#include "screwfem/solve/stop.h"
 
 namespace screwfem {
 
@@ -30,6 +31,15 @@ struct StaticOptions {
   double constraint_tolerance = 1e-10;  // |phi|_inf
 };
 
+// Range of StaticOptions::load_steps (scene files: analysis.load_steps); max_iterations and
+// max_halvings have the ranges of the dynamic solver (kMaxNewtonIterations, kMaxHalvings).
+inline constexpr int kMaxLoadSteps = 1000000;
+
+// Throws InputError "<owner>.<field>: what is expected" unless time is finite, load_steps in
+// [1, kMaxLoadSteps], max_halvings in [0, 30], max_iterations in [1, 1000] and the tolerances
+// finite and > 0.
+void ValidateStaticOptions(const StaticOptions& options, const std::string& owner);
+
 struct StaticStep {
   double load_factor = 0.0;
   int iterations = 0;
@@ -38,6 +48,7 @@ struct StaticStep {
 
 struct StaticResult {
   bool converged = false;
+  bool interrupted = false;     // ended by a StopRequest (then not converged)
   double load_factor = 0.0;     // last converged load factor (1 when converged)
   int load_steps = 0;           // accepted load steps
   int total_iterations = 0;
@@ -47,7 +58,9 @@ struct StaticResult {
 };
 
 // Brings the model from data's current state to equilibrium under the full loads. On failure
-// data holds the last converged state.
-StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options = {});
+// data holds the last converged state. `stop` is polled before every Newton iteration; when
+// it is requested the solve ends with interrupted = true at the last converged load step.
+StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options = {},
+                         const StopRequest& stop = {});
 
 }  // namespace screwfem
