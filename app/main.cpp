@@ -145,9 +145,10 @@ int RunPython(std::vector<std::string> args, const std::string& python_path) {
   std::vector<char*> envp;
   for (std::string& e : env_strings) envp.push_back(e.data());
   envp.push_back(nullptr);
-  // A handler (not SIG_IGN) so that the child starts with the default disposition.
+  // A handler (not SIG_IGN) so that the child starts with the default disposition; Ctrl-C
+  // is the child's to act on, this process waits for it.
   struct sigaction action {};
-  action.sa_handler = OnSigint;
+  action.sa_handler = OnStopSignal;
   sigemptyset(&action.sa_mask);
   sigaction(SIGINT, &action, nullptr);
   pid_t pid = 0;
