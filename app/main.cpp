@@ -3,6 +3,8 @@
 //   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet]
 //   screwfem check SCENE.yaml [--set key=value]...
 //   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1]
+//   screwfem view OUTDIR [-o FILE.html]
+//   screwfem --version
 //
 // Exit codes: 0 success, 1 a failed step or static solution, 2 invalid input or usage,
 // 130 interrupted (SIGINT).
@@ -102,14 +104,14 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
   }
 }
 
-// Runs the plotting script with Debian's python (full path, no PATH lookup).
-int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
-         const std::string& points, const std::string& times) {
-  const char* env_script = std::getenv("SCREWFEM_PLOT_SCRIPT");
-  const std::string script = env_script && *env_script ? env_script : SCREWFEM_PLOT_SCRIPT;
+// Runs a script of tools/ with Debian's python (full path, no PATH lookup): `script` unless the
+// environment variable `env_var` names another file. Returns the script's exit status.
+int RunPythonTool(const char* env_var, const std::string& script_default, const char* what,
+                  const std::vector<std::string>& script_args) {
+  const char* env_script = std::getenv(env_var);
+  const std::string script = env_script && *env_script ? env_script : script_default;
   if (!std::filesystem::is_regular_file(script)) {
-    std::fprintf(stderr, "error: plotting script %s not found (set SCREWFEM_PLOT_SCRIPT)\n",
-                 script.c_str());
+    std::fprintf(stderr, "error: %s script %s not found (set %s)\n", what, script.c_str(), env_var);
     return kExitInput;
   }
   if (access(kPython, X_OK) != 0) {
@@ -118,10 +120,7 @@ int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
     return kExitInput;
   }
   std::vector<std::string> args = {kPython, script};
-  args.insert(args.end(), outdirs.begin(), outdirs.end());
-  args.insert(args.end(), {"-o", figdir});
-  if (!points.empty()) args.insert(args.end(), {"--points", points});
-  if (!times.empty()) args.insert(args.end(), {"--times", times});
+  args.insert(args.end(), script_args.begin(), script_args.end());
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -138,13 +137,29 @@ int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
   return kExitFailed;
 }
 
+int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
+         const std::string& points, const std::string& times) {
+  std::vector<std::string> args = outdirs;
+  args.insert(args.end(), {"-o", figdir});
+  if (!points.empty()) args.insert(args.end(), {"--points", points});
+  if (!times.empty()) args.insert(args.end(), {"--times", times});
+  return RunPythonTool("SCREWFEM_PLOT_SCRIPT", SCREWFEM_PLOT_SCRIPT, "plotting", args);
+}
+
+int View(const std::string& outdir, const std::string& html) {
+  std::vector<std::string> args = {outdir};
+  if (!html.empty()) args.insert(args.end(), {"-o", html});
+  return RunPythonTool("SCREWFEM_VIEW_SCRIPT", SCREWFEM_VIEW_SCRIPT, "viewer", args);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"screwfem: geometrically exact screw-based FEM for articulated soft robots"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("screwfem ") + SCREWFEM_VERSION);
 
-  std::string scene_path, outdir, figdir, points, times;
+  std::string scene_path, outdir, figdir, points, times, html;
   std::vector<std::string> overrides, outdirs;
   bool quiet = false;
   const auto add_overrides = [&](CLI::App* cmd) {
@@ -169,6 +184,10 @@ int main(int argc, char** argv) {
   plot->add_option("--points", points, "comma-separated point names (default: all)");
   plot->add_option("--times", times, "comma-separated snapshot times [s] (default: 5 evenly spaced)");
 
+  CLI::App* view = app.add_subcommand("view", "write a self-contained HTML viewer of a run (three.js)");
+  view->add_option("outdir", outdir, "run output directory")->required();
+  view->add_option("-o,--output", html, "HTML file to write (default: OUTDIR/view.html)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -176,5 +195,6 @@ int main(int argc, char** argv) {
   }
   if (run->parsed()) return Run(scene_path, outdir, overrides, quiet);
   if (check->parsed()) return Check(scene_path, overrides);
+  if (view->parsed()) return View(outdir, html);
   return Plot(outdirs, figdir, points, times);
 }

@@ -7,7 +7,8 @@ packages=(
   build-essential cmake
   libeigen3-dev libyaml-cpp-dev libcli11-dev
   googletest libgtest-dev libbenchmark-dev
-  pybind11-dev python3-dev python3-numpy python3-matplotlib
+  pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pil
+  libjs-three chromium python3-websocket
 )
 
 if ! command -v dpkg-query > /dev/null 2>&1; then

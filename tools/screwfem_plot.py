@@ -6,7 +6,7 @@ For every recorded point P (points.csv), FIGDIR/point_P.png: displacement x(t) -
 velocity and acceleration (rows) of the x, y and z components (columns), the runs overlaid
 with their directory names as labels -- the layout of Fig. 4 of the GRM paper.
 For every recorded joint J (joints.csv), FIGDIR/joint_J.png: q, dq/dt, d2q/dt2 and effort.
-For every run with ParaView frames (vtk/motion.pvd), FIGDIR/snapshots_RUN.png: the mechanism
+For every run with ParaView frames (vtk/, read by screwfem_vtk.py), FIGDIR/snapshots_RUN.png: the mechanism
 at the chosen times (the frames nearest to them) in one 3D view -- Fig. 3 style.
 
 Needs numpy and matplotlib (Debian: python3-numpy, python3-matplotlib); uses the Agg backend.
@@ -17,13 +17,15 @@ import argparse
 import csv
 import os
 import sys
-import xml.etree.ElementTree as ET
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import screwfem_vtk  # noqa: E402  (the ParaView frames, whatever their encoding)
 
 AXES = ("x", "y", "z")
 
@@ -122,54 +124,22 @@ def plot_joint(name, runs, figdir):
 
 
 def read_collection(outdir):
-    """[(time, path)] of the ParaView frames of a run, or None without vtk/motion.pvd."""
-    pvd = os.path.join(outdir, "vtk", "motion.pvd")
-    if not os.path.isfile(pvd):
-        return None
+    """[(time, path)] of the ParaView frames of a run, or None without them."""
     try:
-        root = ET.parse(pvd).getroot()
-    except ET.ParseError as e:
-        raise InputProblem(f"{pvd}: not valid XML: {e}") from e
-    frames = []
-    for ds in root.iter("DataSet"):
-        frames.append((float(ds.get("timestep")), os.path.join(outdir, "vtk", ds.get("file"))))
-    return sorted(frames)
-
-
-def read_numbers(element, kind=float):
-    return np.array([kind(v) for v in (element.text or "").split()])
+        return screwfem_vtk.read_collection(outdir)
+    except screwfem_vtk.VtkError as e:
+        raise InputProblem(str(e)) from e
 
 
 def read_frame(path):
     """Points (n x 3) and cells of one .vtp frame: a list of (point indices, kind) with kind
     'joint', 'rod' or 'body'."""
-    if not os.path.isfile(path):
-        raise InputProblem(f"{path} is listed in motion.pvd but missing")
     try:
-        piece = ET.parse(path).getroot().find("PolyData/Piece")
-    except ET.ParseError as e:
-        raise InputProblem(f"{path}: not valid XML: {e}") from e
-    points = read_numbers(piece.find("Points/DataArray")).reshape(-1, 3)
-    cell_data = {a.get("Name"): read_numbers(a, int) for a in piece.findall("CellData/DataArray")}
-    cells = []
-    for tag in ("Verts", "Lines"):
-        block = piece.find(tag)
-        if block is None:
-            continue
-        arrays = {a.get("Name"): read_numbers(a, int) for a in block.findall("DataArray")}
-        start = 0
-        for end in arrays["offsets"]:
-            cells.append(arrays["connectivity"][start:end])
-            start = end
-    kinds = []
-    for i in range(len(cells)):
-        if cell_data.get("rod_id", [-1] * len(cells))[i] >= 0:
-            kinds.append("rod")
-        elif cell_data.get("body_id", [-1] * len(cells))[i] >= 0:
-            kinds.append("body")
-        else:
-            kinds.append("joint")
-    return points, list(zip(cells, kinds))
+        frame = screwfem_vtk.read_frame(path)
+    except screwfem_vtk.VtkError as e:
+        raise InputProblem(str(e)) from e
+    points = np.array(frame["points"], dtype=float).reshape(-1, 3)
+    return points, list(zip(frame["cells"], frame["kinds"]))
 
 
 def plot_snapshots(outdir, times, figdir):

@@ -105,6 +105,8 @@ class Run {
     summary_path_ = outdir + "/summary.json";
     points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
     joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
+    if (!WriteFileAtomically(outdir + "/joints.json", JointsDescriptionJson(model_, scene.outputs.joints)))
+      throw InputError("cannot write " + outdir + "/joints.json: " + std::strerror(errno));
     if (scene.outputs.vtk) {
       vtk_.emplace();
       vtk_->Open(outdir + "/vtk");
