@@ -2,7 +2,7 @@
 //
 //   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet]
 //   screwfem check SCENE.yaml [--set key=value]...
-//   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1]
+//   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1] [--animate]
 //   screwfem view OUTDIR [-o FILE.html]
 //   screwfem --version
 //
@@ -138,11 +138,12 @@ int RunPythonTool(const char* env_var, const std::string& script_default, const 
 }
 
 int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
-         const std::string& points, const std::string& times) {
+         const std::string& points, const std::string& times, bool animate) {
   std::vector<std::string> args = outdirs;
   args.insert(args.end(), {"-o", figdir});
   if (!points.empty()) args.insert(args.end(), {"--points", points});
   if (!times.empty()) args.insert(args.end(), {"--times", times});
+  if (animate) args.emplace_back("--animate");
   return RunPythonTool("SCREWFEM_PLOT_SCRIPT", SCREWFEM_PLOT_SCRIPT, "plotting", args);
 }
 
@@ -161,7 +162,7 @@ int main(int argc, char** argv) {
 
   std::string scene_path, outdir, figdir, points, times, html;
   std::vector<std::string> overrides, outdirs;
-  bool quiet = false;
+  bool quiet = false, animate = false;
   const auto add_overrides = [&](CLI::App* cmd) {
     cmd->add_option("--set", overrides, "override a scene value, e.g. analysis.step=5e-4 (repeatable)")
         ->type_name("KEY=VALUE")
@@ -183,6 +184,8 @@ int main(int argc, char** argv) {
   plot->add_option("-o,--output", figdir, "figure directory (created if needed)")->required();
   plot->add_option("--points", points, "comma-separated point names (default: all)");
   plot->add_option("--times", times, "comma-separated snapshot times [s] (default: 5 evenly spaced)");
+  plot->add_flag("--animate", animate,
+                 "also write animation_RUN.gif per run (and .mp4 when ffmpeg is installed)");
 
   CLI::App* view = app.add_subcommand("view", "write a self-contained HTML viewer of a run (three.js)");
   view->add_option("outdir", outdir, "run output directory")->required();
@@ -196,5 +199,5 @@ int main(int argc, char** argv) {
   if (run->parsed()) return Run(scene_path, outdir, overrides, quiet);
   if (check->parsed()) return Check(scene_path, overrides);
   if (view->parsed()) return View(outdir, html);
-  return Plot(outdirs, figdir, points, times);
+  return Plot(outdirs, figdir, points, times, animate);
 }
