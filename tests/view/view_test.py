@@ -77,7 +77,11 @@ class ViewerInChromium(unittest.TestCase):
         cls.browser.load(cls.url, cls.ready)
         cls.browser.evaluate("document.getElementById('loop').checked = false")
         cls.playing_start = state()
-        cls.browser.evaluate("new Promise(function (done) { setTimeout(done, 300); })")
+        # Waits (at most 20 s, for a loaded machine) until the time has moved on.
+        cls.browser.evaluate(
+            "new Promise(function (done) { var t0 = document.body.dataset.time, n = 0;"
+            " var id = setInterval(function () { if (document.body.dataset.time !== t0 || ++n > 400)"
+            " { clearInterval(id); done(); } }, 50); })")
         cls.playing_later = state()
         cls.problems = cls.browser.console_problems()
 

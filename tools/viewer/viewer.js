@@ -8,7 +8,7 @@
 // URL parameters (for tests and links): t=SECONDS shows that time and stays paused;
 // bare=1 draws the mechanism alone (no grid, axes, trails, labels or controls);
 // follow=NAME follows a body, rod, joint or recorded point; colour=FIELD colours the rods;
-// labels=1 shows the names of joints and recorded points.
+// labels=1 shows the names of joints and recorded points; trail=SECONDS or all.
 (function () {
   "use strict";
 
@@ -328,15 +328,24 @@
   };
   var labels = new THREE.Group();
   scene.add(labels);
-  var joints = data.joints.map(function (j) {
+  // Joints at the same place (a hinge and a weld at one point) share one label, "J1, W1".
+  var labelOwner = data.joints.map(function (j, k) {
+    for (var i = 0; i < k; ++i)
+      if (point0(data.joints[i].point).distanceTo(point0(j.point)) < 1e-6 * size) return i;
+    return k;
+  });
+  function point0(i) { return new THREE.Vector3(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]); }
+  var joints = data.joints.map(function (j, k) {
     var kind = j.type === "fixed" ? "weld" : j.drive && j.drive !== "none" ? "actuated" : "passive";
     var m = new THREE.Mesh(sphere, jointMaterials[kind]);
     var r = kind === "weld" ? 0.6 * jointRadius : jointRadius;
     m.scale.set(r, r, r);
     scene.add(m);
     var label = null;
-    if (j.name) {
-      label = textSprite(j.name, "#1d2430", 0.03 * size);
+    if (j.name && labelOwner[k] === k) {
+      var names = data.joints.filter(function (o, i) { return labelOwner[i] === k && o.name; })
+        .map(function (o) { return o.name; });
+      label = textSprite(names.join(", "), "#1d2430", 0.03 * size);
       labels.add(label);
     }
     return { point: j.point, mesh: m, label: label, name: j.name };
@@ -345,10 +354,11 @@
   // ---- recorded points and their trails -------------------------------------------------------
   var recPoints = [];
   if (rec) {
-    var recMaterial = new THREE.MeshStandardMaterial({ color: 0xc2185b, roughness: 0.4 });
+    var recColors = [0xc2185b, 0x6a1b9a, 0xad1457, 0x4527a0, 0x880e4f];  // magentas and purples
     var nr = recTimes.length, npr = rec.names.length;
     rec.names.forEach(function (name, k) {
-      var m = new THREE.Mesh(sphere, recMaterial);
+      var color = recColors[k % recColors.length];
+      var m = new THREE.Mesh(sphere, new THREE.MeshStandardMaterial({ color: color, roughness: 0.4 }));
       var r = 0.75 * jointRadius;
       m.scale.set(r, r, r);
       scene.add(m);
@@ -357,10 +367,10 @@
         for (var c = 0; c < 3; ++c) trailPos[3 * i + c] = recXyz[3 * (i * npr + k) + c];
       var g = new THREE.BufferGeometry();
       g.setAttribute("position", new THREE.BufferAttribute(trailPos, 3));
-      var line = new THREE.Line(g, new THREE.LineBasicMaterial({ color: 0xc2185b, transparent: true, opacity: 0.7 }));
+      var line = new THREE.Line(g, new THREE.LineBasicMaterial({ color: color, transparent: true, opacity: 0.75 }));
       line.frustumCulled = false;
       scene.add(line);
-      var label = textSprite(name, "#8a1040", 0.03 * size);
+      var label = textSprite(name, "#" + new THREE.Color(color).getHexString(), 0.03 * size);
       labels.add(label);
       recPoints.push({ name: name, k: k, mesh: m, line: line, label: label });
     });
@@ -423,7 +433,7 @@
     recPoints.forEach(function (p) {
       var x = recordedPoint(p.k, time);
       p.mesh.position.copy(x);
-      p.label.position.copy(x).addScaledVector(up, 2.2 * jointRadius);
+      p.label.position.copy(x).addScaledVector(up, -2.4 * jointRadius);  // joints' labels go above
       var end = bracket(recTimes, time)[0] + 1;
       var start = trail === "all" ? 0 : bracket(recTimes, time - trail)[0];
       p.line.geometry.setDrawRange(start, trail === 0 || bare ? 0 : end - start);
@@ -566,6 +576,17 @@
   }
   if (params.has("follow")) {
     targets.forEach(function (tg, k) { if (tg.name === params.get("follow")) { followSelect.value = String(k); setFollow(k); } });
+  }
+  if (params.has("trail")) {
+    var tr = params.get("trail"), trailSelect = document.getElementById("trail");
+    trail = tr === "all" ? "all" : Math.max(Number(tr) || 0, 0);
+    if (!Array.prototype.some.call(trailSelect.options, function (o) { return o.value === tr; })) {
+      var o = document.createElement("option");
+      o.value = tr;
+      o.textContent = tr + " s";
+      trailSelect.appendChild(o);
+    }
+    trailSelect.value = tr;
   }
   var frozen = params.has("t");
   if (frozen) {
