@@ -72,7 +72,13 @@
       box.expandByPoint(new THREE.Vector3(recXyz[i], recXyz[i + 1], recXyz[i + 2]));
   if (box.isEmpty()) box.set(new THREE.Vector3(-0.5, -0.5, -0.5), new THREE.Vector3(0.5, 0.5, 0.5));
   var size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-6);
-  var tubeRadius = 0.006 * size, bodyWidth = 0.016 * size, jointRadius = 0.014 * size;
+  // The mechanism's own size (its initial bounding box) sets the drawn thicknesses and the
+  // following camera's distance; the motion's size (box) sets the grid and the overall view.
+  var box0 = new THREE.Box3();
+  for (i = 0; i + 2 < np * 3; i += 3)
+    box0.expandByPoint(new THREE.Vector3(positions[i], positions[i + 1], positions[i + 2]));
+  var size0 = box0.isEmpty() ? size : Math.max(box0.getSize(new THREE.Vector3()).length(), 1e-3 * size);
+  var tubeRadius = 0.006 * size0, bodyWidth = 0.016 * size0, jointRadius = 0.014 * size0;
   var up = new THREE.Vector3().fromArray(data.up).normalize();
 
   // ---- renderer, camera, controls ----------------------------------------------------------
@@ -345,7 +351,7 @@
     if (j.name && labelOwner[k] === k) {
       var names = data.joints.filter(function (o, i) { return labelOwner[i] === k && o.name; })
         .map(function (o) { return o.name; });
-      label = textSprite(names.join(", "), "#1d2430", 0.03 * size);
+      label = textSprite(names.join(", "), "#1d2430", 0.03 * size0);
       labels.add(label);
     }
     return { point: j.point, mesh: m, label: label, name: j.name };
@@ -370,7 +376,7 @@
       var line = new THREE.Line(g, new THREE.LineBasicMaterial({ color: color, transparent: true, opacity: 0.75 }));
       line.frustumCulled = false;
       scene.add(line);
-      var label = textSprite(name, "#" + new THREE.Color(color).getHexString(), 0.03 * size);
+      var label = textSprite(name, "#" + new THREE.Color(color).getHexString(), 0.03 * size0);
       labels.add(label);
       recPoints.push({ name: name, k: k, mesh: m, line: line, label: label });
     });
@@ -445,9 +451,12 @@
         camera.position.add(d);
         controls.target.add(d);
       } else {
-        var shift = c.clone().sub(controls.target);
-        camera.position.add(shift);
+        // Start following: look at the target from the current direction, from a distance
+        // that shows the mechanism (its initial size), whatever distance the motion needs.
+        var dir = camera.position.clone().sub(controls.target).normalize();
+        var dist = 0.6 * size0 / Math.tan(camera.fov * Math.PI / 360);
         controls.target.copy(c);
+        camera.position.copy(c).addScaledVector(dir, dist);
       }
       followLast = c;
       controls.update();
