@@ -8,7 +8,7 @@ velocity and acceleration (rows) of the x, y and z components (columns), the run
 with their directory names as labels -- the layout of Fig. 4 of the GRM paper.
 For every recorded joint J (joints.csv), FIGDIR/joint_J.png: q, dq/dt, d2q/dt2 and effort,
 in the units joints.json gives (rad or m). When the runs' scales in one panel differ by more
-than 10x, each scale group gets its own row of panels (the group's runs are named in the title).
+than 10x, each scale group gets its own row of panels (the group's runs are in its legend).
 For every run with ParaView frames (vtk/, read by screwfem_vtk.py), FIGDIR/snapshots_RUN.png:
 the mechanism at the chosen times (the frames nearest to them) in one 3D view -- Fig. 3 style;
 a mechanism that travels far also gets one view per time, framed on it.
@@ -135,8 +135,7 @@ def plot_grouped(name, runs, rows, columns, figdir, filename, width):
                 v = get(cols, data, spec)
                 ax.plot(data[:, 0], v, label=run_label, color=colors[run_label],
                         marker="o" if len(data) == 1 else None)
-            suffix = "" if len(layout) == len(rows) else f" ({', '.join(runs[i][0] for i in group)})"
-            ax.set_title(f"{name} {title}{' ' + label if label else ''}{suffix}", fontsize=9)
+            ax.set_title(f"{name} {title}{' ' + label if label else ''}", fontsize=9)
             ax.set_ylabel(unit)
             ax.grid(True, alpha=0.3)
             # A component at round-off level (e.g. the z motion of a planar chain) is shown on
