@@ -77,6 +77,9 @@
   var box0 = new THREE.Box3();
   for (i = 0; i + 2 < np * 3; i += 3)
     box0.expandByPoint(new THREE.Vector3(positions[i], positions[i + 1], positions[i + 2]));
+  if (recXyz)
+    for (i = 0; i + 2 < 3 * rec.names.length; i += 3)
+      box0.expandByPoint(new THREE.Vector3(recXyz[i], recXyz[i + 1], recXyz[i + 2]));
   var size0 = box0.isEmpty() ? size : Math.max(box0.getSize(new THREE.Vector3()).length(), 1e-3 * size);
   var tubeRadius = 0.006 * size0, bodyWidth = 0.016 * size0, jointRadius = 0.014 * size0;
   var up = new THREE.Vector3().fromArray(data.up).normalize();
