@@ -2,11 +2,14 @@
 //
 //   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet] [--force]
 //   screwfem check SCENE.yaml [--set key=value]...
-//   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1]
+//   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1] [--animate]
+//   screwfem view OUTDIR [-o FILE.html]
 //   screwfem sweep SCENE.yaml --grid key=v1,v2 [--grid ...] -o DIR [--resume] [...]
+//   screwfem --version
 //
-// `plot` and `sweep` run Python (Debian's /usr/bin/python3): tools/screwfem_plot.py, and
-// `python3 -m screwfem sweep` with the package of the build tree (python/screwfem).
+// `plot`, `view` and `sweep` run Python (Debian's /usr/bin/python3): tools/screwfem_plot.py,
+// tools/screwfem_view.py, and `python3 -m screwfem sweep` with the package of the build tree
+// (python/screwfem).
 //
 // Exit codes: 0 success, 1 a failed step or static solution, 2 invalid input or usage, or
 // an output directory that cannot be used or written (in use, earlier results, a full disk),
@@ -192,21 +195,34 @@ int RunPython(std::vector<std::string> args, const std::string& python_path) {
   return kExitFailed;
 }
 
-// Runs the plotting script (ToolScript; SCREWFEM_PLOT_SCRIPT overrides its location).
-int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
-         const std::string& points, const std::string& times) {
-  const std::string script = ToolScript("SCREWFEM_PLOT_SCRIPT", "screwfem_plot.py");
+// Runs a script of screwfem's tools with Debian's python (ToolScript: `env_var` overrides its
+// location). Returns the script's exit status.
+int RunPythonTool(const char* env_var, const char* name, const char* what,
+                  const std::vector<std::string>& script_args) {
+  const std::string script = ToolScript(env_var, name);
   if (!std::filesystem::is_regular_file(script)) {
-    std::fprintf(stderr, "error: plotting script %s not found (set SCREWFEM_PLOT_SCRIPT)\n",
-                 script.c_str());
+    std::fprintf(stderr, "error: %s script %s not found (set %s)\n", what, script.c_str(), env_var);
     return kExitInput;
   }
   std::vector<std::string> args = {script};
-  args.insert(args.end(), outdirs.begin(), outdirs.end());
+  args.insert(args.end(), script_args.begin(), script_args.end());
+  return RunPython(args, "");
+}
+
+int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
+         const std::string& points, const std::string& times, bool animate) {
+  std::vector<std::string> args = outdirs;
   args.insert(args.end(), {"-o", figdir});
   if (!points.empty()) args.insert(args.end(), {"--points", points});
   if (!times.empty()) args.insert(args.end(), {"--times", times});
-  return RunPython(args, "");
+  if (animate) args.emplace_back("--animate");
+  return RunPythonTool("SCREWFEM_PLOT_SCRIPT", "screwfem_plot.py", "plotting", args);
+}
+
+int View(const std::string& outdir, const std::string& html) {
+  std::vector<std::string> args = {outdir};
+  if (!html.empty()) args.insert(args.end(), {"-o", html});
+  return RunPythonTool("SCREWFEM_VIEW_SCRIPT", "screwfem_view.py", "viewer", args);
 }
 
 // Runs `python3 -m screwfem sweep ARGS...` with the package of PythonPackageDir (it must hold
@@ -228,10 +244,11 @@ int Sweep(const std::vector<std::string>& sweep_args) {
 int Main(int argc, char** argv) {
   CLI::App app{"screwfem: geometrically exact screw-based FEM for articulated soft robots"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("screwfem ") + SCREWFEM_VERSION);
 
-  std::string scene_path, outdir, figdir, points, times;
+  std::string scene_path, outdir, figdir, points, times, html;
   std::vector<std::string> overrides, outdirs;
-  bool quiet = false, force = false;
+  bool quiet = false, force = false, animate = false;
   const auto add_overrides = [&](CLI::App* cmd) {
     cmd->add_option("--set", overrides, "override a scene value, e.g. analysis.step=5e-4 (repeatable)")
         ->type_name("KEY=VALUE")
@@ -255,6 +272,12 @@ int Main(int argc, char** argv) {
   plot->add_option("-o,--output", figdir, "figure directory (created if needed)")->required();
   plot->add_option("--points", points, "comma-separated point names (default: all)");
   plot->add_option("--times", times, "comma-separated snapshot times [s] (default: 5 evenly spaced)");
+  plot->add_flag("--animate", animate,
+                 "also write animation_RUN.gif per run (and .mp4 when ffmpeg is installed)");
+
+  CLI::App* view = app.add_subcommand("view", "write a self-contained HTML viewer of a run (three.js)");
+  view->add_option("outdir", outdir, "run output directory")->required();
+  view->add_option("-o,--output", html, "HTML file to write (default: OUTDIR/view.html)");
 
   // Everything after `sweep` goes to the Python front end (python/screwfem/__main__.py), which
   // parses and documents it (`screwfem sweep --help`).
@@ -274,7 +297,8 @@ int Main(int argc, char** argv) {
   }
   if (check->parsed()) return Check(scene_path, overrides);
   if (sweep->parsed()) return Sweep(sweep->remaining());
-  return Plot(outdirs, figdir, points, times);
+  if (view->parsed()) return View(outdir, html);
+  return Plot(outdirs, figdir, points, times, animate);
 }
 
 }  // namespace

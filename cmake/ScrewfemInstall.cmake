@@ -3,7 +3,8 @@
 #   lib/libscrewfem_<layer>.a                one static library per layer
 #   lib/cmake/screwfem/screwfemConfig.cmake  find_package(screwfem) -> screwfem::core, ::io, ...
 #   bin/screwfem                             the command-line program
-#   share/screwfem/screwfem_plot.py          the plot tool `screwfem plot` runs
+#   share/screwfem/                          the tools `screwfem plot` and `view` run, the
+#                                            Python package (python/CMakeLists.txt)
 # The CLI finds its tools in ../share/screwfem next to its own directory, in the build tree as
 # in an installation (app/CMakeLists.txt copies them there at build time).
 include(GNUInstallDirs)
@@ -21,7 +22,11 @@ install(TARGETS ${screwfem_libraries} screwfem_core
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/screwfem
   DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS screwfem_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(FILES ${SCREWFEM_TOOL_SCRIPTS} DESTINATION ${CMAKE_INSTALL_DATADIR}/screwfem)
+foreach(file IN LISTS SCREWFEM_TOOL_FILES)
+  get_filename_component(subdir ${file} DIRECTORY)
+  install(FILES ${PROJECT_SOURCE_DIR}/tools/${file}
+          DESTINATION ${CMAKE_INSTALL_DATADIR}/screwfem/${subdir})
+endforeach()
 
 install(EXPORT screwfemTargets NAMESPACE screwfem:: DESTINATION ${SCREWFEM_INSTALL_CMAKEDIR})
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/screwfemConfig.cmake.in

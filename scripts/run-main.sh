@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
 # The main job (README.md, "Quick start", first command): installs missing Debian packages,
-# builds screwfem in Release into build/release, runs the statics example and the three GRM
-# cases, and plots the GRM results, writing everything to out/. Run as root (installing
-# packages needs it).
+# builds what it runs (the screwfem program and the statics example) in Release into
+# build/main, runs the statics example and the GRM cases, plots the GRM results and writes a
+# browser viewer per case, everything into out/. Run as root (installing packages needs it).
+#
+# build/main, not the test job's build/release: the main job configures without the test
+# suite, the benchmarks and the Python module, and CMake keeps such options in its cache, so a
+# shared directory would leave the test job's next configure without its tests.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
-build_dir=build/release
+build_dir=build/main
 jobs=$(nproc 2> /dev/null || echo 2)
 
 source scripts/phase-timing.sh
@@ -16,11 +20,12 @@ bash scripts/setup-deps.sh
 end "dependencies"
 
 begin "configure (Release)"
-cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DSCREWFEM_BUILD_TESTS=OFF \
+  -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_BUILD_PYTHON=OFF
 end "configure (Release)"
 
 begin "build (Release, -j$jobs)"
-cmake --build "$build_dir" -j"$jobs"
+cmake --build "$build_dir" -j"$jobs" --target screwfem_cli screwfem_statics_example
 end "build (Release, -j$jobs)"
 
 mkdir -p out
@@ -35,10 +40,12 @@ fi
 "$statics_example" | tee out/statics.txt
 end "statics example"
 
-# The GRM of the method paper in its three cases (examples/grm, ../shared/grm.md): each run
-# writes points.csv, joints.csv, summary.json and ParaView frames into out/grm_<case>/.
+# The GRM of the method paper (examples/grm, ../shared/grm.md): the rigid case, and the soft
+# cases in both readings (series-elastic actuated joints, and springs in parallel with
+# prescribed ones). Each run writes points.csv, joints.csv, joints.json, summary.json and
+# ParaView frames into out/grm_<case>/.
 screwfem=$build_dir/app/screwfem
-cases=(rigid soft_k soft_kd)
+cases=(rigid soft_k soft_kd soft_k_parallel soft_kd_parallel)
 run_dirs=()
 for c in "${cases[@]}"; do
   begin "GRM $c (0 to 2 s)"
@@ -47,13 +54,21 @@ for c in "${cases[@]}"; do
   run_dirs+=("out/grm_$c")
 done
 
-# Figures: displacement, velocity and acceleration of P8 and P4 with the three cases overlaid
-# (the paper's Fig. 4), every joint, and 3D snapshots of each case (Fig. 3).
+# Figures: displacement, velocity and acceleration of P8 and P4 with the cases overlaid (the
+# paper's Fig. 4; cases whose scales differ by more than 10x on separate axes), every joint,
+# and 3D snapshots of each case (Fig. 3).
 begin "GRM figures"
 "$screwfem" plot "${run_dirs[@]}" -o out/figures --times 0,0.5,1,1.5,2
 end "GRM figures"
 
+# One self-contained browser viewer per case (three.js inlined; opens from file://).
+begin "GRM viewers"
+for c in "${cases[@]}"; do
+  "$screwfem" view "out/grm_$c" -o "out/viewer/grm_$c.html"
+done
+end "GRM viewers"
+
 echo
 echo "Phase timings:"
 printf '  %s\n' "${timings[@]}"
-echo "Output written to out/statics.txt, out/grm_{rigid,soft_k,soft_kd}/ and out/figures/"
+echo "Output written to out/statics.txt, out/grm_*/, out/figures/ and out/viewer/"

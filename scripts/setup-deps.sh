@@ -7,8 +7,9 @@ packages=(
   build-essential cmake
   libeigen3-dev libyaml-cpp-dev libcli11-dev
   googletest libgtest-dev libbenchmark-dev
-  pybind11-dev python3-dev python3-numpy python3-matplotlib
+  pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pil
   python3-dask python3-distributed python3-pandas
+  libjs-three chromium python3-websocket
 )
 
 if ! command -v dpkg-query > /dev/null 2>&1; then

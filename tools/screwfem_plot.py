@@ -1,29 +1,40 @@
 """Plots the results of screwfem runs (run with Debian's /usr/bin/python3; `screwfem plot` does).
 
     screwfem_plot.py OUTDIR [OUTDIR ...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1,1.5,2]
+                     [--animate]
 
 For every recorded point P (points.csv), FIGDIR/point_P.png: displacement x(t) - x(t0),
 velocity and acceleration (rows) of the x, y and z components (columns), the runs overlaid
 with their directory names as labels -- the layout of Fig. 4 of the GRM paper.
-For every recorded joint J (joints.csv), FIGDIR/joint_J.png: q, dq/dt, d2q/dt2 and effort.
-For every run with ParaView frames (vtk/motion.pvd), FIGDIR/snapshots_RUN.png: the mechanism
-at the chosen times (the frames nearest to them) in one 3D view -- Fig. 3 style.
+For every recorded joint J (joints.csv), FIGDIR/joint_J.png: q, dq/dt, d2q/dt2 and effort,
+in the units joints.json gives (rad or m). When the runs' scales in one panel differ by more
+than 10x, each scale group gets its own row of panels (the group's runs are in its legend).
+For every run with ParaView frames (vtk/, read by screwfem_vtk.py), FIGDIR/snapshots_RUN.png:
+the mechanism at the chosen times (the frames nearest to them) in one 3D view -- Fig. 3 style;
+a mechanism that travels far also gets one view per time, framed on it.
+With --animate, FIGDIR/animation_RUN.gif (and .mp4 when ffmpeg is installed) per run: the
+mechanism in 3D, framed on it as it moves.
 
-Needs numpy and matplotlib (Debian: python3-numpy, python3-matplotlib); uses the Agg backend.
+Needs numpy and matplotlib (Debian: python3-numpy, python3-matplotlib; python3-pil for the
+GIF); uses the Agg backend.
 Exit status: 0 on success, 2 when an input is missing or malformed.
 """
 
 import argparse
 import csv
+import json
 import os
+import shutil
 import sys
-import xml.etree.ElementTree as ET
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import screwfem_vtk  # noqa: E402  (the ParaView frames, whatever their encoding)
 
 AXES = ("x", "y", "z")
 
@@ -74,145 +85,297 @@ def save_figure(fig, figdir, filename):
     return path
 
 
-def plot_point(name, runs, figdir):
-    fig, axes = plt.subplots(3, 3, figsize=(13, 9), sharex=True, squeeze=False)
-    quantities = (("displacement", "", "m"), ("velocity", "v", "m/s"), ("acceleration", "a", "m/s²"))
-    row_scale = [0.0, 0.0, 0.0]  # largest magnitude of each quantity over components and runs
-    for label, (columns, data) in runs:
-        t = data[:, 0]
-        for row, (title, prefix, unit) in enumerate(quantities):
-            for col, axis in enumerate(AXES):
-                values = data[:, columns.index(f"{name}.{prefix}{axis}")]
-                if row == 0 and len(values):
-                    values = values - values[0]
-                if len(values):
-                    row_scale[row] = max(row_scale[row], float(np.max(np.abs(values))))
-                ax = axes[row][col]
-                ax.plot(t, values, label=label, marker="o" if len(t) == 1 else None)
-                ax.set_title(f"{name} {title} {axis}", fontsize=10)
-                ax.set_ylabel(unit)
-                ax.grid(True, alpha=0.3)
-    # A component that stays at round-off level (e.g. the z motion of a planar chain) is shown
-    # on the scale of the other components, not magnified into noise.
-    for row, scale in enumerate(row_scale):
-        for ax in axes[row]:
+def scale_groups(scales, ratio=10.0):
+    """Groups of run indices whose scales lie within `ratio` of each other (smallest first).
+
+    Runs whose scales differ by more than `ratio` get axes of their own, so that a small
+    motion is not flattened by a large one; runs at round-off (scale 0) join the first group."""
+    order = sorted(range(len(scales)), key=lambda i: scales[i])
+    groups = []
+    for i in order:
+        if groups and (scales[i] <= ratio * max(scales[groups[-1][0]], 1e-300) or scales[groups[-1][0]] == 0.0
+                       and scales[i] == 0.0):
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    zero = [i for g in groups for i in g if scales[i] == 0.0]
+    groups = [[i for i in g if scales[i] > 0.0] for g in groups]
+    groups = [g for g in groups if g]
+    if not groups:
+        return [zero]
+    groups[0] = zero + groups[0]
+    return groups
+
+
+def plot_grouped(name, runs, rows, columns, figdir, filename, width):
+    """One figure with a row of panels (one per column spec) for every quantity, overlaid runs;
+    a quantity whose runs' scales differ by more than 10x gets one row per scale group.
+
+    rows: [(title, unit, get(columns, data, column_spec) -> values)]; columns: [(spec, label)]."""
+    colors = {label: f"C{k}" for k, (label, _) in enumerate(runs)}
+    layout = []  # (row spec, group of run indices)
+    for row in rows:
+        scales = []
+        for _, (cols, data) in runs:
+            m = 0.0
+            for spec, _ in columns:
+                v = row[2](cols, data, spec)
+                if len(v):
+                    m = max(m, float(np.max(np.abs(v))))
+            scales.append(m)
+        for group in scale_groups(scales):
+            layout.append((row, group, max(scales[i] for i in group)))
+    fig, axes = plt.subplots(len(layout), len(columns), figsize=(width, 2.9 * len(layout) + 0.4),
+                             sharex=True, squeeze=False)
+    for r, ((title, unit, get), group, scale) in enumerate(layout):
+        for c, (spec, label) in enumerate(columns):
+            ax = axes[r][c]
+            for i in group:
+                run_label, (cols, data) = runs[i]
+                v = get(cols, data, spec)
+                ax.plot(data[:, 0], v, label=run_label, color=colors[run_label],
+                        marker="o" if len(data) == 1 else None)
+            ax.set_title(f"{name} {title}{' ' + label if label else ''}", fontsize=9)
+            ax.set_ylabel(unit)
+            ax.grid(True, alpha=0.3)
+            # A component at round-off level (e.g. the z motion of a planar chain) is shown on
+            # the scale of the other components, not magnified into noise.
             low, high = ax.get_ylim()
             if scale > 0.0 and high - low < 1e-9 * scale:
                 ax.set_ylim(-0.05 * scale, 0.05 * scale)
+        axes[r][0].legend(fontsize=7)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
-    axes[0][0].legend(fontsize=8)
-    return save_figure(fig, figdir, f"point_{name}.png")
+    return save_figure(fig, figdir, filename)
 
 
-def plot_joint(name, runs, figdir):
-    quantities = (("q", "coordinate", "m or rad"), ("qd", "rate", "m/s or rad/s"),
-                  ("qdd", "acceleration", "m/s² or rad/s²"), ("effort", "effort", "N or N m"))
-    fig, axes = plt.subplots(4, 1, figsize=(8, 10), sharex=True)
-    for label, (columns, data) in runs:
-        for ax, (suffix, title, unit) in zip(axes, quantities):
-            ax.plot(data[:, 0], data[:, columns.index(f"{name}.{suffix}")], label=label,
-                    marker="o" if len(data) == 1 else None)
-            ax.set_title(f"{name} {title}", fontsize=10)
-            ax.set_ylabel(unit)
-            ax.grid(True, alpha=0.3)
-    axes[-1].set_xlabel("t [s]")
-    axes[0].legend(fontsize=8)
-    return save_figure(fig, figdir, f"joint_{name}.png")
+def plot_point(name, runs, figdir):
+    def getter(prefix, relative):
+        def get(cols, data, axis):
+            v = data[:, cols.index(f"{name}.{prefix}{axis}")]
+            return v - v[0] if relative and len(v) else v
+        return get
+
+    rows = [("displacement", "m", getter("", True)), ("velocity", "m/s", getter("v", False)),
+            ("acceleration", "m/s²", getter("a", False))]
+    return plot_grouped(name, runs, rows, [(a, a) for a in AXES], figdir, f"point_{name}.png", 13)
+
+
+def read_joint_units(outdir):
+    """{column prefix: coordinate entry of joints.json} of a run, {} without joints.json."""
+    path = os.path.join(outdir, "joints.json")
+    if not os.path.isfile(path):
+        return {}
+    try:
+        with open(path) as f:
+            described = json.load(f)
+    except (OSError, ValueError) as e:
+        raise InputProblem(f"{path}: cannot read: {e}") from e
+    units = {}
+    for joint in described.get("joints", []):
+        for coordinate in joint.get("coordinates", []):
+            if coordinate.get("column"):
+                units[coordinate["column"]] = dict(coordinate, type=joint.get("type", ""))
+    return units
+
+
+def plot_joint(name, runs, figdir, units=None):
+    """q, dq/dt, d2q/dt2 and effort of joint coordinate `name`, with the units that joints.json
+    gives ("rad" or "m"); without it, "m or rad"."""
+    u = units or {}
+    rows = [("coordinate", u.get("unit", "m or rad"), "q"),
+            ("rate", u.get("rate_unit", "m/s or rad/s"), "qd"),
+            ("acceleration", u.get("acceleration_unit", "m/s² or rad/s²"), "qdd"),
+            ("effort", u.get("effort_unit", "N or N m"), "effort")]
+    rows = [(title, unit, (lambda suffix: lambda cols, data, _: data[:, cols.index(f"{name}.{suffix}")])(s))
+            for title, unit, s in rows]
+    title = name + (f" ({u['type']} {u['quantity']})" if "type" in u and "quantity" in u else "")
+    return plot_grouped(title, runs, rows, [(None, "")], figdir, f"joint_{name}.png", 8)
 
 
 def read_collection(outdir):
-    """[(time, path)] of the ParaView frames of a run, or None without vtk/motion.pvd."""
-    pvd = os.path.join(outdir, "vtk", "motion.pvd")
-    if not os.path.isfile(pvd):
-        return None
+    """[(time, path)] of the ParaView frames of a run, or None without them."""
     try:
-        root = ET.parse(pvd).getroot()
-    except ET.ParseError as e:
-        raise InputProblem(f"{pvd}: not valid XML: {e}") from e
-    frames = []
-    for ds in root.iter("DataSet"):
-        frames.append((float(ds.get("timestep")), os.path.join(outdir, "vtk", ds.get("file"))))
-    return sorted(frames)
-
-
-def read_numbers(element, kind=float):
-    return np.array([kind(v) for v in (element.text or "").split()])
+        return screwfem_vtk.read_collection(outdir)
+    except screwfem_vtk.VtkError as e:
+        raise InputProblem(str(e)) from e
 
 
 def read_frame(path):
     """Points (n x 3) and cells of one .vtp frame: a list of (point indices, kind) with kind
     'joint', 'rod' or 'body'."""
-    if not os.path.isfile(path):
-        raise InputProblem(f"{path} is listed in motion.pvd but missing")
     try:
-        piece = ET.parse(path).getroot().find("PolyData/Piece")
-    except ET.ParseError as e:
-        raise InputProblem(f"{path}: not valid XML: {e}") from e
-    points = read_numbers(piece.find("Points/DataArray")).reshape(-1, 3)
-    cell_data = {a.get("Name"): read_numbers(a, int) for a in piece.findall("CellData/DataArray")}
-    cells = []
-    for tag in ("Verts", "Lines"):
-        block = piece.find(tag)
-        if block is None:
+        frame = screwfem_vtk.read_frame(path)
+    except screwfem_vtk.VtkError as e:
+        raise InputProblem(str(e)) from e
+    points = np.array(frame["points"], dtype=float).reshape(-1, 3)
+    return points, list(zip(frame["cells"], frame["kinds"]))
+
+
+def draw_frame(ax, points, cells, color, label=None):
+    """Draws one frame's geometry (rods thin, rigid bodies thick, joints as dots) on a 3D axis."""
+    first = True
+    for ids, kind in cells:
+        p = points[ids]
+        if kind == "joint":
+            ax.scatter(p[:, 0], p[:, 1], p[:, 2], color=color, s=12)
             continue
-        arrays = {a.get("Name"): read_numbers(a, int) for a in block.findall("DataArray")}
-        start = 0
-        for end in arrays["offsets"]:
-            cells.append(arrays["connectivity"][start:end])
-            start = end
-    kinds = []
+        ax.plot(p[:, 0], p[:, 1], p[:, 2], color=color, linewidth=2.5 if kind == "body" else 1.5,
+                label=label if first else None)
+        first = False
+
+
+def set_cube(ax, lo, hi, margin=0.05):
+    """Equal-aspect limits: the cube around the box [lo, hi] (and labelled axes)."""
+    center, half = 0.5 * (lo + hi), (0.5 + margin) * max(float(np.max(hi - lo)), 1e-9)
+    ax.set_xlim(center[0] - half, center[0] + half)
+    ax.set_ylim(center[1] - half, center[1] + half)
+    ax.set_zlim(center[2] - half, center[2] + half)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
+
+
+def parts(points, cells, gap):
+    """The connected parts of a frame: lists of cell indices whose cells lie within `gap` of
+    each other (a prismatic joint that slides far splits the mechanism into two parts)."""
+    parent = list(range(len(cells)))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    pts = [points[ids] for ids, _ in cells]
     for i in range(len(cells)):
-        if cell_data.get("rod_id", [-1] * len(cells))[i] >= 0:
-            kinds.append("rod")
-        elif cell_data.get("body_id", [-1] * len(cells))[i] >= 0:
-            kinds.append("body")
-        else:
-            kinds.append("joint")
-    return points, list(zip(cells, kinds))
+        for j in range(i + 1, len(cells)):
+            if root(i) == root(j) or not len(pts[i]) or not len(pts[j]):
+                continue
+            d = np.min(np.linalg.norm(pts[i][:, None, :] - pts[j][None, :, :], axis=2))
+            if d <= gap:
+                parent[root(i)] = root(j)
+    groups = {}
+    for i in range(len(cells)):
+        groups.setdefault(root(i), []).append(i)
+    return sorted(groups.values(), key=lambda g: -sum(len(cells[i][0]) for i in g))
+
+
+def extent(points):
+    return float(np.max(points.max(axis=0) - points.min(axis=0))) if len(points) else 0.0
 
 
 def plot_snapshots(outdir, times, figdir):
+    """The mechanism at the chosen times. Overlaid in one view while the motion stays within
+    3 times the mechanism's initial size; otherwise (a mechanism that travels or stretches
+    far) one view of the whole motion and then one view per time and connected part, each
+    framed on that part."""
     frames = read_collection(outdir)
     label = run_label(outdir)
     if not frames:
-        print(f"warning: {outdir} has no ParaView frames (vtk/motion.pvd): no snapshots "
+        print(f"warning: {outdir} has no ParaView frames (vtk/): no snapshots "
               f"(set outputs.vtk: true)", file=sys.stderr)
         return None
     frame_times = np.array([t for t, _ in frames])
     if times is None:
         times = np.linspace(frame_times[0], frame_times[-1], min(5, len(frames)))
     chosen = sorted({int(np.argmin(np.abs(frame_times - t))) for t in times})
-    fig = plt.figure(figsize=(9, 8))
-    ax = fig.add_subplot(projection="3d")
     colors = plt.cm.viridis(np.linspace(0.0, 0.9, len(chosen)))
-    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    shots = []
     for color, index in zip(colors, chosen):
         t, path = frames[index]
         points, cells = read_frame(path)
         if len(points):
-            lo, hi = np.minimum(lo, points.min(axis=0)), np.maximum(hi, points.max(axis=0))
-        first = True
-        for ids, kind in cells:
-            p = points[ids]
-            if kind == "joint":
-                ax.scatter(p[:, 0], p[:, 1], p[:, 2], color=color, s=12)
-                continue
-            ax.plot(p[:, 0], p[:, 1], p[:, 2], color=color, linewidth=2.5 if kind == "body" else 1.5,
-                    label=f"t = {t:.3g} s" if first else None)
-            first = False
-    if np.all(np.isfinite(lo)):
-        center, half = 0.5 * (lo + hi), 0.5 * max(float(np.max(hi - lo)), 1e-9)
-        ax.set_xlim(center[0] - half, center[0] + half)
-        ax.set_ylim(center[1] - half, center[1] + half)
-        ax.set_zlim(center[2] - half, center[2] + half)
-        ax.set_box_aspect((1, 1, 1))
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_zlabel("z [m]")
-    ax.set_title(f"{label}: snapshots")
-    ax.legend(fontsize=8, loc="upper left")
+            shots.append((t, points, cells, color))
+    if not shots:
+        return None
+    every = np.vstack([p for _, p, _, _ in shots])
+    lo, hi = every.min(axis=0), every.max(axis=0)
+    size0 = max(extent(read_frame(frames[0][1])[0]), 1e-12)
+    if float(np.max(hi - lo)) <= 3.0 * size0:
+        fig = plt.figure(figsize=(9, 8))
+        ax = fig.add_subplot(projection="3d")
+        for t, points, cells, color in shots:
+            draw_frame(ax, points, cells, color, f"t = {t:.3g} s")
+        set_cube(ax, lo, hi)
+        ax.set_title(f"{label}: snapshots")
+        ax.legend(fontsize=8, loc="upper left")
+        return save_figure(fig, figdir, f"snapshots_{label}.png")
+    panels = []
+    for t, points, cells, color in shots:
+        groups = parts(points, cells, 0.2 * size0)
+        for k, group in enumerate(groups[:3]):
+            sub = [cells[i] for i in group]
+            title = f"t = {t:.3g} s" + (f", part {k + 1} of {len(groups)}" if len(groups) > 1 else "")
+            panels.append((title, points, sub, color))
+    ncols = 3
+    nrows = (len(panels) + 1 + ncols - 1) // ncols
+    fig = plt.figure(figsize=(5.0 * ncols, 4.6 * nrows))
+    ax = fig.add_subplot(nrows, ncols, 1, projection="3d")
+    for t, points, cells, color in shots:
+        draw_frame(ax, points, cells, color, f"t = {t:.3g} s")
+    set_cube(ax, lo, hi)
+    ax.set_title(f"{label}: the whole motion\n(the next views: one part at one time)", fontsize=10)
+    ax.legend(fontsize=7, loc="upper left")
+    for k, (title, points, cells, color) in enumerate(panels):
+        ax = fig.add_subplot(nrows, ncols, k + 2, projection="3d")
+        draw_frame(ax, points, cells, color)
+        used = np.vstack([points[ids] for ids, _ in cells])
+        set_cube(ax, used.min(axis=0), used.max(axis=0))
+        ax.set_title(title, fontsize=10)
     return save_figure(fig, figdir, f"snapshots_{label}.png")
+
+
+def animate(outdir, figdir, fps=25):
+    """FIGDIR/animation_RUN.gif (Pillow) and .mp4 (when ffmpeg is on PATH): the mechanism in 3D,
+    one picture per ParaView frame, framed as it moves: a cube of constant size (the largest
+    its biggest connected part needs at any time) whose centre follows that part's centre.
+    Returns the written paths."""
+    from matplotlib import animation
+
+    frames = read_collection(outdir)
+    label = run_label(outdir)
+    if not frames:
+        print(f"warning: {outdir} has no ParaView frames (vtk/): no animation", file=sys.stderr)
+        return []
+    geometry = [(t, *read_frame(path)) for t, path in frames]
+    geometry = [g for g in geometry if len(g[1])]
+    if not geometry:
+        return []
+    size0 = max(extent(geometry[0][1]), 1e-12)
+    followed = []
+    for _, points, cells in geometry:
+        main = parts(points, cells, 0.2 * size0)[0]
+        used = np.vstack([points[cells[i][0]] for i in main])
+        followed.append(used)
+    half = max(0.55 * max(extent(u) for u in followed), 1e-9)
+    centers = np.array([0.5 * (u.min(axis=0) + u.max(axis=0)) for u in followed])
+    fig = plt.figure(figsize=(6.4, 6.0))
+    ax = fig.add_subplot(projection="3d")
+
+    def draw(k):
+        ax.cla()
+        t, points, cells = geometry[k]
+        draw_frame(ax, points, cells, "C0")
+        c = centers[k]
+        set_cube(ax, c - half, c + half, margin=0.0)
+        ax.set_title(f"{label}   t = {t:.3f} s", fontsize=10)
+        return []
+
+    written = []
+    writers = [("gif", animation.PillowWriter(fps=fps))]
+    if shutil.which("ffmpeg") and animation.FFMpegWriter.isAvailable():
+        writers.append(("mp4", animation.FFMpegWriter(fps=fps, bitrate=1800)))
+    else:
+        print("note: ffmpeg not found: no MP4 (the GIF is written)", file=sys.stderr)
+    movie = animation.FuncAnimation(fig, draw, frames=len(geometry), blit=False)
+    for ext, writer in writers:
+        path = os.path.join(figdir, f"animation_{label}.{ext}")
+        movie.save(path, writer=writer, dpi=90)
+        written.append(path)
+    plt.close(fig)
+    return written
 
 
 def parse_list(text, kind, what):
@@ -230,6 +393,8 @@ def main(argv):
     parser.add_argument("-o", "--output", required=True, help="figure directory")
     parser.add_argument("--points", help="comma-separated point names (default: all)")
     parser.add_argument("--times", help="comma-separated snapshot times [s] (default: 5 evenly spaced)")
+    parser.add_argument("--animate", action="store_true",
+                        help="also write animation_RUN.gif (and .mp4 with ffmpeg) per run")
     args = parser.parse_args(argv)
     try:
         for outdir in args.outdirs:
@@ -261,13 +426,19 @@ def main(argv):
         joints = []
         for _, (columns, _) in joint_runs:
             joints += [n for n in joint_names(columns) if n not in joints]
+        units = {}
+        for outdir in args.outdirs:
+            for column, entry in read_joint_units(outdir).items():
+                units.setdefault(column, entry)
         for name in joints:
             runs = [(label, table) for label, table in joint_runs if f"{name}.q" in table[0]]
-            written.append(plot_joint(name, runs, args.output))
+            written.append(plot_joint(name, runs, args.output, units.get(name)))
         for outdir in args.outdirs:
             path = plot_snapshots(outdir, times, args.output)
             if path:
                 written.append(path)
+            if args.animate:
+                written += animate(outdir, args.output)
     except InputProblem as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

@@ -134,13 +134,14 @@ class OutputLock {
 };
 
 // Refuses a directory that holds the files of an earlier run, unless `replace`: then removes
-// them (screwfem's own files only: the tables, the summary, the ParaView frames and
+// them (screwfem's own files only: the tables, joints.json, the summary, the ParaView frames and
 // collection, and vtk/ when that leaves it empty), so no stale frame or table survives.
 void PrepareOutputDirectory(const std::string& dir, bool replace) {
   namespace fs = std::filesystem;
   std::vector<fs::path> own;
   std::error_code ec;
-  for (const char* name : {"summary.json", "summary.json.tmp", "points.csv", "joints.csv"})
+  for (const char* name :
+       {"summary.json", "summary.json.tmp", "points.csv", "joints.csv", "joints.json"})
     if (fs::exists(fs::path(dir) / name, ec)) own.push_back(fs::path(dir) / name);
   const fs::path vtk = fs::path(dir) / "vtk";
   if (fs::is_directory(vtk, ec))
@@ -181,6 +182,9 @@ class Run {
     try {
       points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
       joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
+      if (!WriteFileAtomically(outdir + "/joints.json",
+                               JointsDescriptionJson(model_, scene.outputs.joints)))
+        throw InputError("cannot write " + outdir + "/joints.json: " + std::strerror(errno));
       if (scene.outputs.vtk) {
         vtk_.emplace();
         vtk_->Open(outdir + "/vtk");

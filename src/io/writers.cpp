@@ -66,6 +66,53 @@ std::vector<std::string> JointColumns(const Model& model, const std::vector<Outp
   return columns;
 }
 
+std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJoint>& joints) {
+  const auto drive_name = [](DriveKind d) {
+    switch (d) {
+      case DriveKind::kNone: return "none";
+      case DriveKind::kPrescribed: return "prescribed";
+      case DriveKind::kSeriesElastic: return "series_elastic";
+      case DriveKind::kForce: return "force";
+    }
+    return "none";
+  };
+  JsonWriter w;
+  const auto null_field = [&w](const char* key) { w.Key(key).Number(std::nan("")); };  // null
+  w.BeginObject().Field("format", "screwfem joints 1").Key("joints").BeginArray();
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    const OutputJoint* recorded = nullptr;
+    for (const OutputJoint& oj : joints)
+      if (oj.joint == static_cast<int>(jj) && !recorded) recorded = &oj;
+    w.BeginObject().Field("name", j.name).Field("index", static_cast<long>(jj));
+    w.Field("type", JointTypeName(j.type)).Field("drive", drive_name(j.drive));
+    if (j.drive != DriveKind::kNone)
+      w.Field("drive_coordinate", j.drive_coord);
+    else
+      null_field("drive_coordinate");
+    if (recorded)
+      w.Field("column", recorded->name);
+    else
+      null_field("column");
+    w.Key("coordinates").BeginArray();
+    for (int c = 0; c < j.k(); ++c) {
+      const bool angle = j.basis.col(c).tail<3>().squaredNorm() > 0.0;
+      w.BeginObject();
+      if (recorded)
+        w.Field("column", j.k() == 1 ? recorded->name : recorded->name + "." + std::to_string(c));
+      else
+        null_field("column");
+      w.Field("quantity", angle ? "angle" : "slide").Field("unit", angle ? "rad" : "m");
+      w.Field("rate_unit", angle ? "rad/s" : "m/s").Field("acceleration_unit", angle ? "rad/s²" : "m/s²");
+      w.Field("effort_unit", angle ? "N m" : "N");
+      w.EndObject();
+    }
+    w.EndArray().EndObject();
+  }
+  w.EndArray().EndObject();
+  return w.str();
+}
+
 void CalcPointRow(const Model& model, const Data& data, const std::vector<OutputPoint>& points,
                   std::vector<double>* row) {
   row->resize(9 * points.size());

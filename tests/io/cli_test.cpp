@@ -1,7 +1,7 @@
 // The screwfem program (app/main.cpp), run as a child process on tests/data/pendulum.yaml:
 // files and exit codes of run (0 completed, 1 failed step, 2 input error, 130 SIGINT),
-// check, and plot (which runs tools/screwfem_plot.py with /usr/bin/python3); sweep's package
-// lookup.
+// check, plot and view (which run tools/screwfem_plot.py and tools/screwfem_view.py with
+// /usr/bin/python3), --version, and sweep's package lookup.
 #include <gtest/gtest.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -107,6 +107,29 @@ TEST(Cli, RunWritesResultsAndExitsZero) {
   EXPECT_EQ(summary->Find("status")->string, "completed");
   EXPECT_EQ(summary->Find("scene.source")->string, kPendulum);
   EXPECT_TRUE(std::filesystem::is_regular_file(out + "/vtk/motion.pvd"));
+}
+
+TEST(Cli, RunDescribesTheJointCoordinatesInJointsJson) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_joints_json");
+  const std::string out = tmp.path() + "/out";
+  ASSERT_EQ(RunCli({"run", kPendulum, "-o", out, "-q", "--set", "analysis.end_time=0.01"}, tmp.path()).code, 0);
+  const auto joints = ParseJsonFile(out + "/joints.json");
+  ASSERT_TRUE(joints);
+  EXPECT_EQ(joints->Find("format")->string, "screwfem joints 1");
+  const test::Json& list = *joints->Find("joints");
+  ASSERT_EQ(list.array.size(), 1u);
+  const test::Json& hinge = list.array[0];
+  EXPECT_EQ(hinge.Find("name")->string, "hinge");
+  EXPECT_EQ(hinge.Find("type")->string, "revolute");
+  EXPECT_EQ(hinge.Find("drive")->string, "none");
+  EXPECT_EQ(hinge.Find("column")->string, "hinge");
+  ASSERT_EQ(hinge.Find("coordinates")->array.size(), 1u);
+  const test::Json& q = hinge.Find("coordinates")->array[0];
+  EXPECT_EQ(q.Find("column")->string, "hinge");  // joints.csv: hinge.q, hinge.qd, ...
+  EXPECT_EQ(q.Find("quantity")->string, "angle");
+  EXPECT_EQ(q.Find("unit")->string, "rad");
+  EXPECT_EQ(q.Find("effort_unit")->string, "N m");
 }
 
 TEST(Cli, OverridesApplyInOrder) {
@@ -428,6 +451,54 @@ TEST(Cli, PlotDrawsPointsJointsAndSnapshots) {
   bad = RunCli({"plot", run_a, "-o", figs, "--points", "P8"}, tmp.path());
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("point 'P8' is not recorded"), std::string::npos) << bad.err;
+}
+
+TEST(Cli, PlotAnimateWritesOneGifPicturePerFrame) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_animate");
+  if (!PythonHasMatplotlib(tmp.path())) GTEST_SKIP() << "no /usr/bin/python3 with matplotlib";
+  const std::string run = tmp.path() + "/swing";
+  ASSERT_EQ(RunCli({"run", kPendulum, "-o", run, "-q"}, tmp.path()).code, 0);  // 6 frames
+  const std::string figs = tmp.path() + "/figs";
+  const Outcome o = RunCli({"plot", run, "-o", figs, "--animate"}, tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  const std::string gif = ReadFile(figs + "/animation_swing.gif");
+  ASSERT_EQ(gif.substr(0, 4), "GIF8");
+  // One image descriptor (0x2C after a graphic control extension) per ParaView frame.
+  std::size_t images = 0;
+  for (std::size_t i = gif.find("\x21\xF9\x04"); i != std::string::npos; i = gif.find("\x21\xF9\x04", i + 1))
+    images += gif.size() > i + 8 && gif[i + 8] == '\x2C' ? 1 : 0;
+  EXPECT_EQ(images, 6u);
+}
+
+TEST(Cli, VersionPrintsTheProjectVersion) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_version");
+  const Outcome o = RunCli({"--version"}, tmp.path());
+  EXPECT_EQ(o.code, 0) << o.err;
+  EXPECT_EQ(o.out, std::string("screwfem ") + SCREWFEM_VERSION + "\n");
+}
+
+TEST(Cli, ViewWritesOneSelfContainedPage) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_view");
+  const std::string out = tmp.path() + "/out";
+  ASSERT_EQ(RunCli({"run", kPendulum, "-o", out, "-q"}, tmp.path()).code, 0);
+  const Outcome o = RunCli({"view", out}, tmp.path());  // default: OUTDIR/view.html
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_EQ(o.out, out + "/view.html\n");
+  const std::string html = ReadFile(out + "/view.html");
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  EXPECT_NE(html.find("\"name\":\"pendulum\""), std::string::npos);  // the case name
+  EXPECT_NE(html.find("var REVISION=\"111\""), std::string::npos);      // three.js inlined
+  EXPECT_EQ(html.find("<script src"), std::string::npos);                // nothing fetched
+  // A run without ParaView frames: a clear error, exit status 2.
+  const std::string novtk = tmp.path() + "/novtk";
+  ASSERT_EQ(RunCli({"run", kPendulum, "-o", novtk, "-q", "--set", "outputs.vtk=false"}, tmp.path()).code, 0);
+  const Outcome bad = RunCli({"view", novtk, "-o", tmp.path() + "/x.html"}, tmp.path());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("has no ParaView frames"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp.path() + "/x.html"));
 }
 
 TEST(Cli, PlotScriptCanBeOverriddenByTheEnvironment) {

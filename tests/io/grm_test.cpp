@@ -1,5 +1,6 @@
 // The generic robotic mechanism (GRM, ../shared/grm.md) run from its example scenes
-// examples/grm/grm_{rigid,soft_k,soft_kd}.yaml through LoadScene and RunScene. The checks are
+// examples/grm/grm_{rigid,soft_k,soft_kd,soft_k_parallel,soft_kd_parallel}.yaml through
+// LoadScene and RunScene. The checks are
 // the ones grm.md lists as checkable without the paper's curves: actuated joints follow their
 // profiles exactly in case 1, constraints hold, recorded velocities and accelerations are the
 // time derivatives of recorded positions and velocities, the free joint's point follows the
@@ -545,6 +546,66 @@ TEST(GrmSoftK, RunsTwoSecondsWithSeriesElasticSpringEffortsAndExactChainKinemati
 // Measured: completed, largest constraint residual 7.1e-15.
 TEST(GrmSoftKd, RunsTwoSecondsWithSeriesElasticSpringDamperEffortsAndExactChainKinematics) {
   ExpectSoftCase("grm_soft_kd", 5.0);
+}
+
+// --- cases 2 and 3, parallel reading: prescribed actuators, springs on every joint ---------------
+
+// grm_soft_k_parallel.yaml and grm_soft_kd_parallel.yaml keep the actuated joints prescribed
+// (rheonomic constraints, as in case 1) and put the springs (and dampers) of cases 2 and 3 on
+// every joint, in parallel with the actuators. So the actuated coordinates are their profiles
+// at every row, to the constraint tolerance, as in GrmRigid.ActuatedJointsFollowTheirBangBang-
+// Profiles; the passive joints' springs act (effort -(K alpha + D alpha')), and the motion
+// differs from the rigid case's. 4 elements per soft body, h = 1e-3 s, 2 s.
+// Measured: |alpha - q| <= 1.2e-16, largest constraint residual 1.0e-15, passive joints up to
+// 2.2 rad (both cases); the tip P8 at 2 s lies 0.14 m (K) and 0.17 m (K+D) from the rigid
+// case's.
+void ExpectParallelCase(const std::string& scene, double damping) {
+  constexpr double K = 10.0;
+  const std::vector<std::string> o = {"defaults.elements=4", "analysis.step=1e-3"};
+  const GrmRun run = RunGrm(scene, o, scene);
+  ExpectCompletedWithConstraintsHeld(run, 2.0, 2000);
+  const std::vector<double> t = Series(run.joints, "t");
+  for (const Actuated& j : kActuated) {
+    SCOPED_TRACE(j.name);
+    const std::vector<double> q = Series(run.joints, std::string(j.name) + ".q");
+    ASSERT_EQ(q.size(), t.size());
+    for (std::size_t i = 0; i < t.size(); ++i)
+      ASSERT_NEAR(q[i], BangBang(j.q_final, t[i]).q, 1e-8) << "t = " << t[i];
+    EXPECT_DOUBLE_EQ(q.back(), j.q_final);  // held after T = 1 s
+  }
+  double passive_motion = 0.0;
+  for (const char* name : kPassive) {
+    SCOPED_TRACE(name);
+    const std::string n(name);
+    const std::vector<double> q = Series(run.joints, n + ".q"), qd = Series(run.joints, n + ".qd");
+    const std::vector<double> effort = Series(run.joints, n + ".effort");
+    ASSERT_EQ(q.size(), t.size());
+    ASSERT_EQ(qd.size(), t.size());
+    ASSERT_EQ(effort.size(), t.size());
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      const double expected = -(K * q[i] + damping * qd[i]);
+      ASSERT_NEAR(effort[i], expected, 1e-9 * (1.0 + std::abs(expected))) << "t = " << t[i];
+      passive_motion = std::max(passive_motion, std::abs(q[i]));
+    }
+  }
+  EXPECT_GT(passive_motion, 0.1);  // the springs are loaded
+  const GrmRun rigid = RunGrm("grm_rigid", o, scene + "_rigid");
+  ASSERT_TRUE(rigid.result.ok) << rigid.result.message;
+  const auto tip = [](const GrmRun& r) {
+    const std::vector<double>& last = r.points.rows.back();
+    return Vec3(last[static_cast<std::size_t>(r.points.Column("P8.x"))],
+                last[static_cast<std::size_t>(r.points.Column("P8.y"))],
+                last[static_cast<std::size_t>(r.points.Column("P8.z"))]);
+  };
+  EXPECT_GT((tip(run) - tip(rigid)).norm(), 0.05);
+}
+
+TEST(GrmSoftKParallel, ActuatedJointsFollowTheirProfilesExactlyAndPassiveSpringsAct) {
+  ExpectParallelCase("grm_soft_k_parallel", 0.0);
+}
+
+TEST(GrmSoftKdParallel, ActuatedJointsFollowTheirProfilesExactlyAndPassiveSpringDampersAct) {
+  ExpectParallelCase("grm_soft_kd_parallel", 5.0);
 }
 
 // --- cases 2 and 3: energy balance ---------------------------------------------------------------

@@ -27,6 +27,17 @@ std::vector<std::string> PointColumns(const std::vector<OutputPoint>& points);
 // four per coordinate i as J.i.q ...; joints without coordinates (fixed) have no columns.
 std::vector<std::string> JointColumns(const Model& model, const std::vector<OutputJoint>& joints);
 
+// The text of joints.json, which describes the joints' coordinates for readers of joints.csv:
+//   {"format": "screwfem joints 1", "joints": [{"name", "index" (in the model, as the VTK
+//    frames' joint_id), "type" ("revolute", ...), "drive" ("none", "prescribed",
+//    "series_elastic", "force"), "drive_coordinate" (or null), "column" (the joints.csv prefix,
+//    or null when not recorded), "coordinates": [{"column" (e.g. "J3" or "J7.1", or null),
+//    "quantity" ("angle" or "slide"), "unit" ("rad" or "m"), "rate_unit", "acceleration_unit",
+//    "effort_unit" ("N m" or "N")}]}]}
+// for every joint of the model, in model order. A coordinate is an angle when its basis column
+// has a rotation part (so a helical joint's coordinate is its angle), a slide otherwise.
+std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJoint>& joints);
+
 // Values of one row (without t), in column order, at data's current state: world position
 // [m], velocity [m/s] and acceleration [m/s^2] (method.md §6); joint coordinates [m or rad]
 // and their first and second time derivatives, and the effort [N or N m].
