@@ -182,15 +182,15 @@ class Run {
     try {
       points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
       joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
-      if (!WriteFileAtomically(outdir + "/joints.json",
-                               JointsDescriptionJson(model_, scene.outputs.joints)))
-        throw InputError("cannot write " + outdir + "/joints.json: " + std::strerror(errno));
       if (scene.outputs.vtk) {
         vtk_.emplace();
         vtk_->Open(outdir + "/vtk");
       }
       if (!WriteSummary())
         throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
+      if (!WriteFileAtomically(outdir + "/joints.json",
+                               JointsDescriptionJson(model_, scene.outputs.joints)))
+        throw InputError("cannot write " + outdir + "/joints.json: " + std::strerror(errno));
     } catch (const InputError&) {
       // No header-only tables without a summary that explains them.
       points_.Close();
