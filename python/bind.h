@@ -5,8 +5,10 @@
 
 #include <pybind11/pybind11.h>
 
+#include <cctype>
 #include <string>
 
+#include "screwfem/model/enum_names.h"
 #include "screwfem/solve/stop.h"
 
 namespace screwfem::python {
@@ -17,6 +19,19 @@ void BindModel(pybind11::module_& m);
 void BindScene(pybind11::module_& m);
 // bind_simulation.cpp: Simulation (Model + Data + Integrator) and its results.
 void BindSimulation(pybind11::module_& m);
+
+// An enum with a vocabulary (model/enum_names.h) as a Python enum whose members are its
+// names in capitals (NewtonMatrix.SIMPLIFIED for the scene's `newton: simplified`).
+template <class E>
+pybind11::enum_<E> BindEnum(pybind11::module_& m, const char* name, const char* doc) {
+  pybind11::enum_<E> e(m, name, doc);
+  for (const EnumName<E>& v : EnumNames<E>::kValues) {
+    std::string upper = v.name;
+    for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    e.value(upper.c_str(), v.value, v.doc);
+  }
+  return e;
+}
 
 // Raises screwfem.SolverError(message) with the attribute `result` set to `result` (the
 // StepResult or StaticResult of the failed call).

@@ -31,32 +31,18 @@ py::list ReferenceList(const std::vector<T>& items, py::handle parent) {
 }  // namespace
 
 void BindModel(py::module_& m) {
-  py::enum_<JointType>(m, "JointType",
-                       "Joint types (model.h); the relative frame H_J lies in "
-                       "the joint's Lie subgroup.")
-      .value("kRevolute", JointType::kRevolute)
-      .value("kPrismatic", JointType::kPrismatic)
-      .value("kHelical", JointType::kHelical)
-      .value("kCylindrical", JointType::kCylindrical)
-      .value("kSpherical", JointType::kSpherical)
-      .value("kPlanar", JointType::kPlanar)
-      .value("kUniversal", JointType::kUniversal)
-      .value("kFixed", JointType::kFixed)
-      .value("kFree", JointType::kFree);
-
-  py::enum_<DriveKind>(m, "DriveKind", "Drive on one joint coordinate (model.h).")
-      .value("kNone", DriveKind::kNone, "passive joint")
-      .value("kPrescribed", DriveKind::kPrescribed,
-             "rheonomic constraint alpha_i = q(t) on one coordinate (method.md §4.4)")
-      .value("kSeriesElastic", DriveKind::kSeriesElastic,
-             "spring/damper towards q(t) on one coordinate (method.md §4.5)")
-      .value("kForce", DriveKind::kForce, "generalised force f(t) on one coordinate");
-
-  py::enum_<RodInertia>(m, "RodInertia", "Rod inertia model (method.md §2.5).")
-      .value("kExact", RodInertia::kExact,
-             "option A: exact helical velocity field, M(d), 3-point Gauss")
-      .value("kConstant", RodInertia::kConstant,
-             "option B: linear velocity interpolation, constant mass matrix");
+  // Joint types: the names of the joint-type table (elements/joint.h), in capitals.
+  py::enum_<JointType> joint_type(m, "JointType",
+                                  "Joint types (model.h); the relative frame H_J lies in the "
+                                  "joint's Lie subgroup.");
+  for (const std::string& type_name : JointTypeNameList()) {
+    std::string upper = type_name;
+    for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    joint_type.value(upper.c_str(), FindJointType(type_name)->type);
+  }
+  BindEnum<DriveKind>(m, "DriveKind", "Drive on one joint coordinate (model.h).");
+  BindEnum<RodInertia>(m, "RodInertia", "Rod inertia model (method.md §2.5).");
+  BindEnum<LoadFrame>(m, "LoadFrame", "Frame of an applied load's components (model.h).");
 
   m.def("joint_type_name", &JointTypeName, py::arg("type"),
         "Name of a joint type as written in scene files, e.g. 'revolute'.");

@@ -34,22 +34,11 @@ void BindSettings(py::module_& m) {
       .def_static("from_spectral_radius", &GeneralizedAlpha::FromSpectralRadius, py::arg("rho_inf"),
                   "Chung-Hulbert parameters from the spectral radius at infinity rho in [0, 1].");
 
-  py::enum_<NewtonMatrix>(m, "NewtonMatrix",
-                         "When the dynamic iteration matrix is factorised (dynamics.h).")
-      .value("EVERY_ITERATION", NewtonMatrix::kEveryIteration, "Full Newton.")
-      .value("ONCE_PER_STEP", NewtonMatrix::kOncePerStep,
-             "Simplified Newton: at a step's first iteration, reused by its later ones.");
-  py::enum_<Predictor>(m, "Predictor", "Acceleration each step's iteration starts from.")
-      .value("ZERO_ACCELERATION", Predictor::kZeroAcceleration, "vdot = 0 (Arnold and Bruls).")
-      .value("LAST_ACCELERATION", Predictor::kLastAcceleration, "vdot = the last step's.")
-      .value("ADAPTIVE", Predictor::kAdaptive,
-             "Per step, whichever of the two was closer at the previous step.");
-  py::enum_<ConvergenceTest>(m, "ConvergenceTest",
-                             "Where the residual and constraint tests of a step are applied.")
-      .value("MEASURED", ConvergenceTest::kMeasured, "At assembled iterates only.")
-      .value("ESTIMATED", ConvergenceTest::kEstimated,
-             "Also at the iterate after a small correction, estimated from the contraction of "
-             "the last two corrections.");
+  BindEnum<NewtonMatrix>(m, "NewtonMatrix",
+                         "When the dynamic iteration matrix is factorised (dynamics.h).");
+  BindEnum<Predictor>(m, "Predictor", "Acceleration each step's iteration starts from.");
+  BindEnum<ConvergenceTest>(m, "ConvergenceTest",
+                            "Where the residual and constraint tests of a step are applied.");
 
   py::class_<DynamicOptions>(m, "DynamicOptions",
                              "Settings of the generalized-alpha integrator (dynamics.h). Checked "
@@ -101,9 +90,7 @@ void BindSettings(py::module_& m) {
       .def_readwrite("constraint_tolerance", &StaticOptions::constraint_tolerance,
                      "|phi|_inf [m or rad].");
 
-  py::enum_<AnalysisKind>(m, "AnalysisKind")
-      .value("kStatic", AnalysisKind::kStatic)
-      .value("kDynamic", AnalysisKind::kDynamic);
+  BindEnum<AnalysisKind>(m, "AnalysisKind", "What a scene's analysis does (scene.h).");
 
   py::class_<AnalysisSettings>(m, "AnalysisSettings", "What a scene does (scene.h).")
       .def(py::init<>())

@@ -45,8 +45,7 @@ void ValidateSettings(const Scene& scene) {
           "must be a finite time >= 0 s");
   require(std::isfinite(o.vtk_interval) && o.vtk_interval >= 0.0, "outputs.vtk_interval",
           "must be a finite time >= 0 s");
-  require(a.kind == AnalysisKind::kStatic || a.kind == AnalysisKind::kDynamic, "analysis.kind",
-          "must be static or dynamic");
+  require(IsEnumValue(a.kind), "analysis.kind", "must be " + EnumNameAlternatives<AnalysisKind>());
   if (a.kind == AnalysisKind::kStatic || a.static_preload)
     ValidateStaticOptions(a.statics, "analysis.statics");
   if (a.kind == AnalysisKind::kStatic) return;
@@ -435,7 +434,7 @@ class Run {
       j.Key("signal").Null();
 
     j.Key("settings").BeginObject();
-    j.Field("analysis", statics ? "static" : "dynamic");
+    j.Field("analysis", NameOf(a.kind));
     if (!statics) {
       j.Field("start_time", a.start_time).Field("end_time", a.end_time).Field("step", a.step);
       j.Field("align_steps", a.align_steps).Field("static_preload", a.static_preload);
@@ -445,13 +444,10 @@ class Run {
       j.Field("constraint_tolerance", d.constraint_tolerance);
       j.Field("residual_tolerance", d.residual_tolerance);
       j.Field("use_tangent_operator", d.use_tangent_operator);
-      j.Field("newton", d.newton_matrix == NewtonMatrix::kEveryIteration ? "full" : "simplified");
+      j.Field("newton", NameOf(d.newton_matrix));
       j.Field("refresh_ratio", d.refresh_ratio);
-      j.Field("predictor", d.predictor == Predictor::kZeroAcceleration   ? "zero"
-                           : d.predictor == Predictor::kLastAcceleration ? "last"
-                                                                          : "adaptive");
-      j.Field("convergence",
-              d.convergence == ConvergenceTest::kMeasured ? "measured" : "estimated");
+      j.Field("predictor", NameOf(d.predictor));
+      j.Field("convergence", NameOf(d.convergence));
     }
     if (statics || a.static_preload) {
       j.Key("statics").BeginObject();
@@ -462,7 +458,7 @@ class Run {
       j.Field("constraint_tolerance", s.constraint_tolerance);
       j.EndObject();
     }
-    j.Field("rod_inertia", model_.rod_inertia == RodInertia::kExact ? "exact" : "constant");
+    j.Field("rod_inertia", NameOf(model_.rod_inertia));
     j.Key("gravity").BeginArray();
     for (int i = 0; i < 3; ++i) j.Number(model_.gravity(i));
     j.EndArray();

@@ -758,11 +758,10 @@ void SceneCompiler::ReadJoints(const Node* node) {
     if (const Node* drive = value.Find("drive")) {
       const std::string dp = Join(path, "drive");
       r_.CheckKeys(*drive, dp, {"type", "coordinate", "profile"});
-      const std::string kind = r_.Choice(r_.Require(*drive, dp, "type"), Join(dp, "type"),
-                                         {"prescribed", "series_elastic", "force"});
-      j.drive = kind == "prescribed"       ? DriveKind::kPrescribed
-                : kind == "series_elastic" ? DriveKind::kSeriesElastic
-                                           : DriveKind::kForce;
+      std::vector<std::string> kinds = EnumNameList<DriveKind>();
+      kinds.erase(kinds.begin());  // "none": a passive joint has no `drive` key
+      j.drive = *EnumFromName<DriveKind>(
+          r_.Choice(r_.Require(*drive, dp, "type"), Join(dp, "type"), kinds));
       if (const Node* c = drive->Find("coordinate"))
         j.drive_coord = r_.Integer(*c, Join(dp, "coordinate"), 0, k - 1);
       j.drive_profile = ReadProfile(r_.Require(*drive, dp, "profile"), Join(dp, "profile"));
@@ -792,8 +791,7 @@ void SceneCompiler::ReadLoads(const Node* node) {
     if (m != nullptr) moment = r_.Vector3(*m, Join(path, "moment"));
     LoadFrame frame = LoadFrame::kWorld;
     if (const Node* fr = value.Find("frame"))
-      frame = r_.Choice(*fr, Join(path, "frame"), {"world", "body"}) == "world" ? LoadFrame::kWorld
-                                                                                : LoadFrame::kBody;
+      frame = r_.Enum<LoadFrame>(*fr, Join(path, "frame"));
     Profile profile = Profile::Constant(1.0);
     if (const Node* p = value.Find("profile")) profile = ReadProfile(*p, Join(path, "profile"));
 
@@ -868,9 +866,7 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
                 "newton", "predictor", "convergence"});
   auto find = [&](const char* key) { return node->Find(key); };
   if (const Node* t = find("type"))
-    a->kind = r_.Choice(*t, Join(path, "type"), {"static", "dynamic"}) == "static"
-                  ? AnalysisKind::kStatic
-                  : AnalysisKind::kDynamic;
+    a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
   if (const Node* t = find("start_time")) a->start_time = r_.Number(*t, Join(path, "start_time"));
   if (const Node* t = find("end_time")) {
     a->end_time = r_.Number(*t, Join(path, "end_time"));
@@ -917,21 +913,11 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
     a->dynamic.max_halvings = a->statics.max_halvings =
         r_.Integer(*t, Join(path, "max_halvings"), 0, kMaxHalvings);
   if (const Node* t = find("newton"))
-    a->dynamic.newton_matrix =
-        r_.Choice(*t, Join(path, "newton"), {"simplified", "full"}) == "full"
-            ? NewtonMatrix::kEveryIteration
-            : NewtonMatrix::kOncePerStep;
-  if (const Node* t = find("predictor")) {
-    const std::string v = r_.Choice(*t, Join(path, "predictor"), {"adaptive", "last", "zero"});
-    a->dynamic.predictor = v == "zero"   ? Predictor::kZeroAcceleration
-                           : v == "last" ? Predictor::kLastAcceleration
-                                         : Predictor::kAdaptive;
-  }
+    a->dynamic.newton_matrix = r_.Enum<NewtonMatrix>(*t, Join(path, "newton"));
+  if (const Node* t = find("predictor"))
+    a->dynamic.predictor = r_.Enum<Predictor>(*t, Join(path, "predictor"));
   if (const Node* t = find("convergence"))
-    a->dynamic.convergence =
-        r_.Choice(*t, Join(path, "convergence"), {"estimated", "measured"}) == "measured"
-            ? ConvergenceTest::kMeasured
-            : ConvergenceTest::kEstimated;
+    a->dynamic.convergence = r_.Enum<ConvergenceTest>(*t, Join(path, "convergence"));
   if (const Node* t = find("load_steps"))
     a->statics.load_steps = r_.Integer(*t, Join(path, "load_steps"), 1, kMaxLoadSteps);
   if (const Node* t = find("align_steps")) a->align_steps = r_.Bool(*t, Join(path, "align_steps"));
@@ -1088,10 +1074,7 @@ Scene SceneCompiler::Compile(const Node& root, const std::string& default_name) 
   CheckConnections();
   ReadAnalysis(root.Find("analysis"), &scene.analysis);
   if (const Node* a = root.Find("analysis"); a != nullptr && a->Find("rod_inertia") != nullptr)
-    builder_.model().rod_inertia =
-        r_.Choice(*a->Find("rod_inertia"), "analysis.rod_inertia", {"constant", "exact"}) == "exact"
-            ? RodInertia::kExact
-            : RodInertia::kConstant;
+    builder_.model().rod_inertia = r_.Enum<RodInertia>(*a->Find("rod_inertia"), "analysis.rod_inertia");
   try {
     scene.model = builder_.Build();
   } catch (const InputError& e) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "screwfem/lie/se3.h"
+#include "screwfem/model/enum_names.h"
 
 namespace screwfem::scene_yaml {
 
@@ -98,6 +99,11 @@ class Reader {
   // One of `choices`; reports the closest one otherwise.
   std::string Choice(const Node& node, const std::string& path,
                      const std::vector<std::string>& choices) const;
+  // A value of an enum with a vocabulary (model/enum_names.h), by its name.
+  template <class E>
+  E Enum(const Node& node, const std::string& path) const {
+    return *EnumFromName<E>(Choice(node, path, EnumNameList<E>()));
+  }
   std::vector<double> Numbers(const Node& node, const std::string& path) const;
   // Exactly n numbers.
   std::vector<double> FixedNumbers(const Node& node, const std::string& path, std::size_t n) const;

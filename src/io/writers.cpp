@@ -67,15 +67,6 @@ std::vector<std::string> JointColumns(const Model& model, const std::vector<Outp
 }
 
 std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJoint>& joints) {
-  const auto drive_name = [](DriveKind d) {
-    switch (d) {
-      case DriveKind::kNone: return "none";
-      case DriveKind::kPrescribed: return "prescribed";
-      case DriveKind::kSeriesElastic: return "series_elastic";
-      case DriveKind::kForce: return "force";
-    }
-    return "none";
-  };
   JsonWriter w;
   const auto null_field = [&w](const char* key) { w.Key(key).Number(std::nan("")); };  // null
   w.BeginObject().Field("format", "screwfem joints 1").Key("joints").BeginArray();
@@ -85,7 +76,7 @@ std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJo
     for (const OutputJoint& oj : joints)
       if (oj.joint == static_cast<int>(jj) && !recorded) recorded = &oj;
     w.BeginObject().Field("name", j.name).Field("index", static_cast<long>(jj));
-    w.Field("type", JointTypeName(j.type)).Field("drive", drive_name(j.drive));
+    w.Field("type", JointTypeName(j.type)).Field("drive", NameOf(j.drive));
     if (j.drive != DriveKind::kNone)
       w.Field("drive_coordinate", j.drive_coord);
     else

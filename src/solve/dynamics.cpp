@@ -51,15 +51,14 @@ void ValidateDynamicOptions(const DynamicOptions& o, const std::string& owner) {
                                      std::pair{o.residual_tolerance, "residual_tolerance"}})
     require(std::isfinite(value) && value > 0.0, field, "must be finite and > 0");
   require(o.refresh_ratio > 0.0 && o.refresh_ratio < 1.0, "refresh_ratio", "must lie in (0, 1)");
-  require(o.newton_matrix == NewtonMatrix::kEveryIteration ||
-              o.newton_matrix == NewtonMatrix::kOncePerStep,
-          "newton_matrix", "must be EVERY_ITERATION or ONCE_PER_STEP");
-  require(o.predictor == Predictor::kZeroAcceleration ||
-              o.predictor == Predictor::kLastAcceleration || o.predictor == Predictor::kAdaptive,
-          "predictor", "must be ZERO_ACCELERATION, LAST_ACCELERATION or ADAPTIVE");
-  require(o.convergence == ConvergenceTest::kMeasured ||
-              o.convergence == ConvergenceTest::kEstimated,
-          "convergence", "must be MEASURED or ESTIMATED");
+  const auto require_enum = [&](auto value, const char* field) {
+    using E = decltype(value);
+    if (!IsEnumValue(value))
+      throw InputError(owner + "." + field + ": must be " + EnumNameAlternatives<E>());
+  };
+  require_enum(o.newton_matrix, "newton_matrix");
+  require_enum(o.predictor, "predictor");
+  require_enum(o.convergence, "convergence");
 }
 
 bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
@@ -117,7 +116,7 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   data.vdot = data.increment.head(nv);
   data.lambda = data.increment.tail(nc);
   integ.a = data.vdot;
-  integ.use_last_acceleration = options.predictor != Predictor::kZeroAcceleration;
+  integ.use_last_acceleration = options.predictor != Predictor::kZero;
   return true;
 }
 
@@ -291,7 +290,7 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, bool co
             std::string* why) {
   const DynamicOptions& opt = integ.options;
   const StepConstants c = MakeStepConstants(integ.params, h);
-  bool full_newton = conservative || opt.newton_matrix == NewtonMatrix::kEveryIteration;
+  bool full_newton = conservative || opt.newton_matrix == NewtonMatrix::kFull;
   Predict(data, integ, c, integ.use_last_acceleration && !conservative);
   AssemblyOptions o = DynamicAssemblyOptions(opt, c, data.time);
 
@@ -378,8 +377,8 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
   double hs = h;
   std::string why;
   const DynamicOptions& opt = integ.options;
-  const bool conservative = opt.newton_matrix == NewtonMatrix::kEveryIteration &&
-                            opt.predictor == Predictor::kZeroAcceleration;
+  const bool conservative = opt.newton_matrix == NewtonMatrix::kFull &&
+                            opt.predictor == Predictor::kZero;
   while (data.time < t_end - 1e-12 * h) {
     hs = std::min(hs, t_end - data.time);
     const double t0 = data.time;

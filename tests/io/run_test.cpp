@@ -704,7 +704,7 @@ TEST(RunScene, NewtonFailureAtTheFirstStepKeepsTheInitialRow) {
   // One correction from the zero-acceleration start never converges (from the last
   // acceleration, the default start, it may).
   s.analysis.dynamic.max_iterations = 1;
-  s.analysis.dynamic.predictor = Predictor::kZeroAcceleration;
+  s.analysis.dynamic.predictor = Predictor::kZero;
   s.analysis.dynamic.max_halvings = 1;
   const ScopedDir scoped_dir("newton_failed");
   const std::string& dir = scoped_dir.path();

@@ -432,8 +432,8 @@ outputs:
   EXPECT_TRUE(a.static_preload);
   EXPECT_EQ(a.statics.time, 0.5);
   EXPECT_EQ(scene.model.rod_inertia, RodInertia::kExact);
-  EXPECT_EQ(a.dynamic.newton_matrix, NewtonMatrix::kEveryIteration);
-  EXPECT_EQ(a.dynamic.predictor, Predictor::kZeroAcceleration);
+  EXPECT_EQ(a.dynamic.newton_matrix, NewtonMatrix::kFull);
+  EXPECT_EQ(a.dynamic.predictor, Predictor::kZero);
   EXPECT_EQ(a.dynamic.convergence, ConvergenceTest::kMeasured);
   const OutputSpec& o = scene.outputs;
   ASSERT_EQ(o.points.size(), 3u);

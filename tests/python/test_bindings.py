@@ -128,17 +128,17 @@ class SceneAndModelTest(unittest.TestCase):
         np.testing.assert_array_equal(node.reference, np.eye(4))  # at O, world-aligned
         joint = model.joints[0]
         self.assertEqual(joint.name, "hinge")
-        self.assertEqual(joint.type, sf.JointType.kRevolute)
+        self.assertEqual(joint.type, sf.JointType.REVOLUTE)
         self.assertEqual(sf.joint_type_name(joint.type), "revolute")
         self.assertEqual((joint.node_a, joint.node_b), (sf.kGround, 0))
         self.assertEqual((joint.k(), joint.coord, joint.row), (1, 6, 0))
-        self.assertEqual(joint.drive, sf.DriveKind.kNone)
+        self.assertEqual(joint.drive, sf.DriveKind.NONE)
         np.testing.assert_array_equal(joint.basis[:, 0], [0, 0, 0, 0, 1, 0])  # rotation about y
 
     def test_analysis_settings_are_readable_and_writable(self):
         scene = sf.load_scene(PENDULUM)
         a = scene.analysis
-        self.assertEqual(a.kind, sf.AnalysisKind.kDynamic)
+        self.assertEqual(a.kind, sf.AnalysisKind.DYNAMIC)
         self.assertEqual((a.start_time, a.end_time, a.step, a.rho_inf), (0.0, 0.5, 1e-3, 0.9))
         a.end_time, a.step, a.rho_inf = 0.25, 5e-4, 1.0
         self.assertEqual((scene.analysis.end_time, scene.analysis.step), (0.25, 5e-4))
@@ -206,8 +206,8 @@ class InputErrorTest(unittest.TestCase):
         # Full Newton from vdot = 0 against the defaults (simplified Newton, adaptive start):
         # the same solution, with fewer factorisations than iterations for the defaults.
         runs = []
-        for newton, predictor in ((sf.NewtonMatrix.EVERY_ITERATION, sf.Predictor.ZERO_ACCELERATION),
-                                  (sf.NewtonMatrix.ONCE_PER_STEP, sf.Predictor.ADAPTIVE)):
+        for newton, predictor in ((sf.NewtonMatrix.FULL, sf.Predictor.ZERO),
+                                  (sf.NewtonMatrix.SIMPLIFIED, sf.Predictor.ADAPTIVE)):
             sim = sf.Simulation(sf.load_scene(PENDULUM))
             options = sf.DynamicOptions()
             options.newton_matrix = newton

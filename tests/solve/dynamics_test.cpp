@@ -77,8 +77,8 @@ void MakeSpinner(Spinner* s, JointType type, bool tangent) {
   opt.use_tangent_operator = tangent;
   // The convergence rate is the point: full Newton from the zero-acceleration start (the
   // closer default start needs fewer iterations with or without the tangent operators).
-  opt.newton_matrix = NewtonMatrix::kEveryIteration;
-  opt.predictor = Predictor::kZeroAcceleration;
+  opt.newton_matrix = NewtonMatrix::kFull;
+  opt.predictor = Predictor::kZero;
   std::string message;
   ASSERT_TRUE(InitializeDynamics(s->model, s->data, s->integ, opt, &message)) << message;
 }
@@ -255,13 +255,15 @@ TEST(GeneralizedAlpha, SimplifiedNewtonAndPredictorsReachTheSameSolutions) {
   };
   for (bool moving : {true, false}) {
     Run ref;
-    simulate(moving, NewtonMatrix::kEveryIteration, Predictor::kZeroAcceleration, &ref);
+    simulate(moving, NewtonMatrix::kFull, Predictor::kZero, &ref);
     EXPECT_EQ(ref.integ.factorizations, ref.integ.iterations);
     long iterations[2][3];
-    for (NewtonMatrix newton : {NewtonMatrix::kEveryIteration, NewtonMatrix::kOncePerStep}) {
+    for (NewtonMatrix newton : {NewtonMatrix::kFull, NewtonMatrix::kSimplified}) {
       for (Predictor predictor :
-           {Predictor::kZeroAcceleration, Predictor::kLastAcceleration, Predictor::kAdaptive}) {
-        const int in = static_cast<int>(newton), ip = static_cast<int>(predictor);
+           {Predictor::kZero, Predictor::kLast, Predictor::kAdaptive}) {
+        // Table rows: full, simplified; columns: zero, last, adaptive.
+        const int in = newton == NewtonMatrix::kFull ? 0 : 1;
+        const int ip = predictor == Predictor::kZero ? 0 : predictor == Predictor::kLast ? 1 : 2;
         SCOPED_TRACE(::testing::Message() << (moving ? "moving" : "from rest") << ", newton "
                                           << in << ", predictor " << ip);
         Run r;
@@ -273,7 +275,7 @@ TEST(GeneralizedAlpha, SimplifiedNewtonAndPredictorsReachTheSameSolutions) {
         }
         EXPECT_LT((r.data.v - ref.data.v).cwiseAbs().maxCoeff(), 1e-5);
         EXPECT_EQ(r.integ.retries, 0);
-        if (newton == NewtonMatrix::kOncePerStep) {
+        if (newton == NewtonMatrix::kSimplified) {
           EXPECT_LE(r.integ.factorizations, r.integ.steps + r.integ.steps / 10);
           EXPECT_LT(r.integ.factorizations, r.integ.iterations);
         }
@@ -434,8 +436,8 @@ TEST(GeneralizedAlpha, AStepTheSimplifiedIterationCannotDoIsRetriedWithFullNewto
   };
   Integrator simplified, full;
   Data a, c;
-  run(NewtonMatrix::kOncePerStep, &simplified, &a);
-  run(NewtonMatrix::kEveryIteration, &full, &c);
+  run(NewtonMatrix::kSimplified, &simplified, &a);
+  run(NewtonMatrix::kFull, &full, &c);
   EXPECT_GT(simplified.retries, 0);
   EXPECT_EQ(simplified.halvings, 0);
   EXPECT_EQ(full.halvings, 0);

@@ -13,6 +13,13 @@
 namespace screwfem {
 
 enum class AnalysisKind { kStatic, kDynamic };
+template <>
+struct EnumNames<AnalysisKind> {
+  static constexpr std::array<EnumName<AnalysisKind>, 2> kValues = {{
+      {AnalysisKind::kStatic, "static", "Newton on the Lie group with load stepping"},
+      {AnalysisKind::kDynamic, "dynamic", "generalized-alpha time integration"},
+  }};
+};
 
 struct AnalysisSettings {
   AnalysisKind kind = AnalysisKind::kDynamic;

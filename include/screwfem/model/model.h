@@ -8,10 +8,12 @@
 // computed once at build time.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
 #include "screwfem/lie/se3.h"
+#include "screwfem/model/enum_names.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/model/profile.h"
 #include "screwfem/model/section.h"
@@ -60,6 +62,13 @@ enum class LoadFrame {
   kWorld,  // dead load: fixed direction in the world
   kBody,   // follower load: fixed in the node frame
 };
+template <>
+struct EnumNames<LoadFrame> {
+  static constexpr std::array<EnumName<LoadFrame>, 2> kValues = {{
+      {LoadFrame::kWorld, "world", "dead load: fixed direction in the world"},
+      {LoadFrame::kBody, "body", "follower load: fixed in the body's frame"},
+  }};
+};
 
 // A force and a moment applied at a point of a node frame, scaled by a profile.
 struct PointLoad {
@@ -97,6 +106,15 @@ enum class DriveKind {
   kSeriesElastic,  // spring/damper towards q(t) on one coordinate (method.md §4.5)
   kForce,          // generalised force f(t) on one coordinate
 };
+template <>
+struct EnumNames<DriveKind> {
+  static constexpr std::array<EnumName<DriveKind>, 4> kValues = {{
+      {DriveKind::kNone, "none", "passive joint"},
+      {DriveKind::kPrescribed, "prescribed", "the coordinate follows q(t) exactly"},
+      {DriveKind::kSeriesElastic, "series_elastic", "a spring and damper towards q(t)"},
+      {DriveKind::kForce, "force", "a generalised force f(t)"},
+  }};
+};
 
 // A joint: relative frame H_J in a subgroup between frame A (node a, or the ground) and frame
 // B (node b), placed by the constant offsets C_A, C_B (method.md §4.1): H_B C_B = H_A C_A H_J.
@@ -124,6 +142,13 @@ struct Joint {
 enum class RodInertia {
   kExact,     // option A: exact helical velocity field, M(d), 3-point Gauss (method.md §2.5)
   kConstant,  // option B: linear velocity interpolation, constant mass matrix
+};
+template <>
+struct EnumNames<RodInertia> {
+  static constexpr std::array<EnumName<RodInertia>, 2> kValues = {{
+      {RodInertia::kExact, "exact", "option A: the exact helical velocity field"},
+      {RodInertia::kConstant, "constant", "option B: linear velocity field, constant mass"},
+  }};
 };
 
 struct Model {

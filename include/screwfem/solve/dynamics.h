@@ -6,10 +6,12 @@
 // accelerations and multipliers; failed steps are retried with halved step sizes.
 #pragma once
 
+#include <array>
 #include <string>
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/data.h"
+#include "screwfem/model/enum_names.h"
 #include "screwfem/solve/stop.h"
 
 namespace screwfem {
@@ -20,9 +22,36 @@ struct GeneralizedAlpha {
   static GeneralizedAlpha FromSpectralRadius(double rho_inf);
 };
 
-enum class NewtonMatrix { kEveryIteration, kOncePerStep };
-enum class Predictor { kZeroAcceleration, kLastAcceleration, kAdaptive };
-enum class ConvergenceTest { kMeasured, kEstimated };
+// The options' values and their names (scene key analysis.newton, .predictor, .convergence;
+// summary.json; Python NewtonMatrix.SIMPLIFIED, ...): DynamicOptions below says what they do.
+enum class NewtonMatrix { kSimplified, kFull };
+enum class Predictor { kAdaptive, kLast, kZero };
+enum class ConvergenceTest { kEstimated, kMeasured };
+template <>
+struct EnumNames<NewtonMatrix> {
+  static constexpr std::array<EnumName<NewtonMatrix>, 2> kValues = {{
+      {NewtonMatrix::kSimplified, "simplified",
+       "simplified Newton: the matrix of a step's first iteration, reused by its later ones"},
+      {NewtonMatrix::kFull, "full", "full Newton: a new matrix at every iteration"},
+  }};
+};
+template <>
+struct EnumNames<Predictor> {
+  static constexpr std::array<EnumName<Predictor>, 3> kValues = {{
+      {Predictor::kAdaptive, "adaptive",
+       "per step, whichever of the two others was closer at the previous step"},
+      {Predictor::kLast, "last", "vdot = the last step's"},
+      {Predictor::kZero, "zero", "vdot = 0 (Arnold and Bruls)"},
+  }};
+};
+template <>
+struct EnumNames<ConvergenceTest> {
+  static constexpr std::array<EnumName<ConvergenceTest>, 2> kValues = {{
+      {ConvergenceTest::kEstimated, "estimated",
+       "also at the iterate after a small correction, estimated from the contraction"},
+      {ConvergenceTest::kMeasured, "measured", "at assembled iterates only"},
+  }};
+};
 
 struct DynamicOptions {
   double rho_inf = 0.9;          // spectral radius at infinity (1: no numerical damping)
@@ -38,16 +67,16 @@ struct DynamicOptions {
   bool use_tangent_operator = true;  // T(h dq) on node columns of the iteration matrix
   // When the iteration matrix is assembled and factorised (docs/numerics.md, "Newton
   // iteration"):
-  //   kEveryIteration: full Newton (quadratic convergence, one factorisation per iteration);
-  //   kOncePerStep:    simplified Newton: at the first iteration of each step, reused by the
+  //   kFull: full Newton (quadratic convergence, one factorisation per iteration);
+  //   kSimplified:    simplified Newton: at the first iteration of each step, reused by the
   //                    step's later iterations; when a reused matrix shrinks a correction by
   //                    less than refresh_ratio, the rest of the step is full Newton.
   // Both converge to the same solution (they solve the same residual to the same tolerances).
-  NewtonMatrix newton_matrix = NewtonMatrix::kOncePerStep;
+  NewtonMatrix newton_matrix = NewtonMatrix::kSimplified;
   double refresh_ratio = 0.1;
   // The acceleration vdot_{n+1} the Newton iteration starts from (method.md §5.2):
-  //   kZeroAcceleration:  vdot_{n+1} = 0 (Arnold & Bruls 2007);
-  //   kLastAcceleration:  vdot_{n+1} = vdot_n, an O(h) closer start for smooth motions;
+  //   kZero:  vdot_{n+1} = 0 (Arnold & Bruls 2007);
+  //   kLast:  vdot_{n+1} = vdot_n, an O(h) closer start for smooth motions;
   //   kAdaptive:          per step, whichever of the two was closer at the previous step
   //                       (vdot_n unless undamped high frequencies make vdot alternate).
   Predictor predictor = Predictor::kAdaptive;
