@@ -367,21 +367,21 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       // the matrix the blocks themselves.
       const Vec6 tl = Tinv.transpose() * lam;
       const int da = s.NodeDof(j.node_a), db = s.NodeDof(j.node_b);  // -1: ground or fixed
+      // The blocks B_A, B_B, B_J of CalcJointGradient (the matrix needs the node blocks).
+      Mat6 BA, BB;
+      Mat6X BJ;
+      CalcJointGradient(j, HA, HB, phi, Tinv, A, o.assemble_matrix && da >= 0 ? &BA : nullptr,
+                        o.assemble_matrix && db >= 0 ? &BB : nullptr, k > 0 ? &BJ : nullptr);
       if (da >= 0) {
         const SE3 GA = CBinv * HB.Inverse() * HA;
         d.residual.segment<6>(da).noalias() -= o.s_rows * AdTransposeTimes(GA, tl);
-        if (o.assemble_matrix)
-          s.GradientMatrix(j.row, da, Mat6(-Tinv * Ad(GA)), &s.NodeT(j.node_a));
+        if (o.assemble_matrix) s.GradientMatrix(j.row, da, BA, &s.NodeT(j.node_a));
       }
       if (db >= 0) {
         d.residual.segment<6>(db).noalias() += o.s_rows * AdTransposeTimes(CBinv, tl);
-        if (o.assemble_matrix)
-          s.GradientMatrix(j.row, db, Mat6(Tinv * Ad(CBinv)), &s.NodeT(j.node_b));
+        if (o.assemble_matrix) s.GradientMatrix(j.row, db, BB, &s.NodeT(j.node_b));
       }
-      if (k > 0) {
-        const Mat6X BJ = -(Tinv - ad(phi)) * A * TJ;  // T^-1(-phi) = T^-1(phi) - ad(phi)
-        s.Gradient(j.row, j.coord, BJ, nullptr, lam);
-      }
+      if (k > 0) s.Gradient(j.row, j.coord, Mat6X(BJ * TJ), nullptr, lam);
     }
     if (k == 0) continue;
     // Joint springs, dampers and drives act on the coordinates.
