@@ -756,12 +756,12 @@ void SceneCompiler::ReadJoints(const Node* node) {
     const int k = j.k();
     const bool global =
         type != JointType::kSpherical && type != JointType::kPlanar && type != JointType::kFree;
-    if (k == 0) NotUsedBy(value, path, {"stiffness", "damping", "rest", "drive"}, who);
+    if (j.num_springs() == 0) NotUsedBy(value, path, {"stiffness", "damping", "rest", "drive"}, who);
     if (!global) NotUsedBy(value, path, {"rest", "drive"}, who + " (no global coordinates)");
     if (const Node* s = value.Find("stiffness"))
-      j.stiffness = PerCoordinate(*s, Join(path, "stiffness"), k, true);
+      j.stiffness = PerCoordinate(*s, Join(path, "stiffness"), j.num_springs(), true);
     if (const Node* d = value.Find("damping"))
-      j.damping = PerCoordinate(*d, Join(path, "damping"), k, true);
+      j.damping = PerCoordinate(*d, Join(path, "damping"), j.num_springs(), true);
     if (const Node* rest = value.Find("rest"))
       j.rest = PerCoordinate(*rest, Join(path, "rest"), k, false);
     if (const Node* drive = value.Find("drive")) {

@@ -123,7 +123,7 @@ Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2, double pitch) {
       A.resize(6, 0);
       break;
     case JointType::kFree:
-      A = Mat6::Identity();
+      A.resize(6, 0);
       break;
   }
   return A;
@@ -352,9 +352,10 @@ Model ModelBuilder::Build() const {
           !IsRotation(j.offset_b.R))
         throw InputError(label + ": joint frame offsets must be rigid transformations");
       if (!j.basis.allFinite()) throw InputError(label + ": joint basis must be finite");
-      for (int c = 0; c < j.k(); ++c) {
-        if (!(j.stiffness(c) >= 0.0) || !(j.damping(c) >= 0.0))
-          throw InputError(label + ": stiffness and damping must be non-negative");
+      for (int c = 0; c < j.num_springs(); ++c) {
+        if (!(j.stiffness(c) >= 0.0) || !(j.damping(c) >= 0.0) || !std::isfinite(j.stiffness(c)) ||
+            !std::isfinite(j.damping(c)))
+          throw InputError(label + ": stiffness and damping must be finite and non-negative");
       }
       if (j.drive != DriveKind::kNone) {
         if (j.drive_coord < 0 || j.drive_coord >= j.k())
@@ -475,6 +476,7 @@ Model ModelBuilder::Build() const {
       link(cb, nb(j.node_b));
       link(cb, coord_block);
     }
+    if (j.type == JointType::kFree) link(nb(j.node_a), nb(j.node_b));  // its spring couples them
     if (j.drive_row >= 0) link(add_block(m.nv + j.drive_row, 1), coord_block);
   }
   adj.assign(blocks.size(), {});

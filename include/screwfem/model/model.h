@@ -118,7 +118,12 @@ struct Joint {
   int drive_coord = 0;     // which coordinate (0..k-1)
   int drive_row = -1;      // multiplier row of a prescribed drive
   Profile drive_profile;   // q(t) [m or rad], or the force/torque f(t)
+  // Coordinates (unknowns) of the joint: the columns of A_J. A free joint has none: its
+  // relative motion is that of its two frames, with no constraint rows (see num_springs).
   int k() const { return static_cast<int>(basis.cols()); }
+  // Springs and dampers the joint can carry: one per coordinate, and six on a free joint,
+  // acting on delta = log(C_A^-1 H_A^-1 H_B C_B) (docs/numerics.md, "Free joints").
+  int num_springs() const { return type == JointType::kFree ? 6 : k(); }
 };
 
 enum class RodInertia {
@@ -210,7 +215,7 @@ class ModelBuilder {
 
 // Joint basis A_J of each joint type (method.md §4.2), for axis e (unit) and pitch p. For a
 // planar joint e is the plane normal; for universal joints e is the first axis and e2 the
-// second. Returns 6 x k.
+// second. Returns 6 x k (6 x 0 for fixed and free joints: neither has coordinates).
 Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2 = Vec3::Zero(), double pitch = 0.0);
 const char* JointTypeName(JointType type);
 
