@@ -339,6 +339,53 @@ void AddRodLoads(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) 
   }
 }
 
+// A free joint (no constraint rows, no coordinates) with springs and dampers on the logarithm
+// of the relative motion of its frames F_A = H_A C_A, F_B = H_B C_B (docs/numerics.md, "Free
+// joints"): delta = log(F_A^-1 F_B), energy 1/2 delta^T K delta, damping force D delta_dot.
+// delta varies like a rod element's relative motion between the joint frames (method.md §2.3):
+// d delta = P(delta) E [dh_A; dh_B], E = diag(Ad(C_A^-1), Ad(C_B^-1)), G = P E. Force
+// G^T (K delta + D G eta_AB); stiffness G^T K G + E^T [D(-delta, s); D(delta, s)] P E with
+// s = K delta (method.md §2.4); damping block G^T D G (its configuration derivative is
+// omitted, as for rods).
+void AddFreeJoint(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s, int joint) {
+  const Joint& j = m.joints[static_cast<std::size_t>(joint)];
+  const bool has_damping = o.dynamics && j.damping.squaredNorm() > 0.0;
+  if (j.stiffness.squaredNorm() == 0.0 && !has_damping) return;
+  const int nodes[2] = {j.node_a, j.node_b};
+  const Vec6 delta = CalcFreeJointDeflection(m, d, joint);
+  const Mat6x12 P = CalcRodP(delta);
+  const Mat6 EA = Ad(j.offset_a.Inverse()), EB = Ad(j.offset_b.Inverse());
+  Mat6x12 G;
+  G.leftCols<6>().noalias() = P.leftCols<6>() * EA;
+  G.rightCols<6>().noalias() = P.rightCols<6>() * EB;
+  const Vec6 sigma = j.stiffness.cwiseProduct(delta);
+  Vec6 f = sigma;
+  if (has_damping) {
+    Vec12 eta = Vec12::Zero();
+    if (s.NodeDof(j.node_a) >= 0) eta.head<6>() = d.v.segment<6>(s.NodeDof(j.node_a));
+    if (s.NodeDof(j.node_b) >= 0) eta.tail<6>() = d.v.segment<6>(s.NodeDof(j.node_b));
+    f += j.damping.cwiseProduct(G * eta);
+  }
+  const Vec12 g = G.transpose() * f;
+  s.Rows(s.NodeDof(j.node_a), g.head<6>());
+  s.Rows(s.NodeDof(j.node_b), g.tail<6>());
+  if (!o.assemble_matrix) return;
+  Mat12 K = G.transpose() * j.stiffness.asDiagonal() * G;
+  Mat6x12 geo_top = DTSE3InvT(-delta, sigma) * P, geo_bottom = DTSE3InvT(delta, sigma) * P;
+  for (Mat6x12* rows : {&geo_top, &geo_bottom}) {
+    rows->leftCols<6>() = rows->leftCols<6>() * EA;
+    rows->rightCols<6>() = rows->rightCols<6>() * EB;
+  }
+  K.topRows<6>() += EA.transpose() * geo_top;
+  K.bottomRows<6>() += EB.transpose() * geo_bottom;
+  if (has_damping) {
+    const Mat12 C = G.transpose() * j.damping.asDiagonal() * G;
+    s.NodeMatrix<2>(nodes, &K, nullptr, &C);
+  } else {
+    s.NodeMatrix<2>(nodes, &K, nullptr, nullptr);
+  }
+}
+
 void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
   for (std::size_t jj = 0; jj < m.joints.size(); ++jj) {
     const Joint& j = m.joints[jj];
@@ -367,22 +414,23 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       // the matrix the blocks themselves.
       const Vec6 tl = Tinv.transpose() * lam;
       const int da = s.NodeDof(j.node_a), db = s.NodeDof(j.node_b);  // -1: ground or fixed
+      // The blocks B_A, B_B, B_J of CalcJointGradient (the matrix needs the node blocks).
+      Mat6 BA, BB;
+      Mat6X BJ;
+      CalcJointGradient(j, HA, HB, phi, Tinv, A, o.assemble_matrix && da >= 0 ? &BA : nullptr,
+                        o.assemble_matrix && db >= 0 ? &BB : nullptr, k > 0 ? &BJ : nullptr);
       if (da >= 0) {
         const SE3 GA = CBinv * HB.Inverse() * HA;
         d.residual.segment<6>(da).noalias() -= o.s_rows * AdTransposeTimes(GA, tl);
-        if (o.assemble_matrix)
-          s.GradientMatrix(j.row, da, Mat6(-Tinv * Ad(GA)), &s.NodeT(j.node_a));
+        if (o.assemble_matrix) s.GradientMatrix(j.row, da, BA, &s.NodeT(j.node_a));
       }
       if (db >= 0) {
         d.residual.segment<6>(db).noalias() += o.s_rows * AdTransposeTimes(CBinv, tl);
-        if (o.assemble_matrix)
-          s.GradientMatrix(j.row, db, Mat6(Tinv * Ad(CBinv)), &s.NodeT(j.node_b));
+        if (o.assemble_matrix) s.GradientMatrix(j.row, db, BB, &s.NodeT(j.node_b));
       }
-      if (k > 0) {
-        const Mat6X BJ = -(Tinv - ad(phi)) * A * TJ;  // T^-1(-phi) = T^-1(phi) - ad(phi)
-        s.Gradient(j.row, j.coord, BJ, nullptr, lam);
-      }
+      if (k > 0) s.Gradient(j.row, j.coord, Mat6X(BJ * TJ), nullptr, lam);
     }
+    if (j.type == JointType::kFree) AddFreeJoint(m, d, o, s, ji);
     if (k == 0) continue;
     // Joint springs, dampers and drives act on the coordinates.
     const int q0 = j.coord - m.nv_nodes;
@@ -472,6 +520,13 @@ Vec6 JointConstraint(const Model& model, const Data& data, int joint) {
   const SE3 HB = j.node_b == kGround ? SE3::Identity() : data.H[static_cast<std::size_t>(j.node_b)];
   const SE3 G = j.offset_a.Inverse() * HA.Inverse() * HB * j.offset_b;
   return LogSE3(JointRelativeFrame(model, data, joint).Inverse() * G);
+}
+
+Vec6 CalcFreeJointDeflection(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  const SE3 HA = j.node_a == kGround ? SE3::Identity() : data.H[static_cast<std::size_t>(j.node_a)];
+  const SE3 HB = j.node_b == kGround ? SE3::Identity() : data.H[static_cast<std::size_t>(j.node_b)];
+  return LogSE3(j.offset_a.Inverse() * HA.Inverse() * HB * j.offset_b);
 }
 
 double JointDriveEffort(const Model& model, const Data& data, int joint) {

@@ -414,6 +414,11 @@ Energy CalcEnergy(const Model& model, const Data& data) {
   }
   for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
     const Joint& j = model.joints[jj];
+    if (j.type == JointType::kFree) {  // spring on the relative motion's logarithm
+      const Vec6 delta = CalcFreeJointDeflection(model, data, static_cast<int>(jj));
+      E.spring += 0.5 * delta.dot(j.stiffness.cwiseProduct(delta));
+      continue;
+    }
     const int k = j.k();
     if (k == 0) continue;
     const auto alpha = data.q_joint.segment(j.coord - model.nv_nodes, k);

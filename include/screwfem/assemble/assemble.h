@@ -62,6 +62,9 @@ SE3 JointRelativeFrame(const Model& model, const Data& data, int joint);  // H_J
 Mat6X JointCurrentBasis(const Model& model, const Data& data, int joint);
 // Constraint value phi_J = log(H_J^-1 C_A^-1 H_A^-1 H_B C_B) (6) of a joint.
 Vec6 JointConstraint(const Model& model, const Data& data, int joint);
+// Deflection of a free joint, delta = log(C_A^-1 H_A^-1 H_B C_B) (principal logarithm; its
+// springs act on it, docs/numerics.md "Free joints").
+Vec6 CalcFreeJointDeflection(const Model& model, const Data& data, int joint);
 // Effort of a joint's drive: the generalised force the drive applies along its coordinate
 // (actuator torque or force; for a series-elastic drive the spring-damper force).
 double JointDriveEffort(const Model& model, const Data& data, int joint);

@@ -118,7 +118,12 @@ struct Joint {
   int drive_coord = 0;     // which coordinate (0..k-1)
   int drive_row = -1;      // multiplier row of a prescribed drive
   Profile drive_profile;   // q(t) [m or rad], or the force/torque f(t)
+  // Coordinates (unknowns) of the joint: the columns of A_J. A free joint has none: its
+  // relative motion is that of its two frames, with no constraint rows (see num_springs).
   int k() const { return static_cast<int>(basis.cols()); }
+  // Springs and dampers the joint can carry: one per coordinate, and six on a free joint,
+  // acting on delta = log(C_A^-1 H_A^-1 H_B C_B) (docs/numerics.md, "Free joints").
+  int num_springs() const { return type == JointType::kFree ? 6 : k(); }
 };
 
 enum class RodInertia {
@@ -210,13 +215,39 @@ class ModelBuilder {
 
 // Joint basis A_J of each joint type (method.md §4.2), for axis e (unit) and pitch p. For a
 // planar joint e is the plane normal; for universal joints e is the first axis and e2 the
-// second. Returns 6 x k.
+// second. Returns 6 x k (6 x 0 for fixed and free joints: neither has coordinates).
 Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2 = Vec3::Zero(), double pitch = 0.0);
 const char* JointTypeName(JointType type);
+
+// Gradient of a joint's six relative-frame constraints phi_J (method.md §4.3) with respect to
+// the right-trivialised variations of node A, node B and the joint coordinates:
+//   B_A = -T^-1(phi) Ad(C_B^-1 H_B^-1 H_A),   B_B = T^-1(phi) Ad(C_B^-1),
+//   B_J = -T^-1(-phi) A = -(T^-1(phi) - ad(phi)) A.
+// H_A, H_B are the node frames (identity for the ground), phi the constraint value,
+// Tinv = T^-1(phi) and A the joint's current basis (6 x k). Outputs may be null. The assembly
+// and the redundancy check of Build use this one function.
+void CalcJointGradient(const Joint& joint, const SE3& H_A, const SE3& H_B, const Vec6& phi,
+                       const Mat6& Tinv, const Mat6X& A, Mat6* B_A, Mat6* B_B, Mat6X* B_J);
 // Rotation whose x axis is `axis` (normalised) and whose z axis is as close as possible to
 // `up`; when `up` is parallel to `axis`, the world axis least aligned with `axis` stands in.
 // The section-frame convention of rods (AddStraightRod, scene paths).
 Mat3 FrameAlong(const Vec3& axis, const Vec3& up);
+
+// Redundant constraint rows at the reference configuration (called by ModelBuilder::Build on
+// a model whose layout is set): fills model.redundant_rows and adds a warning naming the
+// joints involved. The joint graph (nodes with unknowns, and one vertex for the ground and
+// every fixed node; an edge per joint with constraint rows) is split into a spanning forest
+// and chords. The rows of tree joints are independent (each has an invertible block on its
+// child node), so only chord rows and drive rows can be redundant: they are reduced onto the
+// coordinates of the tree joints between the chord's ends and their lowest common ancestor
+// (the common ancestor's rigid motion drops out exactly), and each group of reduced rows that
+// share coordinates is rank-revealed with a column-pivoting QR (relative threshold 1e-10).
+// Cost: linear in the joints for trees; for loops, the tree paths walked plus one dense QR
+// per group. Scenes whose loops exceed kMaxRedundancyWork skip the check with a warning.
+void FindRedundantConstraints(Model& model);
+// Work bound of FindRedundantConstraints: tree-path steps (a few microseconds each) plus the
+// dense QRs' operation counts / 1000; about 2 s at the bound.
+inline constexpr double kMaxRedundancyWork = 1e6;
 
 // ------------------------------------------------------------------------------------------
 // Data: the state and every workspace of one simulation, allocated once from a Model.
