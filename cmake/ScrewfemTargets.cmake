@@ -20,7 +20,9 @@ foreach(options screwfem_options screwfem_test_options)
     target_link_options(${options} INTERFACE -fsanitize=address,undefined)
     # GCC 12 reports false 'may be used uninitialized' inside Eigen's evaluators when the
     # sanitizers instrument optimised code; the Release build keeps the warning as an error.
-    target_compile_options(${options} INTERFACE -Wno-maybe-uninitialized)
+    # (Clang has no such warning.)
+    target_compile_options(${options} INTERFACE
+                           $<$<CXX_COMPILER_ID:GNU>:-Wno-maybe-uninitialized>)
   endif()
   # Eigen: keep eigen_assert active in the sanitizer build only.
   target_compile_definitions(${options} INTERFACE
@@ -29,6 +31,12 @@ endforeach()
 if(SCREWFEM_SANITIZE)
   target_compile_options(screwfem_options INTERFACE -fsanitize=address,undefined)
   target_compile_options(screwfem_test_options INTERFACE -fsanitize=address)
+endif()
+# Fuzzing (tests/fuzz): the library and the harnesses carry libFuzzer's coverage
+# instrumentation; only the fuzz programs link libFuzzer itself (-fsanitize=fuzzer), so the
+# same build tree serves the test suite and the fuzzers.
+if(SCREWFEM_FUZZ)
+  target_compile_options(screwfem_options INTERFACE -fsanitize=fuzzer-no-link)
 endif()
 
 # screwfem_add_library(NAME SOURCES ... DEPS ...)

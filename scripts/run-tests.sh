@@ -3,7 +3,13 @@
 #   1. installs missing Debian packages;
 #   2. Release build in build/release, its ctest suite, and every example program
 #      (build/release/examples/**/*_example, run from the repository root without arguments);
-#   3. AddressSanitizer + UndefinedBehaviorSanitizer build in build/asan and its ctest suite.
+#   3. AddressSanitizer + UndefinedBehaviorSanitizer build in build/asan (clang, with the
+#      libFuzzer harnesses of tests/fuzz) and its ctest suite;
+#   4. the two fuzz targets, concurrently, for SCREWFEM_FUZZ_SECONDS each (default 50) on the
+#      seed corpus (examples/, tests/data/, tests/fuzz/regressions/): any crash, sanitizer
+#      report, leak, timeout (10 s per input) or out-of-memory (1024 MB) fails the job, and
+#      the failing input is copied into tests/fuzz/regressions/NAME/ (commit it: ctest
+#      replays that corpus in every build).
 # Runs every phase even after a failure (except the sanitizer build when the Release build
 # failed), prints the time of each phase, and ends with the line "N passed, M failed" summed
 # over both ctest runs and the examples; a failed build or a ctest run without a summary counts
@@ -90,6 +96,47 @@ run_examples() {
   end "examples (Release)"
 }
 
+# run_fuzzers DIR: both libFuzzer targets at once (one per core), each for
+# SCREWFEM_FUZZ_SECONDS; one pass or one failure per target in the counts.
+run_fuzzers() {
+  local dir=$1 seconds=${SCREWFEM_FUZZ_SECONDS:-50} name work pids=() status
+  begin "fuzzing (2 x ${seconds} s)"
+  for name in parse build; do
+    work=$dir/fuzz/$name
+    rm -rf "$work"
+    mkdir -p "$work/corpus" "$work/artifacts"
+    # The first directory receives new inputs; the others are read-only seeds.
+    "$dir/tests/fuzz/screwfem_fuzz_$name" "$work/corpus" examples/grm tests/data \
+      "tests/fuzz/regressions/$name" -max_total_time="$seconds" -timeout=10 \
+      -rss_limit_mb=1024 -max_len=65536 -print_final_stats=1 \
+      -artifact_prefix="$work/artifacts/" > "$work/log.txt" 2>&1 &
+    pids+=($!)
+  done
+  local i=0
+  for name in parse build; do
+    wait "${pids[$i]}"
+    status=$?
+    i=$((i + 1))
+    work=$dir/fuzz/$name
+    grep -E '^stat::(number_of_executed_units|average_exec_per_sec)' "$work/log.txt" |
+      sed "s/^/fuzz $name: /"
+    if [[ $status -eq 0 ]]; then
+      passed=$((passed + 1))
+      echo "fuzz $name: passed (log in $work/log.txt)"
+    else
+      tail -n 60 "$work/log.txt"
+      local f
+      for f in "$work"/artifacts/*; do
+        [[ -e "$f" ]] || continue
+        cp "$f" "tests/fuzz/regressions/$name/"
+        echo "fuzz $name: failing input kept as tests/fuzz/regressions/$name/$(basename "$f")"
+      done
+      fail "fuzz $name: exit status $status (log in $work/log.txt)"
+    fi
+  done
+  end "fuzzing (2 x ${seconds} s)"
+}
+
 total_start=$(now_us)
 
 begin "dependencies"
@@ -114,10 +161,14 @@ if [[ $release_built -eq 1 ]]; then
   # sanitizers on; the suite itself then runs somewhat slower. SCREWFEM_NATIVE=OFF: the
   # portable instruction set (the Release build above uses the machine's), so the suite
   # passes on both code paths of Eigen's vectorisation.
+  # Clang (not GCC): it provides libFuzzer, so this one tree serves the sanitizer suite and
+  # the fuzzers; it also compiles the sanitizer build faster than GCC (README.md, "Fuzzing").
   if configure_and_build "ASan+UBSan" "$asan_dir" -DSCREWFEM_SANITIZE=ON \
+      -DCMAKE_CXX_COMPILER=clang++ -DSCREWFEM_FUZZ=ON \
       -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
       -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_NATIVE=OFF; then
     run_ctest "ASan+UBSan" "$asan_dir"
+    run_fuzzers "$asan_dir"
   fi
 else
   echo "== sanitizer build skipped: the Release build failed"

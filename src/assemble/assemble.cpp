@@ -270,7 +270,8 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
 
 // The element kinds the assembly calls, in this order (docs/architecture.md, "Add an element
 // kind"); joints follow them.
-using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind>;
+using ElementKinds =
+    std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind, JointSpringKind>;
 constexpr ElementKinds* kElementKinds = nullptr;
 }  // namespace
 

@@ -26,59 +26,6 @@ bool IsRotation(const Mat3& R) {
   return (R.transpose() * R - Mat3::Identity()).norm() < 1e-9 && R.determinant() > 0.0;
 }
 
-// Rank of the constraint gradient B at the reference configuration (phi = 0, T = I): rows of
-// [B_A B_B B_J] = [-Ad(C_B^-1 H_B^-1 H_A)  Ad(C_B^-1)  -A_J] per joint and e_alpha per
-// prescribed drive. Linearly dependent rows are recorded in model.redundant_rows (their
-// multipliers are held at zero) and reported in model.warnings with the joints involved.
-void FindRedundantConstraints(Model& m) {
-  m.redundant_rows.clear();
-  if (m.nc == 0) return;
-  if (m.nc > 3000) {
-    m.warnings.push_back("redundant-constraint check skipped (more than 3000 constraint rows)");
-    return;
-  }
-  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(m.nc, m.nv);
-  std::vector<int> row_joint(static_cast<std::size_t>(m.nc), -1);
-  for (std::size_t jj = 0; jj < m.joints.size(); ++jj) {
-    const Joint& j = m.joints[jj];
-    if (j.drive_row >= 0) {
-      B(j.drive_row, j.coord + j.drive_coord) = 1.0;
-      row_joint[static_cast<std::size_t>(j.drive_row)] = static_cast<int>(jj);
-    }
-    if (j.row < 0) continue;
-    for (int r = 0; r < 6; ++r) row_joint[static_cast<std::size_t>(j.row + r)] = static_cast<int>(jj);
-    const SE3 HA = j.node_a == kGround ? SE3::Identity() : m.nodes[static_cast<std::size_t>(j.node_a)].reference;
-    const SE3 HB = j.node_b == kGround ? SE3::Identity() : m.nodes[static_cast<std::size_t>(j.node_b)].reference;
-    const SE3 CBinv = j.offset_b.Inverse();
-    if (j.node_a != kGround && m.nodes[static_cast<std::size_t>(j.node_a)].dof >= 0)
-      B.block<6, 6>(j.row, m.nodes[static_cast<std::size_t>(j.node_a)].dof) = -Ad(CBinv * HB.Inverse() * HA);
-    if (j.node_b != kGround && m.nodes[static_cast<std::size_t>(j.node_b)].dof >= 0)
-      B.block<6, 6>(j.row, m.nodes[static_cast<std::size_t>(j.node_b)].dof) = Ad(CBinv);
-    if (j.k() > 0) B.block(j.row, j.coord, 6, j.k()) = -j.basis;
-  }
-  // Rows that are identically zero (a joint between two fixed nodes) are redundant as well.
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(B.transpose());
-  qr.setThreshold(1e-10);
-  const int rank = static_cast<int>(qr.rank());
-  if (rank == m.nc) return;
-  for (int c = rank; c < m.nc; ++c) m.redundant_rows.push_back(static_cast<int>(qr.colsPermutation().indices()(c)));
-  std::sort(m.redundant_rows.begin(), m.redundant_rows.end());
-  // The joints involved: rows with a nonzero weight in some dependency y (B^T y = 0).
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(B.transpose());
-  lu.setThreshold(1e-10);
-  const Eigen::MatrixXd kernel = lu.kernel();
-  std::set<std::string> involved;
-  for (int r = 0; r < m.nc; ++r)
-    if (kernel.row(r).cwiseAbs().maxCoeff() > 1e-8)
-      involved.insert("'" + m.joints[static_cast<std::size_t>(row_joint[static_cast<std::size_t>(r)])].name + "'");
-  std::string names;
-  for (const std::string& n : involved) names += (names.empty() ? "" : ", ") + n;
-  m.warnings.push_back(std::to_string(m.nc - rank) +
-                       " redundant constraint equation(s) among joints " + names +
-                       "; their reaction components are not unique and are reported as zero "
-                       "(the motion is unaffected)");
-}
-
 }  // namespace
 
 int ModelBuilder::AddNode(const SE3& frame, std::string name) {
@@ -295,9 +242,10 @@ Model ModelBuilder::Build() const {
           !IsRotation(j.offset_b.R))
         throw InputError(label + ": joint frame offsets must be rigid transformations");
       if (!j.basis.allFinite()) throw InputError(label + ": joint basis must be finite");
-      for (int c = 0; c < j.k(); ++c) {
-        if (!(j.stiffness(c) >= 0.0) || !(j.damping(c) >= 0.0))
-          throw InputError(label + ": stiffness and damping must be non-negative");
+      for (int c = 0; c < JointSpringCount(j); ++c) {
+        if (!(j.stiffness(c) >= 0.0) || !(j.damping(c) >= 0.0) || !std::isfinite(j.stiffness(c)) ||
+            !std::isfinite(j.damping(c)))
+          throw InputError(label + ": stiffness and damping must be finite and non-negative");
       }
       if (j.drive != DriveKind::kNone) {
         if (j.drive_coord < 0 || j.drive_coord >= j.k())
@@ -417,6 +365,9 @@ Model ModelBuilder::Build() const {
       link(cb, nb(j.node_b));
       link(cb, coord_block);
     }
+    // A joint whose springs act on the nodes' relative motion (a free joint) couples them.
+    if (GetJointTypeInfo(j.type).spring_law == JointSpringLaw::kRelativeMotion)
+      link(nb(j.node_a), nb(j.node_b));
     if (j.drive_row >= 0) link(add_block(m.nv + j.drive_row, 1), coord_block);
   }
   adj.assign(blocks.size(), {});

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 
+#include "screwfem/elements/rod.h"
 #include "screwfem/model/errors.h"
 
 namespace screwfem {
@@ -69,7 +70,6 @@ Mat6X UniversalBasis(const Vec3& e, const Vec3& e2, double) {
   return A;
 }
 Mat6X FixedBasis(const Vec3&, const Vec3&, double) { return Mat6X(6, 0); }
-Mat6X FreeBasis(const Vec3&, const Vec3&, double) { return Mat6::Identity(); }
 
 // H_J = exp(A_J alpha) for abelian subgroups.
 SE3 SubgroupFrame(const Mat6X& A, const double* alpha) {
@@ -106,8 +106,8 @@ const std::array<JointTypeInfo, 9> kJointTypes = {{
      JointSpringLaw::kCoordinates, UniversalBasis, UniversalFrame, UniversalCurrentBasis},
     {JointType::kFixed, "fixed", 0, kYes, kYes, kNo, kNo, kNo, JointSpringLaw::kCoordinates,
      FixedBasis, SubgroupFrame, ConstantBasis},
-    {JointType::kFree, "free", 6, kNo, kNo, kNo, kNo, kNo, JointSpringLaw::kLogarithm, FreeBasis,
-     nullptr, nullptr},
+    {JointType::kFree, "free", 0, kNo, kNo, kNo, kNo, kNo, JointSpringLaw::kRelativeMotion,
+     FixedBasis, nullptr, nullptr},
 }};
 
 }  // namespace
@@ -140,6 +140,11 @@ Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2, double pitch) {
 
 bool JointHasGlobalCoordinates(JointType type) {
   return GetJointTypeInfo(type).global_coordinates;
+}
+
+int JointSpringCount(const Joint& joint) {
+  return GetJointTypeInfo(joint.type).spring_law == JointSpringLaw::kRelativeMotion ? 6
+                                                                                    : joint.k();
 }
 
 // ---- the kernel --------------------------------------------------------------------------------
@@ -290,6 +295,54 @@ double CalcMaxJointConstraint(const Model& model, const Data& data, double time)
                                j.drive_profile(time)));
   }
   return r;
+}
+
+Vec6 CalcFreeJointDeflection(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  return LogSE3(j.offset_a.Inverse() * NodeFrame(data, j.node_a).Inverse() *
+                NodeFrame(data, j.node_b) * j.offset_b);
+}
+
+bool JointSpringKind::Calc(const Model& m, const Data& d, const Item& joint,
+                           const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
+  const Joint& j = m.joints[static_cast<std::size_t>(joint)];
+  const bool has_damping = o.dynamics && j.damping.squaredNorm() > 0.0;
+  if (j.stiffness.squaredNorm() == 0.0 && !has_damping) {
+    t->active = false;
+    return true;
+  }
+  const Vec6 delta = CalcFreeJointDeflection(m, d, joint);
+  const Mat6x12 P = CalcRodP(delta);
+  const Mat6 EA = Ad(j.offset_a.Inverse()), EB = Ad(j.offset_b.Inverse());
+  Mat6x12 G;
+  G.leftCols<6>().noalias() = P.leftCols<6>() * EA;
+  G.rightCols<6>().noalias() = P.rightCols<6>() * EB;
+  const Vec6 sigma = j.stiffness.cwiseProduct(delta);
+  Vec6 f = sigma;
+  if (has_damping) f += j.damping.cwiseProduct(G * x.eta);
+  t->residual = G.transpose() * f;
+  if (!o.tangent) return true;
+  Mat12& K = t->stiffness;
+  K = G.transpose() * j.stiffness.asDiagonal() * G;
+  Mat6x12 geo_top = DTSE3InvT(-delta, sigma) * P, geo_bottom = DTSE3InvT(delta, sigma) * P;
+  for (Mat6x12* rows : {&geo_top, &geo_bottom}) {
+    rows->leftCols<6>() = rows->leftCols<6>() * EA;
+    rows->rightCols<6>() = rows->rightCols<6>() * EB;
+  }
+  K.topRows<6>() += EA.transpose() * geo_top;
+  K.bottomRows<6>() += EB.transpose() * geo_bottom;
+  t->has_stiffness = true;
+  if (has_damping) {
+    t->damping = G.transpose() * j.damping.asDiagonal() * G;
+    t->has_damping = true;
+  }
+  return true;
+}
+
+void JointSpringKind::AddEnergy(const Model& m, const Data& d, const Item& joint, Energy* E) {
+  const Joint& j = m.joints[static_cast<std::size_t>(joint)];
+  const Vec6 delta = CalcFreeJointDeflection(m, d, joint);
+  E->spring += 0.5 * delta.dot(j.stiffness.cwiseProduct(delta));
 }
 
 double JointDriveEffort(const Model& model, const Data& data, int joint) {

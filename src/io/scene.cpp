@@ -30,6 +30,7 @@ const std::vector<std::string> kCollections = {"points", "materials", "sections"
                                                "joints", "loads",     "outputs.points"};
 
 constexpr int kMaxElements = 100000;  // per rod (or per path segment)
+constexpr long kMaxTotalElements = 1000000;  // all rods of a scene
 constexpr double kMaxSteps = 1e9;     // time steps of one dynamic analysis
 
 const char* const kGroundName = "ground";
@@ -110,6 +111,7 @@ class SceneCompiler {
   Reader r_;
   ModelBuilder builder_;
   int default_elements_ = 8;
+  long total_elements_ = 0;  // over all rods (kMaxTotalElements)
   Vec3 default_up_ = Vec3::UnitZ();
   std::vector<std::pair<std::string, Vec3>> points_;
   std::map<std::string, Material> materials_;
@@ -384,7 +386,8 @@ void SceneCompiler::ReadMaterials(const Node* node) {
 void SceneCompiler::ReadSections(const Node* node) {
   if (node == nullptr || node->IsNull()) return;
   r_.CheckNames(*node, "sections", "section");
-  for (const auto& [entry, value] : node->entries) {
+  for (const auto& [entry, value_binding] : node->entries) {
+    const Node& value = value_binding;  // a variable the lambdas below can capture (Clang 14)
     const std::string path = Join("sections", entry.key);
     r_.CheckKeys(value, path,
                  {"stiffness", "inertia", "damping", "rayleigh_mass", "rayleigh_stiffness", "shape",
@@ -592,6 +595,11 @@ void SceneCompiler::ReadSoftBody(BodyEntry& b) {
     pts_at.push_back(from->location);
     pts_at.push_back(to->location);
   }
+  total_elements_ += static_cast<long>(elements) * static_cast<long>(pts.size() - 1);
+  if (total_elements_ > kMaxTotalElements)
+    r_.Fail(n.Find("elements") != nullptr ? n.Find("elements")->location : n.location, path,
+            "the scene's rods have more than " + std::to_string(kMaxTotalElements) +
+                " elements in all (the limit)");
   for (std::size_t i = 1; i < pts.size(); ++i)
     if (!((pts[i] - pts[i - 1]).norm() > 1e-12 * std::max(1.0, pts[i].norm())))
       r_.Fail(
@@ -747,12 +755,13 @@ void SceneCompiler::ReadJoints(const Node* node) {
     // Springs, dampers, drive (method.md §4.4, §4.5).
     const int k = j.k();
     const bool global = info.global_coordinates;
-    if (k == 0) NotUsedBy(value, path, {"stiffness", "damping", "rest", "drive"}, who);
+    if (JointSpringCount(j) == 0)
+      NotUsedBy(value, path, {"stiffness", "damping", "rest", "drive"}, who);
     if (!global) NotUsedBy(value, path, {"rest", "drive"}, who + " (no global coordinates)");
     if (const Node* s = value.Find("stiffness"))
-      j.stiffness = PerCoordinate(*s, Join(path, "stiffness"), k, true);
+      j.stiffness = PerCoordinate(*s, Join(path, "stiffness"), JointSpringCount(j), true);
     if (const Node* d = value.Find("damping"))
-      j.damping = PerCoordinate(*d, Join(path, "damping"), k, true);
+      j.damping = PerCoordinate(*d, Join(path, "damping"), JointSpringCount(j), true);
     if (const Node* rest = value.Find("rest"))
       j.rest = PerCoordinate(*rest, Join(path, "rest"), k, false);
     if (const Node* drive = value.Find("drive")) {
@@ -1094,6 +1103,14 @@ std::string Stem(const std::string& source) {
 
 Scene ParseScene(const std::string& yaml_text, const std::string& source_name,
                  const std::vector<std::string>& overrides) {
+  if (yaml_text.size() > kMaxSceneBytes)
+    throw InputError(source_name + ": the scene is larger than " +
+                     std::to_string(kMaxSceneBytes >> 20) + " MiB (the limit)");
+  for (const std::string& o : overrides)
+    if (o.size() > kMaxOverrideBytes)
+      throw InputError(source_name + ": an override is longer than " +
+                       std::to_string(kMaxOverrideBytes >> 20) + " MiB (the limit): '" +
+                       o.substr(0, 40) + "...'");
   scene_yaml::Node root = scene_yaml::Parse(yaml_text, source_name);
   for (const std::string& o : overrides)
     scene_yaml::ApplyOverride(root, o, source_name, kCollections);
@@ -1110,10 +1127,18 @@ Scene LoadScene(const std::string& path, const std::vector<std::string>& overrid
     throw InputError(path + ": is a directory, not a scene file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open the scene file");
-  std::ostringstream text;
-  text << in.rdbuf();
+  // Bounded reads: a file without a size (/dev/zero, a pipe) stops at the limit.
+  std::string text;
+  char buffer[1 << 16];
+  while (in) {
+    in.read(buffer, sizeof buffer);
+    text.append(buffer, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxSceneBytes)
+      throw InputError(path + ": the scene file is larger than " +
+                       std::to_string(kMaxSceneBytes >> 20) + " MiB (the limit)");
+  }
   if (in.bad()) throw InputError(path + ": cannot read the scene file");
-  return ParseScene(text.str(), path, overrides);
+  return ParseScene(text, path, overrides);
 }
 
 }  // namespace screwfem

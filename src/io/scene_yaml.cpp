@@ -13,6 +13,7 @@
 #include <map>
 #include <numbers>
 #include <sstream>
+#include <string_view>
 
 #include "screwfem/model/errors.h"
 
@@ -20,8 +21,10 @@ namespace screwfem::scene_yaml {
 
 namespace {
 
-// Limits that keep hostile input from exhausting memory or time.
+// Limits that keep hostile input from exhausting memory or time (docs/scene-format.md,
+// "Limits").
 constexpr long kMaxNodes = 1000000;          // after alias expansion
+constexpr std::size_t kMaxDepth = 100;       // nesting of lists and maps
 constexpr std::size_t kMaxExpression = 400;  // characters of one numeric expression
 
 Location FromMark(const YAML::Mark& mark) {
@@ -31,21 +34,20 @@ Location FromMark(const YAML::Mark& mark) {
   return l;
 }
 
-long CountNodes(const Node& n) {
-  long count = 1;
-  for (const Node& item : n.items) count += CountNodes(item);
-  for (const auto& entry : n.entries) count += CountNodes(entry.second);
-  return count;
-}
-
-// Builds the tree from parser events. Errors are recorded (not thrown through yaml-cpp).
+// Builds the tree from parser events. The first error stops the parse (TreeBuilder::Stop is
+// thrown through yaml-cpp and caught by Parse), so nothing is built or copied after it.
+// Every node is counted once as it is added, an alias by the size of the anchored subtree
+// (kept with the anchor), so expansion stops at kMaxNodes after O(kMaxNodes) work; the
+// anchors' own copies are bounded the same way.
 class TreeBuilder : public YAML::EventHandler {
  public:
+  struct Stop {};
   struct Frame {
     Node node;
     YAML::anchor_t anchor = 0;
     bool has_key = false;
     MapEntry key;
+    long size = 1;  // nodes in the subtree so far
   };
 
   std::vector<Node> documents;
@@ -58,28 +60,17 @@ class TreeBuilder : public YAML::EventHandler {
   void OnNull(const YAML::Mark& mark, YAML::anchor_t anchor) override {
     Node n;
     n.location = FromMark(mark);
-    Add(std::move(n), anchor);
+    Add(std::move(n), anchor, 1);
   }
   void OnAlias(const YAML::Mark& mark, YAML::anchor_t anchor) override {
     const auto it = anchors_.find(anchor);
-    if (it == anchors_.end()) {
-      SetError(FromMark(mark), "alias to an unknown or unfinished anchor");
-      Node n;
-      n.location = FromMark(mark);
-      Add(std::move(n), 0);
-      return;
-    }
-    count_ += CountNodes(it->second);
-    if (count_ > kMaxNodes) {
+    if (it == anchors_.end()) SetError(FromMark(mark), "alias to an unknown or unfinished anchor");
+    const long size = it->second.second;
+    if (count_ + size > kMaxNodes)
       SetError(FromMark(mark), "the document expands to more than " + std::to_string(kMaxNodes) +
                                    " nodes (aliases?)");
-      Node n;
-      n.location = FromMark(mark);
-      Add(std::move(n), 0);
-      return;
-    }
-    Node copy = it->second;
-    Add(std::move(copy), 0);
+    Node copy = it->second.first;
+    Add(std::move(copy), 0, size);
   }
   void OnScalar(const YAML::Mark& mark, const std::string& tag, YAML::anchor_t anchor,
                 const std::string& value) override {
@@ -94,50 +85,61 @@ class TreeBuilder : public YAML::EventHandler {
       n.scalar = value;
       n.quoted = !plain;
     }
-    Add(std::move(n), anchor);
+    Add(std::move(n), anchor, 1);
   }
   void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
                        YAML::EmitterStyle::value) override {
-    Frame f;
-    f.node.kind = Node::Kind::kSequence;
-    f.node.location = FromMark(mark);
-    f.anchor = anchor;
-    stack_.push_back(std::move(f));
+    Open(Node::Kind::kSequence, mark, anchor);
   }
   void OnSequenceEnd() override { Close(); }
   void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
                   YAML::EmitterStyle::value) override {
-    Frame f;
-    f.node.kind = Node::Kind::kMap;
-    f.node.location = FromMark(mark);
-    f.anchor = anchor;
-    stack_.push_back(std::move(f));
+    Open(Node::Kind::kMap, mark, anchor);
   }
   void OnMapEnd() override { Close(); }
 
  private:
-  void SetError(const Location& at, const std::string& what) {
-    if (!error.empty()) return;
+  [[noreturn]] void SetError(const Location& at, const std::string& what) {
     error = what;
     error_location = at;
+    throw Stop{};
+  }
+  void Open(Node::Kind kind, const YAML::Mark& mark, YAML::anchor_t anchor) {
+    if (stack_.size() >= kMaxDepth)
+      SetError(FromMark(mark), "lists and maps nested more than " + std::to_string(kMaxDepth) +
+                                   " levels deep");
+    Frame f;
+    f.node.kind = kind;
+    f.node.location = FromMark(mark);
+    f.anchor = anchor;
+    stack_.push_back(std::move(f));
   }
   void Close() {
     if (stack_.empty()) return;
     Frame f = std::move(stack_.back());
     stack_.pop_back();
-    Add(std::move(f.node), f.anchor);
+    // The container itself counts one node (its children were counted as they came).
+    Add(std::move(f.node), f.anchor, f.size, 1);
   }
-  void Add(Node n, YAML::anchor_t anchor) {
-    if (++count_ > kMaxNodes) {
+  // Adds a node whose subtree has `size` nodes, of which `new_nodes` are not counted yet.
+  void Add(Node n, YAML::anchor_t anchor, long size) { Add(std::move(n), anchor, size, size); }
+  void Add(Node n, YAML::anchor_t anchor, long size, long new_nodes) {
+    count_ += new_nodes;
+    if (count_ > kMaxNodes)
       SetError(n.location, "the document has more than " + std::to_string(kMaxNodes) + " nodes");
-      return;
+    if (anchor != 0) {
+      anchor_copies_ += size;
+      if (anchor_copies_ > kMaxNodes)
+        SetError(n.location, "the document's anchors hold more than " +
+                                 std::to_string(kMaxNodes) + " nodes");
+      anchors_[anchor] = {n, size};
     }
-    if (anchor != 0) anchors_[anchor] = n;
     if (stack_.empty()) {
       documents.push_back(std::move(n));
       return;
     }
     Frame& top = stack_.back();
+    top.size += size;
     if (top.node.kind == Node::Kind::kSequence) {
       top.node.items.push_back(std::move(n));
       return;
@@ -148,7 +150,6 @@ class TreeBuilder : public YAML::EventHandler {
       if (n.kind == Node::Kind::kScalar) {
         top.key.key = n.scalar;
       } else if (n.kind == Node::Kind::kNull) {
-        top.key.key = "";
         SetError(n.location, "empty map key");
       } else {
         SetError(n.location, "map keys must be plain names, not lists or maps");
@@ -163,8 +164,9 @@ class TreeBuilder : public YAML::EventHandler {
   }
 
   std::vector<Frame> stack_;
-  std::map<YAML::anchor_t, Node> anchors_;
+  std::map<YAML::anchor_t, std::pair<Node, long>> anchors_;  // node and its subtree size
   long count_ = 0;
+  long anchor_copies_ = 0;
 };
 
 // Binary content: NUL and other control bytes, or invalid UTF-8. Returns the byte offset of the
@@ -212,7 +214,7 @@ Location LocationOfOffset(const std::string& text, std::size_t offset) {
   return l;
 }
 
-void MarkOverride(Node& n, const std::string& text) {
+void MarkOverride(Node& n, const std::shared_ptr<const std::string>& text) {
   n.location = Location{};
   n.location.override_text = text;
   for (Node& item : n.items) MarkOverride(item, text);
@@ -432,8 +434,7 @@ const MapEntry* Node::FindEntry(const std::string& key) const {
 }
 
 std::string Where(const std::string& source, const Location& location) {
-  if (!location.override_text.empty())
-    return source + ": override '" + location.override_text + "'";
+  if (location.override_text) return source + ": override '" + *location.override_text + "'";
   if (location.line <= 0) return source;
   return source + ":" + std::to_string(location.line) + ":" + std::to_string(location.column);
 }
@@ -467,9 +468,10 @@ Node Parse(const std::string& text, const std::string& source, bool allow_empty)
   try {
     YAML::Parser parser(in);
     while (parser.HandleNextDocument(builder)) {
-      if (!builder.error.empty()) break;
       if (++documents > 1) break;
     }
+  } catch (const TreeBuilder::Stop&) {
+    // builder.error says why
   } catch (const YAML::Exception& e) {
     throw InputError(Where(source, FromMark(e.mark)) + ": not valid YAML: " + e.msg);
   }
@@ -496,21 +498,26 @@ void ApplyOverride(Node& root, const std::string& override_text, const std::stri
     throw InputError(where + ": expected KEY.PATH=VALUE (e.g. analysis.step=5e-4)");
   const std::string path = override_text.substr(0, eq);
   const std::string value_text = override_text.substr(eq + 1);
-  std::vector<std::string> parts;
+  // Components as [begin, end) offsets into `path` (the dotted prefix up to a component is a
+  // prefix of `path`: no per-component copies).
+  std::vector<std::pair<std::size_t, std::size_t>> parts;
   {
     std::size_t start = 0;
     for (;;) {
       const std::size_t dot = path.find('.', start);
-      parts.push_back(
-          path.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
+      const std::size_t end = dot == std::string::npos ? path.size() : dot;
+      if (end == start || path.find_first_of(" \t", start) < end)
+        throw InputError(where + ": malformed key path '" + path + "'");
+      parts.emplace_back(start, end);
+      if (parts.size() > kMaxOverrideDepth)
+        throw InputError(where + ": the key path has more than " +
+                         std::to_string(kMaxOverrideDepth) + " components");
       if (dot == std::string::npos) break;
       start = dot + 1;
     }
   }
-  for (const std::string& p : parts)
-    if (p.empty() || p.find_first_of(" \t") != std::string::npos)
-      throw InputError(where + ": malformed key path '" + path + "'");
 
+  const auto text = std::make_shared<const std::string>(override_text);
   Node value;
   {
     try {
@@ -518,23 +525,23 @@ void ApplyOverride(Node& root, const std::string& override_text, const std::stri
     } catch (const InputError& e) {
       throw InputError(where + ": the value is not a YAML value (" + e.what() + ")");
     }
-    MarkOverride(value, override_text);
+    MarkOverride(value, text);
   }
   if (root.IsNull()) root.kind = Node::Kind::kMap;
   if (!root.IsMap()) throw InputError(where + ": the scene is not a map");
 
   Node* cur = &root;
-  std::string cur_path;
+  std::size_t cur_end = 0;  // cur's dotted path is path.substr(0, cur_end)
   for (std::size_t i = 0; i < parts.size(); ++i) {
-    const std::string& part = parts[i];
+    const std::string part = path.substr(parts[i].first, parts[i].second - parts[i].first);
+    const std::string_view cur_path(path.data(), cur_end);
     const bool last = i + 1 == parts.size();
-    const std::string next_path = cur_path.empty() ? part : cur_path + "." + part;
     if (cur->IsNull()) cur->kind = Node::Kind::kMap;  // descend into an empty value
     if (cur->IsSequence()) {
       std::size_t index = 0;
       const auto r = std::from_chars(part.data(), part.data() + part.size(), index);
       if (r.ec != std::errc() || r.ptr != part.data() + part.size() || index >= cur->items.size())
-        throw InputError(where + ": '" + cur_path + "' is a list of " +
+        throw InputError(where + ": '" + std::string(cur_path) + "' is a list of " +
                          std::to_string(cur->items.size()) + " items; '" + part +
                          "' is not an index into it");
       cur = &cur->items[index];
@@ -546,22 +553,23 @@ void ApplyOverride(Node& root, const std::string& override_text, const std::stri
         if (in_collection && !last) {
           std::vector<std::string> names;
           for (const auto& e : cur->entries) names.push_back(e.first.key);
-          throw InputError(where + ": " + cur_path + ": no entry '" + part + "'" +
+          throw InputError(where + ": " + std::string(cur_path) + ": no entry '" + part + "'" +
                            DidYouMean(part, names));
         }
         MapEntry key;
         key.key = part;
-        key.key_location.override_text = override_text;
+        key.key_location.override_text = text;
         Node created;
-        created.location.override_text = override_text;
+        created.location.override_text = text;
         cur->entries.emplace_back(std::move(key), std::move(created));
         next = &cur->entries.back().second;
       }
       cur = next;
     } else {
-      throw InputError(where + ": '" + cur_path + "' is a single value, it has no '" + part + "'");
+      throw InputError(where + ": '" + std::string(cur_path) + "' is a single value, it has no '" +
+                       part + "'");
     }
-    cur_path = next_path;
+    cur_end = parts[i].second;
   }
   *cur = std::move(value);
 }

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,7 +22,9 @@ namespace screwfem::scene_yaml {
 struct Location {
   int line = 0;
   int column = 0;
-  std::string override_text;  // non-empty: the node was written by this override
+  // Non-null: the node was written by this override (shared by all its nodes, so that an
+  // override costs memory linear in its length).
+  std::shared_ptr<const std::string> override_text;
 };
 
 struct MapEntry {
@@ -38,6 +41,15 @@ struct Node {
   std::vector<Node> items;                         // kSequence
   std::vector<std::pair<MapEntry, Node>> entries;  // kMap, in file order (duplicates kept)
 
+  // Declared here and defaulted below, where Node is complete: the implicit ones would
+  // instantiate std::pair<MapEntry, Node> while Node is still incomplete (Clang rejects that).
+  Node();
+  Node(const Node&);
+  Node(Node&&) noexcept;
+  Node& operator=(const Node&);
+  Node& operator=(Node&&) noexcept;
+  ~Node();
+
   bool IsNull() const { return kind == Kind::kNull; }
   bool IsScalar() const { return kind == Kind::kScalar; }
   bool IsSequence() const { return kind == Kind::kSequence; }
@@ -47,6 +59,13 @@ struct Node {
   Node* Find(const std::string& key);
   const MapEntry* FindEntry(const std::string& key) const;
 };
+
+inline Node::Node() = default;
+inline Node::Node(const Node&) = default;
+inline Node::Node(Node&&) noexcept = default;
+inline Node& Node::operator=(const Node&) = default;
+inline Node& Node::operator=(Node&&) noexcept = default;
+inline Node::~Node() = default;
 
 // Text of a location for messages: "FILE:LINE:COL" or "FILE: override 'a.b=c'".
 std::string Where(const std::string& source, const Location& location);
@@ -61,7 +80,10 @@ Node Parse(const std::string& text, const std::string& source, bool allow_empty 
 
 // Applies "a.b.c=value" to the tree (value parsed as a YAML scalar or flow collection).
 // Missing keys are created, except entries of the named collections in `collections` (dotted
-// paths such as "bodies"), which must exist unless they are the last component.
+// paths such as "bodies"), which must exist unless they are the last component. Time and
+// memory are linear in the override's length; the key path has at most kMaxOverrideDepth
+// components.
+inline constexpr std::size_t kMaxOverrideDepth = 16;
 void ApplyOverride(Node& root, const std::string& override_text, const std::string& source,
                    const std::vector<std::string>& collections);
 

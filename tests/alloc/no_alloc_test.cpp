@@ -21,7 +21,16 @@ std::atomic<bool> g_counting{false};
 std::atomic<long> g_allocations{0};
 }  // namespace
 
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+// AddressSanitizer: GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature.
+#if defined(__SANITIZE_ADDRESS__)
+#define SCREWFEM_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SCREWFEM_ASAN 1
+#endif
+#endif
+
+#if defined(__GLIBC__) && !defined(SCREWFEM_ASAN)
 #define SCREWFEM_COUNT_MALLOC 1
 extern "C" {
 void* __libc_malloc(std::size_t);

@@ -335,7 +335,7 @@ TEST(EquilibriumTangent, WorldAndFollowerPointLoadsAtBodyPoints) {
 
 TEST(EquilibriumTangent, SoftJointSpringsOnCoordinatesOfEveryJointType) {
   for (JointType type : kAllTypes) {
-    if (type == JointType::kFixed) continue;
+    if (type == JointType::kFixed || type == JointType::kFree) continue;  // no coordinates
     SCOPED_TRACE(JointTypeName(type));
     ModelBuilder b;
     auto rng = Rng(30 + static_cast<unsigned>(type));
@@ -398,8 +398,7 @@ double SpringEnergy(const Model& m, const Data& d) {
 
 TEST(EquilibriumTangent, JointSpringForceIsTheGradientOfTheSpringEnergy) {
   for (JointType type : {JointType::kRevolute, JointType::kHelical, JointType::kCylindrical,
-                         JointType::kUniversal, JointType::kSpherical, JointType::kPlanar,
-                         JointType::kFree}) {
+                         JointType::kUniversal, JointType::kSpherical, JointType::kPlanar}) {
     SCOPED_TRACE(JointTypeName(type));
     ModelBuilder b;
     auto rng = Rng(50 + static_cast<unsigned>(type));
@@ -429,6 +428,45 @@ TEST(EquilibriumTangent, JointSpringForceIsTheGradientOfTheSpringEnergy) {
       const double vm = SpringEnergy(m, d);
       EXPECT_NEAR(f(i - m.nv_nodes), (vp - vm) / (2.0 * kEps), 1e-7 * std::max(1.0, f.norm()));
     }
+  }
+}
+
+// A free joint's springs act on delta = log(C_A^-1 H_A^-1 H_B C_B) between the nodes (no
+// coordinates, no constraint rows): the node force is the gradient of the spring energy of
+// CalcEnergy through the retraction, and the stiffness block its derivative, at large
+// deflections (|delta| ~ 1), with the ground on either side and between two bodies.
+TEST(EquilibriumTangent, FreeJointSpringForceIsTheEnergyGradientAndItsTangentMatches) {
+  ModelBuilder b;
+  auto rng = Rng(60);
+  const int na = b.AddNode(RandomFrame(rng));
+  const int nb = b.AddNode(RandomFrame(rng));
+  AddBody(b, na, "A");
+  AddBody(b, nb, "B");
+  const int j1 = b.AddJointAt("g", JointType::kFree, kGround, na, Vec3(0.3, -0.4, 0.5));
+  const int j2 = b.AddJointAt("ab", JointType::kFree, na, nb, Vec3(-0.2, 0.6, 0.1));
+  const int j3 = b.AddJointAt("bg", JointType::kFree, nb, kGround, Vec3(0.1, 0.1, -0.3));
+  for (int j : {j1, j2, j3})
+    b.model().joints[static_cast<std::size_t>(j)].stiffness << 3.0, 5.0, 7.0, 11.0, 13.0, 17.0;
+  const Model m = b.Build();
+  EXPECT_EQ(m.nc, 0);
+  EXPECT_EQ(m.nv, 12);
+  Data d = MakeData(m);
+  Disturb(m, d, 61);
+  for (int j : {j1, j2, j3}) EXPECT_GT(CalcFreeJointDeflection(m, d, j).norm(), 0.3);
+  ExpectStiffnessMatchesFiniteDifference(m, d);
+  ASSERT_TRUE(Assemble(m, d, StaticsOptions()));
+  const Eigen::VectorXd f = d.residual.head(m.nv);
+  const Snapshot base = Take(d);
+  for (int i = 0; i < m.nv; ++i) {
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(m.nv);
+    e(i) = kEps;
+    Put(base, d);
+    Retract(m, d, e);
+    const double vp = CalcEnergy(m, d).spring;
+    Put(base, d);
+    Retract(m, d, -e);
+    const double vm = CalcEnergy(m, d).spring;
+    EXPECT_NEAR(f(i), (vp - vm) / (2.0 * kEps), 1e-7 * std::max(1.0, f.norm()));
   }
 }
 
@@ -499,6 +537,37 @@ TEST(DynamicTangent, DampingBlockIsTheDerivativeOfTheResidualWithRespectToVeloci
   EXPECT_GT(C_fd.topLeftCorner(m.nv_nodes, m.nv_nodes).cwiseAbs().maxCoeff(), 0.1);
   EXPECT_GT(C_fd.bottomRightCorner(m.nv - m.nv_nodes, m.nv - m.nv_nodes).cwiseAbs().maxCoeff(),
             0.1);
+  EXPECT_LT(RelativeError(C, C_fd), 1e-7) << "C =\n" << C << "\nFD =\n" << C_fd;
+}
+
+// A free joint's damper acts on the rate of its deflection, D G eta_AB: exact block G^T D G.
+TEST(DynamicTangent, FreeJointDamperBlockIsTheDerivativeOfTheResidualWithRespectToVelocity) {
+  ModelBuilder b;
+  auto rng = Rng(4);
+  const int na = b.AddNode(RandomFrame(rng));
+  const int nb = b.AddNode(RandomFrame(rng));
+  AddBody(b, na, "A");
+  AddBody(b, nb, "B");
+  const int j1 = b.AddJointAt("g", JointType::kFree, kGround, na, Vec3(0.1, 0.2, 0.3));
+  const int j2 = b.AddJointAt("ab", JointType::kFree, na, nb, Vec3(0.4, -0.2, 0.3));
+  for (int j : {j1, j2}) {
+    b.model().joints[static_cast<std::size_t>(j)].damping << 0.3, 0.5, 0.7, 1.1, 1.3, 1.7;
+    b.model().joints[static_cast<std::size_t>(j)].stiffness << 2.0, 3.0, 4.0, 5.0, 6.0, 7.0;
+  }
+  const Model m = b.Build();
+  Data d = MakeData(m);
+  SetRandomMotion(m, d);
+  AssemblyOptions o;
+  o.dynamics = true;
+  o.c_mass = 0.0;
+  o.c_damping = 1.0;
+  o.c_stiffness = 0.0;
+  ASSERT_TRUE(Assemble(m, d, o));
+  const Eigen::MatrixXd C = GlobalMatrix(m, d).topLeftCorner(m.nv, m.nv);
+  const Eigen::MatrixXd C_fd = ResidualDerivative(
+      m, d, o, [](Data& data, int i, double e) { data.v(i) += e; }).topRows(m.nv);
+  // The dampers couple the two bodies.
+  EXPECT_GT(C_fd.topRightCorner(6, 6).cwiseAbs().maxCoeff(), 0.1);
   EXPECT_LT(RelativeError(C, C_fd), 1e-7) << "C =\n" << C << "\nFD =\n" << C_fd;
 }
 

@@ -53,4 +53,22 @@ class ModelBuilder {
 };
 
 
+// Redundant constraint rows at the reference configuration (called by ModelBuilder::Build on
+// a model whose layout is set; build/redundancy.cpp): fills model.redundant_rows and adds a
+// warning naming the joints involved. The joint graph (nodes with unknowns, and one vertex for
+// the ground and every fixed node; an edge per joint with constraint rows) is split into a
+// spanning forest and chords. The rows of tree joints are independent (each has an invertible
+// block on its child node), so only chord rows and drive rows can be redundant: they are
+// reduced onto the coordinates of the tree joints between the chord's ends and their lowest
+// common ancestor (the common ancestor's rigid motion drops out exactly), and each group of
+// reduced rows that share coordinates is rank-revealed with a column-pivoting QR (relative
+// threshold 1e-10). The gradient is the joint kernel's (CalcJointGradient), as in the
+// assembly. Cost: linear in the joints for trees; for loops, the tree paths walked plus one
+// dense QR per group. Scenes whose loops exceed kMaxRedundancyWork skip the check with a
+// warning.
+void FindRedundantConstraints(Model& model);
+// Work bound of FindRedundantConstraints: tree-path steps (a few microseconds each) plus the
+// dense QRs' operation counts / 1000; about 2 s at the bound.
+inline constexpr double kMaxRedundancyWork = 1e6;
+
 }  // namespace screwfem

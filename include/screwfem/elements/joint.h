@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "screwfem/elements/element.h"
 #include "screwfem/model/data.h"
 
 namespace screwfem {
@@ -23,10 +24,13 @@ using JointMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 
 // ---- the joint-type table ---------------------------------------------------------------------
 
 // The law of a soft joint's springs (method.md §4.5):
-//   kCoordinates: force K (alpha - rest) on each global coordinate alpha;
-//   kLogarithm:   energy 1/2 delta^T K delta with delta = A_J^T log(H_J), for subgroups without
-//                 global coordinates (spherical, planar, free); no rest value.
-enum class JointSpringLaw { kCoordinates, kLogarithm };
+//   kCoordinates:    force K (alpha - rest) on each global coordinate alpha;
+//   kLogarithm:      energy 1/2 delta^T K delta with delta = A_J^T log(H_J), for subgroups
+//                    without global coordinates (spherical, planar); no rest value;
+//   kRelativeMotion: six springs on delta = log(C_A^-1 H_A^-1 H_B C_B), the relative motion of
+//                    the two joint frames, acting on the nodes (the free joint: no coordinates,
+//                    no constraint rows; JointSpringKind below; docs/numerics.md, "Free joints").
+enum class JointSpringLaw { kCoordinates, kLogarithm, kRelativeMotion };
 
 struct JointTypeInfo {
   JointType type;
@@ -62,6 +66,8 @@ const char* JointTypeName(JointType type);
 // Returns 6 x k.
 Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2 = Vec3::Zero(), double pitch = 0.0);
 bool JointHasGlobalCoordinates(JointType type);
+// Springs and dampers a joint carries: one per coordinate, six for kRelativeMotion.
+int JointSpringCount(const Joint& joint);
 
 // ---- the joint kernel -------------------------------------------------------------------------
 
@@ -131,6 +137,35 @@ void RetractJoint(const Model& model, Data& data, int joint,
 // MaxConstraintViolation (assemble.h) computes from a whole residual assembly, for one
 // logarithm per joint.
 double CalcMaxJointConstraint(const Model& model, const Data& data, double time);
+
+// Deflection of a joint with JointSpringLaw::kRelativeMotion (the free joint):
+// delta = log(C_A^-1 H_A^-1 H_B C_B), the principal logarithm its springs act on.
+Vec6 CalcFreeJointDeflection(const Model& model, const Data& data, int joint);
+
+// The springs and dampers of joints with JointSpringLaw::kRelativeMotion, as an element kind
+// (elements/element.h) on the joint's two nodes: delta varies like a rod element's relative
+// motion between the joint frames, d delta = P(delta) E [dh_A; dh_B] with
+// E = diag(Ad(C_A^-1), Ad(C_B^-1)) and G = P E (method.md §2.3). Force G^T (K delta + D G
+// eta_AB); stiffness G^T K G + E^T [D(-delta, s); D(delta, s)] P E with s = K delta (§2.4);
+// damping block G^T D G (its configuration derivative omitted, as for rods). Energy
+// 1/2 delta^T K delta.
+struct JointSpringKind {
+  static constexpr int kNodes = 2;
+  using Item = int;  // joint index
+  template <class F>
+  static void ForEach(const Model& model, F&& f) {
+    for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+      const Joint& j = model.joints[jj];
+      if (GetJointTypeInfo(j.type).spring_law != JointSpringLaw::kRelativeMotion) continue;
+      const int nodes[2] = {j.node_a, j.node_b};
+      f(static_cast<int>(jj), nodes);
+    }
+  }
+  static bool Calc(const Model& model, const Data& data, const Item& joint,
+                   const NodeMotion<2>& motion, const KernelOptions& options,
+                   ElementTerms<2>* terms);
+  static void AddEnergy(const Model& model, const Data& data, const Item& joint, Energy* energy);
+};
 
 // Effort of a joint's drive: the generalised force the drive applies along its coordinate
 // (actuator torque or force; for a series-elastic drive the spring-damper force).

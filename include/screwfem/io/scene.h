@@ -75,6 +75,12 @@ struct Scene {
   std::vector<std::pair<std::string, Vec3>> named_points;
 };
 
+// Size limits of the input (docs/scene-format.md, "Limits"): a scene file or text, and one
+// override string. LoadScene reads at most kMaxSceneBytes + 1 bytes, so a file without a size
+// (/dev/zero, a pipe) stops there.
+inline constexpr std::size_t kMaxSceneBytes = std::size_t{16} << 20;    // 16 MiB
+inline constexpr std::size_t kMaxOverrideBytes = std::size_t{1} << 20;  // 1 MiB
+
 // Parses and compiles a scene. `overrides` are "key.path=value" strings applied to the YAML
 // tree before compilation (e.g. "analysis.step=5e-4", "bodies.arm56.elements=8").
 // Throws InputError with a message "FILE:LINE:COLUMN: FIELD: what was expected".

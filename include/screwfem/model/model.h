@@ -136,6 +136,9 @@ struct Joint {
   int drive_coord = 0;     // which coordinate (0..k-1)
   int drive_row = -1;      // multiplier row of a prescribed drive
   Profile drive_profile;   // q(t) [m or rad], or the force/torque f(t)
+  // Coordinates (unknowns) of the joint: the columns of A_J. A free joint has none: its
+  // relative motion is that of its two frames, with no constraint rows (JointSpringCount,
+  // elements/joint.h, says how many springs a joint carries).
   int k() const { return static_cast<int>(basis.cols()); }
 };
 
