@@ -130,9 +130,7 @@ int ModelBuilder::AddJointAt(std::string name, JointType type, int node_a, int n
   j.pitch = pitch;
   j.basis = JointBasis(type, axis, axis2, pitch);
   const SE3 frame = SE3::Translation(point);
-  const auto ref = [&](int node) {
-    return node == kGround ? SE3::Identity() : model_.nodes[static_cast<std::size_t>(node)].reference;
-  };
+  const auto ref = [&](int node) { return NodeReferenceFrame(model_, node); };
   j.offset_a = ref(node_a).Inverse() * frame;
   j.offset_b = ref(node_b).Inverse() * frame;
   return AddJoint(j);
@@ -150,12 +148,10 @@ int ModelBuilder::AddRodLoad(const RodLoad& load) {
 
 void ModelBuilder::SetGravity(const Vec3& g) { model_.gravity = g; }
 
-Model ModelBuilder::Build() const {
-  Model m = model_;
-  const int num_nodes = static_cast<int>(m.nodes.size());
-  auto valid_node = [&](int n) { return n >= 0 && n < num_nodes; };
+namespace {
 
-  // --- validation ------------------------------------------------------------------------
+// Node frames are finite rigid transformations with unique names; gravity is finite.
+void ValidateNodes(const Model& m) {
   {
     std::set<std::string> names;
     for (const Node& n : m.nodes) {
@@ -166,7 +162,13 @@ Model ModelBuilder::Build() const {
     }
   }
   if (!m.gravity.allFinite()) throw InputError("gravity must be finite");
-  std::vector<char> used(static_cast<std::size_t>(num_nodes), 0);
+}
+
+// Rod sections and the elements of every rod (reference relative motion d0, length); marks
+// the nodes rods use. Rod names are unique.
+void BuildRodElements(Model& m, std::vector<char>& used) {
+  const int num_nodes = static_cast<int>(m.nodes.size());
+  auto valid_node = [&](int n) { return n >= 0 && n < num_nodes; };
   m.elements.clear();
   for (std::size_t r = 0; r < m.rods.size(); ++r) {
     Rod& rod = m.rods[r];
@@ -211,6 +213,13 @@ Model ModelBuilder::Build() const {
       if (!rod.name.empty() && !names.insert(rod.name).second)
         throw InputError("duplicate rod name '" + rod.name + "'");
   }
+}
+
+// Rigid bodies: node, positive mass, finite centre of mass, symmetric positive definite inertia,
+// unique names; marks their nodes.
+void ValidateBodies(const Model& m, std::vector<char>& used) {
+  const int num_nodes = static_cast<int>(m.nodes.size());
+  auto valid_node = [&](int n) { return n >= 0 && n < num_nodes; };
   {
     std::set<std::string> names;
     for (const RigidBody& b : m.bodies) {
@@ -230,6 +239,13 @@ Model ModelBuilder::Build() const {
       used[static_cast<std::size_t>(b.node)] = 1;
     }
   }
+}
+
+// Joints: sides, offsets, basis, springs, drives (on global coordinates only), unique names;
+// marks their nodes.
+void ValidateJoints(const Model& m, std::vector<char>& used) {
+  const int num_nodes = static_cast<int>(m.nodes.size());
+  auto valid_node = [&](int n) { return n >= 0 && n < num_nodes; };
   {
     std::set<std::string> names;
     for (const Joint& j : m.joints) {
@@ -261,6 +277,12 @@ Model ModelBuilder::Build() const {
       if (j.node_b != kGround) used[static_cast<std::size_t>(j.node_b)] = 1;
     }
   }
+}
+
+// Loads: finite values and valid profiles; a concentrated rod load finds its element and xi.
+void PlaceLoads(Model& m) {
+  const int num_nodes = static_cast<int>(m.nodes.size());
+  auto valid_node = [&](int n) { return n >= 0 && n < num_nodes; };
   for (const PointLoad& l : m.point_loads) {
     if (!valid_node(l.node)) throw InputError("point load: invalid node " + std::to_string(l.node));
     if (!l.force.allFinite() || !l.moment.allFinite() || !l.point.allFinite())
@@ -290,11 +312,19 @@ Model ModelBuilder::Build() const {
       s0 += L;
     }
   }
+}
+
+// Every node that is not fixed is used by a rod, a body or a joint.
+void CheckConnected(const Model& m, const std::vector<char>& used) {
+  const int num_nodes = static_cast<int>(m.nodes.size());
   for (int n = 0; n < num_nodes; ++n)
     if (!m.nodes[static_cast<std::size_t>(n)].fixed && !used[static_cast<std::size_t>(n)])
       throw InputError(NodeLabel(m, n) + " is connected to nothing (no rod, body or joint)");
+}
 
-  // --- layout ------------------------------------------------------------------------------
+// Unknowns: 6 velocities per free node, then the joints' coordinates; multipliers: 6 rows per
+// constrained joint and one per prescribed drive.
+void LayOutUnknowns(Model& m) {
   m.nv = 0;
   for (Node& n : m.nodes) {
     n.dof = n.fixed ? -1 : m.nv;
@@ -316,19 +346,23 @@ Model ModelBuilder::Build() const {
       m.nc += 1;
     }
   }
+}
 
+void CheckJointFramesCoincide(const Model& m) {
   // The joint frames must coincide in the reference configuration (H_J = I, method.md §4.2).
   for (const Joint& j : m.joints) {
-    const SE3 HA = j.node_a == kGround ? SE3::Identity() : m.nodes[static_cast<std::size_t>(j.node_a)].reference;
-    const SE3 HB = j.node_b == kGround ? SE3::Identity() : m.nodes[static_cast<std::size_t>(j.node_b)].reference;
+    const SE3& HA = NodeReferenceFrame(m, j.node_a);
+    const SE3& HB = NodeReferenceFrame(m, j.node_b);
     const Vec6 phi0 = LogSE3(j.offset_a.Inverse() * HA.Inverse() * HB * j.offset_b);
     if (j.row >= 0 && phi0.norm() > 1e-9 * std::max(1.0, HA.x.norm() + HB.x.norm()))
       throw InputError("joint '" + j.name +
                        "': its frames on the two sides do not coincide in the reference "
                        "configuration (check the joint point and the attached bodies)");
   }
-  FindRedundantConstraints(m);
+}
 
+void OrderUnknowns(Model& m) {
+  const int num_nodes = static_cast<int>(m.nodes.size());
   // Block graph: a block is a contiguous range of unknowns that always couple together; an
   // edge is a block of the iteration matrix that the assembly writes (rod elements couple
   // their nodes, joints their constraint rows with both nodes and their coordinates, drives
@@ -409,7 +443,10 @@ Model ModelBuilder::Build() const {
     for (int i = 0; i < blocks[b].size; ++i)
       m.pattern_last[static_cast<std::size_t>(block_pos[b] + i)] = last;
   }
+}
 
+void SetLengthScale(Model& m) {
+  const int num_nodes = static_cast<int>(m.nodes.size());
   // Characteristic length: the diagonal of the bounding box of all node positions.
   Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
   for (const Node& n : m.nodes) {
@@ -418,6 +455,24 @@ Model ModelBuilder::Build() const {
   }
   m.length_scale = num_nodes > 0 ? std::max((hi - lo).norm(), 1e-3) : 1.0;
   for (const Rod& r : m.rods) m.length_scale = std::max(m.length_scale, r.length);
+}
+
+}  // namespace
+
+Model ModelBuilder::Build() const {
+  Model m = model_;
+  ValidateNodes(m);
+  std::vector<char> used(m.nodes.size(), 0);  // nodes that something is attached to
+  BuildRodElements(m, used);
+  ValidateBodies(m, used);
+  ValidateJoints(m, used);
+  PlaceLoads(m);
+  CheckConnected(m, used);
+  LayOutUnknowns(m);
+  CheckJointFramesCoincide(m);
+  FindRedundantConstraints(m);
+  OrderUnknowns(m);
+  SetLengthScale(m);
   return m;
 }
 

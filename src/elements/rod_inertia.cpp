@@ -26,6 +26,8 @@ struct NtHNSum {
 // c_mass M_e + c_gyro C_t (kCombined: *mass_out, one set of products per Gauss point).
 enum class InertiaTangent { kNone, kSeparate, kCombined };
 
+// One function (about 85 lines) for the three tangent variants, so that they compute the force
+// with the same operations (the residual is bit-identical with and without the tangent).
 template <InertiaTangent kTangent>
 void InertiaExact(const RodElement& element, const Section& section, const RodGeometry& geometry,
                   const Vec12& eta_ab, const Vec12& eta_dot_ab, double c_mass, double c_gyro,

@@ -37,9 +37,6 @@ struct Geometry {
 
 Geometry BuildGeometry(const Model& model, const Data& data) {
   Geometry g;
-  const auto node_frame = [&](int node) {
-    return node == kGround ? SE3::Identity() : data.H[static_cast<std::size_t>(node)];
-  };
   const auto node_point = [&](int node, const Vec3& p) {
     return node == kGround ? PointMotion{p, Vec3::Zero(), Vec3::Zero()}
                            : CalcNodePointMotion(model, data, node, p);
@@ -49,7 +46,7 @@ Geometry BuildGeometry(const Model& model, const Data& data) {
   std::vector<std::vector<Vec3>> attachments(model.nodes.size());
   for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
     const Joint& j = model.joints[jj];
-    const SE3 H = node_frame(j.node_a) * j.offset_a * JointRelativeFrame(model, data, static_cast<int>(jj));
+    const SE3 H = NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, static_cast<int>(jj));
     const PointMotion m = j.node_b != kGround ? node_point(j.node_b, j.offset_b.x)
                                               : node_point(j.node_a, j.offset_a.x);
     Geometry::Cell cell;

@@ -80,6 +80,8 @@ void BandedLU::SetZero() {
   extents_valid_ = true;
 }
 
+// One function (about 100 lines): the column elimination is the hot loop of every step, and its
+// extent bookkeeping, pivoting and updates share locals that splitting would pass around.
 int BandedLU::Factorize() {
   extents_valid_ = false;
   max_pivot_ = 0.0;

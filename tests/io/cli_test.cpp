@@ -283,9 +283,8 @@ Outcome RunCliWithLimit(const std::vector<std::string>& args, const std::string&
 // reported with exit code 3, never an abort.
 TEST(Cli, OutOfMemoryIsReportedWithExitCodeThree) {
   REQUIRE_CLI();
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "AddressSanitizer reserves more address space than the limit";
-#endif
+  if (test::kAddressSanitizer)
+    GTEST_SKIP() << "AddressSanitizer reserves more address space than the limit";
   const ScopedDir tmp("cli_oom");
   const std::string grm = std::string(SCREWFEM_SOURCE_DIR) + "/examples/grm/grm_rigid.yaml";
   const rlim_t limit = rlim_t{48} << 20;

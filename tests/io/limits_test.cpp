@@ -31,17 +31,7 @@ namespace {
 using test::ReadFile;
 using test::ScopedDir;
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-#else
-constexpr bool kSanitized = false;
-#endif
+constexpr bool kSanitized = test::kAddressSanitizer;
 
 #ifdef SCREWFEM_CLI_PATH
 constexpr const char* kCli = SCREWFEM_CLI_PATH;

@@ -17,6 +17,20 @@
 
 namespace screwfem::test {
 
+// Built with AddressSanitizer (GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature):
+// tests that limit the address space skip, ASan reserves more than the limit.
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kAddressSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+inline constexpr bool kAddressSanitizer = true;
+#else
+inline constexpr bool kAddressSanitizer = false;
+#endif
+#else
+inline constexpr bool kAddressSanitizer = false;
+#endif
+
 inline std::string ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream s;
