@@ -126,6 +126,8 @@ void BindScenesAndRuns(py::module_& m) {
       .def_readonly("name", &OutputJoint::name)
       .def_readonly("joint", &OutputJoint::joint);
 
+  BindEnum<VtkFormat>(m, "VtkFormat", "Encoding of the ParaView frames (vtk.h).");
+
   py::class_<OutputSpec>(m, "OutputSpec", "What a run records (scene.h, run.h).")
       .def_readonly("points", &OutputSpec::points, "List of OutputPoint (copies).")
       .def_readonly("joints", &OutputSpec::joints, "List of OutputJoint (copies).")
@@ -133,7 +135,9 @@ void BindScenesAndRuns(py::module_& m) {
                      "Time between recorded rows [s]; 0: every step.")
       .def_readwrite("vtk", &OutputSpec::vtk, "Write ParaView files under vtk/.")
       .def_readwrite("vtk_interval", &OutputSpec::vtk_interval,
-                     "Time between ParaView frames [s]; 0: same as interval.");
+                     "Time between ParaView frames [s]; 0: same as interval.")
+      .def_readwrite("vtk_format", &OutputSpec::vtk_format,
+                     "Encoding of the ParaView frames (VtkFormat.BINARY or ASCII; vtk.h).");
 
   py::class_<Scene>(m, "Scene",
                     "A compiled scene (scene.h): the model plus what to do with it (analysis) and "

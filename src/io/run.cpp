@@ -45,12 +45,27 @@ void ValidateSettings(const Scene& scene) {
           "must be a finite time >= 0 s");
   require(std::isfinite(o.vtk_interval) && o.vtk_interval >= 0.0, "outputs.vtk_interval",
           "must be a finite time >= 0 s");
+  require(IsEnumValue(o.vtk_format), "outputs.vtk_format",
+          "must be " + EnumNameAlternatives<VtkFormat>());
   require(IsEnumValue(a.kind), "analysis.kind", "must be " + EnumNameAlternatives<AnalysisKind>());
   if (a.kind == AnalysisKind::kStatic || a.static_preload)
     ValidateStaticOptions(a.statics, "analysis.statics");
   if (a.kind == AnalysisKind::kStatic) return;
   ValidateTimeGrid(a.start_time, a.end_time, a.step, "analysis");
   ValidateDynamicOptions(a.dynamic, "analysis.dynamic");
+}
+
+// About how many ParaView frames a run writes (a reservation, so that writing them allocates
+// nothing): one per frame interval (or step), the first and the last, and one per profile
+// breakpoint for steps shortened to land on them; capped, since it is only a hint.
+int ExpectedFrames(const Scene& scene) {
+  const AnalysisSettings& a = scene.analysis;
+  if (a.kind == AnalysisKind::kStatic) return 1;
+  const OutputSpec& o = scene.outputs;
+  const double interval = std::max(o.vtk_interval > 0.0 ? o.vtk_interval : o.interval, a.step);
+  const double frames = std::ceil((a.end_time - a.start_time) / interval) + 2.0 +
+                        static_cast<double>(a.align_steps ? ProfileBreakpoints(scene.model).size() : 0);
+  return static_cast<int>(std::clamp(frames, 1.0, 1e6));
 }
 
 // "SIGINT", ... for the signals a run is stopped by; nullptr for others and 0.
@@ -183,7 +198,7 @@ class Run {
       joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
       if (scene.outputs.vtk) {
         vtk_.emplace();
-        vtk_->Open(outdir + "/vtk");
+        vtk_->Open(outdir + "/vtk", model_, scene.outputs.vtk_format, ExpectedFrames(scene));
       }
       if (!WriteSummary())
         throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
@@ -464,6 +479,7 @@ class Run {
     j.EndArray();
     j.Field("output_interval", scene_.outputs.interval);
     j.Field("vtk", scene_.outputs.vtk).Field("vtk_interval", scene_.outputs.vtk_interval);
+    j.Field("vtk_format", NameOf(scene_.outputs.vtk_format));
     j.EndObject();
 
     long free_nodes = 0;

@@ -957,7 +957,7 @@ void SceneCompiler::ReadOutputs(const Node* node, const Model& model,
   all_joints();
   if (node == nullptr || node->IsNull()) return;
   const std::string path = "outputs";
-  r_.CheckKeys(*node, path, {"points", "joints", "interval", "vtk", "vtk_interval"});
+  r_.CheckKeys(*node, path, {"points", "joints", "interval", "vtk", "vtk_interval", "vtk_format"});
   if (const Node* pts = node->Find("points")) {
     const std::string pp = Join(path, "points");
     r_.CheckNames(*pts, pp, "output point");
@@ -1034,6 +1034,8 @@ void SceneCompiler::ReadOutputs(const Node* node, const Model& model,
   if (const Node* v = node->Find("interval"))
     out->interval = r_.NonNegativeNumber(*v, Join(path, "interval"));
   if (const Node* v = node->Find("vtk")) out->vtk = r_.Bool(*v, Join(path, "vtk"));
+  if (const Node* v = node->Find("vtk_format"))
+    out->vtk_format = r_.Enum<VtkFormat>(*v, Join(path, "vtk_format"));
   if (const Node* v = node->Find("vtk_interval"))
     out->vtk_interval = r_.NonNegativeNumber(*v, Join(path, "vtk_interval"));
   else if (node->Find("interval") != nullptr)

@@ -1,13 +1,20 @@
 #include "screwfem/io/vtk.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
 #include <cerrno>
 #include <charconv>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <tuple>
 
-#include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
+#include "screwfem/elements/joint.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
 
@@ -15,66 +22,160 @@ namespace screwfem {
 
 namespace {
 
-// The drawn geometry of one state.
-struct Geometry {
-  struct Cell {
-    std::vector<int> points;
-    int rod = -1, body = -1, joint = -1;
-  };
-  std::vector<Vec3> position, velocity;
-  std::vector<Mat3> frame;
-  std::vector<int> point_joint;
-  std::vector<Cell> verts, lines;
+void AppendInt(std::string* text, long long value) {
+  char buf[24];
+  text->append(buf, std::to_chars(buf, buf + sizeof buf, value).ptr);
+}
 
-  int AddPoint(const Vec3& x, const Mat3& R, const Vec3& v, int joint = -1) {
-    position.push_back(x);
-    frame.push_back(R);
-    velocity.push_back(v);
-    point_joint.push_back(joint);
-    return static_cast<int>(position.size()) - 1;
+// frame_NNNNN.vtp: the frame index with at least five digits.
+void AppendFrameName(std::string* text, int index) {
+  char digits[16];
+  char* end = std::to_chars(digits, digits + sizeof digits, index).ptr;
+  *text += "frame_";
+  for (std::ptrdiff_t n = end - digits; n < 5; ++n) *text += '0';
+  text->append(digits, end);
+  *text += ".vtp";
+}
+
+const char* kVtkTypeName[] = {"Float64", "Int32", "Int64"};
+enum VtkType { kFloat64, kInt32, kInt64 };
+
+// The opening of a <DataArray> up to its format attribute.
+void AppendArrayTag(std::string* f, const char* indent, VtkType type, const char* name,
+                    int components, long tuples_for_field = -1) {
+  *f += indent;
+  *f += "<DataArray type=\"";
+  *f += kVtkTypeName[type];
+  *f += "\" Name=\"";
+  *f += name;
+  *f += '"';
+  if (components > 1) {
+    *f += " NumberOfComponents=\"";
+    AppendInt(f, components);
+    *f += '"';
   }
-};
+  if (tuples_for_field >= 0) {
+    *f += " NumberOfTuples=\"";
+    AppendInt(f, tuples_for_field);
+    *f += '"';
+  }
+}
 
-Geometry BuildGeometry(const Model& model, const Data& data) {
-  Geometry g;
-  const auto node_point = [&](int node, const Vec3& p) {
-    return node == kGround ? PointMotion{p, Vec3::Zero(), Vec3::Zero()}
-                           : CalcNodePointMotion(model, data, node, p);
+// Writes `size` bytes to a new file at path (open/write/close: no stdio buffer to allocate).
+// On failure removes the file and returns false with errno kept.
+bool WriteWholeFile(const std::string& path, const char* data, std::size_t size) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) return false;
+  bool ok = true;
+  while (ok && size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0 && errno == EINTR) continue;
+    ok = n > 0;
+    if (ok) {
+      data += n;
+      size -= static_cast<std::size_t>(n);
+    }
+  }
+  int saved = errno;
+  if (::close(fd) != 0 && ok) {
+    ok = false;
+    saved = errno;
+  }
+  if (!ok) {
+    std::remove(path.c_str());
+    errno = saved;
+  }
+  return ok;
+}
+
+}  // namespace
+
+void VtkWriter::Open(const std::string& dir, const Model& model, VtkFormat format,
+                     int expected_frames) {
+  if (!IsEnumValue(format)) throw InputError("VtkWriter::Open: unknown VtkFormat value");
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError("cannot create directory " + dir + ": " + ec.message());
+  dir_ = dir;
+  format_ = format;
+  times_.clear();
+  times_.reserve(static_cast<std::size_t>(std::max(expected_frames, 1)));
+  path_.reserve(dir_.size() + 32);
+  LayOut(model);
+  if (format_ == VtkFormat::kBinary) {
+    ComposeBinaryImage();
+  } else {
+    // Room for a frame of shortest doubles (at most 24 characters each) and the cells.
+    image_.clear();
+    image_.reserve(4096 + 400 * sources_.size() +
+                   24 * (vert_connectivity_.size() + line_connectivity_.size()) +
+                   64 * cell_rod_.size());
+  }
+}
+
+// The drawn points and cells; constant for a model.
+void VtkWriter::LayOut(const Model& model) {
+  sources_.clear();
+  vert_connectivity_.clear();
+  vert_offsets_.clear();
+  line_connectivity_.clear();
+  line_offsets_.clear();
+  point_joint_.clear();
+  cell_rod_.clear();
+  cell_body_.clear();
+  cell_joint_.clear();
+  std::vector<int> vert_rod, vert_body, vert_joint;  // vertices' cell data, put first below
+  const auto add_point = [&](const PointSource& s, int joint = -1) {
+    sources_.push_back(s);
+    point_joint_.push_back(joint);
+    return static_cast<long long>(sources_.size()) - 1;
+  };
+  const auto add_vert = [&](long long point, int rod, int body, int joint) {
+    vert_connectivity_.push_back(point);
+    vert_offsets_.push_back(static_cast<long long>(vert_connectivity_.size()));
+    vert_rod.push_back(rod);
+    vert_body.push_back(body);
+    vert_joint.push_back(joint);
+  };
+  const auto end_line = [&](int rod, int body) {
+    line_offsets_.push_back(static_cast<long long>(line_connectivity_.size()));
+    cell_rod_.push_back(rod);
+    cell_body_.push_back(body);
+    cell_joint_.push_back(-1);
   };
 
   // Joints: a vertex at the joint frame H_A C_A H_J, moving with side B when it is a node.
   std::vector<std::vector<Vec3>> attachments(model.nodes.size());
   for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
     const Joint& j = model.joints[jj];
-    const SE3 H = NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, static_cast<int>(jj));
-    const PointMotion m = j.node_b != kGround ? node_point(j.node_b, j.offset_b.x)
-                                              : node_point(j.node_a, j.offset_a.x);
-    Geometry::Cell cell;
-    cell.joint = static_cast<int>(jj);
-    cell.points.push_back(g.AddPoint(H.x, H.R, m.velocity, static_cast<int>(jj)));
-    g.verts.push_back(std::move(cell));
+    const int joint = static_cast<int>(jj);
+    PointSource s;
+    s.kind = PointSource::Kind::kJoint;
+    s.index = joint;
+    add_vert(add_point(s, joint), -1, -1, joint);
     if (j.node_a != kGround) attachments[static_cast<std::size_t>(j.node_a)].push_back(j.offset_a.x);
     if (j.node_b != kGround) attachments[static_cast<std::size_t>(j.node_b)].push_back(j.offset_b.x);
   }
 
   // Rods: polylines through their nodes.
   for (std::size_t r = 0; r < model.rods.size(); ++r) {
-    Geometry::Cell cell;
-    cell.rod = static_cast<int>(r);
     for (int node : model.rods[r].nodes) {
-      const SE3& H = data.H[static_cast<std::size_t>(node)];
-      cell.points.push_back(g.AddPoint(H.x, H.R, node_point(node, Vec3::Zero()).velocity));
+      PointSource s;
+      s.index = node;
+      line_connectivity_.push_back(add_point(s));
     }
-    g.lines.push_back(std::move(cell));
+    end_line(static_cast<int>(r), -1);
   }
 
   // Rigid bodies: segments from the node origin to the centre of mass and the attachments.
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     const RigidBody& body = model.bodies[b];
-    const SE3& H = data.H[static_cast<std::size_t>(body.node)];
+    const int id = static_cast<int>(b);
     std::vector<Vec3> ends = attachments[static_cast<std::size_t>(body.node)];
     ends.push_back(body.com);
-    const int origin = g.AddPoint(H.x, H.R, node_point(body.node, Vec3::Zero()).velocity);
+    PointSource s;
+    s.index = body.node;
+    const long long origin = add_point(s);
     bool drawn = false;
     for (std::size_t e = 0; e < ends.size(); ++e) {
       const Vec3& p = ends[e];
@@ -82,160 +183,218 @@ Geometry BuildGeometry(const Model& model, const Data& data) {
       for (std::size_t f = 0; f < e && !repeated; ++f)
         repeated = (ends[f] - p).norm() <= 1e-12 * model.length_scale;
       if (repeated) continue;
-      Geometry::Cell cell;
-      cell.body = static_cast<int>(b);
-      cell.points = {origin, g.AddPoint(H.Act(p), H.R, node_point(body.node, p).velocity)};
-      g.lines.push_back(std::move(cell));
+      PointSource end = s;
+      end.offset = p;
+      end.origin = false;
+      line_connectivity_.push_back(origin);
+      line_connectivity_.push_back(add_point(end));
+      end_line(-1, id);
       drawn = true;
     }
-    if (!drawn) {  // a point mass: a vertex at its node
-      Geometry::Cell cell;
-      cell.body = static_cast<int>(b);
-      cell.points = {origin};
-      g.verts.push_back(std::move(cell));
-    }
+    if (!drawn) add_vert(origin, -1, id, -1);  // a point mass: a vertex at its node
   }
-  return g;
-}
-
-// The file is composed in memory (numbers through AppendNumber, the printf formats of the
-// format strings noted) and written at once.
-void AppendInt(std::string* text, long value) {
-  char buf[24];
-  text->append(buf, std::to_chars(buf, buf + sizeof buf, value).ptr);
-}
-
-void WriteCells(std::string* f, const char* tag, const std::vector<Geometry::Cell>& cells) {
-  if (cells.empty()) return;
-  *f += "      <";
-  *f += tag;
-  *f += ">\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
-  for (const Geometry::Cell& c : cells) {
-    *f += "         ";
-    for (int p : c.points) {
-      *f += ' ';
-      AppendInt(f, p);
-    }
-    *f += '\n';
-  }
-  *f += "        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n         ";
-  long offset = 0;
-  for (const Geometry::Cell& c : cells) {
-    offset += static_cast<long>(c.points.size());
-    *f += ' ';
-    AppendInt(f, offset);
-  }
-  *f += "\n        </DataArray>\n      </";
-  *f += tag;
-  *f += ">\n";
-}
-
-void WriteVectors(std::string* f, const char* name, const std::vector<Vec3>& values) {
-  *f += "        <DataArray type=\"Float64\" Name=\"";
-  *f += name;
-  *f += "\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (const Vec3& v : values) {  // "          %.10g %.10g %.10g\n"
-    *f += "         ";
-    for (int i = 0; i < 3; ++i) {
-      *f += ' ';
-      AppendNumber(f, v(i), 10);
-    }
-    *f += '\n';
-  }
-  *f += "        </DataArray>\n";
-}
-
-void WriteInts(std::string* f, const char* name, const std::vector<int>& values) {
-  *f += "        <DataArray type=\"Int32\" Name=\"";
-  *f += name;
-  *f += "\" format=\"ascii\">\n         ";
-  for (int v : values) {
-    *f += ' ';
-    AppendInt(f, v);
-  }
-  *f += "\n        </DataArray>\n";
-}
-
-bool WriteVtp(const std::string& path, const Geometry& g, double time) {
-  std::string f;
-  f.reserve(4096 + 160 * g.position.size());
-  f += "<?xml version=\"1.0\"?>\n"
-       "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-       "  <PolyData>\n"
-       "    <FieldData>\n"
-       "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">\n";
-  f += "        ";
-  AppendNumber(&f, time, 17);
-  f += "\n      </DataArray>\n    </FieldData>\n";
-  f += "    <Piece NumberOfPoints=\"";
-  AppendInt(&f, static_cast<long>(g.position.size()));
-  f += "\" NumberOfVerts=\"";
-  AppendInt(&f, static_cast<long>(g.verts.size()));
-  f += "\" NumberOfLines=\"";
-  AppendInt(&f, static_cast<long>(g.lines.size()));
-  f += "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n";
-
-  f += "      <PointData Vectors=\"velocity\">\n";
-  for (int axis = 0; axis < 3; ++axis) {
-    std::vector<Vec3> column(g.frame.size());
-    for (std::size_t i = 0; i < g.frame.size(); ++i) column[i] = g.frame[i].col(axis);
-    WriteVectors(&f, axis == 0 ? "frame_x" : axis == 1 ? "frame_y" : "frame_z", column);
-  }
-  WriteVectors(&f, "velocity", g.velocity);
-  WriteInts(&f, "joint_id", g.point_joint);
-  f += "      </PointData>\n";
 
   // Cell data in the order VTK stores the cells: vertices, then lines.
-  f += "      <CellData Scalars=\"rod_id\">\n";
-  std::vector<int> rod, body, joint;
-  for (const auto* cells : {&g.verts, &g.lines})
-    for (const Geometry::Cell& c : *cells) {
-      rod.push_back(c.rod);
-      body.push_back(c.body);
-      joint.push_back(c.joint);
-    }
-  WriteInts(&f, "rod_id", rod);
-  WriteInts(&f, "body_id", body);
-  WriteInts(&f, "joint_id", joint);
-  f += "      </CellData>\n";
+  cell_rod_.insert(cell_rod_.begin(), vert_rod.begin(), vert_rod.end());
+  cell_body_.insert(cell_body_.begin(), vert_body.begin(), vert_body.end());
+  cell_joint_.insert(cell_joint_.begin(), vert_joint.begin(), vert_joint.end());
 
-  f += "      <Points>\n";
-  WriteVectors(&f, "position", g.position);
-  f += "      </Points>\n";
-  WriteCells(&f, "Verts", g.verts);
-  WriteCells(&f, "Lines", g.lines);
-  f += "    </Piece>\n  </PolyData>\n</VTKFile>\n";
-
-  std::FILE* file = std::fopen(path.c_str(), "w");
-  if (!file) return false;
-  const bool ok = std::fwrite(f.data(), 1, f.size(), file) == f.size() && !std::ferror(file);
-  const int saved = errno;
-  const bool closed = std::fclose(file) == 0;
-  errno = saved;
-  return ok && closed;
+  const std::size_t n = 3 * sources_.size();
+  for (std::vector<double>& axis : frame_axes_) axis.assign(n, 0.0);
+  velocity_.assign(n, 0.0);
+  position_.assign(n, 0.0);
 }
 
-}  // namespace
+// Positions, frame axes and velocities of the points at data's state (method.md §6).
+void VtkWriter::CalcPoints(const Model& model, const Data& data) {
+  const auto node_point = [&](int node, const Vec3& p) {
+    return node == kGround ? PointMotion{p, Vec3::Zero(), Vec3::Zero()}
+                           : CalcNodePointMotion(model, data, node, p);
+  };
+  for (std::size_t i = 0; i < sources_.size(); ++i) {
+    const PointSource& s = sources_[i];
+    Vec3 x, v;
+    Mat3 R;
+    if (s.kind == PointSource::Kind::kJoint) {
+      const Joint& j = model.joints[static_cast<std::size_t>(s.index)];
+      const SE3 H = NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, s.index);
+      x = H.x;
+      R = H.R;
+      v = j.node_b != kGround ? node_point(j.node_b, j.offset_b.x).velocity
+                              : node_point(j.node_a, j.offset_a.x).velocity;
+    } else {
+      const SE3& H = data.H[static_cast<std::size_t>(s.index)];
+      x = s.origin ? H.x : H.Act(s.offset);
+      R = H.R;
+      v = node_point(s.index, s.offset).velocity;
+    }
+    for (int k = 0; k < 3; ++k) {
+      position_[3 * i + k] = x(k);
+      velocity_[3 * i + k] = v(k);
+      for (int axis = 0; axis < 3; ++axis) frame_axes_[axis][3 * i + k] = R(k, axis);
+    }
+  }
+}
 
-void VtkWriter::Open(const std::string& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw InputError("cannot create directory " + dir + ": " + ec.message());
-  dir_ = dir;
-  frames_.clear();
+// The binary file: the XML with offsets into the appended block, then the block, every array
+// as UInt64 byte count + values. All sizes are fixed by the model, so only the doubles change
+// from frame to frame (time_at_, frame_axes_at_, velocity_at_, position_at_).
+void VtkWriter::ComposeBinaryImage() {
+  struct Block {
+    const void* data;
+    std::size_t bytes;
+    std::size_t* at;  // where the values land in image_ (nullptr: constant)
+  };
+  std::vector<Block> blocks;
+  std::string& f = image_;
+  f.clear();
+  std::uint64_t offset = 0;
+  const double zero_time = 0.0;
+  const auto array = [&](const char* indent, VtkType type, const char* name, int components,
+                         const void* data, std::size_t count, std::size_t* at,
+                         long field_tuples = -1) {
+    AppendArrayTag(&f, indent, type, name, components, field_tuples);
+    f += " format=\"appended\" offset=\"";
+    AppendInt(&f, static_cast<long long>(offset));
+    f += "\"/>\n";
+    const std::size_t bytes = count * (type == kInt32 ? 4 : 8);
+    blocks.push_back({data, bytes, at});
+    offset += sizeof(std::uint64_t) + bytes;
+  };
+  const std::size_t n = sources_.size();
+
+  f += "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"";
+  f += std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian";
+  f += "\" header_type=\"UInt64\">\n  <PolyData>\n    <FieldData>\n";
+  array("      ", kFloat64, "TimeValue", 1, &zero_time, 1, &time_at_, 1);
+  f += "    </FieldData>\n    <Piece NumberOfPoints=\"";
+  AppendInt(&f, static_cast<long long>(n));
+  f += "\" NumberOfVerts=\"";
+  AppendInt(&f, static_cast<long long>(vert_offsets_.size()));
+  f += "\" NumberOfLines=\"";
+  AppendInt(&f, static_cast<long long>(line_offsets_.size()));
+  f += "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n      <PointData Vectors=\"velocity\">\n";
+  const char* axis_names[] = {"frame_x", "frame_y", "frame_z"};
+  for (int axis = 0; axis < 3; ++axis)
+    array("        ", kFloat64, axis_names[axis], 3, frame_axes_[axis].data(), 3 * n,
+          &frame_axes_at_[axis]);
+  array("        ", kFloat64, "velocity", 3, velocity_.data(), 3 * n, &velocity_at_);
+  array("        ", kInt32, "joint_id", 1, point_joint_.data(), n, nullptr);
+  f += "      </PointData>\n      <CellData Scalars=\"rod_id\">\n";
+  array("        ", kInt32, "rod_id", 1, cell_rod_.data(), cell_rod_.size(), nullptr);
+  array("        ", kInt32, "body_id", 1, cell_body_.data(), cell_body_.size(), nullptr);
+  array("        ", kInt32, "joint_id", 1, cell_joint_.data(), cell_joint_.size(), nullptr);
+  f += "      </CellData>\n      <Points>\n";
+  array("        ", kFloat64, "position", 3, position_.data(), 3 * n, &position_at_);
+  f += "      </Points>\n";
+  for (const auto& [tag, connectivity, offsets] :
+       {std::tuple{"Verts", &vert_connectivity_, &vert_offsets_},
+        std::tuple{"Lines", &line_connectivity_, &line_offsets_}}) {
+    if (offsets->empty()) continue;
+    f += "      <";
+    f += tag;
+    f += ">\n";
+    array("        ", kInt64, "connectivity", 1, connectivity->data(), connectivity->size(), nullptr);
+    array("        ", kInt64, "offsets", 1, offsets->data(), offsets->size(), nullptr);
+    f += "      </";
+    f += tag;
+    f += ">\n";
+  }
+  f += "    </Piece>\n  </PolyData>\n  <AppendedData encoding=\"raw\">\n   _";
+  f.reserve(f.size() + offset + 64);
+  for (const Block& b : blocks) {
+    const std::uint64_t bytes = b.bytes;
+    f.append(reinterpret_cast<const char*>(&bytes), sizeof bytes);
+    if (b.at != nullptr) *b.at = f.size();
+    f.append(static_cast<const char*>(b.data), b.bytes);
+  }
+  f += "\n  </AppendedData>\n</VTKFile>\n";
+}
+
+// The ascii file of the current values.
+void VtkWriter::ComposeAsciiImage(double time) {
+  std::string& f = image_;
+  f.clear();
+  const auto doubles = [&](const char* name, const std::vector<double>& values) {
+    AppendArrayTag(&f, "        ", kFloat64, name, 3);
+    f += " format=\"ascii\">\n";
+    for (std::size_t i = 0; i < values.size(); i += 3) {
+      f += "         ";
+      for (std::size_t k = i; k < i + 3; ++k) {
+        f += ' ';
+        AppendShortest(&f, values[k]);
+      }
+      f += '\n';
+    }
+    f += "        </DataArray>\n";
+  };
+  const auto integers = [&](VtkType type, const char* name, const auto& values) {
+    AppendArrayTag(&f, "        ", type, name, 1);
+    f += " format=\"ascii\">\n         ";
+    for (const auto v : values) {
+      f += ' ';
+      AppendInt(&f, v);
+    }
+    f += "\n        </DataArray>\n";
+  };
+
+  f += "<?xml version=\"1.0\"?>\n"
+       "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+       "  <PolyData>\n    <FieldData>\n";
+  AppendArrayTag(&f, "      ", kFloat64, "TimeValue", 1, 1);
+  f += " format=\"ascii\">\n        ";
+  AppendShortest(&f, time);
+  f += "\n      </DataArray>\n    </FieldData>\n    <Piece NumberOfPoints=\"";
+  AppendInt(&f, static_cast<long long>(sources_.size()));
+  f += "\" NumberOfVerts=\"";
+  AppendInt(&f, static_cast<long long>(vert_offsets_.size()));
+  f += "\" NumberOfLines=\"";
+  AppendInt(&f, static_cast<long long>(line_offsets_.size()));
+  f += "\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n      <PointData Vectors=\"velocity\">\n";
+  doubles("frame_x", frame_axes_[0]);
+  doubles("frame_y", frame_axes_[1]);
+  doubles("frame_z", frame_axes_[2]);
+  doubles("velocity", velocity_);
+  integers(kInt32, "joint_id", point_joint_);
+  f += "      </PointData>\n      <CellData Scalars=\"rod_id\">\n";
+  integers(kInt32, "rod_id", cell_rod_);
+  integers(kInt32, "body_id", cell_body_);
+  integers(kInt32, "joint_id", cell_joint_);
+  f += "      </CellData>\n      <Points>\n";
+  doubles("position", position_);
+  f += "      </Points>\n";
+  if (!vert_offsets_.empty()) {
+    f += "      <Verts>\n";
+    integers(kInt64, "connectivity", vert_connectivity_);
+    integers(kInt64, "offsets", vert_offsets_);
+    f += "      </Verts>\n";
+  }
+  if (!line_offsets_.empty()) {
+    f += "      <Lines>\n";
+    integers(kInt64, "connectivity", line_connectivity_);
+    integers(kInt64, "offsets", line_offsets_);
+    f += "      </Lines>\n";
+  }
+  f += "    </Piece>\n  </PolyData>\n</VTKFile>\n";
 }
 
 bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time) {
-  char name[32];
-  std::snprintf(name, sizeof name, "frame_%05d.vtp", frames());
-  const std::string path = dir_ + "/" + name;
-  if (!WriteVtp(path, BuildGeometry(model, data), time)) {
-    const int saved = errno;
-    std::remove(path.c_str());
-    errno = saved;
-    return false;
+  CalcPoints(model, data);
+  if (format_ == VtkFormat::kBinary) {
+    std::memcpy(&image_[time_at_], &time, sizeof time);
+    const std::size_t bytes = position_.size() * sizeof(double);
+    for (int axis = 0; axis < 3; ++axis)
+      std::memcpy(&image_[frame_axes_at_[axis]], frame_axes_[axis].data(), bytes);
+    std::memcpy(&image_[velocity_at_], velocity_.data(), bytes);
+    std::memcpy(&image_[position_at_], position_.data(), bytes);
+  } else {
+    ComposeAsciiImage(time);
   }
-  frames_.emplace_back(time, name);
+  path_.assign(dir_);
+  path_ += '/';
+  AppendFrameName(&path_, frames());
+  if (!WriteWholeFile(path_, image_.data(), image_.size())) return false;
+  times_.push_back(time);
   return true;
 }
 
@@ -245,9 +404,11 @@ bool VtkWriter::WriteCollection() const {
       "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
       "  <Collection>\n";
   char line[128];
-  for (const auto& [time, file] : frames_) {
+  for (std::size_t i = 0; i < times_.size(); ++i) {
+    std::string name;
+    AppendFrameName(&name, static_cast<int>(i));
     std::snprintf(line, sizeof line, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"%s\"/>\n",
-                  time, file.c_str());
+                  times_[i], name.c_str());
     text += line;
   }
   text += "  </Collection>\n</VTKFile>\n";

@@ -1,8 +1,8 @@
-// Proves that a time step allocates no heap memory after set-up (style.md, "Math code"):
-// this test executable replaces global operator new and (outside sanitizer builds, where the
-// sanitizer owns malloc) interposes glibc's malloc/calloc/realloc, counting allocations while
-// a flag is raised. Eigen's dynamic temporaries go through malloc, std containers and strings
-// through operator new: both are counted.
+// Proves that a time step, and writing a ParaView frame, allocate no heap memory after set-up
+// (style.md, "Math code"): this test executable replaces global operator new and (outside
+// sanitizer builds, where the sanitizer owns malloc) interposes glibc's malloc/calloc/realloc,
+// counting allocations while a flag is raised. Eigen's dynamic temporaries go through malloc,
+// std containers and strings through operator new: both are counted.
 #include <gtest/gtest.h>
 
 // This file replaces the global allocation functions with malloc/free pairs; GCC cannot see
@@ -11,8 +11,13 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <filesystem>
 #include <new>
+#include <string>
 
+#include <unistd.h>
+
+#include "screwfem/io/vtk.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
@@ -129,6 +134,38 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
   EXPECT_TRUE(ok);
   EXPECT_GT(integ.iterations, 50);  // the steps really iterated
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
+}
+
+// Writing a ParaView frame (both encodings) between time steps allocates nothing once the
+// writer is open with room for the frames (the ascii text buffer is reserved for a frame too).
+TEST(NoAllocation, ParaViewFramesAllocateNothing) {
+  const Model model = MixedModel();
+  for (const VtkFormat format : {VtkFormat::kBinary, VtkFormat::kAscii}) {
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                      ("screwfem_alloc_vtk_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    Data data = MakeData(model);
+    Integrator integ;
+    DynamicOptions options;
+    options.rho_inf = 0.8;
+    std::string message;
+    ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
+    VtkWriter writer;
+    writer.Open(dir.string(), model, format, 20);
+    g_allocations = 0;
+    bool ok = true;
+    for (int i = 0; i < 20; ++i) {
+      ok = Step(model, data, integ, 1e-3).ok && ok;
+      data.time += 1e-3;
+      g_counting = true;
+      ok = writer.WriteFrame(model, data, data.time) && ok;
+      g_counting = false;
+    }
+    EXPECT_TRUE(ok);
+    EXPECT_EQ(writer.frames(), 20);
+    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations writing 20 frames, " << NameOf(format);
+    std::filesystem::remove_all(dir);
+  }
 }
 
 #ifdef SCREWFEM_COUNT_MALLOC

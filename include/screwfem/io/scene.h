@@ -56,12 +56,23 @@ struct OutputJoint {
 inline constexpr int kDefaultOutputRows = 1000;
 inline constexpr int kDefaultVtkFrames = 100;
 
+// Encoding of the ParaView frames (vtk.h).
+enum class VtkFormat { kBinary, kAscii };
+template <>
+struct EnumNames<VtkFormat> {
+  static constexpr std::array<EnumName<VtkFormat>, 2> kValues = {{
+      {VtkFormat::kBinary, "binary", "raw binary arrays appended to the XML, doubles exact"},
+      {VtkFormat::kAscii, "ascii", "arrays as text, each double the shortest text that reads back exactly"},
+  }};
+};
+
 struct OutputSpec {
   std::vector<OutputPoint> points;
   std::vector<OutputJoint> joints;
   double interval = 0.0;      // [s] between recorded rows; 0: every step
   bool vtk = true;            // ParaView files under vtk/
   double vtk_interval = 0.0;  // [s]; 0: same as interval
+  VtkFormat vtk_format = VtkFormat::kBinary;
 };
 
 struct Scene {

@@ -1,0 +1,82 @@
+"""The ParaView frames `screwfem run` writes, read back: the binary (default) and the ascii
+encoding of one run hold the same values bit for bit as tools/screwfem_vtk.py reads them, and,
+when VTK's own Python module is installed (Debian's python3-vtk9, not a dependency of the
+project), VTK's vtkXMLPolyDataReader — the reader ParaView uses — reads both to the same points.
+
+    /usr/bin/python3 -m unittest -v test_vtk_frames
+        (from tests/tools; SCREWFEM_SOURCE_DIR, SCREWFEM_CLI = the screwfem program)
+"""
+
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+SOURCE = os.environ.get("SCREWFEM_SOURCE_DIR", "../..")
+sys.path.insert(0, os.path.join(SOURCE, "tools"))
+import screwfem_vtk  # noqa: E402
+
+try:
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+except ImportError:
+    vtkXMLPolyDataReader = None
+
+
+class Frames(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cli = os.environ.get("SCREWFEM_CLI")
+        if not cli:
+            raise unittest.SkipTest("SCREWFEM_CLI (the screwfem program) is not set")
+        cls.tmp = tempfile.mkdtemp(prefix="screwfem_vtk_frames_")
+        cls.runs = {}
+        scene = os.path.join(SOURCE, "examples", "grm", "grm_rigid.yaml")
+        for fmt in ("binary", "ascii"):
+            out = os.path.join(cls.tmp, fmt)
+            subprocess.run([cli, "run", scene, "-o", out, "-q", "--set", "defaults.elements=2",
+                            "--set", "analysis.end_time=0.1", "--set", f"outputs.vtk_format={fmt}"],
+                           check=True)
+            cls.runs[fmt] = screwfem_vtk.read_collection(out)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def test_binary_and_ascii_frames_hold_the_same_values(self):
+        binary, ascii_ = self.runs["binary"], self.runs["ascii"]
+        self.assertEqual(len(binary), 6)  # t = 0, 0.02, ..., 0.1
+        self.assertEqual([t for t, _ in binary], [t for t, _ in ascii_])
+        for (_, b), (_, a) in zip(binary, ascii_):
+            fb, fa = screwfem_vtk.read_frame(b), screwfem_vtk.read_frame(a)
+            with open(b, "rb") as f:
+                self.assertIn(b'<AppendedData encoding="raw">', f.read())
+            self.assertEqual(fb["time"], fa["time"])
+            self.assertEqual(fb["points"], fa["points"])  # float == float: bit for bit
+            self.assertEqual(fb["point_data"], fa["point_data"])
+            self.assertEqual(fb["cell_data"], fa["cell_data"])
+            self.assertEqual(fb["cells"], fa["cells"])
+
+    @unittest.skipIf(vtkXMLPolyDataReader is None, "VTK's Python module (python3-vtk9) not installed")
+    def test_vtk_reads_both_encodings_to_the_same_points(self):
+        for fmt in ("binary", "ascii"):
+            for _, path in self.runs[fmt]:
+                ours = screwfem_vtk.read_frame(path)
+                reader = vtkXMLPolyDataReader()
+                reader.SetFileName(path)
+                reader.Update()
+                poly = reader.GetOutput()
+                self.assertEqual(poly.GetNumberOfPoints(), len(ours["points"]), path)
+                points = vtk_to_numpy(poly.GetPoints().GetData())
+                self.assertEqual([tuple(p) for p in points.tolist()], ours["points"], path)
+                velocity = vtk_to_numpy(poly.GetPointData().GetArray("velocity")).ravel().tolist()
+                self.assertEqual(velocity, ours["point_data"]["velocity"][1], path)
+                self.assertEqual(poly.GetNumberOfCells(), len(ours["cells"]), path)
+                time = poly.GetFieldData().GetArray("TimeValue").GetValue(0)
+                self.assertEqual(time, ours["time"], path)
+
+
+if __name__ == "__main__":
+    unittest.main()
