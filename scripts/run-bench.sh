@@ -3,7 +3,8 @@
 # from their JSON results (README.md, "Benchmarks"):
 #   screwfem_bench_statics   -> bench/results_statics.json   (rod assembly and solve)
 #   screwfem_bench_dynamics  -> bench/results_dynamics.json  (GRM runs, rod time steps)
-# SCREWFEM_BENCH selects the programs (default "statics dynamics"); the results file of a
+#   screwfem_bench_outputs   -> bench/results_outputs.json   (cost of a run's outputs)
+# SCREWFEM_BENCH selects the programs (default "statics dynamics outputs"); the results file of a
 # program not run (or whose benchmarks a filter left out entirely) is kept and reported with
 # its own date and revision. Extra arguments go to every program run, e.g.
 # SCREWFEM_BENCH=dynamics bash scripts/run-bench.sh --benchmark_filter=Rod.
@@ -14,10 +15,10 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 build_dir=build/release
 jobs=$(nproc 2> /dev/null || echo 2)
-programs=${SCREWFEM_BENCH:-statics dynamics}
+programs=${SCREWFEM_BENCH:-statics dynamics outputs}
 for p in $programs; do
   case $p in
-    statics | dynamics) ;;
+    statics | dynamics | outputs) ;;
     *) echo "run-bench.sh: unknown benchmark program '$p' in SCREWFEM_BENCH" >&2; exit 2 ;;
   esac
 done
@@ -59,5 +60,5 @@ for p in $programs; do
 done
 
 /usr/bin/python3 bench/make_results.py bench/RESULTS.md "bash scripts/run-bench.sh" "$revision" \
-  bench/results_statics.json bench/results_dynamics.json
-echo "Wrote bench/RESULTS.md from bench/results_statics.json and bench/results_dynamics.json"
+  bench/results_statics.json bench/results_dynamics.json bench/results_outputs.json
+echo "Wrote bench/RESULTS.md from bench/results_statics.json, bench/results_dynamics.json and bench/results_outputs.json"
