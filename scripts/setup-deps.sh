@@ -7,7 +7,7 @@ packages=(
   build-essential cmake clang
   libeigen3-dev libyaml-cpp-dev libcli11-dev
   googletest libgtest-dev libbenchmark-dev
-  pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pil
+  pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pil python3-venv python3-pip
   python3-dask python3-distributed python3-pandas
   libjs-three chromium python3-websocket
 )
