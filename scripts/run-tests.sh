@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The test job (README.md, "Quick start", second command; also .ci/run):
-#   1. installs missing Debian packages;
+#   1. installs missing Debian packages (those the Release build needs first; the rest while it
+#      compiles);
 #   2. Release build in build/release, its ctest suite, and every example program
 #      (build/release/examples/**/*_example, run from the repository root without arguments);
 #   3. AddressSanitizer + UndefinedBehaviorSanitizer build in build/asan (clang, with the
@@ -141,13 +142,34 @@ run_fuzzers() {
 
 total_start=$(now_us)
 
-begin "dependencies"
-bash scripts/setup-deps.sh || { echo "run-tests: dependencies missing; stopping" >&2; exit 1; }
-end "dependencies"
+begin "dependencies (build)"
+bash scripts/setup-deps.sh build || { echo "run-tests: dependencies missing; stopping" >&2; exit 1; }
+end "dependencies (build)"
+# The other packages (clang, Chromium, the Python tools' packages) are downloaded and installed
+# while the Release tree compiles; the job waits for them before the first test.
+mkdir -p build
+bash scripts/setup-deps.sh rest > build/setup-deps-rest.log 2>&1 &
+rest_pid=$!
+wait_for_rest() {
+  [[ -n "${rest_pid:-}" ]] || return 0
+  begin "dependencies (rest, waited for)"
+  local status=0
+  wait "$rest_pid" || status=$?
+  rest_pid=
+  end "dependencies (rest, waited for)"
+  cat build/setup-deps-rest.log
+  if [[ $status -ne 0 ]]; then
+    echo "run-tests: installing the remaining dependencies failed; stopping" >&2
+    exit 1
+  fi
+}
 
 # The benchmarks are not run here (scripts/run-bench.sh builds them): not built either.
-if configure_and_build "Release" "$release_dir" -DCMAKE_BUILD_TYPE=Release \
-    -DSCREWFEM_BUILD_BENCH=OFF; then
+configure_and_build "Release" "$release_dir" -DCMAKE_BUILD_TYPE=Release \
+  -DSCREWFEM_BUILD_BENCH=OFF
+release_status=$?
+wait_for_rest
+if [[ $release_status -eq 0 ]]; then
   run_ctest "Release" "$release_dir"
   run_examples "$release_dir"
   release_built=1
@@ -170,7 +192,7 @@ if [[ $release_built -eq 1 ]]; then
   if configure_and_build "ASan+UBSan" "$asan_dir" -DSCREWFEM_SANITIZE=ON \
       -DCMAKE_CXX_COMPILER=clang++ -DSCREWFEM_FUZZ=ON \
       -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
-      -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_NATIVE=OFF; then
+      -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_BUILD_EXAMPLES=OFF -DSCREWFEM_NATIVE=OFF; then
     # The full-length GRM soft runs, the GRM convergence study, the free-vibration history and
     # three of the four full rigid GRM runs take 20 to 50 s each at -O1 with the sanitizers
     # (and the fuzzer's coverage instrumentation); the Release run above asserts their physics,

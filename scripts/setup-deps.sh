@@ -3,14 +3,31 @@
 # are missing. Silent when everything is already installed; needs root only to install.
 set -euo pipefail
 
-packages=(
-  build-essential cmake clang
+# Two groups, so that the test job can compile while the second is being installed
+# (scripts/run-tests.sh): `build`, what configuring and compiling the Release tree needs, and
+# `rest`, the sanitizer compiler and what the tests, plots, viewer and Python tools run with.
+# Usage: setup-deps.sh [build|rest|all]   (default: all)
+build_packages=(
+  build-essential cmake
   libeigen3-dev libyaml-cpp-dev libcli11-dev
   googletest libgtest-dev libbenchmark-dev
-  pybind11-dev python3-dev python3-numpy python3-matplotlib python3-pil python3-venv python3-pip
+  pybind11-dev python3-dev python3-numpy
+)
+rest_packages=(
+  clang
+  python3-matplotlib python3-pil python3-venv python3-pip
   python3-dask python3-distributed python3-pandas
   libjs-three chromium python3-websocket
 )
+case "${1:-all}" in
+  build) packages=("${build_packages[@]}") ;;
+  rest) packages=("${rest_packages[@]}") ;;
+  all) packages=("${build_packages[@]}" "${rest_packages[@]}") ;;
+  *)
+    echo "setup-deps: unknown group '$1' (expected build, rest or all)" >&2
+    exit 2
+    ;;
+esac
 
 if ! command -v dpkg-query > /dev/null 2>&1; then
   echo "setup-deps: dpkg-query not found; screwfem's scripts expect Debian 12 (bookworm)." >&2
