@@ -570,6 +570,8 @@ void CheckJointFramesCoincide(const Model& m) {
   }
 }
 
+// One function (about 80 lines): one algorithm, the block graph and the band pattern it implies
+// share the block numbering, so the steps would pass the same four arrays to each other.
 void OrderUnknowns(Model& m) {
   const int num_nodes = static_cast<int>(m.nodes.size());
   // Block graph: a block is a contiguous range of unknowns that always couple together; an
