@@ -15,6 +15,8 @@ namespace screwfem::python {
 
 // bind_model.cpp: Model and its entities (read-only), SE3 conversions.
 void BindModel(pybind11::module_& m);
+// bind_build.cpp: ModelBuilder, Section, Profile, JointSpec.
+void BindBuild(pybind11::module_& m);
 // bind_scene.cpp: analysis settings, Scene, LoadScene/ParseScene, RunScene, StepSchedule.
 void BindScene(pybind11::module_& m);
 // bind_simulation.cpp: Simulation (Model + Data + Integrator) and its results.

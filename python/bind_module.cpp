@@ -51,6 +51,7 @@ PYBIND11_MODULE(_screwfem, m) {
   screwfem::python::g_solver_error = solver_error.ptr();
 
   screwfem::python::BindModel(m);
+  screwfem::python::BindBuild(m);
   screwfem::python::BindScene(m);
   screwfem::python::BindSimulation(m);
 }

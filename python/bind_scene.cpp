@@ -142,6 +142,15 @@ void BindScenesAndRuns(py::module_& m) {
   py::class_<Scene>(m, "Scene",
                     "A compiled scene (scene.h): the model plus what to do with it (analysis) and "
                     "what to record (outputs). Made by load_scene or parse_scene.")
+      .def(py::init([](const Model& model, std::string name) {
+             Scene scene;
+             scene.model = model;
+             scene.name = std::move(name);
+             return scene;
+           }),
+           py::arg("model"), py::arg("name") = std::string("model"),
+           "A scene of a Model built in code (ModelBuilder), with the default analysis and "
+           "no outputs.")
       .def_readonly("source", &Scene::source, "File name (for messages and the summary).")
       .def_readonly("name", &Scene::name, "Scene title.")
       .def_readonly("model", &Scene::model, "The compiled Model (a read-only reference).")

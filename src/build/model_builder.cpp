@@ -5,6 +5,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <string>
 
@@ -24,6 +25,22 @@ bool IsFinite(const SE3& H) { return H.R.allFinite() && H.x.allFinite(); }
 
 bool IsRotation(const Mat3& R) {
   return (R.transpose() * R - Mat3::Identity()).norm() < 1e-9 && R.determinant() > 0.0;
+}
+
+// The rod that a node belongs to ("'name'"), or the node's label when no rod has it.
+std::string OwnerLabel(const Model& m, int node) {
+  for (const Rod& r : m.rods)
+    if (std::find(r.nodes.begin(), r.nodes.end(), node) != r.nodes.end()) return "'" + r.name + "'";
+  return NodeLabel(m, node);
+}
+
+// Profile::Validate, with the entity that owns the profile in the error.
+void ValidateProfile(const Profile& profile, const std::string& label, const EntityRef& entity) {
+  try {
+    profile.Validate(label.c_str());
+  } catch (const InputError& e) {
+    throw InputError(e.what(), entity);
+  }
 }
 
 }  // namespace
@@ -47,7 +64,7 @@ int ModelBuilder::AddStraightRod(std::string name, const Vec3& p0, const Vec3& p
                                  int start_node, int end_node) {
   const double length = (p1 - p0).norm();
   if (!(length > 0.0) || !std::isfinite(length))
-    throw InputError("rod '" + name + "': zero length (its end points coincide)");
+    throw InputError("rod '" + name + "': zero length (its end points coincide)", NextRod());
   SE3 root;
   root.R = FrameAlong(p1 - p0, up);
   root.x = p0;
@@ -60,9 +77,10 @@ int ModelBuilder::AddStraightRodFromFrame(std::string name, const SE3& root, dou
                                           int start_node, int end_node) {
   if (num_elements < 1)
     throw InputError("rod '" + name + "': needs at least one element, got " +
-                     std::to_string(num_elements));
+                         std::to_string(num_elements),
+                     NextRod());
   if (!(length > 0.0) || !std::isfinite(length))
-    throw InputError("rod '" + name + "': length must be positive");
+    throw InputError("rod '" + name + "': length must be positive", NextRod());
   std::vector<int> nodes;
   for (int i = 0; i <= num_elements; ++i) {
     SE3 H = root;
@@ -89,6 +107,154 @@ int ModelBuilder::AddRodThroughNodes(std::string name, const std::vector<int>& n
   return static_cast<int>(model_.rods.size()) - 1;
 }
 
+namespace {
+
+// Frames of the nodes of a rod along a polyline with n elements per segment (AddRodAlongPath).
+// Throws InputError for `rod` with the part "path[i]" of the offending point.
+std::vector<SE3> PathNodeFrames(const std::string& name, const EntityRef& rod,
+                                const std::vector<Vec3>& pts, int n, const Vec3& up) {
+  auto fail = [&](std::size_t i, const std::string& detail) {
+    const std::string part = "path[" + std::to_string(i) + "]";
+    throw InputError("rod '" + name + "': " + part + ": " + detail,
+                     {rod.kind, rod.index, part}, detail);
+  };
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (!pts[i].allFinite()) fail(i, "the point is not finite");
+  for (std::size_t i = 1; i < pts.size(); ++i)
+    if (!((pts[i] - pts[i - 1]).norm() > 1e-12 * std::max(1.0, pts[i].norm())))
+      fail(i, "zero-length segment (its end points coincide)");
+  const std::size_t segs = pts.size() - 1;
+  std::vector<Vec3> dir(segs);
+  for (std::size_t i = 0; i < segs; ++i) dir[i] = (pts[i + 1] - pts[i]).normalized();
+  // At path point i: along the segment at the ends, along the bisector inside.
+  auto vertex_frame = [&](std::size_t i) {
+    const Vec3 t = i == 0 ? dir[0] : i == segs ? dir[segs - 1] : Vec3(dir[i - 1] + dir[i]);
+    if (!(t.norm() > 1e-6)) fail(i, "the path turns back on itself here");
+    return FrameAlong(t, up);
+  };
+  std::vector<SE3> frames;
+  frames.reserve(segs * static_cast<std::size_t>(n) + 1);
+  SE3 H;
+  H.R = vertex_frame(0);
+  H.x = pts[0];
+  frames.push_back(H);
+  for (std::size_t s = 0; s < segs; ++s) {
+    for (int e = 1; e <= n; ++e) {
+      const bool vertex = e == n;
+      H.R = vertex ? vertex_frame(s + 1) : FrameAlong(dir[s], up);
+      H.x = vertex ? pts[s + 1]
+                   : Vec3(pts[s] + (pts[s + 1] - pts[s]) * (static_cast<double>(e) / n));
+      frames.push_back(H);
+    }
+  }
+  return frames;
+}
+
+}  // namespace
+
+int ModelBuilder::AddRodAlongPath(std::string name, const std::vector<Vec3>& path,
+                                  int elements_per_segment, const Section& section,
+                                  const Vec3& up, int start_node, int end_node) {
+  const EntityRef rod = NextRod();
+  const std::string label = "rod '" + name + "'";
+  if (path.size() < 2)
+    throw InputError(label + ": a path needs at least two points", rod);
+  if (elements_per_segment < 1)
+    throw InputError(label + ": needs at least one element per segment, got " +
+                         std::to_string(elements_per_segment),
+                     rod);
+  if (!up.allFinite() || !(up.norm() > 0.0))
+    throw InputError(label + ": the up vector must be finite and non-zero", rod);
+  const std::vector<SE3> frames = PathNodeFrames(name, rod, path, elements_per_segment, up);
+  // A shared end node must sit at the path's end with the same section frame (else the rod
+  // would start with a kink that no element carries).
+  auto check_shared = [&](int node, const SE3& H, const char* part) {
+    if (node < 0) return;
+    std::string detail;
+    if (node >= static_cast<int>(model_.nodes.size())) {
+      detail = "no node " + std::to_string(node);
+    } else {
+      const SE3& Ho = model_.nodes[static_cast<std::size_t>(node)].reference;
+      const double tol = 1e-8 * std::max({1.0, H.x.norm(), (path.back() - path.front()).norm()});
+      if ((Ho.x - H.x).norm() > tol)
+        detail = NodeLabel(model_, node) + " is not at the path's end";
+      else if ((Ho.R - H.R).norm() > 1e-9)
+        detail = "the section frames of '" + name + "' and " + OwnerLabel(model_, node) +
+                 " differ at the shared node (a kink or a different up vector); join them by a "
+                 "fixed joint instead";
+    }
+    if (!detail.empty())
+      throw InputError(label + ": " + part + ": " + detail, {rod.kind, rod.index, part}, detail);
+  };
+  check_shared(start_node, frames.front(), "start_node");
+  check_shared(end_node, frames.back(), "end_node");
+  // Two points: the straight rod (its node positions are computed along the frame's x axis).
+  if (path.size() == 2)
+    return AddStraightRod(std::move(name), path[0], path[1], elements_per_segment, section, up,
+                          start_node, end_node);
+  std::vector<int> nodes;
+  nodes.reserve(frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    if (i == 0 && start_node >= 0) {
+      nodes.push_back(start_node);
+    } else if (i + 1 == frames.size() && end_node >= 0) {
+      nodes.push_back(end_node);
+    } else {
+      nodes.push_back(
+          AddNode(frames[i], name.empty() ? std::string{} : name + "." + std::to_string(i)));
+    }
+  }
+  return AddRodThroughNodes(std::move(name), nodes, section);
+}
+
+NodeMatch ModelBuilder::FindNodeAt(const Vec3& p, int rod, double tolerance) const {
+  const Model& m = model_;
+  if (rod >= static_cast<int>(m.rods.size()))
+    throw InputError("FindNodeAt: no rod " + std::to_string(rod));
+  NodeMatch match;
+  match.distance = std::numeric_limits<double>::infinity();
+  auto valid = [&](int n) { return n >= 0 && n < static_cast<int>(m.nodes.size()); };
+  auto consider = [&](int n) {
+    if (!valid(n)) return;
+    const double d = (m.nodes[static_cast<std::size_t>(n)].reference.x - p).norm();
+    if (d < match.distance) {
+      match.distance = d;
+      match.nearest = n;
+    }
+  };
+  double extent = 0.0;
+  if (rod >= 0) {
+    const Rod& r = m.rods[static_cast<std::size_t>(rod)];
+    for (int n : r.nodes) consider(n);
+    if (!r.nodes.empty() && valid(r.nodes.front()) && valid(r.nodes.back()))
+      extent = (m.nodes[static_cast<std::size_t>(r.nodes.front())].reference.x -
+                m.nodes[static_cast<std::size_t>(r.nodes.back())].reference.x)
+                   .norm();
+  } else {
+    for (int n = 0; n < static_cast<int>(m.nodes.size()); ++n) consider(n);
+  }
+  if (tolerance < 0.0) tolerance = 1e-8 * std::max({1.0, p.norm(), extent});
+  if (match.distance <= tolerance) match.node = match.nearest;
+  return match;
+}
+
+double ModelBuilder::RodLength(int rod) const {
+  const Model& m = model_;
+  if (rod < 0 || rod >= static_cast<int>(m.rods.size()))
+    throw InputError("RodLength: no rod " + std::to_string(rod));
+  const Rod& r = m.rods[static_cast<std::size_t>(rod)];
+  const int num_nodes = static_cast<int>(m.nodes.size());
+  for (int n : r.nodes)
+    if (n < 0 || n >= num_nodes) throw InputError("RodLength: rod " + std::to_string(rod) + " has an invalid node");
+  double length = 0.0;
+  for (std::size_t i = 0; i + 1 < r.nodes.size(); ++i)
+    length += LogSE3(m.nodes[static_cast<std::size_t>(r.nodes[i])].reference.Inverse() *
+                     m.nodes[static_cast<std::size_t>(r.nodes[i + 1])].reference)
+                  .head<3>()
+                  .norm();
+  return length;
+}
+
 int ModelBuilder::AddRigidBody(std::string name, int node, double mass, const Vec3& com,
                                const Mat3& inertia) {
   RigidBody b;
@@ -110,18 +276,23 @@ int ModelBuilder::AddJointAt(std::string name, JointType type, int node_a, int n
                              const Vec3& point, const Vec3& axis, const Vec3& axis2,
                              double pitch) {
   const int n = static_cast<int>(model_.nodes.size());
-  auto check = [&](int node) {
-    if (node != kGround && (node < 0 || node >= n))
-      throw InputError("joint '" + name + "': invalid node " + std::to_string(node));
+  const int index = static_cast<int>(model_.joints.size());
+  const std::string label = "joint '" + name + "'";
+  auto check = [&](int node, const char* part) {
+    if (node != kGround && (node < 0 || node >= n)) {
+      const std::string detail = "invalid node " + std::to_string(node);
+      throw InputError(label + ": " + detail, {EntityKind::kJoint, index, part}, detail);
+    }
   };
-  check(node_a);
-  check(node_b);
+  check(node_a, "node_a");
+  check(node_b, "node_b");
   const JointTypeInfo& info = GetJointTypeInfo(type);
   if (info.uses_axis && !(std::abs(axis.norm() - 1.0) < 1e-9))
-    throw InputError("joint '" + name + "': axis must be a unit vector");
+    throw InputError(label + ": axis must be a unit vector", {EntityKind::kJoint, index, {}});
   if (info.uses_axis2 &&
       (!(std::abs(axis2.norm() - 1.0) < 1e-9) || std::abs(axis.dot(axis2)) > 1e-9))
-    throw InputError("joint '" + name + "': universal joint axes must be orthogonal unit vectors");
+    throw InputError(label + ": universal joint axes must be orthogonal unit vectors",
+                     {EntityKind::kJoint, index, {}});
   Joint j;
   j.name = std::move(name);
   j.type = type;
@@ -134,6 +305,19 @@ int ModelBuilder::AddJointAt(std::string name, JointType type, int node_a, int n
   j.offset_a = ref(node_a).Inverse() * frame;
   j.offset_b = ref(node_b).Inverse() * frame;
   return AddJoint(j);
+}
+
+int ModelBuilder::AddJoint(const JointSpec& spec) {
+  const int index = AddJointAt(spec.name, spec.type, spec.node_a, spec.node_b, spec.point,
+                               spec.axis, spec.axis2, spec.pitch);
+  Joint& j = model_.joints[static_cast<std::size_t>(index)];
+  j.stiffness = spec.stiffness;
+  j.damping = spec.damping;
+  j.rest = spec.rest;
+  j.drive = spec.drive;
+  j.drive_coord = spec.drive_coordinate;
+  j.drive_profile = spec.drive_profile;
+  return index;
 }
 
 int ModelBuilder::AddPointLoad(const PointLoad& load) {
@@ -154,11 +338,14 @@ namespace {
 void ValidateNodes(const Model& m) {
   {
     std::set<std::string> names;
-    for (const Node& n : m.nodes) {
+    for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+      const Node& n = m.nodes[i];
+      const EntityRef entity{EntityKind::kNode, static_cast<int>(i), {}};
       if (!IsFinite(n.reference) || !IsRotation(n.reference.R))
-        throw InputError("node '" + n.name + "': frame is not a finite rigid transformation");
+        throw InputError("node '" + n.name + "': frame is not a finite rigid transformation",
+                         entity);
       if (!n.name.empty() && !names.insert(n.name).second)
-        throw InputError("duplicate node name '" + n.name + "'");
+        throw InputError("duplicate node name '" + n.name + "'", entity);
     }
   }
   if (!m.gravity.allFinite()) throw InputError("gravity must be finite");
@@ -173,16 +360,17 @@ void BuildRodElements(Model& m, std::vector<char>& used) {
   for (std::size_t r = 0; r < m.rods.size(); ++r) {
     Rod& rod = m.rods[r];
     const std::string label = "rod '" + rod.name + "'";
-    if (rod.num_elements < 1) throw InputError(label + ": needs at least two nodes");
+    const EntityRef entity{EntityKind::kRod, static_cast<int>(r), {}};
+    if (rod.num_elements < 1) throw InputError(label + ": needs at least two nodes", entity);
     for (int i = 0; i < 6; ++i) {
       if (!(rod.section.stiffness(i) > 0.0) || !std::isfinite(rod.section.stiffness(i)))
-        throw InputError(label + ": section stiffness entries must be positive");
+        throw InputError(label + ": section stiffness entries must be positive", entity);
       if (!(rod.section.inertia(i) >= 0.0) || !(rod.section.damping(i) >= 0.0))
-        throw InputError(label + ": section inertia and damping must be non-negative");
+        throw InputError(label + ": section inertia and damping must be non-negative", entity);
     }
     if (!(rod.section.rayleigh_mass >= 0.0) || !std::isfinite(rod.section.rayleigh_mass) ||
         !(rod.section.rayleigh_stiffness >= 0.0) || !std::isfinite(rod.section.rayleigh_stiffness))
-      throw InputError(label + ": Rayleigh damping coefficients must be finite and non-negative");
+      throw InputError(label + ": Rayleigh damping coefficients must be finite and non-negative", entity);
     rod.first_element = static_cast<int>(m.elements.size());
     rod.length = 0.0;
     for (int e = 0; e < rod.num_elements; ++e) {
@@ -191,17 +379,18 @@ void BuildRodElements(Model& m, std::vector<char>& used) {
       el.node_a = rod.nodes[static_cast<std::size_t>(e)];
       el.node_b = rod.nodes[static_cast<std::size_t>(e) + 1];
       if (!valid_node(el.node_a) || !valid_node(el.node_b) || el.node_a == el.node_b)
-        throw InputError(label + ": element " + std::to_string(e) + " has invalid nodes");
+        throw InputError(label + ": element " + std::to_string(e) + " has invalid nodes", entity);
       const SE3 rel = m.nodes[static_cast<std::size_t>(el.node_a)].reference.Inverse() *
                       m.nodes[static_cast<std::size_t>(el.node_b)].reference;
       el.d0 = LogSE3(rel);
       el.length = el.d0.head<3>().norm();
       if (!(el.length > 1e-12 * std::max(1.0, rel.x.norm())))
         throw InputError(label + ": element " + std::to_string(e) +
-                         " has zero length (its nodes coincide)");
+                         " has zero length (its nodes coincide)", entity);
       if (el.d0.tail<3>().norm() > 3.14159265358979323846 - 1e-3)
         throw InputError(label + ": element " + std::to_string(e) +
-                         " is curved by more than pi in its reference state; use more elements");
+                         " is curved by more than pi in its reference state; use more elements",
+                         entity);
       rod.length += el.length;
       used[static_cast<std::size_t>(el.node_a)] = used[static_cast<std::size_t>(el.node_b)] = 1;
       m.elements.push_back(el);
@@ -209,9 +398,10 @@ void BuildRodElements(Model& m, std::vector<char>& used) {
   }
   {
     std::set<std::string> names;
-    for (const Rod& rod : m.rods)
-      if (!rod.name.empty() && !names.insert(rod.name).second)
-        throw InputError("duplicate rod name '" + rod.name + "'");
+    for (std::size_t r = 0; r < m.rods.size(); ++r)
+      if (!m.rods[r].name.empty() && !names.insert(m.rods[r].name).second)
+        throw InputError("duplicate rod name '" + m.rods[r].name + "'",
+                         {EntityKind::kRod, static_cast<int>(r), {}});
   }
 }
 
@@ -222,20 +412,22 @@ void ValidateBodies(const Model& m, std::vector<char>& used) {
   auto valid_node = [&](int n) { return n >= 0 && n < num_nodes; };
   {
     std::set<std::string> names;
-    for (const RigidBody& b : m.bodies) {
+    for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+      const RigidBody& b = m.bodies[i];
       const std::string label = "body '" + b.name + "'";
-      if (!valid_node(b.node)) throw InputError(label + ": invalid node");
+      const EntityRef entity{EntityKind::kBody, static_cast<int>(i), {}};
+      if (!valid_node(b.node)) throw InputError(label + ": invalid node", entity);
       if (!(b.mass > 0.0) || !std::isfinite(b.mass))
-        throw InputError(label + ": mass must be positive");
-      if (!b.com.allFinite()) throw InputError(label + ": centre of mass must be finite");
+        throw InputError(label + ": mass must be positive", entity);
+      if (!b.com.allFinite()) throw InputError(label + ": centre of mass must be finite", entity);
       const Mat3 J = 0.5 * (b.inertia + b.inertia.transpose());
       if (!b.inertia.allFinite() || (b.inertia - J).norm() > 1e-12 * std::max(1.0, J.norm()))
-        throw InputError(label + ": inertia must be a finite symmetric matrix");
+        throw InputError(label + ": inertia must be a finite symmetric matrix", entity);
       Eigen::LLT<Mat3> llt(J);
       if (llt.info() != Eigen::Success)
-        throw InputError(label + ": inertia must be positive definite");
+        throw InputError(label + ": inertia must be positive definite", entity);
       if (!b.name.empty() && !names.insert(b.name).second)
-        throw InputError("duplicate body name '" + b.name + "'");
+        throw InputError("duplicate body name '" + b.name + "'", entity);
       used[static_cast<std::size_t>(b.node)] = 1;
     }
   }
@@ -248,31 +440,38 @@ void ValidateJoints(const Model& m, std::vector<char>& used) {
   auto valid_node = [&](int n) { return n >= 0 && n < num_nodes; };
   {
     std::set<std::string> names;
-    for (const Joint& j : m.joints) {
+    for (std::size_t i = 0; i < m.joints.size(); ++i) {
+      const Joint& j = m.joints[i];
       const std::string label = "joint '" + j.name + "'";
-      if (j.node_a != kGround && !valid_node(j.node_a)) throw InputError(label + ": invalid side a");
-      if (j.node_b != kGround && !valid_node(j.node_b)) throw InputError(label + ": invalid side b");
+      const EntityRef entity{EntityKind::kJoint, static_cast<int>(i), {}};
+      if (j.node_a != kGround && !valid_node(j.node_a))
+        throw InputError(label + ": invalid side a", {EntityKind::kJoint, entity.index, "node_a"},
+                         "invalid side a");
+      if (j.node_b != kGround && !valid_node(j.node_b))
+        throw InputError(label + ": invalid side b", {EntityKind::kJoint, entity.index, "node_b"},
+                         "invalid side b");
       if (j.node_a == j.node_b)
-        throw InputError(label + ": both sides are " + NodeLabel(m, j.node_a));
+        throw InputError(label + ": both sides are " + NodeLabel(m, j.node_a), entity);
       if (!IsFinite(j.offset_a) || !IsFinite(j.offset_b) || !IsRotation(j.offset_a.R) ||
           !IsRotation(j.offset_b.R))
-        throw InputError(label + ": joint frame offsets must be rigid transformations");
-      if (!j.basis.allFinite()) throw InputError(label + ": joint basis must be finite");
+        throw InputError(label + ": joint frame offsets must be rigid transformations", entity);
+      if (!j.basis.allFinite()) throw InputError(label + ": joint basis must be finite", entity);
       for (int c = 0; c < JointSpringCount(j); ++c) {
         if (!(j.stiffness(c) >= 0.0) || !(j.damping(c) >= 0.0) || !std::isfinite(j.stiffness(c)) ||
             !std::isfinite(j.damping(c)))
-          throw InputError(label + ": stiffness and damping must be finite and non-negative");
+          throw InputError(label + ": stiffness and damping must be finite and non-negative",
+                         entity);
       }
       if (j.drive != DriveKind::kNone) {
         if (j.drive_coord < 0 || j.drive_coord >= j.k())
-          throw InputError(label + ": drive coordinate out of range");
+          throw InputError(label + ": drive coordinate out of range", entity);
         if (!JointHasGlobalCoordinates(j.type))
           throw InputError(label + ": drives need a joint with global coordinates (not " +
-                           JointTypeName(j.type) + ")");
-        j.drive_profile.Validate(label.c_str());
+                           JointTypeName(j.type) + ")", entity);
+        ValidateProfile(j.drive_profile, label, entity);
       }
       if (!j.name.empty() && !names.insert(j.name).second)
-        throw InputError("duplicate joint name '" + j.name + "'");
+        throw InputError("duplicate joint name '" + j.name + "'", entity);
       if (j.node_a != kGround) used[static_cast<std::size_t>(j.node_a)] = 1;
       if (j.node_b != kGround) used[static_cast<std::size_t>(j.node_b)] = 1;
     }
@@ -283,23 +482,30 @@ void ValidateJoints(const Model& m, std::vector<char>& used) {
 void PlaceLoads(Model& m) {
   const int num_nodes = static_cast<int>(m.nodes.size());
   auto valid_node = [&](int n) { return n >= 0 && n < num_nodes; };
-  for (const PointLoad& l : m.point_loads) {
-    if (!valid_node(l.node)) throw InputError("point load: invalid node " + std::to_string(l.node));
+  for (std::size_t i = 0; i < m.point_loads.size(); ++i) {
+    const PointLoad& l = m.point_loads[i];
+    const EntityRef entity{EntityKind::kPointLoad, static_cast<int>(i), {}};
+    if (!valid_node(l.node))
+      throw InputError("point load: invalid node " + std::to_string(l.node), entity);
+    const std::string label = "point load on " + NodeLabel(m, l.node);
     if (!l.force.allFinite() || !l.moment.allFinite() || !l.point.allFinite())
-      throw InputError("point load on " + NodeLabel(m, l.node) + ": values must be finite");
-    l.profile.Validate(("point load on " + NodeLabel(m, l.node)).c_str());
+      throw InputError(label + ": values must be finite", entity);
+    ValidateProfile(l.profile, label, entity);
   }
-  for (RodLoad& l : m.rod_loads) {
+  for (std::size_t i = 0; i < m.rod_loads.size(); ++i) {
+    RodLoad& l = m.rod_loads[i];
+    const EntityRef entity{EntityKind::kRodLoad, static_cast<int>(i), {}};
     if (l.rod < 0 || l.rod >= static_cast<int>(m.rods.size()))
-      throw InputError("rod load: invalid rod " + std::to_string(l.rod));
+      throw InputError("rod load: invalid rod " + std::to_string(l.rod), entity);
     const Rod& rod = m.rods[static_cast<std::size_t>(l.rod)];
     const std::string label = "load on rod '" + rod.name + "'";
     if (!l.force.allFinite() || !l.moment.allFinite())
-      throw InputError(label + ": values must be finite");
-    l.profile.Validate(label.c_str());
+      throw InputError(label + ": values must be finite", entity);
+    ValidateProfile(l.profile, label, entity);
     if (l.distributed) continue;
     if (!(l.arc_length >= 0.0 && l.arc_length <= rod.length * (1.0 + 1e-12)))
-      throw InputError(label + ": arc length must be within [0, " + std::to_string(rod.length) + "]");
+      throw InputError(
+          label + ": arc length must be within [0, " + std::to_string(rod.length) + "]", entity);
     double s0 = 0.0;
     l.element = rod.first_element + rod.num_elements - 1;
     for (int k = 0; k < rod.num_elements; ++k) {
@@ -319,7 +525,8 @@ void CheckConnected(const Model& m, const std::vector<char>& used) {
   const int num_nodes = static_cast<int>(m.nodes.size());
   for (int n = 0; n < num_nodes; ++n)
     if (!m.nodes[static_cast<std::size_t>(n)].fixed && !used[static_cast<std::size_t>(n)])
-      throw InputError(NodeLabel(m, n) + " is connected to nothing (no rod, body or joint)");
+      throw InputError(NodeLabel(m, n) + " is connected to nothing (no rod, body or joint)",
+                       {EntityKind::kNode, n, {}});
 }
 
 // Unknowns: 6 velocities per free node, then the joints' coordinates; multipliers: 6 rows per
@@ -350,17 +557,21 @@ void LayOutUnknowns(Model& m) {
 
 void CheckJointFramesCoincide(const Model& m) {
   // The joint frames must coincide in the reference configuration (H_J = I, method.md §4.2).
-  for (const Joint& j : m.joints) {
+  for (std::size_t i = 0; i < m.joints.size(); ++i) {
+    const Joint& j = m.joints[i];
     const SE3& HA = NodeReferenceFrame(m, j.node_a);
     const SE3& HB = NodeReferenceFrame(m, j.node_b);
     const Vec6 phi0 = LogSE3(j.offset_a.Inverse() * HA.Inverse() * HB * j.offset_b);
     if (j.row >= 0 && phi0.norm() > 1e-9 * std::max(1.0, HA.x.norm() + HB.x.norm()))
       throw InputError("joint '" + j.name +
                        "': its frames on the two sides do not coincide in the reference "
-                       "configuration (check the joint point and the attached bodies)");
+                       "configuration (check the joint point and the attached bodies)",
+                       {EntityKind::kJoint, static_cast<int>(i), {}});
   }
 }
 
+// One function (about 80 lines): one algorithm, the block graph and the band pattern it implies
+// share the block numbering, so the steps would pass the same four arrays to each other.
 void OrderUnknowns(Model& m) {
   const int num_nodes = static_cast<int>(m.nodes.size());
   // Block graph: a block is a contiguous range of unknowns that always couple together; an

@@ -490,6 +490,67 @@ Node Parse(const std::string& text, const std::string& source, bool allow_empty)
   return std::move(builder.documents[0]);
 }
 
+namespace {
+
+// The components of an override's key path as [begin, end) offsets into `path` (the dotted
+// prefix up to a component is a prefix of `path`: no per-component copies).
+std::vector<std::pair<std::size_t, std::size_t>> SplitKeyPath(const std::string& path,
+                                                              const std::string& where) {
+  std::vector<std::pair<std::size_t, std::size_t>> parts;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t dot = path.find('.', start);
+    const std::size_t end = dot == std::string::npos ? path.size() : dot;
+    if (end == start || path.find_first_of(" \t", start) < end)
+      throw InputError(where + ": malformed key path '" + path + "'");
+    parts.emplace_back(start, end);
+    if (parts.size() > kMaxOverrideDepth)
+      throw InputError(where + ": the key path has more than " +
+                       std::to_string(kMaxOverrideDepth) + " components");
+    if (dot == std::string::npos) return parts;
+    start = dot + 1;
+  }
+}
+
+// One step of an override's key path from `cur` (whose dotted path is `cur_path`) to its
+// component `part`: a list index, or a map key (created unless `cur` is a named collection and
+// the step is not the last).
+Node* Descend(Node* cur, const std::string& part, std::string_view cur_path, bool last,
+              const std::shared_ptr<const std::string>& text, const std::string& where,
+              const std::vector<std::string>& collections) {
+  if (cur->IsNull()) cur->kind = Node::Kind::kMap;  // descend into an empty value
+  if (cur->IsSequence()) {
+    std::size_t index = 0;
+    const auto r = std::from_chars(part.data(), part.data() + part.size(), index);
+    if (r.ec != std::errc() || r.ptr != part.data() + part.size() || index >= cur->items.size())
+      throw InputError(where + ": '" + std::string(cur_path) + "' is a list of " +
+                       std::to_string(cur->items.size()) + " items; '" + part +
+                       "' is not an index into it");
+    return &cur->items[index];
+  }
+  if (!cur->IsMap())
+    throw InputError(where + ": '" + std::string(cur_path) + "' is a single value, it has no '" +
+                     part + "'");
+  if (Node* next = cur->Find(part)) return next;
+  const bool in_collection =
+      std::find(collections.begin(), collections.end(), cur_path) != collections.end();
+  if (in_collection && !last) {
+    std::vector<std::string> names;
+    for (const auto& e : cur->entries) names.push_back(e.first.key);
+    throw InputError(where + ": " + std::string(cur_path) + ": no entry '" + part + "'" +
+                     DidYouMean(part, names));
+  }
+  MapEntry key;
+  key.key = part;
+  key.key_location.override_text = text;
+  Node created;
+  created.location.override_text = text;
+  cur->entries.emplace_back(std::move(key), std::move(created));
+  return &cur->entries.back().second;
+}
+
+}  // namespace
+
 void ApplyOverride(Node& root, const std::string& override_text, const std::string& source,
                    const std::vector<std::string>& collections) {
   const std::string where = source + ": override '" + override_text + "'";
@@ -498,35 +559,16 @@ void ApplyOverride(Node& root, const std::string& override_text, const std::stri
     throw InputError(where + ": expected KEY.PATH=VALUE (e.g. analysis.step=5e-4)");
   const std::string path = override_text.substr(0, eq);
   const std::string value_text = override_text.substr(eq + 1);
-  // Components as [begin, end) offsets into `path` (the dotted prefix up to a component is a
-  // prefix of `path`: no per-component copies).
-  std::vector<std::pair<std::size_t, std::size_t>> parts;
-  {
-    std::size_t start = 0;
-    for (;;) {
-      const std::size_t dot = path.find('.', start);
-      const std::size_t end = dot == std::string::npos ? path.size() : dot;
-      if (end == start || path.find_first_of(" \t", start) < end)
-        throw InputError(where + ": malformed key path '" + path + "'");
-      parts.emplace_back(start, end);
-      if (parts.size() > kMaxOverrideDepth)
-        throw InputError(where + ": the key path has more than " +
-                         std::to_string(kMaxOverrideDepth) + " components");
-      if (dot == std::string::npos) break;
-      start = dot + 1;
-    }
-  }
+  const std::vector<std::pair<std::size_t, std::size_t>> parts = SplitKeyPath(path, where);
 
   const auto text = std::make_shared<const std::string>(override_text);
   Node value;
-  {
-    try {
-      value = Parse(value_text, "value", /*allow_empty=*/true);
-    } catch (const InputError& e) {
-      throw InputError(where + ": the value is not a YAML value (" + e.what() + ")");
-    }
-    MarkOverride(value, text);
+  try {
+    value = Parse(value_text, "value", /*allow_empty=*/true);
+  } catch (const InputError& e) {
+    throw InputError(where + ": the value is not a YAML value (" + e.what() + ")");
   }
+  MarkOverride(value, text);
   if (root.IsNull()) root.kind = Node::Kind::kMap;
   if (!root.IsMap()) throw InputError(where + ": the scene is not a map");
 
@@ -534,41 +576,8 @@ void ApplyOverride(Node& root, const std::string& override_text, const std::stri
   std::size_t cur_end = 0;  // cur's dotted path is path.substr(0, cur_end)
   for (std::size_t i = 0; i < parts.size(); ++i) {
     const std::string part = path.substr(parts[i].first, parts[i].second - parts[i].first);
-    const std::string_view cur_path(path.data(), cur_end);
-    const bool last = i + 1 == parts.size();
-    if (cur->IsNull()) cur->kind = Node::Kind::kMap;  // descend into an empty value
-    if (cur->IsSequence()) {
-      std::size_t index = 0;
-      const auto r = std::from_chars(part.data(), part.data() + part.size(), index);
-      if (r.ec != std::errc() || r.ptr != part.data() + part.size() || index >= cur->items.size())
-        throw InputError(where + ": '" + std::string(cur_path) + "' is a list of " +
-                         std::to_string(cur->items.size()) + " items; '" + part +
-                         "' is not an index into it");
-      cur = &cur->items[index];
-    } else if (cur->IsMap()) {
-      Node* next = cur->Find(part);
-      if (next == nullptr) {
-        const bool in_collection =
-            std::find(collections.begin(), collections.end(), cur_path) != collections.end();
-        if (in_collection && !last) {
-          std::vector<std::string> names;
-          for (const auto& e : cur->entries) names.push_back(e.first.key);
-          throw InputError(where + ": " + std::string(cur_path) + ": no entry '" + part + "'" +
-                           DidYouMean(part, names));
-        }
-        MapEntry key;
-        key.key = part;
-        key.key_location.override_text = text;
-        Node created;
-        created.location.override_text = text;
-        cur->entries.emplace_back(std::move(key), std::move(created));
-        next = &cur->entries.back().second;
-      }
-      cur = next;
-    } else {
-      throw InputError(where + ": '" + std::string(cur_path) + "' is a single value, it has no '" +
-                       part + "'");
-    }
+    cur = Descend(cur, part, std::string_view(path.data(), cur_end), i + 1 == parts.size(), text,
+                  where, collections);
     cur_end = parts[i].second;
   }
   *cur = std::move(value);

@@ -13,19 +13,15 @@
 #include <utility>
 #include <vector>
 
+#include "screwfem/io/scene_spec.h"
 #include "screwfem/lie/se3.h"
 #include "screwfem/model/enum_names.h"
 
 namespace screwfem::scene_yaml {
 
-// Where a node came from: a line and column of the scene file (1-based), or an override string.
-struct Location {
-  int line = 0;
-  int column = 0;
-  // Non-null: the node was written by this override (shared by all its nodes, so that an
-  // override costs memory linear in its length).
-  std::shared_ptr<const std::string> override_text;
-};
+// Where a node came from: a line and column of the scene file (1-based), or an override string
+// (shared by all the nodes it wrote, so that an override costs memory linear in its length).
+using Location = SourceLocation;
 
 struct MapEntry {
   std::string key;

@@ -92,6 +92,93 @@ bool CalcLinearizedSystem(const Model& model, Data& data, const ModalOptions& op
   return ok;
 }
 
+namespace {
+
+// Reduced mass and stiffness on the admissible space Z (symmetrised; a warning when the
+// stiffness is not symmetric).
+void CalcReducedMatrices(const LinearizedSystem& sys, ModalResult* result, Eigen::MatrixXd* Mr,
+                         Eigen::MatrixXd* Kr) {
+  const Eigen::MatrixXd& Z = sys.null_space;
+  *Mr = Z.transpose() * sys.mass * Z;
+  *Kr = Z.transpose() * sys.stiffness * Z;
+  *Mr = 0.5 * (*Mr + Mr->transpose()).eval();
+  const double k_norm = Kr->norm();
+  result->stiffness_asymmetry = k_norm > 0.0 ? (*Kr - Kr->transpose()).norm() / k_norm : 0.0;
+  if (result->stiffness_asymmetry > 1e-6)
+    result->warnings.push_back(Format(
+        "the stiffness is not symmetric (relative asymmetry %.3g; follower loads or a "
+        "non-equilibrium state): its symmetric part is used",
+        result->stiffness_asymmetry));
+  *Kr = 0.5 * (*Kr + Kr->transpose()).eval();
+}
+
+// The reduced problem on the directions with mass, the massless ones condensed statically.
+struct CondensedSystem {
+  Eigen::MatrixXd V0, Vm;       // eigenvectors of Mr without and with mass
+  Eigen::VectorXd inv_sqrt_mu;  // mu^-1/2 of the directions with mass
+  Eigen::MatrixXd Kmm;          // K* = K_mm - K_m0 K_00^-1 K_0m
+  Eigen::MatrixXd condense;     // n0 x nm: massless coordinates = condense * massive coordinates
+};
+
+// Splits the admissible space into directions with and without mass (eigenvectors of Mr) and
+// condenses the massless ones. False (and result->message) when nothing carries mass or a
+// massless direction has no stiffness.
+bool CondenseMassless(const Eigen::MatrixXd& Mr, const Eigen::MatrixXd& Kr, ModalResult* result,
+                      CondensedSystem* c) {
+  const int m = static_cast<int>(Mr.cols());
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> mass_eig(Mr);
+  const Eigen::VectorXd mu = mass_eig.eigenvalues();
+  const double mass_tol = 1e-12 * std::max(mu.cwiseAbs().maxCoeff(), 1e-300);
+  int n0 = 0;
+  while (n0 < m && mu(n0) <= mass_tol) ++n0;
+  const int nm = m - n0;
+  result->num_massless = n0;
+  if (nm == 0) {
+    result->message = "the admissible motions carry no mass";
+    return false;
+  }
+  c->V0 = mass_eig.eigenvectors().leftCols(n0);
+  c->Vm = mass_eig.eigenvectors().rightCols(nm);
+  c->inv_sqrt_mu = mu.tail(nm).cwiseSqrt().cwiseInverse();
+  c->Kmm = c->Vm.transpose() * Kr * c->Vm;
+  if (n0 == 0) return true;
+  const Eigen::MatrixXd K00 = c->V0.transpose() * Kr * c->V0;
+  const Eigen::MatrixXd K0m = c->V0.transpose() * Kr * c->Vm;
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(K00);
+  if (!lu.isInvertible()) {
+    result->message =
+        "admissible motions without mass and without stiffness (an unrestrained massless "
+        "part): no modes";
+    return false;
+  }
+  c->condense = -lu.solve(K0m);
+  c->Kmm.noalias() += K0m.transpose() * c->condense;
+  return true;
+}
+
+// Frequencies, modal damping ratios phi^T C phi / (2 omega), and a warning for negative
+// eigenvalues (an unstable equilibrium).
+void CalcFrequenciesAndDamping(const LinearizedSystem& sys, double eigenvalue_scale, int count,
+                               ModalResult* result) {
+  result->omega = result->eigenvalues.cwiseMax(0.0).cwiseSqrt();
+  result->frequency = result->omega / (2.0 * std::numbers::pi);
+  result->damping_ratio = Eigen::VectorXd::Zero(count);
+  int negative = 0;
+  for (int i = 0; i < count; ++i) {
+    const double lam = result->eigenvalues(i);
+    if (lam < -1e-8 * eigenvalue_scale) ++negative;
+    if (lam > 0.0) {
+      const Eigen::VectorXd phi = result->modes.col(i);
+      result->damping_ratio(i) = phi.dot(sys.damping * phi) / (2.0 * result->omega(i));
+    }
+  }
+  if (negative > 0)
+    result->warnings.push_back(
+        Format("%g negative eigenvalue(s): the equilibrium is unstable", negative));
+}
+
+}  // namespace
+
 ModalResult CalcModes(const Model& model, Data& data, const ModalOptions& options) {
   ModalResult result;
   LinearizedSystem sys;
@@ -112,53 +199,13 @@ ModalResult CalcModes(const Model& model, Data& data, const ModalOptions& option
     result.ok = true;
     return result;
   }
-
-  // Reduced matrices on the admissible space.
-  Eigen::MatrixXd Mr = Z.transpose() * sys.mass * Z;
-  Eigen::MatrixXd Kr = Z.transpose() * sys.stiffness * Z;
-  Mr = 0.5 * (Mr + Mr.transpose()).eval();
-  const double k_norm = Kr.norm();
-  result.stiffness_asymmetry = k_norm > 0.0 ? (Kr - Kr.transpose()).norm() / k_norm : 0.0;
-  if (result.stiffness_asymmetry > 1e-6)
-    result.warnings.push_back(Format(
-        "the stiffness is not symmetric (relative asymmetry %.3g; follower loads or a "
-        "non-equilibrium state): its symmetric part is used",
-        result.stiffness_asymmetry));
-  Kr = 0.5 * (Kr + Kr.transpose()).eval();
-
-  // Split the admissible space into directions with and without mass (eigenvectors of Mr),
-  // condense the massless ones statically: K* = K_mm - K_m0 K_00^-1 K_0m.
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> mass_eig(Mr);
-  const Eigen::VectorXd mu = mass_eig.eigenvalues();
-  const double mass_tol = 1e-12 * std::max(mu.cwiseAbs().maxCoeff(), 1e-300);
-  int n0 = 0;
-  while (n0 < m && mu(n0) <= mass_tol) ++n0;
-  const int nm = m - n0;
-  result.num_massless = n0;
-  if (nm == 0) {
-    result.message = "the admissible motions carry no mass";
-    return result;
-  }
-  const Eigen::MatrixXd V0 = mass_eig.eigenvectors().leftCols(n0);
-  const Eigen::MatrixXd Vm = mass_eig.eigenvectors().rightCols(nm);
-  const Eigen::VectorXd inv_sqrt_mu = mu.tail(nm).cwiseSqrt().cwiseInverse();
-  Eigen::MatrixXd Kmm = Vm.transpose() * Kr * Vm;
-  Eigen::MatrixXd condense;  // n0 x nm: massless coordinates = condense * massive coordinates
-  if (n0 > 0) {
-    const Eigen::MatrixXd K00 = V0.transpose() * Kr * V0;
-    const Eigen::MatrixXd K0m = V0.transpose() * Kr * Vm;
-    Eigen::FullPivLU<Eigen::MatrixXd> lu(K00);
-    if (!lu.isInvertible()) {
-      result.message =
-          "admissible motions without mass and without stiffness (an unrestrained massless "
-          "part): no modes";
-      return result;
-    }
-    condense = -lu.solve(K0m);
-    Kmm.noalias() += K0m.transpose() * condense;
-  }
+  Eigen::MatrixXd Mr, Kr;
+  CalcReducedMatrices(sys, &result, &Mr, &Kr);
+  CondensedSystem c;
+  if (!CondenseMassless(Mr, Kr, &result, &c)) return result;
+  const int nm = static_cast<int>(c.Vm.cols());
   // Mass-normalised standard problem: S = mu^-1/2 K* mu^-1/2.
-  const Eigen::MatrixXd S = inv_sqrt_mu.asDiagonal() * Kmm * inv_sqrt_mu.asDiagonal();
+  const Eigen::MatrixXd S = c.inv_sqrt_mu.asDiagonal() * c.Kmm * c.inv_sqrt_mu.asDiagonal();
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (S + S.transpose()));
   if (eig.info() != Eigen::Success) {
     result.message = "the eigenvalue solver did not converge";
@@ -166,27 +213,12 @@ ModalResult CalcModes(const Model& model, Data& data, const ModalOptions& option
   }
   const int count = options.num_modes > 0 ? std::min(options.num_modes, nm) : nm;
   result.eigenvalues = eig.eigenvalues().head(count);
-  const Eigen::MatrixXd y = inv_sqrt_mu.asDiagonal() * eig.eigenvectors().leftCols(count);
-  Eigen::MatrixXd phi_r = Vm * y;
-  if (n0 > 0) phi_r.noalias() += V0 * (condense * y);
+  const Eigen::MatrixXd y = c.inv_sqrt_mu.asDiagonal() * eig.eigenvectors().leftCols(count);
+  Eigen::MatrixXd phi_r = c.Vm * y;
+  if (c.V0.cols() > 0) phi_r.noalias() += c.V0 * (c.condense * y);
   result.modes = Z * phi_r;
-
-  result.omega = result.eigenvalues.cwiseMax(0.0).cwiseSqrt();
-  result.frequency = result.omega / (2.0 * std::numbers::pi);
-  result.damping_ratio = Eigen::VectorXd::Zero(count);
-  const double scale = std::max(eig.eigenvalues().cwiseAbs().maxCoeff(), 1e-300);
-  int negative = 0;
-  for (int i = 0; i < count; ++i) {
-    const double lam = result.eigenvalues(i);
-    if (lam < -1e-8 * scale) ++negative;
-    if (lam > 0.0) {
-      const Eigen::VectorXd phi = result.modes.col(i);
-      result.damping_ratio(i) = phi.dot(sys.damping * phi) / (2.0 * result.omega(i));
-    }
-  }
-  if (negative > 0)
-    result.warnings.push_back(
-        Format("%g negative eigenvalue(s): the equilibrium is unstable", negative));
+  CalcFrequenciesAndDamping(sys, std::max(eig.eigenvalues().cwiseAbs().maxCoeff(), 1e-300), count,
+                            &result);
   result.ok = true;
   return result;
 }

@@ -41,8 +41,6 @@ std::string ElementLabel(const Model& m, int e) {
   return "element " + std::to_string(e - rod.first_element) + " of rod '" + rod.name + "'";
 }
 
-enum class NewtonOutcome { kConverged, kDiverged, kBranch, kSingular };
-
 }  // namespace
 
 void ValidateStaticOptions(const StaticOptions& o, const std::string& owner) {
@@ -62,19 +60,85 @@ void ValidateStaticOptions(const StaticOptions& o, const std::string& owner) {
     require(std::isfinite(value) && value > 0.0, field, "must be finite and > 0");
 }
 
+namespace {
+
+// Scale of the constraint rows: the largest stiffness of the model (method.md §5.6).
+double ConstraintScale(const Model& model) {
+  double k_scale = 1.0;
+  for (const Rod& r : model.rods)
+    k_scale = std::max(k_scale, r.section.stiffness.maxCoeff() / std::max(r.length, 1e-12));
+  for (const Joint& j : model.joints) k_scale = std::max(k_scale, j.stiffness.maxCoeff());
+  return k_scale;
+}
+
+enum class LoadStepEnd { kConverged, kFailed, kStopped };
+
+// Newton iterations at the load factor opt.load_factor from the current state: records the
+// residual norms and the iterations in `step`, the cause of a failure in `cause`.
+LoadStepEnd IterateLoadStep(const Model& model, Data& data, const StaticOptions& options,
+                            const AssemblyOptions& opt, double k_scale, const StopRequest& stop,
+                            StaticStep& step, std::string& cause) {
+  double last_increment = INFINITY;
+  for (int it = 0; it <= options.max_iterations; ++it) {
+    if (stop.Requested()) return LoadStepEnd::kStopped;
+    if (!Assemble(model, data, opt)) {
+      if (data.failed_element >= 0) {
+        cause = ElementLabel(model, data.failed_element) +
+                Format(" rotates by %.4g rad, beyond what one helical element represents "
+                       "(2 pi); use more elements",
+                       data.failed_rotation);
+      } else {
+        cause = "the residual is not finite";
+      }
+      return LoadStepEnd::kFailed;
+    }
+    const double res = model.nv > 0 ? data.residual.head(model.nv).cwiseAbs().maxCoeff() : 0.0;
+    const double con = model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() / k_scale
+                                    : 0.0;
+    step.residual_norms.push_back(res);
+    const double scale = std::max(data.force_scale, 1e-300);
+    // Below this level the residual is round-off (e.g. eps EA |d|/L in a stiff rod).
+    const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
+                         std::max(data.term_scale, data.force_scale);
+    // There the residual no longer measures the error; the last Newton correction does, so
+    // it must be small as well (as in the dynamic solver).
+    const bool at_floor = res <= floor;
+    if (con <= options.constraint_tolerance && last_increment <= options.increment_tolerance &&
+        (at_floor || res <= options.residual_tolerance * scale)) {
+      step.iterations = it;
+      return LoadStepEnd::kConverged;
+    }
+    if (it == options.max_iterations) {
+      cause = Format("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
+                     options.max_iterations, res, res / scale);
+      return LoadStepEnd::kFailed;
+    }
+    if (!SolveAssembledSystem(model, data)) {
+      cause = "the tangent matrix is singular (a mechanism, or unsupported free motion)";
+      return LoadStepEnd::kFailed;
+    }
+    Retract(model, data, data.increment.head(model.nv));
+    data.lambda += k_scale * data.increment.tail(model.nc);
+    last_increment = ScaledIncrementSize(model, data.increment.head(model.nv));
+  }
+  return LoadStepEnd::kFailed;
+}
+
+}  // namespace
+
 StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options,
                          const StopRequest& stop) {
   StaticResult result;
   State saved;
   SaveState(data, &saved);
   Eigen::VectorXd saved_lambda = data.lambda;
+  auto restore = [&] {
+    RestoreState(saved, data);
+    data.lambda = saved_lambda;
+    UpdateBranchReferences(model, data);
+  };
 
-  // Scale of the constraint rows: the largest stiffness of the model (method.md §5.6).
-  double k_scale = 1.0;
-  for (const Rod& r : model.rods)
-    k_scale = std::max(k_scale, r.section.stiffness.maxCoeff() / std::max(r.length, 1e-12));
-  for (const Joint& j : model.joints) k_scale = std::max(k_scale, j.stiffness.maxCoeff());
-
+  const double k_scale = ConstraintScale(model);
   AssemblyOptions opt;
   opt.time = options.time;
   opt.s_constraints = opt.s_multipliers = k_scale;
@@ -90,62 +154,16 @@ StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& op
     opt.load_factor = target;
     StaticStep step;
     step.load_factor = target;
-    NewtonOutcome outcome = NewtonOutcome::kDiverged;
-    double last_increment = INFINITY;
-    for (int it = 0; it <= options.max_iterations; ++it) {
-      if (stop.Requested()) {
-        RestoreState(saved, data);
-        data.lambda = saved_lambda;
-        UpdateBranchReferences(model, data);
-        result.interrupted = true;
-        result.message = Format("static solve interrupted at load factor %.6g", s);
-        return result;
-      }
-      if (!Assemble(model, data, opt)) {
-        if (data.failed_element >= 0) {
-          outcome = NewtonOutcome::kBranch;
-          last_cause = ElementLabel(model, data.failed_element) +
-                       Format(" rotates by %.4g rad, beyond what one helical element represents "
-                              "(2 pi); use more elements",
-                              data.failed_rotation);
-        } else {
-          last_cause = "the residual is not finite";
-        }
-        break;
-      }
-      const double res = model.nv > 0 ? data.residual.head(model.nv).cwiseAbs().maxCoeff() : 0.0;
-      const double con = model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() / k_scale
-                                      : 0.0;
-      step.residual_norms.push_back(res);
-      const double scale = std::max(data.force_scale, 1e-300);
-      // Below this level the residual is round-off (e.g. eps EA |d|/L in a stiff rod).
-      const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
-                           std::max(data.term_scale, data.force_scale);
-      // There the residual no longer measures the error; the last Newton correction does, so
-      // it must be small as well (as in the dynamic solver).
-      const bool at_floor = res <= floor;
-      if (con <= options.constraint_tolerance && last_increment <= options.increment_tolerance &&
-          (at_floor || res <= options.residual_tolerance * scale)) {
-        outcome = NewtonOutcome::kConverged;
-        step.iterations = it;
-        break;
-      }
-      if (it == options.max_iterations) {
-        last_cause = Format("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
-                            options.max_iterations, res, res / scale);
-        break;
-      }
-      if (!SolveAssembledSystem(model, data)) {
-        outcome = NewtonOutcome::kSingular;
-        last_cause = "the tangent matrix is singular (a mechanism, or unsupported free motion)";
-        break;
-      }
-      Retract(model, data, data.increment.head(model.nv));
-      data.lambda += k_scale * data.increment.tail(model.nc);
-      last_increment = ScaledIncrementSize(model, data.increment.head(model.nv));
+    const LoadStepEnd end =
+        IterateLoadStep(model, data, options, opt, k_scale, stop, step, last_cause);
+    if (end == LoadStepEnd::kStopped) {
+      restore();
+      result.interrupted = true;
+      result.message = Format("static solve interrupted at load factor %.6g", s);
+      return result;
     }
     result.total_iterations += step.iterations;
-    if (outcome == NewtonOutcome::kConverged) {
+    if (end == LoadStepEnd::kConverged) {
       UpdateBranchReferences(model, data);
       SaveState(data, &saved);
       saved_lambda = data.lambda;
@@ -158,9 +176,7 @@ StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& op
       continue;
     }
     // Failed load step: back to the last converged state, retry with half the increment.
-    RestoreState(saved, data);
-    data.lambda = saved_lambda;
-    UpdateBranchReferences(model, data);
+    restore();
     ++result.halvings;
     ds *= 0.5;
     // The limit is on consecutive halvings: progress is still made while steps succeed, each

@@ -468,6 +468,95 @@ class PendulumDynamicsTest(unittest.TestCase):
         np.testing.assert_array_equal(sim.node_frame(0), np.eye(4))
 
 
+class ModelBuilderTest(unittest.TestCase):
+    """ModelBuilder from Python: rods along a polyline, the node at a point, joints in one call."""
+
+    def test_rod_along_a_bent_path_has_bisector_frames_at_the_corner(self):
+        b = sf.ModelBuilder()
+        section = sf.Section(np.ones(6), np.ones(6))
+        rod = b.add_rod_along_path("L", [[0, 0, 0], [2, 0, 0], [2, 1, 0]], 2, section)
+        model = b.build()
+        frames = [model.nodes[n].reference for n in model.rods[rod].nodes]
+        positions = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 0.5, 0], [2, 1, 0]]
+        c = math.sqrt(0.5)
+        tangents = [[1, 0, 0], [1, 0, 0], [c, c, 0], [0, 1, 0], [0, 1, 0]]
+        for H, x, t in zip(frames, positions, tangents):
+            np.testing.assert_allclose(H[:3, 3], x, rtol=0, atol=1e-15)
+            np.testing.assert_allclose(H[:3, 0], t, rtol=0, atol=1e-15)  # section axis
+            np.testing.assert_allclose(H[:3, 2], [0, 0, 1], rtol=0, atol=1e-15)  # up
+        # The two elements at the corner are arcs, longer than their chords.
+        self.assertGreater(model.rods[rod].length, 3.0)
+
+    def test_find_node_at_finds_the_node_two_welded_rods_share(self):
+        b = sf.ModelBuilder()
+        section = sf.Section(np.ones(6), np.ones(6))
+        b.add_rod_along_path("a", [[0, 0, 0], [1, 0, 0]], 4, section)
+        shared = b.find_node_at([1, 0, 0], rod=0).node
+        self.assertGreaterEqual(shared, 0)
+        b.add_rod_along_path("c", [[1, 0, 0], [2, 0, 0], [2, 1, 0]], 3, section,
+                             start_node=shared)
+        self.assertEqual(b.find_node_at([1, 0, 0]).node, shared)
+        self.assertEqual(b.find_node_at([1, 0, 0], rod=1).node, shared)
+        miss = b.find_node_at([0.1, 0, 0], rod=0)
+        self.assertEqual(miss.node, -1)
+        self.assertAlmostEqual(miss.distance, 0.1, delta=1e-15)
+        with self.assertRaisesRegex(sf.InputError, "rod 'bad': start_node: the section frames"):
+            b.add_rod_along_path("bad", [[1, 0, 0], [1, 1, 0]], 2, section, start_node=shared)
+
+    def test_pendulum_built_with_a_joint_spec_has_the_small_angle_period(self):
+        g, length, theta0 = 9.81, 0.5, 0.02
+        b = sf.ModelBuilder()
+        pivot = b.add_node(np.eye(4), "pivot")
+        b.add_rigid_body("bob", pivot, 2.0, [length * math.sin(theta0), -length * math.cos(theta0), 0],
+                         1e-10 * np.eye(3))
+        pin = sf.JointSpec()
+        pin.name = "pin"
+        pin.type = sf.JointType.REVOLUTE
+        pin.node_a = sf.GROUND
+        pin.node_b = pivot
+        pin.axis = [0, 0, 1]
+        b.add_joint(pin)
+        b.set_gravity([0, -g, 0])
+        sim = sf.Simulation(sf.Scene(b.build(), "pendulum"))
+        undamped(sim)
+        period = 2 * math.pi * math.sqrt(length / g) * (1 + theta0 ** 2 / 16)
+        h, crossings = 1e-3, []
+        while len(crossings) < 2 and sim.time < 2 * period:
+            t0, v0 = sim.time, sim.joint_velocity("pin")
+            sim.step(h)
+            v1 = sim.joint_velocity("pin")
+            if t0 > 0 and (v0 > 0) != (v1 > 0):
+                crossings.append(t0 + h * v0 / (v0 - v1))
+        self.assertEqual(len(crossings), 2)
+        self.assertAlmostEqual(crossings[1] / period, 1.0, delta=1e-4)
+
+    def test_joint_spec_drive_prescribes_the_coordinate(self):
+        b = sf.ModelBuilder()
+        node = b.add_node(np.eye(4), "slider")
+        b.add_rigid_body("block", node, 1.0, [0, 0, 0], np.eye(3))
+        slide = sf.JointSpec()
+        slide.name = "slide"
+        slide.type = sf.JointType.PRISMATIC
+        slide.node_b = node
+        slide.axis = [1, 0, 0]
+        slide.drive = sf.DriveKind.PRESCRIBED
+        slide.drive_profile = sf.Profile.ramp(0.0, 0.1, 0.05)
+        b.add_joint(slide)
+        sim = sf.Simulation(sf.Scene(b.build()))
+        sim.initialize()
+        while sim.time < 0.2 - 1e-12:
+            sim.step(1e-2)
+        self.assertAlmostEqual(sim.joint_coordinate("slide"), 0.05, delta=1e-12)
+
+    def test_invalid_joint_side_raises_input_error(self):
+        b = sf.ModelBuilder()
+        spec = sf.JointSpec()
+        spec.name = "j"
+        spec.node_b = 3
+        with self.assertRaisesRegex(sf.InputError, "joint 'j': invalid node 3"):
+            b.add_joint(spec)
+
+
 class StaticsTest(unittest.TestCase):
     def test_pendulum_with_a_hinge_spring_balances_gravity(self):
         # Equilibrium k alpha = m g d cos(alpha) (a scalar Newton solve for the reference).

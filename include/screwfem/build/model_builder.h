@@ -7,9 +7,46 @@
 #include <vector>
 
 #include "screwfem/elements/joint.h"
+#include "screwfem/model/errors.h"
 #include "screwfem/model/model.h"
 
 namespace screwfem {
+
+// A joint, added in one call by ModelBuilder::AddJoint(const JointSpec&). The joint frame is
+// world-aligned at `point` in the reference configuration, so H_J = I and the coordinates are 0
+// there (method.md §4.2).
+struct JointSpec {
+  std::string name;
+  JointType type = JointType::kRevolute;
+  int node_a = kGround;  // the two sides: node indices or kGround (not both the same)
+  int node_b = kGround;
+  Vec3 point = Vec3::Zero();  // [m], world
+  // Unit axis of the joint type (plane normal of a planar joint); axis2 is the universal
+  // joint's second axis (orthogonal to axis); pitch [m/rad] of a helical joint. Used as the
+  // type's table row says (JointTypeInfo::uses_axis, uses_axis2, uses_pitch).
+  Vec3 axis = Vec3::UnitZ();
+  Vec3 axis2 = Vec3::Zero();
+  double pitch = 0.0;
+  // Springs and dampers on the coordinates (method.md §4.4), JointSpringCount entries used:
+  // stiffness [N/m or N m/rad], damping [N s/m or N m s/rad], rest [m or rad] (global
+  // coordinates only).
+  Vec6 stiffness = Vec6::Zero();
+  Vec6 damping = Vec6::Zero();
+  Vec6 rest = Vec6::Zero();
+  // A drive on one coordinate (method.md §4.5): prescribed q(t) [m or rad], force f(t) [N or
+  // N m], or a series-elastic spring whose rest value follows the profile.
+  DriveKind drive = DriveKind::kNone;
+  int drive_coordinate = 0;
+  Profile drive_profile;
+};
+
+// The result of ModelBuilder::FindNodeAt: the nearest node and its distance; node is -1 when
+// the nearest one is farther than the tolerance (or there is none).
+struct NodeMatch {
+  int node = -1;
+  int nearest = -1;      // the nearest node, even when out of tolerance
+  double distance = 0.0; // [m] to the nearest node (infinity when there is none)
+};
 
 // Builds a Model through a small C++ API; Build() validates everything and computes the layout.
 class ModelBuilder {
@@ -30,13 +67,34 @@ class ModelBuilder {
   // A rod through existing nodes (curved references allowed: element references are
   // log(H_a^-1 H_b) of the nodes' reference frames).
   int AddRodThroughNodes(std::string name, const std::vector<int>& nodes, const Section& section);
+  // A rod along the polyline `path` (at least two points [m], world) with
+  // `elements_per_segment` elements on each segment. Node frames have x along the segment and z
+  // as close as possible to `up`; at interior path points x is along the bisector of the two
+  // segments (the sum of their unit directions), so that the rod turns there by curving. A path
+  // of two points is AddStraightRod. Optional existing end nodes are shared (welds): their
+  // reference frames must equal the path's frames there. Throws InputError (entity: the rod,
+  // part "path[i]" for a segment of zero length or a point where the path turns back on itself,
+  // "start_node"/"end_node" for a shared node that does not fit).
+  int AddRodAlongPath(std::string name, const std::vector<Vec3>& path, int elements_per_segment,
+                      const Section& section, const Vec3& up = Vec3::UnitZ(), int start_node = -1,
+                      int end_node = -1);
+  // The node nearest to world point p in the reference configuration, among the nodes of rod
+  // `rod` (all nodes when rod < 0), within `tolerance` [m]. A negative tolerance means
+  // 1e-8 max(1, |p|, the distance between the rod's end nodes).
+  NodeMatch FindNodeAt(const Vec3& p, int rod = -1, double tolerance = -1.0) const;
+  // Reference arc length [m] of a rod added so far (the sum of its elements' lengths, as Build
+  // computes them).
+  double RodLength(int rod) const;
   int AddRigidBody(std::string name, int node, double mass, const Vec3& com, const Mat3& inertia);
   int AddJoint(const Joint& joint);  // offsets, basis and names filled by the caller
+  // A joint from its spec (AddJointAt plus springs, dampers and drive). Throws InputError
+  // (entity: the joint, part "node_a"/"node_b" for an invalid side).
+  int AddJoint(const JointSpec& spec);
   // A joint at world point `point` with world axis `axis` (plane normal for planar joints;
   // `axis2` is the second axis of a universal joint), between node_a and node_b (either may be
   // kGround). The joint frame is world-aligned in the reference configuration, so H_J = I and
-  // the coordinates are 0 there (method.md §4.2). Returns the joint index; edit
-  // model().joints[i] to add stiffness, damping or a drive.
+  // the coordinates are 0 there (method.md §4.2). Returns the joint index; AddJoint(JointSpec)
+  // also sets stiffness, damping and a drive.
   int AddJointAt(std::string name, JointType type, int node_a, int node_b, const Vec3& point,
                  const Vec3& axis = Vec3::UnitZ(), const Vec3& axis2 = Vec3::Zero(),
                  double pitch = 0.0);
@@ -49,6 +107,8 @@ class ModelBuilder {
   Model Build() const;
 
  private:
+  // The entity of the rod that the next Add*Rod* call adds (for its errors).
+  EntityRef NextRod() const { return {EntityKind::kRod, static_cast<int>(model_.rods.size()), {}}; }
   Model model_;
 };
 

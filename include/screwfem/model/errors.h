@@ -4,12 +4,35 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace screwfem {
+
+// The entity of a model under construction that an InputError is about: its kind and its index
+// in the builder's arrays (ModelBuilder, model.h), and optionally a named part of it: for rods
+// "path[i]" (a point of AddRodAlongPath's polyline), "start_node" or "end_node" (a shared end
+// node); for joints "node_a" or "node_b". A scene compiler maps it to the place in the file
+// that defined the entity (io/scene_spec.h) without reading the message.
+enum class EntityKind { kNone, kNode, kRod, kBody, kJoint, kPointLoad, kRodLoad };
+struct EntityRef {
+  EntityKind kind = EntityKind::kNone;
+  int index = -1;
+  std::string part;  // empty: the whole entity
+};
 
 class InputError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+  // `message` names the entity ("joint 'j': ..."); `detail` is the same message without that
+  // label, for a caller that names the entity itself (empty: use what()).
+  InputError(const std::string& message, EntityRef entity, std::string detail = {})
+      : std::runtime_error(message), entity_(std::move(entity)), detail_(std::move(detail)) {}
+  const EntityRef& entity() const { return entity_; }
+  const std::string& detail() const { return detail_; }
+
+ private:
+  EntityRef entity_;
+  std::string detail_;
 };
 
 class SolverError : public std::runtime_error {

@@ -1,0 +1,135 @@
+// A scene as plain data, between reading and compiling (docs/architecture.md, "Scenes"): the
+// reader (ReadSceneSpec) turns YAML into a SceneSpec, the compiler (CompileScene) turns a
+// SceneSpec into ModelBuilder calls, the analysis settings and the output specification. A
+// SceneSpec holds no YAML types: points, materials and sections are resolved to values, and
+// entities refer to each other by index. Where each entity came from is kept apart, in the side
+// table SceneSources, so that the physics structs carry no source locations.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "screwfem/build/model_builder.h"
+#include "screwfem/io/scene.h"
+
+namespace screwfem {
+
+// A body: a rigid body at a node, or a soft body (a rod along a polyline).
+struct BodySpec {
+  std::string name;
+  bool rigid = true;
+  bool free = false;   // floating: connected to nothing on purpose
+  // Rigid bodies. The body frame is world-aligned at `origin` in the reference configuration.
+  bool fixed = false;             // welded to the ground
+  Vec3 origin = Vec3::Zero();     // [m], world
+  Vec3 com = Vec3::Zero();        // centre of mass [m], world
+  double mass = 0.0;              // [kg]
+  Mat3 inertia = Mat3::Identity();  // about the centre of mass, body frame [kg m^2]
+  // Soft bodies: ModelBuilder::AddRodAlongPath(name, path, elements, section, up, ...).
+  std::vector<Vec3> path;         // at least two points [m], world
+  int elements = 8;               // per path segment
+  Section section;
+  Vec3 up = Vec3::UnitZ();
+  // Welds: the first (last) node is shared with the node of an earlier soft body at that point.
+  int weld_start = -1;  // body index, -1: none
+  int weld_end = -1;
+};
+
+// A joint between two bodies (or a body and the ground) at joint.point. The compiler finds
+// the sides' nodes (the rigid body's node, or the rod node at the point) and fills
+// joint.node_a and joint.node_b.
+struct JointEntrySpec {
+  int body_a = -1;  // body index, -1: the ground
+  int body_b = -1;
+  JointSpec joint;
+};
+
+// An applied load: at a point of a body (`at`), at arc length s of a soft body, or distributed
+// along a soft body (per unit length).
+struct LoadSpec {
+  enum class Where { kAt, kArcLength, kDistributed };
+  int body = -1;
+  Where where = Where::kAt;
+  Vec3 at = Vec3::Zero();      // [m], world (kAt)
+  double arc_length = 0.0;     // [m] (kArcLength)
+  LoadFrame frame = LoadFrame::kWorld;
+  Vec3 force = Vec3::Zero();   // [N] (or N/m)
+  Vec3 moment = Vec3::Zero();  // [N m] (or N m/m)
+  Profile profile = Profile::Constant(1.0);
+};
+
+// A recorded point: a point of a body at `at`, or a point along a soft body at arc length s.
+struct OutputPointSpec {
+  std::string name;
+  int body = -1;
+  bool along_rod = false;
+  Vec3 at = Vec3::Zero();   // [m], world
+  double arc_length = 0.0;  // [m]
+};
+
+struct OutputsSpec {
+  std::vector<OutputPointSpec> points;
+  std::vector<int> joints;     // joint indices, in the order recorded
+  double interval = 0.0;       // [s]; see OutputSpec
+  bool vtk = true;
+  double vtk_interval = 0.0;   // [s]
+};
+
+struct SceneSpec {
+  std::string name;
+  Vec3 gravity = Vec3::Zero();  // [m/s^2]
+  RodInertia rod_inertia = RodInertia::kExact;
+  std::vector<std::pair<std::string, Vec3>> points;  // named points [m], world
+  std::vector<BodySpec> bodies;
+  std::vector<JointEntrySpec> joints;
+  std::vector<LoadSpec> loads;
+  AnalysisSettings analysis;
+  OutputsSpec outputs;
+};
+
+// ---- the side table of source locations --------------------------------------------------
+
+// A line and column of the scene file (1-based; 0: unknown), or the override that wrote it.
+struct SourceLocation {
+  int line = 0;
+  int column = 0;
+  // Non-null: written by this override (shared by all nodes it wrote).
+  std::shared_ptr<const std::string> override_text;
+};
+
+// A field of the file: where it is and its dotted name in messages ("bodies.arm.weld_start").
+struct FieldSource {
+  SourceLocation location;
+  std::string field;
+};
+
+// Where an entity was defined (its name), and where some of its parts were: for bodies
+// "path[i]" (each path point; "from" and "to" map to path[0] and path[1]), "start_node" and
+// "end_node" (the welds); for joints "node_a" and "node_b" (the sides); for loads and output
+// points "at" and "s". The part names are those of InputError::entity().part.
+struct EntitySource {
+  FieldSource self;
+  std::vector<std::pair<std::string, FieldSource>> parts;
+  const FieldSource* Part(const std::string& name) const;
+};
+
+struct SceneSources {
+  std::string file;  // the source name used in messages
+  FieldSource root;  // the document
+  std::vector<EntitySource> bodies, joints, loads, output_points;
+};
+
+// Reads scene text (docs/scene-format.md) with overrides applied into a spec and the sources
+// of its entities. Checks everything that does not need the model's geometry. Throws
+// InputError "FILE:LINE:COLUMN: FIELD: what was expected".
+SceneSpec ReadSceneSpec(const std::string& yaml_text, const std::string& source_name,
+                        const std::vector<std::string>& overrides, SceneSources* sources);
+
+// Compiles a spec into a Scene through ModelBuilder: finds the nodes of joints, welds, loads
+// and output points, checks that every body is connected, builds the Model. Errors, including
+// the builder's (InputError::entity()), name the entity's place in `sources`.
+Scene CompileScene(const SceneSpec& spec, const SceneSources& sources);
+
+}  // namespace screwfem

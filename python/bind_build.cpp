@@ -1,0 +1,113 @@
+// ModelBuilder (include/screwfem/build/model_builder.h): building a Model from Python, with the
+// Section, Profile and JointSpec values it takes. Frames are 4x4 homogeneous matrices
+// [R x; 0 1] (R must be a rotation; Build() checks).
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <string>
+#include <vector>
+
+#include "bind.h"
+#include "screwfem/build/model_builder.h"
+
+namespace py = pybind11;
+
+namespace screwfem::python {
+
+namespace {
+
+SE3 FrameFromMatrix(const Mat4& T) {
+  SE3 H;
+  H.R = T.topLeftCorner<3, 3>();
+  H.x = T.topRightCorner<3, 1>();
+  return H;
+}
+
+void BindValues(py::module_& m) {
+  py::class_<Section>(m, "Section",
+                      "Rod cross-section (section.h): diagonals of the sectional stiffness K "
+                      "[N, N, N, N m^2, N m^2, N m^2] and mass M per length [kg/m x3, kg m x3].")
+      .def(py::init(&Section::FromDiagonals), py::arg("stiffness"),
+           py::arg("inertia") = Vec6::Zero())
+      .def_readwrite("stiffness", &Section::stiffness)
+      .def_readwrite("inertia", &Section::inertia)
+      .def_readwrite("damping", &Section::damping, "Viscous damping on strain rates (per mode).")
+      .def_readwrite("rayleigh_mass", &Section::rayleigh_mass, "a_M [1/s].")
+      .def_readwrite("rayleigh_stiffness", &Section::rayleigh_stiffness, "a_K [s].");
+
+  py::class_<Profile>(m, "Profile", "A time profile f(t) (profile.h).")
+      .def_static("constant", &Profile::Constant, py::arg("value") = 1.0)
+      .def_static("ramp", &Profile::Ramp, py::arg("t0"), py::arg("t1"), py::arg("scale") = 1.0,
+                  "0 before t0, linear to `scale` at t1.")
+      .def_static("smooth_step", &Profile::SmoothStep, py::arg("t0"), py::arg("t1"),
+                  py::arg("scale") = 1.0)
+      .def_static("sine", &Profile::Sine, py::arg("amplitude"), py::arg("frequency"),
+                  py::arg("phase") = 0.0, py::arg("t0") = 0.0, "frequency in Hz")
+      .def("__call__", &Profile::operator(), py::arg("t"), "f(t).");
+
+  py::class_<JointSpec>(m, "JointSpec",
+                        "A joint for ModelBuilder.add_joint (model_builder.h): type, sides "
+                        "(node indices or GROUND = -1), world point [m] and axes, springs, "
+                        "dampers, rest values and a drive.")
+      .def(py::init<>())
+      .def_readwrite("name", &JointSpec::name)
+      .def_readwrite("type", &JointSpec::type)
+      .def_readwrite("node_a", &JointSpec::node_a)
+      .def_readwrite("node_b", &JointSpec::node_b)
+      .def_readwrite("point", &JointSpec::point)
+      .def_readwrite("axis", &JointSpec::axis)
+      .def_readwrite("axis2", &JointSpec::axis2)
+      .def_readwrite("pitch", &JointSpec::pitch)
+      .def_readwrite("stiffness", &JointSpec::stiffness)
+      .def_readwrite("damping", &JointSpec::damping)
+      .def_readwrite("rest", &JointSpec::rest)
+      .def_readwrite("drive", &JointSpec::drive)
+      .def_readwrite("drive_coordinate", &JointSpec::drive_coordinate)
+      .def_readwrite("drive_profile", &JointSpec::drive_profile);
+
+  py::class_<NodeMatch>(m, "NodeMatch", "Result of ModelBuilder.find_node_at.")
+      .def_readonly("node", &NodeMatch::node, "The node within the tolerance, or -1.")
+      .def_readonly("nearest", &NodeMatch::nearest, "The nearest node (-1 when there is none).")
+      .def_readonly("distance", &NodeMatch::distance, "Distance to the nearest node [m].");
+}
+
+}  // namespace
+
+void BindBuild(py::module_& m) {
+  m.attr("GROUND") = kGround;
+  BindValues(m);
+  using B = ModelBuilder;
+  py::class_<B>(m, "ModelBuilder",
+                "Builds a Model (model_builder.h); build() validates it and raises InputError.")
+      .def(py::init<>())
+      .def(
+          "add_node",
+          [](B& b, const Mat4& frame, std::string name) {
+            return b.AddNode(FrameFromMatrix(frame), std::move(name));
+          },
+          py::arg("frame"), py::arg("name") = std::string{},
+          "A node with the 4x4 reference frame [R x; 0 1]; returns its index.")
+      .def("fix_node", &B::FixNode, py::arg("node"))
+      .def("add_straight_rod", &B::AddStraightRod, py::arg("name"), py::arg("p0"), py::arg("p1"),
+           py::arg("num_elements"), py::arg("section"), py::arg("up") = Vec3::UnitZ(),
+           py::arg("start_node") = -1, py::arg("end_node") = -1)
+      .def("add_rod_along_path", &B::AddRodAlongPath, py::arg("name"), py::arg("path"),
+           py::arg("elements_per_segment"), py::arg("section"), py::arg("up") = Vec3::UnitZ(),
+           py::arg("start_node") = -1, py::arg("end_node") = -1,
+           "A rod along a polyline (points [m]); frames along the segments, along the bisector "
+           "at interior points. start_node/end_node share existing nodes. Returns the rod index.")
+      .def("find_node_at", &B::FindNodeAt, py::arg("point"), py::arg("rod") = -1,
+           py::arg("tolerance") = -1.0,
+           "The node at a world point (of one rod, or of all nodes when rod < 0) -> NodeMatch.")
+      .def("rod_length", &B::RodLength, py::arg("rod"), "Reference arc length [m].")
+      .def("add_rigid_body", &B::AddRigidBody, py::arg("name"), py::arg("node"), py::arg("mass"),
+           py::arg("com"), py::arg("inertia"),
+           "Mass [kg], centre of mass and inertia about it [kg m^2] in the node frame.")
+      .def("add_joint", py::overload_cast<const JointSpec&>(&B::AddJoint), py::arg("spec"),
+           "A joint from a JointSpec; returns its index.")
+      .def("set_gravity", &B::SetGravity, py::arg("g"), "[m/s^2], world frame.")
+      .def("build", &B::Build, "The validated Model.");
+}
+
+}  // namespace screwfem::python

@@ -1,0 +1,351 @@
+// The scene compiler (docs/architecture.md, "Scenes"): a SceneSpec -> ModelBuilder calls -> a
+// Scene. It finds the nodes that joints, welds, loads and output points attach to
+// (ModelBuilder::FindNodeAt), checks that every body is connected, and maps every error,
+// including the builder's (InputError::entity()), to the place in the file that defined the
+// entity (SceneSources).
+#include <sstream>
+
+#include "scene_yaml.h"
+#include "screwfem/io/scene_spec.h"
+#include "screwfem/model/errors.h"
+
+namespace screwfem {
+
+namespace {
+
+std::string FormatVec(const Vec3& v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
+  return s.str();
+}
+
+// The source of entity i, or an empty one (a spec made in code may have no sources).
+const EntitySource& SourceOf(const std::vector<EntitySource>& sources, std::size_t i) {
+  static const EntitySource kNone;
+  return i < sources.size() ? sources[i] : kNone;
+}
+
+// A part of an entity's source, or the entity's own.
+const FieldSource& PartOf(const EntitySource& source, const std::string& part) {
+  const FieldSource* field = source.Part(part);
+  return field != nullptr ? *field : source.self;
+}
+
+class SceneCompiler {
+ public:
+  SceneCompiler(const SceneSpec& spec, const SceneSources& sources)
+      : spec_(spec), src_(sources), r_(sources.file) {}
+
+  Scene Compile();
+
+ private:
+  void AddBodies();
+  void AddRigidBody(int b);
+  void AddSoftBody(int b);
+  void AddJoints();
+  void AddLoads();
+  void CheckConnections() const;
+  void AddOutputs(const Model& model, OutputSpec* out) const;
+
+  // The node of body b at world point p: the rigid body's node, or the rod node there (an
+  // error at `at` otherwise; `what` names the attachment in the message).
+  int NodeAt(int b, const Vec3& p, const FieldSource& at, const std::string& what) const;
+  // Fails at an entity's source, or at its part that `e` names.
+  [[noreturn]] void Fail(const EntitySource& source, const InputError& e) const;
+  [[noreturn]] void Fail(const FieldSource& field, const std::string& what) const {
+    r_.Fail(field.location, field.field, what);
+  }
+  // Maps an error of ModelBuilder::Build to the spec entity that made the builder's entity.
+  [[noreturn]] void RethrowBuildError(const InputError& e) const;
+  const EntitySource& BodySource(int b) const {
+    return SourceOf(src_.bodies, static_cast<std::size_t>(b));
+  }
+  // Every reference to a body in the spec is a valid index (the reader guarantees it; a spec
+  // made in code may not).
+  void CheckReferences() const;
+
+  const SceneSpec& spec_;
+  const SceneSources& src_;
+  scene_yaml::Reader r_;  // for messages
+  ModelBuilder builder_;
+  // Per spec body: the builder's rigid body or rod index, and a rigid body's node.
+  std::vector<int> body_index_, body_node_;
+  std::vector<char> connected_;
+  // Per builder entity: the spec entity that made it (-1: none).
+  std::vector<int> node_body_, rod_body_, rigid_body_, point_load_, rod_load_;
+};
+
+void SceneCompiler::Fail(const EntitySource& source, const InputError& e) const {
+  if (!e.entity().part.empty())
+    if (const FieldSource* part = source.Part(e.entity().part))
+      Fail(*part, e.detail().empty() ? e.what() : e.detail());
+  Fail(source.self, e.what());
+}
+
+void SceneCompiler::RethrowBuildError(const InputError& e) const {
+  const EntityRef& entity = e.entity();
+  auto owner = [&](const std::vector<int>& owners) {
+    return entity.index >= 0 && entity.index < static_cast<int>(owners.size())
+               ? owners[static_cast<std::size_t>(entity.index)]
+               : -1;
+  };
+  const EntitySource* source = nullptr;
+  auto pick = [&](const std::vector<EntitySource>& sources, int i) {
+    if (i >= 0 && i < static_cast<int>(sources.size())) source = &sources[static_cast<std::size_t>(i)];
+  };
+  switch (entity.kind) {
+    case EntityKind::kNode: pick(src_.bodies, owner(node_body_)); break;
+    case EntityKind::kRod: pick(src_.bodies, owner(rod_body_)); break;
+    case EntityKind::kBody: pick(src_.bodies, owner(rigid_body_)); break;
+    case EntityKind::kJoint: pick(src_.joints, entity.index); break;
+    case EntityKind::kPointLoad: pick(src_.loads, owner(point_load_)); break;
+    case EntityKind::kRodLoad: pick(src_.loads, owner(rod_load_)); break;
+    case EntityKind::kNone: break;
+  }
+  if (source != nullptr) Fail(*source, e);
+  throw InputError(src_.file + ": " + e.what());
+}
+
+int SceneCompiler::NodeAt(int b, const Vec3& p, const FieldSource& at,
+                          const std::string& what) const {
+  const BodySpec& body = spec_.bodies[static_cast<std::size_t>(b)];
+  if (body.rigid) return body_node_[static_cast<std::size_t>(b)];
+  const NodeMatch match = builder_.FindNodeAt(p, body_index_[static_cast<std::size_t>(b)]);
+  if (match.node < 0) {
+    std::ostringstream s;
+    s.precision(6);
+    s << what << ": soft body '" << body.name << "' has no node at " << FormatVec(p)
+      << " (nearest node " << match.distance << " m away); attach at an end, a path point or a "
+      << "subdivision point of the rod";
+    Fail(at, s.str());
+  }
+  return match.node;
+}
+
+// --- bodies ------------------------------------------------------------------------------------
+
+void SceneCompiler::AddBodies() {
+  const std::size_t n = spec_.bodies.size();
+  body_index_.assign(n, -1);
+  body_node_.assign(n, -1);
+  connected_.assign(n, 0);
+  // In file order (node and rod numbering follows the file).
+  for (std::size_t b = 0; b < n; ++b) {
+    const std::size_t first_node = builder_.model().nodes.size();
+    if (spec_.bodies[b].rigid)
+      AddRigidBody(static_cast<int>(b));
+    else
+      AddSoftBody(static_cast<int>(b));
+    node_body_.resize(builder_.model().nodes.size(), -1);
+    for (std::size_t i = first_node; i < node_body_.size(); ++i) node_body_[i] = static_cast<int>(b);
+  }
+}
+
+void SceneCompiler::AddRigidBody(int b) {
+  const BodySpec& s = spec_.bodies[static_cast<std::size_t>(b)];
+  const int node = builder_.AddNode(SE3::Translation(s.origin), s.name);
+  if (s.fixed) builder_.FixNode(node);
+  body_node_[static_cast<std::size_t>(b)] = node;
+  body_index_[static_cast<std::size_t>(b)] =
+      builder_.AddRigidBody(s.name, node, s.mass, s.com - s.origin, s.inertia);
+  rigid_body_.push_back(b);
+}
+
+void SceneCompiler::AddSoftBody(int b) {
+  const BodySpec& s = spec_.bodies[static_cast<std::size_t>(b)];
+  const EntitySource& source = BodySource(b);
+  // Welds: the node of the earlier soft body at the path's end (its frame is checked by
+  // AddRodAlongPath).
+  auto weld = [&](int other, const Vec3& p, const char* part) {
+    if (other < 0) return -1;
+    const int node = NodeAt(other, p, PartOf(source, part), "weld");
+    connected_[static_cast<std::size_t>(other)] = connected_[static_cast<std::size_t>(b)] = 1;
+    return node;
+  };
+  const int start = weld(s.weld_start, s.path.front(), "start_node");
+  const int end = weld(s.weld_end, s.path.back(), "end_node");
+  try {
+    body_index_[static_cast<std::size_t>(b)] =
+        builder_.AddRodAlongPath(s.name, s.path, s.elements, s.section, s.up, start, end);
+  } catch (const InputError& e) {
+    Fail(source, e);
+  }
+  rod_body_.push_back(b);
+}
+
+void SceneCompiler::CheckConnections() const {
+  for (std::size_t b = 0; b < spec_.bodies.size(); ++b) {
+    const BodySpec& s = spec_.bodies[b];
+    if (!connected_[b] && !s.fixed && !s.free)
+      Fail(SourceOf(src_.bodies, b).self, "body '" + s.name +
+                                    "' is connected to nothing: add a joint or a weld, or set "
+                                    "'fixed: true' (welded to the ground) or 'free: true' "
+                                    "(floating)");
+  }
+}
+
+// --- joints and loads ----------------------------------------------------------------------
+
+void SceneCompiler::AddJoints() {
+  for (std::size_t i = 0; i < spec_.joints.size(); ++i) {
+    const JointEntrySpec& entry = spec_.joints[i];
+    const EntitySource& source = SourceOf(src_.joints, i);
+    JointSpec j = entry.joint;
+    int* nodes[2] = {&j.node_a, &j.node_b};
+    const int bodies[2] = {entry.body_a, entry.body_b};
+    for (int s = 0; s < 2; ++s) {
+      if (bodies[s] < 0) continue;
+      *nodes[s] = NodeAt(bodies[s], j.point, PartOf(source, s == 0 ? "node_a" : "node_b"),
+                         "joint point");
+      connected_[static_cast<std::size_t>(bodies[s])] = 1;
+    }
+    try {
+      builder_.AddJoint(j);
+    } catch (const InputError& e) {
+      Fail(source, e);
+    }
+  }
+}
+
+void SceneCompiler::AddLoads() {
+  for (std::size_t i = 0; i < spec_.loads.size(); ++i) {
+    const LoadSpec& l = spec_.loads[i];
+    const EntitySource& source = SourceOf(src_.loads, i);
+    const BodySpec& body = spec_.bodies[static_cast<std::size_t>(l.body)];
+    const int index = body_index_[static_cast<std::size_t>(l.body)];
+    if (l.where == LoadSpec::Where::kAt) {
+      PointLoad load;
+      if (body.rigid) {
+        load.node = body_node_[static_cast<std::size_t>(l.body)];
+        load.point = l.at - body.origin;  // the body frame is world-aligned in the reference
+      } else {
+        load.node = NodeAt(l.body, l.at, PartOf(source, "at"), "load point");
+      }
+      load.frame = l.frame;
+      load.force = l.force;
+      load.moment = l.moment;
+      load.profile = l.profile;
+      builder_.AddPointLoad(load);
+      point_load_.push_back(static_cast<int>(i));
+      continue;
+    }
+    RodLoad load;
+    load.rod = index;
+    load.distributed = l.where == LoadSpec::Where::kDistributed;
+    if (!load.distributed) {
+      load.arc_length = l.arc_length;
+      const double length = builder_.RodLength(index);
+      if (load.arc_length > length * (1.0 + 1e-12)) {
+        std::ostringstream msg;
+        msg.precision(9);
+        msg << "arc length beyond the end of the rod (length " << length << " m)";
+        Fail(PartOf(source, "s"), msg.str());
+      }
+    }
+    load.frame = l.frame;
+    load.force = l.force;
+    load.moment = l.moment;
+    load.profile = l.profile;
+    builder_.AddRodLoad(load);
+    rod_load_.push_back(static_cast<int>(i));
+  }
+}
+
+// --- outputs ---------------------------------------------------------------------------------
+
+void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
+  const OutputsSpec& o = spec_.outputs;
+  for (std::size_t i = 0; i < o.points.size(); ++i) {
+    const OutputPointSpec& p = o.points[i];
+    const EntitySource& source = SourceOf(src_.output_points, i);
+    const BodySpec& body = spec_.bodies[static_cast<std::size_t>(p.body)];
+    OutputPoint op;
+    op.name = p.name;
+    if (!p.along_rod) {
+      op.node = NodeAt(p.body, p.at, PartOf(source, "at"), "output point");
+      if (body.rigid) op.offset = p.at - body.origin;
+    } else {
+      op.rod = body_index_[static_cast<std::size_t>(p.body)];
+      op.arc_length = p.arc_length;
+      const double length = model.rods[static_cast<std::size_t>(op.rod)].length;
+      if (op.arc_length > length * (1.0 + 1e-12)) {
+        std::ostringstream s;
+        s.precision(9);
+        s << "arc length beyond the end of the rod (length " << length << " m)";
+        Fail(PartOf(source, "s"), s.str());
+      }
+    }
+    out->points.push_back(op);
+  }
+  for (int j : o.joints) out->joints.push_back({model.joints[static_cast<std::size_t>(j)].name, j});
+  out->interval = o.interval;
+  out->vtk = o.vtk;
+  out->vtk_interval = o.vtk_interval;
+}
+
+void SceneCompiler::CheckReferences() const {
+  const int n = static_cast<int>(spec_.bodies.size());
+  auto check = [&](int b, bool ground_allowed, const EntitySource& source, const char* what) {
+    if ((b < 0 && !(ground_allowed && b == -1)) || b >= n)
+      Fail(source.self, std::string(what) + ": no body " + std::to_string(b));
+  };
+  for (std::size_t i = 0; i < spec_.bodies.size(); ++i) {
+    const BodySpec& b = spec_.bodies[i];
+    check(b.weld_start, true, BodySource(static_cast<int>(i)), "weld_start");
+    check(b.weld_end, true, BodySource(static_cast<int>(i)), "weld_end");
+    if (b.weld_start >= static_cast<int>(i) || b.weld_end >= static_cast<int>(i) ||
+        (b.weld_start >= 0 && spec_.bodies[static_cast<std::size_t>(b.weld_start)].rigid) ||
+        (b.weld_end >= 0 && spec_.bodies[static_cast<std::size_t>(b.weld_end)].rigid))
+      Fail(BodySource(static_cast<int>(i)).self, "a weld needs a soft body defined earlier");
+  }
+  for (std::size_t i = 0; i < spec_.joints.size(); ++i) {
+    check(spec_.joints[i].body_a, true, SourceOf(src_.joints, i), "joint side a");
+    check(spec_.joints[i].body_b, true, SourceOf(src_.joints, i), "joint side b");
+  }
+  for (std::size_t i = 0; i < spec_.loads.size(); ++i) {
+    const LoadSpec& l = spec_.loads[i];
+    check(l.body, false, SourceOf(src_.loads, i), "load");
+    if (l.where != LoadSpec::Where::kAt && spec_.bodies[static_cast<std::size_t>(l.body)].rigid)
+      Fail(SourceOf(src_.loads, i).self, "'s' and 'distributed' apply to soft bodies only");
+  }
+  for (std::size_t i = 0; i < spec_.outputs.points.size(); ++i) {
+    const OutputPointSpec& p = spec_.outputs.points[i];
+    check(p.body, false, SourceOf(src_.output_points, i), "output point");
+    if (p.along_rod && spec_.bodies[static_cast<std::size_t>(p.body)].rigid)
+      Fail(SourceOf(src_.output_points, i).self, "a point along a rod needs a soft body");
+  }
+  for (int j : spec_.outputs.joints)
+    if (j < 0 || j >= static_cast<int>(spec_.joints.size()))
+      Fail(src_.root, "outputs: no joint " + std::to_string(j));
+}
+
+Scene SceneCompiler::Compile() {
+  CheckReferences();
+  Scene scene;
+  scene.source = src_.file;
+  scene.name = spec_.name;
+  builder_.SetGravity(spec_.gravity);
+  builder_.model().rod_inertia = spec_.rod_inertia;
+  AddBodies();
+  AddJoints();
+  AddLoads();
+  CheckConnections();
+  scene.analysis = spec_.analysis;
+  try {
+    scene.model = builder_.Build();
+  } catch (const InputError& e) {
+    RethrowBuildError(e);
+  }
+  AddOutputs(scene.model, &scene.outputs);
+  scene.named_points = spec_.points;
+  return scene;
+}
+
+}  // namespace
+
+Scene CompileScene(const SceneSpec& spec, const SceneSources& sources) {
+  return SceneCompiler(spec, sources).Compile();
+}
+
+}  // namespace screwfem

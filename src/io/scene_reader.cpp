@@ -1,0 +1,981 @@
+// The scene reader (docs/architecture.md, "Scenes"): YAML text -> document tree (scene_yaml.cpp)
+// -> overrides -> a SceneSpec and the source of each entity (scene_spec.h). It checks what the
+// text alone decides (keys, types, ranges, names); the compiler (scene_compiler.cpp) checks what
+// needs the model's geometry. Every message names the file, line, column and field.
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "scene_yaml.h"
+#include "screwfem/io/scene_spec.h"
+#include "screwfem/io/schedule.h"
+#include "screwfem/model/errors.h"
+
+namespace screwfem {
+
+namespace {
+
+using scene_yaml::Location;
+using scene_yaml::Node;
+using scene_yaml::Reader;
+
+// Maps of named entries: an override may not walk through an entry that does not exist.
+const std::vector<std::string> kCollections = {"points", "materials", "sections",      "bodies",
+                                               "joints", "loads",     "outputs.points"};
+
+constexpr int kMaxElements = 100000;  // per rod (or per path segment)
+constexpr long kMaxTotalElements = 1000000;  // all rods of a scene
+constexpr double kMaxSteps = 1e9;     // time steps of one dynamic analysis
+
+const char* const kGroundName = "ground";
+
+const std::vector<std::string> kBodyKeys = {
+    "type", "between", "at",   "mass",    "inertia",  "com", "fixed",      "free",
+    "from", "to",      "path", "section", "elements", "up",  "weld_start", "weld_end"};
+
+std::string Join(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+std::string Index(const std::string& path, std::size_t i) {
+  return path + "[" + std::to_string(i) + "]";
+}
+
+FieldSource Field(const Location& location, std::string field) {
+  return FieldSource{location, std::move(field)};
+}
+
+class SceneReader {
+ public:
+  SceneReader(const std::string& source, SceneSpec* spec, SceneSources* sources)
+      : r_(source), spec_(*spec), src_(*sources) {}
+
+  void Read(const Node& root, const std::string& default_name);
+
+ private:
+  // Sections of the file.
+  void ReadUnits(const Node& root);
+  void ReadDefaults(const Node* node);
+  void ReadPoints(const Node* node);
+  void ReadMaterials(const Node* node);
+  void ReadSections(const Node* node);
+  void ReadBodies(const Node* node);
+  void ReadRigidBody(const Node& n, const std::string& path, BodySpec& b);
+  void ReadSoftBody(const Node& n, const std::string& path, BodySpec& b, EntitySource& source);
+  void ReadPath(const Node& n, const std::string& path, BodySpec& b, EntitySource& source);
+  int ReadWeld(const Node& n, const std::string& path, const char* key, const char* part,
+               int self, EntitySource& source);
+  void ReadJoints(const Node* node);
+  void ReadJointSides(const Node& value, const std::string& path, JointEntrySpec& j,
+                      EntitySource& source);
+  void ReadJointAxes(const Node& value, const std::string& path, const JointTypeInfo& info,
+                     JointSpec& j);
+  void ReadJointSprings(const Node& value, const std::string& path, const JointTypeInfo& info,
+                        JointSpec& j);
+  void ReadLoads(const Node* node);
+  void ReadLoad(const Node& value, const std::string& path, LoadSpec& load, EntitySource& source);
+  void ReadAnalysis(const Node* node);
+  void ReadTimes(const Node& node, const std::string& path);
+  void ReadSolverOptions(const Node& node, const std::string& path);
+  void ReadOutputs(const Node* node);
+  void ReadOutputPoint(const Node& value, const std::string& path, OutputPointSpec& op,
+                       EntitySource& source);
+  void ReadOutputJoints(const Node& jn, const std::string& path);
+
+  // Values.
+  Vec3 Point(const Node& node, const std::string& path) const;
+  Vec3 UnitAxis(const Node& node, const std::string& path) const;
+  Material ReadMaterial(const Node& node, const std::string& path) const;
+  Mat3 ReadInertia(const Node& node, const std::string& path) const;
+  Profile ReadProfile(const Node& node, const std::string& path) const;
+  Profile ReadProfileTerm(const Node& node, const std::string& path) const;
+  Vec6 PerCoordinate(const Node& node, const std::string& path, int k, bool non_negative) const;
+  int Body(const Node& node, const std::string& path) const;  // index of a named body
+  void NotUsedBy(const Node& map, const std::string& path, const std::vector<std::string>& keys,
+                 const std::string& who) const;
+
+  Reader r_;
+  SceneSpec& spec_;
+  SceneSources& src_;
+  int default_elements_ = 8;
+  long total_elements_ = 0;  // over all rods (kMaxTotalElements)
+  Vec3 default_up_ = Vec3::UnitZ();
+  std::vector<std::pair<std::string, Vec3>>& points_ = spec_.points;
+  std::map<std::string, Material> materials_;
+  std::map<std::string, Section> sections_;
+  std::vector<std::string> material_names_, section_names_;
+};
+
+// --- values ------------------------------------------------------------------------------------
+
+Vec3 SceneReader::Point(const Node& node, const std::string& path) const {
+  if (node.IsScalar()) {
+    for (const auto& [name, p] : points_)
+      if (name == node.scalar) return p;
+    std::vector<std::string> names;
+    for (const auto& np : points_) names.push_back(np.first);
+    r_.Fail(node.location, path,
+            "undefined point '" + node.scalar + "'" + scene_yaml::DidYouMean(node.scalar, names));
+  }
+  if (node.IsSequence()) return r_.Vector3(node, path);
+  r_.Fail(node.location, path,
+          "expected a point name or [x, y, z], got " + scene_yaml::Describe(node));
+}
+
+Vec3 SceneReader::UnitAxis(const Node& node, const std::string& path) const {
+  Vec3 a;
+  if (node.IsMap()) {
+    // {from: A, to: B}: the unit vector from point A to point B.
+    r_.CheckKeys(node, path, {"from", "to"});
+    a = Point(r_.Require(node, path, "to"), Join(path, "to")) -
+        Point(r_.Require(node, path, "from"), Join(path, "from"));
+    if (!(a.norm() > 0.0)) r_.Fail(node.location, path, "'from' and 'to' coincide: no direction");
+    return a.normalized();
+  }
+  if (!node.IsSequence())
+    r_.Fail(node.location, path,
+            "expected a unit vector [x, y, z] or {from: POINT, to: POINT}, got " +
+                scene_yaml::Describe(node));
+  a = r_.Vector3(node, path);
+  const double n = a.norm();
+  if (!(n > 0.0)) r_.Fail(node.location, path, "the axis is zero");
+  if (std::abs(n - 1.0) > 1e-6) {
+    std::ostringstream s;
+    s.precision(9);
+    s << "expected a unit vector, got length " << n
+      << " (write it normalised, or as {from: POINT, to: POINT})";
+    r_.Fail(node.location, path, s.str());
+  }
+  return a / n;
+}
+
+Material SceneReader::ReadMaterial(const Node& node, const std::string& path) const {
+  if (node.IsScalar()) {
+    const auto it = materials_.find(node.scalar);
+    if (it == materials_.end())
+      r_.Fail(node.location, path,
+              "undefined material '" + node.scalar + "'" +
+                  scene_yaml::DidYouMean(node.scalar, material_names_));
+    return it->second;
+  }
+  r_.CheckKeys(node, path, {"E", "G", "nu", "density", "shear_coefficient"});
+  Material m;
+  m.youngs_modulus = r_.PositiveNumber(r_.Require(node, path, "E"), Join(path, "E"));
+  const Node* G = node.Find("G");
+  const Node* nu = node.Find("nu");
+  if (G != nullptr && nu != nullptr)
+    r_.Fail(nu->location, Join(path, "nu"), "give either G or nu, not both");
+  if (G == nullptr && nu == nullptr) r_.Fail(node.location, path, "missing key 'G' (or 'nu')");
+  if (G != nullptr) {
+    m.shear_modulus = r_.PositiveNumber(*G, Join(path, "G"));
+  } else {
+    m.poisson_ratio = r_.Number(*nu, Join(path, "nu"));
+    if (!(m.poisson_ratio > -1.0 && m.poisson_ratio <= 0.5))
+      r_.Fail(nu->location, Join(path, "nu"), "expected a Poisson ratio in (-1, 0.5]");
+  }
+  m.density = r_.NonNegativeNumber(r_.Require(node, path, "density"), Join(path, "density"));
+  if (const Node* k = node.Find("shear_coefficient"))
+    m.shear_coefficient = r_.PositiveNumber(*k, Join(path, "shear_coefficient"));
+  return m;
+}
+
+Profile SceneReader::ReadProfile(const Node& node, const std::string& path) const {
+  if (node.IsScalar()) return Profile::Constant(r_.Number(node, path));
+  r_.ExpectMap(node, path);
+  if (const Node* sum = node.Find("sum")) {
+    r_.CheckKeys(node, path, {"sum"});
+    const std::string p = Join(path, "sum");
+    if (!sum->IsSequence() || sum->items.empty())
+      r_.Fail(sum->location, p,
+              "expected a non-empty list of profiles, got " + scene_yaml::Describe(*sum));
+    Profile total;
+    for (std::size_t i = 0; i < sum->items.size(); ++i)
+      total.Add(ReadProfile(sum->items[i], p + "[" + std::to_string(i) + "]"));
+    return total;
+  }
+  return ReadProfileTerm(node, path);
+}
+
+Profile SceneReader::ReadProfileTerm(const Node& node, const std::string& path) const {
+  r_.CheckKeys(node, path,
+               {"type", "value", "scale", "t0", "t1", "frequency", "phase", "times", "values"});
+  const std::string type =
+      r_.Choice(r_.Require(node, path, "type"), Join(path, "type"),
+                {"constant", "ramp", "bang_bang", "s_curve", "smooth_step", "sine", "table"});
+  const Node* value = node.Find("value");
+  const Node* scale = node.Find("scale");
+  if (value != nullptr && scale != nullptr)
+    r_.Fail(scale->location, Join(path, "scale"), "give either value or scale, not both");
+  double s = 1.0;
+  if (value != nullptr) s = r_.Number(*value, Join(path, "value"));
+  if (scale != nullptr) s = r_.Number(*scale, Join(path, "scale"));
+  auto number = [&](const char* key, double fallback) {
+    const Node* n = node.Find(key);
+    return n == nullptr ? fallback : r_.Number(*n, Join(path, key));
+  };
+  const std::string who = type + " profiles";
+  if (type == "constant") {
+    NotUsedBy(node, path, {"t0", "t1", "frequency", "phase", "times", "values"}, who);
+    return Profile::Constant(s);
+  }
+  if (type == "sine") {
+    NotUsedBy(node, path, {"t1", "times", "values"}, who);
+    const double f =
+        r_.NonNegativeNumber(r_.Require(node, path, "frequency"), Join(path, "frequency"));
+    return Profile::Sine(s, f, number("phase", 0.0), number("t0", 0.0));
+  }
+  if (type == "table") {
+    NotUsedBy(node, path, {"t0", "t1", "frequency", "phase"}, who);
+    const Node& tn = r_.Require(node, path, "times");
+    const Node& vn = r_.Require(node, path, "values");
+    const std::vector<double> times = r_.Numbers(tn, Join(path, "times"));
+    const std::vector<double> values = r_.Numbers(vn, Join(path, "values"));
+    if (times.size() < 2) r_.Fail(tn.location, Join(path, "times"), "expected at least two times");
+    if (values.size() != times.size())
+      r_.Fail(vn.location, Join(path, "values"),
+              "expected " + std::to_string(times.size()) + " values (one per time), got " +
+                  std::to_string(values.size()));
+    for (std::size_t i = 1; i < times.size(); ++i)
+      if (!(times[i] > times[i - 1]))
+        r_.Fail(tn.items[i].location, Join(path, "times") + "[" + std::to_string(i) + "]",
+                "times must be strictly increasing");
+    return Profile::Table(times, values, s);
+  }
+  // Windowed laws: 0 before t0, the full value after t1.
+  NotUsedBy(node, path, {"frequency", "phase", "times", "values"}, who);
+  const double t0 = number("t0", 0.0);
+  const Node& t1n = r_.Require(node, path, "t1");
+  const double t1 = r_.Number(t1n, Join(path, "t1"));
+  if (!(t1 > t0)) r_.Fail(t1n.location, Join(path, "t1"), "expected t1 > t0");
+  if (type == "ramp") return Profile::Ramp(t0, t1, s);
+  if (type == "smooth_step") return Profile::SmoothStep(t0, t1, s);
+  return Profile::BangBang(t0, t1, s);  // bang_bang and its alias s_curve
+}
+
+Vec6 SceneReader::PerCoordinate(const Node& node, const std::string& path, int k,
+                                  bool non_negative) const {
+  Vec6 v = Vec6::Zero();
+  if (node.IsScalar()) {
+    const double x = non_negative ? r_.NonNegativeNumber(node, path) : r_.Number(node, path);
+    v.head(k).setConstant(x);
+    return v;
+  }
+  const std::vector<double> list = r_.FixedNumbers(node, path, static_cast<std::size_t>(k));
+  for (int i = 0; i < k; ++i) {
+    v(i) = list[static_cast<std::size_t>(i)];
+    if (non_negative && !(v(i) >= 0.0))
+      r_.Fail(node.items[static_cast<std::size_t>(i)].location,
+              path + "[" + std::to_string(i) + "]", "expected a non-negative number");
+  }
+  return v;
+}
+
+void SceneReader::NotUsedBy(const Node& map, const std::string& path,
+                              const std::vector<std::string>& keys, const std::string& who) const {
+  for (const auto& [entry, value] : map.entries)
+    if (std::find(keys.begin(), keys.end(), entry.key) != keys.end())
+      r_.Fail(entry.key_location, Join(path, entry.key),
+              "'" + entry.key + "' is not used by " + who);
+}
+
+
+// --- sections of the file ----------------------------------------------------------------------
+
+void SceneReader::ReadUnits(const Node& root) {
+  const Node* units = root.Find("units");
+  if (units == nullptr) return;
+  if (!units->IsScalar() || units->scalar != "SI")
+    r_.Fail(units->location, "units",
+            "only SI units are supported (m, kg, s, N, rad), got " + scene_yaml::Describe(*units));
+}
+
+void SceneReader::ReadDefaults(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckKeys(*node, "defaults", {"elements", "up"});
+  if (const Node* e = node->Find("elements"))
+    default_elements_ = r_.Integer(*e, "defaults.elements", 1, kMaxElements);
+  if (const Node* up = node->Find("up")) {
+    default_up_ = r_.Vector3(*up, "defaults.up");
+    if (!(default_up_.norm() > 0.0)) r_.Fail(up->location, "defaults.up", "the vector is zero");
+  }
+}
+
+void SceneReader::ReadPoints(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "points", "point");
+  for (const auto& [entry, value] : node->entries)
+    points_.emplace_back(entry.key, r_.Vector3(value, Join("points", entry.key)));
+}
+
+void SceneReader::ReadMaterials(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "materials", "material");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("materials", entry.key);
+    r_.ExpectMap(value, path);
+    materials_[entry.key] = ReadMaterial(value, path);
+    material_names_.push_back(entry.key);
+  }
+}
+
+void SceneReader::ReadSections(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "sections", "section");
+  for (const auto& [entry, value_binding] : node->entries) {
+    const Node& value = value_binding;  // a variable the lambdas below can capture (Clang 14)
+    const std::string path = Join("sections", entry.key);
+    r_.CheckKeys(value, path,
+                 {"stiffness", "inertia", "damping", "rayleigh_mass", "rayleigh_stiffness", "shape",
+                  "material", "radius", "width", "height", "outer_radius", "inner_radius"});
+    Section s;
+    if (const Node* shape = value.Find("shape")) {
+      NotUsedBy(value, path, {"stiffness", "inertia"}, "sections given by shape and material");
+      const std::string kind =
+          r_.Choice(*shape, Join(path, "shape"), {"circle", "rectangle", "tube"});
+      const Material m = ReadMaterial(r_.Require(value, path, "material"), Join(path, "material"));
+      auto positive = [&](const char* key) {
+        return r_.PositiveNumber(r_.Require(value, path, key), Join(path, key));
+      };
+      if (kind == "circle") {
+        NotUsedBy(value, path, {"width", "height", "outer_radius", "inner_radius"}, "circles");
+        s = Section::Circle(positive("radius"), m);
+      } else if (kind == "rectangle") {
+        NotUsedBy(value, path, {"radius", "outer_radius", "inner_radius"}, "rectangles");
+        s = Section::Rectangle(positive("width"), positive("height"), m);
+      } else {
+        NotUsedBy(value, path, {"radius", "width", "height"}, "tubes");
+        const double ro = positive("outer_radius");
+        const Node& in = r_.Require(value, path, "inner_radius");
+        const double ri = r_.NonNegativeNumber(in, Join(path, "inner_radius"));
+        if (!(ri < ro))
+          r_.Fail(in.location, Join(path, "inner_radius"), "expected inner_radius < outer_radius");
+        s = Section::Tube(ro, ri, m);
+      }
+    } else {
+      NotUsedBy(value, path,
+                {"material", "radius", "width", "height", "outer_radius", "inner_radius"},
+                "sections given by stiffness (add 'shape')");
+      const Node& kn = r_.Require(value, path, "stiffness");
+      s.stiffness = r_.Vector6(kn, Join(path, "stiffness"));
+      for (int i = 0; i < 6; ++i)
+        if (!(s.stiffness(i) > 0.0))
+          r_.Fail(kn.items[static_cast<std::size_t>(i)].location,
+                  Join(path, "stiffness") + "[" + std::to_string(i) + "]",
+                  "stiffness entries must be positive");
+      if (const Node* in = value.Find("inertia")) {
+        s.inertia = r_.Vector6(*in, Join(path, "inertia"));
+        for (int i = 0; i < 6; ++i)
+          if (!(s.inertia(i) >= 0.0))
+            r_.Fail(in->items[static_cast<std::size_t>(i)].location,
+                    Join(path, "inertia") + "[" + std::to_string(i) + "]",
+                    "inertia entries must be non-negative");
+      }
+    }
+    if (const Node* d = value.Find("damping")) {
+      s.damping = r_.Vector6(*d, Join(path, "damping"));
+      for (int i = 0; i < 6; ++i)
+        if (!(s.damping(i) >= 0.0))
+          r_.Fail(d->items[static_cast<std::size_t>(i)].location,
+                  Join(path, "damping") + "[" + std::to_string(i) + "]",
+                  "damping entries must be non-negative");
+    }
+    if (const Node* a = value.Find("rayleigh_mass"))
+      s.rayleigh_mass = r_.NonNegativeNumber(*a, Join(path, "rayleigh_mass"));
+    if (const Node* a = value.Find("rayleigh_stiffness"))
+      s.rayleigh_stiffness = r_.NonNegativeNumber(*a, Join(path, "rayleigh_stiffness"));
+    sections_[entry.key] = s;
+    section_names_.push_back(entry.key);
+  }
+}
+
+int SceneReader::Body(const Node& node, const std::string& path) const {
+  const std::string name = r_.Text(node, path);
+  for (std::size_t b = 0; b < spec_.bodies.size(); ++b)
+    if (spec_.bodies[b].name == name) return static_cast<int>(b);
+  std::vector<std::string> names;
+  for (const BodySpec& b : spec_.bodies) names.push_back(b.name);
+  r_.Fail(node.location, path,
+          "undefined body '" + name + "'" + scene_yaml::DidYouMean(name, names));
+}
+
+void SceneReader::ReadBodies(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "bodies", "body");
+  // Names and types first: welds, joints and loads refer to bodies by name.
+  std::vector<const Node*> values;
+  for (const auto& [entry, value] : node->entries) {
+    BodySpec b;
+    b.name = entry.key;
+    const std::string path = Join("bodies", entry.key);
+    if (b.name == kGroundName)
+      r_.Fail(entry.key_location, path, "'ground' is reserved for the world frame");
+    r_.ExpectMap(value, path);
+    const std::string type = r_.Choice(r_.Require(value, path, "type"), Join(path, "type"),
+                                       {"rigid", "soft", "rod"});
+    b.rigid = type == "rigid";
+    spec_.bodies.push_back(b);
+    src_.bodies.push_back({Field(entry.key_location, path), {}});
+    values.push_back(&value);
+  }
+  // Then each body in file order (node and rod numbering follows the file).
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    BodySpec& b = spec_.bodies[i];
+    EntitySource& source = src_.bodies[i];
+    if (b.rigid)
+      ReadRigidBody(*values[i], source.self.field, b);
+    else
+      ReadSoftBody(*values[i], source.self.field, b, source);
+  }
+}
+
+void SceneReader::ReadRigidBody(const Node& n, const std::string& path, BodySpec& b) {
+  r_.CheckKeys(n, path, kBodyKeys);
+  NotUsedBy(n, path, {"from", "to", "path", "section", "elements", "up", "weld_start", "weld_end"},
+            "rigid bodies");
+  const Node* between = n.Find("between");
+  const Node* at = n.Find("at");
+  if (between != nullptr && at != nullptr)
+    r_.Fail(at->location, Join(path, "at"), "give either 'between' (two points) or 'at', not both");
+  if (between == nullptr && at == nullptr)
+    r_.Fail(n.location, path, "missing key 'between' (two points) or 'at' (one point)");
+  Vec3& com_world = b.com;
+  if (between != nullptr) {
+    const std::string p = Join(path, "between");
+    if (!between->IsSequence() || between->items.size() != 2)
+      r_.Fail(between->location, p,
+              "expected two points [A, B], got " + scene_yaml::Describe(*between));
+    const Vec3 a = Point(between->items[0], p + "[0]");
+    const Vec3 c = Point(between->items[1], p + "[1]");
+    if (!((c - a).norm() > 0.0))
+      r_.Fail(between->location, p, "the two points coincide (zero-length body; use 'at')");
+    b.origin = a;
+    com_world = 0.5 * (a + c);
+  } else {
+    b.origin = Point(*at, Join(path, "at"));
+    com_world = b.origin;
+  }
+  if (const Node* com = n.Find("com")) com_world = Point(*com, Join(path, "com"));
+  b.mass = r_.PositiveNumber(r_.Require(n, path, "mass"), Join(path, "mass"));
+  b.inertia = ReadInertia(r_.Require(n, path, "inertia"), Join(path, "inertia"));
+  if (const Node* f = n.Find("fixed")) b.fixed = r_.Bool(*f, Join(path, "fixed"));
+  if (const Node* f = n.Find("free")) b.free = r_.Bool(*f, Join(path, "free"));
+  if (b.fixed && b.free)
+    r_.Fail(n.Find("free")->location, Join(path, "free"), "a body cannot be both fixed and free");
+}
+
+// A 3x3 matrix, nine numbers, or three principal moments; symmetric positive definite.
+Mat3 SceneReader::ReadInertia(const Node& in, const std::string& ip) const {
+  Mat3 J = Mat3::Zero();
+  if (in.IsSequence() && in.items.size() == 3 && in.items[0].IsSequence()) {
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 row =
+          r_.Vector3(in.items[static_cast<std::size_t>(i)], ip + "[" + std::to_string(i) + "]");
+      J.row(i) = row.transpose();
+    }
+  } else if (in.IsSequence() && in.items.size() == 9) {
+    const std::vector<double> v = r_.Numbers(in, ip);
+    for (int i = 0; i < 9; ++i) J(i / 3, i % 3) = v[static_cast<std::size_t>(i)];
+  } else if (in.IsSequence() && in.items.size() == 3) {
+    const Vec3 d = r_.Vector3(in, ip);
+    for (int i = 0; i < 3; ++i)
+      if (!(d(i) > 0.0))
+        r_.Fail(in.items[static_cast<std::size_t>(i)].location, ip + "[" + std::to_string(i) + "]",
+                "principal moments of inertia must be positive");
+    J = d.asDiagonal();
+  } else {
+    r_.Fail(in.location, ip,
+            "expected 3 principal moments [Jxx, Jyy, Jzz] or a 3x3 matrix, got " +
+                (in.IsSequence() ? "a list of " + std::to_string(in.items.size())
+                                 : scene_yaml::Describe(in)));
+  }
+  if ((J - J.transpose()).norm() > 1e-12 * std::max(1e-300, J.norm()))
+    r_.Fail(in.location, ip, "the inertia matrix must be symmetric");
+  if (Eigen::LLT<Mat3>(J).info() != Eigen::Success || !(J.determinant() > 0.0))
+    r_.Fail(in.location, ip, "the inertia matrix must be positive definite");
+  return J;
+}
+
+void SceneReader::ReadSoftBody(const Node& n, const std::string& path, BodySpec& b,
+                               EntitySource& source) {
+  r_.CheckKeys(n, path, kBodyKeys);
+  NotUsedBy(n, path, {"between", "at", "mass", "inertia", "com", "fixed"},
+            "soft bodies (a soft body is clamped to the ground by a fixed joint)");
+  const Node& sn = r_.Require(n, path, "section");
+  const std::string section_name = r_.Text(sn, Join(path, "section"));
+  const auto sec = sections_.find(section_name);
+  if (sec == sections_.end())
+    r_.Fail(sn.location, Join(path, "section"),
+            "undefined section '" + section_name + "'" +
+                scene_yaml::DidYouMean(section_name, section_names_));
+  b.section = sec->second;
+  b.elements = default_elements_;
+  if (const Node* e = n.Find("elements"))
+    b.elements = r_.Integer(*e, Join(path, "elements"), 1, kMaxElements);
+  b.up = default_up_;
+  if (const Node* u = n.Find("up")) {
+    b.up = r_.Vector3(*u, Join(path, "up"));
+    if (!(b.up.norm() > 0.0)) r_.Fail(u->location, Join(path, "up"), "the vector is zero");
+  }
+  if (const Node* f = n.Find("free")) b.free = r_.Bool(*f, Join(path, "free"));
+  ReadPath(n, path, b, source);
+  total_elements_ += static_cast<long>(b.elements) * static_cast<long>(b.path.size() - 1);
+  if (total_elements_ > kMaxTotalElements)
+    r_.Fail(n.Find("elements") != nullptr ? n.Find("elements")->location : n.location, path,
+            "the scene's rods have more than " + std::to_string(kMaxTotalElements) +
+                " elements in all (the limit)");
+  const int self = static_cast<int>(&b - spec_.bodies.data());
+  b.weld_start = ReadWeld(n, path, "weld_start", "start_node", self, source);
+  b.weld_end = ReadWeld(n, path, "weld_end", "end_node", self, source);
+}
+
+// The polyline: from/to (one straight segment) or path (several); the source of each point is
+// the part "path[i]".
+void SceneReader::ReadPath(const Node& n, const std::string& path, BodySpec& b,
+                           EntitySource& source) {
+  const Node* from = n.Find("from");
+  const Node* to = n.Find("to");
+  const Node* poly = n.Find("path");
+  if (poly != nullptr && (from != nullptr || to != nullptr))
+    r_.Fail(poly->location, Join(path, "path"), "give either 'from' and 'to', or 'path', not both");
+  auto add = [&](const Node& point, const std::string& field) {
+    source.parts.emplace_back(Index("path", b.path.size()), Field(point.location, field));
+    b.path.push_back(Point(point, field));
+  };
+  if (poly != nullptr) {
+    const std::string p = Join(path, "path");
+    if (!poly->IsSequence() || poly->items.size() < 2)
+      r_.Fail(poly->location, p,
+              "expected a list of at least two points, got " + scene_yaml::Describe(*poly));
+    for (std::size_t i = 0; i < poly->items.size(); ++i) add(poly->items[i], Index(p, i));
+    return;
+  }
+  if (from == nullptr) r_.Fail(n.location, path, "missing key 'from' (or 'path')");
+  if (to == nullptr) r_.Fail(n.location, path, "missing key 'to'");
+  add(*from, Join(path, "from"));
+  add(*to, Join(path, "to"));
+}
+
+// A weld: the end node is shared with an earlier soft body (a rigid clamp without extra
+// unknowns). Returns the body index, -1 without the key.
+int SceneReader::ReadWeld(const Node& n, const std::string& path, const char* key,
+                          const char* part, int self, EntitySource& source) {
+  const Node* w = n.Find(key);
+  if (w == nullptr) return -1;
+  const std::string wp = Join(path, key);
+  const int other = Body(*w, wp);
+  if (other == self) r_.Fail(w->location, wp, "a soft body cannot be welded to itself");
+  const BodySpec& o = spec_.bodies[static_cast<std::size_t>(other)];
+  if (o.rigid || other > self)
+    r_.Fail(w->location, wp,
+            "'" + o.name +
+                "' must be a soft body defined earlier in the file (to weld to a "
+                "rigid body, use a joint of type fixed)");
+  source.parts.emplace_back(part, Field(w->location, wp));
+  return other;
+}
+
+void SceneReader::ReadJoints(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "joints", "joint");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("joints", entry.key);
+    src_.joints.push_back({Field(entry.key_location, path), {}});
+    EntitySource& source = src_.joints.back();
+    r_.CheckKeys(value, path,
+                 {"type", "at", "between", "axis", "axis2", "pitch", "stiffness", "damping", "rest",
+                  "drive"});
+    const std::string type_name =
+        r_.Choice(r_.Require(value, path, "type"), Join(path, "type"), JointTypeNameList());
+    const JointTypeInfo& info = *FindJointType(type_name);
+    JointEntrySpec entry_spec;
+    JointSpec& j = entry_spec.joint;
+    j.name = entry.key;
+    j.type = info.type;
+    j.point = Point(r_.Require(value, path, "at"), Join(path, "at"));
+    ReadJointSides(value, path, entry_spec, source);
+    ReadJointAxes(value, path, info, j);
+    ReadJointSprings(value, path, info, j);
+    spec_.joints.push_back(entry_spec);
+  }
+}
+
+// between: [A, B], ground or body names; their sources are the parts node_a and node_b.
+void SceneReader::ReadJointSides(const Node& value, const std::string& path, JointEntrySpec& j,
+                                 EntitySource& source) {
+  const Node& bn = r_.Require(value, path, "between");
+  const std::string bp = Join(path, "between");
+  if (!bn.IsSequence() || bn.items.size() != 2)
+    r_.Fail(bn.location, bp,
+            "expected two sides [A, B] (ground or body names), got " + scene_yaml::Describe(bn));
+  int* sides[2] = {&j.body_a, &j.body_b};
+  for (std::size_t s = 0; s < 2; ++s) {
+    const Node& sn = bn.items[s];
+    const std::string sp = Index(bp, s);
+    source.parts.emplace_back(s == 0 ? "node_a" : "node_b", Field(sn.location, sp));
+    if (r_.Text(sn, sp) != kGroundName) *sides[s] = Body(sn, sp);
+  }
+  if (j.body_a < 0 && j.body_b < 0) r_.Fail(bn.location, bp, "both sides are the ground");
+  if (j.body_a == j.body_b)
+    r_.Fail(bn.location, bp,
+            "both sides are the same body '" +
+                spec_.bodies[static_cast<std::size_t>(j.body_a)].name + "'");
+}
+
+void SceneReader::ReadJointAxes(const Node& value, const std::string& path,
+                                const JointTypeInfo& info, JointSpec& j) {
+  const std::string who = std::string(info.name) + " joints";
+  if (info.uses_axis) {
+    j.axis = UnitAxis(r_.Require(value, path, "axis"), Join(path, "axis"));
+  } else {
+    NotUsedBy(value, path, {"axis"}, who);
+  }
+  if (info.uses_axis2) {
+    const Node& a2 = r_.Require(value, path, "axis2");
+    j.axis2 = UnitAxis(a2, Join(path, "axis2"));
+    if (std::abs(j.axis.dot(j.axis2)) > 1e-6)
+      r_.Fail(a2.location, Join(path, "axis2"), "must be orthogonal to 'axis'");
+    j.axis2 = (j.axis2 - j.axis.dot(j.axis2) * j.axis).normalized();
+  } else {
+    NotUsedBy(value, path, {"axis2"}, who);
+  }
+  if (info.uses_pitch) {
+    j.pitch = r_.Number(r_.Require(value, path, "pitch"), Join(path, "pitch"));
+  } else {
+    NotUsedBy(value, path, {"pitch"}, who);
+  }
+}
+
+// Springs, dampers, drive (method.md §4.4, §4.5).
+void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
+                                   const JointTypeInfo& info, JointSpec& j) {
+  const std::string who = std::string(info.name) + " joints";
+  const int k = info.dof;
+  const int springs = info.spring_law == JointSpringLaw::kRelativeMotion ? 6 : k;  // JointSpringCount
+  if (springs == 0) NotUsedBy(value, path, {"stiffness", "damping", "rest", "drive"}, who);
+  if (!info.global_coordinates)
+    NotUsedBy(value, path, {"rest", "drive"}, who + " (no global coordinates)");
+  if (const Node* s = value.Find("stiffness"))
+    j.stiffness = PerCoordinate(*s, Join(path, "stiffness"), springs, true);
+  if (const Node* d = value.Find("damping"))
+    j.damping = PerCoordinate(*d, Join(path, "damping"), springs, true);
+  if (const Node* rest = value.Find("rest")) j.rest = PerCoordinate(*rest, Join(path, "rest"), k, false);
+  const Node* drive = value.Find("drive");
+  if (drive == nullptr) return;
+  const std::string dp = Join(path, "drive");
+  r_.CheckKeys(*drive, dp, {"type", "coordinate", "profile"});
+  std::vector<std::string> kinds = EnumNameList<DriveKind>();
+  kinds.erase(kinds.begin());  // "none": a passive joint has no `drive` key
+  j.drive = *EnumFromName<DriveKind>(
+      r_.Choice(r_.Require(*drive, dp, "type"), Join(dp, "type"), kinds));
+  if (const Node* c = drive->Find("coordinate"))
+    j.drive_coordinate = r_.Integer(*c, Join(dp, "coordinate"), 0, k - 1);
+  j.drive_profile = ReadProfile(r_.Require(*drive, dp, "profile"), Join(dp, "profile"));
+  if (j.drive == DriveKind::kSeriesElastic && !(j.stiffness(j.drive_coordinate) > 0.0))
+    r_.Fail(drive->location, dp,
+            "a series_elastic drive needs a positive stiffness on coordinate " +
+                std::to_string(j.drive_coordinate) + " (the spring it drives)");
+}
+
+void SceneReader::ReadLoads(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "loads", "load");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("loads", entry.key);
+    src_.loads.push_back({Field(entry.key_location, path), {}});
+    spec_.loads.emplace_back();
+    ReadLoad(value, path, spec_.loads.back(), src_.loads.back());
+  }
+}
+
+void SceneReader::ReadLoad(const Node& value, const std::string& path, LoadSpec& load,
+                           EntitySource& source) {
+  r_.CheckKeys(value, path,
+               {"body", "at", "s", "distributed", "force", "moment", "frame", "profile"});
+  load.body = Body(r_.Require(value, path, "body"), Join(path, "body"));
+  const bool rigid = spec_.bodies[static_cast<std::size_t>(load.body)].rigid;
+  const Node* f = value.Find("force");
+  const Node* m = value.Find("moment");
+  if (f == nullptr && m == nullptr) r_.Fail(value.location, path, "missing key 'force' (or 'moment')");
+  if (f != nullptr) load.force = r_.Vector3(*f, Join(path, "force"));
+  if (m != nullptr) load.moment = r_.Vector3(*m, Join(path, "moment"));
+  if (const Node* fr = value.Find("frame")) load.frame = r_.Enum<LoadFrame>(*fr, Join(path, "frame"));
+  if (const Node* p = value.Find("profile")) load.profile = ReadProfile(*p, Join(path, "profile"));
+
+  // Where: a point of a rigid body, a rod node, a rod section at arc length s, or the
+  // whole rod (per unit length).
+  const Node* at = value.Find("at");
+  const Node* s = value.Find("s");
+  bool distributed = false;
+  if (const Node* d = value.Find("distributed"))
+    distributed = r_.Bool(*d, Join(path, "distributed"));
+  const int given = (at != nullptr) + (s != nullptr) + (distributed ? 1 : 0);
+  if (given > 1) r_.Fail(value.location, path, "give one of 'at', 's' or 'distributed: true'");
+  if (rigid && (s != nullptr || distributed))
+    r_.Fail(value.location, path, "'s' and 'distributed' apply to soft bodies only");
+  if (given == 0)
+    r_.Fail(value.location, path,
+            rigid ? "missing key 'at'" : "missing key 'at' (or 's', or 'distributed: true')");
+  if (at != nullptr) {
+    load.where = LoadSpec::Where::kAt;
+    load.at = Point(*at, Join(path, "at"));
+    source.parts.emplace_back("at", Field(at->location, Join(path, "at")));
+  } else if (s != nullptr) {
+    load.where = LoadSpec::Where::kArcLength;
+    load.arc_length = r_.NonNegativeNumber(*s, Join(path, "s"));
+    source.parts.emplace_back("s", Field(s->location, Join(path, "s")));
+  } else {
+    load.where = LoadSpec::Where::kDistributed;
+  }
+}
+
+void SceneReader::ReadAnalysis(const Node* node) {
+  AnalysisSettings* a = &spec_.analysis;
+  a->statics.time = a->start_time;
+  if (node == nullptr || node->IsNull()) return;
+  const std::string path = "analysis";
+  r_.CheckKeys(*node, path,
+               {"type", "start_time", "end_time", "step", "rho_inf", "tolerances", "max_iterations",
+                "max_halvings", "align_steps", "static_preload", "load_steps", "rod_inertia",
+                "newton", "predictor", "convergence"});
+  if (const Node* t = node->Find("type")) a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
+  ReadTimes(*node, path);
+  ReadSolverOptions(*node, path);
+  if (const Node* t = node->Find("align_steps"))
+    a->align_steps = r_.Bool(*t, Join(path, "align_steps"));
+  if (const Node* t = node->Find("static_preload"))
+    a->static_preload = r_.Bool(*t, Join(path, "static_preload"));
+  if (const Node* t = node->Find("rod_inertia"))
+    spec_.rod_inertia = r_.Enum<RodInertia>(*t, Join(path, "rod_inertia"));
+  // Statics evaluates the profiles at the end time (static analyses) or at the start time
+  // (the preload of a dynamic analysis).
+  a->statics.time = a->kind == AnalysisKind::kStatic ? a->end_time : a->start_time;
+}
+
+// start_time, end_time, step: a time grid that a dynamic analysis can step through.
+void SceneReader::ReadTimes(const Node& node, const std::string& path) {
+  AnalysisSettings* a = &spec_.analysis;
+  auto find = [&](const char* key) { return node.Find(key); };
+  if (const Node* t = find("start_time")) a->start_time = r_.Number(*t, Join(path, "start_time"));
+  if (const Node* t = find("end_time")) {
+    a->end_time = r_.Number(*t, Join(path, "end_time"));
+    if (!(a->end_time > a->start_time))
+      r_.Fail(t->location, Join(path, "end_time"), "expected end_time > start_time");
+  } else if (!(a->end_time > a->start_time)) {
+    r_.Fail(node.location, path, "start_time must be before end_time (default 1 s)");
+  }
+  if (const Node* t = find("step")) a->step = r_.PositiveNumber(*t, Join(path, "step"));
+  if (a->kind != AnalysisKind::kDynamic) return;
+  if ((a->end_time - a->start_time) / a->step > kMaxSteps)
+    r_.Fail(find("step") != nullptr ? find("step")->location : node.location, Join(path, "step"),
+            "more than 1e9 time steps from start_time to end_time");
+  // Times so large that their doubles are coarser than the step (schedule.h).
+  const std::string problem = TimeGridProblem(a->start_time, a->end_time, a->step);
+  if (!problem.empty()) {
+    const char* key = std::abs(a->start_time) > std::abs(a->end_time) ? "start_time" : "end_time";
+    const Node* at = find(key) != nullptr ? find(key) : find("step") != nullptr ? find("step") : &node;
+    r_.Fail(at->location, Join(path, key), problem);
+  }
+}
+
+// The Newton iteration's options, shared by dynamics and statics where both have them.
+void SceneReader::ReadSolverOptions(const Node& node, const std::string& path) {
+  AnalysisSettings* a = &spec_.analysis;
+  if (const Node* t = node.Find("rho_inf")) {
+    a->dynamic.rho_inf = r_.Number(*t, Join(path, "rho_inf"));
+    if (!(a->dynamic.rho_inf >= 0.0 && a->dynamic.rho_inf <= 1.0))
+      r_.Fail(t->location, Join(path, "rho_inf"), "expected a spectral radius in [0, 1]");
+  }
+  if (const Node* t = node.Find("tolerances")) {
+    const std::string tp = Join(path, "tolerances");
+    r_.CheckKeys(*t, tp, {"increment", "constraint", "residual"});
+    if (const Node* v = t->Find("increment"))
+      a->dynamic.increment_tolerance = a->statics.increment_tolerance =
+          r_.PositiveNumber(*v, Join(tp, "increment"));
+    if (const Node* v = t->Find("constraint"))
+      a->dynamic.constraint_tolerance = a->statics.constraint_tolerance =
+          r_.PositiveNumber(*v, Join(tp, "constraint"));
+    if (const Node* v = t->Find("residual"))
+      a->dynamic.residual_tolerance = a->statics.residual_tolerance =
+          r_.PositiveNumber(*v, Join(tp, "residual"));
+  }
+  if (const Node* t = node.Find("max_iterations"))
+    a->dynamic.max_iterations = a->statics.max_iterations =
+        r_.Integer(*t, Join(path, "max_iterations"), 1, kMaxNewtonIterations);
+  if (const Node* t = node.Find("max_halvings"))
+    a->dynamic.max_halvings = a->statics.max_halvings =
+        r_.Integer(*t, Join(path, "max_halvings"), 0, kMaxHalvings);
+  if (const Node* t = node.Find("newton"))
+    a->dynamic.newton_matrix = r_.Enum<NewtonMatrix>(*t, Join(path, "newton"));
+  if (const Node* t = node.Find("predictor"))
+    a->dynamic.predictor = r_.Enum<Predictor>(*t, Join(path, "predictor"));
+  if (const Node* t = node.Find("convergence"))
+    a->dynamic.convergence = r_.Enum<ConvergenceTest>(*t, Join(path, "convergence"));
+  if (const Node* t = node.Find("load_steps"))
+    a->statics.load_steps = r_.Integer(*t, Join(path, "load_steps"), 1, kMaxLoadSteps);
+}
+
+// A whole number of steps, about (end - start) / count long (one step at least).
+double DefaultOutputInterval(const AnalysisSettings& a, int count) {
+  if (a.kind == AnalysisKind::kStatic) return 0.0;
+  const double steps = (a.end_time - a.start_time) / a.step;
+  return a.step * std::max(1.0, std::round(steps / count));
+}
+
+void SceneReader::ReadOutputs(const Node* node) {
+  OutputsSpec* out = &spec_.outputs;
+  out->interval = DefaultOutputInterval(spec_.analysis, kDefaultOutputRows);
+  out->vtk_interval = DefaultOutputInterval(spec_.analysis, kDefaultVtkFrames);
+  // By default, every joint with coordinates.
+  for (std::size_t j = 0; j < spec_.joints.size(); ++j)
+    if (GetJointTypeInfo(spec_.joints[j].joint.type).dof > 0)
+      out->joints.push_back(static_cast<int>(j));
+  if (node == nullptr || node->IsNull()) return;
+  const std::string path = "outputs";
+  r_.CheckKeys(*node, path, {"points", "joints", "interval", "vtk", "vtk_format", "vtk_interval"});
+  if (const Node* pts = node->Find("points")) {
+    const std::string pp = Join(path, "points");
+    r_.CheckNames(*pts, pp, "output point");
+    for (const auto& [entry, value] : pts->entries) {
+      const std::string p = Join(pp, entry.key);
+      src_.output_points.push_back({Field(entry.key_location, p), {}});
+      out->points.emplace_back();
+      out->points.back().name = entry.key;
+      ReadOutputPoint(value, p, out->points.back(), src_.output_points.back());
+    }
+  }
+  if (const Node* jn = node->Find("joints")) ReadOutputJoints(*jn, Join(path, "joints"));
+  if (const Node* v = node->Find("interval"))
+    out->interval = r_.NonNegativeNumber(*v, Join(path, "interval"));
+  if (const Node* v = node->Find("vtk")) out->vtk = r_.Bool(*v, Join(path, "vtk"));
+  if (const Node* v = node->Find("vtk_format"))
+    out->vtk_format = r_.Enum<VtkFormat>(*v, Join(path, "vtk_format"));
+  if (const Node* v = node->Find("vtk_interval"))
+    out->vtk_interval = r_.NonNegativeNumber(*v, Join(path, "vtk_interval"));
+  else if (node->Find("interval") != nullptr)
+    out->vtk_interval = 0.0;  // the same as the given interval
+}
+
+void SceneReader::ReadOutputPoint(const Node& value, const std::string& p, OutputPointSpec& op,
+                                  EntitySource& source) {
+  r_.CheckKeys(value, p, {"body", "at", "rod", "s"});
+  const Node* bn = value.Find("body");
+  const Node* rn = value.Find("rod");
+  if (bn != nullptr && rn != nullptr)
+    r_.Fail(rn->location, Join(p, "rod"), "give either {body, at} or {rod, s}, not both");
+  if (bn == nullptr && rn == nullptr)
+    r_.Fail(value.location, p, "missing key 'body' (with 'at') or 'rod' (with 's')");
+  if (bn != nullptr) {
+    NotUsedBy(value, p, {"s"}, "body points (use 'rod' and 's' for a point along a rod)");
+    op.body = Body(*bn, Join(p, "body"));
+    const Node& an = r_.Require(value, p, "at");
+    op.at = Point(an, Join(p, "at"));
+    source.parts.emplace_back("at", Field(an.location, Join(p, "at")));
+    return;
+  }
+  NotUsedBy(value, p, {"at"}, "rod points (use 'body' and 'at' for a node point)");
+  op.body = Body(*rn, Join(p, "rod"));
+  const BodySpec& body = spec_.bodies[static_cast<std::size_t>(op.body)];
+  if (body.rigid)
+    r_.Fail(rn->location, Join(p, "rod"),
+            "'" + body.name + "' is a rigid body; use {body: " + body.name + ", at: POINT}");
+  const Node& sn = r_.Require(value, p, "s");
+  op.along_rod = true;
+  op.arc_length = r_.NonNegativeNumber(sn, Join(p, "s"));
+  source.parts.emplace_back("s", Field(sn.location, Join(p, "s")));
+}
+
+// 'all', 'none' or a list of joint names (with coordinates, each once).
+void SceneReader::ReadOutputJoints(const Node& jn, const std::string& jp) {
+  std::vector<int>& out = spec_.outputs.joints;
+  if (jn.IsScalar() && (jn.scalar == "all" || jn.scalar == "none")) {
+    if (jn.scalar == "none") out.clear();
+    return;
+  }
+  if (!jn.IsSequence())
+    r_.Fail(jn.location, jp,
+            "expected 'all', 'none' or a list of joint names, got " + scene_yaml::Describe(jn));
+  out.clear();
+  std::vector<std::string> names;
+  for (const JointEntrySpec& j : spec_.joints) names.push_back(j.joint.name);
+  for (std::size_t i = 0; i < jn.items.size(); ++i) {
+    const Node& item = jn.items[i];
+    const std::string ip = Index(jp, i);
+    const std::string name = r_.Text(item, ip);
+    const auto found = std::find(names.begin(), names.end(), name);
+    if (found == names.end())
+      r_.Fail(item.location, ip,
+              "undefined joint '" + name + "'" + scene_yaml::DidYouMean(name, names));
+    const int index = static_cast<int>(found - names.begin());
+    if (GetJointTypeInfo(spec_.joints[static_cast<std::size_t>(index)].joint.type).dof == 0)
+      r_.Fail(item.location, ip, "joint '" + name + "' is fixed: it has no coordinates to record");
+    if (std::find(out.begin(), out.end(), index) != out.end())
+      r_.Fail(item.location, ip, "joint '" + name + "' is listed twice");
+    out.push_back(index);
+  }
+}
+
+void SceneReader::Read(const Node& root, const std::string& default_name) {
+  src_.root = Field(root.location, "");
+  if (!root.IsMap())
+    r_.Fail(root.location, "",
+            "a scene is a map of sections (points:, sections:, bodies:, joints:, ...), got " +
+                scene_yaml::Describe(root));
+  r_.CheckKeys(root, "",
+               {"name", "description", "units", "gravity", "defaults", "points", "materials",
+                "sections", "bodies", "joints", "loads", "analysis", "outputs"});
+  spec_.name = default_name;
+  if (const Node* n = root.Find("name")) spec_.name = r_.Text(*n, "name");
+  if (const Node* d = root.Find("description"))
+    if (!d->IsScalar())
+      r_.Fail(d->location, "description", "expected text, got " + scene_yaml::Describe(*d));
+  ReadUnits(root);
+  if (const Node* g = root.Find("gravity")) spec_.gravity = r_.Vector3(*g, "gravity");
+  ReadDefaults(root.Find("defaults"));
+  ReadPoints(root.Find("points"));
+  ReadMaterials(root.Find("materials"));
+  ReadSections(root.Find("sections"));
+  ReadBodies(root.Find("bodies"));
+  if (spec_.bodies.empty()) r_.Fail(root.location, "bodies", "the scene has no bodies");
+  ReadJoints(root.Find("joints"));
+  ReadLoads(root.Find("loads"));
+  ReadAnalysis(root.Find("analysis"));
+  ReadOutputs(root.Find("outputs"));
+}
+
+std::string Stem(const std::string& source) {
+  const std::string stem = std::filesystem::path(source).stem().string();
+  return stem.empty() ? source : stem;
+}
+
+}  // namespace
+
+const FieldSource* EntitySource::Part(const std::string& name) const {
+  for (const auto& [key, field] : parts)
+    if (key == name) return &field;
+  return nullptr;
+}
+
+SceneSpec ReadSceneSpec(const std::string& yaml_text, const std::string& source_name,
+                        const std::vector<std::string>& overrides, SceneSources* sources) {
+  if (yaml_text.size() > kMaxSceneBytes)
+    throw InputError(source_name + ": the scene is larger than " +
+                     std::to_string(kMaxSceneBytes >> 20) + " MiB (the limit)");
+  for (const std::string& o : overrides)
+    if (o.size() > kMaxOverrideBytes)
+      throw InputError(source_name + ": an override is longer than " +
+                       std::to_string(kMaxOverrideBytes >> 20) + " MiB (the limit): '" +
+                       o.substr(0, 40) + "...'");
+  scene_yaml::Node root = scene_yaml::Parse(yaml_text, source_name);
+  for (const std::string& o : overrides)
+    scene_yaml::ApplyOverride(root, o, source_name, kCollections);
+  SceneSpec spec;
+  *sources = SceneSources{};
+  sources->file = source_name;
+  SceneReader(source_name, &spec, sources).Read(root, Stem(source_name));
+  return spec;
+}
+
+}  // namespace screwfem
