@@ -872,7 +872,7 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
   r_.CheckKeys(*node, path,
                {"type", "start_time", "end_time", "step", "rho_inf", "tolerances", "max_iterations",
                 "max_halvings", "align_steps", "static_preload", "load_steps", "rod_inertia",
-                "newton", "predictor", "convergence"});
+                "newton", "predictor", "convergence", "restart_at_breakpoints"});
   auto find = [&](const char* key) { return node->Find(key); };
   if (const Node* t = find("type"))
     a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
@@ -930,6 +930,8 @@ void SceneCompiler::ReadAnalysis(const Node* node, AnalysisSettings* a) {
   if (const Node* t = find("load_steps"))
     a->statics.load_steps = r_.Integer(*t, Join(path, "load_steps"), 1, kMaxLoadSteps);
   if (const Node* t = find("align_steps")) a->align_steps = r_.Bool(*t, Join(path, "align_steps"));
+  if (const Node* t = find("restart_at_breakpoints"))
+    a->dynamic.restart_at_breakpoints = r_.Bool(*t, Join(path, "restart_at_breakpoints"));
   if (const Node* t = find("static_preload"))
     a->static_preload = r_.Bool(*t, Join(path, "static_preload"));
   // Statics evaluates the profiles at the end time (static analyses) or at the start time
