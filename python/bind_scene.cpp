@@ -68,7 +68,11 @@ void BindSettings(py::module_& m) {
                      "correction shrinks by less than this factor.")
       .def_readwrite("predictor", &DynamicOptions::predictor, "Start of each step (Predictor).")
       .def_readwrite("convergence", &DynamicOptions::convergence,
-                     "Where the residual tests apply (ConvergenceTest).");
+                     "Where the residual tests apply (ConvergenceTest).")
+      .def_readwrite("restart_at_breakpoints", &DynamicOptions::restart_at_breakpoints,
+                     "End a substep on every breakpoint of a drive or load profile and "
+                     "re-initialise accelerations and multipliers there (right limits), as at "
+                     "the start.");
 
   py::class_<StaticOptions>(m, "StaticOptions",
                             "Settings of the static Newton solver with load stepping (statics.h). "

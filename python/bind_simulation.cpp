@@ -263,6 +263,9 @@ and indices out of range IndexError.)doc")
           "estimated_convergences",
           [](const S& s) { return s.integrator().estimated_convergences; },
           "Steps accepted by ConvergenceTest.ESTIMATED without a residual at their last iterate.")
+      .def_property_readonly(
+          "restarts", [](const S& s) { return s.integrator().restarts; },
+          "Re-initialisations at profile breakpoints (DynamicOptions.restart_at_breakpoints).")
       .def_property_readonly("max_iterations_in_step",
                              [](const S& s) { return s.integrator().max_iterations_in_step; })
 

@@ -463,6 +463,7 @@ class Run {
       j.Field("refresh_ratio", d.refresh_ratio);
       j.Field("predictor", NameOf(d.predictor));
       j.Field("convergence", NameOf(d.convergence));
+      j.Field("restart_at_breakpoints", d.restart_at_breakpoints);
     }
     if (statics || a.static_preload) {
       j.Key("statics").BeginObject();
@@ -516,6 +517,7 @@ class Run {
     j.Field("matrix_factorizations", integ_.factorizations);
     j.Field("step_retries", integ_.retries);
     j.Field("estimated_convergences", integ_.estimated_convergences);
+    j.Field("restarts", integ_.restarts);
     if (has_static_) {
       j.Key("static_solution").BeginObject();
       j.Field("converged", static_.converged).Field("load_factor", static_.load_factor);

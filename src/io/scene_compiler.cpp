@@ -281,6 +281,7 @@ void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
   for (int j : o.joints) out->joints.push_back({model.joints[static_cast<std::size_t>(j)].name, j});
   out->interval = o.interval;
   out->vtk = o.vtk;
+  out->vtk_format = o.vtk_format;
   out->vtk_interval = o.vtk_interval;
 }
 

@@ -8,24 +8,6 @@
 
 namespace screwfem {
 
-std::vector<double> ProfileBreakpoints(const Model& model) {
-  std::vector<double> b;
-  for (const PointLoad& l : model.point_loads) {
-    const std::vector<double> p = l.profile.Breakpoints();
-    b.insert(b.end(), p.begin(), p.end());
-  }
-  for (const RodLoad& l : model.rod_loads) {
-    const std::vector<double> p = l.profile.Breakpoints();
-    b.insert(b.end(), p.begin(), p.end());
-  }
-  for (const Joint& j : model.joints)
-    if (j.drive != DriveKind::kNone) {
-      const std::vector<double> p = j.drive_profile.Breakpoints();
-      b.insert(b.end(), p.begin(), p.end());
-    }
-  return b;
-}
-
 std::string TimeGridProblem(double start, double end, double step) {
   const double t_max = std::max(std::abs(start), std::abs(end));
   const double spacing = std::nextafter(t_max, INFINITY) - t_max;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -30,14 +31,17 @@ ProfileValue EvalTerm(const ProfileTerm& p, double t) {
       break;
     }
     case ProfileTerm::Kind::kBangBang: {
+      // The pieces are chosen by comparing t with the breakpoints themselves (the values
+      // Breakpoints() returns), so that Eval(b) is the right limit at a breakpoint b and
+      // EvalLeft(b) the left one, whatever the rounding of t - t0 (method-next.md §N1.6).
       const double T = p.t1 - p.t0, tau = t - p.t0;
       const double a = 4.0 * s / (T * T);
-      if (tau < 0.0) break;
-      if (tau < 0.5 * T) {
+      if (t < p.t0) break;
+      if (t < 0.5 * (p.t0 + p.t1)) {
         r.value = 0.5 * a * tau * tau;
         r.rate = a * tau;
         r.accel = a;
-      } else if (tau < T) {
+      } else if (t < p.t1) {
         const double rem = T - tau;
         r.value = s - 0.5 * a * rem * rem;
         r.rate = a * rem;
@@ -49,8 +53,8 @@ ProfileValue EvalTerm(const ProfileTerm& p, double t) {
     }
     case ProfileTerm::Kind::kSmoothStep: {
       const double T = p.t1 - p.t0, u = (t - p.t0) / T;
-      if (u < 0.0) break;
-      if (u < 1.0) {
+      if (t < p.t0) break;
+      if (t < p.t1) {
         const double u2 = u * u, u3 = u2 * u;
         r.value = s * u3 * (10.0 - 15.0 * u + 6.0 * u2);
         r.rate = s * 30.0 * u2 * (1.0 - u) * (1.0 - u) / T;
@@ -188,6 +192,10 @@ ProfileValue Profile::Eval(double t) const {
     sum.accel += v.accel;
   }
   return sum;
+}
+
+ProfileValue Profile::EvalLeft(double t) const {
+  return Eval(std::nextafter(t, -std::numeric_limits<double>::infinity()));
 }
 
 std::vector<double> Profile::Breakpoints() const {

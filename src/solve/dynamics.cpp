@@ -61,31 +61,42 @@ void ValidateDynamicOptions(const DynamicOptions& o, const std::string& owner) {
   require_enum(o.convergence, "convergence");
 }
 
-bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
-                        const DynamicOptions& options, std::string* message) {
-  integ.options = options;
-  integ.params = GeneralizedAlpha::FromSpectralRadius(options.rho_inf);
-  const int nv = model.nv, nc = model.nc;
-  integ.a = Eigen::VectorXd::Zero(nv);
-  integ.v_start = integ.vdot_start = integ.a_start = integ.dq = integ.a_base =
-      Eigen::VectorXd::Zero(nv);
-  integ.lambda_start = Eigen::VectorXd::Zero(nc);
-  SaveState(data, &integ.q_start);
-  // One tangent operator per node, then one per joint (used by spherical, planar and free
-  // joints, whose coordinates retract by the exponential; see TryStep).
-  data.node_tangent.assign(model.nodes.size() + model.joints.size(), Mat6::Identity());
+std::vector<double> ProfileBreakpoints(const Model& model) {
+  std::vector<double> b;
+  for (const PointLoad& l : model.point_loads) {
+    const std::vector<double> p = l.profile.Breakpoints();
+    b.insert(b.end(), p.begin(), p.end());
+  }
+  for (const RodLoad& l : model.rod_loads) {
+    const std::vector<double> p = l.profile.Breakpoints();
+    b.insert(b.end(), p.begin(), p.end());
+  }
+  for (const Joint& j : model.joints)
+    if (j.drive != DriveKind::kNone) {
+      const std::vector<double> p = j.drive_profile.Breakpoints();
+      b.insert(b.end(), p.begin(), p.end());
+    }
+  return b;
+}
 
+namespace {
+
+// Consistent accelerations and multipliers at data's state and time (method.md §5.4), and the
+// auxiliary acceleration a = vdot. Uses the integrator's workspace (no allocation unless it
+// fails); integ.q_start is overwritten with the current state.
+bool ConsistentStart(const Model& model, Data& data, Integrator& integ, std::string* message) {
+  const int nv = model.nv, nc = model.nc;
+  SaveState(data, &integ.q_start);
   // Bdot v = d^2/de^2 phi(q exp(e v)) (exact for constant body velocities), by a central
-  // second difference; only at start-up (method.md §5.4).
-  Eigen::VectorXd bdot_v = Eigen::VectorXd::Zero(nc);
+  // second difference.
+  integ.bdot_v.setZero();
   const double vmax = ScaledIncrementSize(model, data.v);
   if (nc > 0 && vmax > 0.0) {
     const double e = 1e-4 / vmax;
-    Eigen::VectorXd plus(nc), minus(nc), zero(nc), work(nv);
-    ConstraintsAlong(model, data, integ.q_start, e, plus, work);
-    ConstraintsAlong(model, data, integ.q_start, -e, minus, work);
-    ConstraintsAlong(model, data, integ.q_start, 0.0, zero, work);
-    bdot_v = (plus - 2.0 * zero + minus) / (e * e);
+    ConstraintsAlong(model, data, integ.q_start, e, integ.phi_plus, integ.v_work);
+    ConstraintsAlong(model, data, integ.q_start, -e, integ.phi_minus, integ.v_work);
+    ConstraintsAlong(model, data, integ.q_start, 0.0, integ.phi_zero, integ.v_work);
+    integ.bdot_v = (integ.phi_plus - 2.0 * integ.phi_zero + integ.phi_minus) / (e * e);
     RestoreState(integ.q_start, data);
   }
 
@@ -99,25 +110,70 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   o.c_damping = 0.0;
   o.c_stiffness = 0.0;
   if (!Assemble(model, data, o)) {
-    if (message) *message = "initial state is invalid (an element is bent past its limit)";
+    if (message) *message = "the state is invalid (an element is bent past its limit)";
     return false;
   }
-  data.residual.tail(nc) = bdot_v;
+  data.residual.tail(nc) = integ.bdot_v;
   for (const Joint& j : model.joints)
     if (j.drive == DriveKind::kPrescribed)
       data.residual(nv + j.drive_row) -= j.drive_profile.Eval(data.time).accel;
   if (!SolveAssembledSystem(model, data)) {
     if (message)
       *message =
-          "cannot compute consistent initial accelerations: the system [M B^T; B 0] is singular "
+          "cannot compute consistent accelerations: the system [M B^T; B 0] is singular "
           "(a part without mass that is not fixed by constraints, or redundant constraints)";
     return false;
   }
   data.vdot = data.increment.head(nv);
   data.lambda = data.increment.tail(nc);
   integ.a = data.vdot;
-  integ.use_last_acceleration = options.predictor != Predictor::kZero;
+  integ.use_last_acceleration = integ.options.predictor != Predictor::kZero;
   return true;
+}
+
+}  // namespace
+
+bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
+                        const DynamicOptions& options, std::string* message) {
+  integ.options = options;
+  integ.params = GeneralizedAlpha::FromSpectralRadius(options.rho_inf);
+  const int nv = model.nv, nc = model.nc;
+  integ.a = Eigen::VectorXd::Zero(nv);
+  integ.v_start = integ.vdot_start = integ.a_start = integ.dq = integ.a_base =
+      integ.v_work = Eigen::VectorXd::Zero(nv);
+  integ.lambda_start = integ.phi_plus = integ.phi_minus = integ.phi_zero = integ.bdot_v =
+      Eigen::VectorXd::Zero(nc);
+  integ.breakpoints.clear();
+  if (options.restart_at_breakpoints) {
+    std::vector<double> b = ProfileBreakpoints(model);
+    std::sort(b.begin(), b.end());
+    for (double t : b)
+      if (t > data.time && (integ.breakpoints.empty() || t > integ.breakpoints.back()))
+        integ.breakpoints.push_back(t);
+  }
+  // One tangent operator per node, then one per joint (used by spherical, planar and free
+  // joints, whose coordinates retract by the exponential; see TryStep).
+  data.node_tangent.assign(model.nodes.size() + model.joints.size(), Mat6::Identity());
+  std::string why;
+  if (!ConsistentStart(model, data, integ, &why)) {
+    if (message) *message = "at the start time: " + why;
+    return false;
+  }
+  return true;
+}
+
+bool RestartDynamics(const Model& model, Data& data, Integrator& integ, std::string* message) {
+  std::string why;  // empty: no allocation on success
+  if (ConsistentStart(model, data, integ, &why)) {
+    ++integ.restarts;
+    return true;
+  }
+  if (message) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "restart at the profile breakpoint t = %.9g s: ", data.time);
+    *message = buf + why;
+  }
+  return false;
 }
 
 namespace {
@@ -286,13 +342,18 @@ void Accept(Data& data, Integrator& integ, const StepConstants& c) {
 // accept. Returns the number of Newton corrections, or -1 on failure (state then undefined:
 // the caller restores). `conservative`: full Newton from the zero-acceleration start, whatever
 // the options (the retry of a step the faster settings could not do).
-int TryStep(const Model& model, Data& data, Integrator& integ, double h, bool conservative,
-            std::string* why) {
+// The step ends at t_end (= its start + h up to rounding; exactly a breakpoint when it ends on
+// one); `left_limit`: the profiles are evaluated just before t_end (a step ending on a
+// breakpoint, method-next.md §N1.2 step 1).
+int TryStep(const Model& model, Data& data, Integrator& integ, double h, double t_end,
+            bool left_limit, bool conservative, std::string* why) {
   const DynamicOptions& opt = integ.options;
   const StepConstants c = MakeStepConstants(integ.params, h);
   bool full_newton = conservative || opt.newton_matrix == NewtonMatrix::kFull;
   Predict(data, integ, c, integ.use_last_acceleration && !conservative);
-  AssemblyOptions o = DynamicAssemblyOptions(opt, c, data.time);
+  data.time = t_end;
+  AssemblyOptions o = DynamicAssemblyOptions(
+      opt, c, left_limit ? std::nextafter(t_end, -std::numeric_limits<double>::infinity()) : t_end);
 
   double last_increment = INFINITY, last_res = INFINITY, last_con = INFINITY;
   bool factorized = false;  // data.matrix holds a factorisation from this step
@@ -366,22 +427,42 @@ void RestoreStepStart(const Model& model, Data& data, Integrator& integ, double 
   (void)model;
 }
 
+// The first breakpoint after t (beyond the snapping tolerance), or infinity.
+double NextBreakpoint(const Integrator& integ, double t, double tolerance) {
+  const auto it =
+      std::upper_bound(integ.breakpoints.begin(), integ.breakpoints.end(), t + tolerance);
+  return it != integ.breakpoints.end() ? *it : std::numeric_limits<double>::infinity();
+}
+
 }  // namespace
 
 StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
                 const StopRequest& stop) {
   StepResult result;
   result.substeps = 0;
-  const double t_end = data.time + h;
+  double t_end = data.time + h;
+  // A breakpoint within this distance of a substep's end is that end (the run loop's step ends
+  // are breakpoints up to the rounding of start + h).
+  const double snap = 1e-9 * h;
   const double h_min = h * std::ldexp(1.0, -integ.options.max_halvings);
   double hs = h;
   std::string why;
   const DynamicOptions& opt = integ.options;
   const bool conservative = opt.newton_matrix == NewtonMatrix::kFull &&
                             opt.predictor == Predictor::kZero;
+  if (std::abs(NextBreakpoint(integ, data.time, snap) - t_end) <= snap)
+    t_end = NextBreakpoint(integ, data.time, snap);
   while (data.time < t_end - 1e-12 * h) {
-    hs = std::min(hs, t_end - data.time);
     const double t0 = data.time;
+    // This substep: hs, cut at the step's end and at the next breakpoint.
+    double h_sub = std::min(hs, t_end - t0), t_sub = t0 + h_sub;
+    if (h_sub == t_end - t0) t_sub = t_end;
+    const double bp = NextBreakpoint(integ, t0, snap);
+    const bool at_breakpoint = bp <= t_sub + snap;
+    if (at_breakpoint) {
+      t_sub = bp;
+      h_sub = bp - t0;
+    }
     if (stop.Requested()) {
       char buf[96];
       std::snprintf(buf, sizeof buf, "step interrupted at t = %.9g s", t0);
@@ -390,13 +471,13 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
       return result;
     }
     SaveStepStart(data, integ);
-    int its = TryStep(model, data, integ, hs, false, &why);
+    int its = TryStep(model, data, integ, h_sub, t_sub, at_breakpoint, false, &why);
     if (its < 0 && !conservative) {
       // The simplified iteration or the predictor failed: retry the same step with full
       // Newton from the zero-acceleration start before halving.
       RestoreStepStart(model, data, integ, t0);
       ++integ.retries;
-      its = TryStep(model, data, integ, hs, true, &why);
+      its = TryStep(model, data, integ, h_sub, t_sub, at_breakpoint, true, &why);
     }
     if (its >= 0) {
       UpdateBranchReferences(model, data);
@@ -405,17 +486,19 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
       integ.iterations += its;
       integ.max_iterations_in_step = std::max(integ.max_iterations_in_step, its);
       hs = std::min(h, 2.0 * hs);
+      // method-next.md §N1.2: consistent vdot, lambda and a from the right limits.
+      if (at_breakpoint && !RestartDynamics(model, data, integ, &result.message)) return result;
       continue;
     }
     RestoreStepStart(model, data, integ, t0);
-    if (hs * 0.5 < h_min * (1.0 - 1e-12)) {
+    if (h_sub * 0.5 < h_min * (1.0 - 1e-12)) {
       char buf[160];
       std::snprintf(buf, sizeof buf, "step failed at t = %.9g s (step %.3g s, after %d halvings): ",
-                    t0, hs, integ.options.max_halvings);
+                    t0, h_sub, integ.options.max_halvings);
       result.message = std::string(buf) + why;
       return result;
     }
-    hs *= 0.5;
+    hs = 0.5 * h_sub;
     ++integ.halvings;
   }
   data.time = t_end;

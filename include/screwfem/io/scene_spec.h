@@ -74,6 +74,7 @@ struct OutputsSpec {
   std::vector<int> joints;     // joint indices, in the order recorded
   double interval = 0.0;       // [s]; see OutputSpec
   bool vtk = true;
+  VtkFormat vtk_format = VtkFormat::kBinary;
   double vtk_interval = 0.0;   // [s]
 };
 

@@ -8,11 +8,9 @@
 #include <vector>
 
 #include "screwfem/model/data.h"
+#include "screwfem/solve/dynamics.h"  // ProfileBreakpoints
 
 namespace screwfem {
-
-// Every breakpoint (Profile::Breakpoints) of the model's load and drive profiles, unsorted.
-std::vector<double> ProfileBreakpoints(const Model& model);
 
 // Relative accuracy to which the step ends of a dynamic run must be representable. A time t
 // is a double, and consecutive doubles near t are u(t) = 2^(floor(log2 |t|) - 52) apart (about

@@ -47,9 +47,15 @@ class Profile {
   void Validate(const char* where) const;
 
   ProfileValue Eval(double t) const;
+  // The left limit at t: the pieces that end at t (at a breakpoint b, EvalLeft(b) is the state
+  // just before the switch, Eval(b) the state just after it). Evaluated at the double below t,
+  // so value and rate are those at t to within one unit in the last place of t.
+  ProfileValue EvalLeft(double t) const;
   double operator()(double t) const { return Eval(t).value; }
   const std::vector<ProfileTerm>& terms() const { return terms_; }
-  // Times where the second derivative jumps (for aligning time steps with them).
+  // Times where the second derivative (or the value or rate) may jump, sorted, without
+  // duplicates: the time steps land on them (align_steps) and the integrator restarts there
+  // (DynamicOptions::restart_at_breakpoints).
   std::vector<double> Breakpoints() const;
 
  private:

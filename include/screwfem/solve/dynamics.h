@@ -8,6 +8,7 @@
 
 #include <array>
 #include <string>
+#include <vector>
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/data.h"
@@ -92,6 +93,14 @@ struct DynamicOptions {
   //               quasi-Newton matrix leaves the first corrected residual or correction just
   //               above its tolerance (the GRM: 2.0 instead of 2.1-2.6 iterations per step).
   ConvergenceTest convergence = ConvergenceTest::kEstimated;
+  // Restart at the breakpoints of drive and load profiles (docs/numerics.md, "Restarts at
+  // breakpoints"; method-next.md §N1.2): Step never straddles a breakpoint (it ends a substep
+  // exactly on it), the substep that ends on it sees the profiles' left limits, and there
+  // vdot, lambda and the auxiliary acceleration are re-initialised from the right limits as at
+  // the start (method.md §5.4). Without it the auxiliary acceleration carries the old branch
+  // across a jump of a prescribed acceleration, and efforts and accelerations ring as
+  // (-rho_inf)^k for many steps.
+  bool restart_at_breakpoints = true;
 };
 
 // Ranges of the iteration limits (scene files: analysis.max_iterations, max_halvings).
@@ -119,12 +128,17 @@ struct Integrator {
   // Step workspace.
   State q_start;
   Eigen::VectorXd v_start, vdot_start, a_start, lambda_start, dq, a_base;
+  // Restarts: the breakpoints after the start time (sorted, ProfileBreakpoints) and the
+  // workspace of the consistent-acceleration solve (Bdot v by differences, method.md §5.4).
+  std::vector<double> breakpoints;
+  Eigen::VectorXd phi_plus, phi_minus, phi_zero, bdot_v, v_work;
   bool use_last_acceleration = true;  // predictor of the next step (DynamicOptions::predictor)
   // Statistics.
   long steps = 0, iterations = 0, halvings = 0;
   long factorizations = 0;       // of the iteration matrix (including failed attempts)
   long retries = 0;              // steps redone with full Newton from the zero start
   long estimated_convergences = 0;  // steps accepted by ConvergenceTest::kEstimated
+  long restarts = 0;             // re-initialisations at profile breakpoints
   int max_iterations_in_step = 0;
 };
 
@@ -136,6 +150,9 @@ struct StepResult {
   std::string message;     // on failure: when and why (allocated only on failure)
 };
 
+// Every breakpoint (Profile::Breakpoints) of the model's load and drive profiles, unsorted.
+std::vector<double> ProfileBreakpoints(const Model& model);
+
 // Computes consistent initial accelerations and multipliers (method.md §5.4) at data.time
 // from data's configuration and velocities, and allocates the workspace. Profiles use their
 // right limit at the start time. Returns false with a message if the saddle-point system is
@@ -143,7 +160,14 @@ struct StepResult {
 bool InitializeDynamics(const Model& model, Data& data, Integrator& integrator,
                         const DynamicOptions& options, std::string* message = nullptr);
 
-// Advances data by h (possibly in halved substeps). On failure data is left at the start of
+// Re-initialises vdot, lambda and the auxiliary acceleration at data's state and time as
+// InitializeDynamics does (profiles at their right limits), keeping the workspace: the restart
+// at a breakpoint. No allocation unless it fails (then false with a message naming the time).
+bool RestartDynamics(const Model& model, Data& data, Integrator& integrator,
+                     std::string* message = nullptr);
+
+// Advances data by h (possibly in halved substeps; with restart_at_breakpoints, a substep
+// ends on every profile breakpoint inside the step and the integrator restarts there). On failure data is left at the start of
 // the step. `stop` is polled before every attempt at a (sub)step: when it is requested the
 // step ends with interrupted = true, data at the end of the last completed substep (the start
 // of the step unless the step was halved). No allocation unless it fails or is interrupted.
