@@ -282,6 +282,7 @@ void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
   out->interval = o.interval;
   out->vtk = o.vtk;
   out->vtk_interval = o.vtk_interval;
+  out->vtk_format = o.vtk_format;
 }
 
 void SceneCompiler::CheckReferences() const {

@@ -75,6 +75,7 @@ struct OutputsSpec {
   double interval = 0.0;       // [s]; see OutputSpec
   bool vtk = true;
   double vtk_interval = 0.0;   // [s]
+  VtkFormat vtk_format = VtkFormat::kBinary;
 };
 
 struct SceneSpec {
