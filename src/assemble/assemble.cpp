@@ -60,15 +60,17 @@ class Scatter {
   }
   // Element matrix over nodes: rows/cols in 6-blocks. S = s_R (c_K K T + c_M M + c_C C);
   // with `kHasNodeTangent`, K already holds K T (or K when the iteration does not use T).
+  // dofs[i] is node i's first unknown (-1: none), T[i] its tangent operator.
   template <int N, bool kHasNodeTangent = false>
-  void NodeMatrix(const int (&nodes)[N], const Eigen::Matrix<double, 6 * N, 6 * N>* K,
+  void NodeMatrix(const int (&dofs)[N], const Mat6* const (&T)[N],
+                  const Eigen::Matrix<double, 6 * N, 6 * N>* K,
                   const Eigen::Matrix<double, 6 * N, 6 * N>* M,
                   const Eigen::Matrix<double, 6 * N, 6 * N>* C) {
-    ForEachNodeBlock(nodes, [&](int a, int b, int gi, int gj) {
+    ForEachNodeBlock(dofs, [&](int a, int b, int gi, int gj) {
       Mat6 S = Mat6::Zero();
       if (K) {
         if (o_.use_node_tangent && !kHasNodeTangent)
-          S.noalias() += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b) * NodeT(nodes[b]);
+          S.noalias() += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b) * *T[b];
         else
           S += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b);
       }
@@ -79,44 +81,45 @@ class Scatter {
   }
   // An element matrix already combined (S = c_K K T + c_M M + c_C C): adds s_R S.
   template <int N>
-  void ElementMatrix(const int (&nodes)[N], const Eigen::Matrix<double, 6 * N, 6 * N>& S) {
-    ForEachNodeBlock(nodes, [&](int a, int b, int gi, int gj) {
+  void ElementMatrix(const int (&dofs)[N], const Eigen::Matrix<double, 6 * N, 6 * N>& S) {
+    ForEachNodeBlock(dofs, [&](int a, int b, int gi, int gj) {
       Block(gi, gj, S.template block<6, 6>(6 * a, 6 * b), o_.s_rows);
     });
   }
-  // f(a, b, gi, gj) for the 6 x 6 blocks (a, b) of an element matrix over `nodes` whose nodes
-  // both have unknowns (gi, gj their first global indices); nothing without the matrix.
+  // f(a, b, gi, gj) for the 6 x 6 blocks (a, b) of an element matrix over nodes with first
+  // unknowns `dofs` (-1: none) whose nodes both have unknowns (gi, gj their first global
+  // indices); nothing without the matrix.
   template <int N, typename F>
-  void ForEachNodeBlock(const int (&nodes)[N], F&& f) {
+  void ForEachNodeBlock(const int (&dofs)[N], F&& f) {
     if (!o_.assemble_matrix) return;
     for (int b = 0; b < N; ++b) {
-      const int gj = NodeDof(nodes[b]);
+      const int gj = dofs[b];
       if (gj < 0) continue;
       for (int a = 0; a < N; ++a) {
-        const int gi = NodeDof(nodes[a]);
+        const int gi = dofs[a];
         if (gi >= 0) f(a, b, gi, gj);
       }
     }
   }
   // An item's terms (elements/element.h): its node rows, and its matrix blocks combined by the
-  // kernel or here.
+  // kernel or here. dofs and x as gathered for the item (GatherItem).
   template <int N>
-  void Add(const int (&nodes)[N], const ElementTerms<N>& t) {
+  void Add(const int (&dofs)[N], const NodeMotion<N>& x, const ElementTerms<N>& t) {
     if (!t.active) return;
     Force(t.force_scale);
     Term(t.term_scale);
-    for (int i = 0; i < N; ++i) Rows(NodeDof(nodes[i]), t.residual.template segment<6>(6 * i));
+    for (int i = 0; i < N; ++i) Rows(dofs[i], t.residual.template segment<6>(6 * i));
     if (!o_.assemble_matrix) return;
     using M = typename ElementTerms<N>::Matrix;
     const M* K = t.has_stiffness ? &t.stiffness : nullptr;
     const M* Ms = t.has_mass ? &t.mass : nullptr;
     const M* C = t.has_damping ? &t.damping : nullptr;
     if (t.combined)
-      ElementMatrix<N>(nodes, t.matrix);
+      ElementMatrix<N>(dofs, t.matrix);
     else if (t.stiffness_has_node_tangent)
-      NodeMatrix<N, true>(nodes, K, Ms, C);
+      NodeMatrix<N, true>(dofs, x.T, K, Ms, C);
     else
-      NodeMatrix<N, false>(nodes, K, Ms, C);
+      NodeMatrix<N, false>(dofs, x.T, K, Ms, C);
   }
   // Constraint gradient block B (rows: constraint rows starting at `row`, cols: unknowns
   // starting at gj): adds s_C B T to the constraint rows and s_R s_L B^T to the equilibrium
@@ -146,18 +149,18 @@ class Scatter {
   const AssemblyOptions& o_;
 };
 
-// The node state of one item, as its kernel reads it (elements/element.h, NodeMotion).
+// The node state of one item, as its kernel reads it (elements/element.h, NodeMotion), and
+// the first unknown of each node (-1: fixed or the ground), looked up once per item.
 template <int N>
-void GatherItem(const Model& m, const Data& d, const AssemblyOptions& o, const int (&nodes)[N],
-                NodeMotion<N>* x) {
+void GatherItem(const Scatter& s, const Data& d, const AssemblyOptions& o,
+                const int (&nodes)[N], int (&dofs)[N], NodeMotion<N>* x) {
   const bool node_tangent = o.use_node_tangent && o.assemble_matrix;
   for (int i = 0; i < N; ++i) {
+    dofs[i] = s.NodeDof(nodes[i]);
     x->H[i] = &NodeFrame(d, nodes[i]);
-    const bool free = nodes[i] != kGround && m.nodes[static_cast<std::size_t>(nodes[i])].dof >= 0;
-    x->T[i] = node_tangent && free ? &d.node_tangent[static_cast<std::size_t>(nodes[i])]
-                                   : &kIdentity6;
+    x->T[i] = node_tangent && dofs[i] >= 0 ? &s.NodeT(nodes[i]) : &kIdentity6;
   }
-  if (o.dynamics) GatherNodeMotion<N>(m, d, nodes, &x->eta, &x->eta_dot);
+  if (o.dynamics) GatherNodeMotionAt<N>(d, dofs, &x->eta, &x->eta_dot);
 }
 
 KernelOptions MakeKernelOptions(const AssemblyOptions& o) {
@@ -182,8 +185,9 @@ bool AddKind(const Model& m, Data& d, const AssemblyOptions& o, const KernelOpti
   bool ok = true;
   Kind::ForEach(m, [&](const typename Kind::Item& item, const int (&nodes)[N]) {
     if (!ok) return;
+    int dofs[N];
     NodeMotion<N> x;
-    GatherItem<N>(m, d, o, nodes, &x);
+    GatherItem<N>(s, d, o, nodes, dofs, &x);
     ElementTerms<N> t;
     if (!Kind::Calc(m, d, item, x, ko, &t)) {
       ok = false;
@@ -191,7 +195,7 @@ bool AddKind(const Model& m, Data& d, const AssemblyOptions& o, const KernelOpti
       d.failed_rotation = t.failure;
       return;
     }
-    s.Add(nodes, t);
+    s.Add(dofs, x, t);
   });
   return ok;
 }

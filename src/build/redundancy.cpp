@@ -52,35 +52,54 @@ int Root(std::vector<int>& parent, int i) {
   return i;
 }
 
-}  // namespace
+// Gradient blocks of a joint at the reference state (H_J = I).
+struct Blocks {
+  Mat6 a, b;
+  Mat6X coord;
+};
+Blocks ReferenceGradient(const Model& m, int jj) {
+  const Joint& j = m.joints[static_cast<std::size_t>(jj)];
+  JointGradient jg;
+  CalcJointGradient(j, NodeReferenceFrame(m, j.node_a), NodeReferenceFrame(m, j.node_b),
+                    SE3::Identity(), &jg);
+  Blocks g;
+  g.a = JointGradientA(jg);
+  g.b = JointGradientB(jg);
+  g.coord = JointGradientCoordinates(jg, j.basis, JointMatrix::Identity(j.k(), j.k()));
+  return g;
+}
 
-void FindRedundantConstraints(Model& m) {
-  m.redundant_rows.clear();
-  if (m.nc == 0) return;
+// The work spent so far (kMaxRedundancyWork) and whether it passed the bound.
+struct Work {
+  double spent = 0.0;
+  bool too_large = false;
+};
+
+// The joint graph (vertices: nodes with unknowns and the ground vertex; edges: joints with
+// constraint rows) and its breadth-first spanning forest.
+struct JointForest {
+  int ground = -1;  // the vertex of the ground and all fixed nodes
+  std::vector<GraphJoint> edges;
+  std::vector<int> parent_edge, depth;  // per vertex (-1: a root, or not reached)
+  std::vector<char> is_tree;            // per edge
+  bool IsChord(const GraphJoint& e) const {
+    return !is_tree[static_cast<std::size_t>(&e - edges.data())];
+  }
+  int ParentOf(int v) const {
+    const GraphJoint& e = edges[static_cast<std::size_t>(parent_edge[static_cast<std::size_t>(v)])];
+    return e.va == v ? e.vb : e.va;
+  }
+};
+
+JointForest BuildJointForest(const Model& m) {
+  JointForest f;
   const int num_nodes = static_cast<int>(m.nodes.size());
-  const int G = num_nodes;  // the ground vertex
+  const int G = num_nodes;
+  f.ground = G;
   auto vertex = [&](int node) {
     return node == kGround || m.nodes[static_cast<std::size_t>(node)].dof < 0 ? G : node;
   };
-  // Gradient blocks of joint jj at the reference state (H_J = I).
-  struct Blocks {
-    Mat6 a, b;
-    Mat6X coord;
-  };
-  auto gradient = [&](int jj) {
-    const Joint& j = m.joints[static_cast<std::size_t>(jj)];
-    JointGradient jg;
-    CalcJointGradient(j, NodeReferenceFrame(m, j.node_a), NodeReferenceFrame(m, j.node_b),
-                      SE3::Identity(), &jg);
-    Blocks g;
-    g.a = JointGradientA(jg);
-    g.b = JointGradientB(jg);
-    g.coord = JointGradientCoordinates(jg, j.basis, JointMatrix::Identity(j.k(), j.k()));
-    return g;
-  };
-
-  // --- joint graph and spanning forest ---------------------------------------------------
-  std::vector<GraphJoint> edges;
+  std::vector<GraphJoint>& edges = f.edges;
   for (std::size_t jj = 0; jj < m.joints.size(); ++jj) {
     const Joint& j = m.joints[jj];
     if (j.row >= 0) edges.push_back({static_cast<int>(jj), vertex(j.node_a), vertex(j.node_b)});
@@ -101,8 +120,11 @@ void FindRedundantConstraints(Model& m) {
         adj[static_cast<std::size_t>(fill[static_cast<std::size_t>(edges[e].vb)]++)] = static_cast<int>(e);
     }
   }
-  std::vector<int> parent_edge(nvert, -1), depth(nvert, -1);
-  std::vector<char> is_tree(edges.size(), 0);
+  f.parent_edge.assign(nvert, -1);
+  f.depth.assign(nvert, -1);
+  f.is_tree.assign(edges.size(), 0);
+  std::vector<int>& parent_edge = f.parent_edge;
+  std::vector<int>& depth = f.depth;
   std::vector<int> queue;
   queue.reserve(nvert);
   auto bfs = [&](int root) {
@@ -118,7 +140,7 @@ void FindRedundantConstraints(Model& m) {
         if (depth[static_cast<std::size_t>(w)] >= 0) continue;
         depth[static_cast<std::size_t>(w)] = depth[static_cast<std::size_t>(u)] + 1;
         parent_edge[static_cast<std::size_t>(w)] = e;
-        is_tree[static_cast<std::size_t>(e)] = 1;
+        f.is_tree[static_cast<std::size_t>(e)] = 1;
         queue.push_back(w);
       }
     }
@@ -127,56 +149,64 @@ void FindRedundantConstraints(Model& m) {
   for (int v = 0; v < num_nodes; ++v)
     if (depth[static_cast<std::size_t>(v)] < 0 && adj_start[static_cast<std::size_t>(v)] < adj_start[static_cast<std::size_t>(v) + 1])
       bfs(v);
-  auto parent_of = [&](int v) {
-    const GraphJoint& e = edges[static_cast<std::size_t>(parent_edge[static_cast<std::size_t>(v)])];
-    return e.va == v ? e.vb : e.va;
-  };
+  return f;
+}
 
-  // --- reduced rows: chords and drives ---------------------------------------------------
-  // Entries (row, column, value); columns are joint-coordinate velocity indices.
-  struct Entry {
-    int row, col;
-    double value;
+// Walks from the chord's ends to their lowest common ancestor; for each tree joint on the
+// way calls f(u, e, Y_u): Y_u maps dh_u to the chord rows (6 x 6), u the child of tree edge e.
+// Stops when the work passes the bound.
+template <class F>
+void WalkChord(const Model& m, const JointForest& forest, const GraphJoint& chord,
+               const Blocks& cg, Work* work, F&& f) {
+  int u[2] = {chord.va, chord.vb};
+  Mat6 Y[2] = {cg.a, cg.b};
+  auto step = [&](int s) {
+    const int e = forest.parent_edge[static_cast<std::size_t>(u[s])];
+    f(u[s], e, Y[s]);
+    const GraphJoint& te = forest.edges[static_cast<std::size_t>(e)];
+    const Blocks tg = ReferenceGradient(m, te.joint);
+    const bool child_is_a = te.va == u[s];
+    const Mat6& Bc = child_is_a ? tg.a : tg.b;
+    const Mat6& Bp = child_is_a ? tg.b : tg.a;
+    const int p = forest.ParentOf(u[s]);
+    // Y_p = -Y_u B_c^-1 B_p
+    Y[s] = -(Bc.transpose().partialPivLu().solve(Y[s].transpose())).transpose() * Bp;
+    u[s] = p;
+    work->spent += 1.0;
   };
+  while (u[0] != u[1] && !work->too_large) {
+    const int side = forest.depth[static_cast<std::size_t>(u[0])] >=
+                             forest.depth[static_cast<std::size_t>(u[1])]
+                         ? 0
+                         : 1;
+    step(side);
+    if (work->spent > kMaxRedundancyWork) work->too_large = true;
+  }
+}
+
+// An entry (row, column, value) of the reduced rows; columns are joint-coordinate velocity
+// indices.
+struct Entry {
+  int row, col;
+  double value;
+};
+
+// The chord rows reduced onto the coordinates of the tree joints on their paths, and the
+// drive rows. Stops early when the work passes the bound.
+std::vector<Entry> ReduceChordAndDriveRows(const Model& m, const JointForest& forest,
+                                           Work* work) {
   std::vector<Entry> entries;
-  double work = 0.0;
-  bool too_large = false;
-  // Walks from the chord's ends to their lowest common ancestor; for each tree joint on the
-  // way calls f(u, e, Y_u): Y_u maps dh_u to the chord rows (6 x 6), u the child of tree edge e.
-  auto walk = [&](const GraphJoint& chord, const Blocks& cg, auto&& f) {
-    int u[2] = {chord.va, chord.vb};
-    Mat6 Y[2] = {cg.a, cg.b};
-    auto step = [&](int s) {
-      const int e = parent_edge[static_cast<std::size_t>(u[s])];
-      f(u[s], e, Y[s]);
-      const GraphJoint& te = edges[static_cast<std::size_t>(e)];
-      const Blocks tg = gradient(te.joint);
-      const bool child_is_a = te.va == u[s];
-      const Mat6& Bc = child_is_a ? tg.a : tg.b;
-      const Mat6& Bp = child_is_a ? tg.b : tg.a;
-      const int p = parent_of(u[s]);
-      // Y_p = -Y_u B_c^-1 B_p
-      Y[s] = -(Bc.transpose().partialPivLu().solve(Y[s].transpose())).transpose() * Bp;
-      u[s] = p;
-      work += 1.0;
-    };
-    while (u[0] != u[1] && !too_large) {
-      const int side = depth[static_cast<std::size_t>(u[0])] >= depth[static_cast<std::size_t>(u[1])] ? 0 : 1;
-      step(side);
-      if (work > kMaxRedundancyWork) too_large = true;
-    }
-  };
-  for (const GraphJoint& chord : edges) {
-    if (is_tree[static_cast<std::size_t>(&chord - edges.data())] || too_large) continue;
+  for (const GraphJoint& chord : forest.edges) {
+    if (!forest.IsChord(chord) || work->too_large) continue;
     const Joint& j = m.joints[static_cast<std::size_t>(chord.joint)];
-    const Blocks cg = gradient(chord.joint);
+    const Blocks cg = ReferenceGradient(m, chord.joint);
     for (int c = 0; c < j.k(); ++c)
       for (int r = 0; r < 6; ++r) entries.push_back({j.row + r, j.coord + c, cg.coord(r, c)});
-    walk(chord, cg, [&](int u, int e, const Mat6& Yu) {
-      const GraphJoint& te = edges[static_cast<std::size_t>(e)];
+    WalkChord(m, forest, chord, cg, work, [&](int u, int e, const Mat6& Yu) {
+      const GraphJoint& te = forest.edges[static_cast<std::size_t>(e)];
       const Joint& tj = m.joints[static_cast<std::size_t>(te.joint)];
       if (tj.k() == 0) return;
-      const Blocks tg = gradient(te.joint);
+      const Blocks tg = ReferenceGradient(m, te.joint);
       const Mat6& Bc = te.va == u ? tg.a : tg.b;
       // rows += Y_u (-B_c^-1 B_J) dalpha_e
       const Mat6X coef = -Yu * Bc.partialPivLu().solve(tg.coord);
@@ -184,21 +214,31 @@ void FindRedundantConstraints(Model& m) {
         for (int r = 0; r < 6; ++r) entries.push_back({j.row + r, tj.coord + c, coef(r, c)});
     });
   }
-  if (too_large) {
-    m.warnings.push_back("redundant-constraint check skipped (the closed loops are too many or too long)");
-    return;
-  }
+  if (work->too_large) return entries;
   for (const Joint& j : m.joints)
     if (j.drive_row >= 0) entries.push_back({j.drive_row, j.coord + j.drive_coord, 1.0});
+  return entries;
+}
 
-  // --- groups of reduced rows sharing coordinates -------------------------------------------
+// The reduced rows grouped by shared coordinates (a joint's rows always together), keyed by
+// a root row, with the entries of each group; row_joint: the joint of each constraint row.
+struct RowGroups {
+  std::map<int, std::vector<int>> rows;
+  std::map<int, std::vector<const Entry*>> entries;
+  std::vector<int> row_joint;
+};
+
+RowGroups GroupReducedRows(const Model& m, const JointForest& forest,
+                           const std::vector<Entry>& entries) {
+  RowGroups g;
   std::vector<char> reduced(static_cast<std::size_t>(m.nc), 0);
-  std::vector<int> row_joint(static_cast<std::size_t>(m.nc), -1);
-  for (const GraphJoint& e : edges) {
+  std::vector<int>& row_joint = g.row_joint;
+  row_joint.assign(static_cast<std::size_t>(m.nc), -1);
+  for (const GraphJoint& e : forest.edges) {
     const int row = m.joints[static_cast<std::size_t>(e.joint)].row;
     for (int r = 0; r < 6; ++r) {
       row_joint[static_cast<std::size_t>(row + r)] = e.joint;
-      if (!is_tree[static_cast<std::size_t>(&e - edges.data())]) reduced[static_cast<std::size_t>(row + r)] = 1;
+      if (forest.IsChord(e)) reduced[static_cast<std::size_t>(row + r)] = 1;
     }
   }
   for (std::size_t jj = 0; jj < m.joints.size(); ++jj)
@@ -213,7 +253,7 @@ void FindRedundantConstraints(Model& m) {
     b = Root(uf, b);
     if (a != b) uf[static_cast<std::size_t>(a)] = b;
   };
-  for (const GraphJoint& e : edges)  // a joint's rows are reported together
+  for (const GraphJoint& e : forest.edges)  // a joint's rows are reported together
     for (int r = 1; r < 6; ++r) unite(m.joints[static_cast<std::size_t>(e.joint)].row, m.joints[static_cast<std::size_t>(e.joint)].row + r);
   {
     std::map<int, int> first_row_of_col;
@@ -222,31 +262,30 @@ void FindRedundantConstraints(Model& m) {
       if (!inserted) unite(it->second, en.row);
     }
   }
-  std::map<int, std::vector<int>> group_rows;
   for (int r = 0; r < m.nc; ++r)
-    if (reduced[static_cast<std::size_t>(r)]) group_rows[Root(uf, r)].push_back(r);
-  std::map<int, std::vector<const Entry*>> group_entries;
-  for (const Entry& en : entries) group_entries[Root(uf, en.row)].push_back(&en);
+    if (reduced[static_cast<std::size_t>(r)]) g.rows[Root(uf, r)].push_back(r);
+  for (const Entry& en : entries) g.entries[Root(uf, en.row)].push_back(&en);
+  return g;
+}
 
-  // --- rank of each group, and one dependency per group ------------------------------------
-  std::vector<double> z(static_cast<std::size_t>(m.nc), 0.0);  // chord and drive weights
+// The rank of each group (column-pivoting QR of its transpose): appends the redundant rows
+// (the group's last pivots) to m.redundant_rows and sets z, the weights of one dependency per
+// group on its rows. Returns the number of redundant rows, or -1 when the work passes the
+// bound.
+int RankGroups(Model& m, RowGroups& groups, Work* work, std::vector<double>* z) {
   int num_redundant = 0;
-  for (const auto& [root, rows] : group_rows) {
+  for (const auto& [root, rows] : groups.rows) {
     std::map<int, int> col_index;
-    for (const Entry* en : group_entries[root]) col_index.emplace(en->col, 0);
+    for (const Entry* en : groups.entries[root]) col_index.emplace(en->col, 0);
     int ncols = 0;
     for (auto& [col, index] : col_index) index = ncols++;
     const int nrows = static_cast<int>(rows.size());
-    work += static_cast<double>(nrows) * nrows * std::max(ncols, 1) / 1000.0;
-    if (work > kMaxRedundancyWork) {
-      m.warnings.push_back("redundant-constraint check skipped (the closed loops are too many or too long)");
-      m.redundant_rows.clear();
-      return;
-    }
+    work->spent += static_cast<double>(nrows) * nrows * std::max(ncols, 1) / 1000.0;
+    if (work->spent > kMaxRedundancyWork) return -1;
     std::map<int, int> row_index;
     for (int i = 0; i < nrows; ++i) row_index[rows[static_cast<std::size_t>(i)]] = i;
     Eigen::MatrixXd Mt = Eigen::MatrixXd::Zero(std::max(ncols, 1), nrows);  // reduced rows^T
-    for (const Entry* en : group_entries[root]) Mt(col_index[en->col], row_index[en->row]) += en->value;
+    for (const Entry* en : groups.entries[root]) Mt(col_index[en->col], row_index[en->row]) += en->value;
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Mt);
     qr.setThreshold(1e-10);
     const int rank = static_cast<int>(qr.rank());
@@ -263,12 +302,18 @@ void FindRedundantConstraints(Model& m) {
     if (rank > 0)
       y.head(rank) = -qr.matrixR().topLeftCorner(rank, rank).template triangularView<Eigen::Upper>().solve(
           qr.matrixR().topRightCorner(rank, nrows - rank) * t);
-    for (int i = 0; i < nrows; ++i) z[static_cast<std::size_t>(rows[static_cast<std::size_t>(perm(i))])] = y(i);
+    for (int i = 0; i < nrows; ++i) (*z)[static_cast<std::size_t>(rows[static_cast<std::size_t>(perm(i))])] = y(i);
   }
-  if (num_redundant == 0) return;
-  std::sort(m.redundant_rows.begin(), m.redundant_rows.end());
+  return num_redundant;
+}
 
-  // --- joints involved: chord weights, then tree weights deepest first ----------------------
+// The names of the joints a dependency y involves, quoted and comma-separated: z on the chord
+// and drive rows, and w on the tree rows from the node balance of each tree joint's child,
+// deepest first (w_e = -B_c^-T (sum of the other rows' B^T y on node c)).
+std::string InvolvedJointNames(const Model& m, const JointForest& forest,
+                               const std::vector<int>& row_joint, const std::vector<double>& z,
+                               Work* work) {
+  const int G = forest.ground;
   std::vector<double> joint_weight(m.joints.size(), 0.0);
   double zmax = 0.0;
   for (int r = 0; r < m.nc; ++r) {
@@ -280,25 +325,27 @@ void FindRedundantConstraints(Model& m) {
   // Node forces sum B^T y over the rows placed so far; tree joints on the chords' paths.
   std::map<int, Vec6> force;
   std::set<std::pair<int, int>> path;  // (-depth, child vertex) of tree joints walked
-  for (const GraphJoint& chord : edges) {
-    if (is_tree[static_cast<std::size_t>(&chord - edges.data())]) continue;
+  for (const GraphJoint& chord : forest.edges) {
+    if (!forest.IsChord(chord)) continue;
     const Joint& j = m.joints[static_cast<std::size_t>(chord.joint)];
     const Vec6 zc = Eigen::Map<const Vec6>(&z[static_cast<std::size_t>(j.row)]);
     if (zc.cwiseAbs().maxCoeff() == 0.0) continue;
-    const Blocks cg = gradient(chord.joint);
+    const Blocks cg = ReferenceGradient(m, chord.joint);
     if (chord.va != G) force.try_emplace(chord.va, Vec6::Zero()).first->second += cg.a.transpose() * zc;
     if (chord.vb != G) force.try_emplace(chord.vb, Vec6::Zero()).first->second += cg.b.transpose() * zc;
-    walk(chord, cg, [&](int u, int, const Mat6&) { path.emplace(-depth[static_cast<std::size_t>(u)], u); });
+    WalkChord(m, forest, chord, cg, work, [&](int u, int, const Mat6&) {
+      path.emplace(-forest.depth[static_cast<std::size_t>(u)], u);
+    });
   }
   double wmax = zmax;
   for (const auto& [neg_depth, u] : path) {
-    const int e = parent_edge[static_cast<std::size_t>(u)];
-    const GraphJoint& te = edges[static_cast<std::size_t>(e)];
-    const Blocks tg = gradient(te.joint);
+    const int e = forest.parent_edge[static_cast<std::size_t>(u)];
+    const GraphJoint& te = forest.edges[static_cast<std::size_t>(e)];
+    const Blocks tg = ReferenceGradient(m, te.joint);
     const bool child_is_a = te.va == u;
     const Vec6 fu = force.count(u) ? force[u] : Vec6::Zero();
     const Vec6 w = -(child_is_a ? tg.a : tg.b).transpose().partialPivLu().solve(fu);
-    const int p = parent_of(u);
+    const int p = forest.ParentOf(u);
     if (p != G) force.try_emplace(p, Vec6::Zero()).first->second += (child_is_a ? tg.b : tg.a).transpose() * w;
     double& jw = joint_weight[static_cast<std::size_t>(te.joint)];
     jw = std::max(jw, w.cwiseAbs().maxCoeff());
@@ -309,6 +356,35 @@ void FindRedundantConstraints(Model& m) {
     if (joint_weight[jj] > 1e-8 * wmax) involved.insert("'" + m.joints[jj].name + "'");
   std::string names;
   for (const std::string& n : involved) names += (names.empty() ? "" : ", ") + n;
+  return names;
+}
+
+constexpr const char* kTooLargeWarning =
+    "redundant-constraint check skipped (the closed loops are too many or too long)";
+
+}  // namespace
+
+void FindRedundantConstraints(Model& m) {
+  m.redundant_rows.clear();
+  if (m.nc == 0) return;
+  Work work;
+  const JointForest forest = BuildJointForest(m);
+  const std::vector<Entry> entries = ReduceChordAndDriveRows(m, forest, &work);
+  if (work.too_large) {
+    m.warnings.push_back(kTooLargeWarning);
+    return;
+  }
+  RowGroups groups = GroupReducedRows(m, forest, entries);
+  std::vector<double> z(static_cast<std::size_t>(m.nc), 0.0);  // chord and drive weights
+  const int num_redundant = RankGroups(m, groups, &work, &z);
+  if (num_redundant < 0) {
+    m.warnings.push_back(kTooLargeWarning);
+    m.redundant_rows.clear();
+    return;
+  }
+  if (num_redundant == 0) return;
+  std::sort(m.redundant_rows.begin(), m.redundant_rows.end());
+  const std::string names = InvolvedJointNames(m, forest, groups.row_joint, z, &work);
   m.warnings.push_back(std::to_string(num_redundant) +
                        " redundant constraint equation(s) among joints " + names +
                        "; their reaction components are not unique and are reported as zero "

@@ -10,6 +10,8 @@ namespace {
 const Mat12 kZero12 = Mat12::Zero();
 }  // namespace
 
+// One function (81 lines): the flags decided at the top choose between the combined exact-inertia
+// matrix and the separate K, M, C blocks, and split steps would pass them all back and forth.
 bool RodElementKind::Calc(const Model& m, const Data& d, const Item& e, const NodeMotion<2>& x,
                           const KernelOptions& o, ElementTerms<2>* t) {
   const RodElement& el = m.elements[static_cast<std::size_t>(e)];

@@ -35,26 +35,39 @@ struct Data {
 // Allocates Data for a model and sets the reference state (at rest).
 Data MakeData(const Model& model);
 
+// The frame of the ground (the world frame).
+inline const SE3 kGroundFrame = SE3::Identity();
+
 // The current frame of a node, or the identity for kGround (the one ground-or-node lookup).
 inline const SE3& NodeFrame(const Data& data, int node) {
-  static const SE3 kWorld = SE3::Identity();
-  return node == kGround ? kWorld : data.H[static_cast<std::size_t>(node)];
+  return node == kGround ? kGroundFrame : data.H[static_cast<std::size_t>(node)];
 }
 
 // Body velocities and accelerations of N nodes stacked (node 0 first), zero for a fixed node
-// or the ground: the one gathering of node motion for kernels and outputs.
+// or the ground: the one gathering of node motion for kernels and outputs. dofs[i] is the
+// first velocity unknown of node i (Node::dof; -1 for a fixed node or the ground).
+template <int N>
+void GatherNodeMotionAt(const Data& data, const int (&dofs)[N],
+                        Eigen::Matrix<double, 6 * N, 1>* eta,
+                        Eigen::Matrix<double, 6 * N, 1>* eta_dot) {
+  for (int i = 0; i < N; ++i) {
+    if (dofs[i] < 0) {
+      if (eta) eta->template segment<6>(6 * i).setZero();
+      if (eta_dot) eta_dot->template segment<6>(6 * i).setZero();
+    } else {
+      if (eta) eta->template segment<6>(6 * i) = data.v.segment<6>(dofs[i]);
+      if (eta_dot) eta_dot->template segment<6>(6 * i) = data.vdot.segment<6>(dofs[i]);
+    }
+  }
+}
 template <int N>
 void GatherNodeMotion(const Model& model, const Data& data, const int (&nodes)[N],
                       Eigen::Matrix<double, 6 * N, 1>* eta,
                       Eigen::Matrix<double, 6 * N, 1>* eta_dot) {
-  if (eta) eta->setZero();
-  if (eta_dot) eta_dot->setZero();
-  for (int i = 0; i < N; ++i) {
-    const int dof = nodes[i] == kGround ? -1 : model.nodes[static_cast<std::size_t>(nodes[i])].dof;
-    if (dof < 0) continue;
-    if (eta) eta->template segment<6>(6 * i) = data.v.segment<6>(dof);
-    if (eta_dot) eta_dot->template segment<6>(6 * i) = data.vdot.segment<6>(dof);
-  }
+  int dofs[N];
+  for (int i = 0; i < N; ++i)
+    dofs[i] = nodes[i] == kGround ? -1 : model.nodes[static_cast<std::size_t>(nodes[i])].dof;
+  GatherNodeMotionAt<N>(data, dofs, eta, eta_dot);
 }
 
 }  // namespace screwfem
