@@ -283,7 +283,6 @@ void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
   out->vtk = o.vtk;
   out->vtk_format = o.vtk_format;
   out->vtk_interval = o.vtk_interval;
-  out->vtk_format = o.vtk_format;
 }
 
 void SceneCompiler::CheckReferences() const {

@@ -76,7 +76,6 @@ struct OutputsSpec {
   bool vtk = true;
   VtkFormat vtk_format = VtkFormat::kBinary;
   double vtk_interval = 0.0;   // [s]
-  VtkFormat vtk_format = VtkFormat::kBinary;
 };
 
 struct SceneSpec {
