@@ -39,6 +39,9 @@ void BindSettings(py::module_& m) {
   BindEnum<Predictor>(m, "Predictor", "Acceleration each step's iteration starts from.");
   BindEnum<ConvergenceTest>(m, "ConvergenceTest",
                             "Where the residual and constraint tests of a step are applied.");
+  BindEnum<ConstraintFormulation>(m, "ConstraintFormulation",
+                                  "How joint constraints enter a step: index 3 or stabilised "
+                                  "index 2 (GGL).");
 
   py::class_<DynamicOptions>(m, "DynamicOptions",
                              "Settings of the generalized-alpha integrator (dynamics.h). Checked "
@@ -72,7 +75,11 @@ void BindSettings(py::module_& m) {
       .def_readwrite("restart_at_breakpoints", &DynamicOptions::restart_at_breakpoints,
                      "End a substep on every breakpoint of a drive or load profile and "
                      "re-initialise accelerations and multipliers there (right limits), as at "
-                     "the start.");
+                     "the start.")
+      .def_readwrite("constraints", &DynamicOptions::constraints,
+                     "INDEX3 (position constraints) or GGL (also the velocity constraints, "
+                     "stabilised index 2: round-off velocity constraints, second-order "
+                     "multipliers and efforts).");
 
   py::class_<StaticOptions>(m, "StaticOptions",
                             "Settings of the static Newton solver with load stepping (statics.h). "

@@ -354,6 +354,67 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   return data.residual.allFinite();
 }
 
+void CalcConstraintGradient(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> out) {
+  out.setZero();
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    const int ji = static_cast<int>(jj);
+    if (j.row >= 0) {
+      JointGradient g;
+      CalcJointGradient(j, NodeFrame(data, j.node_a), NodeFrame(data, j.node_b),
+                        JointRelativeFrame(model, data, ji), &g);
+      const int da = j.node_a == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_a)].dof;
+      const int db = j.node_b == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_b)].dof;
+      if (da >= 0) out.block<6, 6>(j.row, da) += JointGradientA(g);
+      if (db >= 0) out.block<6, 6>(j.row, db) += JointGradientB(g);
+      if (j.k() > 0) {
+        const JointMatrix I = Mat6::Identity().topLeftCorner(j.k(), j.k());
+        out.block(j.row, j.coord, 6, j.k()) +=
+            JointGradientCoordinates(g, JointCurrentBasis(model, data, ji), I);
+      }
+    }
+    if (j.drive == DriveKind::kPrescribed) out(j.drive_row, j.coord + j.drive_coord) = 1.0;
+  }
+  for (int r : model.redundant_rows) out.row(r).setZero();
+}
+
+void CalcConstraintGradientTimes(const Model& model, const Data& data,
+                                 const Eigen::Ref<const Eigen::VectorXd>& x,
+                                 Eigen::Ref<Eigen::VectorXd> out) {
+  out.setZero();
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    const int ji = static_cast<int>(jj);
+    if (j.row >= 0) {
+      JointGradient g;
+      CalcJointGradient(j, NodeFrame(data, j.node_a), NodeFrame(data, j.node_b),
+                        JointRelativeFrame(model, data, ji), &g);
+      const int da = j.node_a == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_a)].dof;
+      const int db = j.node_b == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_b)].dof;
+      // B_A x_A + B_B x_B = T^-1(phi) (Ad(C_B^-1) x_B - Ad(G_A) x_A).
+      Vec6 rel = Vec6::Zero();
+      if (db >= 0) rel += Ad(g.Cb_inv) * x.segment<6>(db);
+      if (da >= 0) rel -= Ad(g.G_A) * x.segment<6>(da);
+      Vec6 bx = g.Tinv * rel;
+      if (j.k() > 0) {
+        const JointMatrix I = Mat6::Identity().topLeftCorner(j.k(), j.k());
+        bx += JointGradientCoordinates(g, JointCurrentBasis(model, data, ji), I) *
+              x.segment(j.coord, j.k());
+      }
+      out.segment<6>(j.row) = bx;
+    }
+    if (j.drive == DriveKind::kPrescribed) out(j.drive_row) = x(j.coord + j.drive_coord);
+  }
+  for (int r : model.redundant_rows) out(r) = 0.0;
+}
+
+void CalcVelocityConstraint(const Model& model, const Data& data, double time,
+                            Eigen::Ref<Eigen::VectorXd> out) {
+  CalcConstraintGradientTimes(model, data, data.v, out);
+  for (const Joint& j : model.joints)
+    if (j.drive == DriveKind::kPrescribed) out(j.drive_row) -= j.drive_profile.Eval(time).rate;
+}
+
 double MaxConstraintViolation(const Model& model, Data& data, double time, double load_factor) {
   AssemblyOptions o;
   o.time = time;

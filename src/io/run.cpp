@@ -464,6 +464,7 @@ class Run {
       j.Field("predictor", NameOf(d.predictor));
       j.Field("convergence", NameOf(d.convergence));
       j.Field("restart_at_breakpoints", d.restart_at_breakpoints);
+      j.Field("constraints", NameOf(d.constraints));
     }
     if (statics || a.static_preload) {
       j.Key("statics").BeginObject();

@@ -59,6 +59,7 @@ void ValidateDynamicOptions(const DynamicOptions& o, const std::string& owner) {
   require_enum(o.newton_matrix, "newton_matrix");
   require_enum(o.predictor, "predictor");
   require_enum(o.convergence, "convergence");
+  require_enum(o.constraints, "constraints");
 }
 
 std::vector<double> ProfileBreakpoints(const Model& model) {
@@ -143,6 +144,14 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
       integ.v_work = Eigen::VectorXd::Zero(nv);
   integ.lambda_start = integ.phi_plus = integ.phi_minus = integ.phi_zero = integ.bdot_v =
       Eigen::VectorXd::Zero(nc);
+  if (options.constraints == ConstraintFormulation::kGgl) {
+    integ.ggl_b = Eigen::MatrixXd::Zero(nc, nv);
+    integ.ggl_gram = Eigen::MatrixXd::Identity(nc, nc);
+    integ.ggl_gram_llt = Eigen::LLT<Eigen::MatrixXd>(nc);
+    integ.ggl_bv = integ.ggl_phi = integ.ggl_nu = integ.ggl_dnu = Eigen::VectorXd::Zero(nc);
+    integ.ggl_y = Eigen::VectorXd::Zero(nv);
+    integ.max_nu = 0.0;
+  }
   integ.breakpoints.clear();
   if (options.restart_at_breakpoints) {
     std::vector<double> b = ProfileBreakpoints(model);
@@ -213,6 +222,23 @@ void Predict(Data& data, Integrator& integ, const StepConstants& c, bool from_la
   integ.dq = integ.v_start + h * (0.5 - p.beta) * integ.a_start + h * p.beta * integ.a;
   data.lambda = integ.lambda_start;
   data.time += h;
+}
+
+// ConstraintFormulation::kGgl (method-next.md §N1.3): the gradient B_n = B(q_n) of the step's
+// start, which multiplies nu in the configuration update, and the factorised B_n B_n^T of the
+// multiplier correction (redundant rows: the identity, holding their nu at zero). Data holds q_n.
+bool PrepareGglStep(const Model& model, const Data& data, Integrator& integ) {
+  if (integ.options.constraints != ConstraintFormulation::kGgl || model.nc == 0) return true;
+  CalcConstraintGradient(model, data, integ.ggl_b);
+  integ.ggl_gram.noalias() = integ.ggl_b.lazyProduct(integ.ggl_b.transpose());
+  for (int r : model.redundant_rows) {
+    integ.ggl_gram.row(r).setZero();
+    integ.ggl_gram.col(r).setZero();
+    integ.ggl_gram(r, r) = 1.0;
+  }
+  integ.ggl_gram_llt.compute(integ.ggl_gram);
+  integ.ggl_nu.setZero();
+  return integ.ggl_gram_llt.info() == Eigen::Success;
 }
 
 // Update the configuration: q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
@@ -309,8 +335,23 @@ bool ConvergedByEstimate(const DynamicOptions& opt, const IterateMeasures& m, do
 
 // Correct: solve the iteration matrix for the Newton correction (factorising it when
 // `factorize`) and apply it to dq, v, vdot and lambda. Returns false if the matrix is singular.
+//
+// ConstraintFormulation::kGgl (docs/numerics.md, "Stabilised index 2"): the unknowns are the
+// Newmark correction y = dx + B_n^T dnu (which moves v and vdot), dlambda and dnu. With the
+// quasi-Newton simplifications of method-next.md §N1.3 (Z dropped, T -> I in the constraint
+// rows) and the stiffness part of the (1,3) block dropped, the system is block triangular:
+//   [S_3] [y; dmu] = -[r; (h beta / gamma)(B v + dphi/dt)]   (the index-3 matrix),
+//   B_n B_n^T dnu = B_n y + phi,   dx = y - B_n^T dnu.
+// The residual is exact, so the converged state is the stabilised index-2 one.
 bool Correct(const Model& model, Data& data, Integrator& integ, const StepConstants& c,
              bool factorize) {
+  const bool ggl = integ.options.constraints == ConstraintFormulation::kGgl && model.nc > 0;
+  if (ggl) {
+    const double s_v = c.h * integ.params.beta / integ.params.gamma;
+    integ.ggl_phi = data.residual.tail(model.nc);
+    data.residual.tail(model.nc) = s_v * integ.ggl_bv;
+    for (int r : model.redundant_rows) data.residual(model.nv + r) = integ.ggl_phi(r);
+  }
   bool solved;
   if (factorize) {
     ++integ.factorizations;
@@ -319,6 +360,21 @@ bool Correct(const Model& model, Data& data, Integrator& integ, const StepConsta
     solved = SolveFactorizedSystem(model, data);
   }
   if (!solved) return false;
+  if (ggl) {
+    integ.ggl_y = data.increment.head(model.nv);
+    integ.ggl_dnu.noalias() = integ.ggl_b * integ.ggl_y;
+    integ.ggl_dnu += integ.ggl_phi;
+    for (int r : model.redundant_rows) integ.ggl_dnu(r) = 0.0;
+    integ.ggl_gram_llt.solveInPlace(integ.ggl_dnu);
+    integ.ggl_nu += integ.ggl_dnu;
+    data.increment.head(model.nv).noalias() -= integ.ggl_b.transpose() * integ.ggl_dnu;
+    const auto dx = data.increment.head(model.nv);
+    integ.dq += dx / c.h;
+    data.v += c.gamma_p * integ.ggl_y;
+    data.vdot += c.beta_p * integ.ggl_y;
+    data.lambda += data.increment.tail(model.nc) / c.bh2;
+    return true;
+  }
   const auto dx = data.increment.head(model.nv);
   integ.dq += dx / c.h;
   data.v += c.gamma_p * dx;
@@ -332,6 +388,8 @@ bool Correct(const Model& model, Data& data, Integrator& integ, const StepConsta
 // (undamped high-frequency content, which flips the sign of vdot from step to step).
 void Accept(Data& data, Integrator& integ, const StepConstants& c) {
   integ.a = integ.a_base + c.c_a * data.vdot;
+  if (integ.options.constraints == ConstraintFormulation::kGgl && integ.ggl_nu.size() > 0)
+    integ.max_nu = std::max(integ.max_nu, integ.ggl_nu.cwiseAbs().maxCoeff());
   if (integ.options.predictor == Predictor::kAdaptive)
     integ.use_last_acceleration =
         (data.vdot - integ.vdot_start).squaredNorm() <= data.vdot.squaredNorm();
@@ -355,6 +413,11 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
   AssemblyOptions o = DynamicAssemblyOptions(
       opt, c, left_limit ? std::nextafter(t_end, -std::numeric_limits<double>::infinity()) : t_end);
 
+  const bool ggl = opt.constraints == ConstraintFormulation::kGgl && model.nc > 0;
+  if (ggl && !PrepareGglStep(model, data, integ)) {
+    if (why) *why = "the constraint gradient B B^T is singular (redundant constraints)";
+    return -1;
+  }
   double last_increment = INFINITY, last_res = INFINITY, last_con = INFINITY;
   bool factorized = false;  // data.matrix holds a factorisation from this step
   for (int it = 0; it <= opt.max_iterations; ++it) {
@@ -366,7 +429,16 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
     const bool may_converge = last_increment <= opt.increment_tolerance;
     const bool with_matrix = need_matrix && !may_converge && it < opt.max_iterations;
     if (!AssembleIterate(model, data, opt, o, with_matrix, why)) return -1;
-    const IterateMeasures m = MeasureIterate(model, data, opt);
+    IterateMeasures m = MeasureIterate(model, data, opt);
+    if (ggl) {
+      // The velocity constraint, scaled like its row of the iteration matrix (h beta / gamma),
+      // enters the constraint test.
+      CalcVelocityConstraint(model, data, o.time, integ.ggl_bv);
+      const double s_v = h * integ.params.beta / integ.params.gamma;
+      m.con = std::max(m.con, s_v * integ.ggl_bv.cwiseAbs().maxCoeff());
+      m.residual_ok = m.con <= opt.constraint_tolerance &&
+                      (m.res <= opt.residual_tolerance * m.scale || m.res <= m.floor);
+    }
     if (it > 0 && m.residual_ok && may_converge) {
       Accept(data, integ, c);
       return it;
@@ -378,7 +450,8 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
       return -1;
     }
     if (need_matrix) factorized = true;
-    const double increment = ScaledIncrementSize(model, data.increment.head(model.nv));
+    double increment = ScaledIncrementSize(model, data.increment.head(model.nv));
+    if (ggl) increment = std::max(increment, ScaledIncrementSize(model, integ.ggl_y));
     // Converged: the residual passed at this iterate and its correction is below the
     // increment tolerance (the corrected state is only closer to the solution).
     const bool increment_ok = increment <= opt.increment_tolerance;

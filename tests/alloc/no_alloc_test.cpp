@@ -118,11 +118,15 @@ Model MixedModel() {
 }
 
 TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
+  for (ConstraintFormulation constraints :
+       {ConstraintFormulation::kIndex3, ConstraintFormulation::kGgl}) {
+  SCOPED_TRACE(NameOf(constraints));
   const Model model = MixedModel();
   Data data = MakeData(model);
   Integrator integ;
   DynamicOptions options;
   options.rho_inf = 0.8;
+  options.constraints = constraints;
   std::string message;
   ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
@@ -134,6 +138,7 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
   EXPECT_TRUE(ok);
   EXPECT_GT(integ.iterations, 50);  // the steps really iterated
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
+  }
 }
 
 // Writing a ParaView frame (both encodings) between time steps allocates nothing once the

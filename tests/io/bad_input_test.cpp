@@ -338,6 +338,11 @@ TEST(BadInput, UnknownNewtonVariantOrPredictor) {
                   "analysis:\n  convergence: 1e-8\n",
               "bad.yaml:6:16",
               "analysis.convergence: expected one of estimated or measured, got '1e-8'");
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                  "analysis:\n  constraints: index2\n",
+              "bad.yaml:6:16",
+              "analysis.constraints: expected one of index3 or ggl, got 'index2'");
 }
 
 TEST(BadInput, NonScalarMapKey) {

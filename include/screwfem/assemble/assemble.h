@@ -59,6 +59,18 @@ void UpdateBranchReferences(const Model& model, Data& data);
 // energies and the joints' springs.
 Energy CalcEnergy(const Model& model, const Data& data);
 
+// The constraint gradient B(q) (nc x nv, method.md §4.3; joint coordinates without tangent
+// operator) at data's configuration times x (velocity layout): out = B x (nc). Rows of
+// redundant constraints are zero. No allocation.
+void CalcConstraintGradientTimes(const Model& model, const Data& data,
+                                 const Eigen::Ref<const Eigen::VectorXd>& x,
+                                 Eigen::Ref<Eigen::VectorXd> out);
+// The velocity constraint B(q) v + d phi/dt at `time` (nc; drives: alpha_dot - q_dot(t)).
+void CalcVelocityConstraint(const Model& model, const Data& data, double time,
+                            Eigen::Ref<Eigen::VectorXd> out);
+// The dense constraint gradient B(q) (nc x nv, preallocated), rows of redundant constraints zero.
+void CalcConstraintGradient(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> out);
+
 // Largest |phi| over all constraint rows at the current state (global order residual rows).
 double MaxConstraintViolation(const Model& model, Data& data, double time, double load_factor);
 

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Cholesky>
+
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/data.h"
 #include "screwfem/model/enum_names.h"
@@ -28,6 +30,7 @@ struct GeneralizedAlpha {
 enum class NewtonMatrix { kSimplified, kFull };
 enum class Predictor { kAdaptive, kLast, kZero };
 enum class ConvergenceTest { kEstimated, kMeasured };
+enum class ConstraintFormulation { kIndex3, kGgl };
 template <>
 struct EnumNames<NewtonMatrix> {
   static constexpr std::array<EnumName<NewtonMatrix>, 2> kValues = {{
@@ -51,6 +54,15 @@ struct EnumNames<ConvergenceTest> {
       {ConvergenceTest::kEstimated, "estimated",
        "also at the iterate after a small correction, estimated from the contraction"},
       {ConvergenceTest::kMeasured, "measured", "at assembled iterates only"},
+  }};
+};
+
+template <>
+struct EnumNames<ConstraintFormulation> {
+  static constexpr std::array<EnumName<ConstraintFormulation>, 2> kValues = {{
+      {ConstraintFormulation::kIndex3, "index3", "position constraints only (index 3)"},
+      {ConstraintFormulation::kGgl, "ggl",
+       "stabilised index 2: position and velocity constraints (Gear-Gupta-Leimkuhler)"},
   }};
 };
 
@@ -101,6 +113,13 @@ struct DynamicOptions {
   // across a jump of a prescribed acceleration, and efforts and accelerations ring as
   // (-rho_inf)^k for many steps.
   bool restart_at_breakpoints = true;
+  // How the joints' constraints enter the step (docs/numerics.md, "Stabilised index 2"):
+  //   kIndex3: phi(q) = 0 at the end of each step (method.md §5.2);
+  //   kGgl:    also the velocity constraint B(q) v + d phi/dt = 0, with a second multiplier nu
+  //            acting on the configuration update only (method-next.md §N1.3, Arnold & Hante
+  //            2017): velocities satisfy the constraints to round-off and multipliers
+  //            (actuator efforts) are second-order accurate.
+  ConstraintFormulation constraints = ConstraintFormulation::kIndex3;
 };
 
 // Ranges of the iteration limits (scene files: analysis.max_iterations, max_halvings).
@@ -132,6 +151,14 @@ struct Integrator {
   // workspace of the consistent-acceleration solve (Bdot v by differences, method.md §5.4).
   std::vector<double> breakpoints;
   Eigen::VectorXd phi_plus, phi_minus, phi_zero, bdot_v, v_work;
+  // ConstraintFormulation::kGgl: the constraint gradient B_n = B(q_n) of the step's start
+  // (dense, nc x nv, redundant rows zero), the factorised B_n B_n^T (redundant rows and columns
+  // the identity), the velocity constraint B v + dphi/dt of the iterate, the constraint values,
+  // the Newmark correction y and the multiplier nu of the step, and the largest |nu| of the run.
+  Eigen::MatrixXd ggl_b, ggl_gram;
+  Eigen::LLT<Eigen::MatrixXd> ggl_gram_llt;
+  Eigen::VectorXd ggl_bv, ggl_phi, ggl_y, ggl_nu, ggl_dnu;
+  double max_nu = 0.0;
   bool use_last_acceleration = true;  // predictor of the next step (DynamicOptions::predictor)
   // Statistics.
   long steps = 0, iterations = 0, halvings = 0;
