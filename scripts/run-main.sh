@@ -16,7 +16,7 @@ jobs=$(nproc 2> /dev/null || echo 2)
 source scripts/phase-timing.sh
 
 begin "dependencies"
-bash scripts/setup-deps.sh
+bash scripts/setup-deps.sh main
 end "dependencies"
 
 begin "configure (Release)"

@@ -3,28 +3,33 @@
 # are missing. Silent when everything is already installed; needs root only to install.
 set -euo pipefail
 
-# Two groups, so that the test job can compile while the second is being installed
-# (scripts/run-tests.sh): `build`, what configuring and compiling the Release tree needs, and
-# `rest`, the sanitizer compiler and what the tests, plots, viewer and Python tools run with.
-# Usage: setup-deps.sh [build|rest|all]   (default: all)
+# Groups, so that a job installs only what it uses and the test job can compile while the
+# packages only its tests need are being installed (scripts/run-tests.sh):
+#   build  what configuring and compiling the Release tree needs;
+#   main   build + what the main job's figures and viewer pages need (scripts/run-main.sh);
+#   rest   the figures' and viewer's packages + what only the tests use (the sanitizer
+#          compiler, Chromium for the viewer test, venv/pip for the package test, Dask);
+#   all    everything (the default).
+# Usage: setup-deps.sh [build|main|rest|all]
 build_packages=(
   build-essential cmake
   libeigen3-dev libyaml-cpp-dev libcli11-dev
   googletest libgtest-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy
 )
-rest_packages=(
-  clang
-  python3-matplotlib python3-pil python3-venv python3-pip
+view_packages=(python3-matplotlib python3-pil libjs-three)
+test_packages=(
+  clang python3-venv python3-pip
   python3-dask python3-distributed python3-pandas
-  libjs-three chromium python3-websocket
+  chromium python3-websocket
 )
 case "${1:-all}" in
   build) packages=("${build_packages[@]}") ;;
-  rest) packages=("${rest_packages[@]}") ;;
-  all) packages=("${build_packages[@]}" "${rest_packages[@]}") ;;
+  main) packages=("${build_packages[@]}" "${view_packages[@]}") ;;
+  rest) packages=("${view_packages[@]}" "${test_packages[@]}") ;;
+  all) packages=("${build_packages[@]}" "${view_packages[@]}" "${test_packages[@]}") ;;
   *)
-    echo "setup-deps: unknown group '$1' (expected build, rest or all)" >&2
+    echo "setup-deps: unknown group '$1' (expected build, main, rest or all)" >&2
     exit 2
     ;;
 esac

@@ -354,27 +354,41 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   return data.residual.allFinite();
 }
 
-void CalcConstraintGradient(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> out) {
-  out.setZero();
+namespace {
+
+// Calls visit(joint, its index, gradient factors, dof of node A, dof of node B; -1 for the
+// ground) for every joint with constraint rows, at the current configuration.
+template <typename Visit>
+void ForEachConstraintGradient(const Model& model, const Data& data, Visit&& visit) {
   for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
     const Joint& j = model.joints[jj];
+    if (j.row < 0) continue;
     const int ji = static_cast<int>(jj);
-    if (j.row >= 0) {
-      JointGradient g;
-      CalcJointGradient(j, NodeFrame(data, j.node_a), NodeFrame(data, j.node_b),
-                        JointRelativeFrame(model, data, ji), &g);
-      const int da = j.node_a == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_a)].dof;
-      const int db = j.node_b == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_b)].dof;
-      if (da >= 0) out.block<6, 6>(j.row, da) += JointGradientA(g);
-      if (db >= 0) out.block<6, 6>(j.row, db) += JointGradientB(g);
-      if (j.k() > 0) {
-        const JointMatrix I = Mat6::Identity().topLeftCorner(j.k(), j.k());
-        out.block(j.row, j.coord, 6, j.k()) +=
-            JointGradientCoordinates(g, JointCurrentBasis(model, data, ji), I);
-      }
-    }
-    if (j.drive == DriveKind::kPrescribed) out(j.drive_row, j.coord + j.drive_coord) = 1.0;
+    JointGradient g;
+    CalcJointGradient(j, NodeFrame(data, j.node_a), NodeFrame(data, j.node_b),
+                      JointRelativeFrame(model, data, ji), &g);
+    const int da = j.node_a == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_a)].dof;
+    const int db = j.node_b == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_b)].dof;
+    visit(j, ji, g, da, db);
   }
+}
+
+}  // namespace
+
+void CalcConstraintGradient(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> out) {
+  out.setZero();
+  ForEachConstraintGradient(model, data, [&](const Joint& j, int ji, const JointGradient& g,
+                                             int da, int db) {
+    if (da >= 0) out.block<6, 6>(j.row, da) += JointGradientA(g);
+    if (db >= 0) out.block<6, 6>(j.row, db) += JointGradientB(g);
+    if (j.k() > 0) {
+      const JointMatrix I = Mat6::Identity().topLeftCorner(j.k(), j.k());
+      out.block(j.row, j.coord, 6, j.k()) +=
+          JointGradientCoordinates(g, JointCurrentBasis(model, data, ji), I);
+    }
+  });
+  for (const Joint& j : model.joints)
+    if (j.drive == DriveKind::kPrescribed) out(j.drive_row, j.coord + j.drive_coord) = 1.0;
   for (int r : model.redundant_rows) out.row(r).setZero();
 }
 
@@ -382,29 +396,20 @@ void CalcConstraintGradientTimes(const Model& model, const Data& data,
                                  const Eigen::Ref<const Eigen::VectorXd>& x,
                                  Eigen::Ref<Eigen::VectorXd> out) {
   out.setZero();
-  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
-    const Joint& j = model.joints[jj];
-    const int ji = static_cast<int>(jj);
-    if (j.row >= 0) {
-      JointGradient g;
-      CalcJointGradient(j, NodeFrame(data, j.node_a), NodeFrame(data, j.node_b),
-                        JointRelativeFrame(model, data, ji), &g);
-      const int da = j.node_a == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_a)].dof;
-      const int db = j.node_b == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_b)].dof;
-      // B_A x_A + B_B x_B = T^-1(phi) (Ad(C_B^-1) x_B - Ad(G_A) x_A).
-      Vec6 rel = Vec6::Zero();
-      if (db >= 0) rel += Ad(g.Cb_inv) * x.segment<6>(db);
-      if (da >= 0) rel -= Ad(g.G_A) * x.segment<6>(da);
-      Vec6 bx = g.Tinv * rel;
-      if (j.k() > 0) {
-        const JointMatrix I = Mat6::Identity().topLeftCorner(j.k(), j.k());
-        bx += JointGradientCoordinates(g, JointCurrentBasis(model, data, ji), I) *
-              x.segment(j.coord, j.k());
-      }
-      out.segment<6>(j.row) = bx;
+  ForEachConstraintGradient(model, data, [&](const Joint& j, int ji, const JointGradient& g,
+                                             int da, int db) {
+    const Vec6 xa = da >= 0 ? Vec6(x.segment<6>(da)) : Vec6::Zero();
+    const Vec6 xb = db >= 0 ? Vec6(x.segment<6>(db)) : Vec6::Zero();
+    Vec6 bx = JointGradientTimes(g, da >= 0 ? &xa : nullptr, db >= 0 ? &xb : nullptr);
+    if (j.k() > 0) {
+      const JointMatrix I = Mat6::Identity().topLeftCorner(j.k(), j.k());
+      bx += JointGradientCoordinates(g, JointCurrentBasis(model, data, ji), I) *
+            x.segment(j.coord, j.k());
     }
+    out.segment<6>(j.row) = bx;
+  });
+  for (const Joint& j : model.joints)
     if (j.drive == DriveKind::kPrescribed) out(j.drive_row) = x(j.coord + j.drive_coord);
-  }
   for (int r : model.redundant_rows) out(r) = 0.0;
 }
 

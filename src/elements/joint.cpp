@@ -202,6 +202,13 @@ void JointGradientTransposeTimes(const JointGradient& g, const Vec6& lambda, Vec
   *bt_b = AdTransposeTimes(g.Cb_inv, tl);
 }
 
+Vec6 JointGradientTimes(const JointGradient& g, const Vec6* x_a, const Vec6* x_b) {
+  Vec6 rel = Vec6::Zero();
+  if (x_b != nullptr) rel += Ad(g.Cb_inv) * *x_b;
+  if (x_a != nullptr) rel -= Ad(g.G_A) * *x_a;
+  return g.Tinv * rel;
+}
+
 void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, double time,
                               double load_factor, bool dynamics, bool tangent,
                               JointCoordinateTerms* out) {

@@ -32,6 +32,15 @@ const FieldSource& PartOf(const EntitySource& source, const std::string& part) {
   return field != nullptr ? *field : source.self;
 }
 
+// The values a point load and a rod load share.
+template <typename Load>
+void CopyLoadValues(const LoadSpec& l, Load* load) {
+  load->frame = l.frame;
+  load->force = l.force;
+  load->moment = l.moment;
+  load->profile = l.profile;
+}
+
 class SceneCompiler {
  public:
   SceneCompiler(const SceneSpec& spec, const SceneSources& sources)
@@ -222,10 +231,7 @@ void SceneCompiler::AddLoads() {
       } else {
         load.node = NodeAt(l.body, l.at, PartOf(source, "at"), "load point");
       }
-      load.frame = l.frame;
-      load.force = l.force;
-      load.moment = l.moment;
-      load.profile = l.profile;
+      CopyLoadValues(l, &load);
       builder_.AddPointLoad(load);
       point_load_.push_back(static_cast<int>(i));
       continue;
@@ -243,10 +249,7 @@ void SceneCompiler::AddLoads() {
         Fail(PartOf(source, "s"), msg.str());
       }
     }
-    load.frame = l.frame;
-    load.force = l.force;
-    load.moment = l.moment;
-    load.profile = l.profile;
+    CopyLoadValues(l, &load);
     builder_.AddRodLoad(load);
     rod_load_.push_back(static_cast<int>(i));
   }

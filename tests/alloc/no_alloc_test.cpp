@@ -26,8 +26,10 @@ std::atomic<bool> g_counting{false};
 std::atomic<long> g_allocations{0};
 }  // namespace
 
-// AddressSanitizer: GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature.
-#if defined(__SANITIZE_ADDRESS__)
+// AddressSanitizer: the sanitizer build defines SCREWFEM_SANITIZED for the test programs
+// (which it links with the runtime but does not instrument); GCC defines __SANITIZE_ADDRESS__,
+// Clang answers __has_feature.
+#if defined(SCREWFEM_SANITIZED) || defined(__SANITIZE_ADDRESS__)
 #define SCREWFEM_ASAN 1
 #elif defined(__has_feature)
 #if __has_feature(address_sanitizer)

@@ -17,9 +17,11 @@
 
 namespace screwfem::test {
 
-// Built with AddressSanitizer (GCC defines __SANITIZE_ADDRESS__, Clang answers __has_feature):
-// tests that limit the address space skip, ASan reserves more than the limit.
-#if defined(__SANITIZE_ADDRESS__)
+// Linked with AddressSanitizer (the sanitizer build defines SCREWFEM_SANITIZED for the test
+// programs, which it does not instrument; an instrumented build: GCC defines
+// __SANITIZE_ADDRESS__, Clang answers __has_feature): tests that limit the address space skip,
+// ASan reserves more than the limit.
+#if defined(SCREWFEM_SANITIZED) || defined(__SANITIZE_ADDRESS__)
 inline constexpr bool kAddressSanitizer = true;
 #elif defined(__has_feature)
 #if __has_feature(address_sanitizer)

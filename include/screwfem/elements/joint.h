@@ -103,6 +103,9 @@ Mat6X JointGradientCoordinates(const JointGradient& g, const Mat6X& basis, const
 // is formed): -Ad(G_A)^T T^-T lambda and Ad(C_B^-1)^T T^-T lambda.
 void JointGradientTransposeTimes(const JointGradient& g, const Vec6& lambda, Vec6* bt_a,
                                  Vec6* bt_b);
+// B_A x_A + B_B x_B = T^-1(phi) (Ad(C_B^-1) x_B - Ad(G_A) x_A); a null x means that node is
+// the ground (its block is absent).
+Vec6 JointGradientTimes(const JointGradient& g, const Vec6* x_a, const Vec6* x_b);
 
 // Springs, dampers and the drive on a joint's coordinates (method.md §4.4, §4.5): the
 // generalised force f (k) that enters the coordinate rows of the residual, and its derivatives
