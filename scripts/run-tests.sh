@@ -28,6 +28,7 @@ failed=0
 failures=()
 
 source scripts/phase-timing.sh
+source scripts/cmake-configure.sh
 fail() {
   failed=$((failed + 1))
   failures+=("$1")
@@ -40,7 +41,7 @@ configure_and_build() {
   shift 2
   begin "build ($label)"
   local status=0
-  cmake -S . -B "$dir" "$@" && cmake --build "$dir" -j"$jobs" || status=1
+  configure "$dir" "$@" && cmake --build "$dir" -j"$jobs" || status=1
   end "build ($label)"
   [[ $status -eq 0 ]] || fail "build ($label)"
   return $status
