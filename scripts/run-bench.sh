@@ -24,8 +24,7 @@ for p in $programs; do
 done
 
 bash scripts/setup-deps.sh
-source scripts/cmake-configure.sh
-configure "$build_dir" -DCMAKE_BUILD_TYPE=Release -DSCREWFEM_BUILD_BENCH=ON
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DSCREWFEM_BUILD_BENCH=ON
 targets=()
 for p in $programs; do targets+=("screwfem_bench_$p"); done
 cmake --build "$build_dir" -j"$jobs" --target "${targets[@]}"

@@ -10,8 +10,7 @@ build_dir=build/release
 jobs=$(nproc 2> /dev/null || echo 2)
 
 bash scripts/setup-deps.sh
-source scripts/cmake-configure.sh
-configure "$build_dir" -DCMAKE_BUILD_TYPE=Release > /dev/null
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release > /dev/null
 cmake --build "$build_dir" -j"$jobs" --target screwfem_cli
 mkdir -p out/convergence
 /usr/bin/python3 tools/grm_convergence.py "$build_dir/app/screwfem" out/convergence "$@" \

@@ -20,8 +20,7 @@ bash scripts/setup-deps.sh main
 end "dependencies"
 
 begin "configure (Release)"
-source scripts/cmake-configure.sh
-configure "$build_dir" -DCMAKE_BUILD_TYPE=Release -DSCREWFEM_BUILD_TESTS=OFF \
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DSCREWFEM_BUILD_TESTS=OFF \
   -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_BUILD_PYTHON=OFF
 end "configure (Release)"
 

@@ -28,7 +28,6 @@ failed=0
 failures=()
 
 source scripts/phase-timing.sh
-source scripts/cmake-configure.sh
 fail() {
   failed=$((failed + 1))
   failures+=("$1")
@@ -41,7 +40,7 @@ configure_and_build() {
   shift 2
   begin "build ($label)"
   local status=0
-  configure "$dir" "$@" && cmake --build "$dir" -j"$jobs" || status=1
+  cmake -S . -B "$dir" "$@" && cmake --build "$dir" -j"$jobs" || status=1
   end "build ($label)"
   [[ $status -eq 0 ]] || fail "build ($label)"
   return $status

@@ -12,7 +12,7 @@ set -euo pipefail
 #   all    everything (the default).
 # Usage: setup-deps.sh [build|main|rest|all]
 build_packages=(
-  build-essential cmake ninja-build
+  build-essential cmake
   libeigen3-dev libyaml-cpp-dev libcli11-dev
   googletest libgtest-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy
