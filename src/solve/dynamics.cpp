@@ -64,19 +64,14 @@ void ValidateDynamicOptions(const DynamicOptions& o, const std::string& owner) {
 
 std::vector<double> ProfileBreakpoints(const Model& model) {
   std::vector<double> b;
-  for (const PointLoad& l : model.point_loads) {
-    const std::vector<double> p = l.profile.Breakpoints();
+  const auto add = [&b](const Profile& profile) {
+    const std::vector<double> p = profile.Breakpoints();
     b.insert(b.end(), p.begin(), p.end());
-  }
-  for (const RodLoad& l : model.rod_loads) {
-    const std::vector<double> p = l.profile.Breakpoints();
-    b.insert(b.end(), p.begin(), p.end());
-  }
+  };
+  for (const PointLoad& l : model.point_loads) add(l.profile);
+  for (const RodLoad& l : model.rod_loads) add(l.profile);
   for (const Joint& j : model.joints)
-    if (j.drive != DriveKind::kNone) {
-      const std::vector<double> p = j.drive_profile.Breakpoints();
-      b.insert(b.end(), p.begin(), p.end());
-    }
+    if (j.drive != DriveKind::kNone) add(j.drive_profile);
   return b;
 }
 

@@ -108,7 +108,7 @@ Model MixedModel() {
   PointLoad dead;
   dead.node = b.model().rods[0].nodes[2];
   dead.force = Vec3(0, 0, 1);
-  dead.profile = Profile::Ramp(0, 1);
+  dead.profile = Profile::Ramp(0, 0.02);  // a breakpoint inside the counted steps (a restart)
   b.AddPointLoad(dead);
   PointLoad follower = dead;
   follower.frame = LoadFrame::kBody;
@@ -119,27 +119,30 @@ Model MixedModel() {
   return b.Build();
 }
 
+// Both constraint formulations; the counted steps pass the load ramp's end at 0.02 s, so they
+// include a restart at a breakpoint.
 TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
   for (ConstraintFormulation constraints :
        {ConstraintFormulation::kIndex3, ConstraintFormulation::kGgl}) {
-  SCOPED_TRACE(NameOf(constraints));
-  const Model model = MixedModel();
-  Data data = MakeData(model);
-  Integrator integ;
-  DynamicOptions options;
-  options.rho_inf = 0.8;
-  options.constraints = constraints;
-  std::string message;
-  ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
-  for (int i = 0; i < 3; ++i) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
-  g_allocations = 0;
-  g_counting = true;
-  bool ok = true;
-  for (int i = 0; i < 50; ++i) ok = Step(model, data, integ, 1e-3).ok && ok;
-  g_counting = false;
-  EXPECT_TRUE(ok);
-  EXPECT_GT(integ.iterations, 50);  // the steps really iterated
-  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
+    SCOPED_TRACE(NameOf(constraints));
+    const Model model = MixedModel();
+    Data data = MakeData(model);
+    Integrator integ;
+    DynamicOptions options;
+    options.rho_inf = 0.8;
+    options.constraints = constraints;
+    std::string message;
+    ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
+    g_allocations = 0;
+    g_counting = true;
+    bool ok = true;
+    for (int i = 0; i < 50; ++i) ok = Step(model, data, integ, 1e-3).ok && ok;
+    g_counting = false;
+    EXPECT_TRUE(ok);
+    EXPECT_GT(integ.iterations, 50);  // the steps really iterated
+    EXPECT_GE(integ.restarts, 1);     // and restarted at the ramp's end
+    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
   }
 }
 
