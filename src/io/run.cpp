@@ -84,6 +84,9 @@ class OutputClock {
   OutputClock(double start, double interval, double step)
       : start_(start), interval_(interval), tolerance_(1e-6 * step), next_(start) {}
   bool Due(double t) const { return interval_ <= 0.0 || t >= next_ - tolerance_; }
+  // The next due time (infinity when rows follow the steps): adaptive runs interpolate the
+  // state there when it falls inside a step.
+  double Next() const { return interval_ > 0.0 ? next_ : INFINITY; }
   // After recording at t: the next multiple of the interval after t.
   void Recorded(double t) {
     if (interval_ > 0.0)
@@ -330,6 +333,7 @@ class Run {
     }
     max_constraint_ = CalcMaxJointConstraint(model_, data_, data_.time);
     max_rotation_ = MaxElementRotation(data_);
+    if (a.adaptive_steps) dense_ = data_;  // the interpolated state's storage, before stepping
 
     const OutputSpec& o = scene_.outputs;
     OutputClock rows(a.start_time, o.interval, a.step);
@@ -350,8 +354,12 @@ class Run {
                            last_row_time_));
         return;
       }
-      const double t_next = schedule.Next(data_.time);
-      const StepResult step = Step(model_, data_, integ_, t_next - data_.time, options_.stop);
+      // step: auto: one error-controlled step, which lands exactly on end_time (and on profile
+      // breakpoints); the rows and frames due inside it are interpolated.
+      double t_next = a.adaptive_steps ? a.end_time : schedule.Next(data_.time);
+      const StepResult step =
+          a.adaptive_steps ? AdaptiveStep(model_, data_, integ_, a.end_time, options_.stop)
+                           : Step(model_, data_, integ_, t_next - data_.time, options_.stop);
       if (step.interrupted) {
         Interrupted(Format("at t = %.9g s (within a halved step); the last recorded row is at "
                            "t = %.9g s",
@@ -362,7 +370,12 @@ class Run {
         Finish("failed", step.message);
         return;
       }
-      data_.time = t_next;
+      if (a.adaptive_steps) {
+        if (!RecordInsideStep(rows, frames)) return;
+      } else {
+        data_.time = t_next;
+      }
+      t_next = data_.time;
       max_constraint_ = std::max(max_constraint_, CalcMaxJointConstraint(model_, data_, t_next));
       max_rotation_ = std::max(max_rotation_, MaxElementRotation(data_));
 
@@ -397,20 +410,37 @@ class Run {
     Finish(terminated ? "terminated" : "interrupted", message + " " + when);
   }
 
+  // The rows and frames due strictly inside the last AdaptiveStep, from the state interpolated
+  // on the Lie group (InterpolateStep, method-next.md §N2.3); false if writing failed.
+  bool RecordInsideStep(OutputClock& rows, OutputClock& frames) {
+    const double inside = data_.time - 1e-9 * integ_.dense_h;
+    for (;;) {
+      const double t_row = rows.Next(), t_frame = frames.Next();
+      const double t = std::min(t_row, t_frame);
+      if (!(t < inside)) return true;
+      InterpolateStep(model_, data_, integ_, t, dense_);
+      const bool row = t_row <= t, frame = t_frame <= t;
+      if (!Record(t, row, frame, dense_)) return false;
+      if (row) rows.Recorded(t);
+      if (frame) frames.Recorded(t);
+    }
+  }
+
   // Writes the rows (and the ParaView frame) of the current state; on a write error ends the
   // run as failed and returns false.
-  bool Record(double t, bool row, bool frame) {
+  bool Record(double t, bool row, bool frame) { return Record(t, row, frame, data_); }
+  bool Record(double t, bool row, bool frame, const Data& data) {
     if (row) {
-      CalcPointRow(model_, data_, scene_.outputs.points, &row_);
+      CalcPointRow(model_, data, scene_.outputs.points, &row_);
       points_.WriteRow(t, row_);
-      CalcJointRow(model_, data_, scene_.outputs.joints, &row_);
+      CalcJointRow(model_, data, scene_.outputs.joints, &row_);
       joints_.WriteRow(t, row_);
       last_row_time_ = t;
       if (std::max(points_.batch_bytes(), joints_.batch_bytes()) >= kRowBatchBytes &&
           !FlushRows(t))
         return false;
     }
-    if (frame && vtk_ && !vtk_->WriteFrame(model_, data_, t))
+    if (frame && vtk_ && !vtk_->WriteFrame(model_, data, t))
       return WriteFailed(vtk_->dir() + "/frame files", t);
     return true;
   }
@@ -465,6 +495,16 @@ class Run {
       j.Field("convergence", NameOf(d.convergence));
       j.Field("restart_at_breakpoints", d.restart_at_breakpoints);
       j.Field("constraints", NameOf(d.constraints));
+      j.Field("adaptive_steps", a.adaptive_steps);
+      if (a.adaptive_steps) {
+        j.Field("absolute_tolerance", d.absolute_tolerance);
+        j.Field("relative_tolerance", d.relative_tolerance);
+        j.Field("min_step", d.min_step).Field("initial_step", d.initial_step);
+        if (std::isfinite(d.max_step))
+          j.Field("max_step", d.max_step);
+        else
+          j.Key("max_step").Null();
+      }
     }
     if (statics || a.static_preload) {
       j.Key("statics").BeginObject();
@@ -519,6 +559,17 @@ class Run {
     j.Field("step_retries", integ_.retries);
     j.Field("estimated_convergences", integ_.estimated_convergences);
     j.Field("restarts", integ_.restarts);
+    // The step history: every accepted step (or substep of a halved one), and the attempts
+    // the error control rejected.
+    j.Key("step_history").BeginObject();
+    j.Field("accepted", integ_.accepted_substeps).Field("rejected", integ_.rejected);
+    if (integ_.accepted_substeps > 0) {
+      j.Field("min_step", integ_.min_h).Field("max_step", integ_.max_h);
+      j.Field("mean_step", integ_.sum_h / static_cast<double>(integ_.accepted_substeps));
+    } else {
+      j.Key("min_step").Null().Key("max_step").Null().Key("mean_step").Null();
+    }
+    j.EndObject();
     if (has_static_) {
       j.Key("static_solution").BeginObject();
       j.Field("converged", static_.converged).Field("load_factor", static_.load_factor);
@@ -542,6 +593,7 @@ class Run {
   const RunOptions& options_;
   std::string summary_path_;
   Data data_;
+  Data dense_;  // step: auto: the state interpolated at output times inside a step
   Integrator integ_;
   StaticResult static_;
   bool has_static_ = false;

@@ -79,6 +79,7 @@ class SceneReader {
   void ReadLoad(const Node& value, const std::string& path, LoadSpec& load, EntitySource& source);
   void ReadAnalysis(const Node* node);
   void ReadTimes(const Node& node, const std::string& path);
+  void ReadStepControl(const Node& node, const std::string& path);
   void ReadSolverOptions(const Node& node, const std::string& path);
   void ReadOutputs(const Node* node);
   void ReadOutputPoint(const Node& value, const std::string& path, OutputPointSpec& op,
@@ -739,7 +740,8 @@ void SceneReader::ReadAnalysis(const Node* node) {
   r_.CheckKeys(*node, path,
                {"type", "start_time", "end_time", "step", "rho_inf", "tolerances", "max_iterations",
                 "max_halvings", "align_steps", "static_preload", "load_steps", "rod_inertia",
-                "newton", "predictor", "convergence", "restart_at_breakpoints", "constraints"});
+                "newton", "predictor", "convergence", "restart_at_breakpoints", "constraints",
+                "tolerance", "min_step", "max_step", "initial_step"});
   if (const Node* t = node->Find("type")) a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
   ReadTimes(*node, path);
   ReadSolverOptions(*node, path);
@@ -770,7 +772,15 @@ void SceneReader::ReadTimes(const Node& node, const std::string& path) {
   } else if (!(a->end_time > a->start_time)) {
     r_.Fail(node.location, path, "start_time must be before end_time (default 1 s)");
   }
-  if (const Node* t = find("step")) a->step = r_.PositiveNumber(*t, Join(path, "step"));
+  const Node* step = find("step");
+  if (step != nullptr && step->IsScalar() && !step->quoted && step->scalar == "auto")
+    ReadStepControl(node, path);
+  else if (step != nullptr)
+    a->step = r_.PositiveNumber(*step, Join(path, "step"));
+  if (!a->adaptive_steps)
+    for (const char* key : {"tolerance", "min_step", "max_step", "initial_step"})
+      if (const Node* t = find(key))
+        r_.Fail(t->location, Join(path, key), "applies only to 'step: auto' (error-controlled steps)");
   if (a->kind != AnalysisKind::kDynamic) return;
   if ((a->end_time - a->start_time) / a->step > kMaxSteps)
     r_.Fail(find("step") != nullptr ? find("step")->location : node.location, Join(path, "step"),
@@ -782,6 +792,43 @@ void SceneReader::ReadTimes(const Node& node, const std::string& path) {
     const Node* at = find(key) != nullptr ? find(key) : find("step") != nullptr ? find("step") : &node;
     r_.Fail(at->location, Join(path, key), problem);
   }
+}
+
+// step: auto: tolerance (required; a number for both, or {absolute, relative}), min_step,
+// max_step, initial_step (DynamicOptions). analysis.step becomes the first step.
+void SceneReader::ReadStepControl(const Node& node, const std::string& path) {
+  AnalysisSettings* a = &spec_.analysis;
+  DynamicOptions& d = a->dynamic;
+  a->adaptive_steps = true;
+  const Node* tol = node.Find("tolerance");
+  if (tol == nullptr)
+    r_.Fail(node.Find("step")->location, Join(path, "step"),
+            "'step: auto' requires analysis.tolerance (a number, or {absolute: .., relative: ..}: "
+            "the local error per step, translations relative to the model's size, rotations in rad)");
+  const std::string tp = Join(path, "tolerance");
+  if (tol->IsMap()) {
+    r_.CheckKeys(*tol, tp, {"absolute", "relative"});
+    if (const Node* v = tol->Find("absolute"))
+      d.absolute_tolerance = r_.PositiveNumber(*v, Join(tp, "absolute"));
+    if (const Node* v = tol->Find("relative"))
+      d.relative_tolerance = r_.NonNegativeNumber(*v, Join(tp, "relative"));
+  } else {
+    d.absolute_tolerance = d.relative_tolerance = r_.PositiveNumber(*tol, tp);
+  }
+  const double span = a->end_time - a->start_time;
+  if (const Node* t = node.Find("min_step")) d.min_step = r_.PositiveNumber(*t, Join(path, "min_step"));
+  if (const Node* t = node.Find("max_step")) {
+    d.max_step = r_.PositiveNumber(*t, Join(path, "max_step"));
+    if (!(d.max_step >= d.min_step))
+      r_.Fail(t->location, Join(path, "max_step"), "expected max_step >= min_step");
+  }
+  a->step = std::clamp(1e-3 * span, d.min_step, d.max_step);
+  if (const Node* t = node.Find("initial_step")) {
+    a->step = r_.PositiveNumber(*t, Join(path, "initial_step"));
+    if (a->step < d.min_step || a->step > d.max_step)
+      r_.Fail(t->location, Join(path, "initial_step"), "expected a step in [min_step, max_step]");
+  }
+  d.initial_step = a->step;
 }
 
 // The Newton iteration's options, shared by dynamics and statics where both have them.

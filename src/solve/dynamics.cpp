@@ -6,6 +6,8 @@
 #include <limits>
 #include <utility>
 
+#include <Eigen/LU>
+
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/statics.h"
 
@@ -51,6 +53,15 @@ void ValidateDynamicOptions(const DynamicOptions& o, const std::string& owner) {
                                      std::pair{o.residual_tolerance, "residual_tolerance"}})
     require(std::isfinite(value) && value > 0.0, field, "must be finite and > 0");
   require(o.refresh_ratio > 0.0 && o.refresh_ratio < 1.0, "refresh_ratio", "must lie in (0, 1)");
+  require(std::isfinite(o.absolute_tolerance) && o.absolute_tolerance > 0.0, "tolerance.absolute",
+          "must be finite and > 0");
+  require(std::isfinite(o.relative_tolerance) && o.relative_tolerance >= 0.0, "tolerance.relative",
+          "must be finite and >= 0");
+  require(std::isfinite(o.min_step) && o.min_step > 0.0, "min_step", "must be a finite time > 0 s");
+  require(!std::isnan(o.max_step) && o.max_step >= o.min_step, "max_step",
+          "must be a time >= min_step");
+  require(std::isfinite(o.initial_step) && o.initial_step >= 0.0, "initial_step",
+          "must be a finite time >= 0 s (0: chosen by the integrator)");
   const auto require_enum = [&](auto value, const char* field) {
     using E = decltype(value);
     if (!IsEnumValue(value))
@@ -147,6 +158,15 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
     integ.ggl_y = Eigen::VectorXd::Zero(nv);
     integ.max_nu = 0.0;
   }
+  integ.error = integ.a_accepted = integ.dense_v0 = integ.dense_vdot0 = integ.dense_v1 =
+      integ.dense_vdot1 = integ.dense_d = integ.dense_psi = integ.dense_dpsi =
+          Eigen::VectorXd::Zero(nv);
+  integ.dense_lambda0 = integ.dense_lambda1 = Eigen::VectorXd::Zero(nc);
+  SaveState(data, &integ.dense_q0);
+  integ.dense_t0 = data.time;
+  integ.dense_h = 0.0;
+  integ.h_control = integ.err_last = integ.h_last = integ.error_norm = 0.0;
+  integ.allow_growth = true;
   integ.breakpoints.clear();
   if (options.restart_at_breakpoints) {
     std::vector<double> b = ProfileBreakpoints(model);
@@ -495,6 +515,14 @@ void RestoreStepStart(const Model& model, Data& data, Integrator& integ, double 
   (void)model;
 }
 
+// The step history (summary.json): every accepted step or substep.
+void RecordStepSize(Integrator& integ, double h) {
+  integ.min_h = std::min(integ.min_h, h);
+  integ.max_h = std::max(integ.max_h, h);
+  integ.sum_h += h;
+  ++integ.accepted_substeps;
+}
+
 // The first breakpoint after t (beyond the snapping tolerance), or infinity.
 double NextBreakpoint(const Integrator& integ, double t, double tolerance) {
   const auto it =
@@ -551,6 +579,7 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
       UpdateBranchReferences(model, data);
       result.iterations += its;
       ++result.substeps;
+      RecordStepSize(integ, h_sub);
       integ.iterations += its;
       integ.max_iterations_in_step = std::max(integ.max_iterations_in_step, its);
       hs = std::min(h, 2.0 * hs);
@@ -573,6 +602,291 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
   ++integ.steps;
   result.ok = true;
   return result;
+}
+
+// ---- error-controlled steps ------------------------------------------------------------------
+
+double LocalErrorConstant(const GeneralizedAlpha& p) {
+  return p.beta - 1.0 / 6.0 + 0.5 * (p.alpha_m - p.alpha_f);
+}
+
+namespace {
+
+// PI controller (method-next.md §N2.4): the estimate is O(h^3).
+constexpr double kSafety = 0.9, kMaxGrowth = 2.0, kMinShrink = 0.2;
+constexpr double kOrder = 3.0, kGainI = 0.3 / kOrder, kGainP = 0.4 / kOrder;
+
+// The weight of velocity unknown i in the error norm: translations (node translations and
+// prismatic joint coordinates) are measured in units of the model's length scale.
+bool IsTranslation(const Model& model, int i) {
+  if (i < model.nv_nodes) return false;  // caller handles node blocks
+  for (const Joint& j : model.joints) {
+    if (i < j.coord || i >= j.coord + j.k()) continue;
+    return j.basis.col(i - j.coord).tail<3>().squaredNorm() == 0.0;
+  }
+  return false;
+}
+
+// The weighted RMS norm of integ.error (method-next.md §N2.1): component i divided by
+// atol_i + rtol |h dq_i|; *worst = the component with the largest ratio.
+double WeightedErrorNorm(const Model& model, const Integrator& integ, double h, int* worst) {
+  const DynamicOptions& o = integ.options;
+  const double L = model.length_scale;
+  double sum = 0.0, largest = -1.0;
+  const auto add = [&](int i, double atol) {
+    const double r = integ.error(i) / (atol + o.relative_tolerance * std::abs(h * integ.dq(i)));
+    sum += r * r;
+    if (std::abs(r) > largest) {
+      largest = std::abs(r);
+      *worst = i;
+    }
+  };
+  for (const Node& n : model.nodes) {
+    if (n.dof < 0) continue;
+    for (int c = 0; c < 3; ++c) add(n.dof + c, o.absolute_tolerance * L);
+    for (int c = 3; c < 6; ++c) add(n.dof + c, o.absolute_tolerance);
+  }
+  for (int i = model.nv_nodes; i < model.nv; ++i)
+    add(i, IsTranslation(model, i) ? o.absolute_tolerance * L : o.absolute_tolerance);
+  return model.nv > 0 ? std::sqrt(sum / model.nv) : 0.0;
+}
+
+// "node 3 (translation)", "joint J2 coordinate 0", ... for the message of a failed step.
+std::string DescribeUnknown(const Model& model, int i) {
+  char buf[160];
+  for (std::size_t n = 0; n < model.nodes.size(); ++n) {
+    const int dof = model.nodes[n].dof;
+    if (dof >= 0 && i >= dof && i < dof + 6) {
+      std::snprintf(buf, sizeof buf, "node %zu %s", n, i - dof < 3 ? "translation" : "rotation");
+      return buf;
+    }
+  }
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    if (i >= j.coord && i < j.coord + j.k()) {
+      std::snprintf(buf, sizeof buf, "joint %zu coordinate %d", jj, i - j.coord);
+      return buf;
+    }
+  }
+  std::snprintf(buf, sizeof buf, "velocity unknown %d", i);
+  return buf;
+}
+
+}  // namespace
+
+StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, double t_limit,
+                        const StopRequest& stop) {
+  StepResult result;
+  result.substeps = 0;
+  const DynamicOptions& opt = integ.options;
+  const double t0 = data.time;
+  if (!(t_limit > t0)) {
+    result.ok = true;
+    return result;
+  }
+  double h = integ.h_control;
+  if (h <= 0.0)
+    h = opt.initial_step > 0.0 ? opt.initial_step : 1e-3 * (t_limit - t0);
+  const bool conservative = opt.newton_matrix == NewtonMatrix::kFull &&
+                            opt.predictor == Predictor::kZero;
+  const double c_err = LocalErrorConstant(integ.params);
+  integ.a_accepted = integ.a;
+  std::string why;
+  for (;;) {
+    h = std::clamp(h, opt.min_step, opt.max_step);
+    // The step's end: t_limit or the next breakpoint when within 1.1 h; half the way there when
+    // within 2 h (no sliver step before it); else t0 + h.
+    const double snap = 1e-9 * h;
+    const double bp = NextBreakpoint(integ, t0, snap);
+    const double target = std::min(t_limit, bp);
+    const bool target_is_breakpoint = bp <= t_limit;
+    const double room = target - t0;
+    double hs = h, t1 = t0 + h;
+    bool lands = false;
+    if (room <= 1.1 * h) {
+      hs = room;
+      t1 = target;
+      lands = true;
+    } else if (room < 2.0 * h) {
+      hs = 0.5 * room;
+      t1 = t0 + hs;
+    }
+    const bool truncated = hs < h;
+    if (stop.Requested()) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "step interrupted at t = %.9g s", t0);
+      result.interrupted = true;
+      result.message = buf;
+      integ.a = integ.a_accepted;
+      return result;
+    }
+    // method-next.md §N2.2: a_n approximates vdot at t_n + (alpha_m - alpha_f) h; rescale it to
+    // the new step size, or the scheme is first order on a variable grid.
+    if (integ.h_last > 0.0 && hs != integ.h_last)
+      integ.a = data.vdot + (hs / integ.h_last) * (integ.a_accepted - data.vdot);
+    else
+      integ.a = integ.a_accepted;
+    SaveStepStart(data, integ);
+    const bool left_limit = lands && target_is_breakpoint;
+    int its = TryStep(model, data, integ, hs, t1, left_limit, false, &why);
+    if (its < 0 && !conservative) {
+      RestoreStepStart(model, data, integ, t0);
+      ++integ.retries;
+      its = TryStep(model, data, integ, hs, t1, left_limit, true, &why);
+    }
+    double err = INFINITY;
+    int worst = 0;
+    if (its >= 0) {
+      integ.error = (c_err * hs * hs) * (integ.a - integ.a_start);
+      err = WeightedErrorNorm(model, integ, hs, &worst);
+      integ.error_norm = err;
+    }
+    if (its >= 0 && err <= 1.0) {
+      // Accepted: the dense-output record of the step, then the controller.
+      integ.dense_t0 = t0;
+      integ.dense_h = hs;
+      integ.dense_q0 = integ.q_start;
+      integ.dense_v0 = integ.v_start;
+      integ.dense_vdot0 = integ.vdot_start;
+      integ.dense_lambda0 = integ.lambda_start;
+      integ.dense_v1 = data.v;
+      integ.dense_vdot1 = data.vdot;
+      integ.dense_lambda1 = data.lambda;
+      integ.dense_d = hs * integ.dq;
+      UpdateBranchReferences(model, data);
+      result.iterations += its;
+      result.substeps = 1;
+      integ.iterations += its;
+      integ.max_iterations_in_step = std::max(integ.max_iterations_in_step, its);
+      RecordStepSize(integ, hs);
+      ++integ.steps;
+      const double e = std::max(err, 1e-10);
+      double factor = kSafety * std::pow(e, -kGainI);
+      if (integ.err_last > 0.0) factor *= std::pow(integ.err_last / e, kGainP);
+      else factor = kSafety * std::pow(e, -1.0 / kOrder);
+      factor = std::clamp(factor, kMinShrink, integ.allow_growth ? kMaxGrowth : 1.0);
+      // A step shortened to land on a target keeps the controller's size (§N2.4 step 5).
+      integ.h_control = truncated ? std::max(h, hs * factor) : hs * factor;
+      integ.h_control = std::clamp(integ.h_control, opt.min_step, opt.max_step);
+      integ.err_last = e;
+      integ.allow_growth = true;
+      integ.h_last = hs;
+      data.time = t1;
+      if (left_limit) {
+        // method-next.md §N1.2: consistent vdot, lambda and a from the right limits; the PI
+        // memory restarts too.
+        if (!RestartDynamics(model, data, integ, &result.message)) return result;
+        integ.err_last = 0.0;
+      }
+      result.ok = true;
+      return result;
+    }
+    // Rejected: Newton failure halves the step, an error above the tolerance shrinks it by
+    // the I controller; the next accepted step may not grow.
+    RestoreStepStart(model, data, integ, t0);
+    ++integ.rejected;
+    integ.err_last = 0.0;
+    integ.allow_growth = false;
+    if (hs <= opt.min_step * (1.0 + 1e-12)) {
+      char buf[240];
+      if (its < 0)
+        std::snprintf(buf, sizeof buf, "step failed at t = %.9g s with the smallest step %.3g s: ",
+                      t0, hs);
+      else
+        std::snprintf(buf, sizeof buf,
+                      "step failed at t = %.9g s: with the smallest step %.3g s (min_step) the "
+                      "estimated local error is %.3g times the tolerance, largest in ",
+                      t0, hs, err);
+      result.message = std::string(buf) + (its < 0 ? why : DescribeUnknown(model, worst));
+      integ.a = integ.a_accepted;
+      return result;
+    }
+    h = its < 0 ? 0.5 * hs
+                : hs * std::clamp(kSafety * std::pow(err, -1.0 / kOrder), kMinShrink, 1.0);
+  }
+}
+
+StepResult AdvanceTo(const Model& model, Data& data, Integrator& integ, double t_end,
+                     const StopRequest& stop) {
+  StepResult total;
+  total.substeps = 0;
+  while (data.time < t_end) {
+    const StepResult r = AdaptiveStep(model, data, integ, t_end, stop);
+    total.iterations += r.iterations;
+    total.substeps += r.substeps;
+    if (!r.ok) {
+      total.interrupted = r.interrupted;
+      total.message = r.message;
+      return total;
+    }
+  }
+  total.ok = true;
+  return total;
+}
+
+void InterpolateStep(const Model& model, const Data& data, Integrator& integ, double t,
+                     Data& out) {
+  const double h = integ.dense_h;
+  const double th = h > 0.0 ? std::clamp((t - integ.dense_t0) / h, 0.0, 1.0) : 1.0;
+  const double th2 = th * th, th3 = th2 * th;
+  // Cubic Hermite basis and its derivatives (method-next.md §N2.3).
+  const double h10 = th3 - 2.0 * th2 + th, h01 = -2.0 * th3 + 3.0 * th2, h11 = th3 - th2;
+  const double d10 = 3.0 * th2 - 4.0 * th + 1.0, d01 = 6.0 * th - 6.0 * th2,
+               d11 = 3.0 * th2 - 2.0 * th;
+  const Eigen::VectorXd& v0 = integ.dense_v0;
+  const Eigen::VectorXd& v1 = integ.dense_v1;
+  const Eigen::VectorXd& D = integ.dense_d;
+  Eigen::VectorXd& psi = integ.dense_psi;
+  Eigen::VectorXd& dpsi = integ.dense_dpsi;
+  for (const Node& n : model.nodes) {
+    if (n.dof < 0) continue;
+    const Vec6 d = D.segment<6>(n.dof);
+    const Vec6 w = TSE3Inv(d) * v1.segment<6>(n.dof);  // T^-1(D) v_{n+1}
+    const Vec6 a = v0.segment<6>(n.dof);
+    psi.segment<6>(n.dof) = h10 * h * a + h01 * d + h11 * h * w;
+    dpsi.segment<6>(n.dof) = d10 * h * a + d01 * d + d11 * h * w;
+  }
+  for (const Joint& j : model.joints) {
+    const int k = j.k();
+    if (k == 0) continue;
+    Vec6 w = Vec6::Zero();
+    w.head(k) = v1.segment(j.coord, k);
+    if (!JointHasGlobalCoordinates(j.type)) {
+      Mat6 T;
+      CalcJointCoordinateTangent(j, D.segment(j.coord, k), &T);
+      w = T.partialPivLu().solve(w);
+    }
+    psi.segment(j.coord, k) = h10 * h * v0.segment(j.coord, k) + h01 * D.segment(j.coord, k) +
+                              h11 * h * w.head(k);
+    dpsi.segment(j.coord, k) = d10 * h * v0.segment(j.coord, k) + d01 * D.segment(j.coord, k) +
+                               d11 * h * w.head(k);
+  }
+  RestoreState(integ.dense_q0, out);
+  Retract(model, out, psi);
+  // Velocities: eta = T(psi) psi' / h.
+  const double inv_h = h > 0.0 ? 1.0 / h : 0.0;
+  for (const Node& n : model.nodes) {
+    if (n.dof < 0) continue;
+    out.v.segment<6>(n.dof) = inv_h * (TSE3(psi.segment<6>(n.dof)) * dpsi.segment<6>(n.dof));
+  }
+  for (const Joint& j : model.joints) {
+    const int k = j.k();
+    if (k == 0) continue;
+    if (JointHasGlobalCoordinates(j.type)) {
+      out.v.segment(j.coord, k) = inv_h * dpsi.segment(j.coord, k);
+    } else {
+      Mat6 T;
+      CalcJointCoordinateTangent(j, psi.segment(j.coord, k), &T);
+      Vec6 x = Vec6::Zero();
+      x.head(k) = dpsi.segment(j.coord, k);
+      out.v.segment(j.coord, k) = inv_h * (T * x).head(k);
+    }
+  }
+  if (h <= 0.0) out.v = data.v;
+  out.vdot = (1.0 - th) * integ.dense_vdot0 + th * integ.dense_vdot1;
+  out.lambda = (1.0 - th) * integ.dense_lambda0 + th * integ.dense_lambda1;
+  out.w_ref = data.w_ref;
+  out.time = t;
 }
 
 }  // namespace screwfem

@@ -25,7 +25,10 @@ struct AnalysisSettings {
   AnalysisKind kind = AnalysisKind::kDynamic;
   double start_time = 0.0;   // [s]
   double end_time = 1.0;     // [s]
-  double step = 1e-3;        // [s], dynamic analyses
+  double step = 1e-3;        // [s], dynamic analyses (with adaptive_steps: the first step)
+  // step: auto: error-controlled steps (AdaptiveStep; dynamic.absolute_tolerance, ...,
+  // min_step, max_step); output rows at times inside a step are interpolated (InterpolateStep).
+  bool adaptive_steps = false;
   bool align_steps = true;   // shorten steps so that profile breakpoints fall on step ends
   DynamicOptions dynamic;
   StaticOptions statics;

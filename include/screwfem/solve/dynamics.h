@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -120,6 +121,18 @@ struct DynamicOptions {
   //            2017): velocities satisfy the constraints to round-off and multipliers
   //            (actuator efforts) are second-order accurate.
   ConstraintFormulation constraints = ConstraintFormulation::kIndex3;
+  // Error-controlled steps (AdaptiveStep, AdvanceTo; docs/numerics.md, "Adaptive time steps";
+  // method-next.md §N2). A step is accepted when the weighted RMS of its local position error
+  // estimate C h^2 (a_{n+1} - a_n) is at most 1, each component weighted by
+  //   absolute_tolerance (translations in units of the model's length scale, rotations and
+  //   joint coordinates in rad or m) + relative_tolerance |h dq_i| (the step's own motion).
+  // Steps stay within [min_step, max_step]; initial_step is the first step's size (0: the
+  // tolerance's cube root times the time span's thousandth, see AdvanceTo).
+  double absolute_tolerance = 1e-6;
+  double relative_tolerance = 1e-4;
+  double min_step = 1e-10;
+  double max_step = std::numeric_limits<double>::infinity();
+  double initial_step = 0.0;
 };
 
 // Ranges of the iteration limits (scene files: analysis.max_iterations, max_halvings).
@@ -127,7 +140,8 @@ inline constexpr int kMaxNewtonIterations = 1000;
 inline constexpr int kMaxHalvings = 30;
 
 // Throws InputError "<owner>.<field>: what is expected" unless every setting is in range:
-// rho_inf in [0, 1]; max_iterations in [1, kMaxNewtonIterations]; max_halvings in
+// rho_inf in [0, 1]; absolute and relative tolerances finite and > 0 (relative may be 0);
+// 0 < min_step <= max_step (max_step may be infinite); initial_step >= 0 and finite; max_iterations in [1, kMaxNewtonIterations]; max_halvings in
 // [0, kMaxHalvings] (a step is never cut below 2^-30 of itself, so a failing step ends);
 // tolerances finite and > 0; refresh_ratio in (0, 1); enums one of their values. The one
 // check of these settings, for scenes, runs and the Python bindings.
@@ -167,6 +181,29 @@ struct Integrator {
   long estimated_convergences = 0;  // steps accepted by ConvergenceTest::kEstimated
   long restarts = 0;             // re-initialisations at profile breakpoints
   int max_iterations_in_step = 0;
+  // Step history (every accepted step or substep, fixed or adaptive): the smallest, largest
+  // and summed step sizes, and the steps AdaptiveStep rejected (error estimate above the
+  // tolerance, or Newton failed).
+  double min_h = std::numeric_limits<double>::infinity(), max_h = 0.0, sum_h = 0.0;
+  long accepted_substeps = 0;
+  long rejected = 0;
+
+  // Error control (AdaptiveStep). The controller's next step size (0 before the first), the
+  // error of the last accepted step (for the PI controller; 0: none), whether the next step
+  // may grow (not after a rejection), the size of the last accepted step (the auxiliary
+  // acceleration is rescaled when the next differs, method-next.md §N2.2), the local error
+  // estimate of the last attempted step (nv, velocity layout) and its weighted norm.
+  double h_control = 0.0, err_last = 0.0, h_last = 0.0;
+  bool allow_growth = true;
+  Eigen::VectorXd error, a_accepted;
+  double error_norm = 0.0;
+  // Dense output of the last accepted AdaptiveStep (InterpolateStep): its start time and size,
+  // the configuration at its start, the velocities, accelerations and multipliers at both ends
+  // (the end's before a restart), and the step increment h dq.
+  double dense_t0 = 0.0, dense_h = 0.0;
+  State dense_q0;
+  Eigen::VectorXd dense_v0, dense_vdot0, dense_lambda0, dense_v1, dense_vdot1, dense_lambda1,
+      dense_d, dense_psi, dense_dpsi;
 };
 
 struct StepResult {
@@ -200,6 +237,37 @@ bool RestartDynamics(const Model& model, Data& data, Integrator& integrator,
 // of the step unless the step was halved). No allocation unless it fails or is interrupted.
 StepResult Step(const Model& model, Data& data, Integrator& integrator, double h,
                 const StopRequest& stop = {});
+
+// ---- error-controlled steps (method-next.md §N2; docs/numerics.md, "Adaptive time steps") ----
+
+// The constant C of the local error estimate eps = C h^2 (a_{n+1} - a_n) of generalized-alpha:
+// beta - 1/6 + (alpha_m - alpha_f) / 2.
+double LocalErrorConstant(const GeneralizedAlpha& p);
+
+// One accepted error-controlled step from data.time, ending at or before t_limit (exactly on
+// t_limit when it is within reach, and exactly on the next profile breakpoint, where the
+// integrator restarts as Step does). Rejected attempts (estimated error above the tolerance,
+// or Newton failure) are retried with a smaller step chosen by the PI controller; below
+// options.min_step the step fails with a message naming the time and the worst component.
+// After it, InterpolateStep gives the state anywhere inside the step. No allocation unless it
+// fails or is interrupted.
+StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integrator, double t_limit,
+                        const StopRequest& stop = {});
+
+// Error-controlled steps until data.time == t_end exactly (AdaptiveStep with t_limit = t_end).
+// The controller's state carries over between calls, so stepping to a series of output times
+// costs at most one shortened step per call.
+StepResult AdvanceTo(const Model& model, Data& data, Integrator& integrator, double t_end,
+                     const StopRequest& stop = {});
+
+// Dense output: sets `out` (a Data of the same model, e.g. a copy of data) to the state at time
+// t inside the last accepted AdaptiveStep [t_n, t_n + h] (method-next.md §N2.3): node frames
+// H_n exp(psi(theta)) with the cubic Hermite increment psi in the Lie algebra that matches
+// H, v at both ends (joint coordinates the same way), velocities T(psi) psi' / h, and
+// accelerations and multipliers linear between the step's ends. Pose error O(h^4), velocity
+// O(h^3). Branch references are copied from `data` (the step's end). No allocation.
+void InterpolateStep(const Model& model, const Data& data, Integrator& integrator, double t,
+                     Data& out);
 
 
 }  // namespace screwfem
