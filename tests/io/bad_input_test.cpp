@@ -292,6 +292,43 @@ TEST(BadInput, AnalysisEndBeforeStart) {
               "bad.yaml:5:37", "analysis.end_time: expected end_time > start_time");
 }
 
+// step: auto (error-controlled steps): its keys, their ranges, and the keys it needs.
+TEST(BadInput, AdaptiveStepKeys) {
+  const std::string body =
+      kHead + "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\nanalysis:\n";
+  ExpectError(body + "  step: auto\n", "bad.yaml:6:9",
+              "analysis.step: 'step: auto' requires analysis.tolerance");
+  ExpectError(body + "  step: fast\n", "bad.yaml:6:9", "analysis.step: expected a number");
+  ExpectError(body + "  step: auto\n  tolerance: 0\n", "bad.yaml:7:14",
+              "analysis.tolerance: expected a positive number");
+  ExpectError(body + "  step: auto\n  tolerance: {absolute: 1e-6, relative: -1}\n", "bad.yaml:7:41",
+              "analysis.tolerance.relative: expected a non-negative number");
+  ExpectError(body + "  step: auto\n  tolerance: {absolut: 1e-6}\n", "bad.yaml:7:15",
+              "analysis.tolerance.absolut: unknown key 'absolut' (did you mean 'absolute'?)");
+  ExpectError(body + "  step: auto\n  tolerance: 1e-6\n  min_step: 1e-3\n  max_step: 1e-4\n",
+              "bad.yaml:9:13", "analysis.max_step: expected max_step >= min_step");
+  ExpectError(body + "  step: auto\n  tolerance: 1e-6\n  min_step: -1\n", "bad.yaml:8:13",
+              "analysis.min_step: expected a positive number");
+  ExpectError(body + "  step: auto\n  tolerance: 1e-6\n  max_step: 1e-2\n  initial_step: 1\n",
+              "bad.yaml:9:17", "analysis.initial_step: expected a step in [min_step, max_step]");
+  ExpectError(body + "  step: 1e-3\n  tolerance: 1e-6\n", "bad.yaml:7:14",
+              "analysis.tolerance: applies only to 'step: auto'");
+  ExpectError(body + "  max_step: 1e-3\n", "bad.yaml:6:13",
+              "analysis.max_step: applies only to 'step: auto'");
+  // Valid: a number for both tolerances, or both given, with limits.
+  EXPECT_EQ(Error(body + "  step: auto\n  tolerance: 1e-6\n"), "(no error)");
+  const Scene s = ParseScene(body + "  step: auto\n  tolerance: {absolute: 1e-5, relative: 1e-3}\n"
+                                    "  min_step: 1e-6\n  max_step: 1e-2\n  initial_step: 2e-3\n",
+                             "ok.yaml", {});
+  EXPECT_TRUE(s.analysis.adaptive_steps);
+  EXPECT_EQ(s.analysis.dynamic.absolute_tolerance, 1e-5);
+  EXPECT_EQ(s.analysis.dynamic.relative_tolerance, 1e-3);
+  EXPECT_EQ(s.analysis.dynamic.min_step, 1e-6);
+  EXPECT_EQ(s.analysis.dynamic.max_step, 1e-2);
+  EXPECT_EQ(s.analysis.dynamic.initial_step, 2e-3);
+  EXPECT_EQ(s.analysis.step, 2e-3);
+}
+
 // Near t = 1e15 s doubles are 0.125 s apart: a 1 ms step would silently become 0.125 s.
 TEST(BadInput, TimesTooLargeForTheStepAreRefusedNamingTheField) {
   ExpectError(kHead +
