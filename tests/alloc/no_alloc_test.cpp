@@ -146,6 +146,41 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
   }
 }
 
+// Error-controlled steps (AdaptiveStep) with dense output (InterpolateStep) after each, through
+// the ramp's breakpoint (a landing and a restart) and with rejected attempts (a tight
+// tolerance from a too-large first step).
+TEST(NoAllocation, AdaptiveStepsAndDenseOutputAllocateNothing) {
+  for (ConstraintFormulation constraints :
+       {ConstraintFormulation::kIndex3, ConstraintFormulation::kGgl}) {
+    SCOPED_TRACE(NameOf(constraints));
+    const Model model = MixedModel();
+    Data data = MakeData(model);
+    Integrator integ;
+    DynamicOptions options;
+    options.rho_inf = 0.8;
+    options.constraints = constraints;
+    options.absolute_tolerance = options.relative_tolerance = 1e-6;
+    options.initial_step = 5e-3;
+    std::string message;
+    ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
+    Data dense = data;
+    g_allocations = 0;
+    g_counting = true;
+    bool ok = true;
+    while (ok && data.time < 0.05) {
+      const double t0 = data.time;
+      ok = AdaptiveStep(model, data, integ, 0.05).ok && ok;
+      InterpolateStep(model, data, integ, 0.5 * (t0 + data.time), dense);
+    }
+    g_counting = false;
+    EXPECT_TRUE(ok);
+    EXPECT_GT(integ.steps, 5);      // the steps really ran
+    EXPECT_GE(integ.rejected, 1);   // some were rejected
+    EXPECT_GE(integ.restarts, 1);   // and restarted at the ramp's end
+    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside adaptive steps";
+  }
+}
+
 // Writing a ParaView frame (both encodings) between time steps allocates nothing once the
 // writer is open with room for the frames (the ascii text buffer is reserved for a frame too).
 TEST(NoAllocation, ParaViewFramesAllocateNothing) {
