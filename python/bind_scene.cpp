@@ -79,7 +79,21 @@ void BindSettings(py::module_& m) {
       .def_readwrite("constraints", &DynamicOptions::constraints,
                      "INDEX3 (position constraints) or GGL (also the velocity constraints, "
                      "stabilised index 2: round-off velocity constraints, second-order "
-                     "multipliers and efforts).");
+                     "multipliers and efforts).")
+      .def_readwrite("absolute_tolerance", &DynamicOptions::absolute_tolerance,
+                     "Error-controlled steps (Simulation.advance_to): absolute local error per "
+                     "step (translations relative to the model's length scale, rotations and "
+                     "joint coordinates as they are); > 0.")
+      .def_readwrite("relative_tolerance", &DynamicOptions::relative_tolerance,
+                     "Error-controlled steps: local error relative to the step's own motion "
+                     "|h dq|; >= 0.")
+      .def_readwrite("min_step", &DynamicOptions::min_step,
+                     "Error-controlled steps: smallest step [s] (below it the step fails); > 0.")
+      .def_readwrite("max_step", &DynamicOptions::max_step,
+                     "Error-controlled steps: largest step [s] (inf: none); >= min_step.")
+      .def_readwrite("initial_step", &DynamicOptions::initial_step,
+                     "Error-controlled steps: the first step [s] (0: 1e-3 of the first "
+                     "advance_to's span).");
 
   py::class_<StaticOptions>(m, "StaticOptions",
                             "Settings of the static Newton solver with load stepping (statics.h). "
@@ -109,6 +123,9 @@ void BindSettings(py::module_& m) {
       .def_readwrite("start_time", &AnalysisSettings::start_time, "[s]")
       .def_readwrite("end_time", &AnalysisSettings::end_time, "[s]")
       .def_readwrite("step", &AnalysisSettings::step, "Time step of dynamic analyses [s].")
+      .def_readwrite("adaptive_steps", &AnalysisSettings::adaptive_steps,
+                     "step: auto: error-controlled steps (DynamicOptions.absolute_tolerance, "
+                     "...); rows inside a step are interpolated.")
       .def_readwrite("align_steps", &AnalysisSettings::align_steps,
                      "Shorten steps so that profile breakpoints fall on step ends.")
       .def_readwrite("dynamic", &AnalysisSettings::dynamic, "DynamicOptions (a reference).")

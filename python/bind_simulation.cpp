@@ -68,6 +68,20 @@ class Simulation {
     return r;
   }
 
+  // Error-controlled steps to t_end exactly (AdvanceTo); the controller's state carries over.
+  StepResult AdvanceToTime(double t_end) {
+    if (!initialized_)
+      throw std::logic_error(
+          "Simulation.advance_to: call initialize() first (again after solve_static)");
+    if (!(std::isfinite(t_end) && t_end >= data_.time))
+      throw InputError("Simulation.advance_to: t_end must be a finite time >= the current time");
+    PythonSignals signals;
+    StepResult r = AdvanceTo(model(), data_, integrator_, t_end, signals.request());
+    signals.ThrowIfRaised();
+    if (!r.ok) RaiseSolverError(r.message, py::cast(r));
+    return r;
+  }
+
   StaticResult Statics(const std::optional<StaticOptions>& options) {
     StaticOptions o = scene_.analysis.statics;
     o.time = data_.time;
@@ -266,6 +280,26 @@ and indices out of range IndexError.)doc")
       .def_property_readonly(
           "restarts", [](const S& s) { return s.integrator().restarts; },
           "Re-initialisations at profile breakpoints (DynamicOptions.restart_at_breakpoints).")
+      .def_property_readonly(
+          "rejected_steps", [](const S& s) { return s.integrator().rejected; },
+          "Attempts the error control rejected (advance_to).")
+      .def_property_readonly(
+          "step_history",
+          [](const S& s) {
+            const Integrator& i = s.integrator();
+            py::dict d;
+            d["accepted"] = i.accepted_substeps;
+            d["rejected"] = i.rejected;
+            d["min_step"] = i.accepted_substeps > 0 ? i.min_h : 0.0;
+            d["max_step"] = i.max_h;
+            d["mean_step"] = i.accepted_substeps > 0 ? i.sum_h / i.accepted_substeps : 0.0;
+            return d;
+          },
+          "Accepted steps (or substeps), rejected attempts and the smallest, largest and mean "
+          "accepted step [s], as summary.json's step_history.")
+      .def_property_readonly(
+          "error_norm", [](const S& s) { return s.integrator().error_norm; },
+          "Weighted local error estimate of the last error-controlled step (accepted if <= 1).")
       .def_property_readonly("max_iterations_in_step",
                              [](const S& s) { return s.integrator().max_iterations_in_step; })
 
@@ -284,6 +318,15 @@ StepResult on success. On failure the state is left at the start of the step and
 is raised, with the StepResult (ok False, message) as its `result`. Requires initialize().
 A signal (Ctrl-C) between substeps ends the call with the signal's exception
 (KeyboardInterrupt), the state at the end of the last completed substep.)doc")
+      .def("advance_to", &S::AdvanceToTime, py::arg("t_end"),
+           R"doc(advance_to(t_end) -> StepResult
+
+Error-controlled steps (AdvanceTo, docs/numerics.md "Adaptive time steps") until the time is
+exactly t_end: a local error estimate per step, a PI controller within the options' min_step
+and max_step, steps ending on profile breakpoints. The tolerances are the options'
+absolute_tolerance and relative_tolerance (DynamicOptions). Returns the StepResult (substeps:
+the accepted steps of this call). Call it with successive output times: the controller keeps
+its step between calls. On failure SolverError, the state at the last accepted step.)doc")
       .def("solve_static", &S::Statics, py::arg("options") = py::none(),
            R"doc(solve_static(options=None) -> StaticResult
 

@@ -358,6 +358,38 @@ class PendulumDynamicsTest(unittest.TestCase):
             sim.step(1e-3)
         self.assertLess(sim.calc_energy().total(), -1e-6 * m * g * d)
 
+    def test_advance_to_lands_on_the_quarter_period_with_error_controlled_steps(self):
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        options = sf.DynamicOptions()
+        options.rho_inf = 1.0
+        options.absolute_tolerance = options.relative_tolerance = 1e-8
+        options.initial_step = 1e-4
+        sim.initialize(options)
+        m, d, inertia_pivot, g, w0 = pendulum_constants(sim.model)
+        quarter = elliptic_k(0.5) / w0
+        # Two output times: the controller keeps its step between the calls.
+        sim.advance_to(0.5 * quarter)
+        self.assertEqual(sim.time, 0.5 * quarter)
+        result = sim.advance_to(quarter)
+        self.assertTrue(result.ok)
+        self.assertEqual(sim.time, quarter)
+        # At the bottom alpha = pi/2 and I_O alpha_dot^2 / 2 = m g d.
+        self.assertAlmostEqual(sim.joint_coordinate("hinge"), math.pi / 2, delta=1e-5)
+        rate = math.sqrt(2.0 * m * g * d / inertia_pivot)
+        self.assertAlmostEqual(abs(sim.joint_velocity("hinge")), rate, delta=1e-5 * rate)
+        history = sim.step_history
+        self.assertEqual(history["accepted"], sim.steps)
+        self.assertAlmostEqual(history["mean_step"] * history["accepted"], quarter, delta=1e-12)
+        self.assertLessEqual(history["min_step"], history["mean_step"])
+        self.assertGreater(history["max_step"], history["mean_step"])
+        self.assertLessEqual(sim.error_norm, 1.0)
+        self.assertGreaterEqual(sim.rejected_steps, 0)
+        # Fewer steps than the fixed step of the same accuracy (5e-4, the test below).
+        self.assertLess(sim.steps, quarter / 5e-4)
+        options.min_step = 0.0
+        with self.assertRaises(sf.InputError):
+            sim.initialize(options)
+
     def test_tip_is_at_the_bottom_with_the_energy_speed_after_a_quarter_period(self):
         sim = sf.Simulation(sf.load_scene(PENDULUM))
         undamped(sim)
