@@ -124,10 +124,10 @@ struct DynamicOptions {
   // Error-controlled steps (AdaptiveStep, AdvanceTo; docs/numerics.md, "Adaptive time steps";
   // method-next.md §N2). A step is accepted when the weighted RMS of its local position error
   // estimate C h^2 (a_{n+1} - a_n) is at most 1, each component weighted by
-  //   absolute_tolerance (translations in units of the model's length scale, rotations and
-  //   joint coordinates in rad or m) + relative_tolerance |h dq_i| (the step's own motion).
-  // Steps stay within [min_step, max_step]; initial_step is the first step's size (0: the
-  // tolerance's cube root times the time span's thousandth, see AdvanceTo).
+  //   absolute_tolerance (node translations and prismatic coordinates in units of the model's
+  //   length scale, rotations and other coordinates in rad) + relative_tolerance |h dq_i|.
+  // Steps stay within [min_step, max_step]; initial_step is the first step's size (0: 1e-3 of
+  // the span from the start to the first AdaptiveStep's t_limit).
   double absolute_tolerance = 1e-6;
   double relative_tolerance = 1e-4;
   double min_step = 1e-10;
