@@ -658,14 +658,15 @@ std::string DescribeUnknown(const Model& model, int i) {
     const int dof = model.nodes[n].dof;
     if (dof >= 0 && i >= dof && i < dof + 6) {
       std::snprintf(buf, sizeof buf, "node %zu %s", n, i - dof < 3 ? "translation" : "rotation");
-      return buf;
+      const std::string& name = model.nodes[n].name;
+      return name.empty() ? std::string(buf) : std::string(buf) + " ('" + name + "')";
     }
   }
   for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
     const Joint& j = model.joints[jj];
     if (i >= j.coord && i < j.coord + j.k()) {
       std::snprintf(buf, sizeof buf, "joint %zu coordinate %d", jj, i - j.coord);
-      return buf;
+      return j.name.empty() ? std::string(buf) : std::string(buf) + " ('" + j.name + "')";
     }
   }
   std::snprintf(buf, sizeof buf, "velocity unknown %d", i);
@@ -795,7 +796,7 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
       else
         std::snprintf(buf, sizeof buf,
                       "step failed at t = %.9g s: with the smallest step %.3g s (min_step) the "
-                      "estimated local error is %.3g times the tolerance, largest in ",
+                      "estimated local error is %.4g times the tolerance, largest in ",
                       t0, hs, err);
       result.message = std::string(buf) + (its < 0 ? why : DescribeUnknown(model, worst));
       integ.a = integ.a_accepted;
