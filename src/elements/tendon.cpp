@@ -78,8 +78,8 @@ bool TendonSegmentKind::Calc(const Model& model, const Data&, const Item& segmen
   }
   PointDistance g;
   if (!CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, o.tangent, &g)) {
-    t->failure = 0.0;
-    return false;
+    t->active = false;  // coinciding eyelets: no direction, no force
+    return true;
   }
   // method-next.md §N4.3, prescribed tension: residual +tau dl/dq, tangent tau d2l.
   t->residual = tau * g.gradient;
@@ -97,8 +97,8 @@ bool ForceElementKind::Calc(const Model& model, const Data&, const Item& element
   const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
   PointDistance g;
   if (!CalcPointDistance(*x.H[0], fe.a.offset, *x.H[1], fe.b.offset, o.tangent, &g)) {
-    t->failure = 0.0;
-    return false;
+    t->active = false;  // coinciding ends: no direction, no force
+    return true;
   }
   const double actuator = o.load_factor * fe.actuator(o.time);
   const bool damped = o.dynamics && fe.damping != 0.0;

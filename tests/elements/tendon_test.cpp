@@ -7,9 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "screwfem/build/model_builder.h"
+#include "screwfem/solve/dynamics.h"
 
 namespace screwfem {
 namespace {
@@ -181,6 +183,22 @@ TEST(TendonSegmentKind, StatesTensionNeverNegativeAndLoadFactorScalesIt) {
   EXPECT_DOUBLE_EQ(TendonTension(t, 0.5, 0.5), 2.5);
   t.tension = Profile::Constant(-3.0);  // a run-time value that would push: slack
   EXPECT_EQ(TendonTension(t, 0.0), 0.0);
+}
+
+TEST(TendonSegmentKind, TensionAndActuatorProfilesAreBreakpointsOfTheModel) {
+  // Steps end and the integrator restarts at their breakpoints, as at drives' and loads'.
+  ModelBuilder b;
+  const int n = b.AddNode(SE3::Identity());
+  b.AddRigidBody("b", n, 1.0, Vec3::Zero(), Mat3::Identity());
+  b.AddTendon("t", {{kGround, Vec3(1, 0, 0)}, {n, Vec3::Zero()}}, Profile::Ramp(0.25, 0.5, 2.0));
+  ForceElement fe;
+  fe.a = {kGround, Vec3(0, 1, 0)};
+  fe.b = {n, Vec3::Zero()};
+  fe.actuator = Profile::BangBang(0.75, 1.5);
+  b.AddForceElement(fe);
+  std::vector<double> breakpoints = ProfileBreakpoints(b.Build());
+  std::sort(breakpoints.begin(), breakpoints.end());
+  EXPECT_EQ(breakpoints, (std::vector<double>{0.25, 0.5, 0.75, 1.125, 1.5}));
 }
 
 TEST(ForceElementKind, ForceIsTheSpringDamperActuatorLawWithExactTangents) {
