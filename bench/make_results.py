@@ -11,6 +11,7 @@ skipped. One table per benchmark family:
   output cost      BM_GrmOutputCost/<case>                   (outputs_bench.cpp)
   rod dynamics     BM_RodStep/<elements>                     (dynamics_bench.cpp)
   rod statics      BM_Assemble/<elements>, BM_Solve/<elements> (statics_bench.cpp)
+  tendons          BM_RodTendonStep/<tendons>                (tendons_bench.cpp)
 Each JSON's revision comes from its context (the script passes --benchmark_context=revision=...),
 else from REVISION. Uses the median over repetitions when the JSON holds aggregates, else the
 single run. Times are real time (wall clock; manual time where the benchmark times itself).
@@ -317,6 +318,51 @@ def rod_dynamics_section(entries):
     ]
 
 
+def tendon_section(entries):
+    runs = family(entries, "RodTendonStep")
+    if not runs:
+        return []
+    rows, per_step = [], {}
+    for arg in sorted(runs, key=int):
+        e = runs[arg]
+        if e.error:
+            rows.append(failed_row(8, arg, e))
+            continue
+        steps = e.counter("timed_steps")
+        per_step[arg] = (e.real / steps, e.cpu / steps)
+        rows.append(
+            f"| {arg} | {format_number(e.counter('unknowns'))} "
+            f"| {format_number(e.counter('bandwidth'))} | {format_time(e.real / steps)} "
+            f"| {format_time(e.cpu / steps)} | {format_number(e.counter('newton_per_step'))} "
+            f"| {e.counter('tip_y') * 1e3:.4g} | {e.repetitions} |"
+        )
+    ratio = []
+    if "0" in per_step and "2" in per_step:
+        wall = per_step["2"][0] / per_step["0"][0]
+        cpu = per_step["2"][1] / per_step["0"][1]
+        ratio = [
+            f"With two tendons a step costs **{wall:.3f}×** the rod alone in wall time "
+            f"({cpu:.3f}× in CPU time); the target is at most 1.25×.",
+            "",
+        ]
+    return [
+        "## Tendons on a rod",
+        "",
+        "The 10-element cantilever of the rod benchmark (1 m, GRM arm section, gravity, h = 1e-3 s,",
+        "ρ∞ = 0.8) alone and with two tendons of 10 eyelets each (nodes 0 to 9, 0.02 m from the",
+        "axis on two sides, tensions ramping to 5 N and 3 N over 0.1 s): time per step over the",
+        "same 50 steps after 5 warm-up steps; the repetitions of the two variants alternate",
+        f"(`--benchmark_enable_random_interleaving`); {statistic(runs.values())}.",
+        "",
+        "| Tendons | Unknowns | Bandwidth | Time per step | CPU time per step | Newton per step "
+        "| Tip y at the end [mm] | Repetitions |",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|",
+        *rows,
+        "",
+        *ratio,
+    ]
+
+
 def rod_statics_section(entries):
     assemble, solve = family(entries, "Assemble"), family(entries, "Solve")
     if not assemble and not solve:
@@ -384,6 +430,7 @@ def main():
         *output_cost_section(entries),
         *rod_dynamics_section(entries),
         *rod_statics_section(entries),
+        *tendon_section(entries),
         "## Machine and run",
         "",
         f"- CPU: {cpu_model()} ({nproc()} cores available, `nproc`)",

@@ -66,6 +66,27 @@ void BindValues(py::module_& m) {
       .def_readwrite("drive_coordinate", &JointSpec::drive_coordinate)
       .def_readwrite("drive_profile", &JointSpec::drive_profile);
 
+  py::class_<BodyPoint>(m, "BodyPoint",
+                        "A point fixed in a node frame (node-frame offset [m]) or, on GROUND, a "
+                        "world point: a tendon eyelet or a force element's end (model.h).")
+      .def(py::init([](int node, const Vec3& offset) { return BodyPoint{node, offset}; }),
+           py::arg("node"), py::arg("offset") = Vec3::Zero())
+      .def_readwrite("node", &BodyPoint::node)
+      .def_readwrite("offset", &BodyPoint::offset);
+
+  py::class_<ForceElement>(m, "ForceElement",
+                           "A spring-damper-actuator between two body points (model.h): force "
+                           "k (l - rest_length) + c dl/dt + actuator(t) [N], positive pulling "
+                           "the ends together; rest_length < 0 means the reference distance.")
+      .def(py::init<>())
+      .def_readwrite("name", &ForceElement::name)
+      .def_readwrite("a", &ForceElement::a)
+      .def_readwrite("b", &ForceElement::b)
+      .def_readwrite("stiffness", &ForceElement::stiffness, "[N/m]")
+      .def_readwrite("rest_length", &ForceElement::rest_length, "[m]")
+      .def_readwrite("damping", &ForceElement::damping, "[N s/m]")
+      .def_readwrite("actuator", &ForceElement::actuator, "Profile [N].");
+
   py::class_<NodeMatch>(m, "NodeMatch", "Result of ModelBuilder.find_node_at.")
       .def_readonly("node", &NodeMatch::node, "The node within the tolerance, or -1.")
       .def_readonly("nearest", &NodeMatch::nearest, "The nearest node (-1 when there is none).")
@@ -106,6 +127,14 @@ void BindBuild(py::module_& m) {
            "Mass [kg], centre of mass and inertia about it [kg m^2] in the node frame.")
       .def("add_joint", py::overload_cast<const JointSpec&>(&B::AddJoint), py::arg("spec"),
            "A joint from a JointSpec; returns its index.")
+      .def("add_tendon", &B::AddTendon, py::arg("name"), py::arg("eyelets"), py::arg("tension"),
+           "A tendon through eyelets (a list of BodyPoint, in routing order) pulling with the "
+           "tension profile [N] (>= 0); returns its index.")
+      .def("add_force_element", &B::AddForceElement, py::arg("element"),
+           "A ForceElement (spring-damper-actuator between two body points); returns its index.")
+      .def("find_rod_node_at_arc_length", &B::FindRodNodeAtArcLength, py::arg("rod"),
+           py::arg("s"), py::arg("tolerance") = -1.0,
+           "The node of a rod at reference arc length s [m] -> NodeMatch (distance in arc length).")
       .def("set_gravity", &B::SetGravity, py::arg("g"), "[m/s^2], world frame.")
       .def("build", &B::Build, "The validated Model.");
 }

@@ -148,6 +148,9 @@ void BindModel(py::module_& m) {
       .def_property_readonly("num_rods", [](const Model& mo) { return mo.rods.size(); })
       .def_property_readonly("num_bodies", [](const Model& mo) { return mo.bodies.size(); })
       .def_property_readonly("num_joints", [](const Model& mo) { return mo.joints.size(); })
+      .def_property_readonly("num_tendons", [](const Model& mo) { return mo.tendons.size(); })
+      .def_property_readonly("num_force_elements",
+                             [](const Model& mo) { return mo.force_elements.size(); })
       .def_property_readonly(
           "nodes",
           [](py::object self) { return ReferenceList(self.cast<const Model&>().nodes, self); })

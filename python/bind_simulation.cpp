@@ -15,6 +15,7 @@
 #include "bind.h"
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
+#include "screwfem/elements/tendon.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
@@ -106,6 +107,12 @@ class Simulation {
   int Node(const std::string& name) const { return Named(model().FindNode(name), "node", name); }
   int Rod(long i) const { return CheckIndex(i, model().rods.size(), "rod"); }
   int Rod(const std::string& name) const { return Named(model().FindRod(name), "rod", name); }
+  int TendonIndex(const std::string& name) const {
+    return Named(model().FindTendon(name), "tendon", name);
+  }
+  int ForceElementIndex(const std::string& name) const {
+    return Named(model().FindForceElement(name), "force element", name);
+  }
   int JointIndex(long i) const { return CheckIndex(i, model().joints.size(), "joint"); }
   int JointIndex(const std::string& name) const {
     return Named(model().FindJoint(name), "joint", name);
@@ -428,6 +435,26 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "joint_columns", [](S& s) { return JointColumns(s.model(), s.scene().outputs.joints); },
           "Column names of calc_joint_row (those of joints.csv after 't').")
 
+      .def(
+          "tendon_state",
+          [](S& s, const std::string& name) {
+            const LineForceState t = CalcTendonState(
+                s.model(), s.data(), s.TendonIndex(name));
+            return py::make_tuple(t.length, t.rate, t.force);
+          },
+          py::arg("tendon"),
+          "tendon_state(tendon) -> (length [m], rate [m/s], tension [N]) of a tendon (name), "
+          "as tendons.csv records it.")
+      .def(
+          "force_element_state",
+          [](S& s, const std::string& name) {
+            const LineForceState f = CalcForceElementState(
+                s.model(), s.data(), s.ForceElementIndex(name));
+            return py::make_tuple(f.length, f.rate, f.force);
+          },
+          py::arg("element"),
+          "force_element_state(element) -> (length [m], rate [m/s], force [N], positive in "
+          "tension) of a force element (name), as forces.csv records it.")
       .def(
           "joint_coordinate",
           [](S& s, long j, int c) {

@@ -8,6 +8,7 @@
 #include "screwfem/elements/loads.h"
 #include "screwfem/elements/rigid_body.h"
 #include "screwfem/elements/rod.h"
+#include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 
 namespace screwfem {
@@ -274,8 +275,8 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
 
 // The element kinds the assembly calls, in this order (docs/architecture.md, "Add an element
 // kind"); joints follow them.
-using ElementKinds =
-    std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind, JointSpringKind>;
+using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind,
+                                JointSpringKind, TendonSegmentKind, ForceElementKind>;
 constexpr ElementKinds* kElementKinds = nullptr;
 }  // namespace
 

@@ -320,6 +320,44 @@ int ModelBuilder::AddJoint(const JointSpec& spec) {
   return index;
 }
 
+int ModelBuilder::AddTendon(std::string name, std::vector<BodyPoint> eyelets,
+                           const Profile& tension) {
+  Tendon t;
+  t.name = std::move(name);
+  t.eyelets = std::move(eyelets);
+  t.tension = tension;
+  model_.tendons.push_back(std::move(t));
+  return static_cast<int>(model_.tendons.size()) - 1;
+}
+
+int ModelBuilder::AddForceElement(const ForceElement& element) {
+  model_.force_elements.push_back(element);
+  return static_cast<int>(model_.force_elements.size()) - 1;
+}
+
+NodeMatch ModelBuilder::FindRodNodeAtArcLength(int rod, double s, double tolerance) const {
+  const double length = RodLength(rod);  // validates the rod and its nodes
+  const Rod& r = model_.rods[static_cast<std::size_t>(rod)];
+  if (tolerance < 0.0) tolerance = 1e-8 * std::max(1.0, length);
+  NodeMatch match;
+  match.distance = std::numeric_limits<double>::infinity();
+  double arc = 0.0;
+  for (std::size_t i = 0; i < r.nodes.size(); ++i) {
+    if (i > 0)
+      arc += LogSE3(model_.nodes[static_cast<std::size_t>(r.nodes[i - 1])].reference.Inverse() *
+                    model_.nodes[static_cast<std::size_t>(r.nodes[i])].reference)
+                 .head<3>()
+                 .norm();
+    const double distance = std::abs(arc - s);
+    if (distance < match.distance) {
+      match.distance = distance;
+      match.nearest = r.nodes[i];
+    }
+  }
+  if (match.distance <= tolerance) match.node = match.nearest;
+  return match;
+}
+
 int ModelBuilder::AddPointLoad(const PointLoad& load) {
   model_.point_loads.push_back(load);
   return static_cast<int>(model_.point_loads.size()) - 1;
@@ -520,6 +558,121 @@ void PlaceLoads(Model& m) {
   }
 }
 
+// A lower bound of a profile over all times: the sum of each term's lower bound (a ramp or
+// step lies between 0 and its scale, a sine between -|scale| and |scale|, a table between its
+// extreme values times the scale).
+double ProfileLowerBound(const Profile& profile) {
+  double bound = 0.0;
+  for (const ProfileTerm& t : profile.terms()) {
+    switch (t.kind) {
+      case ProfileTerm::Kind::kConstant: bound += t.scale; break;
+      case ProfileTerm::Kind::kRamp:
+      case ProfileTerm::Kind::kBangBang:
+      case ProfileTerm::Kind::kSmoothStep: bound += std::min(0.0, t.scale); break;
+      case ProfileTerm::Kind::kSine: bound -= std::abs(t.scale); break;
+      case ProfileTerm::Kind::kTable: {
+        double lo = 0.0;
+        for (std::size_t i = 0; i < t.values.size(); ++i) {
+          const double v = t.scale * t.values[i];
+          lo = i == 0 ? v : std::min(lo, v);
+        }
+        bound += lo;
+        break;
+      }
+    }
+  }
+  return bound;
+}
+
+// A body point: a valid node (or the ground) and a finite offset; "" when it is, else why not.
+std::string BodyPointProblem(const Model& m, const BodyPoint& p) {
+  if (p.node != kGround && (p.node < 0 || p.node >= static_cast<int>(m.nodes.size())))
+    return "invalid node " + std::to_string(p.node);
+  if (!p.offset.allFinite()) return "the offset must be finite";
+  return {};
+}
+
+Vec3 ReferencePosition(const Model& m, const BodyPoint& p) {
+  const SE3& H = NodeReferenceFrame(m, p.node);
+  return H.x + H.R * p.offset;
+}
+
+// Tendons (method-next.md §N4): eyelets, tension profile, unique names; their segments.
+void BuildTendons(Model& m) {
+  m.tendon_segments.clear();
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < m.tendons.size(); ++i) {
+    Tendon& t = m.tendons[i];
+    const std::string label = "tendon '" + t.name + "'";
+    const int index = static_cast<int>(i);
+    const EntityRef entity{EntityKind::kTendon, index, {}};
+    if (t.eyelets.size() < 2)
+      throw InputError(label + ": needs at least two eyelets (it runs between them), got " +
+                           std::to_string(t.eyelets.size()),
+                       entity);
+    for (std::size_t k = 0; k < t.eyelets.size(); ++k) {
+      const std::string part = "eyelets[" + std::to_string(k) + "]";
+      const std::string problem = BodyPointProblem(m, t.eyelets[k]);
+      if (!problem.empty())
+        throw InputError(label + ": eyelet " + std::to_string(k) + ": " + problem,
+                         {EntityKind::kTendon, index, part}, problem);
+      if (k == 0) continue;
+      const double l = (ReferencePosition(m, t.eyelets[k]) - ReferencePosition(m, t.eyelets[k - 1])).norm();
+      if (!(l > 1e-9 * std::max(1.0, m.length_scale))) {
+        const std::string what = "coincides with eyelet " + std::to_string(k - 1) +
+                                 " in the reference configuration (no direction between them)";
+        throw InputError(label + ": eyelet " + std::to_string(k) + " " + what,
+                         {EntityKind::kTendon, index, part}, what);
+      }
+    }
+    ValidateProfile(t.tension, label + " tension", entity);
+    const double lower = ProfileLowerBound(t.tension);
+    if (lower < 0.0)
+      throw InputError(label + ": the tension profile can become negative (its terms' lower "
+                               "bound is " + std::to_string(lower) + " N); a tendon can only pull",
+                       entity);
+    if (!t.name.empty() && !names.insert(t.name).second)
+      throw InputError("duplicate tendon name '" + t.name + "'", entity);
+    t.first_segment = static_cast<int>(m.tendon_segments.size());
+    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k)
+      m.tendon_segments.push_back({index, t.eyelets[k], t.eyelets[k + 1]});
+  }
+}
+
+// Force elements: ends, values, rest length (the reference distance when negative), names.
+void BuildForceElements(Model& m) {
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < m.force_elements.size(); ++i) {
+    ForceElement& f = m.force_elements[i];
+    const std::string label = "force element '" + f.name + "'";
+    const int index = static_cast<int>(i);
+    const EntityRef entity{EntityKind::kForceElement, index, {}};
+    for (const auto& [p, part] : {std::pair<const BodyPoint*, const char*>{&f.a, "a"}, {&f.b, "b"}}) {
+      const std::string problem = BodyPointProblem(m, *p);
+      if (!problem.empty())
+        throw InputError(label + ": end " + part + ": " + problem,
+                         {EntityKind::kForceElement, index, part}, problem);
+    }
+    if (f.a.node == f.b.node)
+      throw InputError(label + ": both ends are on " + NodeLabel(m, f.a.node), entity);
+    if (!(f.stiffness >= 0.0) || !std::isfinite(f.stiffness) || !(f.damping >= 0.0) ||
+        !std::isfinite(f.damping))
+      throw InputError(label + ": stiffness and damping must be finite and non-negative", entity);
+    if (!std::isfinite(f.rest_length))
+      throw InputError(label + ": the rest length must be finite", entity);
+    const double l = (ReferencePosition(m, f.b) - ReferencePosition(m, f.a)).norm();
+    if (!(l > 1e-9 * std::max(1.0, m.length_scale)))
+      throw InputError(label + ": its ends coincide in the reference configuration (no direction "
+                               "between them)",
+                       {EntityKind::kForceElement, index, "b"},
+                       "coincides with end a in the reference configuration");
+    if (f.rest_length < 0.0) f.rest_length = l;
+    ValidateProfile(f.actuator, label + " actuator", entity);
+    if (!f.name.empty() && !names.insert(f.name).second)
+      throw InputError("duplicate force element name '" + f.name + "'", entity);
+  }
+}
+
 // Every node that is not fixed is used by a rod, a body or a joint.
 void CheckConnected(const Model& m, const std::vector<char>& used) {
   const int num_nodes = static_cast<int>(m.nodes.size());
@@ -602,6 +755,9 @@ void OrderUnknowns(Model& m) {
   };
   auto nb = [&](int node) { return node == kGround ? -1 : node_block[static_cast<std::size_t>(node)]; };
   for (const RodElement& e : m.elements) link(nb(e.node_a), nb(e.node_b));
+  // Tendon segments and force elements couple their two nodes (elements/tendon.h).
+  for (const TendonSegment& s : m.tendon_segments) link(nb(s.a.node), nb(s.b.node));
+  for (const ForceElement& f : m.force_elements) link(nb(f.a.node), nb(f.b.node));
   for (const Joint& j : m.joints) {
     const int coord_block = j.k() > 0 ? add_block(j.coord, j.k()) : -1;
     if (j.row >= 0) {
@@ -678,12 +834,14 @@ Model ModelBuilder::Build() const {
   ValidateBodies(m, used);
   ValidateJoints(m, used);
   PlaceLoads(m);
+  SetLengthScale(m);
+  BuildTendons(m);
+  BuildForceElements(m);
   CheckConnected(m, used);
   LayOutUnknowns(m);
   CheckJointFramesCoincide(m);
   FindRedundantConstraints(m);
   OrderUnknowns(m);
-  SetLengthScale(m);
   return m;
 }
 

@@ -2,6 +2,7 @@
 #include "screwfem/io/run.h"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -199,6 +200,15 @@ class Run {
     try {
       points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
       joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
+      // Tendons and force elements: their tables only when the model has them.
+      if (!model_.tendons.empty()) {
+        tendons_.Open(outdir + "/tendons.csv", TendonColumns(model_));
+        tables_[num_tables_++] = &tendons_;
+      }
+      if (!model_.force_elements.empty()) {
+        forces_.Open(outdir + "/forces.csv", ForceColumns(model_));
+        tables_[num_tables_++] = &forces_;
+      }
       if (scene.outputs.vtk) {
         vtk_.emplace();
         vtk_->Open(outdir + "/vtk", model_, scene.outputs.vtk_format, ExpectedFrames(scene));
@@ -210,8 +220,7 @@ class Run {
         throw InputError("cannot write " + outdir + "/joints.json: " + std::strerror(errno));
     } catch (const InputError&) {
       // No header-only tables without a summary that explains them.
-      points_.Close();
-      joints_.Close();
+      for (std::size_t i = 0; i < num_tables_; ++i) tables_[i]->Close();
       PrepareOutputDirectory(outdir, true);
       throw;
     }
@@ -230,13 +239,16 @@ class Run {
     if (finished_) return;
     finished_ = true;
     const bool failed_before = io_error_ || std::string(status) == "failed";
-    if (const CsvWriter* w = CsvWriter::FlushTogether({&points_, &joints_}); w && !failed_before) {
+    if (const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_);
+        w && !failed_before) {
       status = "failed";
       message = Format("cannot write at t = %.9g s: ", data_.time) + w->path() + ": " +
                 std::strerror(errno);
       io_error_ = true;
     }
-    if ((!points_.Close() || !joints_.Close()) && !failed_before && !io_error_) {
+    bool closed = true;
+    for (std::size_t i = 0; i < num_tables_; ++i) closed = tables_[i]->Close() && closed;
+    if (!closed && !failed_before && !io_error_) {
       status = "failed";
       message = "cannot close the tables: " + std::string(std::strerror(errno));
       io_error_ = true;
@@ -435,8 +447,18 @@ class Run {
       points_.WriteRow(t, row_);
       CalcJointRow(model_, data, scene_.outputs.joints, &row_);
       joints_.WriteRow(t, row_);
+      if (tendons_.path().size() > 0) {
+        CalcTendonRow(model_, data_, &row_);
+        tendons_.WriteRow(t, row_);
+      }
+      if (forces_.path().size() > 0) {
+        CalcForceRow(model_, data_, &row_);
+        forces_.WriteRow(t, row_);
+      }
       last_row_time_ = t;
-      if (std::max(points_.batch_bytes(), joints_.batch_bytes()) >= kRowBatchBytes &&
+      std::size_t batch = 0;
+      for (std::size_t i = 0; i < num_tables_; ++i) batch = std::max(batch, tables_[i]->batch_bytes());
+      if (batch >= kRowBatchBytes &&
           !FlushRows(t))
         return false;
     }
@@ -448,7 +470,7 @@ class Run {
   // Writes the rows collected so far to the files, keeping the tables at the same row; on a
   // write error ends the run as failed.
   bool FlushRows(double t) {
-    if (const CsvWriter* w = CsvWriter::FlushTogether({&points_, &joints_}))
+    if (const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_))
       return WriteFailed(w->path(), t);
     return true;
   }
@@ -597,7 +619,10 @@ class Run {
   Integrator integ_;
   StaticResult static_;
   bool has_static_ = false;
-  CsvWriter points_, joints_;
+  CsvWriter points_, joints_, tendons_, forces_;
+  // The open tables, flushed together (points.csv and joints.csv always).
+  std::array<CsvWriter*, 4> tables_ = {&points_, &joints_, nullptr, nullptr};
+  std::size_t num_tables_ = 2;
   std::optional<VtkWriter> vtk_;
   std::optional<ProgressBar> progress_;
   std::vector<double> row_;

@@ -54,6 +54,10 @@ class SceneCompiler {
   void AddSoftBody(int b);
   void AddJoints();
   void AddLoads();
+  void AddTendonsAndForces();
+  // The builder's body point for a spec's (an error at `at` when it is not on a node).
+  BodyPoint ResolveBodyPoint(const BodyPointSpec& p, const FieldSource& at,
+                             const std::string& what) const;
   void CheckConnections() const;
   void AddOutputs(const Model& model, OutputSpec* out) const;
 
@@ -110,6 +114,8 @@ void SceneCompiler::RethrowBuildError(const InputError& e) const {
     case EntityKind::kJoint: pick(src_.joints, entity.index); break;
     case EntityKind::kPointLoad: pick(src_.loads, owner(point_load_)); break;
     case EntityKind::kRodLoad: pick(src_.loads, owner(rod_load_)); break;
+    case EntityKind::kTendon: pick(src_.tendons, entity.index); break;
+    case EntityKind::kForceElement: pick(src_.forces, entity.index); break;
     case EntityKind::kNone: break;
   }
   if (source != nullptr) Fail(*source, e);
@@ -255,6 +261,54 @@ void SceneCompiler::AddLoads() {
   }
 }
 
+// --- tendons and force elements ----------------------------------------------------------
+
+BodyPoint SceneCompiler::ResolveBodyPoint(const BodyPointSpec& p, const FieldSource& at,
+                                          const std::string& what) const {
+  if (p.body < 0) return {kGround, p.at};
+  const BodySpec& body = spec_.bodies[static_cast<std::size_t>(p.body)];
+  if (body.rigid)  // the body frame is world-aligned in the reference configuration
+    return {body_node_[static_cast<std::size_t>(p.body)], p.at - body.origin};
+  if (!p.along_rod) return {NodeAt(p.body, p.at, at, what), p.offset};
+  const NodeMatch match =
+      builder_.FindRodNodeAtArcLength(body_index_[static_cast<std::size_t>(p.body)], p.arc_length);
+  if (match.node < 0) {
+    std::ostringstream s;
+    s.precision(6);
+    s << what << ": soft body '" << body.name << "' has no node at arc length " << p.arc_length
+      << " m (nearest node " << match.distance << " m away); " << what
+      << "s sit on rod nodes (ends, path points or subdivision points), offset from them by "
+         "'offset'";
+    Fail(at, s.str());
+  }
+  return {match.node, p.offset};
+}
+
+void SceneCompiler::AddTendonsAndForces() {
+  for (std::size_t i = 0; i < spec_.tendons.size(); ++i) {
+    const TendonSpec& t = spec_.tendons[i];
+    const EntitySource& source = SourceOf(src_.tendons, i);
+    std::vector<BodyPoint> eyelets;
+    for (std::size_t k = 0; k < t.eyelets.size(); ++k)
+      eyelets.push_back(ResolveBodyPoint(
+          t.eyelets[k], PartOf(source, "eyelets[" + std::to_string(k) + "]"), "eyelet"));
+    builder_.AddTendon(t.name, eyelets, t.tension);
+  }
+  for (std::size_t i = 0; i < spec_.forces.size(); ++i) {
+    const ForceSpec& f = spec_.forces[i];
+    const EntitySource& source = SourceOf(src_.forces, i);
+    ForceElement fe;
+    fe.name = f.name;
+    fe.a = ResolveBodyPoint(f.a, PartOf(source, "a"), "end");
+    fe.b = ResolveBodyPoint(f.b, PartOf(source, "b"), "end");
+    fe.stiffness = f.stiffness;
+    fe.damping = f.damping;
+    fe.rest_length = f.rest_length;
+    fe.actuator = f.force;
+    builder_.AddForceElement(fe);
+  }
+}
+
 // --- outputs ---------------------------------------------------------------------------------
 
 void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
@@ -319,6 +373,13 @@ void SceneCompiler::CheckReferences() const {
     if (p.along_rod && spec_.bodies[static_cast<std::size_t>(p.body)].rigid)
       Fail(SourceOf(src_.output_points, i).self, "a point along a rod needs a soft body");
   }
+  for (std::size_t i = 0; i < spec_.tendons.size(); ++i)
+    for (const BodyPointSpec& p : spec_.tendons[i].eyelets)
+      check(p.body, true, SourceOf(src_.tendons, i), "eyelet");
+  for (std::size_t i = 0; i < spec_.forces.size(); ++i) {
+    check(spec_.forces[i].a.body, true, SourceOf(src_.forces, i), "end a");
+    check(spec_.forces[i].b.body, true, SourceOf(src_.forces, i), "end b");
+  }
   for (int j : spec_.outputs.joints)
     if (j < 0 || j >= static_cast<int>(spec_.joints.size()))
       Fail(src_.root, "outputs: no joint " + std::to_string(j));
@@ -334,6 +395,7 @@ Scene SceneCompiler::Compile() {
   AddBodies();
   AddJoints();
   AddLoads();
+  AddTendonsAndForces();
   CheckConnections();
   scene.analysis = spec_.analysis;
   try {

@@ -23,8 +23,9 @@ using scene_yaml::Node;
 using scene_yaml::Reader;
 
 // Maps of named entries: an override may not walk through an entry that does not exist.
-const std::vector<std::string> kCollections = {"points", "materials", "sections",      "bodies",
-                                               "joints", "loads",     "outputs.points"};
+const std::vector<std::string> kCollections = {"points", "materials", "sections", "bodies",
+                                               "joints", "loads",     "tendons",  "forces",
+                                               "outputs.points"};
 
 constexpr int kMaxElements = 100000;  // per rod (or per path segment)
 constexpr long kMaxTotalElements = 1000000;  // all rods of a scene
@@ -77,6 +78,9 @@ class SceneReader {
                         JointSpec& j);
   void ReadLoads(const Node* node);
   void ReadLoad(const Node& value, const std::string& path, LoadSpec& load, EntitySource& source);
+  void ReadTendons(const Node* node);
+  void ReadForces(const Node* node);
+  BodyPointSpec ReadBodyPoint(const Node& node, const std::string& path) const;
   void ReadAnalysis(const Node* node);
   void ReadTimes(const Node& node, const std::string& path);
   void ReadStepControl(const Node& node, const std::string& path);
@@ -732,6 +736,94 @@ void SceneReader::ReadLoad(const Node& value, const std::string& path, LoadSpec&
   }
 }
 
+// {body: NAME or ground, at: POINT} or, on a soft body, {body, s: ARC_LENGTH, offset: [x, y, z]}
+// (the node at `at` or at arc length s, and the offset in its section frame).
+BodyPointSpec SceneReader::ReadBodyPoint(const Node& node, const std::string& path) const {
+  r_.ExpectMap(node, path);
+  r_.CheckKeys(node, path, {"body", "at", "s", "offset"});
+  BodyPointSpec p;
+  const Node* body = node.Find("body");
+  if (body != nullptr && r_.Text(*body, Join(path, "body")) != kGroundName)
+    p.body = Body(*body, Join(path, "body"));
+  const bool soft = p.body >= 0 && !spec_.bodies[static_cast<std::size_t>(p.body)].rigid;
+  const Node* at = node.Find("at");
+  const Node* s = node.Find("s");
+  if (!soft) {
+    const std::string who = p.body < 0 ? "the ground" : "rigid bodies";
+    NotUsedBy(node, path, {"s", "offset"}, who + " (give the point itself as 'at')");
+    p.at = Point(r_.Require(node, path, "at"), Join(path, "at"));
+    return p;
+  }
+  if (at != nullptr && s != nullptr) r_.Fail(node.location, path, "give either 'at' or 's', not both");
+  if (at == nullptr && s == nullptr)
+    r_.Fail(node.location, path, "missing key 's' (or 'at'): the rod node the point is fixed to");
+  if (at != nullptr) p.at = Point(*at, Join(path, "at"));
+  if (s != nullptr) {
+    p.along_rod = true;
+    p.arc_length = r_.NonNegativeNumber(*s, Join(path, "s"));
+  }
+  if (const Node* o = node.Find("offset")) p.offset = r_.Vector3(*o, Join(path, "offset"));
+  return p;
+}
+
+void SceneReader::ReadTendons(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "tendons", "tendon");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("tendons", entry.key);
+    src_.tendons.push_back({Field(entry.key_location, path), {}});
+    EntitySource& source = src_.tendons.back();
+    r_.ExpectMap(value, path);
+    r_.CheckKeys(value, path, {"eyelets", "tension"});
+    TendonSpec t;
+    t.name = entry.key;
+    const Node& en = r_.Require(value, path, "eyelets");
+    const std::string ep = Join(path, "eyelets");
+    if (!en.IsSequence() || en.items.size() < 2)
+      r_.Fail(en.location, ep,
+              "expected a list of at least two eyelets (a tendon runs between them), got " +
+                  scene_yaml::Describe(en));
+    for (std::size_t i = 0; i < en.items.size(); ++i) {
+      source.parts.emplace_back(Index("eyelets", i), Field(en.items[i].location, Index(ep, i)));
+      t.eyelets.push_back(ReadBodyPoint(en.items[i], Index(ep, i)));
+    }
+    const Node& tn = r_.Require(value, path, "tension");
+    t.tension = ReadProfile(tn, Join(path, "tension"));
+    source.parts.emplace_back("tension", Field(tn.location, Join(path, "tension")));
+    spec_.tendons.push_back(std::move(t));
+  }
+}
+
+void SceneReader::ReadForces(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "forces", "force element");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("forces", entry.key);
+    src_.forces.push_back({Field(entry.key_location, path), {}});
+    EntitySource& source = src_.forces.back();
+    r_.ExpectMap(value, path);
+    r_.CheckKeys(value, path, {"a", "b", "stiffness", "damping", "rest_length", "force"});
+    ForceSpec f;
+    f.name = entry.key;
+    for (const char* end : {"a", "b"}) {
+      const Node& en = r_.Require(value, path, end);
+      source.parts.emplace_back(end, Field(en.location, Join(path, end)));
+      (end[0] == 'a' ? f.a : f.b) = ReadBodyPoint(en, Join(path, end));
+    }
+    if (const Node* k = value.Find("stiffness"))
+      f.stiffness = r_.NonNegativeNumber(*k, Join(path, "stiffness"));
+    if (const Node* c = value.Find("damping"))
+      f.damping = r_.NonNegativeNumber(*c, Join(path, "damping"));
+    if (const Node* l = value.Find("rest_length"))
+      f.rest_length = r_.NonNegativeNumber(*l, Join(path, "rest_length"));
+    if (const Node* p = value.Find("force")) f.force = ReadProfile(*p, Join(path, "force"));
+    if (value.Find("stiffness") == nullptr && value.Find("damping") == nullptr &&
+        value.Find("force") == nullptr)
+      r_.Fail(value.location, path, "missing key 'stiffness' (or 'damping', or 'force')");
+    spec_.forces.push_back(std::move(f));
+  }
+}
+
 void SceneReader::ReadAnalysis(const Node* node) {
   AnalysisSettings* a = &spec_.analysis;
   a->statics.time = a->start_time;
@@ -976,7 +1068,8 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
                 scene_yaml::Describe(root));
   r_.CheckKeys(root, "",
                {"name", "description", "units", "gravity", "defaults", "points", "materials",
-                "sections", "bodies", "joints", "loads", "analysis", "outputs"});
+                "sections", "bodies", "joints", "loads", "tendons", "forces", "analysis",
+                "outputs"});
   spec_.name = default_name;
   if (const Node* n = root.Find("name")) spec_.name = r_.Text(*n, "name");
   if (const Node* d = root.Find("description"))
@@ -992,6 +1085,8 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
   if (spec_.bodies.empty()) r_.Fail(root.location, "bodies", "the scene has no bodies");
   ReadJoints(root.Find("joints"));
   ReadLoads(root.Find("loads"));
+  ReadTendons(root.Find("tendons"));
+  ReadForces(root.Find("forces"));
   ReadAnalysis(root.Find("analysis"));
   ReadOutputs(root.Find("outputs"));
 }

@@ -194,6 +194,25 @@ void VtkWriter::LayOut(const Model& model) {
     if (!drawn) add_vert(origin, -1, id, -1);  // a point mass: a vertex at its node
   }
 
+  // Tendons: polylines through their eyelets; force elements: a line between their ends.
+  const auto body_point = [&](const BodyPoint& p) {
+    PointSource s;
+    s.kind = p.node == kGround ? PointSource::Kind::kWorld : PointSource::Kind::kNode;
+    s.index = p.node;
+    s.offset = p.offset;
+    s.origin = false;
+    return add_point(s);
+  };
+  for (const Tendon& t : model.tendons) {
+    for (const BodyPoint& e : t.eyelets) line_connectivity_.push_back(body_point(e));
+    end_line(-1, -1);
+  }
+  for (const ForceElement& fe : model.force_elements) {
+    line_connectivity_.push_back(body_point(fe.a));
+    line_connectivity_.push_back(body_point(fe.b));
+    end_line(-1, -1);
+  }
+
   // Cell data in the order VTK stores the cells: vertices, then lines.
   cell_rod_.insert(cell_rod_.begin(), vert_rod.begin(), vert_rod.end());
   cell_body_.insert(cell_body_.begin(), vert_body.begin(), vert_body.end());
@@ -215,7 +234,11 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
     const PointSource& s = sources_[i];
     Vec3 x, v;
     Mat3 R;
-    if (s.kind == PointSource::Kind::kJoint) {
+    if (s.kind == PointSource::Kind::kWorld) {
+      x = s.offset;
+      R = Mat3::Identity();
+      v = Vec3::Zero();
+    } else if (s.kind == PointSource::Kind::kJoint) {
       const Joint& j = model.joints[static_cast<std::size_t>(s.index)];
       const SE3 H = NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, s.index);
       x = H.x;

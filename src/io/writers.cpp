@@ -9,9 +9,11 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <span>
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
+#include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 
 namespace screwfem {
@@ -135,6 +137,47 @@ void CalcJointRow(const Model& model, const Data& data, const std::vector<Output
   }
 }
 
+namespace {
+
+template <typename Items>
+std::vector<std::string> LineColumns(const Items& items, const char* force) {
+  std::vector<std::string> columns;
+  for (const auto& item : items)
+    for (const char* q : {".length", ".rate", force}) columns.push_back(item.name + q);
+  return columns;
+}
+
+template <typename State>
+void CalcLineRow(std::size_t count, State&& state, std::vector<double>* row) {
+  row->resize(3 * count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const LineForceState s = state(static_cast<int>(i));
+    (*row)[3 * i] = s.length;
+    (*row)[3 * i + 1] = s.rate;
+    (*row)[3 * i + 2] = s.force;
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> TendonColumns(const Model& model) {
+  return LineColumns(model.tendons, ".tension");
+}
+
+std::vector<std::string> ForceColumns(const Model& model) {
+  return LineColumns(model.force_elements, ".force");
+}
+
+void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row) {
+  CalcLineRow(model.tendons.size(),
+              [&](int i) { return CalcTendonState(model, data, i); }, row);
+}
+
+void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row) {
+  CalcLineRow(model.force_elements.size(),
+              [&](int i) { return CalcForceElementState(model, data, i); }, row);
+}
+
 // ---- CSV ---------------------------------------------------------------------------------------
 
 void AppendNumber(std::string* text, double value, int precision) {
@@ -237,6 +280,11 @@ void CsvWriter::KeepBatchRows(std::size_t n) {
 bool CsvWriter::Flush() { return FlushTogether({this}) == nullptr; }
 
 const CsvWriter* CsvWriter::FlushTogether(std::initializer_list<CsvWriter*> writers) {
+  return FlushTogether(writers.begin(), writers.size());
+}
+
+const CsvWriter* CsvWriter::FlushTogether(CsvWriter* const* list, std::size_t n) {
+  const std::span<CsvWriter* const> writers(list, n);
   std::size_t keep = static_cast<std::size_t>(-1);
   const CsvWriter* failed = nullptr;
   int failed_errno = 0;

@@ -83,6 +83,8 @@ std::vector<double> ProfileBreakpoints(const Model& model) {
   for (const RodLoad& l : model.rod_loads) add(l.profile);
   for (const Joint& j : model.joints)
     if (j.drive != DriveKind::kNone) add(j.drive_profile);
+  for (const Tendon& t : model.tendons) add(t.tension);
+  for (const ForceElement& f : model.force_elements) add(f.actuator);
   return b;
 }
 

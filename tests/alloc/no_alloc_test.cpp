@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "screwfem/io/vtk.h"
+#include "screwfem/io/writers.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
@@ -74,7 +75,8 @@ namespace {
 
 // A model with every kind of contribution: a rod with inertia, damping and gravity clamped to
 // a rigid body, rigid bodies, revolute/prismatic/spherical/universal joints, prescribed,
-// series-elastic and force drives, dead and follower point loads with profiles.
+// series-elastic and force drives, dead and follower point loads with profiles, a tendon and a
+// force element.
 Model MixedModel() {
   ModelBuilder b;
   const int base = b.AddNode(SE3::Translation(Vec3(0, 0, 0)), "base");
@@ -114,6 +116,19 @@ Model MixedModel() {
   follower.frame = LoadFrame::kBody;
   follower.moment = Vec3(0, 0.01, 0);
   b.AddPointLoad(follower);
+  // A tendon from the ground through eyelets on a rigid body and along the rod (a ramped
+  // tension), and a spring-damper-actuator between a body and a rod node.
+  std::vector<BodyPoint> eyelets = {{kGround, Vec3(0, 0.05, 0)}, {link, Vec3(0.1, 0.02, 0)}};
+  for (std::size_t i = 1; i < b.model().rods[0].nodes.size(); ++i)
+    eyelets.push_back({b.model().rods[0].nodes[i], Vec3(0, 0.01, 0.01)});
+  b.AddTendon("tendon", eyelets, Profile::Ramp(0, 0.5, 2.0));
+  ForceElement spring;
+  spring.a = {base, Vec3(0, 0.05, 0)};
+  spring.b = {b.model().rods[0].nodes[3], Vec3::Zero()};
+  spring.stiffness = 20;
+  spring.damping = 0.5;
+  spring.actuator = Profile::Sine(0.2, 3.0);
+  b.AddForceElement(spring);
   b.SetGravity(Vec3(0, 0, -9.81));
   (void)rod;
   return b.Build();
@@ -143,6 +158,16 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     EXPECT_GT(integ.iterations, 50);  // the steps really iterated
     EXPECT_GE(integ.restarts, 1);     // and restarted at the ramp's end
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
+    // The rows of tendons.csv and forces.csv, once sized.
+    std::vector<double> tendons, forces;
+    CalcTendonRow(model, data, &tendons);
+    CalcForceRow(model, data, &forces);
+    g_counting = true;
+    CalcTendonRow(model, data, &tendons);
+    CalcForceRow(model, data, &forces);
+    g_counting = false;
+    EXPECT_GT(tendons[2], 0.0);  // the tendon pulls
+    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the tendon and force rows";
   }
 }
 

@@ -522,5 +522,57 @@ TEST_F(BadFile, ErrorsInAFileNameTheFile) {
   EXPECT_EQ(LoadError(path), path + ":2:1: gravty: unknown key 'gravty' (did you mean 'gravity'?)");
 }
 
+// Tendons and force elements (docs/scene-format.md, "tendons", "forces"): line 3 is "bodies:",
+// line 4 a free rod from A to C with nodes at s = 0, 1, 2, line 5 the section under test.
+const std::string kRod =
+    kHead + "bodies:\n  r: {type: soft, from: A, to: C, section: s, elements: 2, free: true}\n";
+
+TEST(BadInput, EyeletBetweenRodNodesNamesTheNearestNode) {
+  ExpectError(kRod + "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 0}\n"
+                     "      - {body: r, s: 0.5, offset: [0, 0.01, 0]}\n    tension: 1\n",
+              "bad.yaml:9:9",
+              "tendons.t.eyelets[1]: eyelet: soft body 'r' has no node at arc length 0.5 m "
+              "(nearest node 0.5 m away)");
+  ExpectError(kRod + "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 0}\n"
+                     "      - {body: r, at: [0.5, 0, 0]}\n    tension: 1\n",
+              "bad.yaml:9:9", "eyelet: soft body 'r' has no node at [0.5, 0, 0]");
+}
+
+TEST(BadInput, TendonThroughOnePoint) {
+  ExpectError(kRod + "tendons:\n  t: {eyelets: [{body: r, s: 0}], tension: 1}\n", "bad.yaml:6:16",
+              "tendons.t.eyelets: expected a list of at least two eyelets");
+}
+
+TEST(BadInput, TendonTensionThatCanBecomeNegative) {
+  ExpectError(kRod + "tendons:\n  t:\n    eyelets: [{body: r, s: 0}, {body: r, s: 2}]\n"
+                     "    tension: {type: sine, value: 2, frequency: 1}\n",
+              "bad.yaml:6:3",
+              "tendon 't': the tension profile can become negative (its terms' lower bound is "
+              "-2.000000 N)");
+  ExpectError(kRod + "tendons:\n  t: {eyelets: [{body: r, s: 0}, {body: r, s: 1}], tension: -5}\n",
+              "bad.yaml:6:3", "a tendon can only pull");
+}
+
+TEST(BadInput, CoincidingEyeletsPointAtTheSecond) {
+  ExpectError(kRod + "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 1}\n"
+                     "      - {body: r, at: B}\n    tension: 1\n",
+              "bad.yaml:9:9",
+              "tendons.t.eyelets[1]: coincides with eyelet 0 in the reference configuration");
+}
+
+TEST(BadInput, OffsetOnARigidBodyOrTheGround) {
+  ExpectError(kRod + "forces:\n  f: {a: {at: A, offset: [0, 1, 0]}, b: {body: r, s: 2}, stiffness: 1}\n",
+              "bad.yaml:6:18",
+              "forces.f.a.offset: 'offset' is not used by the ground (give the point itself as "
+              "'at')");
+}
+
+TEST(BadInput, ForceElementWithBothEndsOnTheGround) {
+  ExpectError(kRod + "forces:\n  f: {a: {at: A}, b: {at: B}, stiffness: 1}\n", "bad.yaml:6:3",
+              "force element 'f': both ends are on ground");
+  ExpectError(kRod + "forces:\n  f: {a: {at: A}, b: {body: r, s: 2}}\n", "bad.yaml:6:6",
+              "forces.f: missing key 'stiffness' (or 'damping', or 'force')");
+}
+
 }  // namespace
 }  // namespace screwfem

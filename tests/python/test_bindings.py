@@ -580,6 +580,56 @@ class ModelBuilderTest(unittest.TestCase):
             sim.step(1e-2)
         self.assertAlmostEqual(sim.joint_coordinate("slide"), 0.05, delta=1e-12)
 
+    def test_force_element_from_python_is_the_spring_mass_oscillator(self):
+        # 2 kg hanging from the ground point (0, 0, 1) by a 50 N/m spring of rest length 1.1 m:
+        # period 2 pi sqrt(m / k); the state reports length, rate and force.
+        b = sf.ModelBuilder()
+        n = b.add_node(np.eye(4), "mass")
+        b.add_rigid_body("mass", n, 2.0, [0, 0, 0], np.eye(3))
+        spring = sf.ForceElement()
+        spring.name = "spring"
+        spring.a = sf.BodyPoint(sf.GROUND, [0, 0, 1])
+        spring.b = sf.BodyPoint(n)
+        spring.stiffness = 50.0
+        spring.rest_length = 1.1
+        b.add_force_element(spring)
+        model = b.build()
+        self.assertEqual(model.num_force_elements, 1)
+        sim = sf.Simulation(sf.Scene(model, "oscillator"))
+        undamped(sim)
+        length, rate, force = sim.force_element_state("spring")
+        self.assertAlmostEqual(length, 1.0, delta=1e-15)
+        self.assertAlmostEqual(force, -5.0, delta=1e-12)  # compressed: pushes
+        period = 2 * math.pi * math.sqrt(2.0 / 50.0)
+        h = period / 400
+        for _ in range(400):
+            sim.step(h)
+        self.assertAlmostEqual(sim.force_element_state("spring")[0], 1.0, delta=1e-4)
+
+    def test_tendon_from_python_pulls_with_its_tension(self):
+        b = sf.ModelBuilder()
+        section = sf.Section(np.array([1e5, 1e5, 1e5, 1.0, 1.0, 1.0]), np.ones(6))
+        rod = b.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 4, section)
+        b.fix_node(b.find_node_at([0, 0, 0]).node)
+        eyelets = [sf.BodyPoint(b.find_rod_node_at_arc_length(rod, 0.25 * i).node, [0, 0.02, 0])
+                   for i in range(5)]
+        b.add_tendon("flexor", eyelets, sf.Profile.constant(50.0))
+        with self.assertRaisesRegex(sf.InputError, "tendon 'one': needs at least two eyelets"):
+            bad = sf.ModelBuilder()
+            bad.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 1, section)
+            bad.add_tendon("one", [sf.BodyPoint(0)], sf.Profile.constant(1.0))
+            bad.build()
+        sim = sf.Simulation(sf.Scene(b.build(), "tendon"))
+        options = sf.StaticOptions()
+        options.load_steps = 40
+        sim.solve_static(options)
+        length, rate, tension = sim.tendon_state("flexor")
+        self.assertEqual(tension, 50.0)
+        # The discrete model's curvature with four elements (tests/validation/tendon_test.cpp).
+        tip = sim.node_frame(sim.model.rods[0].nodes[-1])[:3, 3]
+        np.testing.assert_allclose(tip[:2], [0.729126, 0.572854], atol=2e-6)
+        self.assertLess(length, 1.0)
+
     def test_invalid_joint_side_raises_input_error(self):
         b = sf.ModelBuilder()
         spec = sf.JointSpec()

@@ -98,6 +98,23 @@ class ModelBuilder {
   int AddJointAt(std::string name, JointType type, int node_a, int node_b, const Vec3& point,
                  const Vec3& axis = Vec3::UnitZ(), const Vec3& axis2 = Vec3::Zero(),
                  double pitch = 0.0);
+  // A tendon through `eyelets` (at least two body points, in routing order: node frames with
+  // node-frame offsets, or world points on kGround) pulling with tension tau(t) [N]
+  // (method-next.md §N4). Eyelets sit on nodes: an eyelet on a rod is a section frame's node
+  // plus an offset (FindRodNodeAtArcLength places one at an arc length). Build checks: at least
+  // two eyelets, valid nodes, finite offsets, consecutive eyelets apart in the reference
+  // configuration, and a tension profile that cannot become negative (each term's lower bound
+  // summed). Errors carry EntityKind::kTendon, part "eyelets[i]" for an eyelet.
+  int AddTendon(std::string name, std::vector<BodyPoint> eyelets, const Profile& tension);
+  // A spring-damper-actuator between two body points (model.h, ForceElement); a negative
+  // rest_length means the reference distance. Build checks: valid, distinct nodes (or the
+  // ground), finite values, non-negative stiffness and damping, ends apart in the reference
+  // configuration. Errors carry EntityKind::kForceElement, part "a" or "b" for an end.
+  int AddForceElement(const ForceElement& element);
+  // The node of rod `rod` at reference arc length s [m] (from its first node), within
+  // `tolerance` [m] (negative: 1e-8 max(1, rod length)); node -1 and the nearest node and its
+  // arc-length distance otherwise.
+  NodeMatch FindRodNodeAtArcLength(int rod, double s, double tolerance = -1.0) const;
   int AddPointLoad(const PointLoad& load);
   int AddRodLoad(const RodLoad& load);
   void SetGravity(const Vec3& g);

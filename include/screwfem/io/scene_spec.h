@@ -60,6 +60,34 @@ struct LoadSpec {
   Profile profile = Profile::Constant(1.0);
 };
 
+// A point of a body (or of the ground) that a tendon eyelet or a force element's end is fixed
+// to: the ground at `at`; a rigid body at `at` (world, reference configuration); a soft body at
+// the rod node at `at` or at arc length s, offset from it in its section frame.
+struct BodyPointSpec {
+  int body = -1;               // body index, -1: the ground
+  bool along_rod = false;      // soft bodies: the node at arc length s (else the node at `at`)
+  Vec3 at = Vec3::Zero();      // [m], world
+  double arc_length = 0.0;     // [m]
+  Vec3 offset = Vec3::Zero();  // soft bodies: section-frame components [m]
+};
+
+// A tendon (ModelBuilder::AddTendon): eyelets in routing order and the tension profile [N].
+struct TendonSpec {
+  std::string name;
+  std::vector<BodyPointSpec> eyelets;
+  Profile tension = Profile::Constant(0.0);
+};
+
+// A spring-damper-actuator between two body points (ModelBuilder::AddForceElement).
+struct ForceSpec {
+  std::string name;
+  BodyPointSpec a, b;
+  double stiffness = 0.0;      // [N/m]
+  double damping = 0.0;        // [N s/m]
+  double rest_length = -1.0;   // [m]; negative: the reference distance
+  Profile force = Profile::Constant(0.0);  // actuator [N], positive pulls the ends together
+};
+
 // A recorded point: a point of a body at `at`, or a point along a soft body at arc length s.
 struct OutputPointSpec {
   std::string name;
@@ -86,6 +114,8 @@ struct SceneSpec {
   std::vector<BodySpec> bodies;
   std::vector<JointEntrySpec> joints;
   std::vector<LoadSpec> loads;
+  std::vector<TendonSpec> tendons;
+  std::vector<ForceSpec> forces;
   AnalysisSettings analysis;
   OutputsSpec outputs;
 };
@@ -109,7 +139,8 @@ struct FieldSource {
 // Where an entity was defined (its name), and where some of its parts were: for bodies
 // "path[i]" (each path point; "from" and "to" map to path[0] and path[1]), "start_node" and
 // "end_node" (the welds); for joints "node_a" and "node_b" (the sides); for loads and output
-// points "at" and "s". The part names are those of InputError::entity().part.
+// points "at" and "s"; for tendons "eyelets[i]"; for force elements "a" and "b". The part names
+// are those of InputError::entity().part.
 struct EntitySource {
   FieldSource self;
   std::vector<std::pair<std::string, FieldSource>> parts;
@@ -119,7 +150,7 @@ struct EntitySource {
 struct SceneSources {
   std::string file;  // the source name used in messages
   FieldSource root;  // the document
-  std::vector<EntitySource> bodies, joints, loads, output_points;
+  std::vector<EntitySource> bodies, joints, loads, output_points, tendons, forces;
 };
 
 // Reads scene text (docs/scene-format.md) with overrides applied into a spec and the sources

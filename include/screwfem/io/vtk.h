@@ -5,7 +5,10 @@
 //   vertices   one per joint, at the joint frame's origin (side A);
 //   polylines  one per rod, through its nodes in order;
 //   lines      per rigid body, from its node origin to its centre of mass and to every joint
-//              attachment point on it (so a link between two joints is drawn between them).
+//              attachment point on it (so a link between two joints is drawn between them);
+//   polylines  one per tendon, through its eyelets, and one line per force element between its
+//              ends (rod_id = body_id = joint_id = -1; on the ground the frame axes are the
+//              world's).
 //   Point data: frame_x, frame_y, frame_z (axes of the node frame, the section frame on rods,
 //               the joint frame at joints), velocity [m/s], joint_id (-1 except at joints).
 //   Cell data:  rod_id, body_id, joint_id (-1 where they do not apply).
@@ -61,9 +64,9 @@ class VtkWriter {
  private:
   // Where a point of the frame comes from.
   struct PointSource {
-    enum class Kind { kJoint, kNode } kind = Kind::kNode;
+    enum class Kind { kJoint, kNode, kWorld } kind = Kind::kNode;
     int index = -1;               // joint index (kJoint) or node index (kNode)
-    Vec3 offset = Vec3::Zero();   // kNode: point in the node frame [m]
+    Vec3 offset = Vec3::Zero();   // kNode: point in the node frame [m]; kWorld: world point
     bool origin = true;           // kNode: the node frame's origin itself
   };
   void LayOut(const Model& model);

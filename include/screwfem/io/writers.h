@@ -49,6 +49,14 @@ void CalcJointRow(const Model& model, const Data& data, const std::vector<Output
 
 // (The effort column is JointCoordinateEffort, elements/joint.h.)
 
+// tendons.csv: per tendon T of the model, T.length [m], T.rate [m/s], T.tension [N];
+// forces.csv: per force element F, F.length [m], F.rate [m/s], F.force [N] (positive: tension)
+// (elements/tendon.h, CalcTendonState and CalcForceElementState).
+std::vector<std::string> TendonColumns(const Model& model);
+std::vector<std::string> ForceColumns(const Model& model);
+void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row);
+void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row);
+
 // ---- files -----------------------------------------------------------------------------------
 
 // Appends `value` formatted as printf("%.*g", precision, value) would (std::to_chars with a
@@ -82,6 +90,8 @@ class CsvWriter {
   // rows all of them hold whole, and none accepts more rows. Returns nullptr, or the first
   // writer whose write failed (errno kept).
   static const CsvWriter* FlushTogether(std::initializer_list<CsvWriter*> writers);
+  // The same for the first n writers of an array.
+  static const CsvWriter* FlushTogether(CsvWriter* const* writers, std::size_t n);
   // Flushes and closes. Returns false on a write error.
   bool Close();
   const std::string& path() const { return path_; }

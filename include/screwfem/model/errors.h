@@ -13,7 +13,11 @@ namespace screwfem {
 // "path[i]" (a point of AddRodAlongPath's polyline), "start_node" or "end_node" (a shared end
 // node); for joints "node_a" or "node_b". A scene compiler maps it to the place in the file
 // that defined the entity (io/scene_spec.h) without reading the message.
-enum class EntityKind { kNone, kNode, kRod, kBody, kJoint, kPointLoad, kRodLoad };
+enum class EntityKind {
+  kNone, kNode, kRod, kBody, kJoint, kPointLoad, kRodLoad,
+  kTendon,        // part "eyelets[i]" for one eyelet
+  kForceElement,  // part "a" or "b" for one end
+};
 struct EntityRef {
   EntityKind kind = EntityKind::kNone;
   int index = -1;

@@ -95,6 +95,44 @@ struct RodLoad {
   double xi = 0.0;
 };
 
+// A point fixed in a node frame (a rod node's section frame or a rigid body's frame), or in
+// the world (node kGround): the eyelet of a tendon, the end of a force element. An eyelet on a
+// rod is offset from a node's section; eyelets between nodes are not interpolated (the
+// builder places them on nodes).
+struct BodyPoint {
+  int node = kGround;
+  Vec3 offset = Vec3::Zero();  // node-frame components [m] (world point for kGround)
+};
+
+// A tendon (cable) routed through an ordered list of eyelets, sliding through them without
+// friction (method-next.md §N4): its length is the sum of the straight segments between
+// consecutive eyelets and it pulls with a prescribed tension tau(t) >= 0. Each segment is an
+// item of TendonSegmentKind (elements/tendon.h).
+struct Tendon {
+  std::string name;
+  std::vector<BodyPoint> eyelets;             // at least two
+  Profile tension = Profile::Constant(0.0);   // [N], scaled by the load factor in statics
+  int first_segment = -1;  // set by Build: its segments are first_segment + 0 .. eyelets - 2
+};
+
+// One straight segment of a tendon, between consecutive eyelets (made by Build).
+struct TendonSegment {
+  int tendon = -1;
+  BodyPoint a, b;
+};
+
+// A spring-damper-actuator between two body points (either may be on the ground): along the
+// line between them a force f = stiffness (l - rest_length) + damping dl/dt + actuator(t),
+// positive pulling the points together (tension).
+struct ForceElement {
+  std::string name;
+  BodyPoint a, b;
+  double stiffness = 0.0;     // [N/m]
+  double rest_length = -1.0;  // [m]; negative: the reference distance (set by Build)
+  double damping = 0.0;       // [N s/m]
+  Profile actuator = Profile::Constant(0.0);  // [N], scaled by the load factor in statics
+};
+
 enum class JointType {
   kRevolute, kPrismatic, kHelical, kCylindrical, kSpherical, kPlanar, kUniversal, kFixed,
   kFree,
@@ -162,6 +200,9 @@ struct Model {
   std::vector<Joint> joints;
   std::vector<PointLoad> point_loads;
   std::vector<RodLoad> rod_loads;
+  std::vector<Tendon> tendons;
+  std::vector<TendonSegment> tendon_segments;  // of all tendons, tendon by tendon (Build)
+  std::vector<ForceElement> force_elements;
   Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
   RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
 
@@ -193,6 +234,8 @@ struct Model {
   int FindRod(const std::string& name) const;
   int FindBody(const std::string& name) const;
   int FindJoint(const std::string& name) const;
+  int FindTendon(const std::string& name) const;
+  int FindForceElement(const std::string& name) const;
 };
 
 // The reference frame H_0 of a node, or the identity for kGround (the one ground-or-node

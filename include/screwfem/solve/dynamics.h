@@ -214,7 +214,8 @@ struct StepResult {
   std::string message;     // on failure: when and why (allocated only on failure)
 };
 
-// Every breakpoint (Profile::Breakpoints) of the model's load and drive profiles, unsorted.
+// Every breakpoint (Profile::Breakpoints) of the model's load, drive, tendon tension and force
+// element actuator profiles, unsorted.
 std::vector<double> ProfileBreakpoints(const Model& model);
 
 // Computes consistent initial accelerations and multipliers (method.md §5.4) at data.time

@@ -1,0 +1,96 @@
+// Tendons and point-to-point force elements (method-next.md §N4): forces along the straight
+// line between two body points (model.h, BodyPoint), as element kinds (elements/element.h).
+//
+// Both rest on one piece of geometry, the distance between two body-fixed points and its
+// first two derivatives under the right-trivialised increments of the two frames
+// (CalcPointDistance). A frictionless tendon with prescribed tension tau is the sum of its
+// straight segments: its generalised force tau dL/dq is the sum of tau times each segment's
+// length gradient, so each segment is a 2-node item (TendonSegmentKind) and the tendon needs
+// no coupling beyond consecutive eyelets. A force element (ForceElementKind) is one segment
+// with a spring-damper-actuator law.
+#pragma once
+
+#include "screwfem/elements/element.h"
+#include "screwfem/model/model.h"
+
+namespace screwfem {
+
+// The distance between p_A = x_A + R_A r_A and p_B = x_B + R_B r_B, and its derivatives under
+// H_A <- H_A exp(dh_A), H_B <- H_B exp(dh_B) (method-next.md §N4.2), with S(r) = [I  -Skew(r)]:
+//   l = |p_B - p_A|,  e = (p_B - p_A) / l (world),  J = [-R_A S(r_A)   R_B S(r_B)] (3 x 12),
+//   gradient  dl/d[dh_A; dh_B] = J^T e = [-e_A; -r_A x e_A; e_B; r_B x e_B],  e_X = R_X^T e;
+//   hessian   J^T (I - e e^T) J / l + blockdiag(-S(r_A)^T Skew(e_A) [0 I], S(r_B)^T Skew(e_B) [0 I])
+// (the first part symmetric, the second from the rotation of e into each node frame). The
+// hessian is the derivative of the gradient: d(gradient)/d[dh_A; dh_B], column j for dh_j.
+struct PointDistance {
+  double length = 0.0;     // l [m]
+  Vec3 direction;          // e, world, from A to B
+  Vec12 gradient;          // node-frame components, node A then node B
+  Mat12 hessian;           // set when asked for
+};
+// Returns false when the points coincide (l = 0: no direction).
+bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Vec3& r_B,
+                       bool hessian, PointDistance* out);
+
+// The tension of a tendon at `time`: max(0, load_factor tau(t)) [N] (a tendon cannot push).
+double TendonTension(const Tendon& tendon, double time, double load_factor = 1.0);
+
+// One straight segment of a tendon between consecutive eyelets: the residual rows
+// tau dl/d[dh_A; dh_B] and the stiffness tau d2l (method-next.md §N4.2, §N4.3 with prescribed
+// tension); the segments of a tendon add up to tau dL/dq and its exact tangent. No energy
+// (the tension may vary in time; at constant tension the potential is tau L, and the tests
+// check the forces against it).
+struct TendonSegmentKind {
+  static constexpr int kNodes = 2;
+  using Item = int;  // index into Model::tendon_segments
+  template <class F>
+  static void ForEach(const Model& model, F&& f) {
+    for (std::size_t i = 0; i < model.tendon_segments.size(); ++i) {
+      const TendonSegment& s = model.tendon_segments[i];
+      const int nodes[2] = {s.a.node, s.b.node};
+      f(static_cast<int>(i), nodes);
+    }
+  }
+  static bool Calc(const Model& model, const Data& data, const Item& segment,
+                   const NodeMotion<2>& motion, const KernelOptions& options,
+                   ElementTerms<2>* terms);
+  static void AddEnergy(const Model&, const Data&, const Item&, Energy*) {}
+};
+
+// A spring-damper-actuator between two body points: force
+//   f = k (l - l_0) + c dl/dt + F(t)   (positive: tension, pulling the points together),
+// residual rows f dl/d[dh_A; dh_B], with dl/dt = gradient^T [eta_A; eta_B]; exact tangents:
+//   stiffness k g g^T + f d2l + c g (d2l^T eta)^T   (the last: dl/dt varies with q at fixed eta),
+//   damping   c g g^T,
+// g the gradient. The spring's energy 1/2 k (l - l_0)^2 counts as Energy::spring.
+struct ForceElementKind {
+  static constexpr int kNodes = 2;
+  using Item = int;  // index into Model::force_elements
+  template <class F>
+  static void ForEach(const Model& model, F&& f) {
+    for (std::size_t i = 0; i < model.force_elements.size(); ++i) {
+      const ForceElement& e = model.force_elements[i];
+      const int nodes[2] = {e.a.node, e.b.node};
+      f(static_cast<int>(i), nodes);
+    }
+  }
+  static bool Calc(const Model& model, const Data& data, const Item& element,
+                   const NodeMotion<2>& motion, const KernelOptions& options,
+                   ElementTerms<2>* terms);
+  static void AddEnergy(const Model& model, const Data& data, const Item& element,
+                        Energy* energy);
+};
+
+// What the outputs report (io/writers.cpp, tendons.csv and forces.csv), in the current state of
+// data at data.time: length [m], its rate [m/s] and the tension or force [N].
+struct LineForceState {
+  double length = 0.0;
+  double rate = 0.0;
+  double force = 0.0;
+};
+LineForceState CalcTendonState(const Model& model, const Data& data, int tendon);
+LineForceState CalcForceElementState(const Model& model, const Data& data, int element);
+// The world position of a body point in the current state.
+Vec3 BodyPointPosition(const Data& data, const BodyPoint& point);
+
+}  // namespace screwfem

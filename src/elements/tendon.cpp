@@ -1,0 +1,168 @@
+#include "screwfem/elements/tendon.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace screwfem {
+
+namespace {
+
+// S(r)^T M for a 3 x 3 block M: the rows [M; Skew(r) M] (S(r)^T y = [y; r x y]).
+Eigen::Matrix<double, 6, 3> STimes(const Vec3& r, const Mat3& M) {
+  Eigen::Matrix<double, 6, 3> out;
+  out.topRows<3>() = M;
+  out.bottomRows<3>().noalias() = Skew(r) * M;
+  return out;
+}
+
+}  // namespace
+
+Vec3 BodyPointPosition(const Data& data, const BodyPoint& point) {
+  const SE3& H = NodeFrame(data, point.node);
+  return H.x + H.R * point.offset;
+}
+
+bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Vec3& r_B,
+                       bool hessian, PointDistance* out) {
+  const Vec3 delta = (H_B.x + H_B.R * r_B) - (H_A.x + H_A.R * r_A);
+  const double l = delta.norm();
+  if (!(l > 0.0) || !std::isfinite(l)) return false;
+  const Vec3 e = delta / l;
+  out->length = l;
+  out->direction = e;
+  // method-next.md §N4.2: gradient J^T e with J = [-R_A S(r_A)  R_B S(r_B)].
+  const Vec3 e_A = H_A.R.transpose() * e, e_B = H_B.R.transpose() * e;
+  out->gradient.segment<3>(0) = -e_A;
+  out->gradient.segment<3>(3) = -r_A.cross(e_A);
+  out->gradient.segment<3>(6) = e_B;
+  out->gradient.segment<3>(9) = r_B.cross(e_B);
+  if (!hessian) return true;
+  // J^T (I - e e^T) J / l in node-frame 3 x 3 blocks: with P_XY = R_X^T (I - e e^T) R_Y / l,
+  // block (X, Y) = s_X s_Y S(r_X)^T P_XY S(r_Y), s_A = -1, s_B = +1.
+  const Mat3 P = (Mat3::Identity() - e * e.transpose()) / l;
+  const Mat3 P_AA = H_A.R.transpose() * P * H_A.R;
+  const Mat3 P_BB = H_B.R.transpose() * P * H_B.R;
+  const Mat3 P_AB = H_A.R.transpose() * P * H_B.R;
+  const Mat3 SA = Skew(r_A), SB = Skew(r_B);
+  Mat12& H = out->hessian;
+  auto fill = [&](int row, int col, const Vec3& r_row, const Mat3& M, const Mat3& S_col,
+                  double sign) {
+    // S(r_row)^T M S(r_col) = [M, -M S_col; Skew(r_row) M, -Skew(r_row) M S_col].
+    const Eigen::Matrix<double, 6, 3> left = STimes(r_row, M);
+    H.block<6, 3>(row, col) = sign * left;
+    H.block<6, 3>(row, col + 3).noalias() = -sign * left * S_col;
+  };
+  fill(0, 0, r_A, P_AA, SA, 1.0);
+  fill(6, 6, r_B, P_BB, SB, 1.0);
+  fill(0, 6, r_A, P_AB, SB, -1.0);
+  fill(6, 0, r_B, P_AB.transpose(), SA, -1.0);
+  // The rotation of e into each node frame: -S(r_A)^T Skew(e_A) on dtheta_A, S(r_B)^T Skew(e_B)
+  // on dtheta_B.
+  H.block<6, 3>(0, 3) -= STimes(r_A, Skew(e_A));
+  H.block<6, 3>(6, 9) += STimes(r_B, Skew(e_B));
+  return true;
+}
+
+double TendonTension(const Tendon& tendon, double time, double load_factor) {
+  return std::max(0.0, load_factor * tendon.tension(time));
+}
+
+bool TendonSegmentKind::Calc(const Model& model, const Data&, const Item& segment,
+                             const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
+  const TendonSegment& s = model.tendon_segments[static_cast<std::size_t>(segment)];
+  const double tau =
+      TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], o.time, o.load_factor);
+  if (tau == 0.0) {
+    t->active = false;
+    return true;
+  }
+  PointDistance g;
+  if (!CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, o.tangent, &g)) {
+    t->active = false;  // coinciding eyelets: no direction, no force
+    return true;
+  }
+  // method-next.md §N4.3, prescribed tension: residual +tau dl/dq, tangent tau d2l.
+  t->residual = tau * g.gradient;
+  const double arm = std::max({1.0, s.a.offset.norm(), s.b.offset.norm()});
+  t->force_scale = tau * arm;
+  t->term_scale = tau * arm;  // the pulls of two segments at an eyelet cancel
+  if (!o.tangent) return true;
+  t->stiffness = tau * g.hessian;
+  t->has_stiffness = true;
+  return true;
+}
+
+bool ForceElementKind::Calc(const Model& model, const Data&, const Item& element,
+                            const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
+  const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
+  PointDistance g;
+  if (!CalcPointDistance(*x.H[0], fe.a.offset, *x.H[1], fe.b.offset, o.tangent, &g)) {
+    t->active = false;  // coinciding ends: no direction, no force
+    return true;
+  }
+  const double actuator = o.load_factor * fe.actuator(o.time);
+  const bool damped = o.dynamics && fe.damping != 0.0;
+  const double rate = damped ? g.gradient.dot(x.eta) : 0.0;
+  const double f = fe.stiffness * (g.length - fe.rest_length) + fe.damping * rate + actuator;
+  t->residual = f * g.gradient;
+  const double arm = std::max({1.0, fe.a.offset.norm(), fe.b.offset.norm()});
+  t->force_scale = std::abs(f) * arm;
+  t->term_scale =
+      (fe.stiffness * std::max(g.length, fe.rest_length) + std::abs(actuator)) * arm;
+  if (!o.tangent) return true;
+  Mat12& K = t->stiffness;
+  K.noalias() = fe.stiffness * g.gradient * g.gradient.transpose();
+  K += f * g.hessian;
+  t->has_stiffness = true;
+  if (damped) {
+    // d(dl/dt)/dq at fixed eta = (d2l^T eta)^T.
+    K.noalias() += fe.damping * g.gradient * (g.hessian.transpose() * x.eta).transpose();
+    t->damping.noalias() = fe.damping * g.gradient * g.gradient.transpose();
+    t->has_damping = true;
+  }
+  return true;
+}
+
+void ForceElementKind::AddEnergy(const Model& model, const Data& data, const Item& element,
+                                 Energy* E) {
+  const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
+  const double l = (BodyPointPosition(data, fe.b) - BodyPointPosition(data, fe.a)).norm();
+  E->spring += 0.5 * fe.stiffness * (l - fe.rest_length) * (l - fe.rest_length);
+}
+
+namespace {
+
+// Length and rate of the segment between two body points in the current state.
+void AddSegmentState(const Model& model, const Data& data, const BodyPoint& a, const BodyPoint& b,
+                     LineForceState* s) {
+  PointDistance g;
+  if (!CalcPointDistance(NodeFrame(data, a.node), a.offset, NodeFrame(data, b.node), b.offset,
+                         false, &g))
+    return;  // coinciding points: zero length, no rate
+  const int nodes[2] = {a.node, b.node};
+  Vec12 eta;
+  GatherNodeMotion<2>(model, data, nodes, &eta, nullptr);
+  s->length += g.length;
+  s->rate += g.gradient.dot(eta);
+}
+
+}  // namespace
+
+LineForceState CalcTendonState(const Model& model, const Data& data, int tendon) {
+  const Tendon& td = model.tendons[static_cast<std::size_t>(tendon)];
+  LineForceState s;
+  for (std::size_t k = 0; k + 1 < td.eyelets.size(); ++k)
+    AddSegmentState(model, data, td.eyelets[k], td.eyelets[k + 1], &s);
+  s.force = TendonTension(td, data.time);
+  return s;
+}
+
+LineForceState CalcForceElementState(const Model& model, const Data& data, int element) {
+  const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
+  LineForceState s;
+  AddSegmentState(model, data, fe.a, fe.b, &s);
+  s.force = fe.stiffness * (s.length - fe.rest_length) + fe.damping * s.rate + fe.actuator(data.time);
+  return s;
+}
+
+}  // namespace screwfem

@@ -1,0 +1,93 @@
+// Tendons and force elements from a scene file (docs/scene-format.md, "tendons", "forces"):
+// the example examples/tendon/finger.yaml compiles to the model it describes, a static run
+// curls the finger into the eyelet model's arc, and a run writes tendons.csv and forces.csv
+// with the states the kernels compute, and draws both in the ParaView frames.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "run_test_util.h"
+#include "screwfem/elements/tendon.h"
+#include "screwfem/io/run.h"
+#include "screwfem/io/scene.h"
+#include "screwfem/solve/statics.h"
+
+namespace screwfem {
+namespace {
+
+const std::string kFinger = std::string(SCREWFEM_SOURCE_DIR) + "/examples/tendon/finger.yaml";
+
+TEST(TendonScene, FingerExampleCompilesEyeletsOnNodesWithTheirOffsets) {
+  const Scene s = LoadScene(kFinger);
+  ASSERT_EQ(s.model.tendons.size(), 1u);
+  const Tendon& t = s.model.tendons[0];
+  EXPECT_EQ(t.name, "flexor");
+  ASSERT_EQ(t.eyelets.size(), 9u);
+  EXPECT_EQ(s.model.tendon_segments.size(), 8u);
+  const Rod& rod = s.model.rods[0];
+  for (std::size_t k = 0; k < t.eyelets.size(); ++k) {
+    EXPECT_EQ(t.eyelets[k].node, rod.nodes[k]);
+    EXPECT_EQ(t.eyelets[k].offset, Vec3(0, 0.02, 0));
+  }
+  ASSERT_EQ(s.model.force_elements.size(), 1u);
+  const ForceElement& f = s.model.force_elements[0];
+  EXPECT_EQ(f.a.node, kGround);
+  EXPECT_EQ(f.a.offset, Vec3(1, -0.5, 0));
+  EXPECT_EQ(f.b.node, rod.nodes.back());
+  EXPECT_DOUBLE_EQ(f.rest_length, 0.5);  // the reference distance
+  EXPECT_EQ(f.stiffness, 0.5);
+}
+
+TEST(TendonScene, StaticFingerWithoutTheSpringCurlsIntoTheEyeletModelsArc) {
+  const Scene s = LoadScene(kFinger, {"analysis.type=static", "analysis.load_steps=40",
+                                      "forces.tip_spring.stiffness=0"});
+  Data d = MakeData(s.model);
+  StaticOptions o = s.analysis.statics;
+  const StaticResult r = SolveStatic(s.model, d, o);
+  ASSERT_TRUE(r.converged) << r.message;
+  // 8 elements: the values of tests/validation/tendon_test.cpp (method-next.md T4.3).
+  const Vec3 tip = d.H[static_cast<std::size_t>(s.model.rods[0].nodes.back())].x;
+  EXPECT_NEAR(tip.x(), 0.820295, 2e-6);
+  EXPECT_NEAR(tip.y(), 0.484594, 2e-6);
+  d.time = o.time;  // the static solution's time (the end time): the full tension
+  EXPECT_EQ(CalcTendonState(s.model, d, 0).force, 50.0);
+}
+
+TEST(TendonScene, RunWritesTendonAndForceTablesAndDrawsThem) {
+  test::ScopedDir dir("tendon_scene");
+  const Scene s = LoadScene(kFinger, {"analysis.end_time=0.2", "outputs.interval=0.05"});
+  const RunResult r = RunScene(s, dir.path());
+  ASSERT_TRUE(r.ok) << r.message;
+  const test::Table tendons = test::ReadCsv(dir.path() + "/tendons.csv");
+  ASSERT_TRUE(tendons.well_formed) << tendons.problem;
+  EXPECT_EQ(tendons.columns,
+            (std::vector<std::string>{"t", "flexor.length", "flexor.rate", "flexor.tension"}));
+  const test::Table forces = test::ReadCsv(dir.path() + "/forces.csv");
+  ASSERT_TRUE(forces.well_formed) << forces.problem;
+  EXPECT_EQ(forces.columns, (std::vector<std::string>{"t", "tip_spring.length", "tip_spring.rate",
+                                                      "tip_spring.force"}));
+  const test::Table points = test::ReadCsv(dir.path() + "/points.csv");
+  ASSERT_EQ(tendons.rows.size(), points.rows.size());
+  ASSERT_EQ(forces.rows.size(), points.rows.size());
+  ASSERT_GE(tendons.rows.size(), 5u);
+  // The tension follows the smooth step 50 (10u^3 - 15u^4 + 6u^5), u = t / 1 s; the tendon
+  // shortens as the finger curls; the spring's force is k (l - l0) + c dl/dt.
+  for (const std::vector<double>& row : tendons.rows) {
+    const double u = row[0];
+    EXPECT_NEAR(row[3], 50.0 * u * u * u * (10 - 15 * u + 6 * u * u), 1e-9);
+  }
+  EXPECT_NEAR(tendons.rows.front()[1], 1.0, 1e-12);
+  EXPECT_LT(tendons.rows.back()[1], tendons.rows.front()[1]);
+  EXPECT_LT(tendons.rows.back()[2], 0.0);
+  for (const std::vector<double>& row : forces.rows)
+    EXPECT_NEAR(row[3], 0.5 * (row[1] - 0.5) + 0.1 * row[2], 1e-12);
+  // The frames hold one polyline per rod and tendon and one line per force element (the
+  // joint's vertex, 9 rod nodes, 9 eyelets and the spring's 2 ends are the 21 points).
+  const std::string frame = test::ReadFile(dir.path() + "/vtk/frame_00000.vtp");
+  EXPECT_NE(frame.find("NumberOfLines=\"3\""), std::string::npos);
+  EXPECT_NE(frame.find("NumberOfPoints=\"21\""), std::string::npos);
+}
+
+}  // namespace
+}  // namespace screwfem
