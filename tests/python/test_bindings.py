@@ -629,10 +629,14 @@ outputs:
         # run_scene solves the same problem and records the same row.
         with tempfile.TemporaryDirectory() as outdir:
             run = sf.run_scene(scene, outdir)
-            _, rows = read_csv(os.path.join(outdir, "points.csv"))
+            header, rows = read_csv(os.path.join(outdir, "points.csv"))
         self.assertTrue(run.ok, run.message)
+        # Static analyses: every load step's row at the same t, the load factor after t (the
+        # dict keeps the last row, the equilibrium at load factor 1).
         self.assertEqual(list(rows), [scene.analysis.statics.time])
-        np.testing.assert_allclose(rows[scene.analysis.statics.time], sim.calc_point_row(),
+        self.assertEqual(header[1], "load_factor")
+        self.assertEqual(rows[scene.analysis.statics.time][0], 1.0)
+        np.testing.assert_allclose(rows[scene.analysis.statics.time][1:], sim.calc_point_row(),
                                    rtol=0, atol=1e-14)
 
 
