@@ -848,7 +848,7 @@ void SceneReader::ReadStatics(const Node& node, const std::string& path) {
   }
   if (const Node* t = node.Find("desired_iterations"))
     o->desired_iterations =
-        r_.Integer(*t, field("desired_iterations"), 1, std::max(1, o->max_iterations));
+        r_.Integer(*t, field("desired_iterations"), 1, kMaxNewtonIterations);
   if (const Node* t = node.Find("psi")) o->psi = r_.NonNegativeNumber(*t, field("psi"));
   if (const Node* t = node.Find("rotation_weight"))
     o->rotation_weight = r_.NonNegativeNumber(*t, field("rotation_weight"));

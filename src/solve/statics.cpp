@@ -68,8 +68,8 @@ void ValidateStaticOptions(const StaticOptions& o, const std::string& owner) {
   require(o.arc_length_min == 0.0 || o.arc_length_max == 0.0 ||
               o.arc_length_min <= o.arc_length_max,
           "arc_length_min", "must not exceed arc_length_max");
-  require(o.desired_iterations >= 1 && o.desired_iterations <= o.max_iterations,
-          "desired_iterations", "must lie in [1, max_iterations]");
+  require(o.desired_iterations >= 1 && o.desired_iterations <= kMaxNewtonIterations,
+          "desired_iterations", "must lie in [1, 1000]");
   for (const auto& [value, field] : {std::pair{o.residual_tolerance, "residual_tolerance"},
                                      std::pair{o.increment_tolerance, "increment_tolerance"},
                                      std::pair{o.constraint_tolerance, "constraint_tolerance"}})
@@ -538,8 +538,8 @@ class ArcLengthPath {
         UpdateBranchReferences(model, data);
         const int iterations = std::max(step.iterations, 1);
         Accept(std::move(step), ds);
-        dl *= std::clamp(std::sqrt(static_cast<double>(o.desired_iterations) / iterations), 0.5,
-                         2.0);
+        const int desired = std::min(o.desired_iterations, o.max_iterations);
+        dl *= std::clamp(std::sqrt(static_cast<double>(desired) / iterations), 0.5, 2.0);
         dl = std::clamp(dl, dl_min, dl_max);
         continue;
       }

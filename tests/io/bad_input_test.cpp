@@ -358,9 +358,9 @@ TEST(BadInput, StaticPathSettings) {
               "analysis.statics.max_steps: expected an integer from 1 to 10000000, got '0'");
   ExpectError(head + "analysis:\n  statics: {arc_length: -1}\n", "bad.yaml:6:25",
               "analysis.statics.arc_length: expected a positive number, got '-1'");
-  ExpectError(head + "analysis:\n  max_iterations: 5\n  statics: {desired_iterations: 6}\n",
+  ExpectError(head + "analysis:\n  max_iterations: 5\n  statics: {desired_iterations: 0}\n",
               "bad.yaml:7:33",
-              "analysis.statics.desired_iterations: expected an integer from 1 to 5, got '6'");
+              "analysis.statics.desired_iterations: expected an integer from 1 to 1000, got '0'");
 }
 
 TEST(BadInput, NonScalarMapKey) {

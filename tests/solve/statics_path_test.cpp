@@ -20,6 +20,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/joint.h"
+#include "screwfem/model/errors.h"
 #include "screwfem/model/model.h"
 #include "screwfem/solve/statics.h"
 
@@ -277,6 +278,12 @@ TEST(PathFollowingStatics, ContinuesFromTheCurrentStateAndUnloads) {
   const StaticResult u = SolveStatic(t.model, parts, unload);
   ASSERT_TRUE(u.converged) << u.message;
   EXPECT_LT(std::abs(ApexDescent(t, parts)), 1e-12);
+  // Fewer Newton iterations than the arc-length controller's default aim are valid settings.
+  StaticOptions few;
+  few.max_iterations = 3;
+  EXPECT_NO_THROW(ValidateStaticOptions(few, "StaticOptions"));
+  few.desired_iterations = 0;
+  EXPECT_THROW(ValidateStaticOptions(few, "StaticOptions"), InputError);
 }
 
 }  // namespace

@@ -57,7 +57,8 @@ struct StaticOptions {
   double arc_length = 0.0;            // first arc length; 0: |dx/ds| (end - start) / load_steps
   double arc_length_min = 0.0;        // 0: the first / 2^max_halvings
   double arc_length_max = 0.0;        // 0: 10 x the first
-  int desired_iterations = 5;         // Newton solves per step the step-length controller aims at
+  int desired_iterations = 5;         // Newton solves per step the step-length controller aims
+                                      // at (at most max_iterations)
   double psi = 0.0;                   // 0: cylindrical constraint, 1: spherical
   double rotation_weight = 0.0;
   // The exact tangent: the derivative of the joints' constraint forces d(B^T lambda)/dq in the
@@ -83,7 +84,8 @@ inline constexpr int kMaxStaticSteps = 10000000;
 // Throws InputError "<owner>.<field>: what is expected" unless time is finite, load_steps in
 // [1, kMaxLoadSteps], max_halvings in [0, 30], max_iterations in [1, 1000], the tolerances
 // finite and > 0, the load factors finite, max_steps in [0, kMaxStaticSteps], the arc lengths
-// finite and >= 0 (min <= max when both are given), desired_iterations in [1, max_iterations],
+// finite and >= 0 (min <= max when both are given), desired_iterations in [1, 1000] (the
+// controller aims at the smaller of it and max_iterations),
 // psi and rotation_weight finite and >= 0.
 void ValidateStaticOptions(const StaticOptions& options, const std::string& owner);
 
