@@ -95,16 +95,44 @@ void BindSettings(py::module_& m) {
                      "Error-controlled steps: the first step [s] (0: 1e-3 of the first "
                      "advance_to's span).");
 
+  BindEnum<StaticMethod>(m, "StaticMethod",
+                         "How a static solution follows its path (statics.h): LOAD (load "
+                         "stepping) or ARCLENGTH (arc-length continuation).");
+
   py::class_<StaticOptions>(m, "StaticOptions",
-                            "Settings of the static Newton solver with load stepping (statics.h). "
-                            "Checked when used (ValidateStaticOptions), raising InputError.")
+                            "Settings of the static solver: load stepping or arc-length "
+                            "continuation (statics.h). Checked when used (ValidateStaticOptions), "
+                            "raising InputError.")
       .def(py::init<>())
       .def_readwrite("time", &StaticOptions::time,
                      "Time at which the profiles of loads and drives are evaluated [s].")
+      .def_readwrite("method", &StaticOptions::method, "StaticMethod.LOAD or .ARCLENGTH.")
+      .def_readwrite("start_load_factor", &StaticOptions::start_load_factor,
+                     "The load factor the current state is in equilibrium at (0 from rest; an "
+                     "earlier solve_static's load_factor to continue from where it ended).")
+      .def_readwrite("end_load_factor", &StaticOptions::end_load_factor,
+                     "The load factor to reach (may be below start_load_factor: unloading).")
+      .def_readwrite("max_steps", &StaticOptions::max_steps,
+                     "Accepted steps at most (0: 2 load_steps + 1000); the solve stops there.")
+      .def_readwrite("arc_length", &StaticOptions::arc_length,
+                     "First arc length (0: |dx/ds| (end - start) / load_steps).")
+      .def_readwrite("arc_length_min", &StaticOptions::arc_length_min,
+                     "Smallest arc length (0: the first / 2^max_halvings).")
+      .def_readwrite("arc_length_max", &StaticOptions::arc_length_max,
+                     "Largest arc length (0: 10 x the first).")
+      .def_readwrite("desired_iterations", &StaticOptions::desired_iterations,
+                     "Newton solves per arc-length step the step-length controller aims at.")
+      .def_readwrite("psi", &StaticOptions::psi,
+                     "Load term of the arc-length constraint: 0 cylindrical, 1 spherical.")
+      .def_readwrite("rotation_weight", &StaticOptions::rotation_weight,
+                     "Weight of rotations in the arc-length metric (0: translations only).")
+      .def_readwrite("constraint_force_tangent", &StaticOptions::constraint_force_tangent,
+                     "Exact tangent with d(B^T lambda)/dq (scene key exact_tangent).")
       .def_readwrite("load_steps", &StaticOptions::load_steps,
                      "Initial number of equal load increments, in [1, 1000000].")
       .def_readwrite("max_halvings", &StaticOptions::max_halvings,
-                     "Consecutive halvings of the load increment, in [0, 30].")
+                     "Halvings of the first load increment (arc length) down to the smallest, "
+                     "in [0, 30].")
       .def_readwrite("max_iterations", &StaticOptions::max_iterations,
                      "Newton iterations per load step, in [1, 1000].")
       .def_readwrite("residual_tolerance", &StaticOptions::residual_tolerance,

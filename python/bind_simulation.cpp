@@ -95,8 +95,8 @@ class Simulation {
     signals.ThrowIfRaised();
     if (!r.converged) {
       char head[96];
-      std::snprintf(head, sizeof head,
-                    "static solution failed at load factor %.6g: ", r.load_factor);
+      std::snprintf(head, sizeof head, "static solution %s at load factor %.9g: ",
+                    r.limit_point ? "stopped" : "failed", r.load_factor);
       RaiseSolverError(head + r.message, py::cast(r));
     }
     return r;
@@ -171,7 +171,12 @@ void BindResults(py::module_& m) {
   py::class_<StaticResult>(m, "StaticResult", "Outcome of Simulation.solve_static (statics.h).")
       .def_readonly("converged", &StaticResult::converged)
       .def_readonly("load_factor", &StaticResult::load_factor,
-                    "Last converged load factor (1 when converged).")
+                    "Last converged load factor (end_load_factor when converged): the "
+                    "start_load_factor to continue from.")
+      .def_readonly("limit_point", &StaticResult::limit_point,
+                    "Stopped at a limit point load stepping cannot pass (see message).")
+      .def_readonly("limit_points", &StaticResult::limit_points,
+                    "Load factors of the limit points an arc-length solve passed.")
       .def_readonly("load_steps", &StaticResult::load_steps, "Accepted load steps.")
       .def_readonly("total_iterations", &StaticResult::total_iterations)
       .def_readonly("halvings", &StaticResult::halvings,

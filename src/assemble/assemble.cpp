@@ -51,9 +51,10 @@ class Scatter {
     const int pj = m_.permutation[static_cast<std::size_t>(gj)];
     // The factorisation relies on the model's sparsity pattern (pattern_last is constant over
     // a block of unknowns, so the first row and column stand for all).
-    SCREWFEM_CHECK(m_.pattern_last.empty() ||
-                   (pj + block.cols() - 1 <= m_.pattern_last[static_cast<std::size_t>(pi)] &&
-                    pi + block.rows() - 1 <= m_.pattern_last[static_cast<std::size_t>(pj)]));
+    const std::vector<int>& pattern = o_.pattern_last ? *o_.pattern_last : m_.pattern_last;
+    SCREWFEM_CHECK(pattern.empty() ||
+                   (pj + block.cols() - 1 <= pattern[static_cast<std::size_t>(pi)] &&
+                    pi + block.rows() - 1 <= pattern[static_cast<std::size_t>(pj)]));
     for (Eigen::Index j = 0; j < block.cols(); ++j) {
       double* const col = &d_.matrix.At(pi, pj + static_cast<int>(j));
       for (Eigen::Index i = 0; i < block.rows(); ++i) col[i] += scale * block(i, j);
@@ -216,6 +217,24 @@ void AddKindEnergies(const Model& m, const Data& d, Energy* E, std::tuple<Kinds.
    ...);
 }
 
+// d(B^T lambda)/dq of joint ji (statics' exact tangent) into the blocks over its node A, node
+// B and coordinates (dofs -1: absent).
+void AddConstraintForceTangent(const Model& m, const Data& d, const AssemblyOptions& o,
+                               Scatter& s, int ji, const JointGradient& g, const Vec6& lambda,
+                               int da, int db) {
+  const Joint& j = m.joints[static_cast<std::size_t>(ji)];
+  JointForceTangent K;
+  CalcJointConstraintForceTangent(j, g, lambda, JointCurrentBasis(m, d, ji), &K);
+  const int k = j.k();
+  const int dofs[3] = {da, db, k > 0 ? j.coord : -1};
+  const int sizes[3] = {6, 6, k}, offsets[3] = {0, 6, 12};
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      if (dofs[a] >= 0 && dofs[b] >= 0)
+        s.Block(dofs[a], dofs[b], K.block(offsets[a], offsets[b], sizes[a], sizes[b]),
+                o.s_rows * o.c_stiffness);
+}
+
 // Joints (method.md §4): the constraint rows and their gradient, and the forces of springs,
 // dampers and drives on the coordinates, from the joint kernel (elements/joint.h).
 void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
@@ -253,6 +272,8 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       if (k > 0)
         s.Gradient(j.row, j.coord, JointGradientCoordinates(g, JointCurrentBasis(m, d, ji), TJ),
                    nullptr, lam);
+      if (o.constraint_force_tangent && o.assemble_matrix && !o.use_node_tangent)
+        AddConstraintForceTangent(m, d, o, s, ji, g, Vec6(lam), da, db);
     }
     if (k == 0) continue;
     // Springs, dampers and drives act on the coordinates.
@@ -279,6 +300,37 @@ using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, Ro
                                 JointSpringKind, TendonSegmentKind, ForceElementKind>;
 constexpr ElementKinds* kElementKinds = nullptr;
 }  // namespace
+
+std::vector<int> ConstraintForceTangentPattern(const Model& model, int* bandwidth) {
+  std::vector<int> last = model.pattern_last;
+  *bandwidth = model.bandwidth;
+  if (static_cast<int>(last.size()) != model.num_unknowns()) return last;
+  // The permuted range [first, first + size) of a block of unknowns starting at global g.
+  struct Range {
+    int first = -1, size = 0;
+  };
+  const auto range = [&](int g, int size) {
+    return g < 0 || size == 0 ? Range{} : Range{model.permutation[static_cast<std::size_t>(g)], size};
+  };
+  const auto node_dof = [&](int node) {
+    return node == kGround ? -1 : model.nodes[static_cast<std::size_t>(node)].dof;
+  };
+  for (const Joint& j : model.joints) {
+    if (j.row < 0) continue;
+    const Range r[3] = {range(node_dof(j.node_a), 6), range(node_dof(j.node_b), 6),
+                        range(j.coord, j.k())};
+    for (const Range& a : r)
+      for (const Range& b : r) {
+        if (a.first < 0 || b.first < 0) continue;
+        for (int i = 0; i < a.size; ++i) {
+          int& l = last[static_cast<std::size_t>(a.first + i)];
+          l = std::max(l, b.first + b.size - 1);
+          *bandwidth = std::max(*bandwidth, l - (a.first + i));
+        }
+      }
+  }
+  return last;
+}
 
 Energy CalcEnergy(const Model& model, const Data& data) {
   Energy E;

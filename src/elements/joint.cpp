@@ -209,6 +209,34 @@ Vec6 JointGradientTimes(const JointGradient& g, const Vec6* x_a, const Vec6* x_b
   return g.Tinv * rel;
 }
 
+void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g,
+                                     const Vec6& lambda, const Mat6X& basis,
+                                     JointForceTangent* out) {
+  const int k = static_cast<int>(basis.cols());
+  const int n = 12 + k;
+  // dphi / d[x_A, x_B, x_J].
+  Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 18> dphi(6, n);
+  dphi.leftCols<6>() = JointGradientA(g);
+  dphi.middleCols<6>(6) = JointGradientB(g);
+  if (k > 0) dphi.rightCols(k) = JointGradientCoordinates(g, basis, Mat6::Identity().topLeftCorner(k, k));
+  const Mat6 D = DTSE3InvT(g.phi, lambda);
+  const Mat6 ad_ga_t = Ad(g.G_A).transpose();
+  out->resize(n, n);
+  out->topRows<6>().noalias() = -ad_ga_t * D * dphi;
+  out->middleRows<6>(6).noalias() = Ad(g.Cb_inv).transpose() * D * dphi;
+  if (k > 0) out->bottomRows(k).noalias() = basis.transpose() * DTSE3InvT(-g.phi, lambda) * dphi;
+  // The variation of Ad(G_A) in B_A^T lambda: G_A <- G_A exp(x_A - Ad(G_A^-1 C_B^-1) x_B).
+  const Mat6 S = Star(AdTransposeTimes(g.G_A, g.Tinv.transpose() * lambda));
+  out->block<6, 6>(0, 0) -= S;
+  out->block<6, 6>(0, 6) += S * Ad(g.G_A.Inverse() * g.Cb_inv);
+  // The universal joint's moving first axis A_1(alpha_2) = Ad(exp(-alpha_2 A_2)) A_1:
+  // dA_1/dalpha_2 = -ad(A_2) A_1, so d(-A_1^T T^-T(-phi) lambda)/dalpha_2 = [A_2, A_1] . nu.
+  if (joint.type == JointType::kUniversal) {
+    const Vec6 nu = (g.Tinv - ad(g.phi)).transpose() * lambda;
+    (*out)(12, 13) += Bracket(basis.col(1), basis.col(0)).dot(nu);
+  }
+}
+
 void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, double time,
                               double load_factor, bool dynamics, bool tangent,
                               JointCoordinateTerms* out) {

@@ -198,15 +198,16 @@ class Run {
     PrepareOutputDirectory(outdir, options.replace_results);
     summary_path_ = outdir + "/summary.json";
     try {
-      points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
-      joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
+      points_.Open(outdir + "/points.csv", StaticColumns(PointColumns(scene.outputs.points)));
+      joints_.Open(outdir + "/joints.csv",
+                   StaticColumns(JointColumns(model_, scene.outputs.joints)));
       // Tendons and force elements: their tables only when the model has them.
       if (!model_.tendons.empty()) {
-        tendons_.Open(outdir + "/tendons.csv", TendonColumns(model_));
+        tendons_.Open(outdir + "/tendons.csv", StaticColumns(TendonColumns(model_)));
         tables_[num_tables_++] = &tendons_;
       }
       if (!model_.force_elements.empty()) {
-        forces_.Open(outdir + "/forces.csv", ForceColumns(model_));
+        forces_.Open(outdir + "/forces.csv", StaticColumns(ForceColumns(model_)));
         tables_[num_tables_++] = &forces_;
       }
       if (scene.outputs.vtk) {
@@ -293,23 +294,41 @@ class Run {
     return std::chrono::duration<double>(Clock::now() - wall_start_).count();
   }
 
+  // Static analyses: a load_factor column after t in points.csv and joints.csv.
+  std::vector<std::string> StaticColumns(std::vector<std::string> columns) const {
+    if (scene_.analysis.kind == AnalysisKind::kStatic)
+      columns.insert(columns.begin(), "load_factor");
+    return columns;
+  }
+
+  // Static analyses record a row at every converged load step (the path), the ParaView frame
+  // at the end only (every row has the same time).
   void RunStatic() {
     const StaticOptions& so = scene_.analysis.statics;
     data_.time = so.time;
-    static_ = SolveStatic(model_, data_, so, options_.stop);
+    static_ = SolveStatic(model_, data_, so, options_.stop, [&](const StaticStep& step) {
+      load_factor_ = step.load_factor;
+      if (!finished_) Record(so.time, true, false);
+    });
     has_static_ = true;
+    if (finished_) return;  // a write error while recording the path
     if (static_.interrupted) {
       Interrupted(Format("static solution interrupted at load factor %.6g", static_.load_factor));
       return;
     }
     if (!static_.converged) {
-      Finish("failed", Format("static solution failed at load factor %.6g: ", static_.load_factor) +
+      Finish("failed", Format(static_.limit_point ? "static solution stopped at load factor %.9g: "
+                                                  : "static solution failed at load factor %.9g: ",
+                              static_.load_factor) +
                            static_.message);
       return;
     }
     max_constraint_ = CalcMaxJointConstraint(model_, data_, so.time);
     max_rotation_ = MaxElementRotation(data_);
-    if (!Record(so.time, true, true)) return;
+    // The last step's row is on the path already: the frame only (or the row as well when
+    // the solve took no step, e.g. start_load_factor = end_load_factor).
+    load_factor_ = static_.load_factor;
+    if (!Record(so.time, static_.load_steps == 0, true)) return;
     if (options_.on_step) {
       if (!FlushRows(so.time)) return;
       options_.on_step(so.time);
@@ -444,16 +463,16 @@ class Run {
   bool Record(double t, bool row, bool frame, const Data& data) {
     if (row) {
       CalcPointRow(model_, data, scene_.outputs.points, &row_);
-      points_.WriteRow(t, row_);
+      points_.WriteRow(t, WithLoadFactor(row_));
       CalcJointRow(model_, data, scene_.outputs.joints, &row_);
-      joints_.WriteRow(t, row_);
+      joints_.WriteRow(t, WithLoadFactor(row_));
       if (tendons_.path().size() > 0) {
-        CalcTendonRow(model_, data_, &row_);
-        tendons_.WriteRow(t, row_);
+        CalcTendonRow(model_, data, &row_);
+        tendons_.WriteRow(t, WithLoadFactor(row_));
       }
       if (forces_.path().size() > 0) {
-        CalcForceRow(model_, data_, &row_);
-        forces_.WriteRow(t, row_);
+        CalcForceRow(model_, data, &row_);
+        forces_.WriteRow(t, WithLoadFactor(row_));
       }
       last_row_time_ = t;
       std::size_t batch = 0;
@@ -465,6 +484,14 @@ class Run {
     if (frame && vtk_ && !vtk_->WriteFrame(model_, data, t))
       return WriteFailed(vtk_->dir() + "/frame files", t);
     return true;
+  }
+
+  // A row of a static analysis starts with the load factor (StaticColumns).
+  const std::vector<double>& WithLoadFactor(const std::vector<double>& row) {
+    if (scene_.analysis.kind != AnalysisKind::kStatic) return row;
+    static_row_.assign(1, load_factor_);
+    static_row_.insert(static_row_.end(), row.begin(), row.end());
+    return static_row_;
   }
 
   // Writes the rows collected so far to the files, keeping the tables at the same row; on a
@@ -531,6 +558,8 @@ class Run {
     if (statics || a.static_preload) {
       j.Key("statics").BeginObject();
       j.Field("time", statics ? s.time : a.start_time).Field("load_steps", s.load_steps);
+      j.Field("method", NameOf(s.method)).Field("max_steps", s.max_steps);
+      j.Field("start_load_factor", s.start_load_factor).Field("end_load_factor", s.end_load_factor);
       j.Field("max_halvings", s.max_halvings).Field("max_iterations", s.max_iterations);
       j.Field("residual_tolerance", s.residual_tolerance);
       j.Field("increment_tolerance", s.increment_tolerance);
@@ -596,7 +625,10 @@ class Run {
       j.Key("static_solution").BeginObject();
       j.Field("converged", static_.converged).Field("load_factor", static_.load_factor);
       j.Field("load_steps", static_.load_steps).Field("newton_iterations", static_.total_iterations);
-      j.Field("halvings", static_.halvings);
+      j.Field("halvings", static_.halvings).Field("limit_point", static_.limit_point);
+      j.Key("limit_points").BeginArray();
+      for (double lp : static_.limit_points) j.Number(lp);
+      j.EndArray();
       j.EndObject();
     }
     j.Field("wall_seconds", wall);
@@ -626,6 +658,8 @@ class Run {
   std::optional<VtkWriter> vtk_;
   std::optional<ProgressBar> progress_;
   std::vector<double> row_;
+  std::vector<double> static_row_;  // load factor and row_ (static analyses)
+  double load_factor_ = 0.0;        // of the state recorded (static analyses)
   Clock::time_point wall_start_, last_summary_;
   double max_constraint_ = 0.0;
   double max_rotation_ = 0.0;  // largest relative rotation of one rod element so far [rad]

@@ -85,6 +85,7 @@ class SceneReader {
   void ReadTimes(const Node& node, const std::string& path);
   void ReadStepControl(const Node& node, const std::string& path);
   void ReadSolverOptions(const Node& node, const std::string& path);
+  void ReadStatics(const Node& node, const std::string& path);
   void ReadOutputs(const Node* node);
   void ReadOutputPoint(const Node& value, const std::string& path, OutputPointSpec& op,
                        EntitySource& source);
@@ -833,10 +834,11 @@ void SceneReader::ReadAnalysis(const Node* node) {
                {"type", "start_time", "end_time", "step", "rho_inf", "tolerances", "max_iterations",
                 "max_halvings", "align_steps", "static_preload", "load_steps", "rod_inertia",
                 "newton", "predictor", "convergence", "restart_at_breakpoints", "constraints",
-                "tolerance", "min_step", "max_step", "initial_step"});
+                "tolerance", "min_step", "max_step", "initial_step", "statics"});
   if (const Node* t = node->Find("type")) a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
   ReadTimes(*node, path);
   ReadSolverOptions(*node, path);
+  if (const Node* t = node->Find("statics")) ReadStatics(*t, Join(path, "statics"));
   if (const Node* t = node->Find("align_steps"))
     a->align_steps = r_.Bool(*t, Join(path, "align_steps"));
   if (const Node* t = node->Find("restart_at_breakpoints"))
@@ -958,6 +960,38 @@ void SceneReader::ReadSolverOptions(const Node& node, const std::string& path) {
     a->dynamic.convergence = r_.Enum<ConvergenceTest>(*t, Join(path, "convergence"));
   if (const Node* t = node.Find("load_steps"))
     a->statics.load_steps = r_.Integer(*t, Join(path, "load_steps"), 1, kMaxLoadSteps);
+}
+
+// analysis.statics: how a static solution follows its path (statics.h, StaticOptions).
+void SceneReader::ReadStatics(const Node& node, const std::string& path) {
+  StaticOptions* o = &spec_.analysis.statics;
+  r_.CheckKeys(node, path,
+               {"method", "end_load_factor", "max_steps", "arc_length", "arc_length_min",
+                "arc_length_max", "desired_iterations", "psi", "rotation_weight",
+                "exact_tangent"});
+  const auto field = [&](const char* key) { return Join(path, key); };
+  if (const Node* t = node.Find("method")) o->method = r_.Enum<StaticMethod>(*t, field("method"));
+  if (const Node* t = node.Find("end_load_factor"))
+    o->end_load_factor = r_.Number(*t, field("end_load_factor"));
+  if (const Node* t = node.Find("max_steps"))
+    o->max_steps = r_.Integer(*t, field("max_steps"), 1, kMaxStaticSteps);
+  if (const Node* t = node.Find("arc_length"))
+    o->arc_length = r_.PositiveNumber(*t, field("arc_length"));
+  if (const Node* t = node.Find("arc_length_min"))
+    o->arc_length_min = r_.PositiveNumber(*t, field("arc_length_min"));
+  if (const Node* t = node.Find("arc_length_max")) {
+    o->arc_length_max = r_.PositiveNumber(*t, field("arc_length_max"));
+    if (o->arc_length_min > o->arc_length_max)
+      r_.Fail(t->location, field("arc_length_max"), "expected arc_length_max >= arc_length_min");
+  }
+  if (const Node* t = node.Find("desired_iterations"))
+    o->desired_iterations =
+        r_.Integer(*t, field("desired_iterations"), 1, kMaxNewtonIterations);
+  if (const Node* t = node.Find("psi")) o->psi = r_.NonNegativeNumber(*t, field("psi"));
+  if (const Node* t = node.Find("rotation_weight"))
+    o->rotation_weight = r_.NonNegativeNumber(*t, field("rotation_weight"));
+  if (const Node* t = node.Find("exact_tangent"))
+    o->constraint_force_tangent = r_.Bool(*t, field("exact_tangent"));
 }
 
 // A whole number of steps, about (end - start) / count long (one step at least).

@@ -86,6 +86,7 @@ int BandedLU::Factorize() {
   extents_valid_ = false;
   max_pivot_ = 0.0;
   min_pivot_ = n_ > 0 ? INFINITY : 0.0;
+  determinant_sign_ = 1;
   // Last column of row i (row_last_) and last row of column j (col_last_) that can be
   // nonzero: the pattern, widened below by the interchanges and the updates (structurally,
   // whatever the values).
@@ -114,7 +115,12 @@ int BandedLU::Factorize() {
       }
     }
     ipiv_[sj] = p;
-    if (best == 0.0) return j;
+    if (best == 0.0) {
+      determinant_sign_ = 0;
+      return j;
+    }
+    // det = prod U_jj times -1 per row interchange; U_jj is the pivot found above.
+    if ((p != j) != (diag[p - j] < 0.0)) determinant_sign_ = -determinant_sign_;
     max_pivot_ = std::max(max_pivot_, best);
     min_pivot_ = std::min(min_pivot_, best);
     ju = std::max(ju, std::min(p + ku_, n_ - 1));

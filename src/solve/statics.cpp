@@ -48,12 +48,28 @@ void ValidateStaticOptions(const StaticOptions& o, const std::string& owner) {
     if (!ok) throw InputError(owner + "." + field + ": " + what);
   };
   require(std::isfinite(o.time), "time", "must be finite");
+  require(IsEnumValue(o.method), "method", "must be load or arclength");
+  require(std::isfinite(o.start_load_factor), "start_load_factor", "must be finite");
+  require(std::isfinite(o.end_load_factor), "end_load_factor", "must be finite");
   require(o.load_steps >= 1 && o.load_steps <= kMaxLoadSteps, "load_steps",
           "must lie in [1, 1000000]");
   require(o.max_halvings >= 0 && o.max_halvings <= kMaxHalvings, "max_halvings",
           "must lie in [0, 30]");
   require(o.max_iterations >= 1 && o.max_iterations <= kMaxNewtonIterations, "max_iterations",
           "must lie in [1, 1000]");
+  require(o.max_steps >= 0 && o.max_steps <= kMaxStaticSteps, "max_steps",
+          "must lie in [0, 10000000] (0: automatic)");
+  for (const auto& [value, field] : {std::pair{o.arc_length, "arc_length"},
+                                     std::pair{o.arc_length_min, "arc_length_min"},
+                                     std::pair{o.arc_length_max, "arc_length_max"},
+                                     std::pair{o.psi, "psi"},
+                                     std::pair{o.rotation_weight, "rotation_weight"}})
+    require(std::isfinite(value) && value >= 0.0, field, "must be finite and >= 0");
+  require(o.arc_length_min == 0.0 || o.arc_length_max == 0.0 ||
+              o.arc_length_min <= o.arc_length_max,
+          "arc_length_min", "must not exceed arc_length_max");
+  require(o.desired_iterations >= 1 && o.desired_iterations <= kMaxNewtonIterations,
+          "desired_iterations", "must lie in [1, 1000]");
   for (const auto& [value, field] : {std::pair{o.residual_tolerance, "residual_tolerance"},
                                      std::pair{o.increment_tolerance, "increment_tolerance"},
                                      std::pair{o.constraint_tolerance, "constraint_tolerance"}})
@@ -71,31 +87,102 @@ double ConstraintScale(const Model& model) {
   return k_scale;
 }
 
+// Weights of the arc-length metric (method-next.md §N3.1), velocity layout: translations (node
+// translations, joint coordinates whose axis has no rotation part) 1 / length_scale^2,
+// rotations rotation_weight.
+Eigen::VectorXd MetricWeights(const Model& model, double rotation_weight) {
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(model.nv);
+  const double t = 1.0 / (model.length_scale * model.length_scale);
+  for (const Node& n : model.nodes) {
+    if (n.dof < 0) continue;
+    w.segment<3>(n.dof).setConstant(t);
+    w.segment<3>(n.dof + 3).setConstant(rotation_weight);
+  }
+  for (const Joint& j : model.joints)
+    for (int c = 0; c < j.k(); ++c)
+      w(j.coord + c) = j.basis.col(c).tail<3>().norm() > 0.0 ? rotation_weight : t;
+  return w;
+}
+
 enum class LoadStepEnd { kConverged, kFailed, kStopped };
 
-// Newton iterations at the load factor opt.load_factor from the current state: records the
-// residual norms and the iterations in `step`, the cause of a failure in `cause`.
-LoadStepEnd IterateLoadStep(const Model& model, Data& data, const StaticOptions& options,
-                            const AssemblyOptions& opt, double k_scale, const StopRequest& stop,
-                            StaticStep& step, std::string& cause) {
-  double last_increment = INFINITY;
-  for (int it = 0; it <= options.max_iterations; ++it) {
-    if (stop.Requested()) return LoadStepEnd::kStopped;
-    if (!Assemble(model, data, opt)) {
-      if (data.failed_element >= 0) {
-        cause = ElementLabel(model, data.failed_element) +
-                Format(" rotates by %.4g rad, beyond what one helical element represents "
-                       "(2 pi); use more elements",
-                       data.failed_rotation);
-      } else {
-        cause = "the residual is not finite";
+// The equilibrium solver's shared state: options, scales and the workspaces of the bordered
+// solves (allocated once per solve).
+struct StaticSolver {
+  const Model& model;
+  Data& data;
+  const StaticOptions& options;
+  const StopRequest& stop;
+  double k_scale = 1.0;
+  AssemblyOptions opt;
+  Eigen::VectorXd weights;           // arc-length metric (nv)
+  Eigen::VectorXd r_s, load, x_r, x_f;  // nv + nc: residual at s, F = -dR/ds, the two solves
+  Eigen::VectorXd step_dx;            // nv: the sum of a load step's Newton corrections
+
+  std::vector<int> pattern;          // the band pattern with d(B^T lambda)/dq
+  bool resized = false;
+
+  StaticSolver(const Model& m, Data& d, const StaticOptions& o, const StopRequest& st)
+      : model(m), data(d), options(o), stop(st), k_scale(ConstraintScale(m)),
+        weights(MetricWeights(m, o.rotation_weight)) {
+    opt.time = o.time;
+    opt.s_constraints = opt.s_multipliers = k_scale;
+    const int n = m.num_unknowns();
+    r_s.resize(n);
+    load.resize(n);
+    x_r.resize(n);
+    x_f.resize(n);
+    step_dx.resize(m.nv);
+    // The exact tangent's blocks may lie outside the model's band pattern: the matrix gets
+    // the wider pattern (and band) for the solve, and the model's back at its end.
+    if (o.constraint_force_tangent && static_cast<int>(m.pattern_last.size()) == n) {
+      int bandwidth = 0;
+      pattern = ConstraintForceTangentPattern(m, &bandwidth);
+      if (bandwidth > d.matrix.lower_bandwidth() || bandwidth > d.matrix.upper_bandwidth()) {
+        d.matrix.Resize(n, bandwidth, bandwidth);
+        resized = true;
       }
-      return LoadStepEnd::kFailed;
+      d.matrix.SetPattern(pattern, pattern);
+      opt.constraint_force_tangent = true;
+      opt.pattern_last = &pattern;
     }
+  }
+  ~StaticSolver() {
+    if (!opt.constraint_force_tangent) return;
+    if (resized) data.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
+    data.matrix.SetPattern(model.pattern_last, model.pattern_last);
+  }
+  StaticSolver(const StaticSolver&) = delete;
+  StaticSolver& operator=(const StaticSolver&) = delete;
+
+  double Dot(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const {
+    return (a.head(model.nv).array() * weights.array() * b.head(model.nv).array()).sum();
+  }
+
+  // Assembles at opt.load_factor; false (with the cause) if the assembly failed.
+  bool AssembleAt(bool matrix, std::string& cause) {
+    opt.assemble_matrix = matrix;
+    const bool ok = Assemble(model, data, opt);
+    opt.assemble_matrix = true;
+    if (ok) return true;
+    if (data.failed_element >= 0) {
+      cause = ElementLabel(model, data.failed_element) +
+              Format(" rotates by %.4g rad, beyond what one helical element represents "
+                     "(2 pi); use more elements",
+                     data.failed_rotation);
+    } else {
+      cause = "the residual is not finite";
+    }
+    return false;
+  }
+
+  // Convergence test of the state just assembled (data.residual); records |R|_inf in step.
+  bool Converged(double last_increment, StaticStep& step, double* res_out) const {
     const double res = model.nv > 0 ? data.residual.head(model.nv).cwiseAbs().maxCoeff() : 0.0;
     const double con = model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() / k_scale
                                     : 0.0;
     step.residual_norms.push_back(res);
+    *res_out = res;
     const double scale = std::max(data.force_scale, 1e-300);
     // Below this level the residual is round-off (e.g. eps EA |d|/L in a stiff rod).
     const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
@@ -103,92 +190,484 @@ LoadStepEnd IterateLoadStep(const Model& model, Data& data, const StaticOptions&
     // There the residual no longer measures the error; the last Newton correction does, so
     // it must be small as well (as in the dynamic solver).
     const bool at_floor = res <= floor;
-    if (con <= options.constraint_tolerance && last_increment <= options.increment_tolerance &&
-        (at_floor || res <= options.residual_tolerance * scale)) {
-      step.iterations = it;
-      return LoadStepEnd::kConverged;
-    }
-    if (it == options.max_iterations) {
-      cause = Format("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
-                     options.max_iterations, res, res / scale);
-      return LoadStepEnd::kFailed;
-    }
+    return con <= options.constraint_tolerance && last_increment <= options.increment_tolerance &&
+           (at_floor || res <= options.residual_tolerance * scale);
+  }
+
+  // With data.residual assembled (matrix included) at s = opt.load_factor: the load vector
+  // F = -dR/ds = R(s) - R(s + 1) (R is affine in s: loads and drive values are scaled by it),
+  // the factorisation, x_r = -A^-1 R and x_f = A^-1 F (method-next.md §N3.2). False if the
+  // matrix is singular or an assembly failed.
+  bool BorderedSolves(std::string& cause) {
+    r_s = data.residual;
+    const double s = opt.load_factor;
+    opt.load_factor = s + 1.0;
+    const bool ok = AssembleAt(false, cause);
+    opt.load_factor = s;
+    if (!ok) return false;
+    load = r_s - data.residual;
+    data.residual = r_s;
     if (!SolveAssembledSystem(model, data)) {
       cause = "the tangent matrix is singular (a mechanism, or unsupported free motion)";
-      return LoadStepEnd::kFailed;
+      return false;
     }
-    Retract(model, data, data.increment.head(model.nv));
-    data.lambda += k_scale * data.increment.tail(model.nc);
-    last_increment = ScaledIncrementSize(model, data.increment.head(model.nv));
+    x_r = data.increment;
+    data.residual = -load;
+    const bool finite = SolveFactorizedSystem(model, data);
+    x_f = data.increment;
+    data.residual = r_s;
+    if (!finite || !x_r.allFinite()) {
+      cause = "the tangent matrix is singular (a mechanism, or unsupported free motion)";
+      return false;
+    }
+    return true;
   }
-  return LoadStepEnd::kFailed;
+
+  // x_f = dx/ds at the current state (an equilibrium at opt.load_factor); false if singular.
+  bool PathTangent(std::string& cause) {
+    return AssembleAt(true, cause) && BorderedSolves(cause);
+  }
+
+  void Apply(const Eigen::VectorXd& dx) {
+    Retract(model, data, dx.head(model.nv));
+    data.lambda += k_scale * dx.tail(model.nc);
+  }
+
+  // Newton iterations at the load factor opt.load_factor from the current state: records the
+  // residual norms and the iterations in `step`, the cause of a failure in `cause`.
+  LoadStepEnd IterateLoadStep(StaticStep& step, std::string& cause) {
+    double last_increment = INFINITY;
+    step_dx.setZero();
+    for (int it = 0; it <= options.max_iterations; ++it) {
+      if (stop.Requested()) return LoadStepEnd::kStopped;
+      if (!AssembleAt(true, cause)) return LoadStepEnd::kFailed;
+      double res = 0.0;
+      if (Converged(last_increment, step, &res)) {
+        step.iterations = it;
+        return LoadStepEnd::kConverged;
+      }
+      if (it == options.max_iterations) {
+        cause = Format("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
+                       options.max_iterations, res, res / std::max(data.force_scale, 1e-300));
+        return LoadStepEnd::kFailed;
+      }
+      if (!SolveAssembledSystem(model, data)) {
+        cause = "the tangent matrix is singular (a mechanism, or unsupported free motion)";
+        return LoadStepEnd::kFailed;
+      }
+      Apply(data.increment);
+      step_dx += data.increment.head(model.nv);
+      last_increment = ScaledIncrementSize(model, data.increment.head(model.nv));
+    }
+    return LoadStepEnd::kFailed;
+  }
+
+  // After IterateLoadStep converged (data.residual and data.matrix assembled at the converged
+  // state): x_f = dx/ds there. False if an assembly failed or the matrix is singular;
+  // data.residual is kept.
+  bool PathTangentAfterStep() {
+    r_s = data.residual;
+    const double s = opt.load_factor;
+    opt.load_factor = s + 1.0;
+    std::string ignored;
+    bool ok = AssembleAt(false, ignored);
+    opt.load_factor = s;
+    if (ok) {
+      load = r_s - data.residual;
+      data.residual = -load;
+      ok = SolveAssembledSystem(model, data);
+      x_f = data.increment;
+    }
+    data.residual = r_s;
+    return ok && x_f.allFinite();
+  }
+};
+
+// The converged state a failed step returns to.
+struct Checkpoint {
+  State state;
+  Eigen::VectorXd lambda;
+  void Save(const Data& d) {
+    SaveState(d, &state);
+    lambda = d.lambda;
+  }
+  void Restore(const Model& m, Data& d) const {
+    RestoreState(state, d);
+    d.lambda = lambda;
+    UpdateBranchReferences(m, d);
+  }
+};
+
+int MaxSteps(const StaticOptions& o) {
+  return o.max_steps > 0 ? o.max_steps : 2 * o.load_steps + 1000;
 }
 
-}  // namespace
+std::string StepCapMessage(int steps, double s) {
+  return Format("static solve stopped after %g steps (max_steps) at load factor %.9g, before "
+                "reaching the end load factor; raise analysis.statics.max_steps or the step size",
+                steps, s);
+}
 
-StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options,
-                         const StopRequest& stop) {
+// Load stepping (method.md §5.6) with a bounded increment and step count.
+StaticResult SolveByLoadSteps(StaticSolver& S, const StaticStepCallback& on_step) {
+  const Model& model = S.model;
+  Data& data = S.data;
+  const StaticOptions& options = S.options;
   StaticResult result;
-  State saved;
-  SaveState(data, &saved);
-  Eigen::VectorXd saved_lambda = data.lambda;
-  auto restore = [&] {
-    RestoreState(saved, data);
-    data.lambda = saved_lambda;
-    UpdateBranchReferences(model, data);
-  };
-
-  const double k_scale = ConstraintScale(model);
-  AssemblyOptions opt;
-  opt.time = options.time;
-  opt.s_constraints = opt.s_multipliers = k_scale;
-
-  const double ds0 = 1.0 / std::max(options.load_steps, 1);
-  double s = 0.0, ds = ds0;
-  int consecutive_halvings = 0;
+  Checkpoint saved;
+  saved.Save(data);
+  const double s0 = options.start_load_factor, span = options.end_load_factor - s0;
+  result.load_factor = s0;
+  // Progress p in [0, 1] along the load path, s = s0 + p span.
+  const double dp0 = span == 0.0 ? 1.0 : 1.0 / std::max(options.load_steps, 1);
+  const double dp_min = dp0 * std::ldexp(1.0, -options.max_halvings);
+  const int max_steps = MaxSteps(options);
+  double p = 0.0, dp = dp0;
+  // |dx/ds| at the start, for the limit-point diagnosis (NaN: unknown, e.g. singular).
+  double path_speed0 = NAN;
   std::string last_cause;
-  while (s < 1.0) {
-    // Snap to 1 when only round-off separates s + ds from it (ten steps of 0.1 sum to
+  if (span != 0.0) {
+    S.opt.load_factor = s0;
+    std::string ignored;
+    if (S.PathTangent(ignored)) path_speed0 = ScaledIncrementSize(model, S.x_f.head(model.nv));
+    saved.Restore(model, data);
+  }
+  double path_speed = path_speed0;  // |dx/ds| at the last converged state
+  // At the last converged state (data): a limit point of the path when dx/ds has grown
+  // tenfold since the start (it grows like (s* - s)^-1/2 towards a limit point) or the tangent
+  // is singular there. Leaves data unchanged.
+  const auto at_limit_point = [&](std::string* why) {
+    if (result.load_steps == 0 || span == 0.0 || !std::isfinite(path_speed0)) return false;
+    Checkpoint here;
+    here.Save(data);
+    double speed = INFINITY;
+    S.opt.load_factor = result.load_factor;
+    if (S.PathTangent(*why)) speed = ScaledIncrementSize(model, S.x_f.head(model.nv));
+    here.Restore(model, data);
+    if (speed < 10.0 * path_speed0) return false;
+    if (std::isfinite(speed))
+      *why = Format("|dx/ds| grew %.3g-fold since the start", speed / path_speed0);
+    return true;
+  };
+  const auto limit_point_result = [&](const std::string& why) {
+    result.limit_point = true;
+    result.message =
+        Format("limit point at load factor %.9g: load stepping finds no equilibrium on this "
+               "path at a load factor %.3g further (",
+               result.load_factor, dp_min * std::abs(span)) +
+        why +
+        "); arc-length continuation (analysis.statics.method: arclength) follows the path "
+        "through limit points";
+    return result;
+  };
+  while (p < 1.0) {
+    if (result.load_steps >= max_steps) {
+      result.message = StepCapMessage(result.load_steps, result.load_factor);
+      return result;
+    }
+    // Snap to 1 when only round-off separates p + dp from it (ten steps of 0.1 sum to
     // 1 - 1e-16, which would otherwise cost an extra load step).
-    const double target = s + ds >= 1.0 - 1e-12 ? 1.0 : s + ds;
-    opt.load_factor = target;
+    const double target = p + dp >= 1.0 - 1e-12 ? 1.0 : p + dp;
+    const double s_target = target == 1.0 ? options.end_load_factor : s0 + target * span;
+    S.opt.load_factor = s_target;
     StaticStep step;
-    step.load_factor = target;
-    const LoadStepEnd end =
-        IterateLoadStep(model, data, options, opt, k_scale, stop, step, last_cause);
+    step.load_factor = s_target;
+    LoadStepEnd end = S.IterateLoadStep(step, last_cause);
     if (end == LoadStepEnd::kStopped) {
-      restore();
+      saved.Restore(model, data);
       result.interrupted = true;
-      result.message = Format("static solve interrupted at load factor %.6g", s);
+      result.message = Format("static solve interrupted at load factor %.9g", result.load_factor);
       return result;
     }
     result.total_iterations += step.iterations;
     if (end == LoadStepEnd::kConverged) {
-      UpdateBranchReferences(model, data);
-      SaveState(data, &saved);
-      saved_lambda = data.lambda;
-      s = target;
-      result.load_factor = s;
-      ++result.load_steps;
-      result.steps.push_back(std::move(step));
-      ds = std::min(ds0, 1.5 * ds);
-      consecutive_halvings = 0;
-      continue;
+      // A jump: the step's correction is more than ten times what dx/ds at the last converged
+      // state predicts (on one branch it is at most twice that, up to a limit point where x
+      // varies like sqrt(s* - s)): Newton left the path across a limit point and converged on
+      // another branch (a snap-through). Halve; at the smallest increment, stop at a limit
+      // point, and otherwise accept.
+      const double predicted = path_speed * std::abs((target - p) * span);
+      if (std::isfinite(path_speed) &&
+          ScaledIncrementSize(model, S.step_dx) > 10.0 * predicted + 100.0 * options.increment_tolerance) {
+        if (dp > dp_min * (1.0 + 1e-12)) {
+          end = LoadStepEnd::kFailed;
+          last_cause = "the step jumped to another branch of the path";
+        } else {
+          Checkpoint next;
+          next.Save(data);
+          saved.Restore(model, data);
+          std::string why;
+          if (at_limit_point(&why)) return limit_point_result(why);
+          next.Restore(model, data);
+        }
+      }
+      if (end == LoadStepEnd::kConverged) {
+        path_speed = S.PathTangentAfterStep() ? ScaledIncrementSize(model, S.x_f.head(model.nv))
+                                              : NAN;
+        UpdateBranchReferences(model, data);
+        saved.Save(data);
+        p = target;
+        result.load_factor = s_target;
+        ++result.load_steps;
+        if (on_step) on_step(step);
+        result.steps.push_back(std::move(step));
+        dp = std::min(dp0, 1.5 * dp);
+        continue;
+      }
     }
-    // Failed load step: back to the last converged state, retry with half the increment.
-    restore();
+    // Failed load step: back to the last converged state, retry with half the increment,
+    // down to the smallest increment dp0 / 2^max_halvings.
+    saved.Restore(model, data);
     ++result.halvings;
-    ds *= 0.5;
-    // The limit is on consecutive halvings: progress is still made while steps succeed, each
-    // advancing the load factor by at least ds0 / 2^max_halvings.
-    if (++consecutive_halvings > options.max_halvings) {
-      result.message = Format("static solve failed at load factor %.6g (last converged %.6g): ",
-                              target, s) + last_cause;
-      return result;
-    }
+    dp *= 0.5;
+    if (dp >= dp_min * (1.0 - 1e-12)) continue;
+    std::string why;
+    if (at_limit_point(&why)) return limit_point_result(why);
+    result.message = Format("static solve failed at load factor %.9g (last converged %.9g): ",
+                            s_target, result.load_factor) +
+                     last_cause;
+    return result;
   }
   result.converged = true;
   return result;
+}
+
+}  // namespace
+
+namespace {
+
+// Arc-length continuation (method-next.md §N3.3-§N3.4): Crisfield's cylindrical (psi = 0) or
+// spherical constraint on the summed Newton corrections, the multipliers carried by the two
+// bordered solves, the predictor's sign from the previous step, the root of the smaller
+// angle, a step-length controller, and the end load factor reached by a load-controlled
+// Newton from the interpolated state.
+class ArcLengthPath {
+ public:
+  ArcLengthPath(StaticSolver& s, const StaticStepCallback& on_step)
+      : S_(s), on_step_(on_step), dx_(s.model.nv), prev_dx_(s.model.nv),
+        delta_(s.model.num_unknowns()), lambda_new_(s.model.nc) {}
+
+  StaticResult Run() {
+    const Model& model = S_.model;
+    Data& data = S_.data;
+    const StaticOptions& o = S_.options;
+    saved_.Save(data);
+    s_ = o.start_load_factor;
+    result_.load_factor = s_;
+    const double span = o.end_load_factor - s_;
+    direction_ = span < 0.0 ? -1.0 : 1.0;
+    if (span == 0.0) return Finish();
+    // The first arc length and the spherical constraint's scale from dx/ds at the start.
+    std::string cause;
+    S_.opt.load_factor = s_;
+    if (!S_.PathTangent(cause)) {
+      saved_.Restore(model, data);
+      result_.message = "arc-length continuation cannot start at load factor " +
+                        Format("%.9g: ", s_) + cause;
+      return result_;
+    }
+    saved_.Restore(model, data);
+    const double speed = std::sqrt(S_.Dot(S_.x_f, S_.x_f));
+    if (!(speed > 0.0) || !std::isfinite(speed)) {
+      result_.message =
+          "arc-length continuation: the load moves nothing the arc-length metric measures "
+          "(|dx/ds| = 0 in translations); set analysis.statics.rotation_weight, or use load "
+          "stepping";
+      return result_;
+    }
+    c2_ = o.psi * o.psi * speed * speed;
+    const double dl0 = o.arc_length > 0.0 ? o.arc_length : speed * std::abs(span) / o.load_steps;
+    const double dl_min = o.arc_length_min > 0.0 ? o.arc_length_min
+                                                 : dl0 * std::ldexp(1.0, -o.max_halvings);
+    const double dl_max = o.arc_length_max > 0.0 ? o.arc_length_max : 10.0 * dl0;
+    double dl = std::clamp(dl0, dl_min, dl_max);
+    const int max_steps = MaxSteps(o);
+    std::string last_cause;
+    while (true) {
+      if (result_.load_steps >= max_steps) {
+        result_.message = StepCapMessage(result_.load_steps, s_);
+        return result_;
+      }
+      StaticStep step;
+      double ds = 0.0;
+      const LoadStepEnd end = Step(dl, step, &ds, last_cause);
+      if (end == LoadStepEnd::kStopped) {
+        saved_.Restore(model, data);
+        result_.interrupted = true;
+        result_.message = Format("static solve interrupted at load factor %.9g", s_);
+        return result_;
+      }
+      result_.total_iterations += step.iterations;
+      bool accepted = end == LoadStepEnd::kConverged;
+      // A step that turned back along the path (the root choice jumped to the reverse
+      // branch) is retried shorter.
+      if (accepted && have_prev_ && S_.Dot(dx_, prev_dx_) + c2_ * ds * prev_ds_ < 0.0) {
+        accepted = false;
+        last_cause = "the step turned back along the path";
+      }
+      if (accepted && (s_ + ds - o.end_load_factor) * direction_ >= 0.0) {
+        // The step crossed the end load factor: Newton at exactly that load factor from the
+        // state interpolated between the two converged ones.
+        lambda_new_ = data.lambda;
+        saved_.Restore(model, data);
+        const double t = (o.end_load_factor - s_) / ds;
+        delta_.head(model.nv) = t * dx_;
+        Retract(model, data, delta_.head(model.nv));
+        data.lambda = (1.0 - t) * data.lambda + t * lambda_new_;
+        StaticStep last;
+        last.load_factor = o.end_load_factor;
+        S_.opt.load_factor = o.end_load_factor;
+        const LoadStepEnd e2 = S_.IterateLoadStep(last, last_cause);
+        result_.total_iterations += last.iterations;
+        if (e2 == LoadStepEnd::kConverged) {
+          UpdateBranchReferences(model, data);
+          dx_ *= t;
+          Accept(std::move(last), o.end_load_factor - s_);
+          return Finish();
+        }
+        saved_.Restore(model, data);
+        if (e2 == LoadStepEnd::kStopped) {
+          result_.interrupted = true;
+          result_.message = Format("static solve interrupted at load factor %.9g", s_);
+          return result_;
+        }
+        // Retry with a shorter arc: the crossing moves closer to the converged state.
+        accepted = false;
+      }
+      if (accepted) {
+        UpdateBranchReferences(model, data);
+        const int iterations = std::max(step.iterations, 1);
+        Accept(std::move(step), ds);
+        const int desired = std::min(o.desired_iterations, o.max_iterations);
+        dl *= std::clamp(std::sqrt(static_cast<double>(desired) / iterations), 0.5, 2.0);
+        dl = std::clamp(dl, dl_min, dl_max);
+        continue;
+      }
+      saved_.Restore(model, data);
+      ++result_.halvings;
+      dl *= 0.5;
+      if (dl < dl_min * (1.0 - 1e-12)) {
+        result_.message = Format("arc-length continuation failed at load factor %.9g: the arc "
+                                 "length fell below its minimum %.3g: ",
+                                 s_, dl_min) +
+                          last_cause;
+        return result_;
+      }
+    }
+  }
+
+ private:
+  // One arc-length step of length dl from the converged state: predictor and corrector
+  // (method-next.md §N3.3). On convergence dx_ and *ds hold the step's increments.
+  LoadStepEnd Step(double dl, StaticStep& step, double* ds, std::string& cause) {
+    const Model& model = S_.model;
+    const StaticOptions& o = S_.options;
+    dx_.setZero();
+    *ds = 0.0;
+    double last_increment = INFINITY;
+    for (int it = 0; it <= o.max_iterations; ++it) {
+      if (S_.stop.Requested()) return LoadStepEnd::kStopped;
+      S_.opt.load_factor = s_ + *ds;
+      if (!S_.AssembleAt(true, cause)) return LoadStepEnd::kFailed;
+      double res = 0.0;
+      const bool converged = S_.Converged(last_increment, step, &res);
+      if (it > 0 && converged) {
+        step.iterations = it;
+        return LoadStepEnd::kConverged;
+      }
+      if (it == o.max_iterations) {
+        cause = Format("Newton did not converge in %g iterations (residual %.3g)",
+                       o.max_iterations, res);
+        return LoadStepEnd::kFailed;
+      }
+      if (!S_.BorderedSolves(cause)) return LoadStepEnd::kFailed;
+      const Eigen::VectorXd& xr = S_.x_r;
+      const Eigen::VectorXd& xf = S_.x_f;
+      // |dx + xr + d xf|^2 + c2 (ds + d)^2 = dl^2, a quadratic a1 d^2 + a2 d + a3 = 0.
+      const double a1 = S_.Dot(xf, xf) + c2_;
+      const double ux = S_.Dot(dx_, dx_) + 2.0 * S_.Dot(dx_, xr) + S_.Dot(xr, xr);
+      const double a2 = 2.0 * (S_.Dot(dx_, xf) + S_.Dot(xr, xf)) + 2.0 * c2_ * *ds;
+      const double a3 = ux + c2_ * *ds * *ds - dl * dl;
+      const double disc = a2 * a2 - 4.0 * a1 * a3;
+      if (!(a1 > 0.0) || !(disc >= 0.0)) {
+        cause = "the arc-length equation has no real root";
+        return LoadStepEnd::kFailed;
+      }
+      // Roots without cancellation.
+      const double q = -0.5 * (a2 + std::copysign(std::sqrt(disc), a2));
+      const double r1 = q / a1, r2 = q != 0.0 ? a3 / q : -r1;
+      double d;
+      if (it == 0) {
+        // Predictor: the sign rule (Feng, Peric and Owen): along the previous step, or
+        // towards the end load factor at the first step.
+        const double sigma =
+            have_prev_ ? (S_.Dot(prev_dx_, xf) + c2_ * prev_ds_ >= 0.0 ? 1.0 : -1.0) : direction_;
+        d = (r1 * sigma >= r2 * sigma) ? r1 : r2;
+      } else {
+        // Corrector: the root whose increment makes the smaller angle with the current one.
+        const auto angle = [&](double x) {
+          return S_.Dot(dx_, dx_) + S_.Dot(dx_, xr) + x * S_.Dot(dx_, xf) + c2_ * *ds * (*ds + x);
+        };
+        d = angle(r1) >= angle(r2) ? r1 : r2;
+      }
+      delta_ = xr + d * xf;
+      dx_ += delta_.head(model.nv);
+      *ds += d;
+      S_.Apply(delta_);
+      last_increment = ScaledIncrementSize(model, delta_.head(model.nv));
+    }
+    return LoadStepEnd::kFailed;
+  }
+
+  void Accept(StaticStep step, double ds) {
+    const double s_new = s_ + ds;
+    const double dl = std::sqrt(S_.Dot(dx_, dx_) + c2_ * ds * ds);
+    // A sign change of the load factor's increment: a limit point between the last steps,
+    // located at the vertex of the parabola s(l) through the three converged points around it.
+    if (have_prev_ && ds * prev_ds_ < 0.0) {
+      const double l0 = -prev_dl_, l2 = dl;  // arc lengths relative to the middle point
+      const double s0 = s_ - prev_ds_, s1 = s_, s2 = s_new;
+      // s(l) = s1 + b l + c l^2 through (l0, s0), (0, s1), (l2, s2).
+      const double c = ((s2 - s1) / l2 - (s0 - s1) / l0) / (l2 - l0);
+      const double b = (s2 - s1) / l2 - c * l2;
+      result_.limit_points.push_back(c != 0.0 ? s1 - b * b / (4.0 * c) : s1);
+    }
+    saved_.Save(S_.data);
+    s_ = s_new;
+    result_.load_factor = s_;
+    ++result_.load_steps;
+    step.load_factor = s_;
+    if (on_step_) on_step_(step);
+    result_.steps.push_back(std::move(step));
+    prev_dx_ = dx_;
+    prev_ds_ = ds;
+    prev_dl_ = dl;
+    have_prev_ = true;
+  }
+
+  StaticResult Finish() {
+    result_.converged = true;
+    result_.load_factor = S_.options.end_load_factor;
+    return std::move(result_);
+  }
+
+  StaticSolver& S_;
+  const StaticStepCallback& on_step_;
+  StaticResult result_;
+  Checkpoint saved_;
+  double s_ = 0.0, direction_ = 1.0, c2_ = 0.0;
+  Eigen::VectorXd dx_, prev_dx_, delta_, lambda_new_;
+  double prev_ds_ = 0.0, prev_dl_ = 0.0;
+  bool have_prev_ = false;
+};
+
+}  // namespace
+
+StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options,
+                         const StopRequest& stop, const StaticStepCallback& on_step) {
+  StaticSolver solver(model, data, options, stop);
+  if (options.method == StaticMethod::kArcLength) return ArcLengthPath(solver, on_step).Run();
+  return SolveByLoadSteps(solver, on_step);
 }
 
 }  // namespace screwfem

@@ -382,6 +382,24 @@ TEST(BadInput, UnknownNewtonVariantOrPredictor) {
               "analysis.constraints: expected one of index3 or ggl, got 'index2'");
 }
 
+// analysis.statics (statics.h, StaticOptions): each bad value at its line and column.
+TEST(BadInput, StaticPathSettings) {
+  const std::string head = kHead + "bodies:\n  r: {type: soft, from: A, to: B, section: s}\n";
+  ExpectError(head + "analysis:\n  statics: {method: riks}\n", "bad.yaml:6:21",
+              "analysis.statics.method: expected one of load or arclength, got 'riks'");
+  ExpectError(head + "analysis:\n  statics: {metod: load}\n", "bad.yaml:6:13",
+              "analysis.statics.metod: unknown key 'metod' (did you mean 'method'?)");
+  ExpectError(head + "analysis:\n  statics:\n    arc_length_min: 2\n    arc_length_max: 1\n",
+              "bad.yaml:8:21", "analysis.statics.arc_length_max: expected arc_length_max >= arc_length_min");
+  ExpectError(head + "analysis:\n  statics: {max_steps: 0}\n", "bad.yaml:6:24",
+              "analysis.statics.max_steps: expected an integer from 1 to 10000000, got '0'");
+  ExpectError(head + "analysis:\n  statics: {arc_length: -1}\n", "bad.yaml:6:25",
+              "analysis.statics.arc_length: expected a positive number, got '-1'");
+  ExpectError(head + "analysis:\n  max_iterations: 5\n  statics: {desired_iterations: 0}\n",
+              "bad.yaml:7:33",
+              "analysis.statics.desired_iterations: expected an integer from 1 to 1000, got '0'");
+}
+
 TEST(BadInput, NonScalarMapKey) {
   ExpectError("points:\n  [1, 2]: [0, 0, 0]\n", "bad.yaml:2:3", "map keys must be plain names");
 }

@@ -281,6 +281,34 @@ Outcome RunCliWithLimit(const std::vector<std::string>& args, const std::string&
 // Any exception main() did not expect (here: out of memory under a 48 MiB address-space
 // limit, in which the pendulum runs, building a GRM with 10000 elements per soft body) is
 // reported with exit code 3, never an abort.
+// A static solve driven past a turning point (tests/data/slider_crank.yaml) stops with exit
+// status 1 and names the limit point and its load factor. It used to run without end: the CPU
+// limit (SIGXCPU, exit 152) is the time-out guard.
+TEST(Cli, StaticSolvePastATurningPointStopsWithExitOneAtTheLimitPoint) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_limit_point");
+  const std::string out = tmp.path() + "/out";
+  const Outcome o = RunCliWithLimit(
+      {"run", std::string(SCREWFEM_TEST_DATA_DIR) + "/slider_crank.yaml", "-o", out, "--quiet"},
+      tmp.path(), RLIMIT_CPU, 20);
+  ASSERT_EQ(o.code, 1) << o.out << o.err;
+  EXPECT_NE(o.err.find("static solution stopped at load factor 0.3251"), std::string::npos)
+      << o.err;
+  EXPECT_NE(o.err.find("limit point at load factor 0.3251"), std::string::npos) << o.err;
+  const auto summary = ParseJsonFile(out + "/summary.json");
+  ASSERT_TRUE(summary);
+  EXPECT_EQ(summary->Find("status")->string, "failed");
+  EXPECT_TRUE(summary->Find("static_solution.limit_point")->boolean);
+  // The path up to the limit point: one row per converged step, x_B = 0.3 + 0.2 s.
+  const Table points = ReadCsv(out + "/points.csv");
+  ASSERT_TRUE(points.well_formed) << points.problem;
+  ASSERT_EQ(points.columns[1], "load_factor");
+  ASSERT_GE(points.rows.size(), 3u);
+  const auto x = static_cast<std::size_t>(points.Column("slider.x"));
+  for (const std::vector<double>& row : points.rows) EXPECT_NEAR(row[x], 0.3 + 0.2 * row[1], 1e-12);
+  EXPECT_GT(points.rows.back()[1], 0.325);
+}
+
 TEST(Cli, OutOfMemoryIsReportedWithExitCodeThree) {
   REQUIRE_CLI();
   if (test::kAddressSanitizer)

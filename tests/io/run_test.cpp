@@ -351,7 +351,9 @@ TEST(JointCoordinateEffort, SpringsAndDampersPushTowardsRest) {
 
 // --- static analyses -------------------------------------------------------------------------------
 
-TEST(RunScene, StaticAnalysisWritesOneRowAtRest) {
+// A static analysis records every converged load step (the path) with its load factor in a
+// column after t, and one ParaView frame at the end.
+TEST(RunScene, StaticAnalysisRecordsEveryLoadStepWithItsLoadFactor) {
   Scene s = Cantilever();
   s.analysis.kind = AnalysisKind::kStatic;
   s.analysis.statics.time = 1.0;  // the tip load is fully on
@@ -360,14 +362,23 @@ TEST(RunScene, StaticAnalysisWritesOneRowAtRest) {
   const std::string& dir = scoped_dir.path();
   const RunResult r = RunScene(s, dir);
   ASSERT_TRUE(r.ok) << r.message;
-  EXPECT_GT(r.steps, 0);  // load steps
+  EXPECT_EQ(r.steps, 10);  // load steps
+  for (const char* file : {"/points.csv", "/joints.csv"}) {
+    const Table t = ReadCsv(dir + file);
+    ASSERT_TRUE(t.well_formed) << t.problem;
+    ASSERT_EQ(t.Column("load_factor"), 1) << file;
+    ASSERT_EQ(t.rows.size(), 10u) << file;
+    for (std::size_t i = 0; i < t.rows.size(); ++i) {
+      EXPECT_EQ(t.rows[i][0], 1.0);
+      EXPECT_NEAR(t.rows[i][1], 0.1 * static_cast<double>(i + 1), 1e-15);
+    }
+  }
   const Table t = ReadCsv(dir + "/points.csv");
-  ASSERT_TRUE(t.well_formed) << t.problem;
-  ASSERT_EQ(t.rows.size(), 1u);
-  EXPECT_EQ(t.rows[0][0], 1.0);
-  EXPECT_LT(t.rows[0][static_cast<std::size_t>(t.Column("tip.z"))], -0.01);
+  const auto tip_z = static_cast<std::size_t>(t.Column("tip.z"));
+  EXPECT_LT(t.rows.back()[tip_z], -0.01);
+  for (std::size_t i = 1; i < t.rows.size(); ++i) EXPECT_LT(t.rows[i][tip_z], t.rows[i - 1][tip_z]);
   for (const char* c : {"tip.vx", "tip.vz", "mid.ay", "tip.az"})
-    EXPECT_EQ(t.rows[0][static_cast<std::size_t>(t.Column(c))], 0.0) << c;
+    EXPECT_EQ(t.rows.back()[static_cast<std::size_t>(t.Column(c))], 0.0) << c;
   const std::optional<Json> summary = ParseJsonFile(dir + "/summary.json");
   ASSERT_TRUE(summary);
   EXPECT_EQ(summary->Find("settings.analysis")->string, "static");

@@ -389,6 +389,41 @@ TEST(SceneDefaults, StaticAnalysisEvaluatesProfilesAtTheEndTime) {
   EXPECT_EQ(scene.analysis.statics.load_steps, 4);
 }
 
+TEST(SceneAnalysis, EveryStaticPathSettingIsRead) {
+  const Scene scene = ParseScene(std::string(kMinimalScene) + R"(
+analysis:
+  type: static
+  max_iterations: 12
+  statics:
+    method: arclength
+    end_load_factor: 0.75
+    max_steps: 77
+    arc_length: 0.02
+    arc_length_min: 1e-5
+    arc_length_max: 0.1
+    desired_iterations: 6
+    psi: 1
+    rotation_weight: 0.5
+    exact_tangent: false
+)",
+                                 "statics.yaml");
+  const StaticOptions& o = scene.analysis.statics;
+  EXPECT_EQ(o.method, StaticMethod::kArcLength);
+  EXPECT_EQ(o.start_load_factor, 0.0);
+  EXPECT_EQ(o.end_load_factor, 0.75);
+  EXPECT_EQ(o.max_steps, 77);
+  EXPECT_EQ(o.arc_length, 0.02);
+  EXPECT_EQ(o.arc_length_min, 1e-5);
+  EXPECT_EQ(o.arc_length_max, 0.1);
+  EXPECT_EQ(o.desired_iterations, 6);
+  EXPECT_EQ(o.psi, 1.0);
+  EXPECT_EQ(o.rotation_weight, 0.5);
+  EXPECT_FALSE(o.constraint_force_tangent);
+  const StaticOptions defaults;
+  EXPECT_EQ(defaults.method, StaticMethod::kLoad);
+  EXPECT_TRUE(defaults.constraint_force_tangent);
+}
+
 TEST(SceneAnalysis, EverySettingIsRead) {
   const Scene scene = ParseScene(std::string(kMinimalScene) + R"(
 analysis:

@@ -82,6 +82,28 @@ TEST(BandedLU, MatchesDenseLUOnRandomBandedMatrices) {
   }
 }
 
+// determinant_sign(): the sign of det A (the product of U's diagonal and -1 per row
+// interchange) against the dense determinant, over random banded matrices of both signs.
+TEST(BandedLU, DeterminantSignMatchesTheDenseDeterminant) {
+  std::mt19937 rng(11);
+  int negative = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 3 + trial % 9, kl = 1 + trial % 3, ku = 2;
+    const Eigen::MatrixXd A = RandomBanded(rng, n, kl, ku);
+    BandedLU lu;
+    Load(A, kl, ku, &lu);
+    ASSERT_EQ(lu.Factorize(), -1);
+    const double det = A.determinant();
+    EXPECT_EQ(lu.determinant_sign(), det > 0.0 ? 1 : -1) << "trial " << trial;
+    negative += det < 0.0;
+  }
+  EXPECT_GT(negative, 5);
+  BandedLU singular;
+  Load(Eigen::MatrixXd::Zero(3, 3), 1, 1, &singular);
+  EXPECT_EQ(singular.Factorize(), 0);
+  EXPECT_EQ(singular.determinant_sign(), 0);
+}
+
 TEST(BandedLU, PivotsOverZeroDiagonalEntries) {
   // Every diagonal entry zero: the factorisation works only through row interchanges, and the
   // upper band of U grows to kl + ku.

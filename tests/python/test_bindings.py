@@ -711,11 +711,65 @@ outputs:
         # run_scene solves the same problem and records the same row.
         with tempfile.TemporaryDirectory() as outdir:
             run = sf.run_scene(scene, outdir)
-            _, rows = read_csv(os.path.join(outdir, "points.csv"))
+            header, rows = read_csv(os.path.join(outdir, "points.csv"))
         self.assertTrue(run.ok, run.message)
+        # Static analyses: every load step's row at the same t, the load factor after t (the
+        # dict keeps the last row, the equilibrium at load factor 1).
         self.assertEqual(list(rows), [scene.analysis.statics.time])
-        np.testing.assert_allclose(rows[scene.analysis.statics.time], sim.calc_point_row(),
+        self.assertEqual(header[1], "load_factor")
+        self.assertEqual(rows[scene.analysis.statics.time][0], 1.0)
+        np.testing.assert_allclose(rows[scene.analysis.statics.time][1:], sim.calc_point_row(),
                                    rtol=0, atol=1e-14)
+
+    def test_static_solve_continues_from_the_current_state_and_follows_the_arc_length(self):
+        # The roll-up of the test above (tip on a circle of curvature s M / EI at load factor
+        # s): half the moment, then from there the rest (continuation); arc length from rest.
+        length, ei = 0.5, 2.0
+        moment = 0.5 * math.pi * ei / length
+        text = f"""
+points: {{O: [0, 0, 0], TIP: [{length}, 0, 0]}}
+sections:
+  s: {{stiffness: [1e4, 1e4, 1e4, 3, {ei}, {ei}]}}
+bodies:
+  arm: {{type: soft, from: O, to: TIP, section: s, elements: 4}}
+joints:
+  clamp: {{type: fixed, at: O, between: [ground, arm]}}
+loads:
+  tip: {{body: arm, at: TIP, moment: [0, {moment}, 0]}}
+analysis: {{type: static, statics: {{method: arclength}}}}
+outputs: {{vtk: false}}
+"""
+        scene = sf.parse_scene(text, "rollup.yaml")
+        self.assertEqual(scene.analysis.statics.method, sf.StaticMethod.ARCLENGTH)
+
+        def tip(load_factor):
+            k = load_factor * moment / ei
+            return [math.sin(k * length) / k, 0.0, -(1.0 - math.cos(k * length)) / k]
+
+        sim = sf.Simulation(scene)
+        first = sf.StaticOptions()
+        first.end_load_factor = 0.5
+        result = sim.solve_static(first)
+        self.assertEqual(result.load_factor, 0.5)
+        np.testing.assert_allclose(sim.node_frame("arm.4")[:3, 3], tip(0.5), rtol=0, atol=1e-12)
+        rest = sf.StaticOptions()
+        rest.start_load_factor = result.load_factor
+        rest.load_steps = 2
+        result = sim.solve_static(rest)
+        self.assertEqual((result.load_factor, result.load_steps), (1.0, 2))
+        self.assertAlmostEqual(result.steps[0].load_factor, 0.75, delta=1e-15)
+        np.testing.assert_allclose(sim.node_frame("arm.4")[:3, 3], tip(1.0), rtol=0, atol=1e-12)
+        # The scene's settings: arc length from rest, no limit point on this path.
+        arc = sf.Simulation(scene).solve_static()
+        self.assertTrue(arc.converged)
+        self.assertEqual(arc.limit_points, [])
+        self.assertEqual(arc.load_factor, 1.0)
+        # A step cap too small for the path: SolverError with the message and the result.
+        capped = sf.StaticOptions()
+        capped.max_steps = 2
+        with self.assertRaisesRegex(sf.SolverError, "max_steps") as caught:
+            sf.Simulation(scene).solve_static(capped)
+        self.assertEqual(caught.exception.result.load_steps, 2)
 
 
 @contextlib.contextmanager

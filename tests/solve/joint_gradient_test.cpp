@@ -586,5 +586,38 @@ TEST(DynamicTangent, StiffnessBlockInDynamicsMatchesFiniteDifferenceWithMotion) 
   EXPECT_LT(RelativeError(K, K_fd), 1e-7) << "K =\n" << K << "\nFD =\n" << K_fd;
 }
 
+// Statics' exact tangent (AssemblyOptions::constraint_force_tangent): with multipliers away
+// from zero the equilibrium rows' derivative includes d(B^T lambda)/dq, which couples a joint's
+// two nodes and its coordinates (outside the model's band pattern: the matrix gets the wider
+// one). Without it the equilibrium block misses exactly that term.
+TEST(EquilibriumTangent, ConstraintForceDerivativeMatchesFiniteDifferenceForEveryJointType) {
+  for (JointType type : kAllTypes) {
+    if (type == JointType::kFree) continue;  // no constraint rows
+    for (bool reverse : {false, true}) {
+      SCOPED_TRACE(std::string(JointTypeName(type)) + (reverse ? " (ground on side b)" : ""));
+      const Model m = MakeJointModel(type, reverse);
+      Data d = MakeData(m);
+      Disturb(m, d, static_cast<unsigned>(type));
+      auto rng = Rng(200 + static_cast<unsigned>(type));
+      for (int i = 0; i < m.nc; ++i) d.lambda(i) = RandomVec6(rng, 3.0)(0);
+      int bandwidth = 0;
+      const std::vector<int> pattern = ConstraintForceTangentPattern(m, &bandwidth);
+      EXPECT_GE(bandwidth, m.bandwidth);
+      d.matrix.Resize(m.num_unknowns(), bandwidth, bandwidth);
+      d.matrix.SetPattern(pattern, pattern);
+      AssemblyOptions o = StaticsOptions();
+      o.constraint_force_tangent = true;
+      o.pattern_last = &pattern;
+      ASSERT_TRUE(Assemble(m, d, o));
+      const Eigen::MatrixXd K = GlobalMatrix(m, d).topLeftCorner(m.nv, m.nv);
+      const Eigen::MatrixXd fd = RetractionDerivative(m, d, o).topRows(m.nv);
+      EXPECT_LT(RelativeError(K, fd), 1e-7) << "K =\n" << K << "\nFD =\n" << fd;
+      o.constraint_force_tangent = false;
+      ASSERT_TRUE(Assemble(m, d, o));
+      EXPECT_GT(RelativeError(GlobalMatrix(m, d).topLeftCorner(m.nv, m.nv), fd), 1e-2);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace screwfem

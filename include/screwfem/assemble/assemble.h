@@ -28,7 +28,18 @@ struct AssemblyOptions {
   double s_rows = 1.0, s_constraints = 1.0, s_multipliers = 1.0;
   bool use_node_tangent = false;
   bool assemble_matrix = true;
+  // Statics: adds the derivative of the constraint forces, d(B^T lambda)/dq at fixed lambda
+  // (CalcJointConstraintForceTangent), to the matrix: the exact tangent. Its blocks couple a
+  // joint's two nodes and its coordinates, outside model.pattern_last: give the pattern that
+  // holds them (ConstraintForceTangentPattern) and a matrix sized for it. Not with
+  // use_node_tangent.
+  bool constraint_force_tangent = false;
+  const std::vector<int>* pattern_last = nullptr;  // null: model.pattern_last
 };
+
+// model.pattern_last widened by the blocks of d(B^T lambda)/dq (each constrained joint couples
+// its nodes and coordinates with each other), and the half-bandwidth it needs.
+std::vector<int> ConstraintForceTangentPattern(const Model& model, int* bandwidth);
 
 // Evaluates residual (and matrix). Returns false if an element's relative rotation left the
 // admissible range (data.failed_element, data.failed_rotation say which and how far).

@@ -107,6 +107,21 @@ void JointGradientTransposeTimes(const JointGradient& g, const Vec6& lambda, Vec
 // the ground (its block is absent).
 Vec6 JointGradientTimes(const JointGradient& g, const Vec6* x_a, const Vec6* x_b);
 
+// The derivative of the constraint forces B^T lambda of one joint with respect to its
+// unknowns at fixed lambda (the geometric stiffness of the constraint, d(B^T lambda)/dq;
+// docs/numerics.md, "Exact static tangent"): rows and columns ordered [x_A (6), x_B (6),
+// x_J (k)], right-trivialised node increments and coordinate increments as in Retract. With
+// mu = T^-T(phi) lambda, D = DTSE3InvT and dphi = B_A x_A + B_B x_B + B_J x_J:
+//   d(B_A^T lambda) = -Ad(G_A)^T D(phi, lambda) dphi - Star(Ad(G_A)^T mu) (x_A - Ad(G_A^-1 C_B^-1) x_B)
+//   d(B_B^T lambda) =  Ad(C_B^-1)^T D(phi, lambda) dphi
+//   d(B_J^T lambda) =  A_J^T D(-phi, lambda) dphi
+// plus, for the universal joint, the variation of its moving first axis A_1(alpha_2). `basis`
+// is the current basis (JointCurrentBasis).
+using JointForceTangent = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 18, 18>;
+void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g,
+                                     const Vec6& lambda, const Mat6X& basis,
+                                     JointForceTangent* out);
+
 // Springs, dampers and the drive on a joint's coordinates (method.md §4.4, §4.5): the
 // generalised force f (k) that enters the coordinate rows of the residual, and its derivatives
 // K_q = df/dalpha and D_q = df/d(alpha_dot) (top-left k x k). `dynamics` adds the dampers;

@@ -54,6 +54,9 @@ class BandedLU {
   // Largest and smallest |U_jj| of the last factorisation (a cheap conditioning indicator).
   double max_pivot() const { return max_pivot_; }
   double min_pivot() const { return min_pivot_; }
+  // Sign of the determinant of the last factorised matrix (+1 or -1; 0 when it was singular):
+  // a change between two matrices tells that an odd number of eigenvalues crossed zero.
+  int determinant_sign() const { return determinant_sign_; }
 
  private:
   std::size_t Index(int i, int j) const {
@@ -75,6 +78,7 @@ class BandedLU {
   // Factorize() and by SetZero(), cleared by any write access through At()).
   bool extents_valid_ = false;
   double max_pivot_ = 0.0, min_pivot_ = 0.0;
+  int determinant_sign_ = 0;
 };
 
 // Reverse Cuthill-McKee ordering of an undirected graph given as adjacency lists.
