@@ -44,6 +44,9 @@ void BindValues(py::module_& m) {
                   py::arg("scale") = 1.0)
       .def_static("sine", &Profile::Sine, py::arg("amplitude"), py::arg("frequency"),
                   py::arg("phase") = 0.0, py::arg("t0") = 0.0, "frequency in Hz")
+      .def_static("input", &Profile::Input, py::arg("input"), py::arg("scale") = 1.0,
+                  "scale times run-time input number `input` (Model.inputs; "
+                  "ModelBuilder.add_input), read from Simulation.inputs at every evaluation.")
       .def("__call__", &Profile::operator(), py::arg("t"), "f(t).");
 
   py::class_<JointSpec>(m, "JointSpec",
@@ -107,6 +110,8 @@ void BindBuild(py::module_& m) {
       .def("add_joint", py::overload_cast<const JointSpec&>(&B::AddJoint), py::arg("spec"),
            "A joint from a JointSpec; returns its index.")
       .def("set_gravity", &B::SetGravity, py::arg("g"), "[m/s^2], world frame.")
+      .def("add_input", &B::AddInput, py::arg("name"), py::arg("default") = 0.0,
+           "A run-time input (Model.inputs) for Profile.input; returns its index.")
       .def("build", &B::Build, "The validated Model.");
 }
 

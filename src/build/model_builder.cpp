@@ -34,10 +34,12 @@ std::string OwnerLabel(const Model& m, int node) {
   return NodeLabel(m, node);
 }
 
-// Profile::Validate, with the entity that owns the profile in the error.
-void ValidateProfile(const Profile& profile, const std::string& label, const EntityRef& entity) {
+// Profile::Validate (input terms refer to one of the model's inputs), with the entity that owns
+// the profile in the error.
+void ValidateProfile(const Model& m, const Profile& profile, const std::string& label,
+                     const EntityRef& entity) {
   try {
-    profile.Validate(label.c_str());
+    profile.Validate(label.c_str(), static_cast<int>(m.inputs.size()));
   } catch (const InputError& e) {
     throw InputError(e.what(), entity);
   }
@@ -332,6 +334,11 @@ int ModelBuilder::AddRodLoad(const RodLoad& load) {
 
 void ModelBuilder::SetGravity(const Vec3& g) { model_.gravity = g; }
 
+int ModelBuilder::AddInput(std::string name, double default_value) {
+  model_.inputs.push_back(ModelInput{std::move(name), default_value});
+  return static_cast<int>(model_.inputs.size()) - 1;
+}
+
 namespace {
 
 // Node frames are finite rigid transformations with unique names; gravity is finite.
@@ -349,6 +356,14 @@ void ValidateNodes(const Model& m) {
     }
   }
   if (!m.gravity.allFinite()) throw InputError("gravity must be finite");
+  std::set<std::string> input_names;
+  for (const ModelInput& in : m.inputs) {
+    if (in.name.empty()) throw InputError("inputs: an input needs a name");
+    if (!input_names.insert(in.name).second)
+      throw InputError("inputs: duplicate input name '" + in.name + "'");
+    if (!std::isfinite(in.default_value))
+      throw InputError("inputs: the default of input '" + in.name + "' must be finite");
+  }
 }
 
 // Rod sections and the elements of every rod (reference relative motion d0, length); marks
@@ -468,7 +483,7 @@ void ValidateJoints(const Model& m, std::vector<char>& used) {
         if (!JointHasGlobalCoordinates(j.type))
           throw InputError(label + ": drives need a joint with global coordinates (not " +
                            JointTypeName(j.type) + ")", entity);
-        ValidateProfile(j.drive_profile, label, entity);
+        ValidateProfile(m, j.drive_profile, label, entity);
       }
       if (!j.name.empty() && !names.insert(j.name).second)
         throw InputError("duplicate joint name '" + j.name + "'", entity);
@@ -490,7 +505,7 @@ void PlaceLoads(Model& m) {
     const std::string label = "point load on " + NodeLabel(m, l.node);
     if (!l.force.allFinite() || !l.moment.allFinite() || !l.point.allFinite())
       throw InputError(label + ": values must be finite", entity);
-    ValidateProfile(l.profile, label, entity);
+    ValidateProfile(m, l.profile, label, entity);
   }
   for (std::size_t i = 0; i < m.rod_loads.size(); ++i) {
     RodLoad& l = m.rod_loads[i];
@@ -501,7 +516,7 @@ void PlaceLoads(Model& m) {
     const std::string label = "load on rod '" + rod.name + "'";
     if (!l.force.allFinite() || !l.moment.allFinite())
       throw InputError(label + ": values must be finite", entity);
-    ValidateProfile(l.profile, label, entity);
+    ValidateProfile(m, l.profile, label, entity);
     if (l.distributed) continue;
     if (!(l.arc_length >= 0.0 && l.arc_length <= rod.length * (1.0 + 1e-12)))
       throw InputError(

@@ -281,6 +281,7 @@ class Run {
   void RunStatic() {
     const StaticOptions& so = scene_.analysis.statics;
     data_.time = so.time;
+    SetInputsAt(options_.inputs, so.time, data_);
     static_ = SolveStatic(model_, data_, so, options_.stop);
     has_static_ = true;
     if (static_.interrupted) {
@@ -305,6 +306,7 @@ class Run {
   void RunDynamic() {
     const AnalysisSettings& a = scene_.analysis;
     data_.time = a.start_time;
+    SetInputsAt(options_.inputs, a.start_time, data_);
     if (a.static_preload) {
       StaticOptions so = a.statics;
       so.time = a.start_time;
@@ -351,6 +353,7 @@ class Run {
         return;
       }
       const double t_next = schedule.Next(data_.time);
+      SetInputsAt(options_.inputs, t_next, data_);
       const StepResult step = Step(model_, data_, integ_, t_next - data_.time, options_.stop);
       if (step.interrupted) {
         Interrupted(Format("at t = %.9g s (within a halved step); the last recorded row is at "

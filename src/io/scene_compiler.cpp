@@ -330,6 +330,7 @@ Scene SceneCompiler::Compile() {
   scene.source = src_.file;
   scene.name = spec_.name;
   builder_.SetGravity(spec_.gravity);
+  for (const auto& [name, default_value] : spec_.inputs) builder_.AddInput(name, default_value);
   builder_.model().rod_inertia = spec_.rod_inertia;
   AddBodies();
   AddJoints();

@@ -24,7 +24,7 @@ using scene_yaml::Reader;
 
 // Maps of named entries: an override may not walk through an entry that does not exist.
 const std::vector<std::string> kCollections = {"points", "materials", "sections",      "bodies",
-                                               "joints", "loads",     "outputs.points"};
+                                               "joints", "loads",     "outputs.points", "inputs"};
 
 constexpr int kMaxElements = 100000;  // per rod (or per path segment)
 constexpr long kMaxTotalElements = 1000000;  // all rods of a scene
@@ -62,6 +62,7 @@ class SceneReader {
   void ReadPoints(const Node* node);
   void ReadMaterials(const Node* node);
   void ReadSections(const Node* node);
+  void ReadInputs(const Node* node);
   void ReadBodies(const Node* node);
   void ReadRigidBody(const Node& n, const std::string& path, BodySpec& b);
   void ReadSoftBody(const Node& n, const std::string& path, BodySpec& b, EntitySource& source);
@@ -200,11 +201,11 @@ Profile SceneReader::ReadProfile(const Node& node, const std::string& path) cons
 }
 
 Profile SceneReader::ReadProfileTerm(const Node& node, const std::string& path) const {
-  r_.CheckKeys(node, path,
-               {"type", "value", "scale", "t0", "t1", "frequency", "phase", "times", "values"});
-  const std::string type =
-      r_.Choice(r_.Require(node, path, "type"), Join(path, "type"),
-                {"constant", "ramp", "bang_bang", "s_curve", "smooth_step", "sine", "table"});
+  r_.CheckKeys(node, path, {"type", "value", "scale", "t0", "t1", "frequency", "phase", "times",
+                            "values", "name"});
+  const std::string type = r_.Choice(
+      r_.Require(node, path, "type"), Join(path, "type"),
+      {"constant", "ramp", "bang_bang", "s_curve", "smooth_step", "sine", "table", "input"});
   const Node* value = node.Find("value");
   const Node* scale = node.Find("scale");
   if (value != nullptr && scale != nullptr)
@@ -217,6 +218,23 @@ Profile SceneReader::ReadProfileTerm(const Node& node, const std::string& path) 
     return n == nullptr ? fallback : r_.Number(*n, Join(path, key));
   };
   const std::string who = type + " profiles";
+  if (type != "input") NotUsedBy(node, path, {"name"}, who);
+  if (type == "input") {
+    // scale * (the run-time input `name`, declared in the scene's inputs section).
+    NotUsedBy(node, path, {"t0", "t1", "frequency", "phase", "times", "values"}, who);
+    const Node& nn = r_.Require(node, path, "name");
+    const std::string name = r_.Text(nn, Join(path, "name"));
+    std::vector<std::string> names;
+    for (std::size_t i = 0; i < spec_.inputs.size(); ++i) {
+      if (spec_.inputs[i].first == name) return Profile::Input(static_cast<int>(i), s);
+      names.push_back(spec_.inputs[i].first);
+    }
+    r_.Fail(nn.location, Join(path, "name"),
+            "unknown input '" + name + "'" +
+                (names.empty() ? std::string(" (the scene declares no inputs: add an inputs: "
+                                             "section, e.g. inputs: {" + name + ": 0.0})")
+                               : scene_yaml::UnknownNameHint(name, names)));
+  }
   if (type == "constant") {
     NotUsedBy(node, path, {"t0", "t1", "frequency", "phase", "times", "values"}, who);
     return Profile::Constant(s);
@@ -679,6 +697,14 @@ void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
                 std::to_string(j.drive_coordinate) + " (the spring it drives)");
 }
 
+// inputs: {NAME: DEFAULT, ...}: the run-time inputs that profiles take ({type: input, name}).
+void SceneReader::ReadInputs(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "inputs", "input");
+  for (const auto& [entry, value] : node->entries)
+    spec_.inputs.emplace_back(entry.key, r_.Number(value, Join("inputs", entry.key)));
+}
+
 void SceneReader::ReadLoads(const Node* node) {
   if (node == nullptr || node->IsNull()) return;
   r_.CheckNames(*node, "loads", "load");
@@ -929,7 +955,7 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
                 scene_yaml::Describe(root));
   r_.CheckKeys(root, "",
                {"name", "description", "units", "gravity", "defaults", "points", "materials",
-                "sections", "bodies", "joints", "loads", "analysis", "outputs"});
+                "sections", "bodies", "joints", "loads", "analysis", "outputs", "inputs"});
   spec_.name = default_name;
   if (const Node* n = root.Find("name")) spec_.name = r_.Text(*n, "name");
   if (const Node* d = root.Find("description"))
@@ -941,6 +967,7 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
   ReadPoints(root.Find("points"));
   ReadMaterials(root.Find("materials"));
   ReadSections(root.Find("sections"));
+  ReadInputs(root.Find("inputs"));
   ReadBodies(root.Find("bodies"));
   if (spec_.bodies.empty()) r_.Fail(root.location, "bodies", "the scene has no bodies");
   ReadJoints(root.Find("joints"));

@@ -17,5 +17,6 @@ int Model::FindNode(const std::string& name) const { return FindByName(nodes, na
 int Model::FindRod(const std::string& name) const { return FindByName(rods, name); }
 int Model::FindBody(const std::string& name) const { return FindByName(bodies, name); }
 int Model::FindJoint(const std::string& name) const { return FindByName(joints, name); }
+int Model::FindInput(const std::string& name) const { return FindByName(inputs, name); }
 
 }  // namespace screwfem

@@ -101,6 +101,9 @@ class ModelBuilder {
   int AddPointLoad(const PointLoad& load);
   int AddRodLoad(const RodLoad& load);
   void SetGravity(const Vec3& g);
+  // A run-time input (Model::inputs) that profiles take with Profile::Input(index); returns
+  // the index. Names are unique.
+  int AddInput(std::string name, double default_value = 0.0);
   Model& model() { return model_; }
 
   // Validates and computes sizes and the ordering. Throws InputError.

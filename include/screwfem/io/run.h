@@ -22,6 +22,7 @@
 #include <functional>
 #include <string>
 
+#include "screwfem/io/input_table.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/solve/stop.h"
 
@@ -44,6 +45,10 @@ struct RunOptions {
   // vtk/ frames) is refused unless this is set; then those files (and no others) are removed
   // first. The CLI's --force.
   bool replace_results = false;
+  // Run-time input values over time (the CLI's --inputs). Each step's inputs are the table's
+  // values at the step's end, where the implicit step evaluates its loads (docs/numerics.md,
+  // "Run-time inputs"); the start and a static analysis use those at their time.
+  InputTable inputs;
 };
 
 struct RunResult {

@@ -83,6 +83,7 @@ struct SceneSpec {
   Vec3 gravity = Vec3::Zero();  // [m/s^2]
   RodInertia rod_inertia = RodInertia::kExact;
   std::vector<std::pair<std::string, Vec3>> points;  // named points [m], world
+  std::vector<std::pair<std::string, double>> inputs;  // run-time inputs and their defaults
   std::vector<BodySpec> bodies;
   std::vector<JointEntrySpec> joints;
   std::vector<LoadSpec> loads;

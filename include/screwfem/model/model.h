@@ -154,6 +154,13 @@ struct EnumNames<RodInertia> {
   }};
 };
 
+// A run-time input (MuJoCo's ctrl): a named value that any profile can take (ProfileTerm::kInput),
+// set between steps (Data::inputs; Python sim.inputs["name"], the CLI's --inputs table).
+struct ModelInput {
+  std::string name;
+  double default_value = 0.0;  // Data::inputs after MakeData
+};
+
 struct Model {
   std::vector<Node> nodes;
   std::vector<Rod> rods;
@@ -162,6 +169,7 @@ struct Model {
   std::vector<Joint> joints;
   std::vector<PointLoad> point_loads;
   std::vector<RodLoad> rod_loads;
+  std::vector<ModelInput> inputs;
   Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
   RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
 
@@ -193,6 +201,7 @@ struct Model {
   int FindRod(const std::string& name) const;
   int FindBody(const std::string& name) const;
   int FindJoint(const std::string& name) const;
+  int FindInput(const std::string& name) const;
 };
 
 // The reference frame H_0 of a node, or the identity for kGround (the one ground-or-node

@@ -201,5 +201,21 @@ bool RestartDynamics(const Model& model, Data& data, Integrator& integrator,
 StepResult Step(const Model& model, Data& data, Integrator& integrator, double h,
                 const StopRequest& stop = {});
 
+// Everything a dynamic simulation continues from: time, configuration (node frames, joint
+// frames and coordinates, the rod elements' rotation branches), velocities, accelerations,
+// multipliers, run-time input values and the integrator's auxiliary acceleration and predictor
+// choice. Restoring a saved state and stepping repeats the same steps bit for bit (resets,
+// reinforcement-learning rollouts).
+struct SimulationState {
+  double time = 0.0;
+  State q;
+  std::vector<Vec3> w_ref;
+  Eigen::VectorXd v, vdot, lambda, inputs, a;
+  bool use_last_acceleration = true;
+};
+void SaveSimulationState(const Data& data, const Integrator& integrator, SimulationState* state);
+// The state must come from Data of the same model (same sizes; InputError otherwise).
+void RestoreSimulationState(const SimulationState& state, Data& data, Integrator& integrator);
+
 
 }  // namespace screwfem
