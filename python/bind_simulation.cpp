@@ -4,6 +4,8 @@
 // lookups and the conversion of numerical failures into screwfem.SolverError.
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
+
+#include <Eigen/Geometry>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -20,6 +22,7 @@
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/solve/initial_state.h"
 #include "screwfem/solve/statics.h"
 
 namespace py = pybind11;
@@ -36,6 +39,9 @@ class Simulation {
   explicit Simulation(const Scene& scene) : scene_(scene), data_(MakeData(scene_.model)) {
     data_.time = scene_.analysis.kind == AnalysisKind::kStatic ? scene_.analysis.statics.time
                                                                : scene_.analysis.start_time;
+    std::string why;
+    if (!AssembleInitialState(scene_.model, data_, &why))
+      RaiseSolverError("initial state: " + why, py::none());
   }
 
   Scene& scene() { return scene_; }
@@ -642,6 +648,52 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "rod_rotations(rod) -> (n, 3, 3) array\n\nSection rotations R (columns: the section "
           "axes in world components) at the rod's n nodes (a copy).")
 
+      .def(
+          "joint_reaction",
+          [](S& s, const std::string& j) {
+            return CalcJointReaction(s.model(), s.data(), s.JointIndex(j));
+          },
+          py::arg("joint"))
+      .def(
+          "joint_reaction",
+          [](S& s, long j) { return CalcJointReaction(s.model(), s.data(), s.JointIndex(j)); },
+          py::arg("joint"),
+          "joint_reaction(joint) -> array(6)\n\nForce [N] and moment [N m] the joint transmits "
+          "to its side B, world components, moment about the joint point on side B "
+          "(CalcJointReaction; the reactions.csv columns).")
+      .def(
+          "calc_momentum", [](S& s) { return CalcMomentum(s.model(), s.data()); },
+          "calc_momentum() -> array(6)\n\nLinear [kg m/s] and angular momentum about the world "
+          "origin [kg m^2/s], world components (CalcMomentum; energy.csv px..Lz).")
+      .def(
+          "body_orientation",
+          [](S& s, const std::string& b) {
+            const int i = s.model().FindBody(b);
+            if (i < 0) throw py::key_error("no rigid body named '" + b + "'");
+            const Eigen::Quaterniond q(
+                s.data().H[static_cast<std::size_t>(s.model().bodies[static_cast<std::size_t>(i)].node)].R);
+            Eigen::Vector4d out(q.w(), q.x(), q.y(), q.z());
+            if (out(0) < 0.0) out = -out;
+            return out;
+          },
+          py::arg("body"),
+          "body_orientation(body) -> array(4)\n\nOrientation of a rigid body's frame as a unit "
+          "quaternion [w, x, y, z] (w >= 0), world from body.")
+      .def(
+          "body_angular_velocity",
+          [](S& s, const std::string& b) {
+            const int i = s.model().FindBody(b);
+            if (i < 0) throw py::key_error("no rigid body named '" + b + "'");
+            const Node& n = s.model().nodes[static_cast<std::size_t>(
+                s.model().bodies[static_cast<std::size_t>(i)].node)];
+            if (n.dof < 0) return Vec3::Zero().eval();
+            return Vec3(s.data().H[static_cast<std::size_t>(
+                            s.model().bodies[static_cast<std::size_t>(i)].node)].R *
+                        s.data().v.segment<3>(n.dof + 3));
+          },
+          py::arg("body"),
+          "body_angular_velocity(body) -> array(3)\n\nAngular velocity of a rigid body [rad/s], "
+          "world components.")
       .def(
           "calc_energy", [](S& s) { return CalcEnergy(s.model(), s.data()); },
           "calc_energy() -> Energy\n\nKinetic, strain, spring and gravity energies of the "

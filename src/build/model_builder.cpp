@@ -319,6 +319,10 @@ int ModelBuilder::AddJoint(const JointSpec& spec) {
   j.drive = spec.drive;
   j.drive_coord = spec.drive_coordinate;
   j.drive_profile = spec.drive_profile;
+  j.has_initial_coordinate = spec.has_initial_coordinate;
+  j.initial_coordinate = spec.initial_coordinate;
+  j.has_initial_rate = spec.has_initial_rate;
+  j.initial_rate = spec.initial_rate;
   return index;
 }
 
@@ -333,6 +337,13 @@ int ModelBuilder::AddRodLoad(const RodLoad& load) {
 }
 
 void ModelBuilder::SetGravity(const Vec3& g) { model_.gravity = g; }
+
+void ModelBuilder::SetInitialVelocity(int node, const Vec6& velocity) {
+  if (node < 0 || node >= static_cast<int>(model_.nodes.size()))
+    throw InputError("initial velocity: invalid node " + std::to_string(node));
+  model_.nodes[static_cast<std::size_t>(node)].has_initial_velocity = true;
+  model_.nodes[static_cast<std::size_t>(node)].initial_velocity = velocity;
+}
 
 int ModelBuilder::AddInput(std::string name, double default_value) {
   model_.inputs.push_back(ModelInput{std::move(name), default_value});
@@ -353,6 +364,11 @@ void ValidateNodes(const Model& m) {
                          entity);
       if (!n.name.empty() && !names.insert(n.name).second)
         throw InputError("duplicate node name '" + n.name + "'", entity);
+      if (n.has_initial_velocity && !n.initial_velocity.allFinite())
+        throw InputError("node '" + n.name + "': initial velocity must be finite", entity);
+      if (n.has_initial_velocity && n.fixed && !n.initial_velocity.isZero())
+        throw InputError("node '" + n.name + "': a fixed node cannot have an initial velocity",
+                         entity);
     }
   }
   if (!m.gravity.allFinite()) throw InputError("gravity must be finite");
@@ -485,6 +501,12 @@ void ValidateJoints(const Model& m, std::vector<char>& used) {
                            JointTypeName(j.type) + ")", entity);
         ValidateProfile(m, j.drive_profile, label, entity);
       }
+      if ((j.has_initial_coordinate && !j.initial_coordinate.allFinite()) ||
+          (j.has_initial_rate && !j.initial_rate.allFinite()))
+        throw InputError(label + ": initial coordinates and rates must be finite", entity);
+      if (j.has_initial_coordinate && !JointHasGlobalCoordinates(j.type))
+        throw InputError(label + ": initial coordinates need a joint with global coordinates "
+                         "(not " + JointTypeName(j.type) + ")", entity);
       if (!j.name.empty() && !names.insert(j.name).second)
         throw InputError("duplicate joint name '" + j.name + "'", entity);
       if (j.node_a != kGround) used[static_cast<std::size_t>(j.node_a)] = 1;

@@ -19,6 +19,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/io/progress.h"
 #include "screwfem/io/schedule.h"
+#include "screwfem/solve/initial_state.h"
 #include "screwfem/io/vtk.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
@@ -155,7 +156,8 @@ void PrepareOutputDirectory(const std::string& dir, bool replace) {
   std::vector<fs::path> own;
   std::error_code ec;
   for (const char* name :
-       {"summary.json", "summary.json.tmp", "points.csv", "joints.csv", "joints.json"})
+       {"summary.json", "summary.json.tmp", "points.csv", "joints.csv", "joints.json",
+        "reactions.csv", "energy.csv"})
     if (fs::exists(fs::path(dir) / name, ec)) own.push_back(fs::path(dir) / name);
   const fs::path vtk = fs::path(dir) / "vtk";
   if (fs::is_directory(vtk, ec))
@@ -196,6 +198,8 @@ class Run {
     try {
       points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
       joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
+      reactions_.Open(outdir + "/reactions.csv", ReactionColumns(model_, scene.outputs.joints));
+      energy_.Open(outdir + "/energy.csv", EnergyColumns());
       if (scene.outputs.vtk) {
         vtk_.emplace();
         vtk_->Open(outdir + "/vtk", model_, scene.outputs.vtk_format, ExpectedFrames(scene));
@@ -209,6 +213,8 @@ class Run {
       // No header-only tables without a summary that explains them.
       points_.Close();
       joints_.Close();
+      reactions_.Close();
+      energy_.Close();
       PrepareOutputDirectory(outdir, true);
       throw;
     }
@@ -227,13 +233,15 @@ class Run {
     if (finished_) return;
     finished_ = true;
     const bool failed_before = io_error_ || std::string(status) == "failed";
-    if (const CsvWriter* w = CsvWriter::FlushTogether({&points_, &joints_}); w && !failed_before) {
+    if (const CsvWriter* w = CsvWriter::FlushTogether({&points_, &joints_, &reactions_, &energy_});
+        w && !failed_before) {
       status = "failed";
       message = Format("cannot write at t = %.9g s: ", data_.time) + w->path() + ": " +
                 std::strerror(errno);
       io_error_ = true;
     }
-    if ((!points_.Close() || !joints_.Close()) && !failed_before && !io_error_) {
+    if ((!points_.Close() || !joints_.Close() || !reactions_.Close() || !energy_.Close()) &&
+        !failed_before && !io_error_) {
       status = "failed";
       message = "cannot close the tables: " + std::string(std::strerror(errno));
       io_error_ = true;
@@ -278,10 +286,19 @@ class Run {
     return std::chrono::duration<double>(Clock::now() - wall_start_).count();
   }
 
+  // The scene's initial coordinates and velocities (solve/initial_state.h).
+  bool AssembleInitial() {
+    std::string why;
+    if (AssembleInitialState(model_, data_, &why)) return true;
+    Finish("failed", Format("initial state at t = %.9g s: ", data_.time) + why);
+    return false;
+  }
+
   void RunStatic() {
     const StaticOptions& so = scene_.analysis.statics;
     data_.time = so.time;
     SetInputsAt(options_.inputs, so.time, data_);
+    if (!AssembleInitial()) return;
     static_ = SolveStatic(model_, data_, so, options_.stop);
     has_static_ = true;
     if (static_.interrupted) {
@@ -307,6 +324,7 @@ class Run {
     const AnalysisSettings& a = scene_.analysis;
     data_.time = a.start_time;
     SetInputsAt(options_.inputs, a.start_time, data_);
+    if (!AssembleInitial()) return;
     if (a.static_preload) {
       StaticOptions so = a.statics;
       so.time = a.start_time;
@@ -408,6 +426,10 @@ class Run {
       points_.WriteRow(t, row_);
       CalcJointRow(model_, data_, scene_.outputs.joints, &row_);
       joints_.WriteRow(t, row_);
+      CalcReactionRow(model_, data_, scene_.outputs.joints, &row_);
+      reactions_.WriteRow(t, row_);
+      CalcEnergyRow(model_, data_, &row_);
+      energy_.WriteRow(t, row_);
       last_row_time_ = t;
       if (std::max(points_.batch_bytes(), joints_.batch_bytes()) >= kRowBatchBytes &&
           !FlushRows(t))
@@ -421,7 +443,8 @@ class Run {
   // Writes the rows collected so far to the files, keeping the tables at the same row; on a
   // write error ends the run as failed.
   bool FlushRows(double t) {
-    if (const CsvWriter* w = CsvWriter::FlushTogether({&points_, &joints_}))
+    if (const CsvWriter* w =
+            CsvWriter::FlushTogether({&points_, &joints_, &reactions_, &energy_}))
       return WriteFailed(w->path(), t);
     return true;
   }
@@ -548,7 +571,7 @@ class Run {
   Integrator integ_;
   StaticResult static_;
   bool has_static_ = false;
-  CsvWriter points_, joints_;
+  CsvWriter points_, joints_, reactions_, energy_;
   std::optional<VtkWriter> vtk_;
   std::optional<ProgressBar> progress_;
   std::vector<double> row_;

@@ -34,7 +34,8 @@ const char* const kGroundName = "ground";
 
 const std::vector<std::string> kBodyKeys = {
     "type", "between", "at",   "mass",    "inertia",  "com", "fixed",      "free",
-    "from", "to",      "path", "section", "elements", "up",  "weld_start", "weld_end"};
+    "from", "to",      "path", "section", "elements", "up",  "weld_start", "weld_end",
+    "initial_velocity"};
 
 std::string Join(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
@@ -482,6 +483,15 @@ void SceneReader::ReadRigidBody(const Node& n, const std::string& path, BodySpec
   if (const Node* f = n.Find("free")) b.free = r_.Bool(*f, Join(path, "free"));
   if (b.fixed && b.free)
     r_.Fail(n.Find("free")->location, Join(path, "free"), "a body cannot be both fixed and free");
+  if (const Node* iv = n.Find("initial_velocity")) {
+    // {linear: [vx, vy, vz] (centre of mass, m/s), angular: [wx, wy, wz] (rad/s)}, world.
+    const std::string p = Join(path, "initial_velocity");
+    r_.CheckKeys(*iv, p, {"linear", "angular"});
+    if (b.fixed) r_.Fail(iv->location, p, "a fixed body cannot have an initial velocity");
+    b.has_initial_velocity = true;
+    if (const Node* v = iv->Find("linear")) b.initial_linear = r_.Vector3(*v, Join(p, "linear"));
+    if (const Node* w = iv->Find("angular")) b.initial_angular = r_.Vector3(*w, Join(p, "angular"));
+  }
 }
 
 // A 3x3 matrix, nine numbers, or three principal moments; symmetric positive definite.
@@ -519,7 +529,7 @@ Mat3 SceneReader::ReadInertia(const Node& in, const std::string& ip) const {
 void SceneReader::ReadSoftBody(const Node& n, const std::string& path, BodySpec& b,
                                EntitySource& source) {
   r_.CheckKeys(n, path, kBodyKeys);
-  NotUsedBy(n, path, {"between", "at", "mass", "inertia", "com", "fixed"},
+  NotUsedBy(n, path, {"between", "at", "mass", "inertia", "com", "fixed", "initial_velocity"},
             "soft bodies (a soft body is clamped to the ground by a fixed joint)");
   const Node& sn = r_.Require(n, path, "section");
   const std::string section_name = r_.Text(sn, Join(path, "section"));
@@ -604,7 +614,7 @@ void SceneReader::ReadJoints(const Node* node) {
     EntitySource& source = src_.joints.back();
     r_.CheckKeys(value, path,
                  {"type", "at", "between", "axis", "axis2", "pitch", "stiffness", "damping", "rest",
-                  "drive"});
+                  "drive", "initial_position", "initial_velocity"});
     const std::string type_name =
         r_.Choice(r_.Require(value, path, "type"), Join(path, "type"), JointTypeNameList());
     const JointTypeInfo& info = *FindJointType(type_name);
@@ -680,6 +690,16 @@ void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
   if (const Node* d = value.Find("damping"))
     j.damping = PerCoordinate(*d, Join(path, "damping"), springs, true);
   if (const Node* rest = value.Find("rest")) j.rest = PerCoordinate(*rest, Join(path, "rest"), k, false);
+  if (k == 0) NotUsedBy(value, path, {"initial_position", "initial_velocity"}, who);
+  if (!info.global_coordinates) NotUsedBy(value, path, {"initial_position"}, who);
+  if (const Node* q0 = value.Find("initial_position")) {
+    j.has_initial_coordinate = true;
+    j.initial_coordinate = PerCoordinate(*q0, Join(path, "initial_position"), k, false);
+  }
+  if (const Node* qd0 = value.Find("initial_velocity")) {
+    j.has_initial_rate = true;
+    j.initial_rate = PerCoordinate(*qd0, Join(path, "initial_velocity"), k, false);
+  }
   const Node* drive = value.Find("drive");
   if (drive == nullptr) return;
   const std::string dp = Join(path, "drive");

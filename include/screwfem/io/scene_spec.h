@@ -27,6 +27,9 @@ struct BodySpec {
   Vec3 com = Vec3::Zero();        // centre of mass [m], world
   double mass = 0.0;              // [kg]
   Mat3 inertia = Mat3::Identity();  // about the centre of mass, body frame [kg m^2]
+  // Initial velocity of the centre of mass [m/s] and angular velocity [rad/s], world.
+  bool has_initial_velocity = false;
+  Vec3 initial_linear = Vec3::Zero(), initial_angular = Vec3::Zero();
   // Soft bodies: ModelBuilder::AddRodAlongPath(name, path, elements, section, up, ...).
   std::vector<Vec3> path;         // at least two points [m], world
   int elements = 8;               // per path segment

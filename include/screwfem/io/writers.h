@@ -49,6 +49,17 @@ void CalcJointRow(const Model& model, const Data& data, const std::vector<Output
 
 // (The effort column is JointCoordinateEffort, elements/joint.h.)
 
+// reactions.csv: per output joint J with constraint rows: J.Fx J.Fy J.Fz J.Mx J.My J.Mz, the
+// force [N] and moment [N m] it transmits to its side B (CalcJointReaction, assemble/outputs.h:
+// world components, moment about the joint point on side B).
+std::vector<std::string> ReactionColumns(const Model& model, const std::vector<OutputJoint>& joints);
+void CalcReactionRow(const Model& model, const Data& data, const std::vector<OutputJoint>& joints,
+                     std::vector<double>* row);
+// energy.csv: kinetic strain spring gravity total [J] (CalcEnergy), px py pz [kg m/s] and
+// Lx Ly Lz [kg m^2/s] (CalcMomentum: world, angular momentum about the world origin).
+std::vector<std::string> EnergyColumns();
+void CalcEnergyRow(const Model& model, const Data& data, std::vector<double>* row);
+
 // ---- files -----------------------------------------------------------------------------------
 
 // Appends `value` formatted as printf("%.*g", precision, value) would (std::to_chars with a
