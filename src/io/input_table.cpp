@@ -123,18 +123,22 @@ void SetInputsAt(const InputTable& table, double t, Data& data) {
   if (table.empty()) return;
   const std::vector<double>& ts = table.times;
   std::size_t i = 0;  // the segment [ts[i], ts[i+1]) holding t, or a held end
-  double u = 0.0;
   bool held = true;
   if (t >= ts.back()) {
     i = ts.size() - 1;
   } else if (t > ts.front()) {
     i = static_cast<std::size_t>(std::upper_bound(ts.begin(), ts.end(), t) - ts.begin()) - 1;
-    u = (t - ts[i]) / (ts[i + 1] - ts[i]);
     held = false;
   }
+  // The arithmetic of a table profile (ProfileTerm::kTable), so that the two agree bit for bit.
   for (std::size_t c = 0; c < table.inputs.size(); ++c) {
     const std::vector<double>& v = table.values[c];
-    data.inputs(table.inputs[c]) = held ? v[i] : v[i] + u * (v[i + 1] - v[i]);
+    if (held) {
+      data.inputs(table.inputs[c]) = v[i];
+    } else {
+      const double slope = (v[i + 1] - v[i]) / (ts[i + 1] - ts[i]);
+      data.inputs(table.inputs[c]) = v[i] + slope * (t - ts[i]);
+    }
   }
 }
 

@@ -198,7 +198,7 @@ class Run {
     try {
       points_.Open(outdir + "/points.csv", PointColumns(scene.outputs.points));
       joints_.Open(outdir + "/joints.csv", JointColumns(model_, scene.outputs.joints));
-      reactions_.Open(outdir + "/reactions.csv", ReactionColumns(model_, scene.outputs.joints));
+      reactions_.Open(outdir + "/reactions.csv", ReactionColumns(model_));
       energy_.Open(outdir + "/energy.csv", EnergyColumns());
       if (scene.outputs.vtk) {
         vtk_.emplace();
@@ -426,7 +426,7 @@ class Run {
       points_.WriteRow(t, row_);
       CalcJointRow(model_, data_, scene_.outputs.joints, &row_);
       joints_.WriteRow(t, row_);
-      CalcReactionRow(model_, data_, scene_.outputs.joints, &row_);
+      CalcReactionRow(model_, data_, &row_);
       reactions_.WriteRow(t, row_);
       CalcEnergyRow(model_, data_, &row_);
       energy_.WriteRow(t, row_);

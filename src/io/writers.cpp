@@ -66,26 +66,28 @@ std::vector<std::string> JointColumns(const Model& model, const std::vector<Outp
   return columns;
 }
 
-std::vector<std::string> ReactionColumns(const Model& model,
-                                         const std::vector<OutputJoint>& joints) {
+std::vector<std::string> ReactionColumns(const Model& model) {
   static constexpr const char* kSuffix[6] = {"Fx", "Fy", "Fz", "Mx", "My", "Mz"};
   std::vector<std::string> columns;
-  for (const OutputJoint& oj : joints)
-    if (model.joints[static_cast<std::size_t>(oj.joint)].row >= 0)
-      for (const char* s : kSuffix) columns.push_back(oj.name + "." + s);
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    if (j.row < 0) continue;
+    std::string name = j.name;
+    if (name.empty()) name.append("J").append(std::to_string(jj));
+    for (const char* s : kSuffix) columns.push_back(name + "." + s);
+  }
   return columns;
 }
 
-void CalcReactionRow(const Model& model, const Data& data, const std::vector<OutputJoint>& joints,
-                     std::vector<double>* row) {
+void CalcReactionRow(const Model& model, const Data& data, std::vector<double>* row) {
   std::size_t n = 0;
-  for (const OutputJoint& oj : joints)
-    if (model.joints[static_cast<std::size_t>(oj.joint)].row >= 0) n += 6;
+  for (const Joint& j : model.joints)
+    if (j.row >= 0) n += 6;
   row->resize(n);
   std::size_t i = 0;
-  for (const OutputJoint& oj : joints) {
-    if (model.joints[static_cast<std::size_t>(oj.joint)].row < 0) continue;
-    const Vec6 r = CalcJointReaction(model, data, oj.joint);
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    if (model.joints[jj].row < 0) continue;
+    const Vec6 r = CalcJointReaction(model, data, static_cast<int>(jj));
     for (int c = 0; c < 6; ++c) (*row)[i++] = r(c);
   }
 }

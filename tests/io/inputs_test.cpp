@@ -8,7 +8,9 @@
 #include <cmath>
 #include <string>
 
+#include "run_test_util.h"
 #include "screwfem/io/input_table.h"
+#include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/dynamics.h"
@@ -32,6 +34,9 @@ loads:
   tip: {body: arm, at: B, force: [0, 0.2, 1], profile: )" +
          profile + R"(}
 analysis: {type: dynamic, end_time: 0.1, step: 2e-3, rho_inf: 0.7}
+outputs:
+  points: {tip: {body: arm, at: B}}
+  vtk: false
 )";
 }
 
@@ -203,6 +208,26 @@ TEST(InputTable, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(TableError("t,u\n"), "u.csv:1:1: expected at least one row of values");
   EXPECT_EQ(TableError(""), "u.csv:1:1: empty input table: expected the header 't,NAME,...'");
   EXPECT_EQ(TableError("t,u\n0,nan\n"), "u.csv:2:3: expected a finite number, got 'nan'");
+}
+
+// screwfem run --inputs: the table's values sampled at the step ends give the files a table
+// profile gives, when the profile has no breakpoint inside the run (at a profile breakpoint the
+// integrator restarts; an input's change is no breakpoint: docs/numerics.md).
+TEST(InputTable, RunWithAnInputTableWritesTheSameRowsAsATableProfile) {
+  test::ScopedDir by_profile("inputs_profile"), by_table("inputs_table");
+  const Scene profile = ParseScene(
+      Cantilever("{type: table, times: [0, 0.2], values: [0, 3]}"), "p.yaml");
+  const Scene input = ParseScene(Cantilever("{type: input, name: u}"), "i.yaml");
+  ASSERT_TRUE(RunScene(profile, by_profile.path()).ok);
+  RunOptions options;
+  options.inputs = ParseInputTable("t,u\n0,0\n0.2,3\n", "u.csv", input.model);
+  ASSERT_TRUE(RunScene(input, by_table.path(), options).ok);
+  const std::string a = test::ReadFile(by_profile.path() + "/points.csv");
+  const std::string b = test::ReadFile(by_table.path() + "/points.csv");
+  EXPECT_GT(a.size(), 100u);
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(test::ReadFile(by_profile.path() + "/reactions.csv"),
+            test::ReadFile(by_table.path() + "/reactions.csv"));
 }
 
 }  // namespace

@@ -92,7 +92,7 @@ outputs: {interval: 0.1, vtk: false}
   }
 }
 
-TEST(ReactionsCsv, HasSixColumnsPerConstrainedOutputJoint) {
+TEST(ReactionsCsv, HasSixColumnsPerConstrainedJoint) {
   ScopedDir dir("reactions_csv");
   const Scene scene = LoadScene(std::string(SCREWFEM_TEST_DATA_DIR) + "/pendulum.yaml",
                                 {"analysis.end_time=0.01", "outputs.vtk=false"});

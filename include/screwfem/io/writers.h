@@ -49,12 +49,13 @@ void CalcJointRow(const Model& model, const Data& data, const std::vector<Output
 
 // (The effort column is JointCoordinateEffort, elements/joint.h.)
 
-// reactions.csv: per output joint J with constraint rows: J.Fx J.Fy J.Fz J.Mx J.My J.Mz, the
-// force [N] and moment [N m] it transmits to its side B (CalcJointReaction, assemble/outputs.h:
-// world components, moment about the joint point on side B).
-std::vector<std::string> ReactionColumns(const Model& model, const std::vector<OutputJoint>& joints);
-void CalcReactionRow(const Model& model, const Data& data, const std::vector<OutputJoint>& joints,
-                     std::vector<double>* row);
+// reactions.csv: per joint J of the model with constraint rows (every joint but free ones,
+// passive or driven, recorded or not), in model order: J.Fx J.Fy J.Fz J.Mx J.My J.Mz, the force
+// [N] and moment [N m] it transmits to its side B (CalcJointReaction, assemble/outputs.h: world
+// components, moment about the joint point on side B). J is the joint's name (J<index> when it
+// has none).
+std::vector<std::string> ReactionColumns(const Model& model);
+void CalcReactionRow(const Model& model, const Data& data, std::vector<double>* row);
 // energy.csv: kinetic strain spring gravity total [J] (CalcEnergy), px py pz [kg m/s] and
 // Lx Ly Lz [kg m^2/s] (CalcMomentum: world, angular momentum about the world origin).
 std::vector<std::string> EnergyColumns();
