@@ -48,6 +48,7 @@ class Simulation {
   const Model& model() const { return scene_.model; }
   Data& data() { return data_; }
   const Integrator& integrator() const { return integrator_; }
+  Integrator& integrator() { return integrator_; }
   bool initialized() const { return initialized_; }
 
   void Initialize(const std::optional<DynamicOptions>& options) {
@@ -577,6 +578,19 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
             s.data().inputs = u;
           },
           "All input values in Model.inputs order (writable view of Data::inputs).")
+      .def(
+          "restart",
+          [](S& s) {
+            if (!s.initialized())
+              throw std::logic_error("Simulation.restart: call initialize() first");
+            std::string why;
+            if (!RestartDynamics(s.model(), s.data(), s.integrator(), &why))
+              RaiseSolverError(why, py::none());
+          },
+          "restart()\n\nRestartDynamics: consistent accelerations and multipliers at the current "
+          "state, time and input values, as at a profile breakpoint. Stepping does not restart "
+          "when an input changes (docs/numerics.md, \"Run-time inputs\"); call this after a "
+          "large jump of an input if its ringing in the accelerations matters.")
       .def(
           "get_state", [](S& s) { return s.GetState(); },
           "get_state() -> SimulationState\n\nA copy of everything stepping continues from "
