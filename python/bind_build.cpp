@@ -67,7 +67,13 @@ void BindValues(py::module_& m) {
       .def_readwrite("rest", &JointSpec::rest)
       .def_readwrite("drive", &JointSpec::drive)
       .def_readwrite("drive_coordinate", &JointSpec::drive_coordinate)
-      .def_readwrite("drive_profile", &JointSpec::drive_profile);
+      .def_readwrite("drive_profile", &JointSpec::drive_profile)
+      .def_readwrite("has_initial_coordinate", &JointSpec::has_initial_coordinate)
+      .def_readwrite("initial_coordinate", &JointSpec::initial_coordinate,
+                     "Initial coordinates (first k entries), used when has_initial_coordinate.")
+      .def_readwrite("has_initial_rate", &JointSpec::has_initial_rate)
+      .def_readwrite("initial_rate", &JointSpec::initial_rate,
+                     "Initial rates (first k entries), used when has_initial_rate.");
 
   py::class_<NodeMatch>(m, "NodeMatch", "Result of ModelBuilder.find_node_at.")
       .def_readonly("node", &NodeMatch::node, "The node within the tolerance, or -1.")
@@ -110,6 +116,8 @@ void BindBuild(py::module_& m) {
       .def("add_joint", py::overload_cast<const JointSpec&>(&B::AddJoint), py::arg("spec"),
            "A joint from a JointSpec; returns its index.")
       .def("set_gravity", &B::SetGravity, py::arg("g"), "[m/s^2], world frame.")
+      .def("set_initial_velocity", &B::SetInitialVelocity, py::arg("node"), py::arg("velocity"),
+           "Initial body velocity [v; w] of a node in its frame (AssembleInitialState).")
       .def("add_input", &B::AddInput, py::arg("name"), py::arg("default") = 0.0,
            "A run-time input (Model.inputs) for Profile.input; returns its index.")
       .def("build", &B::Build, "The validated Model.");

@@ -18,6 +18,7 @@
 #include "bind.h"
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
+#include "screwfem/elements/joint.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
@@ -121,6 +122,22 @@ class Simulation {
                           (known.empty() ? std::string("none") : known) + ")");
     }
     return i;
+  }
+
+  // Soft-joint spring or damper values (JointSpringCount of them, finite, >= 0): parameters that
+  // may change between steps (they enter the residual and tangent, not the matrix pattern).
+  void SetJointSprings(int joint, const Eigen::Ref<const Eigen::VectorXd>& values, bool damping) {
+    Joint& j = scene_.model.joints[static_cast<std::size_t>(joint)];
+    const int n = JointSpringCount(j);
+    const char* what = damping ? "set_joint_damping" : "set_joint_stiffness";
+    if (values.size() != n)
+      throw InputError(std::string("Simulation.") + what + ": joint '" + j.name + "' has " +
+                       std::to_string(n) + " springs, got " + std::to_string(values.size()) +
+                       " values");
+    for (int c = 0; c < n; ++c)
+      if (!std::isfinite(values(c)) || values(c) < 0.0)
+        throw InputError(std::string("Simulation.") + what + ": values must be finite and >= 0");
+    (damping ? j.damping : j.stiffness).head(n) = values;
   }
 
   SimulationState GetState() const {
@@ -591,6 +608,23 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "state, time and input values, as at a profile breakpoint. Stepping does not restart "
           "when an input changes (docs/numerics.md, \"Run-time inputs\"); call this after a "
           "large jump of an input if its ringing in the accelerations matters.")
+      .def(
+          "set_joint_stiffness",
+          [](S& s, const std::string& j, const Eigen::Ref<const Vector>& k) {
+            s.SetJointSprings(s.JointIndex(j), k, false);
+          },
+          py::arg("joint"), py::arg("stiffness"),
+          "set_joint_stiffness(joint, stiffness)\n\nThe joint's spring stiffness per spring "
+          "(JointSpringCount values, >= 0) [N/m or N m/rad], from the next step on (the "
+          "simulation's own copy of the model; scene unchanged).")
+      .def(
+          "set_joint_damping",
+          [](S& s, const std::string& j, const Eigen::Ref<const Vector>& d) {
+            s.SetJointSprings(s.JointIndex(j), d, true);
+          },
+          py::arg("joint"), py::arg("damping"),
+          "set_joint_damping(joint, damping)\n\nThe joint's damper values, as "
+          "set_joint_stiffness.")
       .def(
           "get_state", [](S& s) { return s.GetState(); },
           "get_state() -> SimulationState\n\nA copy of everything stepping continues from "

@@ -485,5 +485,12 @@ TEST_F(BadFile, ErrorsInAFileNameTheFile) {
   EXPECT_EQ(LoadError(path), path + ":2:1: gravty: unknown key 'gravty' (did you mean 'gravity'?)");
 }
 
+TEST(BadInput, UnknownRunTimeInputName) {
+  ExpectError(kHead + "inputs: {u: 0}\nbodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], "
+                      "free: true}\nloads:\n  f: {body: b, at: A, force: [1, 0, 0], profile: "
+                      "{type: input, name: uu}}\n",
+              "bad.yaml:7:71", "loads.f.profile.name: unknown input 'uu' (did you mean 'u'?)");
+}
+
 }  // namespace
 }  // namespace screwfem

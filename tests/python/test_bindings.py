@@ -847,6 +847,13 @@ class InputsAndStateTest(unittest.TestCase):
         r = sim.joint_reaction("hinge")
         self.assertAlmostEqual(r[2], m * g + m * d * 0.25, delta=1e-9)
         self.assertAlmostEqual(r[4], 0.0, delta=1e-12)
+        # A soft-joint stiffness set between steps acts at once: the hinge's effort is then the
+        # spring's -k (q - rest), rest 0, no damper.
+        with self.assertRaisesRegex(ValueError, "finite and >= 0"):
+            sim.set_joint_stiffness("hinge", [-1.0])
+        sim.set_joint_stiffness("hinge", [2.0])
+        self.assertAlmostEqual(sim.joint_effort("hinge"), -2.0 * sim.joint_coordinate("hinge"),
+                               delta=1e-12)
         p = sim.calc_momentum()  # v_com = w x r_com = (0, 0.5, 0) x (0, 0, -d): along -x
         self.assertAlmostEqual(p[0], -m * d * 0.5, delta=1e-14)
 
