@@ -322,8 +322,9 @@ step ends (StepSchedule) and the files.
 Units are SI; point quantities are in the world frame. The arrays v, vdot, lambda_ and
 q_joint are NumPy views of the simulation's Data (no copy): they keep the Simulation alive,
 stay valid for its whole life and change as it steps; copy them (numpy.copy) to keep a value.
-v is writable (to set initial velocities; call initialize() afterwards), the others are
-read-only.
+v, vdot and lambda_ are writable (to set a state; call initialize() afterwards to make the
+accelerations consistent), q_joint is read-only (set configurations with set_node_frames or
+the scene's initial_position). get_state and set_state save and restore the whole state.
 
 Failures: numerical failures raise SolverError (step and solve_static attach their result as
 SolverError.result); invalid arguments raise InputError (a ValueError), unknown names KeyError
