@@ -68,7 +68,8 @@ void PrintWarnings(const screwfem::Model& model) {
 }
 
 int Run(const std::string& scene_path, const std::string& outdir,
-        const std::vector<std::string>& overrides, bool quiet, bool force) {
+        const std::vector<std::string>& overrides, const std::string& inputs, bool quiet,
+        bool force) {
   try {
     const screwfem::Scene scene = screwfem::LoadScene(scene_path, overrides);
     PrintWarnings(scene.model);
@@ -76,6 +77,7 @@ int Run(const std::string& scene_path, const std::string& outdir,
     options.progress = !quiet && isatty(STDERR_FILENO);
     options.stop.flag = &g_stop;
     options.replace_results = force;
+    if (!inputs.empty()) options.inputs = screwfem::ReadInputTable(inputs, scene.model);
     const screwfem::RunResult r = screwfem::RunScene(scene, outdir, options);
     const char* status = r.ok            ? "completed"
                          : !r.interrupted ? "failed"
@@ -246,7 +248,7 @@ int Main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("screwfem ") + SCREWFEM_VERSION);
 
-  std::string scene_path, outdir, figdir, points, times, html;
+  std::string scene_path, outdir, figdir, points, times, html, inputs;
   std::vector<std::string> overrides, outdirs;
   bool quiet = false, force = false, animate = false;
   const auto add_overrides = [&](CLI::App* cmd) {
@@ -259,6 +261,10 @@ int Main(int argc, char** argv) {
   run->add_option("scene", scene_path, "scene file (YAML)")->required();
   run->add_option("-o,--output", outdir, "output directory (created if needed)")->required();
   add_overrides(run);
+  run->add_option("--inputs", inputs,
+                  "CSV table of run-time input values: header t,NAME,..., one row per time "
+                  "(linear between rows, held outside; docs/scene-format.md)")
+      ->type_name("TABLE.csv");
   run->add_flag("-q,--quiet", quiet, "no progress bar");
   run->add_flag("-f,--force", force,
                 "replace the results of an earlier run in OUTDIR (removes screwfem's files only)");
@@ -293,7 +299,7 @@ int Main(int argc, char** argv) {
   }
   if (run->parsed()) {
     InstallStopHandlers();
-    return Run(scene_path, outdir, overrides, quiet, force);
+    return Run(scene_path, outdir, overrides, inputs, quiet, force);
   }
   if (check->parsed()) return Check(scene_path, overrides);
   if (sweep->parsed()) return Sweep(sweep->remaining());

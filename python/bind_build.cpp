@@ -44,6 +44,9 @@ void BindValues(py::module_& m) {
                   py::arg("scale") = 1.0)
       .def_static("sine", &Profile::Sine, py::arg("amplitude"), py::arg("frequency"),
                   py::arg("phase") = 0.0, py::arg("t0") = 0.0, "frequency in Hz")
+      .def_static("input", &Profile::Input, py::arg("input"), py::arg("scale") = 1.0,
+                  "scale times run-time input number `input` (Model.inputs; "
+                  "ModelBuilder.add_input), read from Simulation.inputs at every evaluation.")
       .def("__call__", &Profile::operator(), py::arg("t"), "f(t).");
 
   py::class_<JointSpec>(m, "JointSpec",
@@ -64,7 +67,13 @@ void BindValues(py::module_& m) {
       .def_readwrite("rest", &JointSpec::rest)
       .def_readwrite("drive", &JointSpec::drive)
       .def_readwrite("drive_coordinate", &JointSpec::drive_coordinate)
-      .def_readwrite("drive_profile", &JointSpec::drive_profile);
+      .def_readwrite("drive_profile", &JointSpec::drive_profile)
+      .def_readwrite("has_initial_coordinate", &JointSpec::has_initial_coordinate)
+      .def_readwrite("initial_coordinate", &JointSpec::initial_coordinate,
+                     "Initial coordinates (first k entries), used when has_initial_coordinate.")
+      .def_readwrite("has_initial_rate", &JointSpec::has_initial_rate)
+      .def_readwrite("initial_rate", &JointSpec::initial_rate,
+                     "Initial rates (first k entries), used when has_initial_rate.");
 
   py::class_<BodyPoint>(m, "BodyPoint",
                         "A point fixed in a node frame (node-frame offset [m]) or, on GROUND, a "
@@ -136,6 +145,10 @@ void BindBuild(py::module_& m) {
            py::arg("s"), py::arg("tolerance") = -1.0,
            "The node of a rod at reference arc length s [m] -> NodeMatch (distance in arc length).")
       .def("set_gravity", &B::SetGravity, py::arg("g"), "[m/s^2], world frame.")
+      .def("set_initial_velocity", &B::SetInitialVelocity, py::arg("node"), py::arg("velocity"),
+           "Initial body velocity [v; w] of a node in its frame (AssembleInitialState).")
+      .def("add_input", &B::AddInput, py::arg("name"), py::arg("default") = 0.0,
+           "A run-time input (Model.inputs) for Profile.input; returns its index.")
       .def("build", &B::Build, "The validated Model.");
 }
 

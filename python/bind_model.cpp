@@ -138,6 +138,14 @@ void BindModel(py::module_& m) {
       .def_readonly("length_scale", &Model::length_scale,
                     "Characteristic length (bounding box diagonal) [m].")
       .def_readonly("gravity", &Model::gravity, "Gravity [m/s^2], world frame (view).")
+      .def_property_readonly(
+          "input_names",
+          [](const Model& model) {
+            std::vector<std::string> names;
+            for (const ModelInput& in : model.inputs) names.push_back(in.name);
+            return names;
+          },
+          "Names of the run-time inputs, in Simulation.input_values order.")
       .def_readonly("rod_inertia", &Model::rod_inertia)
       .def_readonly("redundant_rows", &Model::redundant_rows,
                     "Constraint rows found linearly dependent at build time (their multipliers "

@@ -3,6 +3,9 @@
 // Every method calls one public C++ function; this file adds only argument checks, name
 // lookups and the conversion of numerical failures into screwfem.SolverError.
 #include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+
+#include <Eigen/Geometry>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -16,10 +19,12 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/tendon.h"
+#include "screwfem/elements/joint.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/solve/initial_state.h"
 #include "screwfem/solve/statics.h"
 
 namespace py = pybind11;
@@ -36,12 +41,16 @@ class Simulation {
   explicit Simulation(const Scene& scene) : scene_(scene), data_(MakeData(scene_.model)) {
     data_.time = scene_.analysis.kind == AnalysisKind::kStatic ? scene_.analysis.statics.time
                                                                : scene_.analysis.start_time;
+    std::string why;
+    if (!AssembleInitialState(scene_.model, data_, &why))
+      RaiseSolverError("initial state: " + why, py::none());
   }
 
   Scene& scene() { return scene_; }
   const Model& model() const { return scene_.model; }
   Data& data() { return data_; }
   const Integrator& integrator() const { return integrator_; }
+  Integrator& integrator() { return integrator_; }
   bool initialized() const { return initialized_; }
 
   void Initialize(const std::optional<DynamicOptions>& options) {
@@ -125,6 +134,40 @@ class Simulation {
     return j.coord + c;
   }
 
+  int Input(const std::string& name) const {
+    const int i = model().FindInput(name);
+    if (i < 0) {
+      std::string known;
+      for (const ModelInput& in : model().inputs) known += (known.empty() ? "'" : ", '") + in.name + "'";
+      throw py::key_error("no input named '" + name + "' (the scene's inputs: " +
+                          (known.empty() ? std::string("none") : known) + ")");
+    }
+    return i;
+  }
+
+  // Soft-joint spring or damper values (JointSpringCount of them, finite, >= 0): parameters that
+  // may change between steps (they enter the residual and tangent, not the matrix pattern).
+  void SetJointSprings(int joint, const Eigen::Ref<const Eigen::VectorXd>& values, bool damping) {
+    Joint& j = scene_.model.joints[static_cast<std::size_t>(joint)];
+    const int n = JointSpringCount(j);
+    const char* what = damping ? "set_joint_damping" : "set_joint_stiffness";
+    if (values.size() != n)
+      throw InputError(std::string("Simulation.") + what + ": joint '" + j.name + "' has " +
+                       std::to_string(n) + " springs, got " + std::to_string(values.size()) +
+                       " values");
+    for (int c = 0; c < n; ++c)
+      if (!std::isfinite(values(c)) || values(c) < 0.0)
+        throw InputError(std::string("Simulation.") + what + ": values must be finite and >= 0");
+    (damping ? j.damping : j.stiffness).head(n) = values;
+  }
+
+  SimulationState GetState() const {
+    SimulationState s;
+    SaveSimulationState(data_, integrator_, &s);
+    return s;
+  }
+  void SetState(const SimulationState& s) { RestoreSimulationState(s, data_, integrator_); }
+
   const OutputPoint& OutputPointNamed(const std::string& name) const {
     for (const OutputPoint& p : scene_.outputs.points)
       if (p.name == name) return p;
@@ -144,6 +187,35 @@ class Simulation {
 };
 
 using Vector = Eigen::VectorXd;
+
+// sim.inputs: the run-time input values by name (a view of Data::inputs; MuJoCo's data.ctrl).
+struct InputsView {
+  Simulation* sim;
+};
+
+// Frames of the given nodes as an (n, 4, 4) array, or their positions (n, 3) or rotations
+// (n, 3, 3) (copies).
+enum class FramePart { kMatrix, kPosition, kRotation };
+py::array_t<double> NodeFrames(const Data& data, const std::vector<int>& nodes, FramePart part) {
+  const auto n = static_cast<py::ssize_t>(nodes.size());
+  std::vector<py::ssize_t> shape{n, 4, 4};
+  if (part == FramePart::kPosition) shape = {n, 3};
+  if (part == FramePart::kRotation) shape = {n, 3, 3};
+  py::array_t<double> out(shape);
+  double* p = out.mutable_data();
+  for (int node : nodes) {
+    const SE3& H = data.H[static_cast<std::size_t>(node)];
+    if (part == FramePart::kPosition) {
+      for (int i = 0; i < 3; ++i) *p++ = H.x(i);
+      continue;
+    }
+    const int rows = part == FramePart::kMatrix ? 4 : 3;
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < rows; ++c) *p++ = part == FramePart::kMatrix ? H.Matrix()(r, c)
+                                                                     : H.R(r, c);
+  }
+  return out;
+}
 
 // The row of CalcPointRow / CalcJointRow as a NumPy array (a copy).
 Vector ToVector(const std::vector<double>& row) {
@@ -209,6 +281,57 @@ void BindResults(py::module_& m) {
       .def_readonly("xi", &RodPoint::xi, "Position in the element, in [0, 1].");
 }
 
+void BindInputs(py::module_& m) {
+  py::class_<SimulationState>(m, "SimulationState",
+                              "A saved simulation state (Simulation.get_state; dynamics.h).")
+      .def_readonly("time", &SimulationState::time)
+      .def("__copy__", [](const SimulationState& s) { return s; })
+      .def("__deepcopy__", [](const SimulationState& s, py::dict) { return s; });
+  py::class_<InputsView>(m, "Inputs", "Simulation.inputs: run-time input values by name.")
+      .def("__getitem__",
+           [](const InputsView& v, const std::string& name) {
+             return v.sim->data().inputs(v.sim->Input(name));
+           })
+      .def("__setitem__",
+           [](InputsView& v, const std::string& name, double value) {
+             const int i = v.sim->Input(name);
+             if (!std::isfinite(value))
+               throw InputError("Simulation.inputs['" + name + "']: must be finite");
+             v.sim->data().inputs(i) = value;
+           })
+      .def("__len__", [](const InputsView& v) { return v.sim->model().inputs.size(); })
+      .def("__contains__",
+           [](const InputsView& v, const std::string& name) {
+             return v.sim->model().FindInput(name) >= 0;
+           })
+      .def("keys",
+           [](const InputsView& v) {
+             std::vector<std::string> k;
+             for (const ModelInput& in : v.sim->model().inputs) k.push_back(in.name);
+             return k;
+           })
+      .def("__iter__",
+           [](const InputsView& v) {
+             std::vector<std::string> k;
+             for (const ModelInput& in : v.sim->model().inputs) k.push_back(in.name);
+             return py::iter(py::cast(k));
+           })
+      .def("values",
+           [](const InputsView& v) {
+             const Vector& u = v.sim->data().inputs;
+             return std::vector<double>(u.data(), u.data() + u.size());
+           })
+      .def("__repr__", [](const InputsView& v) {
+        std::string s = "{";
+        for (std::size_t i = 0; i < v.sim->model().inputs.size(); ++i) {
+          char buf[64];
+          std::snprintf(buf, sizeof buf, "%.17g", v.sim->data().inputs(static_cast<long>(i)));
+          s += (i ? ", '" : "'") + v.sim->model().inputs[i].name + "': " + buf;
+        }
+        return s + "}";
+      });
+}
+
 void BindSimulationClass(py::module_& m) {
   using S = Simulation;
   py::class_<S>(m, "Simulation", R"doc(Simulation(scene)
@@ -225,8 +348,9 @@ step ends (StepSchedule) and the files.
 Units are SI; point quantities are in the world frame. The arrays v, vdot, lambda_ and
 q_joint are NumPy views of the simulation's Data (no copy): they keep the Simulation alive,
 stay valid for its whole life and change as it steps; copy them (numpy.copy) to keep a value.
-v is writable (to set initial velocities; call initialize() afterwards), the others are
-read-only.
+v, vdot and lambda_ are writable (to set a state; call initialize() afterwards to make the
+accelerations consistent), q_joint is read-only (set configurations with set_node_frames or
+the scene's initial_position). get_state and set_state save and restore the whole state.
 
 Failures: numerical failures raise SolverError (step and solve_static attach their result as
 SolverError.result); invalid arguments raise InputError (a ValueError), unknown names KeyError
@@ -256,13 +380,25 @@ and indices out of range IndexError.)doc")
           "Velocities (nv; writable view): per free node the body velocity [v (m/s); w (rad/s)] "
           "in the node frame, then the joint-coordinate rates [m/s or rad/s] (Model docs). "
           "Assigning copies into the existing array.")
-      .def_property_readonly(
-          "vdot", [](S& s) -> const Vector& { return s.data().vdot; },
-          "Accelerations (nv; read-only view): time derivatives of v [m/s^2, rad/s^2], same "
+      .def_property(
+          "vdot", [](S& s) -> Vector& { return s.data().vdot; },
+          [](S& s, const Eigen::Ref<const Vector>& v) {
+            if (v.size() != s.data().vdot.size())
+              throw InputError("Simulation.vdot: expected " +
+                               std::to_string(s.data().vdot.size()) + " values");
+            s.data().vdot = v;
+          },
+          "Accelerations (nv; writable view): time derivatives of v [m/s^2, rad/s^2], same "
           "layout and frames as v.")
-      .def_property_readonly(
-          "lambda_", [](S& s) -> const Vector& { return s.data().lambda; },
-          "Lagrange multipliers (nc; read-only view): generalised constraint forces [N, N m] "
+      .def_property(
+          "lambda_", [](S& s) -> Vector& { return s.data().lambda; },
+          [](S& s, const Eigen::Ref<const Vector>& v) {
+            if (v.size() != s.data().lambda.size())
+              throw InputError("Simulation.lambda_: expected " +
+                               std::to_string(s.data().lambda.size()) + " values");
+            s.data().lambda = v;
+          },
+          "Lagrange multipliers (nc; writable view): generalised constraint forces [N, N m] "
           "conjugate to the constraint rows (6 relative-frame rows per joint from Joint.row, "
           "one row per prescribed drive from Joint.drive_row; method.md §4.3-4.4).")
       .def_property_readonly(
@@ -518,6 +654,170 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "otherwise -(K (alpha - rest) + D alpha_dot) of the joint's spring and damper, "
           "otherwise 0.")
 
+      .def_property_readonly(
+          "inputs", [](S& s) { return InputsView{&s}; }, py::keep_alive<0, 1>(),
+          "The run-time input values by name (the scene's inputs section; MuJoCo's data.ctrl): "
+          "sim.inputs['u'] = 0.3 between steps sets the value every profile of type input "
+          "named u takes during the next steps. Supports [], len, iteration over the names, "
+          "keys(), values() and 'name' in.")
+      .def_property(
+          "input_values", [](S& s) -> Vector& { return s.data().inputs; },
+          [](S& s, const Eigen::Ref<const Vector>& u) {
+            if (u.size() != s.data().inputs.size())
+              throw InputError("Simulation.input_values: expected " +
+                               std::to_string(s.data().inputs.size()) + " values, got " +
+                               std::to_string(u.size()));
+            if (!u.allFinite()) throw InputError("Simulation.input_values: must be finite");
+            s.data().inputs = u;
+          },
+          "All input values in Model.inputs order (writable view of Data::inputs).")
+      .def(
+          "restart",
+          [](S& s) {
+            if (!s.initialized())
+              throw std::logic_error("Simulation.restart: call initialize() first");
+            std::string why;
+            if (!RestartDynamics(s.model(), s.data(), s.integrator(), &why))
+              RaiseSolverError(why, py::none());
+          },
+          "restart()\n\nRestartDynamics: consistent accelerations and multipliers at the current "
+          "state, time and input values, as at a profile breakpoint. Stepping does not restart "
+          "when an input changes (docs/numerics.md, \"Run-time inputs\"); call this after a "
+          "large jump of an input if its ringing in the accelerations matters.")
+      .def(
+          "set_joint_stiffness",
+          [](S& s, const std::string& j, const Eigen::Ref<const Vector>& k) {
+            s.SetJointSprings(s.JointIndex(j), k, false);
+          },
+          py::arg("joint"), py::arg("stiffness"),
+          "set_joint_stiffness(joint, stiffness)\n\nThe joint's spring stiffness per spring "
+          "(JointSpringCount values, >= 0) [N/m or N m/rad], from the next step on (the "
+          "simulation's own copy of the model; scene unchanged).")
+      .def(
+          "set_joint_damping",
+          [](S& s, const std::string& j, const Eigen::Ref<const Vector>& d) {
+            s.SetJointSprings(s.JointIndex(j), d, true);
+          },
+          py::arg("joint"), py::arg("damping"),
+          "set_joint_damping(joint, damping)\n\nThe joint's damper values, as "
+          "set_joint_stiffness.")
+      .def(
+          "get_state", [](S& s) { return s.GetState(); },
+          "get_state() -> SimulationState\n\nA copy of everything stepping continues from "
+          "(time, node and joint frames, joint coordinates, velocities, accelerations, "
+          "multipliers, input values, the integrator's auxiliary acceleration; "
+          "SaveSimulationState). set_state(s) and stepping repeats the same steps bit for bit.")
+      .def(
+          "set_state", [](S& s, const SimulationState& st) { s.SetState(st); }, py::arg("state"),
+          "set_state(state)\n\nRestores a state from get_state() of a simulation of the same "
+          "scene (InputError if the sizes differ). The integrator stays initialised.")
+      .def(
+          "node_frames", [](S& s) {
+            std::vector<int> all(s.model().nodes.size());
+            for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+            return NodeFrames(s.data(), all, FramePart::kMatrix);
+          },
+          "node_frames() -> (n, 4, 4) array\n\nEvery node's frame H (a copy).")
+      .def(
+          "set_node_frames",
+          [](S& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& a) {
+            const auto n = static_cast<py::ssize_t>(s.data().H.size());
+            if (a.ndim() != 3 || a.shape(0) != n || a.shape(1) != 4 || a.shape(2) != 4)
+              throw InputError("Simulation.set_node_frames: expected an array of shape (" +
+                               std::to_string(n) + ", 4, 4)");
+            const double* p = a.data();
+            for (py::ssize_t i = 0; i < n; ++i, p += 16) {
+              SE3 H;
+              for (int r = 0; r < 3; ++r) {
+                for (int c = 0; c < 3; ++c) H.R(r, c) = p[4 * r + c];
+                H.x(r) = p[4 * r + 3];
+              }
+              if (!H.R.allFinite() || !H.x.allFinite() ||
+                  (H.R.transpose() * H.R - Mat3::Identity()).cwiseAbs().maxCoeff() > 1e-9 ||
+                  H.R.determinant() < 0.0)
+                throw InputError("Simulation.set_node_frames: frame " + std::to_string(i) +
+                                 " is not a finite rigid transformation");
+              s.data().H[static_cast<std::size_t>(i)] = H;
+            }
+          },
+          py::arg("frames"),
+          "set_node_frames(frames)\n\nSets every node's frame from an (n, 4, 4) array (the "
+          "caller keeps fixed nodes and joints consistent; call initialize() before stepping).")
+      .def(
+          "rod_centerline",
+          [](S& s, const std::string& r) {
+            return NodeFrames(s.data(), s.model().rods[s.Rod(r)].nodes, FramePart::kPosition);
+          },
+          py::arg("rod"))
+      .def(
+          "rod_centerline",
+          [](S& s, long r) {
+            return NodeFrames(s.data(), s.model().rods[s.Rod(r)].nodes, FramePart::kPosition);
+          },
+          py::arg("rod"),
+          "rod_centerline(rod) -> (n, 3) array\n\nWorld positions [m] of the rod's n nodes "
+          "(num_elements + 1), from its first node (a copy).")
+      .def(
+          "rod_rotations",
+          [](S& s, const std::string& r) {
+            return NodeFrames(s.data(), s.model().rods[s.Rod(r)].nodes, FramePart::kRotation);
+          },
+          py::arg("rod"))
+      .def(
+          "rod_rotations",
+          [](S& s, long r) {
+            return NodeFrames(s.data(), s.model().rods[s.Rod(r)].nodes, FramePart::kRotation);
+          },
+          py::arg("rod"),
+          "rod_rotations(rod) -> (n, 3, 3) array\n\nSection rotations R (columns: the section "
+          "axes in world components) at the rod's n nodes (a copy).")
+
+      .def(
+          "joint_reaction",
+          [](S& s, const std::string& j) {
+            return CalcJointReaction(s.model(), s.data(), s.JointIndex(j));
+          },
+          py::arg("joint"))
+      .def(
+          "joint_reaction",
+          [](S& s, long j) { return CalcJointReaction(s.model(), s.data(), s.JointIndex(j)); },
+          py::arg("joint"),
+          "joint_reaction(joint) -> array(6)\n\nForce [N] and moment [N m] the joint transmits "
+          "to its side B, world components, moment about the joint point on side B "
+          "(CalcJointReaction; the reactions.csv columns).")
+      .def(
+          "calc_momentum", [](S& s) { return CalcMomentum(s.model(), s.data()); },
+          "calc_momentum() -> array(6)\n\nLinear [kg m/s] and angular momentum about the world "
+          "origin [kg m^2/s], world components (CalcMomentum; energy.csv px..Lz).")
+      .def(
+          "body_orientation",
+          [](S& s, const std::string& b) {
+            const int i = s.model().FindBody(b);
+            if (i < 0) throw py::key_error("no rigid body named '" + b + "'");
+            const Eigen::Quaterniond q(
+                s.data().H[static_cast<std::size_t>(s.model().bodies[static_cast<std::size_t>(i)].node)].R);
+            Eigen::Vector4d out(q.w(), q.x(), q.y(), q.z());
+            if (out(0) < 0.0) out = -out;
+            return out;
+          },
+          py::arg("body"),
+          "body_orientation(body) -> array(4)\n\nOrientation of a rigid body's frame as a unit "
+          "quaternion [w, x, y, z] (w >= 0), world from body.")
+      .def(
+          "body_angular_velocity",
+          [](S& s, const std::string& b) {
+            const int i = s.model().FindBody(b);
+            if (i < 0) throw py::key_error("no rigid body named '" + b + "'");
+            const Node& n = s.model().nodes[static_cast<std::size_t>(
+                s.model().bodies[static_cast<std::size_t>(i)].node)];
+            if (n.dof < 0) return Vec3::Zero().eval();
+            return Vec3(s.data().H[static_cast<std::size_t>(
+                            s.model().bodies[static_cast<std::size_t>(i)].node)].R *
+                        s.data().v.segment<3>(n.dof + 3));
+          },
+          py::arg("body"),
+          "body_angular_velocity(body) -> array(3)\n\nAngular velocity of a rigid body [rad/s], "
+          "world components.")
       .def(
           "calc_energy", [](S& s) { return CalcEnergy(s.model(), s.data()); },
           "calc_energy() -> Energy\n\nKinetic, strain, spring and gravity energies of the "
@@ -534,6 +834,7 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
 
 void BindSimulation(py::module_& m) {
   BindResults(m);
+  BindInputs(m);
   BindSimulationClass(m);
 }
 

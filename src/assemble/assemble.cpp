@@ -470,7 +470,7 @@ void CalcVelocityConstraint(const Model& model, const Data& data, double time,
                             Eigen::Ref<Eigen::VectorXd> out) {
   CalcConstraintGradientTimes(model, data, data.v, out);
   for (const Joint& j : model.joints)
-    if (j.drive == DriveKind::kPrescribed) out(j.drive_row) -= j.drive_profile.Eval(time).rate;
+    if (j.drive == DriveKind::kPrescribed) out(j.drive_row) -= EvalProfile(j.drive_profile, time, data).rate;
 }
 
 double MaxConstraintViolation(const Model& model, Data& data, double time, double load_factor) {

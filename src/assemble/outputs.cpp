@@ -2,6 +2,9 @@
 
 #include <algorithm>
 
+#include "screwfem/elements/joint.h"
+#include "screwfem/elements/quadrature.h"
+#include "screwfem/elements/rigid_body.h"
 #include "screwfem/elements/rod.h"
 
 namespace screwfem {
@@ -64,6 +67,59 @@ void CalcRodStresses(const Model& model, const Data& data, int rod_index, std::v
                                          data.H[static_cast<std::size_t>(el.node_b)], data.w_ref[e]);
     (*out)[static_cast<std::size_t>(k)] = rod.section.stiffness.cwiseProduct((d - el.d0) / el.length);
   }
+}
+
+Vec6 CalcJointReaction(const Model& model, const Data& data, int joint) {
+  const Joint& j = model.joints[static_cast<std::size_t>(joint)];
+  Vec6 out = Vec6::Zero();
+  if (j.row < 0) return out;
+  const SE3& HB = NodeFrame(data, j.node_b);
+  JointGradient g;
+  CalcJointGradient(j, NodeFrame(data, j.node_a), HB, JointRelativeFrame(model, data, joint), &g);
+  // Constraint force on node B's velocity rows (body frame, about the node origin).
+  const Vec6 w = -(JointGradientB(g).transpose() * data.lambda.segment<6>(j.row));
+  const Vec3 f = HB.R * w.head<3>();
+  const Vec3 point = (HB * j.offset_b).x;
+  out.head<3>() = f;
+  out.tail<3>() = HB.R * w.tail<3>() + (HB.x - point).cross(f);
+  return out;
+}
+
+namespace {
+// Adds the momentum h = [p; L] (body frame, about the frame origin) of a frame H to the world
+// momentum about the world origin.
+void AddWorldMomentum(const SE3& H, const Vec6& h, Vec6* out) {
+  const Vec3 p = H.R * h.head<3>();
+  out->head<3>() += p;
+  out->tail<3>() += H.R * h.tail<3>() + H.x.cross(p);
+}
+}  // namespace
+
+Vec6 CalcMomentum(const Model& model, const Data& data) {
+  Vec6 out = Vec6::Zero();
+  for (const RigidBody& b : model.bodies) {
+    const Node& n = model.nodes[static_cast<std::size_t>(b.node)];
+    if (n.dof < 0) continue;
+    AddWorldMomentum(data.H[static_cast<std::size_t>(b.node)],
+                     RigidBodyMass(b) * data.v.segment<6>(n.dof), &out);
+  }
+  for (std::size_t e = 0; e < model.elements.size(); ++e) {
+    const RodElement& el = model.elements[e];
+    const Section& section = model.rods[static_cast<std::size_t>(el.rod)].section;
+    const SE3& HA = data.H[static_cast<std::size_t>(el.node_a)];
+    const Vec6 d = CalcRodRelativeMotion(HA, data.H[static_cast<std::size_t>(el.node_b)],
+                                         data.w_ref[e]);
+    const int nodes[2] = {el.node_a, el.node_b};
+    Vec12 eta_ab;
+    GatherNodeMotion<2>(model, data, nodes, &eta_ab, nullptr);
+    for (int i = 0; i < kGauss3Points; ++i) {
+      const double xi = kGauss3Xi[i];
+      const Vec6 eta = CalcRodN(xi, d) * eta_ab;
+      AddWorldMomentum(HA * ExpSE3(xi * d),
+                       el.length * kGauss3W[i] * section.inertia.cwiseProduct(eta), &out);
+    }
+  }
+  return out;
 }
 
 }  // namespace screwfem

@@ -34,10 +34,12 @@ std::string OwnerLabel(const Model& m, int node) {
   return NodeLabel(m, node);
 }
 
-// Profile::Validate, with the entity that owns the profile in the error.
-void ValidateProfile(const Profile& profile, const std::string& label, const EntityRef& entity) {
+// Profile::Validate (input terms refer to one of the model's inputs), with the entity that owns
+// the profile in the error.
+void ValidateProfile(const Model& m, const Profile& profile, const std::string& label,
+                     const EntityRef& entity) {
   try {
-    profile.Validate(label.c_str());
+    profile.Validate(label.c_str(), static_cast<int>(m.inputs.size()));
   } catch (const InputError& e) {
     throw InputError(e.what(), entity);
   }
@@ -317,6 +319,10 @@ int ModelBuilder::AddJoint(const JointSpec& spec) {
   j.drive = spec.drive;
   j.drive_coord = spec.drive_coordinate;
   j.drive_profile = spec.drive_profile;
+  j.has_initial_coordinate = spec.has_initial_coordinate;
+  j.initial_coordinate = spec.initial_coordinate;
+  j.has_initial_rate = spec.has_initial_rate;
+  j.initial_rate = spec.initial_rate;
   return index;
 }
 
@@ -370,6 +376,18 @@ int ModelBuilder::AddRodLoad(const RodLoad& load) {
 
 void ModelBuilder::SetGravity(const Vec3& g) { model_.gravity = g; }
 
+void ModelBuilder::SetInitialVelocity(int node, const Vec6& velocity) {
+  if (node < 0 || node >= static_cast<int>(model_.nodes.size()))
+    throw InputError("initial velocity: invalid node " + std::to_string(node));
+  model_.nodes[static_cast<std::size_t>(node)].has_initial_velocity = true;
+  model_.nodes[static_cast<std::size_t>(node)].initial_velocity = velocity;
+}
+
+int ModelBuilder::AddInput(std::string name, double default_value) {
+  model_.inputs.push_back(ModelInput{std::move(name), default_value});
+  return static_cast<int>(model_.inputs.size()) - 1;
+}
+
 namespace {
 
 // Node frames are finite rigid transformations with unique names; gravity is finite.
@@ -384,9 +402,22 @@ void ValidateNodes(const Model& m) {
                          entity);
       if (!n.name.empty() && !names.insert(n.name).second)
         throw InputError("duplicate node name '" + n.name + "'", entity);
+      if (n.has_initial_velocity && !n.initial_velocity.allFinite())
+        throw InputError("node '" + n.name + "': initial velocity must be finite", entity);
+      if (n.has_initial_velocity && n.fixed && !n.initial_velocity.isZero())
+        throw InputError("node '" + n.name + "': a fixed node cannot have an initial velocity",
+                         entity);
     }
   }
   if (!m.gravity.allFinite()) throw InputError("gravity must be finite");
+  std::set<std::string> input_names;
+  for (const ModelInput& in : m.inputs) {
+    if (in.name.empty()) throw InputError("inputs: an input needs a name");
+    if (!input_names.insert(in.name).second)
+      throw InputError("inputs: duplicate input name '" + in.name + "'");
+    if (!std::isfinite(in.default_value))
+      throw InputError("inputs: the default of input '" + in.name + "' must be finite");
+  }
 }
 
 // Rod sections and the elements of every rod (reference relative motion d0, length); marks
@@ -506,8 +537,14 @@ void ValidateJoints(const Model& m, std::vector<char>& used) {
         if (!JointHasGlobalCoordinates(j.type))
           throw InputError(label + ": drives need a joint with global coordinates (not " +
                            JointTypeName(j.type) + ")", entity);
-        ValidateProfile(j.drive_profile, label, entity);
+        ValidateProfile(m, j.drive_profile, label, entity);
       }
+      if ((j.has_initial_coordinate && !j.initial_coordinate.allFinite()) ||
+          (j.has_initial_rate && !j.initial_rate.allFinite()))
+        throw InputError(label + ": initial coordinates and rates must be finite", entity);
+      if (j.has_initial_coordinate && !JointHasGlobalCoordinates(j.type))
+        throw InputError(label + ": initial coordinates need a joint with global coordinates "
+                         "(not " + JointTypeName(j.type) + ")", entity);
       if (!j.name.empty() && !names.insert(j.name).second)
         throw InputError("duplicate joint name '" + j.name + "'", entity);
       if (j.node_a != kGround) used[static_cast<std::size_t>(j.node_a)] = 1;
@@ -528,7 +565,7 @@ void PlaceLoads(Model& m) {
     const std::string label = "point load on " + NodeLabel(m, l.node);
     if (!l.force.allFinite() || !l.moment.allFinite() || !l.point.allFinite())
       throw InputError(label + ": values must be finite", entity);
-    ValidateProfile(l.profile, label, entity);
+    ValidateProfile(m, l.profile, label, entity);
   }
   for (std::size_t i = 0; i < m.rod_loads.size(); ++i) {
     RodLoad& l = m.rod_loads[i];
@@ -539,7 +576,7 @@ void PlaceLoads(Model& m) {
     const std::string label = "load on rod '" + rod.name + "'";
     if (!l.force.allFinite() || !l.moment.allFinite())
       throw InputError(label + ": values must be finite", entity);
-    ValidateProfile(l.profile, label, entity);
+    ValidateProfile(m, l.profile, label, entity);
     if (l.distributed) continue;
     if (!(l.arc_length >= 0.0 && l.arc_length <= rod.length * (1.0 + 1e-12)))
       throw InputError(
@@ -579,6 +616,9 @@ double ProfileLowerBound(const Profile& profile) {
         bound += lo;
         break;
       }
+      // A run-time input can take any value; the tension is clamped at 0 when it arrives
+      // (TendonTension), so it adds nothing to the bound checked here.
+      case ProfileTerm::Kind::kInput: break;
     }
   }
   return bound;
@@ -625,7 +665,7 @@ void BuildTendons(Model& m) {
                          {EntityKind::kTendon, index, part}, what);
       }
     }
-    ValidateProfile(t.tension, label + " tension", entity);
+    ValidateProfile(m, t.tension, label + " tension", entity);
     const double lower = ProfileLowerBound(t.tension);
     if (lower < 0.0)
       throw InputError(label + ": the tension profile can become negative (its terms' lower "
@@ -667,7 +707,7 @@ void BuildForceElements(Model& m) {
                        {EntityKind::kForceElement, index, "b"},
                        "coincides with end a in the reference configuration");
     if (f.rest_length < 0.0) f.rest_length = l;
-    ValidateProfile(f.actuator, label + " actuator", entity);
+    ValidateProfile(m, f.actuator, label + " actuator", entity);
     if (!f.name.empty() && !names.insert(f.name).second)
       throw InputError("duplicate force element name '" + f.name + "'", entity);
   }

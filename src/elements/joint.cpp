@@ -253,7 +253,7 @@ void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, d
   // A series-elastic drive moves the rest of its coordinate to q(t) (method.md §4.5).
   Vec6 rest = j.rest, rest_rate = Vec6::Zero();
   ProfileValue drive{};
-  if (j.drive != DriveKind::kNone) drive = j.drive_profile.Eval(time);
+  if (j.drive != DriveKind::kNone) drive = EvalProfile(j.drive_profile, time, data);
   if (j.drive == DriveKind::kSeriesElastic) {
     rest(j.drive_coord) += load_factor * drive.value;
     rest_rate(j.drive_coord) = load_factor * drive.rate;
@@ -327,7 +327,7 @@ double CalcMaxJointConstraint(const Model& model, const Data& data, double time)
       r = std::max(r, JointConstraint(model, data, static_cast<int>(jj)).cwiseAbs().maxCoeff());
     if (j.drive == DriveKind::kPrescribed)
       r = std::max(r, std::abs(data.q_joint(j.coord + j.drive_coord - model.nv_nodes) -
-                               j.drive_profile(time)));
+                               EvalProfile(j.drive_profile, time, data).value));
   }
   return r;
 }
@@ -388,10 +388,10 @@ double JointDriveEffort(const Model& model, const Data& data, int joint) {
     case DriveKind::kPrescribed:
       return -data.lambda(j.drive_row);
     case DriveKind::kForce:
-      return j.drive_profile(data.time);
+      return EvalProfile(j.drive_profile, data.time, data).value;
     case DriveKind::kSeriesElastic: {
       const int c = j.coord + j.drive_coord;
-      const ProfileValue q = j.drive_profile.Eval(data.time);
+      const ProfileValue q = EvalProfile(j.drive_profile, data.time, data);
       const double alpha = data.q_joint(c - model.nv_nodes);
       return j.stiffness(j.drive_coord) * (q.value + j.rest(j.drive_coord) - alpha) +
              j.damping(j.drive_coord) * (q.rate - data.v(c));
@@ -429,7 +429,7 @@ double JointSpringEnergy(const Model& model, const Data& data, int joint) {
   for (int c = 0; c < k; ++c) {
     double rest = j.rest(c);
     if (j.drive == DriveKind::kSeriesElastic && c == j.drive_coord)
-      rest += j.drive_profile(data.time);
+      rest += EvalProfile(j.drive_profile, data.time, data).value;
     const double delta = alpha(c) - rest;
     energy += 0.5 * j.stiffness(c) * delta * delta;
   }

@@ -12,13 +12,13 @@ void AddDeadForce(const Vec3& f, const Vec3& p, Vec6* g, Mat6* K) {
   K->bottomRightCorner<3, 3>() -= Skew(p) * Sf;
 }
 
-bool PointLoadKind::Calc(const Model& model, const Data&, const Item& load,
+bool PointLoadKind::Calc(const Model& model, const Data& data, const Item& load,
                          const NodeMotion<1>& motion, const KernelOptions& o,
                          ElementTerms<1>* t) {
   const PointLoad& l = model.point_loads[static_cast<std::size_t>(load)];
   const double scale = model.nodes[static_cast<std::size_t>(l.node)].dof < 0
                            ? 0.0
-                           : o.load_factor * l.profile(o.time);
+                           : o.load_factor * EvalProfile(l.profile, o.time, data).value;
   if (scale == 0.0) {
     t->active = false;
     return true;
@@ -45,7 +45,7 @@ bool RodLoadKind::Calc(const Model& model, const Data& data, const Item& item,
                        const NodeMotion<2>& motion, const KernelOptions& o,
                        ElementTerms<2>* t) {
   const RodLoad& l = model.rod_loads[static_cast<std::size_t>(item.load)];
-  const double scale = o.load_factor * l.profile(o.time);
+  const double scale = o.load_factor * EvalProfile(l.profile, o.time, data).value;
   if (scale == 0.0) {
     t->active = false;
     return true;

@@ -63,15 +63,16 @@ bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Ve
   return true;
 }
 
-double TendonTension(const Tendon& tendon, double time, double load_factor) {
-  return std::max(0.0, load_factor * tendon.tension(time));
+double TendonTension(const Tendon& tendon, const Data& data, double time, double load_factor) {
+  return std::max(0.0, load_factor * EvalProfile(tendon.tension, time, data).value);
 }
 
-bool TendonSegmentKind::Calc(const Model& model, const Data&, const Item& segment,
+bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& segment,
                              const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
   const TendonSegment& s = model.tendon_segments[static_cast<std::size_t>(segment)];
   const double tau =
-      TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], o.time, o.load_factor);
+      TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], data, o.time,
+                    o.load_factor);
   if (tau == 0.0) {
     t->active = false;
     return true;
@@ -92,7 +93,7 @@ bool TendonSegmentKind::Calc(const Model& model, const Data&, const Item& segmen
   return true;
 }
 
-bool ForceElementKind::Calc(const Model& model, const Data&, const Item& element,
+bool ForceElementKind::Calc(const Model& model, const Data& data, const Item& element,
                             const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
   const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
   PointDistance g;
@@ -100,7 +101,7 @@ bool ForceElementKind::Calc(const Model& model, const Data&, const Item& element
     t->active = false;  // coinciding ends: no direction, no force
     return true;
   }
-  const double actuator = o.load_factor * fe.actuator(o.time);
+  const double actuator = o.load_factor * EvalProfile(fe.actuator, o.time, data).value;
   const bool damped = o.dynamics && fe.damping != 0.0;
   const double rate = damped ? g.gradient.dot(x.eta) : 0.0;
   const double f = fe.stiffness * (g.length - fe.rest_length) + fe.damping * rate + actuator;
@@ -153,7 +154,7 @@ LineForceState CalcTendonState(const Model& model, const Data& data, int tendon)
   LineForceState s;
   for (std::size_t k = 0; k + 1 < td.eyelets.size(); ++k)
     AddSegmentState(model, data, td.eyelets[k], td.eyelets[k + 1], &s);
-  s.force = TendonTension(td, data.time);
+  s.force = TendonTension(td, data, data.time);
   return s;
 }
 
@@ -161,7 +162,8 @@ LineForceState CalcForceElementState(const Model& model, const Data& data, int e
   const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
   LineForceState s;
   AddSegmentState(model, data, fe.a, fe.b, &s);
-  s.force = fe.stiffness * (s.length - fe.rest_length) + fe.damping * s.rate + fe.actuator(data.time);
+  s.force = fe.stiffness * (s.length - fe.rest_length) + fe.damping * s.rate +
+            EvalProfile(fe.actuator, data.time, data).value;
   return s;
 }
 

@@ -20,6 +20,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/io/progress.h"
 #include "screwfem/io/schedule.h"
+#include "screwfem/solve/initial_state.h"
 #include "screwfem/io/vtk.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
@@ -159,7 +160,8 @@ void PrepareOutputDirectory(const std::string& dir, bool replace) {
   std::vector<fs::path> own;
   std::error_code ec;
   for (const char* name :
-       {"summary.json", "summary.json.tmp", "points.csv", "joints.csv", "joints.json"})
+       {"summary.json", "summary.json.tmp", "points.csv", "joints.csv", "joints.json",
+        "reactions.csv", "energy.csv"})
     if (fs::exists(fs::path(dir) / name, ec)) own.push_back(fs::path(dir) / name);
   const fs::path vtk = fs::path(dir) / "vtk";
   if (fs::is_directory(vtk, ec))
@@ -201,6 +203,8 @@ class Run {
       points_.Open(outdir + "/points.csv", StaticColumns(PointColumns(scene.outputs.points)));
       joints_.Open(outdir + "/joints.csv",
                    StaticColumns(JointColumns(model_, scene.outputs.joints)));
+      reactions_.Open(outdir + "/reactions.csv", StaticColumns(ReactionColumns(model_)));
+      energy_.Open(outdir + "/energy.csv", StaticColumns(EnergyColumns()));
       // Tendons and force elements: their tables only when the model has them.
       if (!model_.tendons.empty()) {
         tendons_.Open(outdir + "/tendons.csv", StaticColumns(TendonColumns(model_)));
@@ -303,9 +307,21 @@ class Run {
 
   // Static analyses record a row at every converged load step (the path), the ParaView frame
   // at the end only (every row has the same time).
+  // The scene's initial coordinates and velocities (solve/initial_state.h).
+  bool AssembleInitial() {
+    std::string why;
+    if (AssembleInitialState(model_, data_, &why)) return true;
+    Finish("failed", Format("initial state at t = %.9g s: ", data_.time) + why);
+    return false;
+  }
+
+  // Static analyses record a row at every converged load step (the path), the ParaView frame
+  // at the end only (every row has the same time).
   void RunStatic() {
     const StaticOptions& so = scene_.analysis.statics;
     data_.time = so.time;
+    SetInputsAt(options_.inputs, so.time, data_);
+    if (!AssembleInitial()) return;
     static_ = SolveStatic(model_, data_, so, options_.stop, [&](const StaticStep& step) {
       load_factor_ = step.load_factor;
       if (!finished_) Record(so.time, true, false);
@@ -339,6 +355,8 @@ class Run {
   void RunDynamic() {
     const AnalysisSettings& a = scene_.analysis;
     data_.time = a.start_time;
+    SetInputsAt(options_.inputs, a.start_time, data_);
+    if (!AssembleInitial()) return;
     if (a.static_preload) {
       StaticOptions so = a.statics;
       so.time = a.start_time;
@@ -386,8 +404,11 @@ class Run {
         return;
       }
       // step: auto: one error-controlled step, which lands exactly on end_time (and on profile
-      // breakpoints); the rows and frames due inside it are interpolated.
+      // breakpoints); the rows and frames due inside it are interpolated. Run-time inputs from
+      // a table are held over each step: at the step's end with fixed steps (t_next), at its
+      // start with error-controlled steps (whose end is not known before the step).
       double t_next = a.adaptive_steps ? a.end_time : schedule.Next(data_.time);
+      SetInputsAt(options_.inputs, a.adaptive_steps ? data_.time : t_next, data_);
       const StepResult step =
           a.adaptive_steps ? AdaptiveStep(model_, data_, integ_, a.end_time, options_.stop)
                            : Step(model_, data_, integ_, t_next - data_.time, options_.stop);
@@ -466,6 +487,10 @@ class Run {
       points_.WriteRow(t, WithLoadFactor(row_));
       CalcJointRow(model_, data, scene_.outputs.joints, &row_);
       joints_.WriteRow(t, WithLoadFactor(row_));
+      CalcReactionRow(model_, data, &row_);
+      reactions_.WriteRow(t, WithLoadFactor(row_));
+      CalcEnergyRow(model_, data, &row_);
+      energy_.WriteRow(t, WithLoadFactor(row_));
       if (tendons_.path().size() > 0) {
         CalcTendonRow(model_, data, &row_);
         tendons_.WriteRow(t, WithLoadFactor(row_));
@@ -651,10 +676,11 @@ class Run {
   Integrator integ_;
   StaticResult static_;
   bool has_static_ = false;
-  CsvWriter points_, joints_, tendons_, forces_;
-  // The open tables, flushed together (points.csv and joints.csv always).
-  std::array<CsvWriter*, 4> tables_ = {&points_, &joints_, nullptr, nullptr};
-  std::size_t num_tables_ = 2;
+  CsvWriter points_, joints_, reactions_, energy_, tendons_, forces_;
+  // The open tables, flushed together (points, joints, reactions and energy always).
+  std::array<CsvWriter*, 6> tables_ = {&points_, &joints_, &reactions_, &energy_, nullptr,
+                                       nullptr};
+  std::size_t num_tables_ = 4;
   std::optional<VtkWriter> vtk_;
   std::optional<ProgressBar> progress_;
   std::vector<double> row_;

@@ -164,6 +164,17 @@ void SceneCompiler::AddRigidBody(int b) {
   body_node_[static_cast<std::size_t>(b)] = node;
   body_index_[static_cast<std::size_t>(b)] =
       builder_.AddRigidBody(s.name, node, s.mass, s.com - s.origin, s.inertia);
+  if (s.has_initial_velocity) {
+    // The body frame is world-aligned at the origin in the reference configuration: its body
+    // velocity is the angular velocity and the velocity of the origin, v_com + w x (o - com).
+    const Vec3 arm = s.origin - s.com;
+    const Vec3 w = s.initial_angular;
+    const Vec3 velocity = s.initial_linear + w.cross(arm);
+    Vec6 v;
+    v.head<3>() = velocity;
+    v.tail<3>() = w;
+    builder_.SetInitialVelocity(node, v);
+  }
   rigid_body_.push_back(b);
 }
 
@@ -391,6 +402,7 @@ Scene SceneCompiler::Compile() {
   scene.source = src_.file;
   scene.name = spec_.name;
   builder_.SetGravity(spec_.gravity);
+  for (const auto& [name, default_value] : spec_.inputs) builder_.AddInput(name, default_value);
   builder_.model().rod_inertia = spec_.rod_inertia;
   AddBodies();
   AddJoints();

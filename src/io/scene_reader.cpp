@@ -25,7 +25,7 @@ using scene_yaml::Reader;
 // Maps of named entries: an override may not walk through an entry that does not exist.
 const std::vector<std::string> kCollections = {"points", "materials", "sections", "bodies",
                                                "joints", "loads",     "tendons",  "forces",
-                                               "outputs.points"};
+                                               "outputs.points", "inputs"};
 
 constexpr int kMaxElements = 100000;  // per rod (or per path segment)
 constexpr long kMaxTotalElements = 1000000;  // all rods of a scene
@@ -35,7 +35,8 @@ const char* const kGroundName = "ground";
 
 const std::vector<std::string> kBodyKeys = {
     "type", "between", "at",   "mass",    "inertia",  "com", "fixed",      "free",
-    "from", "to",      "path", "section", "elements", "up",  "weld_start", "weld_end"};
+    "from", "to",      "path", "section", "elements", "up",  "weld_start", "weld_end",
+    "initial_velocity"};
 
 std::string Join(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
@@ -63,6 +64,7 @@ class SceneReader {
   void ReadPoints(const Node* node);
   void ReadMaterials(const Node* node);
   void ReadSections(const Node* node);
+  void ReadInputs(const Node* node);
   void ReadBodies(const Node* node);
   void ReadRigidBody(const Node& n, const std::string& path, BodySpec& b);
   void ReadSoftBody(const Node& n, const std::string& path, BodySpec& b, EntitySource& source);
@@ -206,11 +208,11 @@ Profile SceneReader::ReadProfile(const Node& node, const std::string& path) cons
 }
 
 Profile SceneReader::ReadProfileTerm(const Node& node, const std::string& path) const {
-  r_.CheckKeys(node, path,
-               {"type", "value", "scale", "t0", "t1", "frequency", "phase", "times", "values"});
-  const std::string type =
-      r_.Choice(r_.Require(node, path, "type"), Join(path, "type"),
-                {"constant", "ramp", "bang_bang", "s_curve", "smooth_step", "sine", "table"});
+  r_.CheckKeys(node, path, {"type", "value", "scale", "t0", "t1", "frequency", "phase", "times",
+                            "values", "name"});
+  const std::string type = r_.Choice(
+      r_.Require(node, path, "type"), Join(path, "type"),
+      {"constant", "ramp", "bang_bang", "s_curve", "smooth_step", "sine", "table", "input"});
   const Node* value = node.Find("value");
   const Node* scale = node.Find("scale");
   if (value != nullptr && scale != nullptr)
@@ -223,6 +225,23 @@ Profile SceneReader::ReadProfileTerm(const Node& node, const std::string& path) 
     return n == nullptr ? fallback : r_.Number(*n, Join(path, key));
   };
   const std::string who = type + " profiles";
+  if (type != "input") NotUsedBy(node, path, {"name"}, who);
+  if (type == "input") {
+    // scale * (the run-time input `name`, declared in the scene's inputs section).
+    NotUsedBy(node, path, {"t0", "t1", "frequency", "phase", "times", "values"}, who);
+    const Node& nn = r_.Require(node, path, "name");
+    const std::string name = r_.Text(nn, Join(path, "name"));
+    std::vector<std::string> names;
+    for (std::size_t i = 0; i < spec_.inputs.size(); ++i) {
+      if (spec_.inputs[i].first == name) return Profile::Input(static_cast<int>(i), s);
+      names.push_back(spec_.inputs[i].first);
+    }
+    r_.Fail(nn.location, Join(path, "name"),
+            "unknown input '" + name + "'" +
+                (names.empty() ? std::string(" (the scene declares no inputs: add an inputs: "
+                                             "section, e.g. inputs: {" + name + ": 0.0})")
+                               : scene_yaml::UnknownNameHint(name, names)));
+  }
   if (type == "constant") {
     NotUsedBy(node, path, {"t0", "t1", "frequency", "phase", "times", "values"}, who);
     return Profile::Constant(s);
@@ -470,6 +489,15 @@ void SceneReader::ReadRigidBody(const Node& n, const std::string& path, BodySpec
   if (const Node* f = n.Find("free")) b.free = r_.Bool(*f, Join(path, "free"));
   if (b.fixed && b.free)
     r_.Fail(n.Find("free")->location, Join(path, "free"), "a body cannot be both fixed and free");
+  if (const Node* iv = n.Find("initial_velocity")) {
+    // {linear: [vx, vy, vz] (centre of mass, m/s), angular: [wx, wy, wz] (rad/s)}, world.
+    const std::string p = Join(path, "initial_velocity");
+    r_.CheckKeys(*iv, p, {"linear", "angular"});
+    if (b.fixed) r_.Fail(iv->location, p, "a fixed body cannot have an initial velocity");
+    b.has_initial_velocity = true;
+    if (const Node* v = iv->Find("linear")) b.initial_linear = r_.Vector3(*v, Join(p, "linear"));
+    if (const Node* w = iv->Find("angular")) b.initial_angular = r_.Vector3(*w, Join(p, "angular"));
+  }
 }
 
 // A 3x3 matrix, nine numbers, or three principal moments; symmetric positive definite.
@@ -507,7 +535,7 @@ Mat3 SceneReader::ReadInertia(const Node& in, const std::string& ip) const {
 void SceneReader::ReadSoftBody(const Node& n, const std::string& path, BodySpec& b,
                                EntitySource& source) {
   r_.CheckKeys(n, path, kBodyKeys);
-  NotUsedBy(n, path, {"between", "at", "mass", "inertia", "com", "fixed"},
+  NotUsedBy(n, path, {"between", "at", "mass", "inertia", "com", "fixed", "initial_velocity"},
             "soft bodies (a soft body is clamped to the ground by a fixed joint)");
   const Node& sn = r_.Require(n, path, "section");
   const std::string section_name = r_.Text(sn, Join(path, "section"));
@@ -592,7 +620,7 @@ void SceneReader::ReadJoints(const Node* node) {
     EntitySource& source = src_.joints.back();
     r_.CheckKeys(value, path,
                  {"type", "at", "between", "axis", "axis2", "pitch", "stiffness", "damping", "rest",
-                  "drive"});
+                  "drive", "initial_position", "initial_velocity"});
     const std::string type_name =
         r_.Choice(r_.Require(value, path, "type"), Join(path, "type"), JointTypeNameList());
     const JointTypeInfo& info = *FindJointType(type_name);
@@ -668,6 +696,16 @@ void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
   if (const Node* d = value.Find("damping"))
     j.damping = PerCoordinate(*d, Join(path, "damping"), springs, true);
   if (const Node* rest = value.Find("rest")) j.rest = PerCoordinate(*rest, Join(path, "rest"), k, false);
+  if (k == 0) NotUsedBy(value, path, {"initial_position", "initial_velocity"}, who);
+  if (!info.global_coordinates) NotUsedBy(value, path, {"initial_position"}, who);
+  if (const Node* q0 = value.Find("initial_position")) {
+    j.has_initial_coordinate = true;
+    j.initial_coordinate = PerCoordinate(*q0, Join(path, "initial_position"), k, false);
+  }
+  if (const Node* qd0 = value.Find("initial_velocity")) {
+    j.has_initial_rate = true;
+    j.initial_rate = PerCoordinate(*qd0, Join(path, "initial_velocity"), k, false);
+  }
   const Node* drive = value.Find("drive");
   if (drive == nullptr) return;
   const std::string dp = Join(path, "drive");
@@ -683,6 +721,14 @@ void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
     r_.Fail(drive->location, dp,
             "a series_elastic drive needs a positive stiffness on coordinate " +
                 std::to_string(j.drive_coordinate) + " (the spring it drives)");
+}
+
+// inputs: {NAME: DEFAULT, ...}: the run-time inputs that profiles take ({type: input, name}).
+void SceneReader::ReadInputs(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "inputs", "input");
+  for (const auto& [entry, value] : node->entries)
+    spec_.inputs.emplace_back(entry.key, r_.Number(value, Join("inputs", entry.key)));
 }
 
 void SceneReader::ReadLoads(const Node* node) {
@@ -1103,7 +1149,7 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
   r_.CheckKeys(root, "",
                {"name", "description", "units", "gravity", "defaults", "points", "materials",
                 "sections", "bodies", "joints", "loads", "tendons", "forces", "analysis",
-                "outputs"});
+                "outputs", "inputs"});
   spec_.name = default_name;
   if (const Node* n = root.Find("name")) spec_.name = r_.Text(*n, "name");
   if (const Node* d = root.Find("description"))
@@ -1115,6 +1161,7 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
   ReadPoints(root.Find("points"));
   ReadMaterials(root.Find("materials"));
   ReadSections(root.Find("sections"));
+  ReadInputs(root.Find("inputs"));
   ReadBodies(root.Find("bodies"));
   if (spec_.bodies.empty()) r_.Fail(root.location, "bodies", "the scene has no bodies");
   ReadJoints(root.Find("joints"));

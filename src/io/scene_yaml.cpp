@@ -604,6 +604,15 @@ std::string DidYouMean(const std::string& word, const std::vector<std::string>& 
   return c.empty() ? "" : " (did you mean '" + c + "'?)";
 }
 
+std::string UnknownNameHint(const std::string& word, const std::vector<std::string>& candidates) {
+  std::string hint = DidYouMean(word, candidates);
+  if (!hint.empty() || candidates.empty()) return hint;
+  hint = " (known: ";
+  for (std::size_t i = 0; i < candidates.size() && i < 8; ++i)
+    hint += (i ? ", " : "") + candidates[i];
+  return hint + (candidates.size() > 8 ? ", ...)" : ")");
+}
+
 bool EvaluateExpression(const std::string& text, double* value, std::string* error) {
   if (text.size() > kMaxExpression) {
     *error = "expression too long";

@@ -87,6 +87,8 @@ void ApplyOverride(Node& root, const std::string& override_text, const std::stri
 std::string Closest(const std::string& word, const std::vector<std::string>& candidates);
 // " (did you mean 'x'?)" or "".
 std::string DidYouMean(const std::string& word, const std::vector<std::string>& candidates);
+// DidYouMean, or when no candidate is close " (known: a, b, c)" (the first few).
+std::string UnknownNameHint(const std::string& word, const std::vector<std::string>& candidates);
 
 // ---------------------------------------------------------------------------------------------
 // Typed reading with messages. A Reader knows the source name; `path` is the dotted field name

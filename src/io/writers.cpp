@@ -68,6 +68,49 @@ std::vector<std::string> JointColumns(const Model& model, const std::vector<Outp
   return columns;
 }
 
+std::vector<std::string> ReactionColumns(const Model& model) {
+  static constexpr const char* kSuffix[6] = {"Fx", "Fy", "Fz", "Mx", "My", "Mz"};
+  std::vector<std::string> columns;
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    if (j.row < 0) continue;
+    std::string name = j.name;
+    if (name.empty()) name.append("J").append(std::to_string(jj));
+    for (const char* s : kSuffix) columns.push_back(name + "." + s);
+  }
+  return columns;
+}
+
+void CalcReactionRow(const Model& model, const Data& data, std::vector<double>* row) {
+  std::size_t n = 0;
+  for (const Joint& j : model.joints)
+    if (j.row >= 0) n += 6;
+  row->resize(n);
+  std::size_t i = 0;
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    if (model.joints[jj].row < 0) continue;
+    const Vec6 r = CalcJointReaction(model, data, static_cast<int>(jj));
+    for (int c = 0; c < 6; ++c) (*row)[i++] = r(c);
+  }
+}
+
+std::vector<std::string> EnergyColumns() {
+  return {"kinetic", "strain", "spring", "gravity", "total", "px", "py", "pz", "Lx", "Ly", "Lz"};
+}
+
+void CalcEnergyRow(const Model& model, const Data& data, std::vector<double>* row) {
+  const Energy e = CalcEnergy(model, data);
+  const Vec6 h = CalcMomentum(model, data);
+  row->resize(11);
+  double* r = row->data();
+  r[0] = e.kinetic;
+  r[1] = e.strain;
+  r[2] = e.spring;
+  r[3] = e.gravity;
+  r[4] = e.total();
+  for (int c = 0; c < 6; ++c) r[5 + c] = h(c);
+}
+
 std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJoint>& joints) {
   JsonWriter w;
   const auto null_field = [&w](const char* key) { w.Key(key).Number(std::nan("")); };  // null

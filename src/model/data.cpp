@@ -13,6 +13,9 @@ Data MakeData(const Model& model) {
   d.lambda = Eigen::VectorXd::Zero(model.nc);
   d.w_ref.resize(model.elements.size());
   for (std::size_t e = 0; e < model.elements.size(); ++e) d.w_ref[e] = model.elements[e].d0.tail<3>();
+  d.inputs.resize(static_cast<Eigen::Index>(model.inputs.size()));
+  for (std::size_t i = 0; i < model.inputs.size(); ++i)
+    d.inputs(static_cast<Eigen::Index>(i)) = model.inputs[i].default_value;
   d.residual = Eigen::VectorXd::Zero(model.num_unknowns());
   d.rhs = Eigen::VectorXd::Zero(model.num_unknowns());
   d.increment = Eigen::VectorXd::Zero(model.num_unknowns());

@@ -21,5 +21,6 @@ int Model::FindTendon(const std::string& name) const { return FindByName(tendons
 int Model::FindForceElement(const std::string& name) const {
   return FindByName(force_elements, name);
 }
+int Model::FindInput(const std::string& name) const { return FindByName(inputs, name); }
 
 }  // namespace screwfem

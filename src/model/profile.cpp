@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 
 #include "screwfem/model/errors.h"
@@ -12,7 +13,7 @@ namespace screwfem {
 
 namespace {
 
-ProfileValue EvalTerm(const ProfileTerm& p, double t) {
+ProfileValue EvalTerm(const ProfileTerm& p, double t, const Eigen::VectorXd* inputs) {
   ProfileValue r;
   const double s = p.scale;
   switch (p.kind) {
@@ -92,6 +93,13 @@ ProfileValue EvalTerm(const ProfileTerm& p, double t) {
       r.rate = s * slope;
       break;
     }
+    case ProfileTerm::Kind::kInput:
+      if (inputs == nullptr || p.input < 0 || p.input >= inputs->size())
+        throw std::logic_error(
+            "a profile that takes a run-time input was evaluated without the input values "
+            "(use EvalProfile(profile, t, data))");
+      r.value = s * (*inputs)(p.input);
+      break;
   }
   return r;
 }
@@ -143,6 +151,14 @@ Profile Profile::Table(std::vector<double> times, std::vector<double> values, do
   return Profile().Add(t);
 }
 
+Profile Profile::Input(int input, double scale) {
+  ProfileTerm t;
+  t.kind = ProfileTerm::Kind::kInput;
+  t.scale = scale;
+  t.input = input;
+  return Profile().Add(t);
+}
+
 Profile& Profile::Add(const ProfileTerm& term) {
   terms_.push_back(term);
   return *this;
@@ -152,7 +168,7 @@ Profile& Profile::Add(const Profile& other) {
   return *this;
 }
 
-void Profile::Validate(const char* where) const {
+void Profile::Validate(const char* where, int num_inputs) const {
   const std::string w(where);
   for (const ProfileTerm& p : terms_) {
     if (!std::isfinite(p.scale)) throw InputError(w + ": profile scale must be finite");
@@ -177,25 +193,45 @@ void Profile::Validate(const char* where) const {
             throw InputError(w + ": table profile times must be strictly increasing");
         }
         break;
+      case ProfileTerm::Kind::kInput:
+        if (p.input < 0 || p.input >= num_inputs)
+          throw InputError(w + ": profile takes input #" + std::to_string(p.input) +
+                           ", but the model has " + std::to_string(num_inputs) + " inputs");
+        break;
       case ProfileTerm::Kind::kConstant:
         break;
     }
   }
 }
 
-ProfileValue Profile::Eval(double t) const {
+namespace {
+ProfileValue Sum(const std::vector<ProfileTerm>& terms, double t, const Eigen::VectorXd* inputs) {
   ProfileValue sum;
-  for (const ProfileTerm& p : terms_) {
-    const ProfileValue v = EvalTerm(p, t);
+  for (const ProfileTerm& p : terms) {
+    const ProfileValue v = EvalTerm(p, t, inputs);
     sum.value += v.value;
     sum.rate += v.rate;
     sum.accel += v.accel;
   }
   return sum;
 }
+}  // namespace
 
+ProfileValue Profile::Eval(double t, const Eigen::VectorXd& inputs) const {
+  return Sum(terms_, t, &inputs);
+}
+ProfileValue Profile::EvalLeft(double t, const Eigen::VectorXd& inputs) const {
+  return Sum(terms_, std::nextafter(t, -std::numeric_limits<double>::infinity()), &inputs);
+}
+ProfileValue Profile::Eval(double t) const { return Sum(terms_, t, nullptr); }
 ProfileValue Profile::EvalLeft(double t) const {
-  return Eval(std::nextafter(t, -std::numeric_limits<double>::infinity()));
+  return Sum(terms_, std::nextafter(t, -std::numeric_limits<double>::infinity()), nullptr);
+}
+
+bool Profile::HasInputs() const {
+  for (const ProfileTerm& p : terms_)
+    if (p.kind == ProfileTerm::Kind::kInput) return true;
+  return false;
 }
 
 std::vector<double> Profile::Breakpoints() const {
@@ -218,6 +254,7 @@ std::vector<double> Profile::Breakpoints() const {
       case ProfileTerm::Kind::kTable:
         b.insert(b.end(), p.times.begin(), p.times.end());
         break;
+      case ProfileTerm::Kind::kInput:  // changes between steps only (docs/numerics.md)
       case ProfileTerm::Kind::kConstant:
         break;
     }

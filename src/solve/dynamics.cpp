@@ -125,7 +125,7 @@ bool ConsistentStart(const Model& model, Data& data, Integrator& integ, std::str
   data.residual.tail(nc) = integ.bdot_v;
   for (const Joint& j : model.joints)
     if (j.drive == DriveKind::kPrescribed)
-      data.residual(nv + j.drive_row) -= j.drive_profile.Eval(data.time).accel;
+      data.residual(nv + j.drive_row) -= EvalProfile(j.drive_profile, data.time, data).accel;
   if (!SolveAssembledSystem(model, data)) {
     if (message)
       *message =
@@ -890,6 +890,34 @@ void InterpolateStep(const Model& model, const Data& data, Integrator& integ, do
   out.lambda = (1.0 - th) * integ.dense_lambda0 + th * integ.dense_lambda1;
   out.w_ref = data.w_ref;
   out.time = t;
+
+void SaveSimulationState(const Data& data, const Integrator& integ, SimulationState* state) {
+  state->time = data.time;
+  SaveState(data, &state->q);
+  state->w_ref = data.w_ref;
+  state->v = data.v;
+  state->vdot = data.vdot;
+  state->lambda = data.lambda;
+  state->inputs = data.inputs;
+  state->a = integ.a;
+  state->use_last_acceleration = integ.use_last_acceleration;
+}
+
+void RestoreSimulationState(const SimulationState& state, Data& data, Integrator& integ) {
+  if (state.q.H.size() != data.H.size() || state.q.HJ.size() != data.HJ.size() ||
+      state.q.q_joint.size() != data.q_joint.size() || state.w_ref.size() != data.w_ref.size() ||
+      state.v.size() != data.v.size() || state.vdot.size() != data.vdot.size() ||
+      state.lambda.size() != data.lambda.size() || state.inputs.size() != data.inputs.size())
+    throw InputError("the saved state belongs to a different model (its sizes differ)");
+  data.time = state.time;
+  RestoreState(state.q, data);
+  data.w_ref = state.w_ref;
+  data.v = state.v;
+  data.vdot = state.vdot;
+  data.lambda = state.lambda;
+  data.inputs = state.inputs;
+  if (state.a.size() == integ.a.size()) integ.a = state.a;
+  integ.use_last_acceleration = state.use_last_acceleration;
 }
 
 }  // namespace screwfem

@@ -17,6 +17,7 @@
 
 #include <unistd.h>
 
+#include "screwfem/io/input_table.h"
 #include "screwfem/io/vtk.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/solve/dynamics.h"
@@ -129,6 +130,11 @@ Model MixedModel() {
   spring.damping = 0.5;
   spring.actuator = Profile::Sine(0.2, 3.0);
   b.AddForceElement(spring);
+  // A load that takes a run-time input (changed between the counted steps).
+  PointLoad driven = dead;
+  driven.node = b.model().rods[0].nodes[3];
+  driven.profile = Profile::Input(b.AddInput("u", 0.0), 0.5).Add(Profile::Constant(0.1));
+  b.AddPointLoad(driven);
   b.SetGravity(Vec3(0, 0, -9.81));
   (void)rod;
   return b.Build();
@@ -149,12 +155,30 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     std::string message;
     ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
     for (int i = 0; i < 3; ++i) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
+    // Set-up of the between-step work: an input table, a saved state, the output rows.
+    const InputTable table = ParseInputTable("t,u\n0,0\n0.02,1\n0.04,-1\n", "u.csv", model);
+    SimulationState saved;
+    SaveSimulationState(data, integ, &saved);
+    std::vector<double> reactions, energy;
+    CalcEnergyRow(model, data, &energy);
+    CalcReactionRow(model, data, &reactions);
     g_allocations = 0;
     g_counting = true;
     bool ok = true;
-    for (int i = 0; i < 50; ++i) ok = Step(model, data, integ, 1e-3).ok && ok;
+    for (int i = 0; i < 50; ++i) {
+      if (i < 25)
+        SetInputsAt(table, data.time + 1e-3, data);  // the CLI's --inputs
+      else
+        data.inputs(0) = 0.02 * i;  // Python's sim.inputs["u"] = ...
+      ok = Step(model, data, integ, 1e-3).ok && ok;
+      CalcEnergyRow(model, data, &energy);
+      CalcReactionRow(model, data, &reactions);
+    }
+    SaveSimulationState(data, integ, &saved);
+    RestoreSimulationState(saved, data, integ);
     g_counting = false;
     EXPECT_TRUE(ok);
+    EXPECT_NE(data.inputs(0), 0.0);
     EXPECT_GT(integ.iterations, 50);  // the steps really iterated
     EXPECT_GE(integ.restarts, 1);     // and restarted at the ramp's end
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";

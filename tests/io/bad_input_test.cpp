@@ -592,5 +592,12 @@ TEST(BadInput, ForceElementWithBothEndsOnTheGround) {
               "forces.f: missing key 'stiffness' (or 'damping', or 'force')");
 }
 
+TEST(BadInput, UnknownRunTimeInputName) {
+  ExpectError(kHead + "inputs: {u: 0}\nbodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], "
+                      "free: true}\nloads:\n  f: {body: b, at: A, force: [1, 0, 0], profile: "
+                      "{type: input, name: uu}}\n",
+              "bad.yaml:7:70", "loads.f.profile.name: unknown input 'uu' (did you mean 'u'?)");
+}
+
 }  // namespace
 }  // namespace screwfem

@@ -282,9 +282,9 @@ class NumpyArraysTest(unittest.TestCase):
         sim = sf.Simulation(sf.load_scene(PENDULUM))
         sim.initialize()
         v, vdot, lam, q = sim.v, sim.vdot, sim.lambda_, sim.q_joint
-        self.assertTrue(v.flags.writeable)
-        for array in (vdot, lam, q):
-            self.assertFalse(array.flags.writeable)
+        for array in (v, vdot, lam):  # writable: the state is set from Python
+            self.assertTrue(array.flags.writeable)
+        self.assertFalse(q.flags.writeable)
         for _ in range(20):
             sim.step(1e-3)
         # The arrays taken before stepping show the state after it, without a copy.
@@ -889,6 +889,109 @@ class ValidationTest(unittest.TestCase):
             with self.assertRaisesRegex(ValueError, "results of an earlier run"):
                 sf.run_scene(scene, outdir)
             self.assertTrue(sf.run_scene(scene, outdir, force=True).ok)
+
+
+
+CANTILEVER = """
+inputs: {u: 0.0}
+points: {A: [0, 0, 0], B: [0.3, 0, 0]}
+materials: {m: {E: 1e7, nu: 0.45, density: 1100}}
+sections: {s: {shape: circle, radius: 0.01, material: m}}
+bodies:
+  arm: {type: soft, from: A, to: B, section: s, elements: 6}
+joints:
+  clamp: {type: fixed, at: A, between: [ground, arm]}
+loads:
+  tip: {body: arm, at: B, force: [0, 0, 1], profile: {type: input, name: u}}
+analysis: {type: dynamic, end_time: 0.1, step: 2e-3}
+outputs: {points: {tip: {body: arm, at: B}}}
+"""
+
+
+class InputsAndStateTest(unittest.TestCase):
+    """Run-time inputs (sim.inputs), state save/restore, rod arrays, body outputs."""
+
+    def test_inputs_by_name_move_the_arm_and_unknown_names_raise(self):
+        sim = sf.Simulation(sf.parse_scene(CANTILEVER, "arm.yaml"))
+        self.assertEqual(list(sim.inputs.keys()), ["u"])
+        self.assertEqual(len(sim.inputs), 1)
+        self.assertIn("u", sim.inputs)
+        self.assertEqual(sim.model.input_names, ["u"])
+        with self.assertRaisesRegex(KeyError, "no input named 'v'"):
+            sim.inputs["v"] = 1.0
+        with self.assertRaises(ValueError):
+            sim.inputs["u"] = math.nan
+        sim.initialize()
+        sim.inputs["u"] = 0.5
+        self.assertEqual(sim.input_values[0], 0.5)
+        for _ in range(20):
+            sim.step(2e-3)
+        self.assertGreater(sim.point_motion("tip").position[2], 1e-4)  # pushed up
+
+    def test_restored_state_repeats_the_rollout_bit_for_bit(self):
+        sim = sf.Simulation(sf.parse_scene(CANTILEVER, "arm.yaml"))
+        sim.initialize()
+        sim.inputs["u"] = 0.2
+        for _ in range(5):
+            sim.step(2e-3)
+        saved = sim.get_state()
+        self.assertAlmostEqual(saved.time, 0.01, delta=1e-15)
+
+        def rollout():
+            for n in range(10):
+                sim.inputs["u"] = -0.1 * n
+                sim.step(2e-3)
+            return sim.rod_centerline("arm").copy(), sim.time
+
+        first, t1 = rollout()
+        sim.set_state(saved)
+        self.assertEqual(sim.inputs["u"], 0.2)
+        again, t2 = rollout()
+        self.assertEqual(t1, t2)
+        np.testing.assert_array_equal(first, again)
+
+    def test_rod_centerline_and_rotations(self):
+        sim = sf.Simulation(sf.parse_scene(CANTILEVER, "arm.yaml"))
+        x = sim.rod_centerline("arm")
+        self.assertEqual(x.shape, (7, 3))
+        np.testing.assert_allclose(x[:, 0], np.linspace(0.0, 0.3, 7), atol=1e-15)
+        r = sim.rod_rotations(0)
+        self.assertEqual(r.shape, (7, 3, 3))
+        for q in r:
+            np.testing.assert_allclose(q @ q.T, np.eye(3), atol=1e-14)
+        frames = sim.node_frames()
+        self.assertEqual(frames.shape, (7, 4, 4))
+        frames[:, 2, 3] += 0.01  # lift every node by 1 cm
+        sim.set_node_frames(frames)
+        np.testing.assert_allclose(sim.rod_centerline("arm")[:, 2], 0.01, atol=1e-15)
+        with self.assertRaises(ValueError):
+            sim.set_node_frames(np.zeros((7, 4, 4)))
+
+    def test_pendulum_started_by_scene_initial_state_and_body_outputs(self):
+        scene = sf.load_scene(PENDULUM, [
+            "joints.hinge.initial_position=pi/2", "joints.hinge.initial_velocity=0.5"])
+        sim = sf.Simulation(scene)
+        self.assertAlmostEqual(sim.joint_coordinate("hinge"), math.pi / 2, delta=1e-15)
+        np.testing.assert_allclose(sim.body_angular_velocity("link"), [0, 0.5, 0], atol=1e-14)
+        q = sim.body_orientation("link")  # rotation by pi/2 about y
+        np.testing.assert_allclose(q, [math.cos(math.pi / 4), 0, math.sin(math.pi / 4), 0],
+                                   atol=1e-14)
+        # Hanging at rest position with a rate: the hinge carries m g plus the centripetal
+        # force m d w^2, upwards, and no moment about its axis.
+        sim.initialize()
+        m, d, _, g, _ = pendulum_constants(sim.model)
+        r = sim.joint_reaction("hinge")
+        self.assertAlmostEqual(r[2], m * g + m * d * 0.25, delta=1e-9)
+        self.assertAlmostEqual(r[4], 0.0, delta=1e-12)
+        # A soft-joint stiffness set between steps acts at once: the hinge's effort is then the
+        # spring's -k (q - rest), rest 0, no damper.
+        with self.assertRaisesRegex(ValueError, "finite and >= 0"):
+            sim.set_joint_stiffness("hinge", [-1.0])
+        sim.set_joint_stiffness("hinge", [2.0])
+        self.assertAlmostEqual(sim.joint_effort("hinge"), -2.0 * sim.joint_coordinate("hinge"),
+                               delta=1e-12)
+        p = sim.calc_momentum()  # v_com = w x r_com = (0, 0.5, 0) x (0, 0, -d): along -x
+        self.assertAlmostEqual(p[0], -m * d * 0.5, delta=1e-14)
 
 
 if __name__ == "__main__":

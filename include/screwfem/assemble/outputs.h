@@ -35,4 +35,17 @@ RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod, doubl
 // N, V2, V3, T, M2, M3), written into out (size = number of elements).
 void CalcRodStresses(const Model& model, const Data& data, int rod, std::vector<Vec6>* out);
 
+// The force and moment [N; N m] a joint transmits to its side B (node_b) from side A, world
+// components, the moment about the origin of the joint frame on side B (H_B C_B): the
+// constraint force -B_B^T lambda of its six relative-frame rows (which carries the joint's
+// springs, dampers and drive too, as they act on the coordinates). Zero for joints without
+// constraint rows (free joints) and for redundant rows (held at zero). The reaction on side A
+// is the opposite force with the moment about the same point.
+Vec6 CalcJointReaction(const Model& model, const Data& data, int joint);
+
+// Linear momentum [kg m/s] and angular momentum about the world origin [kg m^2/s], world
+// components: rigid bodies exactly, rods by 3-point Gauss quadrature of the exact helical
+// velocity field eta(xi) = N(xi, d) eta_AB with the sectional mass matrix (method.md §2.5).
+Vec6 CalcMomentum(const Model& model, const Data& data);
+
 }  // namespace screwfem

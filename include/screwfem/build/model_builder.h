@@ -38,6 +38,10 @@ struct JointSpec {
   DriveKind drive = DriveKind::kNone;
   int drive_coordinate = 0;
   Profile drive_profile;
+  // Initial coordinates [m or rad] and rates [m/s or rad/s] (k values), assembled with the
+  // constraints before the start (AssembleInitialState, solve/initial_state.h).
+  bool has_initial_coordinate = false, has_initial_rate = false;
+  Vec6 initial_coordinate = Vec6::Zero(), initial_rate = Vec6::Zero();
 };
 
 // The result of ModelBuilder::FindNodeAt: the nearest node and its distance; node is -1 when
@@ -118,6 +122,11 @@ class ModelBuilder {
   int AddPointLoad(const PointLoad& load);
   int AddRodLoad(const RodLoad& load);
   void SetGravity(const Vec3& g);
+  // The initial body velocity of a node [v; w] in its frame (AssembleInitialState).
+  void SetInitialVelocity(int node, const Vec6& velocity);
+  // A run-time input (Model::inputs) that profiles take with Profile::Input(index); returns
+  // the index. Names are unique.
+  int AddInput(std::string name, double default_value = 0.0);
   Model& model() { return model_; }
 
   // Validates and computes sizes and the ordering. Throws InputError.

@@ -33,7 +33,8 @@ bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Ve
                        bool hessian, PointDistance* out);
 
 // The tension of a tendon at `time`: max(0, load_factor tau(t)) [N] (a tendon cannot push).
-double TendonTension(const Tendon& tendon, double time, double load_factor = 1.0);
+double TendonTension(const Tendon& tendon, const Data& data, double time,
+                     double load_factor = 1.0);
 
 // One straight segment of a tendon between consecutive eyelets: the residual rows
 // tau dl/d[dh_A; dh_B] and the stiffness tau d2l (method-next.md §N4.2, §N4.3 with prescribed

@@ -3,6 +3,9 @@
 // OUTDIR/points.csv   t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az (world, SI)
 // OUTDIR/joints.csv   t, then per joint J (per coordinate i for multi-DOF joints: J.i.q ...):
 //                     J.q J.qd J.qdd J.effort
+// OUTDIR/reactions.csv t, then per joint with constraint rows: J.Fx J.Fy J.Fz J.Mx J.My J.Mz
+//                     (CalcJointReaction: on side B, world, about the joint point)
+// OUTDIR/energy.csv   t, kinetic strain spring gravity total, px py pz, Lx Ly Lz (world)
 // OUTDIR/summary.json resolved settings, counts, steps, Newton iterations, halvings, wall time,
 //                     largest element rotation,
 //                     largest constraint residual, status and message
@@ -11,8 +14,8 @@
 // OUTDIR/.screwfem.lock  held (flock) by the running run, with its process id
 // Files are written as the run goes, in whole rows: the CSV rows are collected and written
 // when 64 KiB have accumulated, at least every 2 s of wall time (with the summary), before
-// every on_step callback and at the end of the run; points.csv and joints.csv always hold
-// the same rows. An interrupted run (stop request) leaves valid files up to the last
+// every on_step callback and at the end of the run; points.csv, joints.csv, reactions.csv and
+// energy.csv always hold the same rows. An interrupted run (stop request) leaves valid files up to the last
 // completed output step; the files of a killed process end with a complete row; a write
 // error (a full disk) cuts a torn row off, and the summary says which file failed and how
 // many rows the tables hold.
@@ -22,6 +25,7 @@
 #include <functional>
 #include <string>
 
+#include "screwfem/io/input_table.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/solve/stop.h"
 
@@ -44,6 +48,10 @@ struct RunOptions {
   // vtk/ frames) is refused unless this is set; then those files (and no others) are removed
   // first. The CLI's --force.
   bool replace_results = false;
+  // Run-time input values over time (the CLI's --inputs). Each step's inputs are the table's
+  // values at the step's end, where the implicit step evaluates its loads (docs/numerics.md,
+  // "Run-time inputs"); the start and a static analysis use those at their time.
+  InputTable inputs;
 };
 
 struct RunResult {

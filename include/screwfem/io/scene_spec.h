@@ -27,6 +27,9 @@ struct BodySpec {
   Vec3 com = Vec3::Zero();        // centre of mass [m], world
   double mass = 0.0;              // [kg]
   Mat3 inertia = Mat3::Identity();  // about the centre of mass, body frame [kg m^2]
+  // Initial velocity of the centre of mass [m/s] and angular velocity [rad/s], world.
+  bool has_initial_velocity = false;
+  Vec3 initial_linear = Vec3::Zero(), initial_angular = Vec3::Zero();
   // Soft bodies: ModelBuilder::AddRodAlongPath(name, path, elements, section, up, ...).
   std::vector<Vec3> path;         // at least two points [m], world
   int elements = 8;               // per path segment
@@ -111,6 +114,7 @@ struct SceneSpec {
   Vec3 gravity = Vec3::Zero();  // [m/s^2]
   RodInertia rod_inertia = RodInertia::kExact;
   std::vector<std::pair<std::string, Vec3>> points;  // named points [m], world
+  std::vector<std::pair<std::string, double>> inputs;  // run-time inputs and their defaults
   std::vector<BodySpec> bodies;
   std::vector<JointEntrySpec> joints;
   std::vector<LoadSpec> loads;

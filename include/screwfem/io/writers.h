@@ -56,6 +56,17 @@ std::vector<std::string> TendonColumns(const Model& model);
 std::vector<std::string> ForceColumns(const Model& model);
 void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row);
 void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row);
+// reactions.csv: per joint J of the model with constraint rows (every joint but free ones,
+// passive or driven, recorded or not), in model order: J.Fx J.Fy J.Fz J.Mx J.My J.Mz, the force
+// [N] and moment [N m] it transmits to its side B (CalcJointReaction, assemble/outputs.h: world
+// components, moment about the joint point on side B). J is the joint's name (J<index> when it
+// has none).
+std::vector<std::string> ReactionColumns(const Model& model);
+void CalcReactionRow(const Model& model, const Data& data, std::vector<double>* row);
+// energy.csv: kinetic strain spring gravity total [J] (CalcEnergy), px py pz [kg m/s] and
+// Lx Ly Lz [kg m^2/s] (CalcMomentum: world, angular momentum about the world origin).
+std::vector<std::string> EnergyColumns();
+void CalcEnergyRow(const Model& model, const Data& data, std::vector<double>* row);
 
 // ---- files -----------------------------------------------------------------------------------
 

@@ -17,6 +17,8 @@ struct Data {
   Eigen::VectorXd v, vdot;         // velocities and accelerations (nv)
   Eigen::VectorXd lambda;          // multipliers (nc)
   std::vector<Vec3> w_ref;         // per rod element: rotation vector on the current branch
+  Eigen::VectorXd inputs;          // values of the run-time inputs (Model::inputs), set between
+                                   // steps; profiles read them through EvalProfile
 
   // Workspaces of the Newton solvers.
   Eigen::VectorXd residual;        // global order, size nv + nc
@@ -34,6 +36,12 @@ struct Data {
 
 // Allocates Data for a model and sets the reference state (at rest).
 Data MakeData(const Model& model);
+
+// The one evaluation of a profile by a kernel or solver: at time t, with this simulation's
+// run-time input values (a profile with ProfileTerm::kInput terms reads data.inputs).
+inline ProfileValue EvalProfile(const Profile& profile, double t, const Data& data) {
+  return profile.Eval(t, data.inputs);
+}
 
 // The frame of the ground (the world frame).
 inline const SE3 kGroundFrame = SE3::Identity();

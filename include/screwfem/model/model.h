@@ -31,6 +31,10 @@ struct Node {
   SE3 reference;       // initial frame H_0
   bool fixed = false;  // clamped to the world: eliminated from the unknowns
   int dof = -1;        // first velocity index, or -1 when fixed
+  // Initial body velocity [v (m/s); w (rad/s)] in the node frame, held by AssembleInitialState
+  // (solve/initial_state.h) when given.
+  bool has_initial_velocity = false;
+  Vec6 initial_velocity = Vec6::Zero();
 };
 
 // One two-node helical element (method.md §2.2).
@@ -174,6 +178,9 @@ struct Joint {
   int drive_coord = 0;     // which coordinate (0..k-1)
   int drive_row = -1;      // multiplier row of a prescribed drive
   Profile drive_profile;   // q(t) [m or rad], or the force/torque f(t)
+  // Initial coordinates and rates (k values each), held by AssembleInitialState when given.
+  bool has_initial_coordinate = false, has_initial_rate = false;
+  Vec6 initial_coordinate = Vec6::Zero(), initial_rate = Vec6::Zero();
   // Coordinates (unknowns) of the joint: the columns of A_J. A free joint has none: its
   // relative motion is that of its two frames, with no constraint rows (JointSpringCount,
   // elements/joint.h, says how many springs a joint carries).
@@ -192,6 +199,13 @@ struct EnumNames<RodInertia> {
   }};
 };
 
+// A run-time input (MuJoCo's ctrl): a named value that any profile can take (ProfileTerm::kInput),
+// set between steps (Data::inputs; Python sim.inputs["name"], the CLI's --inputs table).
+struct ModelInput {
+  std::string name;
+  double default_value = 0.0;  // Data::inputs after MakeData
+};
+
 struct Model {
   std::vector<Node> nodes;
   std::vector<Rod> rods;
@@ -203,6 +217,7 @@ struct Model {
   std::vector<Tendon> tendons;
   std::vector<TendonSegment> tendon_segments;  // of all tendons, tendon by tendon (Build)
   std::vector<ForceElement> force_elements;
+  std::vector<ModelInput> inputs;
   Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
   RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
 
@@ -236,6 +251,7 @@ struct Model {
   int FindJoint(const std::string& name) const;
   int FindTendon(const std::string& name) const;
   int FindForceElement(const std::string& name) const;
+  int FindInput(const std::string& name) const;
 };
 
 // The reference frame H_0 of a node, or the identity for kGround (the one ground-or-node

@@ -4,6 +4,8 @@
 
 #include <vector>
 
+#include <Eigen/Core>
+
 namespace screwfem {
 
 struct ProfileValue {
@@ -21,12 +23,15 @@ struct ProfileTerm {
     kSmoothStep,  // quintic C2 step 10u^3 - 15u^4 + 6u^5 from 0 to scale on [t0, t1]
     kSine,        // scale * sin(2 pi frequency (t - t0) + phase) for t >= t0, 0 before
     kTable,       // piecewise-linear through (times[i], values[i]) * scale, held constant outside
+    kInput,       // scale * u, u the value of run-time input `input` (Data::inputs; constant
+                  // between steps: zero rate and acceleration, no breakpoints)
   };
   Kind kind = Kind::kConstant;
   double scale = 1.0;
   double t0 = 0.0, t1 = 1.0;
   double frequency = 0.0, phase = 0.0;
   std::vector<double> times, values;  // kTable only
+  int input = -1;                     // kInput only: index into Model::inputs
 };
 
 // Sum of terms. Right-continuous: at a switch time Eval returns the derivatives that hold just
@@ -40,18 +45,28 @@ class Profile {
   static Profile SmoothStep(double t0, double t1, double scale = 1.0);
   static Profile Sine(double amplitude, double frequency, double phase = 0.0, double t0 = 0.0);
   static Profile Table(std::vector<double> times, std::vector<double> values, double scale = 1.0);
+  // scale * (value of run-time input number `input`, Model::inputs).
+  static Profile Input(int input, double scale = 1.0);
 
   Profile& Add(const ProfileTerm& term);
   Profile& Add(const Profile& other);
   // Validates the parameters; throws InputError naming the problem, prefixed by `where`.
-  void Validate(const char* where) const;
+  // Input terms must refer to one of `num_inputs` inputs.
+  void Validate(const char* where, int num_inputs = 0) const;
 
-  ProfileValue Eval(double t) const;
+  // The value at time t, with `inputs` the values of the model's run-time inputs (Data::inputs;
+  // kernels and solvers call EvalProfile(profile, t, data), model/data.h, which passes them).
+  ProfileValue Eval(double t, const Eigen::VectorXd& inputs) const;
   // The left limit at t: the pieces that end at t (at a breakpoint b, EvalLeft(b) is the state
   // just before the switch, Eval(b) the state just after it). Evaluated at the double below t,
   // so value and rate are those at t to within one unit in the last place of t.
+  ProfileValue EvalLeft(double t, const Eigen::VectorXd& inputs) const;
+  // Without input values: for profiles that take no input (HasInputs() false). A profile that
+  // takes one throws std::logic_error (a caller that should have used EvalProfile).
+  ProfileValue Eval(double t) const;
   ProfileValue EvalLeft(double t) const;
   double operator()(double t) const { return Eval(t).value; }
+  bool HasInputs() const;
   const std::vector<ProfileTerm>& terms() const { return terms_; }
   // Times where the second derivative (or the value or rate) may jump, sorted, without
   // duplicates: the time steps land on them (align_steps) and the integrator restarts there

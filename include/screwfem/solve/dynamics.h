@@ -270,5 +270,21 @@ StepResult AdvanceTo(const Model& model, Data& data, Integrator& integrator, dou
 void InterpolateStep(const Model& model, const Data& data, Integrator& integrator, double t,
                      Data& out);
 
+// Everything a dynamic simulation continues from: time, configuration (node frames, joint
+// frames and coordinates, the rod elements' rotation branches), velocities, accelerations,
+// multipliers, run-time input values and the integrator's auxiliary acceleration and predictor
+// choice. Restoring a saved state and stepping repeats the same steps bit for bit (resets,
+// reinforcement-learning rollouts).
+struct SimulationState {
+  double time = 0.0;
+  State q;
+  std::vector<Vec3> w_ref;
+  Eigen::VectorXd v, vdot, lambda, inputs, a;
+  bool use_last_acceleration = true;
+};
+void SaveSimulationState(const Data& data, const Integrator& integrator, SimulationState* state);
+// The state must come from Data of the same model (same sizes; InputError otherwise).
+void RestoreSimulationState(const SimulationState& state, Data& data, Integrator& integrator);
+
 
 }  // namespace screwfem
