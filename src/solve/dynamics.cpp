@@ -890,6 +890,7 @@ void InterpolateStep(const Model& model, const Data& data, Integrator& integ, do
   out.lambda = (1.0 - th) * integ.dense_lambda0 + th * integ.dense_lambda1;
   out.w_ref = data.w_ref;
   out.time = t;
+}
 
 void SaveSimulationState(const Data& data, const Integrator& integ, SimulationState* state) {
   state->time = data.time;

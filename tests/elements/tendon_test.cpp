@@ -178,11 +178,19 @@ TEST(TendonSegmentKind, SegmentsSumToTensionTimesTheLengthGradientWithTheExactTa
 
 TEST(TendonSegmentKind, StatesTensionNeverNegativeAndLoadFactorScalesIt) {
   Tendon t;
+  Data data;
+  data.inputs = Eigen::VectorXd::Zero(1);
   t.tension = Profile::Ramp(0.0, 1.0, 10.0);
-  EXPECT_DOUBLE_EQ(TendonTension(t, 0.5), 5.0);
-  EXPECT_DOUBLE_EQ(TendonTension(t, 0.5, 0.5), 2.5);
+  EXPECT_DOUBLE_EQ(TendonTension(t, data, 0.5), 5.0);
+  EXPECT_DOUBLE_EQ(TendonTension(t, data, 0.5, 0.5), 2.5);
   t.tension = Profile::Constant(-3.0);  // a run-time value that would push: slack
-  EXPECT_EQ(TendonTension(t, 0.0), 0.0);
+  EXPECT_EQ(TendonTension(t, data, 0.0), 0.0);
+  // A tension taken from a run-time input (EvalProfile): its value, scaled; slack below 0.
+  t.tension = Profile::Input(0, 2.0);
+  data.inputs(0) = 1.5;
+  EXPECT_DOUBLE_EQ(TendonTension(t, data, 0.0), 3.0);
+  data.inputs(0) = -1.0;
+  EXPECT_EQ(TendonTension(t, data, 0.0), 0.0);
 }
 
 TEST(TendonSegmentKind, TensionAndActuatorProfilesAreBreakpointsOfTheModel) {
