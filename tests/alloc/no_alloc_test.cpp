@@ -71,7 +71,7 @@ void operator delete[](void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
-namespace screwfem {
+namespace screwfem::no_alloc_test {
 namespace {
 
 // A model with every kind of contribution: a rod with inertia, damping and gravity clamped to
@@ -286,4 +286,4 @@ TEST(NoAllocation, CounterSeesAllocations) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::no_alloc_test

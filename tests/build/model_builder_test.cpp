@@ -12,7 +12,7 @@
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/dynamics.h"
 
-namespace screwfem {
+namespace screwfem::model_builder_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -257,4 +257,4 @@ TEST(BuildErrors, CarryTheEntityTheyAreAbout) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::model_builder_test

@@ -15,7 +15,7 @@
 #include "screwfem/elements/joint.h"
 #include "screwfem/model/data.h"
 
-namespace screwfem {
+namespace screwfem::redundancy_test {
 namespace {
 
 // Rank deficiency of the dense B (nc x nv) at the reference configuration: the oracle.
@@ -228,4 +228,4 @@ TEST(Redundancy, FiveHundredWeldsOnALongRodBuildQuicklyWithoutDenseGradient) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::redundancy_test

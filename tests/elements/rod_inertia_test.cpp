@@ -16,7 +16,7 @@
 #include "screwfem/elements/rod.h"
 #include "screwfem/solve/dynamics.h"
 
-namespace screwfem {
+namespace screwfem::rod_inertia_test {
 namespace {
 
 constexpr double kGaussXi[3] = {0.5 - 0.3872983346207417, 0.5, 0.5 + 0.3872983346207417};
@@ -400,4 +400,4 @@ TEST(RodDamping, TangentIsTheVelocityDerivativeAndRayleighTermsAreProportional) 
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::rod_inertia_test

@@ -7,7 +7,7 @@
 
 #include "screwfem/elements/rod.h"
 
-namespace screwfem {
+namespace screwfem::rod_load_test {
 namespace {
 
 struct Config {
@@ -185,4 +185,4 @@ TEST(RodConservative, EqualsInternalMinusDeadForceWithTheNodeTangentsApplied) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::rod_load_test

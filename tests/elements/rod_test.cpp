@@ -14,7 +14,7 @@
 #include "screwfem/model/errors.h"
 #include "screwfem/model/section.h"
 
-namespace screwfem {
+namespace screwfem::rod_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -477,4 +477,4 @@ TEST(Section, InvalidInputThrowsInputError) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::rod_test

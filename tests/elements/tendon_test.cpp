@@ -13,7 +13,7 @@
 #include "screwfem/build/model_builder.h"
 #include "screwfem/solve/dynamics.h"
 
-namespace screwfem {
+namespace screwfem::tendon_test {
 namespace {
 
 SE3 RandomFrame(std::mt19937& rng) {
@@ -280,4 +280,4 @@ TEST(ForceElementKind, ForcesHaveZeroWorldResultantSoMomentumIsConserved) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::tendon_test

@@ -13,7 +13,7 @@
 #include "screwfem/model/errors.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::bad_input_test {
 namespace {
 
 // A valid scene; each case edits it. Line numbers below count from 1 at "points:".
@@ -600,4 +600,4 @@ TEST(BadInput, UnknownRunTimeInputName) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::bad_input_test

@@ -21,7 +21,7 @@
 
 extern char** environ;
 
-namespace screwfem {
+namespace screwfem::cli_test {
 namespace {
 
 using test::ParseJsonFile;
@@ -553,4 +553,4 @@ TEST(Cli, SweepPackageDirectoryCanBeOverriddenByTheEnvironment) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::cli_test

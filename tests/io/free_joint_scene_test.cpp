@@ -11,7 +11,7 @@
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/dynamics.h"
 
-namespace screwfem {
+namespace screwfem::free_joint_scene_test {
 namespace {
 
 const char* kScene = R"(
@@ -75,4 +75,4 @@ TEST(FreeJointScene, RestAndDrivesAreErrorsWithTheField) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::free_joint_scene_test

@@ -29,7 +29,7 @@
 #include "screwfem/io/schedule.h"
 #include "screwfem/solve/dynamics.h"
 
-namespace screwfem {
+namespace screwfem::grm_test {
 namespace {
 
 using test::Json;
@@ -783,4 +783,4 @@ TEST(GrmSoftKd, EnergyBalanceClosesWithTheDampersDissipation) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::grm_test

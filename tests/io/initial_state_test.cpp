@@ -13,7 +13,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
 
-namespace screwfem {
+namespace screwfem::initial_state_test {
 namespace {
 
 // A free rigid body with principal moments 1, 2, 3 kg m^2 spinning about its major axis (z) at
@@ -126,4 +126,4 @@ bodies:
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::initial_state_test

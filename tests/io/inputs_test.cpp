@@ -15,7 +15,7 @@
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/dynamics.h"
 
-namespace screwfem {
+namespace screwfem::inputs_test {
 namespace {
 
 // A soft cantilever (0.3 m silicone rod, clamped) with a vertical tip force. `profile` is the
@@ -231,4 +231,4 @@ TEST(InputTable, RunWithAnInputTableWritesTheSameRowsAsATableProfile) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::inputs_test

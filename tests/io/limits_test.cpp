@@ -25,7 +25,7 @@
 #include "screwfem/io/scene.h"
 #include "screwfem/model/errors.h"
 
-namespace screwfem {
+namespace screwfem::limits_test {
 namespace {
 
 using test::ReadFile;
@@ -346,4 +346,4 @@ TEST(Limits, FiveHundredWeldsAndAHundredThousandElementRodCheckQuickly) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::limits_test

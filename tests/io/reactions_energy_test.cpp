@@ -12,7 +12,7 @@
 #include "screwfem/io/scene.h"
 #include "screwfem/solve/statics.h"
 
-namespace screwfem {
+namespace screwfem::reactions_energy_test {
 namespace {
 
 using test::ReadCsv;
@@ -110,4 +110,4 @@ TEST(ReactionsCsv, HasSixColumnsPerConstrainedJoint) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::reactions_energy_test

@@ -22,7 +22,7 @@
 #include "screwfem/model/errors.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::run_test {
 namespace {
 
 using test::Json;
@@ -779,4 +779,4 @@ TEST(RunScene, ProgressBarGoesToStandardErrorAndEndsItsLine) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::run_test

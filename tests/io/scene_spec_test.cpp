@@ -8,7 +8,7 @@
 #include "screwfem/io/scene_spec.h"
 #include "screwfem/model/errors.h"
 
-namespace screwfem {
+namespace screwfem::scene_spec_test {
 namespace {
 
 // Line numbers below count from 1 at "points:".
@@ -141,4 +141,4 @@ bodies:
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::scene_spec_test

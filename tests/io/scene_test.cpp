@@ -15,7 +15,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::scene_test {
 namespace {
 
 // --- the same model twice: as a scene and through ModelBuilder -----------------------------------
@@ -736,4 +736,4 @@ TEST(SceneGrm, ShortRunOfEachCaseSucceeds) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::scene_test

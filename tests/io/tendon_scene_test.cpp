@@ -13,7 +13,7 @@
 #include "screwfem/io/scene.h"
 #include "screwfem/solve/statics.h"
 
-namespace screwfem {
+namespace screwfem::tendon_scene_test {
 namespace {
 
 const std::string kFinger = std::string(SCREWFEM_SOURCE_DIR) + "/examples/tendon/finger.yaml";
@@ -90,4 +90,4 @@ TEST(TendonScene, RunWritesTendonAndForceTablesAndDrawsThem) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::tendon_scene_test

@@ -19,7 +19,7 @@
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/dynamics.h"
 
-namespace screwfem {
+namespace screwfem::vtk_test {
 namespace {
 
 using test::ReadFile;
@@ -275,4 +275,4 @@ TEST(VtkWriter, SceneKeySelectsTheEncoding) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::vtk_test

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace screwfem {
+namespace screwfem::writers_test {
 namespace {
 
 std::uint64_t Bits(double x) {
@@ -64,4 +64,4 @@ TEST(JsonWriter, NumbersAreShortestAndNonFiniteOnesNull) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::writers_test

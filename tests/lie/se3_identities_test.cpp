@@ -11,7 +11,7 @@
 #include "lie/lie_test_util.h"
 #include "screwfem/lie/se3.h"
 
-namespace screwfem {
+namespace screwfem::se3_identities_test {
 namespace {
 
 using test::AngleCase;
@@ -327,4 +327,4 @@ TEST(Se3LogAtPi, LogSE3OfHalfTurnReproducesTheMotion) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::se3_identities_test

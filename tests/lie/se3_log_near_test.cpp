@@ -10,7 +10,7 @@
 #include "lie/lie_test_util.h"
 #include "screwfem/lie/se3.h"
 
-namespace screwfem {
+namespace screwfem::se3_log_near_test {
 namespace {
 
 using test::kPi;
@@ -177,4 +177,4 @@ TEST(Se3LogNear, AtZeroRotationWithAReferencePastPiReturnsTheFullTurnBranch) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::se3_log_near_test

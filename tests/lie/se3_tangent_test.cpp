@@ -13,7 +13,7 @@
 #include "lie/lie_test_util.h"
 #include "screwfem/lie/se3.h"
 
-namespace screwfem {
+namespace screwfem::se3_tangent_test {
 namespace {
 
 using test::AngleCase;
@@ -411,4 +411,4 @@ TEST(Se3TangentAccuracy, DTSE3InvTIsContinuousAcrossItsSeriesSwitchAtPhi0p9) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::se3_tangent_test

@@ -5,7 +5,7 @@
 #include "lie/lie_test_util.h"
 #include "screwfem/lie/se3.h"
 
-namespace screwfem {
+namespace screwfem::se3_vectors_test {
 namespace {
 
 using test::MatrixNear;
@@ -79,4 +79,4 @@ TEST(Se3TestVectors, LogSE3NearPiMatchesMethodSection9) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::se3_vectors_test

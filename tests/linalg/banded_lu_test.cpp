@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-namespace screwfem {
+namespace screwfem::banded_lu_test {
 namespace {
 
 // Copies the band of a dense matrix into a freshly zeroed BandedLU.
@@ -424,4 +424,4 @@ TEST(ReverseCuthillMcKee, ReducesBandwidthOfAShuffledGrid) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::banded_lu_test

@@ -13,7 +13,7 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::dynamics_test {
 namespace {
 
 TEST(GeneralizedAlpha, ChungHulbertParametersFromSpectralRadius) {
@@ -446,4 +446,4 @@ TEST(GeneralizedAlpha, AStepTheSimplifiedIterationCannotDoIsRetriedWithFullNewto
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::dynamics_test

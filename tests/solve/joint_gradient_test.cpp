@@ -16,7 +16,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::joint_gradient_test {
 namespace {
 
 constexpr double kEps = 1e-6;  // central-difference step
@@ -620,4 +620,4 @@ TEST(EquilibriumTangent, ConstraintForceDerivativeMatchesFiniteDifferenceForEver
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::joint_gradient_test

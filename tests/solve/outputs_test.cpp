@@ -7,7 +7,7 @@
 #include "screwfem/elements/rod.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::outputs_test {
 namespace {
 
 // A frame moving with a body velocity that itself changes in time: H(t) = H0 exp(t xi1 +
@@ -42,9 +42,9 @@ TEST(PointMotion, VelocityAndAccelerationMatchFiniteDifferencesOfPosition) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::outputs_test
 
-namespace screwfem {
+namespace screwfem::outputs_test {
 namespace {
 
 // Node motions H(t) = H0 exp(X(t)), X(t) = t a1 + t^2 a2: body velocity T(X) X', and the body
@@ -113,4 +113,4 @@ TEST(TangentOperator, DirectionalDerivativesMatchFiniteDifferences) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::outputs_test

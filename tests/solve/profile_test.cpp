@@ -9,7 +9,7 @@
 #include "screwfem/model/errors.h"
 #include "screwfem/model/profile.h"
 
-namespace screwfem {
+namespace screwfem::profile_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -190,4 +190,4 @@ TEST(Profile, ValidateThrowsInputErrorOnBadParameters) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::profile_test

@@ -6,7 +6,7 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::rod_load_test {
 namespace {
 
 struct Cantilever {
@@ -107,4 +107,4 @@ TEST(RodLoad, ArcLengthOutsideTheRodIsAnInputError) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::rod_load_test

@@ -17,7 +17,7 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::statics_joint_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -128,4 +128,4 @@ TEST(StaticsWithJoints, SeriesElasticDriveSettlesWithSpringDeflectionCarryingThe
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::statics_joint_test

@@ -24,7 +24,7 @@
 #include "screwfem/model/model.h"
 #include "screwfem/solve/statics.h"
 
-namespace screwfem {
+namespace screwfem::statics_path_test {
 namespace {
 
 constexpr double kA = 1.0, kH = 0.5, kEA = 1.0;
@@ -287,4 +287,4 @@ TEST(PathFollowingStatics, ContinuesFromTheCurrentStateAndUnloads) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::statics_path_test

@@ -25,7 +25,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::actuated_joint_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -183,4 +183,4 @@ TEST(ActuatedJointJ2, EffortOscillationAfterAJumpIsUndampedWithRhoInfOne) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::actuated_joint_test

@@ -23,7 +23,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "validation/elliptic.h"
 
-namespace screwfem {
+namespace screwfem::adaptive_steps_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -297,4 +297,4 @@ TEST(AdaptiveSteps, InvalidSettingsAreRefused) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::adaptive_steps_test

@@ -27,7 +27,7 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::cantilever_frequency_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -245,4 +245,4 @@ TEST(CantileverFrequency, FreeVibrationPeriodsAfterReleasingATipLoadMatchTheLine
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::cantilever_frequency_test

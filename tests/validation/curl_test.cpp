@@ -19,7 +19,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::curl_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -111,4 +111,4 @@ TEST(Curl, ElementsRotatePastPiContinuouslyAndTheEnergyBalanceConvergesAtSecondO
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::curl_test

@@ -18,7 +18,7 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::elastica_test {
 namespace {
 
 struct MattiassonRow {
@@ -88,4 +88,4 @@ std::string RowName(const ::testing::TestParamInfo<MattiassonRow>& info) {
 INSTANTIATE_TEST_SUITE_P(Mattiasson, Elastica, ::testing::ValuesIn(kTable), RowName);
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::elastica_test

@@ -39,7 +39,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::flexible_mechanism_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -207,4 +207,4 @@ TEST(FlexibleMechanism, MeshRefinementAndTheGapBetweenInertiaOptionsFallsLikeEle
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::flexible_mechanism_test

@@ -26,7 +26,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::four_bar_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -347,4 +347,4 @@ TEST(FourBar, UnactuatedRedundantLoopEnergyErrorIsSecondOrderWithRhoInfOne) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::four_bar_test

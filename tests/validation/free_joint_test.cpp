@@ -20,7 +20,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::free_joint_test {
 namespace {
 
 constexpr double kM1 = 0.3, kM2 = 0.5;
@@ -128,4 +128,4 @@ TEST(FreeJoint, UndampedSpringConservesEnergyAndDampingDissipatesIt) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::free_joint_test

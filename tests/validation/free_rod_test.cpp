@@ -30,7 +30,7 @@
 #include "screwfem/solve/modal.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::free_rod_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -184,4 +184,4 @@ TEST(FreeRod, FreeFreeBendingFrequenciesAndSixRigidModes) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::free_rod_test

@@ -24,7 +24,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::heavy_top_test {
 namespace {
 
 constexpr double kMass = 15.0;
@@ -200,4 +200,4 @@ TEST(HeavyTopM2, OrientationAtPoint2SecondsMatchesExudynRk4) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::heavy_top_test

@@ -19,7 +19,7 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::helix_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -109,4 +109,4 @@ TEST(Helix, ResultDoesNotDependOnTheNumberOfLoadSteps) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::helix_test

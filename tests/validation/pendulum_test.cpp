@@ -21,7 +21,7 @@
 #include "screwfem/build/model_builder.h"
 #include "validation/elliptic.h"
 
-namespace screwfem {
+namespace screwfem::pendulum_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -159,4 +159,4 @@ TEST(PendulumM1, PositionsAtTableTimesWithin1e4AndSecondOrderInStepSize) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::pendulum_test

@@ -17,7 +17,7 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::rollup_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -175,4 +175,4 @@ TEST(RollUp, ElementDrivenPastTwoPiStopsWithAMessageAndKeepsTheLastConvergedStat
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::rollup_test

@@ -19,7 +19,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::soft_joint_test {
 namespace {
 
 constexpr double kMass = 0.15, kJc = 1e-4, kLc = 0.25, kK = 10.0;
@@ -195,4 +195,4 @@ TEST(SoftJointJ1, NumericalDampingWithRhoInfBelowOneIsExactlyTheGeneralizedAlpha
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::soft_joint_test

@@ -17,7 +17,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::spin_up_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -104,4 +104,4 @@ TEST(SpinUp, HubFollowsThePrescribedLawAndTheTipConvergesAtSecondOrder) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::spin_up_test

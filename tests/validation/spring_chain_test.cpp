@@ -20,7 +20,7 @@
 #include "screwfem/model/model.h"
 #include "screwfem/solve/dynamics.h"
 
-namespace screwfem {
+namespace screwfem::spring_chain_test {
 namespace {
 
 struct ChainRun {
@@ -112,4 +112,4 @@ TEST(SpringChain, StabilisedIndexTwoAtRhoInfOneConvergesFastAndConservesEnergyTo
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::spring_chain_test

@@ -10,7 +10,7 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::statics_solver_test {
 namespace {
 
 struct Cantilever {
@@ -163,4 +163,4 @@ TEST(StaticSolver, MechanismReportsAFailureInsteadOfNaN) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::statics_solver_test

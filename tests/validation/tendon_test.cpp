@@ -19,7 +19,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/statics.h"
 
-namespace screwfem {
+namespace screwfem::tendon_test {
 namespace {
 
 // T4.2/T4.3: L = 1, EA = GA = 1e5, EI = GJ = 1, offset d = 0.02 along section y.
@@ -271,4 +271,4 @@ TEST(ForceElementValidation, SpringAlongTheLineOfCentresConservesMomentumToRound
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::tendon_test

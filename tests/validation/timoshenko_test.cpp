@@ -21,7 +21,7 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/build/model_builder.h"
 
-namespace screwfem {
+namespace screwfem::timoshenko_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -99,4 +99,4 @@ TEST(Timoshenko, MeshRefinementConvergesAtSecondOrderToLinearTheory) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::timoshenko_test

@@ -21,7 +21,7 @@
 #include "screwfem/build/model_builder.h"
 #include "validation/elliptic.h"
 
-namespace screwfem {
+namespace screwfem::torque_free_test {
 namespace {
 
 const Vec3 kI(1.0, 2.0, 3.0);
@@ -164,4 +164,4 @@ TEST(TorqueFreeM3, FreeBodyStepsConvergeWithDefaultTolerances) {
 }
 
 }  // namespace
-}  // namespace screwfem
+}  // namespace screwfem::torque_free_test
