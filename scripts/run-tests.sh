@@ -189,10 +189,14 @@ if [[ $release_built -eq 1 ]]; then
   # passes on both code paths of Eigen's vectorisation.
   # Clang (not GCC): it provides libFuzzer, so this one tree serves the sanitizer suite and
   # the fuzzers; it also compiles the sanitizer build faster than GCC (README.md, "Fuzzing").
+  # SCREWFEM_KERNEL_TESTS=OFF: the kernels' own unit tests (tests/lie, tests/elements: fixed-size
+  # arithmetic against closed forms and finite differences) run in the Release suite only; here
+  # the same kernels run inside every solver and validation test.
   if configure_and_build "ASan+UBSan" "$asan_dir" -DSCREWFEM_SANITIZE=ON \
       -DCMAKE_CXX_COMPILER=clang++ -DSCREWFEM_FUZZ=ON \
       -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
-      -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_BUILD_EXAMPLES=OFF -DSCREWFEM_NATIVE=OFF; then
+      -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_BUILD_EXAMPLES=OFF -DSCREWFEM_NATIVE=OFF \
+      -DSCREWFEM_KERNEL_TESTS=OFF; then
     # Left out of the sanitizer run, and run in the Release suite above:
     #  - the full-length GRM soft runs, the GRM convergence study, three of the four full rigid
     #    GRM runs and the cantilever's free-vibration history (20 to 50 s each at -O1 with the

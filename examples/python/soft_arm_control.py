@@ -1,16 +1,17 @@
 """Closed-loop control from Python: PID control of a soft arm's tip height.
 
 The scene (soft_arm_control.yaml, next to this file) is a silicone rod clamped at its base that
-sags under gravity. Its one actuator takes its value from the run-time input `u`
-({type: input, name: u}: here a vertical tip force in newtons). Between steps the controller
-reads the tip (Simulation.point_motion) and writes the input (sim.inputs["u"] = ...), as one
-writes MuJoCo's data.ctrl; the engine holds the value over the next step.
+sags under gravity, with a tendon along its top through an eyelet at every node. The tendon's
+tension takes its value from the run-time input `u` ({type: input, name: u}, in newtons); a
+tendon only pulls, so a negative u leaves it slack. Between steps the controller reads the tip
+(Simulation.point_motion) and writes the input (sim.inputs["u"] = ...), as one writes MuJoCo's
+data.ctrl; the engine holds the value over the next step.
 
 The controller is a sampled PID on the tip height z with target Z_TARGET: u = Kp e + Ki int(e)
 - Kd z_dot, e = Z_TARGET - z (the integral term cancels the arm's elastic and gravity forces
 at the target). The example exits non-zero unless the tip settles at the target to within
 0.5 mm and stays there over the last 0.5 s, and the settled input balances the arm: the
-static solution under the settled force puts the tip at the target too.
+static solution under the settled tension puts the tip at the target too.
 
 Run from the repository root with the bindings on the path:
     PYTHONPATH=build/release/python /usr/bin/python3 examples/python/soft_arm_control.py
@@ -23,13 +24,13 @@ import screwfem as sf
 
 HERE = pathlib.Path(__file__).resolve().parent
 Z_TARGET = 0.02            # tip height to reach [m] (the tip sags to about -0.04 m unactuated)
-KP, KI, KD = 40.0, 200.0, 1.0  # [N/m], [N/(m s)], [N s/m]
+KP, KI, KD = 800.0, 4000.0, 20.0  # [N/m], [N/(m s)], [N s/m]: tension per tip error
 H = 2e-3                   # time step [s] (the controller's sampling period)
 T_END = 2.0                # [s]
 
 
 def actuate(sim, u):
-    """The actuator: one line (a tendon tension or a joint torque takes the same input)."""
+    """The actuator: the tendon's tension (a joint torque or a load would take the same input)."""
     sim.inputs["u"] = u
 
 
@@ -56,8 +57,8 @@ def main():
     print(f"final tip height {z_end:.6f} m (target {Z_TARGET} m), input {u:.5f} N; "
           f"largest error over the last 0.5 s {worst_late:.2e} m")
 
-    # The settled input, applied as a constant load in a static solution, holds the tip at the
-    # target: the controller found the force that balances the arm there.
+    # The settled input, held constant in a static solution, holds the tip at the
+    # target: the controller found the tension that balances the arm there.
     check = sf.Simulation(scene)
     check.inputs["u"] = u
     check.solve_static()
