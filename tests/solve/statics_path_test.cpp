@@ -63,7 +63,7 @@ Truss MakeTruss(double p_ref, bool displacement_control, double w_max = 1.1) {
   b.AddJointAt("apex", JointType::kRevolute, l1.node, m1.node, top, Vec3::UnitZ());
   t.apex = l1.node;
   if (displacement_control) {
-    const int slider = b.AddNode(SE3(Mat3::Identity(), top), "slider");
+    const int slider = b.AddNode(SE3::Translation(top), "slider");
     b.AddRigidBody("slider", slider, 1e-3, Vec3::Zero(), 1e-6 * Mat3::Identity());
     b.AddJointAt("pin", JointType::kRevolute, slider, t.apex, top, Vec3::UnitZ());
     t.drive = b.AddJointAt("push", JointType::kPrismatic, kGround, slider, top, -Vec3::UnitY());
@@ -111,9 +111,9 @@ TEST(PathFollowingStatics, DisplacementControlPastATurningPointStopsWithALimitPo
   ModelBuilder b;
   const Vec3 O(0, 0, 0), A(0.1, 0.1, 0), B(0.3, 0, 0);
   const Mat3 I = 1e-4 * Mat3::Identity();
-  const int crank = b.AddNode(SE3(Mat3::Identity(), O), "crank");
-  const int coupler = b.AddNode(SE3(Mat3::Identity(), A), "coupler");
-  const int slider = b.AddNode(SE3(Mat3::Identity(), B), "slider");
+  const int crank = b.AddNode(SE3::Translation(O), "crank");
+  const int coupler = b.AddNode(SE3::Translation(A), "coupler");
+  const int slider = b.AddNode(SE3::Translation(B), "slider");
   b.AddRigidBody("crank", crank, 0.1, 0.5 * A, I);
   b.AddRigidBody("coupler", coupler, 0.1, 0.5 * (B - A), I);
   b.AddRigidBody("slider", slider, 0.1, Vec3::Zero(), I);
