@@ -270,7 +270,12 @@ TEST(AdaptiveSteps, FailsBelowMinStepNamingTheComponent) {
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("min_step"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("t = "), std::string::npos) << r.message;
-  EXPECT_NE(r.message.find("joint 0 coordinate 0 ('pin')"), std::string::npos) << r.message;
+  // The pendulum's rotation is both the body's and the pin's coordinate, with the same error:
+  // which of the two is reported largest is decided by round-off (the sanitizer build, with
+  // the portable instruction set, names the body).
+  EXPECT_TRUE(r.message.find("joint 0 coordinate 0 ('pin')") != std::string::npos ||
+              r.message.find("node 0 rotation ('pivot')") != std::string::npos)
+      << r.message;
   EXPECT_GT(p.integ.rejected, 0);
   // The state is that of the last accepted step.
   EXPECT_LT(p.data.time, 1.0);
