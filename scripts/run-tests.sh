@@ -6,7 +6,7 @@
 #      (build/release/examples/**/*_example, run from the repository root without arguments);
 #   3. AddressSanitizer + UndefinedBehaviorSanitizer build in build/asan (clang, with the
 #      libFuzzer harnesses of tests/fuzz) and its ctest suite;
-#   4. the two fuzz targets, concurrently, for SCREWFEM_FUZZ_SECONDS each (default 35) on the
+#   4. the two fuzz targets, concurrently, for SCREWFEM_FUZZ_SECONDS each (default 25) on the
 #      seed corpus (examples/, tests/data/, tests/fuzz/regressions/): any crash, sanitizer
 #      report, leak, timeout (10 s per input) or out-of-memory (1024 MB) fails the job, and
 #      the failing input is copied into tests/fuzz/regressions/NAME/ (commit it: ctest
@@ -102,7 +102,7 @@ run_examples() {
 # run_fuzzers DIR: both libFuzzer targets at once (one per core), each for
 # SCREWFEM_FUZZ_SECONDS; one pass or one failure per target in the counts.
 run_fuzzers() {
-  local dir=$1 seconds=${SCREWFEM_FUZZ_SECONDS:-35} name work pids=() status
+  local dir=$1 seconds=${SCREWFEM_FUZZ_SECONDS:-25} name work pids=() status
   begin "fuzzing (2 x ${seconds} s)"
   for name in parse build; do
     work=$dir/fuzz/$name
@@ -203,13 +203,15 @@ if [[ $release_built -eq 1 ]]; then
     #    sanitizers and the fuzzer's coverage instrumentation); the same code paths run under
     #    the sanitizers in GrmRigid.ActuatedJointsFollowTheirBangBangProfiles and the shorter
     #    validation problems;
+    #  - the error-controlled GRM run (GrmAdaptive: two full rigid GRM runs, 100 s with the
+    #    sanitizers); the AdaptiveSteps tests run the same step control under the sanitizers;
     #  - the convergence-order studies of the integrator, the free rod and the soft joint (a
     #    dozen runs each); the other tests of those suites run the same code under the
     #    sanitizers;
     #  - the tests of the Python tools (plots, viewer, VTK reader): Python code, with nothing
     #    of screwfem's C++ in them but the run that makes their input (run by the other Cli
     #    tests here).
-    asan_excluded='^(GrmSoftK|GrmSoftKd|GrmSoftKParallel|GrmSoftKdParallel|GrmConvergence)\.'
+    asan_excluded='^(GrmSoftK|GrmSoftKd|GrmSoftKParallel|GrmSoftKdParallel|GrmConvergence|GrmAdaptive)\.'
     asan_excluded+='|^CantileverFrequency\.FreeVibration'
     asan_excluded+='|^GrmRigid\.(RecordedPoint|FreeJointPoint|ActuatedJointRates)'
     asan_excluded+='|^GeneralizedAlpha\.(EstimatedConvergence|SimplifiedNewtonAndPredictors)'
