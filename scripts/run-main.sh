@@ -61,6 +61,15 @@ begin "GRM figures"
 "$screwfem" plot "${run_dirs[@]}" -o out/figures --times 0,0.5,1,1.5,2
 end "GRM figures"
 
+# Actuator efforts of the rigid GRM across the drive switch at 0.5 s, with and without the
+# restart at the switch and with full numerical damping (docs/numerics.md, "Efforts across drive
+# switches"): out/figures/switch_efforts/effort_switch_<joint>.png and a table.
+begin "GRM efforts across a switch"
+mkdir -p out/figures/switch_efforts
+/usr/bin/python3 tools/grm_switch_efforts.py "$screwfem" out/figures/switch_efforts \
+  | tee out/figures/switch_efforts/table.md
+end "GRM efforts across a switch"
+
 # One self-contained browser viewer per case (three.js inlined; opens from file://).
 begin "GRM viewers"
 for c in "${cases[@]}"; do
