@@ -235,6 +235,40 @@ void AddConstraintForceTangent(const Model& m, const Data& d, const AssemblyOpti
                 o.s_rows * o.c_stiffness);
 }
 
+// Z = d(B v)/dq of joint ji at the current v (stabilised index 2) into its constraint rows,
+// with the tangent operators of the columns, scaled by s_C o.velocity_constraint_tangent.
+void AddVelocityConstraintTangent(const Model& m, const Data& d, const AssemblyOptions& o,
+                                  Scatter& s, int ji, const JointGradient& g,
+                                  const JointMatrix& TJ, int da, int db) {
+  const Joint& j = m.joints[static_cast<std::size_t>(ji)];
+  const int k = j.k();
+  const Vec6 v_a = da >= 0 ? Vec6(d.v.segment<6>(da)) : Vec6::Zero();
+  const Vec6 v_b = db >= 0 ? Vec6(d.v.segment<6>(db)) : Vec6::Zero();
+  JointVelocityTangent Z;
+  CalcJointVelocityConstraintTangent(j, g, da >= 0 ? &v_a : nullptr, db >= 0 ? &v_b : nullptr,
+                                     d.v.segment(k > 0 ? j.coord : 0, k),
+                                     JointCurrentBasis(m, d, ji), &Z);
+  const double scale = o.s_constraints * o.velocity_constraint_tangent;
+  const int row = m.nv + j.row;
+  const bool tangent = o.use_node_tangent;
+  if (da >= 0)
+    s.Block(row, da, tangent ? Mat6(Z.leftCols<6>() * s.NodeT(j.node_a)) : Mat6(Z.leftCols<6>()),
+            scale);
+  if (db >= 0)
+    s.Block(row, db,
+            tangent ? Mat6(Z.middleCols<6>(6) * s.NodeT(j.node_b)) : Mat6(Z.middleCols<6>(6)),
+            scale);
+  if (k > 0) {
+    // The coordinates' constraint rows hold B_J T_J (AddJoints); those of B v need B_J.
+    const Mat6X basis = JointCurrentBasis(m, d, ji);
+    const JointMatrix I = Mat6::Identity().topLeftCorner(k, k);
+    s.Block(row, j.coord, Mat6X(Z.rightCols(k) * TJ), scale);
+    s.Block(row, j.coord,
+            Mat6X(JointGradientCoordinates(g, basis, I) - JointGradientCoordinates(g, basis, TJ)),
+            o.s_constraints);
+  }
+}
+
 // Joints (method.md §4): the constraint rows and their gradient, and the forces of springs,
 // dampers and drives on the coordinates, from the joint kernel (elements/joint.h).
 void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
@@ -256,6 +290,9 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
                         JointRelativeFrame(m, d, ji), &g);
       const Eigen::Ref<const Eigen::VectorXd> lam = d.lambda.segment(j.row, 6);
       d.residual.segment<6>(m.nv + j.row) += o.s_constraints * g.phi;
+      // Stabilised index 2: the constraint rows of the matrix linearise B(q) v, whose
+      // derivative with respect to the velocities is B itself (no tangent operator).
+      const bool velocity_rows = o.velocity_constraint_tangent != 0.0;
       // The residual gets B^T lambda as transposed products applied to the vector (the same
       // with and without the matrix), the matrix the blocks themselves.
       Vec6 bt_a, bt_b;
@@ -263,17 +300,21 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
       const int da = s.NodeDof(j.node_a), db = s.NodeDof(j.node_b);  // -1: ground or fixed
       if (da >= 0) {
         d.residual.segment<6>(da).noalias() += o.s_rows * bt_a;
-        if (o.assemble_matrix) s.GradientMatrix(j.row, da, JointGradientA(g), &s.NodeT(j.node_a));
+        if (o.assemble_matrix)
+          s.GradientMatrix(j.row, da, JointGradientA(g), velocity_rows ? nullptr : &s.NodeT(j.node_a));
       }
       if (db >= 0) {
         d.residual.segment<6>(db).noalias() += o.s_rows * bt_b;
-        if (o.assemble_matrix) s.GradientMatrix(j.row, db, JointGradientB(g), &s.NodeT(j.node_b));
+        if (o.assemble_matrix)
+          s.GradientMatrix(j.row, db, JointGradientB(g), velocity_rows ? nullptr : &s.NodeT(j.node_b));
       }
       if (k > 0)
         s.Gradient(j.row, j.coord, JointGradientCoordinates(g, JointCurrentBasis(m, d, ji), TJ),
                    nullptr, lam);
       if (o.constraint_force_tangent && o.assemble_matrix && !o.use_node_tangent)
         AddConstraintForceTangent(m, d, o, s, ji, g, Vec6(lam), da, db);
+      if (o.velocity_constraint_tangent != 0.0 && o.assemble_matrix)
+        AddVelocityConstraintTangent(m, d, o, s, ji, g, TJ, da, db);
     }
     if (k == 0) continue;
     // Springs, dampers and drives act on the coordinates.

@@ -237,6 +237,39 @@ void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g,
   }
 }
 
+void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient& g,
+                                        const Vec6* v_a, const Vec6* v_b,
+                                        const Eigen::Ref<const Eigen::VectorXd>& v_j,
+                                        const Mat6X& basis, JointVelocityTangent* out) {
+  const int k = static_cast<int>(basis.cols());
+  const int n = 12 + k;
+  Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 18> dphi(6, n);
+  dphi.leftCols<6>() = JointGradientA(g);
+  dphi.middleCols<6>(6) = JointGradientB(g);
+  if (k > 0) dphi.rightCols(k) = JointGradientCoordinates(g, basis, Mat6::Identity().topLeftCorner(k, k));
+  // u = Ad(C_B^-1) v_B - Ad(G_A) v_A - A_J v_J.
+  const Vec6 av_j = k > 0 ? Vec6(basis * v_j.head(k)) : Vec6::Zero();
+  Vec6 u = -av_j;
+  if (v_b != nullptr) u += Ad(g.Cb_inv) * *v_b;
+  if (v_a != nullptr) u -= Ad(g.G_A) * *v_a;
+  // [dT^-1(phi)/dphi . e_i] u for the six directions e_i, then through dphi.
+  Mat6 dtinv_u;
+  for (int i = 0; i < 6; ++i)
+    dtinv_u.col(i) = TSE3InvDirectionalTimes(g.phi, Vec6::Unit(i), u);
+  out->resize(6, n);
+  out->noalias() = (dtinv_u - ad(av_j)) * dphi;
+  // The variation of Ad(G_A) v_A: G_A <- G_A exp(x_A - Ad(G_A^-1 C_B^-1) x_B).
+  if (v_a != nullptr) {
+    const Mat6 W = g.Tinv * Ad(g.G_A) * ad(*v_a);
+    out->leftCols<6>() += W;
+    out->middleCols<6>(6) -= W * Ad(g.G_A.Inverse() * g.Cb_inv);
+  }
+  // The universal joint's moving first axis: dA_1/dalpha_2 = -ad(A_2) A_1, which enters
+  // B_J v_J = -(T^-1(phi) - ad(phi)) A_J v_J.
+  if (joint.type == JointType::kUniversal)
+    out->col(13) += v_j(0) * (g.Tinv - ad(g.phi)) * ad(Vec6(basis.col(1))) * basis.col(0);
+}
+
 void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, double time,
                               double load_factor, bool dynamics, bool tangent,
                               JointCoordinateTerms* out) {

@@ -8,6 +8,7 @@
 
 #include <Eigen/LU>
 
+#include "screwfem/elements/joint.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/statics.h"
 
@@ -158,6 +159,10 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
     integ.ggl_gram_llt = Eigen::LLT<Eigen::MatrixXd>(nc);
     integ.ggl_bv = integ.ggl_phi = integ.ggl_nu = integ.ggl_dnu = Eigen::VectorXd::Zero(nc);
     integ.ggl_y = Eigen::VectorXd::Zero(nv);
+    integ.ggl_bt = Eigen::MatrixXd::Zero(nc, nv);
+    integ.ggl_cross = Eigen::MatrixXd::Identity(nc, nc);
+    integ.ggl_cross_lu = Eigen::PartialPivLU<Eigen::MatrixXd>(nc);
+    integ.ggl_rhs = Eigen::VectorXd::Zero(nc);
     integ.max_nu = 0.0;
   }
   integ.error = integ.a_accepted = integ.dense_v0 = integ.dense_vdot0 = integ.dense_v1 =
@@ -258,6 +263,45 @@ bool PrepareGglStep(const Model& model, const Data& data, Integrator& integ) {
   return integ.ggl_gram_llt.info() == Eigen::Success;
 }
 
+// ConstraintFormulation::kGgl: the position-constraint rows of the iteration at the current
+// iterate, B(q) T with the tangent operators the matrix was assembled with (method-next.md
+// §N1.3; Delta x enters q as q_n o exp(h dq + Delta x)), and the factorised B T B_n^T that
+// gives the nu correction (redundant rows and columns: the identity).
+void FactorizeGglCross(const Model& model, const Data& data, Integrator& integ) {
+  Eigen::MatrixXd& bt = integ.ggl_bt;
+  CalcConstraintGradient(model, data, bt);
+  if (integ.options.use_tangent_operator) {
+    for (std::size_t i = 0; i < model.nodes.size(); ++i) {
+      const int dof = model.nodes[i].dof;
+      if (dof < 0) continue;
+      const Mat6& T = data.node_tangent[i];
+      for (int r = 0; r < model.nc; ++r) {
+        const Vec6 row = bt.block<1, 6>(r, dof).transpose();
+        bt.block<1, 6>(r, dof) = (T.transpose() * row).transpose();
+      }
+    }
+    for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+      const Joint& j = model.joints[jj];
+      const int k = j.k();
+      if (k == 0 || JointHasGlobalCoordinates(j.type)) continue;
+      const Mat6& T = data.node_tangent[model.nodes.size() + jj];
+      for (int r = 0; r < model.nc; ++r) {
+        Vec6 row = Vec6::Zero();
+        row.head(k) = bt.block(r, j.coord, 1, k).transpose();
+        const Vec6 out = T.transpose() * row;  // T_J is A_J^T T A_J, zero outside k x k
+        bt.block(r, j.coord, 1, k) = out.head(k).transpose();
+      }
+    }
+  }
+  integ.ggl_cross.noalias() = bt.lazyProduct(integ.ggl_b.transpose());
+  for (int r : model.redundant_rows) {
+    integ.ggl_cross.row(r).setZero();
+    integ.ggl_cross.col(r).setZero();
+    integ.ggl_cross(r, r) = 1.0;
+  }
+  integ.ggl_cross_lu.compute(integ.ggl_cross);
+}
+
 // Update the configuration: q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
 void UpdateConfiguration(const Model& model, Data& data, const Integrator& integ, double h) {
   RestoreState(integ.q_start, data);
@@ -278,6 +322,10 @@ AssemblyOptions DynamicAssemblyOptions(const DynamicOptions& opt, const StepCons
   o.s_constraints = 1.0;
   o.s_multipliers = 1.0 / c.bh2;
   o.use_node_tangent = opt.use_tangent_operator;
+  // Stabilised index 2: the constraint rows of the matrix are the velocity constraint's,
+  // B + (h beta / gamma) Z T (method-next.md §N1.3, scaled by D_L).
+  if (opt.constraints == ConstraintFormulation::kGgl)
+    o.velocity_constraint_tangent = 1.0 / c.gamma_p;  // h beta / gamma
   return o;
 }
 
@@ -355,11 +403,13 @@ bool ConvergedByEstimate(const DynamicOptions& opt, const IterateMeasures& m, do
 //
 // ConstraintFormulation::kGgl (docs/numerics.md, "Stabilised index 2"): the unknowns are the
 // Newmark correction y = dx + B_n^T dnu (which moves v and vdot), dlambda and dnu. With the
-// quasi-Newton simplifications of method-next.md §N1.3 (Z dropped, T -> I in the constraint
-// rows) and the stiffness part of the (1,3) block dropped, the system is block triangular:
-//   [S_3] [y; dmu] = -[r; (h beta / gamma)(B v + dphi/dt)]   (the index-3 matrix),
-//   B_n B_n^T dnu = B_n y + phi,   dx = y - B_n^T dnu.
-// The residual is exact, so the converged state is the stabilised index-2 one.
+// (1,3) block and the coupling Z T B_n^T dnu of the velocity rows dropped (method-next.md
+// §N1.3; both multiply dnu, which is of the size of the position-constraint defect), the
+// system is block triangular:
+//   [S_3 with rows B + (h beta / gamma) Z T] [y; dmu] = -[r; (h beta / gamma)(B v + dphi/dt)],
+//   B T B_n^T dnu = B T y + phi,   dx = y - B_n^T dnu,
+// B T at the iterate of the factorisation (FactorizeGglCross). The residual is exact, so the
+// converged state is the stabilised index-2 one.
 bool Correct(const Model& model, Data& data, Integrator& integ, const StepConstants& c,
              bool factorize) {
   const bool ggl = integ.options.constraints == ConstraintFormulation::kGgl && model.nc > 0;
@@ -378,11 +428,12 @@ bool Correct(const Model& model, Data& data, Integrator& integ, const StepConsta
   }
   if (!solved) return false;
   if (ggl) {
+    if (factorize) FactorizeGglCross(model, data, integ);
     integ.ggl_y = data.increment.head(model.nv);
-    integ.ggl_dnu.noalias() = integ.ggl_b * integ.ggl_y;
-    integ.ggl_dnu += integ.ggl_phi;
-    for (int r : model.redundant_rows) integ.ggl_dnu(r) = 0.0;
-    integ.ggl_gram_llt.solveInPlace(integ.ggl_dnu);
+    integ.ggl_rhs.noalias() = integ.ggl_bt * integ.ggl_y;
+    integ.ggl_rhs += integ.ggl_phi;
+    for (int r : model.redundant_rows) integ.ggl_rhs(r) = 0.0;
+    integ.ggl_dnu.noalias() = integ.ggl_cross_lu.solve(integ.ggl_rhs);
     integ.ggl_nu += integ.ggl_dnu;
     data.increment.head(model.nv).noalias() -= integ.ggl_b.transpose() * integ.ggl_dnu;
     const auto dx = data.increment.head(model.nv);

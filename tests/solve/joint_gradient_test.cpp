@@ -619,5 +619,76 @@ TEST(EquilibriumTangent, ConstraintForceDerivativeMatchesFiniteDifferenceForEver
   }
 }
 
+// Stabilised index 2 (method-next.md §N1.3): with AssemblyOptions::velocity_constraint_tangent
+// = c the constraint rows of the matrix are s_C (B + c Z), without the tangent operator on B
+// (the rows linearise B(q) v, whose velocity derivative is B), and Z is the derivative of the
+// velocity constraint B(q) v at fixed v through the retraction (CalcVelocityConstraint).
+TEST(DynamicTangent, VelocityConstraintDerivativeMatchesFiniteDifferenceForEveryJointType) {
+  constexpr double c = 0.37;
+  for (JointType type : kAllTypes) {
+    if (type == JointType::kFree) continue;  // no constraint rows
+    for (bool reverse : {false, true}) {
+      SCOPED_TRACE(std::string(JointTypeName(type)) + (reverse ? " (ground on side b)" : ""));
+      const Model m = MakeJointModel(type, reverse);
+      Data d = MakeData(m);
+      Disturb(m, d, static_cast<unsigned>(type));
+      auto rng = Rng(300 + static_cast<unsigned>(type));
+      for (int i = 0; i < m.nv; ++i) d.v(i) = RandomVec6(rng, 3.0)(0);
+      AssemblyOptions o = StaticsOptions();
+      ASSERT_TRUE(Assemble(m, d, o));
+      const Eigen::MatrixXd B = GlobalMatrix(m, d).block(m.nv, 0, m.nc, m.nv) / kConstraintScale;
+      o.velocity_constraint_tangent = c;
+      ASSERT_TRUE(Assemble(m, d, o));
+      const Eigen::MatrixXd Z =
+          (GlobalMatrix(m, d).block(m.nv, 0, m.nc, m.nv) / kConstraintScale - B) / c;
+      // d(B(q) v)/dx at fixed v.
+      const State base = [&] {
+        State st;
+        SaveState(d, &st);
+        return st;
+      }();
+      Eigen::MatrixXd fd(m.nc, m.nv);
+      Eigen::VectorXd plus(m.nc), minus(m.nc);
+      for (int i = 0; i < m.nv; ++i) {
+        Eigen::VectorXd dx = Eigen::VectorXd::Zero(m.nv);
+        dx(i) = kEps;
+        RestoreState(base, d);
+        Retract(m, d, dx);
+        CalcVelocityConstraint(m, d, 0.0, plus);
+        dx(i) = -kEps;
+        RestoreState(base, d);
+        Retract(m, d, dx);
+        CalcVelocityConstraint(m, d, 0.0, minus);
+        fd.col(i) = (plus - minus) / (2.0 * kEps);
+      }
+      RestoreState(base, d);
+      EXPECT_GT(fd.cwiseAbs().maxCoeff(), 0.1);
+      EXPECT_LT(RelativeError(Z, fd), 1e-7) << "Z =\n" << Z << "\nFD =\n" << fd;
+      // With the tangent operators of a dynamic iteration the B part of the rows stays B.
+      for (std::size_t n = 0; n < m.nodes.size(); ++n)
+        d.node_tangent[n] = TSE3(RandomVec6(rng, 0.3));
+      for (std::size_t jj = 0; jj < m.joints.size(); ++jj)
+        if (m.nodes.size() + jj < d.node_tangent.size())
+          d.node_tangent[m.nodes.size() + jj].setIdentity();
+      o.use_node_tangent = true;
+      o.velocity_constraint_tangent = 0.0;
+      ASSERT_TRUE(Assemble(m, d, o));
+      const Eigen::MatrixXd BT = GlobalMatrix(m, d).block(m.nv, 0, m.nc, m.nv) / kConstraintScale;
+      o.velocity_constraint_tangent = c;
+      ASSERT_TRUE(Assemble(m, d, o));
+      const Eigen::MatrixXd rows = GlobalMatrix(m, d).block(m.nv, 0, m.nc, m.nv) / kConstraintScale;
+      EXPECT_GT(RelativeError(BT, B), 1e-3);  // the tangent operators do act on B T
+      // rows = B + c Z T: compare column blocks of the nodes.
+      for (std::size_t n = 0; n < m.nodes.size(); ++n) {
+        const int dof = m.nodes[n].dof;
+        if (dof < 0) continue;
+        const Eigen::MatrixXd expected =
+            B.middleCols(dof, 6) + c * Z.middleCols(dof, 6) * d.node_tangent[n];
+        EXPECT_LT(RelativeError(rows.middleCols(dof, 6), expected), 1e-12);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace screwfem::joint_gradient_test

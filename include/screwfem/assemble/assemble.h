@@ -35,6 +35,11 @@ struct AssemblyOptions {
   // use_node_tangent.
   bool constraint_force_tangent = false;
   const std::vector<int>* pattern_last = nullptr;  // null: model.pattern_last
+  // Stabilised index 2 (method-next.md §N1.3): adds s_C times this factor times Z T, the
+  // derivative of the velocity constraint B(q) v at the current v
+  // (CalcJointVelocityConstraintTangent), to the joints' constraint rows of the matrix, whose
+  // right-hand side is then the scaled velocity constraint. 0: not added (index 3, statics).
+  double velocity_constraint_tangent = 0.0;
 };
 
 // model.pattern_last widened by the blocks of d(B^T lambda)/dq (each constrained joint couples

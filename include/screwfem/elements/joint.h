@@ -122,6 +122,20 @@ void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g,
                                      const Vec6& lambda, const Mat6X& basis,
                                      JointForceTangent* out);
 
+// The derivative Z = d(B v)/dq of one joint's velocity constraint rows at fixed velocities
+// (method-next.md §N1.3, the (3,1) block of the stabilised index-2 iteration matrix): columns
+// ordered [x_A (6), x_B (6), x_J (k)] as in CalcJointConstraintForceTangent. With
+// u = Ad(C_B^-1) v_B - Ad(G_A) v_A - A_J v_J, B v = T^-1(phi) u + ad(phi) A_J v_J and
+//   Z dx = [dT^-1(phi)/dphi . dphi] u + T^-1(phi) Ad(G_A) ad(v_A) (x_A - Ad(G_A^-1 C_B^-1) x_B)
+//          - ad(A_J v_J) dphi,   dphi = B_A x_A + B_B x_B + B_J x_J,
+// plus, for the universal joint, the variation of its moving first axis A_1(alpha_2). A null
+// v_a (v_b) is a node at rest (the ground); v_j holds the k coordinate rates.
+using JointVelocityTangent = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 18>;
+void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient& g,
+                                        const Vec6* v_a, const Vec6* v_b,
+                                        const Eigen::Ref<const Eigen::VectorXd>& v_j,
+                                        const Mat6X& basis, JointVelocityTangent* out);
+
 // Springs, dampers and the drive on a joint's coordinates (method.md §4.4, §4.5): the
 // generalised force f (k) that enters the coordinate rows of the residual, and its derivatives
 // K_q = df/dalpha and D_q = df/d(alpha_dot) (top-left k x k). `dynamics` adds the dampers;

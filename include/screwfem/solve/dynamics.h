@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/data.h"
@@ -172,6 +173,11 @@ struct Integrator {
   Eigen::MatrixXd ggl_b, ggl_gram;
   Eigen::LLT<Eigen::MatrixXd> ggl_gram_llt;
   Eigen::VectorXd ggl_bv, ggl_phi, ggl_y, ggl_nu, ggl_dnu;
+  // The position-constraint rows of the iteration, B(q) T at the iterate where the matrix was
+  // last factorised (dense, nc x nv), and the factorised B T B_n^T of the nu correction.
+  Eigen::MatrixXd ggl_bt, ggl_cross;
+  Eigen::PartialPivLU<Eigen::MatrixXd> ggl_cross_lu;
+  Eigen::VectorXd ggl_rhs;
   double max_nu = 0.0;
   bool use_last_acceleration = true;  // predictor of the next step (DynamicOptions::predictor)
   // Statistics.
