@@ -76,6 +76,10 @@ void BindSettings(py::module_& m) {
                      "End a substep on every breakpoint of a drive or load profile and "
                      "re-initialise accelerations and multipliers there (right limits), as at "
                      "the start.")
+      .def_readwrite("perturbed_start", &DynamicOptions::perturbed_start,
+                     "After the start and each restart, the auxiliary acceleration "
+                     "a = vdot + (alpha_m - alpha_f) (vdot one step ahead - vdot) instead of "
+                     "a = vdot (fixed steps; second-order efforts with rho_inf < 1 under GGL).")
       .def_readwrite("constraints", &DynamicOptions::constraints,
                      "INDEX3 (position constraints) or GGL (also the velocity constraints, "
                      "stabilised index 2: round-off velocity constraints, second-order "

@@ -568,6 +568,7 @@ class Run {
       j.Field("predictor", NameOf(d.predictor));
       j.Field("convergence", NameOf(d.convergence));
       j.Field("restart_at_breakpoints", d.restart_at_breakpoints);
+      j.Field("perturbed_start", d.perturbed_start);
       j.Field("constraints", NameOf(d.constraints));
       j.Field("adaptive_steps", a.adaptive_steps);
       if (a.adaptive_steps) {

@@ -879,8 +879,8 @@ void SceneReader::ReadAnalysis(const Node* node) {
   r_.CheckKeys(*node, path,
                {"type", "start_time", "end_time", "step", "rho_inf", "tolerances", "max_iterations",
                 "max_halvings", "align_steps", "static_preload", "load_steps", "rod_inertia",
-                "newton", "predictor", "convergence", "restart_at_breakpoints", "constraints",
-                "tolerance", "min_step", "max_step", "initial_step", "statics"});
+                "newton", "predictor", "convergence", "restart_at_breakpoints", "perturbed_start",
+                "constraints", "tolerance", "min_step", "max_step", "initial_step", "statics"});
   if (const Node* t = node->Find("type")) a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
   ReadTimes(*node, path);
   ReadSolverOptions(*node, path);
@@ -889,6 +889,8 @@ void SceneReader::ReadAnalysis(const Node* node) {
     a->align_steps = r_.Bool(*t, Join(path, "align_steps"));
   if (const Node* t = node->Find("restart_at_breakpoints"))
     a->dynamic.restart_at_breakpoints = r_.Bool(*t, Join(path, "restart_at_breakpoints"));
+  if (const Node* t = node->Find("perturbed_start"))
+    a->dynamic.perturbed_start = r_.Bool(*t, Join(path, "perturbed_start"));
   if (const Node* t = node->Find("constraints"))
     a->dynamic.constraints = r_.Enum<ConstraintFormulation>(*t, Join(path, "constraints"));
   if (const Node* t = node->Find("static_preload"))

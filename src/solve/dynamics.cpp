@@ -138,7 +138,42 @@ bool ConsistentStart(const Model& model, Data& data, Integrator& integ, std::str
   data.lambda = data.increment.tail(nc);
   integ.a = data.vdot;
   integ.use_last_acceleration = integ.options.predictor != Predictor::kZero;
+  integ.perturb_pending = integ.options.perturbed_start &&
+                          integ.params.alpha_m != integ.params.alpha_f;
   return true;
+}
+
+// DynamicOptions::perturbed_start (method-next.md §N1.2 step 4): before the first step after
+// a start or restart, of size h, a = vdot + (alpha_m - alpha_f) (vdot_s - vdot) with vdot_s
+// the consistent acceleration at q exp(h v + h^2 vdot / 2), v + h vdot, t + h. One-sided
+// (the left side of a breakpoint lies across the jump). The state is restored afterwards.
+bool ApplyPerturbedStart(const Model& model, Data& data, Integrator& integ, double h,
+                         std::string* why) {
+  if (!integ.perturb_pending) return true;
+  integ.perturb_pending = false;
+  const double t = data.time;
+  SaveState(data, &integ.perturb_q);
+  integ.perturb_v = data.v;
+  integ.perturb_vdot = data.vdot;
+  integ.perturb_lambda = data.lambda;
+  data.increment.head(model.nv) = h * data.v + (0.5 * h * h) * data.vdot;
+  Retract(model, data, data.increment.head(model.nv));
+  data.v += h * data.vdot;
+  data.time = t + h;
+  const bool ok = ConsistentStart(model, data, integ, why);
+  // integ.a holds vdot_s now.
+  if (ok)
+    integ.a = integ.perturb_vdot +
+              (integ.params.alpha_m - integ.params.alpha_f) * (integ.a - integ.perturb_vdot);
+  else
+    integ.a = integ.perturb_vdot;
+  integ.perturb_pending = false;
+  RestoreState(integ.perturb_q, data);
+  data.v = integ.perturb_v;
+  data.vdot = integ.perturb_vdot;
+  data.lambda = integ.perturb_lambda;
+  data.time = t;
+  return ok;
 }
 
 }  // namespace
@@ -155,8 +190,26 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
       Eigen::VectorXd::Zero(nc);
   if (options.constraints == ConstraintFormulation::kGgl) {
     integ.ggl_b = Eigen::MatrixXd::Zero(nc, nv);
-    integ.ggl_gram = Eigen::MatrixXd::Identity(nc, nc);
-    integ.ggl_gram_llt = Eigen::LLT<Eigen::MatrixXd>(nc);
+    std::vector<char> touched(static_cast<std::size_t>(nv), 0);
+    const auto touch = [&](int first, int size) {
+      for (int i = first; i < first + size; ++i) touched[static_cast<std::size_t>(i)] = 1;
+    };
+    for (const Joint& j : model.joints) {
+      if (j.row < 0 && j.drive != DriveKind::kPrescribed) continue;
+      for (const int node : {j.node_a, j.node_b})
+        if (node != kGround && model.nodes[static_cast<std::size_t>(node)].dof >= 0)
+          touch(model.nodes[static_cast<std::size_t>(node)].dof, 6);
+      if (j.k() > 0) touch(j.coord, j.k());
+    }
+    integ.ggl_blocks.clear();
+    for (int i = 0; i < nv; ++i) {
+      if (!touched[static_cast<std::size_t>(i)]) continue;
+      if (!integ.ggl_blocks.empty() &&
+          integ.ggl_blocks.back().first + integ.ggl_blocks.back().second == i)
+        ++integ.ggl_blocks.back().second;
+      else
+        integ.ggl_blocks.emplace_back(i, 1);
+    }
     integ.ggl_bv = integ.ggl_phi = integ.ggl_nu = integ.ggl_dnu = Eigen::VectorXd::Zero(nc);
     integ.ggl_y = Eigen::VectorXd::Zero(nv);
     integ.ggl_bt = Eigen::MatrixXd::Zero(nc, nv);
@@ -169,6 +222,10 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
       integ.dense_vdot1 = integ.dense_d = integ.dense_psi = integ.dense_dpsi =
           Eigen::VectorXd::Zero(nv);
   integ.dense_lambda0 = integ.dense_lambda1 = Eigen::VectorXd::Zero(nc);
+  integ.perturb_v = integ.perturb_vdot = Eigen::VectorXd::Zero(nv);
+  integ.perturb_lambda = Eigen::VectorXd::Zero(nc);
+  SaveState(data, &integ.perturb_q);
+  integ.perturb_pending = false;
   SaveState(data, &integ.dense_q0);
   integ.dense_t0 = data.time;
   integ.dense_h = 0.0;
@@ -247,27 +304,19 @@ void Predict(Data& data, Integrator& integ, const StepConstants& c, bool from_la
 }
 
 // ConstraintFormulation::kGgl (method-next.md §N1.3): the gradient B_n = B(q_n) of the step's
-// start, which multiplies nu in the configuration update, and the factorised B_n B_n^T of the
-// multiplier correction (redundant rows: the identity, holding their nu at zero). Data holds q_n.
-bool PrepareGglStep(const Model& model, const Data& data, Integrator& integ) {
-  if (integ.options.constraints != ConstraintFormulation::kGgl || model.nc == 0) return true;
+// start, which multiplies nu in the configuration update. Data holds q_n.
+void PrepareGglStep(const Model& model, const Data& data, Integrator& integ) {
+  if (integ.options.constraints != ConstraintFormulation::kGgl || model.nc == 0) return;
   CalcConstraintGradient(model, data, integ.ggl_b);
-  integ.ggl_gram.noalias() = integ.ggl_b.lazyProduct(integ.ggl_b.transpose());
-  for (int r : model.redundant_rows) {
-    integ.ggl_gram.row(r).setZero();
-    integ.ggl_gram.col(r).setZero();
-    integ.ggl_gram(r, r) = 1.0;
-  }
-  integ.ggl_gram_llt.compute(integ.ggl_gram);
   integ.ggl_nu.setZero();
-  return integ.ggl_gram_llt.info() == Eigen::Success;
 }
 
 // ConstraintFormulation::kGgl: the position-constraint rows of the iteration at the current
 // iterate, B(q) T with the tangent operators the matrix was assembled with (method-next.md
 // §N1.3; Delta x enters q as q_n o exp(h dq + Delta x)), and the factorised B T B_n^T that
-// gives the nu correction (redundant rows and columns: the identity).
-void FactorizeGglCross(const Model& model, const Data& data, Integrator& integ) {
+// gives the nu correction (redundant rows and columns: the identity). False if it is singular
+// (redundant constraints the build did not find).
+bool FactorizeGglCross(const Model& model, const Data& data, Integrator& integ) {
   Eigen::MatrixXd& bt = integ.ggl_bt;
   CalcConstraintGradient(model, data, bt);
   if (integ.options.use_tangent_operator) {
@@ -293,13 +342,20 @@ void FactorizeGglCross(const Model& model, const Data& data, Integrator& integ) 
       }
     }
   }
-  integ.ggl_cross.noalias() = bt.lazyProduct(integ.ggl_b.transpose());
+  // B T B_n^T over the column blocks where B has entries.
+  integ.ggl_cross.setZero();
+  for (const auto& [first, size] : integ.ggl_blocks)
+    integ.ggl_cross.noalias() +=
+        bt.middleCols(first, size).lazyProduct(integ.ggl_b.middleCols(first, size).transpose());
   for (int r : model.redundant_rows) {
     integ.ggl_cross.row(r).setZero();
     integ.ggl_cross.col(r).setZero();
     integ.ggl_cross(r, r) = 1.0;
   }
   integ.ggl_cross_lu.compute(integ.ggl_cross);
+  // Singular: a pivot below round-off of the largest (rcond() would allocate).
+  const auto pivots = integ.ggl_cross_lu.matrixLU().diagonal().cwiseAbs();
+  return pivots.allFinite() && pivots.minCoeff() > 1e-14 * pivots.maxCoeff();
 }
 
 // Update the configuration: q_{n+1} = q_n o exp(h dq), always recomposed from q_n.
@@ -428,7 +484,7 @@ bool Correct(const Model& model, Data& data, Integrator& integ, const StepConsta
   }
   if (!solved) return false;
   if (ggl) {
-    if (factorize) FactorizeGglCross(model, data, integ);
+    if (factorize && !FactorizeGglCross(model, data, integ)) return false;
     integ.ggl_y = data.increment.head(model.nv);
     integ.ggl_rhs.noalias() = integ.ggl_bt * integ.ggl_y;
     integ.ggl_rhs += integ.ggl_phi;
@@ -482,10 +538,7 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
       opt, c, left_limit ? std::nextafter(t_end, -std::numeric_limits<double>::infinity()) : t_end);
 
   const bool ggl = opt.constraints == ConstraintFormulation::kGgl && model.nc > 0;
-  if (ggl && !PrepareGglStep(model, data, integ)) {
-    if (why) *why = "the constraint gradient B B^T is singular (redundant constraints)";
-    return -1;
-  }
+  if (ggl) PrepareGglStep(model, data, integ);
   double last_increment = INFINITY, last_res = INFINITY, last_con = INFINITY;
   bool factorized = false;  // data.matrix holds a factorisation from this step
   for (int it = 0; it <= opt.max_iterations; ++it) {
@@ -617,6 +670,10 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
       std::snprintf(buf, sizeof buf, "step interrupted at t = %.9g s", t0);
       result.interrupted = true;
       result.message = buf;
+      return result;
+    }
+    if (!ApplyPerturbedStart(model, data, integ, h_sub, &why)) {
+      result.message = "perturbed start: " + why;
       return result;
     }
     SaveStepStart(data, integ);

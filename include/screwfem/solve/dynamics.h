@@ -9,9 +9,9 @@
 #include <array>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
-#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
 #include "screwfem/assemble/assemble.h"
@@ -115,6 +115,13 @@ struct DynamicOptions {
   // across a jump of a prescribed acceleration, and efforts and accelerations ring as
   // (-rho_inf)^k for many steps.
   bool restart_at_breakpoints = true;
+  // The auxiliary acceleration after the start and after each restart (method-next.md §N1.2
+  // step 4, after Arnold, Brüls and Cardona 2015): false: a = vdot (first order in the
+  // multipliers for a few steps when alpha_m != alpha_f); true: a = vdot + (alpha_m - alpha_f)
+  // (vdot_s - vdot), vdot_s the consistent acceleration at the state predicted one step ahead
+  // (q exp(h v + h^2 vdot / 2), v + h vdot, t + h; h = the next step). One more solve of
+  // [M B^T; B 0] per start and restart; nothing changes at rho_inf = 1 (alpha_m = alpha_f).
+  bool perturbed_start = false;
   // How the joints' constraints enter the step (docs/numerics.md, "Stabilised index 2"):
   //   kIndex3: phi(q) = 0 at the end of each step (method.md §5.2);
   //   kGgl:    also the velocity constraint B(q) v + d phi/dt = 0, with a second multiplier nu
@@ -167,17 +174,24 @@ struct Integrator {
   std::vector<double> breakpoints;
   Eigen::VectorXd phi_plus, phi_minus, phi_zero, bdot_v, v_work;
   // ConstraintFormulation::kGgl: the constraint gradient B_n = B(q_n) of the step's start
-  // (dense, nc x nv, redundant rows zero), the factorised B_n B_n^T (redundant rows and columns
-  // the identity), the velocity constraint B v + dphi/dt of the iterate, the constraint values,
+  // (dense, nc x nv, redundant rows zero), the velocity constraint B v + dphi/dt of the
+  // iterate, the constraint values,
   // the Newmark correction y and the multiplier nu of the step, and the largest |nu| of the run.
-  Eigen::MatrixXd ggl_b, ggl_gram;
-  Eigen::LLT<Eigen::MatrixXd> ggl_gram_llt;
+  // DynamicOptions::perturbed_start: a start or restart whose auxiliary acceleration is still
+  // to be perturbed (it needs the next step's size), and the state saved meanwhile.
+  bool perturb_pending = false;
+  State perturb_q;
+  Eigen::VectorXd perturb_v, perturb_vdot, perturb_lambda;
+  Eigen::MatrixXd ggl_b;
   Eigen::VectorXd ggl_bv, ggl_phi, ggl_y, ggl_nu, ggl_dnu;
   // The position-constraint rows of the iteration, B(q) T at the iterate where the matrix was
   // last factorised (dense, nc x nv), and the factorised B T B_n^T of the nu correction.
   Eigen::MatrixXd ggl_bt, ggl_cross;
   Eigen::PartialPivLU<Eigen::MatrixXd> ggl_cross_lu;
   Eigen::VectorXd ggl_rhs;
+  // The column blocks (first unknown, size) where B has entries: the dofs of the nodes joints
+  // attach to and the joints' coordinates.
+  std::vector<std::pair<int, int>> ggl_blocks;
   double max_nu = 0.0;
   bool use_last_acceleration = true;  // predictor of the next step (DynamicOptions::predictor)
   // Statistics.
