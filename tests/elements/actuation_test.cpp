@@ -74,8 +74,8 @@ TEST(RodActuationKernel, StressIsElasticMinusActiveWithRestStrainRemoved) {
   const Vec6 elastic = c.section.stiffness.cwiseProduct(in.strain - c.act.rest_strain);
   EXPECT_LT((in.elastic_stress - elastic).norm(), 1e-12 * elastic.norm());
   EXPECT_LT((in.stress - (elastic - c.act.active_stress)).norm(), 1e-12 * elastic.norm());
-  // At eps = eps0 with sigma_a = K eps0 - K eps0 ... : a stress-free state is eps = eps0 and
-  // sigma_a = 0; the same element with eps0 = strain transmits -sigma_a only.
+  // With eps0 equal to the current strain the material is unstressed and the section
+  // transmits -sigma_a alone.
   RodActuation at_rest = c.act;
   at_rest.rest_strain = in.strain;
   RodInternal r;
