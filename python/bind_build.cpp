@@ -96,6 +96,27 @@ void BindValues(py::module_& m) {
       .def_readwrite("damping", &ForceElement::damping, "[N s/m]")
       .def_readwrite("actuator", &ForceElement::actuator, "Profile [N].");
 
+  py::class_<Actuator>(m, "Actuator",
+                       "Internal actuation of a rod over [from, to] of its arc length "
+                       "(model.h; method-next.md §N5): an element transmits sigma = K (eps - "
+                       "eps0) - sigma_a. PRESSURE: sigma_a = p A [1, 0, 0, 0, r3, -r2]; MUSCLE: "
+                       "-u max_stress A [1, 0, 0, 0, r3, -r2], u clamped to [0, 1]; REST_STRAIN: "
+                       "eps0 = v vector; ACTIVE_STRESS: sigma_a = v vector; the value from "
+                       "`profile`.")
+      .def(py::init<>())
+      .def_readwrite("name", &Actuator::name)
+      .def_readwrite("type", &Actuator::type)
+      .def_readwrite("rod", &Actuator::rod, "Rod index.")
+      .def_readwrite("from_", &Actuator::from, "Start of the range, arc length [m] (at a node).")
+      .def_readwrite("to", &Actuator::to, "End of the range [m] (at a node); < 0: the rod's end.")
+      .def_readwrite("area", &Actuator::area, "Chamber or muscle area [m^2].")
+      .def_readwrite("offset", &Actuator::offset, "Centroid (0, r2, r3) in the section [m].")
+      .def_readwrite("max_stress", &Actuator::max_stress, "Muscle [Pa].")
+      .def_readwrite("vector", &Actuator::vector, "REST_STRAIN or ACTIVE_STRESS (6 entries).")
+      .def_readwrite("profile", &Actuator::profile,
+                     "Pressure [Pa], activation [-] or the factor of `vector` (a Profile; "
+                     "Profile.input for a run-time input).");
+
   py::class_<NodeMatch>(m, "NodeMatch", "Result of ModelBuilder.find_node_at.")
       .def_readonly("node", &NodeMatch::node, "The node within the tolerance, or -1.")
       .def_readonly("nearest", &NodeMatch::nearest, "The nearest node (-1 when there is none).")
@@ -139,6 +160,8 @@ void BindBuild(py::module_& m) {
       .def("add_tendon", &B::AddTendon, py::arg("name"), py::arg("eyelets"), py::arg("tension"),
            "A tendon through eyelets (a list of BodyPoint, in routing order) pulling with the "
            "tension profile [N] (>= 0); returns its index.")
+      .def("add_actuator", &B::AddActuator, py::arg("actuator"),
+           "An Actuator (rest strain or active stress on a rod); returns its index.")
       .def("add_force_element", &B::AddForceElement, py::arg("element"),
            "A ForceElement (spring-damper-actuator between two body points); returns its index.")
       .def("find_rod_node_at_arc_length", &B::FindRodNodeAtArcLength, py::arg("rod"),

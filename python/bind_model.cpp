@@ -43,6 +43,7 @@ void BindModel(py::module_& m) {
   BindEnum<DriveKind>(m, "DriveKind", "Drive on one joint coordinate (model.h).");
   BindEnum<RodInertia>(m, "RodInertia", "Rod inertia model (method.md §2.5).");
   BindEnum<LoadFrame>(m, "LoadFrame", "Frame of an applied load's components (model.h).");
+  BindEnum<ActuatorType>(m, "ActuatorType", "Kind of a rod actuator (model.h, Actuator).");
 
   m.def("joint_type_name", &JointTypeName, py::arg("type"),
         "Name of a joint type as written in scene files, e.g. 'revolute'.");
@@ -157,6 +158,7 @@ void BindModel(py::module_& m) {
       .def_property_readonly("num_bodies", [](const Model& mo) { return mo.bodies.size(); })
       .def_property_readonly("num_joints", [](const Model& mo) { return mo.joints.size(); })
       .def_property_readonly("num_tendons", [](const Model& mo) { return mo.tendons.size(); })
+      .def_property_readonly("num_actuators", [](const Model& mo) { return mo.actuators.size(); })
       .def_property_readonly("num_force_elements",
                              [](const Model& mo) { return mo.force_elements.size(); })
       .def_property_readonly(

@@ -18,6 +18,7 @@
 #include "bind.h"
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
+#include "screwfem/elements/rod.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/io/scene.h"
@@ -118,6 +119,9 @@ class Simulation {
   int Rod(const std::string& name) const { return Named(model().FindRod(name), "rod", name); }
   int TendonIndex(const std::string& name) const {
     return Named(model().FindTendon(name), "tendon", name);
+  }
+  int ActuatorIndex(const std::string& name) const {
+    return Named(model().FindActuator(name), "actuator", name);
   }
   int ForceElementIndex(const std::string& name) const {
     return Named(model().FindForceElement(name), "force element", name);
@@ -586,6 +590,34 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           py::arg("tendon"),
           "tendon_state(tendon) -> (length [m], rate [m/s], tension [N]) of a tendon (name), "
           "as tendons.csv records it.")
+      .def(
+          "actuator_value",
+          [](S& s, const std::string& name) {
+            const int a = s.ActuatorIndex(name);
+            return ActuatorValue(s.model().actuators[static_cast<std::size_t>(a)], s.data().time,
+                                 s.data());
+          },
+          py::arg("actuator"),
+          "actuator_value(actuator) -> its profile's value now (pressure [Pa], activation, or "
+          "factor), as actuators.csv records it.")
+      .def(
+          "rod_stresses",
+          [](S& s, const std::string& r) {
+            std::vector<Vec6> total, elastic;
+            CalcRodStresses(s.model(), s.data(), s.Rod(r), &total, &elastic);
+            const auto array = [](const std::vector<Vec6>& v) {
+              py::array_t<double> out({static_cast<py::ssize_t>(v.size()), py::ssize_t{6}});
+              auto w = out.mutable_unchecked<2>();
+              for (std::size_t i = 0; i < v.size(); ++i)
+                for (int k = 0; k < 6; ++k) w(static_cast<py::ssize_t>(i), k) = v[i](k);
+              return out;
+            };
+            return py::make_tuple(array(total), array(elastic));
+          },
+          py::arg("rod"),
+          "rod_stresses(rod) -> (total, elastic), two (num_elements, 6) arrays of section "
+          "stress resultants [N, N m] (N, V2, V3, T, M2, M3): what each element transmits, "
+          "K (eps - eps0) - sigma_a, and its elastic part K (eps - eps0).")
       .def(
           "force_element_state",
           [](S& s, const std::string& name) {

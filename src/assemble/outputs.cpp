@@ -57,15 +57,22 @@ RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod_index,
   return p;
 }
 
-void CalcRodStresses(const Model& model, const Data& data, int rod_index, std::vector<Vec6>* out) {
+void CalcRodStresses(const Model& model, const Data& data, int rod_index, std::vector<Vec6>* out,
+                     std::vector<Vec6>* elastic) {
   const Rod& rod = model.rods[static_cast<std::size_t>(rod_index)];
   out->resize(static_cast<std::size_t>(rod.num_elements));
+  if (elastic) elastic->resize(static_cast<std::size_t>(rod.num_elements));
   for (int k = 0; k < rod.num_elements; ++k) {
     const std::size_t e = static_cast<std::size_t>(rod.first_element + k);
     const RodElement& el = model.elements[e];
     const Vec6 d = CalcRodRelativeMotion(data.H[static_cast<std::size_t>(el.node_a)],
                                          data.H[static_cast<std::size_t>(el.node_b)], data.w_ref[e]);
-    (*out)[static_cast<std::size_t>(k)] = rod.section.stiffness.cwiseProduct((d - el.d0) / el.length);
+    RodActuation act;
+    CalcRodActuation(model, data, static_cast<int>(e), data.time, 1.0, &act);
+    const Vec6 el_stress =
+        rod.section.stiffness.cwiseProduct((d - el.d0) / el.length - act.rest_strain);
+    (*out)[static_cast<std::size_t>(k)] = el_stress - act.active_stress;
+    if (elastic) (*elastic)[static_cast<std::size_t>(k)] = el_stress;
   }
 }
 

@@ -364,6 +364,11 @@ NodeMatch ModelBuilder::FindRodNodeAtArcLength(int rod, double s, double toleran
   return match;
 }
 
+int ModelBuilder::AddActuator(const Actuator& actuator) {
+  model_.actuators.push_back(actuator);
+  return static_cast<int>(model_.actuators.size()) - 1;
+}
+
 int ModelBuilder::AddPointLoad(const PointLoad& load) {
   model_.point_loads.push_back(load);
   return static_cast<int>(model_.point_loads.size()) - 1;
@@ -679,6 +684,91 @@ void BuildTendons(Model& m) {
   }
 }
 
+// Actuators (method-next.md §N5): rod, range at nodes, values; eps0 and sigma_a per unit
+// profile value; the per-element lists of Model::element_actuators.
+void BuildActuators(Model& m) {
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < m.actuators.size(); ++i) {
+    Actuator& a = m.actuators[i];
+    const std::string label = "actuator '" + a.name + "'";
+    const int index = static_cast<int>(i);
+    const EntityRef entity{EntityKind::kActuator, index, {}};
+    const auto fail = [&](const std::string& part, const std::string& what) {
+      throw InputError(label + ": " + what, {EntityKind::kActuator, index, part}, what);
+    };
+    if (a.rod < 0 || a.rod >= static_cast<int>(m.rods.size()))
+      fail("rod", "invalid rod " + std::to_string(a.rod));
+    if (!IsEnumValue(a.type)) fail("type", "invalid actuator type");
+    const Rod& rod = m.rods[static_cast<std::size_t>(a.rod)];
+    const double to = a.to < 0.0 ? rod.length : a.to;
+    const double tol = 1e-8 * std::max(1.0, rod.length);
+    if (!(a.from >= 0.0) || !std::isfinite(a.from))
+      fail("from", "must be a finite arc length >= 0, got " + std::to_string(a.from));
+    if (!(to <= rod.length + tol) || !std::isfinite(to))
+      fail("to", "must not exceed the rod's length " + std::to_string(rod.length) + " m, got " +
+                     std::to_string(to));
+    if (!(to > a.from + tol))
+      fail("to", "must be greater than from (" + std::to_string(a.from) + " m), got " +
+                     std::to_string(to));
+    // The range's ends at nodes: the first element starting at `from`, the last ending at `to`.
+    int first = -1, last = -1;
+    double s = 0.0, near_from = INFINITY, near_to = INFINITY;
+    for (int k = 0; k < rod.num_elements; ++k) {
+      const double L = m.elements[static_cast<std::size_t>(rod.first_element + k)].length;
+      if (std::abs(s - a.from) <= tol) first = k;
+      if (std::abs(s - a.from) < std::abs(near_from - a.from)) near_from = s;
+      s += L;
+      if (std::abs(s - to) <= tol) last = k;
+      if (std::abs(s - to) < std::abs(near_to - to)) near_to = s;
+    }
+    if (first < 0)
+      fail("from", "arc length " + std::to_string(a.from) + " m is not at a node of rod '" +
+                       rod.name + "' (the nearest node is at " + std::to_string(near_from) + " m)");
+    if (last < 0)
+      fail("to", "arc length " + std::to_string(to) + " m is not at a node of rod '" + rod.name +
+                     "' (the nearest node is at " + std::to_string(near_to) + " m)");
+    a.first_element = rod.first_element + first;
+    a.num_elements = last - first + 1;
+    a.rest_strain_unit.setZero();
+    a.active_stress_unit.setZero();
+    const bool chamber = a.type == ActuatorType::kPressure || a.type == ActuatorType::kMuscle;
+    if (chamber) {
+      if (!(a.area > 0.0) || !std::isfinite(a.area))
+        fail("area", "must be a positive area [m^2], got " + std::to_string(a.area));
+      if (!a.offset.allFinite()) fail("offset", "must be finite");
+      // sigma_a per unit pressure: A [e1; r x e1] (method-next.md §N5.2).
+      Vec6 unit;
+      unit << 1.0, 0.0, 0.0, 0.0, a.offset(2), -a.offset(1);
+      unit *= a.area;
+      if (a.type == ActuatorType::kMuscle) {
+        if (!(a.max_stress >= 0.0) || !std::isfinite(a.max_stress))
+          fail("max_stress", "must be finite and non-negative [Pa], got " +
+                                 std::to_string(a.max_stress));
+        unit *= -a.max_stress;
+      }
+      a.active_stress_unit = unit;
+    } else {
+      if (!a.vector.allFinite()) fail("vector", "must be finite");
+      (a.type == ActuatorType::kRestStrain ? a.rest_strain_unit : a.active_stress_unit) = a.vector;
+    }
+    ValidateProfile(m, a.profile, label + " profile", entity);
+    if (!a.name.empty() && !names.insert(a.name).second)
+      throw InputError("duplicate actuator name '" + a.name + "'", entity);
+  }
+  // Per element, its actuators in order (several on one element add).
+  m.element_actuators.clear();
+  for (std::size_t e = 0; e < m.elements.size(); ++e) {
+    RodElement& el = m.elements[e];
+    el.first_actuator = static_cast<int>(m.element_actuators.size());
+    for (std::size_t i = 0; i < m.actuators.size(); ++i) {
+      const Actuator& a = m.actuators[i];
+      const int k = static_cast<int>(e) - a.first_element;
+      if (k >= 0 && k < a.num_elements) m.element_actuators.push_back(static_cast<int>(i));
+    }
+    el.num_actuators = static_cast<int>(m.element_actuators.size()) - el.first_actuator;
+  }
+}
+
 // Force elements: ends, values, rest length (the reference distance when negative), names.
 void BuildForceElements(Model& m) {
   std::set<std::string> names;
@@ -877,6 +967,7 @@ Model ModelBuilder::Build() const {
   SetLengthScale(m);
   BuildTendons(m);
   BuildForceElements(m);
+  BuildActuators(m);
   CheckConnected(m, used);
   LayOutUnknowns(m);
   CheckJointFramesCoincide(m);

@@ -73,13 +73,21 @@ void CalcRodGeometry(const SE3& H_A, const SE3& H_B, const Vec3& w_ref, bool gau
 }
 
 void CalcRodInternal(const RodElement& element, const Section& section, const RodGeometry& geometry,
-                     bool tangent, RodInternal* out) {
+                     bool tangent, RodInternal* out, const RodActuation* actuation) {
   const double L = element.length;
   const Mat6x12& P = geometry.P;
   out->d = geometry.d;
   out->strain = (out->d - element.d0) / L;
-  out->stress = section.stiffness.cwiseProduct(out->strain);
-  out->energy = 0.5 * L * out->strain.dot(out->stress);
+  // sigma = K (eps - eps0) - sigma_a, V = L/2 (eps - eps0)^T K (eps - eps0) - L eps^T sigma_a
+  // (method-next.md §N5.1).
+  const Vec6 elastic = actuation ? Vec6(out->strain - actuation->rest_strain) : out->strain;
+  out->elastic_stress = section.stiffness.cwiseProduct(elastic);
+  out->stress = out->elastic_stress;
+  out->energy = 0.5 * L * elastic.dot(out->elastic_stress);
+  if (actuation) {
+    out->stress -= actuation->active_stress;
+    out->energy -= L * out->strain.dot(actuation->active_stress);
+  }
   out->force.noalias() = P.transpose() * out->stress;
   if (!tangent) return;
   // K_t = (1/L) P^T K P + [D(-d, sigma); D(d, sigma)] P   (method.md §2.4), with
@@ -93,10 +101,11 @@ void CalcRodInternal(const RodElement& element, const Section& section, const Ro
 }
 
 void CalcRodInternal(const RodElement& element, const Section& section, const SE3& H_A,
-                     const SE3& H_B, const Vec3& w_ref, RodInternal* out) {
+                     const SE3& H_B, const Vec3& w_ref, RodInternal* out,
+                     const RodActuation* actuation) {
   RodGeometry geometry;
   CalcRodGeometry(CalcRodRelativeMotion(H_A, H_B, w_ref), false, false, &geometry);
-  CalcRodInternal(element, section, geometry, true, out);
+  CalcRodInternal(element, section, geometry, true, out, actuation);
 }
 
 Mat6x12 CalcRodNDirectional(double xi, const Vec6& d, const Vec6& dd) {
@@ -353,7 +362,8 @@ void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& ge
 
 void CalcRodConservative(const RodElement& element, const Section& section,
                          const RodGeometry& geometry, const SE3& H_A, const Vec3& f_w,
-                         const Mat6* T_A, const Mat6* T_B, Vec12* force, Mat12* stiffness) {
+                         const Mat6* T_A, const Mat6* T_B, Vec12* force, Mat12* stiffness,
+                         const RodActuation* actuation) {
   // force = P^T sigma - g_dead = P^T (sigma - L s) - L [f; pbar x f; 0], and the tangent
   //   (P^T (K/L - L Hs) + [Star(st) - D(d, st); D(d, st)] + L E_A [0; Skew(f) [Jbar Pw]]) P
   //   - L (P^T S_f Skew(f) + E_A [Skew(f); Skew(pbar) Skew(f)]) Theta_A,   st = sigma - L s
@@ -364,6 +374,8 @@ void CalcRodConservative(const RodElement& element, const Section& section,
   const Mat6x12& P = geometry.P;
   const Vec6 strain = (d - element.d0) / L;
   Vec6 stress = section.stiffness.cwiseProduct(strain);
+  if (actuation)  // method-next.md §N5.1
+    stress -= section.stiffness.cwiseProduct(actuation->rest_strain) + actuation->active_stress;
   const bool weight = f_w.squaredNorm() > 0.0;
   DeadForcePieces p;
   if (weight) {

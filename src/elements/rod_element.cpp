@@ -38,10 +38,13 @@ bool RodElementKind::Calc(const Model& m, const Data& d, const Item& e, const No
   const bool node_tangent = tangent && o.node_tangent;
   Vec12& r = t->residual;
   Mat12& stiffness = t->stiffness;
+  // Actuation (method-next.md §N5.1): sigma = K (eps - eps0) - sigma_a in the same kernel.
+  RodActuation act;
+  const bool actuated = CalcRodActuation(m, d, e, o.time, o.load_factor, &act);
   CalcRodConservative(el, sec, geo, HA,
                       has_gravity ? Vec3(o.load_factor * rhoA * m.gravity) : Vec3::Zero(),
                       node_tangent ? x.T[0] : nullptr, node_tangent ? x.T[1] : nullptr, &r,
-                      tangent ? &stiffness : nullptr);
+                      tangent ? &stiffness : nullptr, actuated ? &act : nullptr);
   const double rotation = geo.d.tail<3>().norm();
   if (!(rotation < m.max_element_rotation) || !r.allFinite()) {
     t->failure = rotation;
@@ -52,6 +55,14 @@ bool RodElementKind::Calc(const Model& m, const Data& d, const Item& e, const No
   Vec6 magnitude = geo.d.cwiseAbs() + el.d0.cwiseAbs();
   magnitude.head<3>().array() += std::max(HA.x.norm(), HB.x.norm());
   t->term_scale = (sec.stiffness.cwiseProduct(magnitude) / el.length).maxCoeff();
+  if (actuated) {
+    // The actuation is a force term of its own (balanced by the element's elastic stress),
+    // like a load: K eps0 + sigma_a sets the scale of the convergence test.
+    const double a =
+        (sec.stiffness.cwiseProduct(act.rest_strain) + act.active_stress).cwiseAbs().maxCoeff();
+    t->force_scale = a;
+    t->term_scale = std::max(t->term_scale, a);
+  }
   // Option A without mass-proportional damping: the force alone for a residual, or with
   // c_M M_e + c_C C_t formed by the kernel (one set of Gauss-point products), the element
   // matrix scattered as one.
@@ -94,6 +105,27 @@ bool RodElementKind::Calc(const Model& m, const Data& d, const Item& e, const No
   return true;
 }
 
+double ActuatorValue(const Actuator& a, double time, const Data& data) {
+  const double v = EvalProfile(a.profile, time, data).value;
+  return a.type == ActuatorType::kMuscle ? std::clamp(v, 0.0, 1.0) : v;
+}
+
+bool CalcRodActuation(const Model& m, const Data& d, int element, double time,
+                      double load_factor, RodActuation* out) {
+  out->rest_strain.setZero();
+  out->active_stress.setZero();
+  const RodElement& el = m.elements[static_cast<std::size_t>(element)];
+  if (el.num_actuators == 0) return false;
+  for (int i = 0; i < el.num_actuators; ++i) {
+    const Actuator& a = m.actuators[static_cast<std::size_t>(
+        m.element_actuators[static_cast<std::size_t>(el.first_actuator + i)])];
+    const double v = load_factor * ActuatorValue(a, time, d);
+    out->rest_strain += v * a.rest_strain_unit;
+    out->active_stress += v * a.active_stress_unit;
+  }
+  return true;
+}
+
 void RodElementKind::AddEnergy(const Model& m, const Data& d, const Item& e, Energy* E) {
   const RodElement& el = m.elements[static_cast<std::size_t>(e)];
   const Section& sec = m.rods[static_cast<std::size_t>(el.rod)].section;
@@ -101,7 +133,13 @@ void RodElementKind::AddEnergy(const Model& m, const Data& d, const Item& e, Ene
   const SE3& HB = d.H[static_cast<std::size_t>(el.node_b)];
   const Vec6 rel = CalcRodRelativeMotion(HA, HB, d.w_ref[static_cast<std::size_t>(e)]);
   const Vec6 strain = (rel - el.d0) / el.length;
-  E->strain += 0.5 * el.length * strain.dot(sec.stiffness.cwiseProduct(strain));
+  // L/2 (eps - eps0)^T K (eps - eps0) - L eps^T sigma_a (method-next.md §N5.1), the actuation
+  // at data.time.
+  RodActuation act;
+  CalcRodActuation(m, d, e, d.time, 1.0, &act);
+  const Vec6 elastic = strain - act.rest_strain;
+  E->strain += 0.5 * el.length * elastic.dot(sec.stiffness.cwiseProduct(elastic)) -
+               el.length * strain.dot(act.active_stress);
   const int nodes[2] = {el.node_a, el.node_b};
   Vec12 eta_ab;
   GatherNodeMotion<2>(m, d, nodes, &eta_ab, nullptr);

@@ -214,6 +214,10 @@ class Run {
         forces_.Open(outdir + "/forces.csv", StaticColumns(ForceColumns(model_)));
         tables_[num_tables_++] = &forces_;
       }
+      if (!model_.actuators.empty()) {
+        actuators_.Open(outdir + "/actuators.csv", StaticColumns(ActuatorColumns(model_)));
+        tables_[num_tables_++] = &actuators_;
+      }
       if (scene.outputs.vtk) {
         vtk_.emplace();
         vtk_->Open(outdir + "/vtk", model_, scene.outputs.vtk_format, ExpectedFrames(scene));
@@ -499,6 +503,10 @@ class Run {
         CalcForceRow(model_, data, &row_);
         forces_.WriteRow(t, WithLoadFactor(row_));
       }
+      if (actuators_.path().size() > 0) {
+        CalcActuatorRow(model_, data, t, &row_);
+        actuators_.WriteRow(t, WithLoadFactor(row_));
+      }
       last_row_time_ = t;
       std::size_t batch = 0;
       for (std::size_t i = 0; i < num_tables_; ++i) batch = std::max(batch, tables_[i]->batch_bytes());
@@ -677,10 +685,10 @@ class Run {
   Integrator integ_;
   StaticResult static_;
   bool has_static_ = false;
-  CsvWriter points_, joints_, reactions_, energy_, tendons_, forces_;
+  CsvWriter points_, joints_, reactions_, energy_, tendons_, forces_, actuators_;
   // The open tables, flushed together (points, joints, reactions and energy always).
-  std::array<CsvWriter*, 6> tables_ = {&points_, &joints_, &reactions_, &energy_, nullptr,
-                                       nullptr};
+  std::array<CsvWriter*, 7> tables_ = {&points_, &joints_, &reactions_, &energy_, nullptr,
+                                       nullptr, nullptr};
   std::size_t num_tables_ = 4;
   std::optional<VtkWriter> vtk_;
   std::optional<ProgressBar> progress_;

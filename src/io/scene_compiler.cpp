@@ -55,6 +55,7 @@ class SceneCompiler {
   void AddJoints();
   void AddLoads();
   void AddTendonsAndForces();
+  void AddActuators();
   // The builder's body point for a spec's (an error at `at` when it is not on a node).
   BodyPoint ResolveBodyPoint(const BodyPointSpec& p, const FieldSource& at,
                              const std::string& what) const;
@@ -116,6 +117,7 @@ void SceneCompiler::RethrowBuildError(const InputError& e) const {
     case EntityKind::kRodLoad: pick(src_.loads, owner(rod_load_)); break;
     case EntityKind::kTendon: pick(src_.tendons, entity.index); break;
     case EntityKind::kForceElement: pick(src_.forces, entity.index); break;
+    case EntityKind::kActuator: pick(src_.actuators, entity.index); break;
     case EntityKind::kNone: break;
   }
   if (source != nullptr) Fail(*source, e);
@@ -320,6 +322,24 @@ void SceneCompiler::AddTendonsAndForces() {
   }
 }
 
+// Actuators on the rods of soft bodies (one per actuation entry, same index).
+void SceneCompiler::AddActuators() {
+  for (const ActuatorSpec& s : spec_.actuators) {
+    Actuator a;
+    a.name = s.name;
+    a.type = s.type;
+    a.rod = body_index_[static_cast<std::size_t>(s.body)];
+    a.from = s.from;
+    a.to = s.to;
+    a.area = s.area;
+    a.offset = s.offset;
+    a.max_stress = s.max_stress;
+    a.vector = s.vector;
+    a.profile = s.profile;
+    builder_.AddActuator(a);
+  }
+}
+
 // --- outputs ---------------------------------------------------------------------------------
 
 void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
@@ -378,6 +398,12 @@ void SceneCompiler::CheckReferences() const {
     if (l.where != LoadSpec::Where::kAt && spec_.bodies[static_cast<std::size_t>(l.body)].rigid)
       Fail(SourceOf(src_.loads, i).self, "'s' and 'distributed' apply to soft bodies only");
   }
+  for (std::size_t i = 0; i < spec_.actuators.size(); ++i) {
+    const int b = spec_.actuators[i].body;
+    check(b, false, SourceOf(src_.actuators, i), "actuator");
+    if (spec_.bodies[static_cast<std::size_t>(b)].rigid)
+      Fail(SourceOf(src_.actuators, i).self, "actuation acts on soft bodies (rods)");
+  }
   for (std::size_t i = 0; i < spec_.outputs.points.size(); ++i) {
     const OutputPointSpec& p = spec_.outputs.points[i];
     check(p.body, false, SourceOf(src_.output_points, i), "output point");
@@ -408,6 +434,7 @@ Scene SceneCompiler::Compile() {
   AddJoints();
   AddLoads();
   AddTendonsAndForces();
+  AddActuators();
   CheckConnections();
   scene.analysis = spec_.analysis;
   try {

@@ -25,7 +25,7 @@ using scene_yaml::Reader;
 // Maps of named entries: an override may not walk through an entry that does not exist.
 const std::vector<std::string> kCollections = {"points", "materials", "sections", "bodies",
                                                "joints", "loads",     "tendons",  "forces",
-                                               "outputs.points", "inputs"};
+                                               "outputs.points", "inputs", "actuation"};
 
 constexpr int kMaxElements = 100000;  // per rod (or per path segment)
 constexpr long kMaxTotalElements = 1000000;  // all rods of a scene
@@ -82,6 +82,7 @@ class SceneReader {
   void ReadLoad(const Node& value, const std::string& path, LoadSpec& load, EntitySource& source);
   void ReadTendons(const Node* node);
   void ReadForces(const Node* node);
+  void ReadActuation(const Node* node);
   BodyPointSpec ReadBodyPoint(const Node& node, const std::string& path) const;
   void ReadAnalysis(const Node* node);
   void ReadTimes(const Node& node, const std::string& path);
@@ -871,6 +872,72 @@ void SceneReader::ReadForces(const Node* node) {
   }
 }
 
+// actuation: {NAME: {type, rod, from, to, ...}} (method-next.md §N5.2; docs/scene-format.md).
+void SceneReader::ReadActuation(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "actuation", "actuator");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("actuation", entry.key);
+    src_.actuators.push_back({Field(entry.key_location, path), {}});
+    EntitySource& source = src_.actuators.back();
+    r_.ExpectMap(value, path);
+    r_.CheckKeys(value, path,
+                 {"type", "rod", "from", "to", "area", "offset", "pressure", "max_stress",
+                  "activation", "vector", "profile"});
+    ActuatorSpec a;
+    a.name = entry.key;
+    a.type = r_.Enum<ActuatorType>(r_.Require(value, path, "type"), Join(path, "type"));
+    const Node& rod = r_.Require(value, path, "rod");
+    a.body = Body(rod, Join(path, "rod"));
+    if (spec_.bodies[static_cast<std::size_t>(a.body)].rigid)
+      r_.Fail(rod.location, Join(path, "rod"),
+              "'" + spec_.bodies[static_cast<std::size_t>(a.body)].name +
+                  "' is a rigid body; actuation acts on soft bodies (rods)");
+    source.parts.emplace_back("rod", Field(rod.location, Join(path, "rod")));
+    for (const char* key : {"from", "to"}) {
+      if (const Node* v = value.Find(key)) {
+        (key[0] == 'f' ? a.from : a.to) = r_.NonNegativeNumber(*v, Join(path, key));
+        source.parts.emplace_back(key, Field(v->location, Join(path, key)));
+      }
+    }
+    if (a.to >= 0.0 && !(a.to > a.from))
+      r_.Fail(value.Find("to")->location, Join(path, "to"),
+              "expected an arc length greater than 'from' (" + std::to_string(a.from) + " m)");
+    const bool chamber = a.type == ActuatorType::kPressure || a.type == ActuatorType::kMuscle;
+    const char* profile_key = a.type == ActuatorType::kPressure ? "pressure"
+                              : a.type == ActuatorType::kMuscle ? "activation"
+                                                                : "profile";
+    const std::string who = std::string("type '") + NameOf(a.type) + "'";
+    if (chamber) {
+      NotUsedBy(value, path, {"vector", "profile"}, who);
+      if (a.type == ActuatorType::kPressure)
+        NotUsedBy(value, path, {"max_stress", "activation"}, who);
+      else
+        NotUsedBy(value, path, {"pressure"}, who);
+      const Node& area = r_.Require(value, path, "area");
+      a.area = r_.PositiveNumber(area, Join(path, "area"));
+      source.parts.emplace_back("area", Field(area.location, Join(path, "area")));
+      const Node& off = r_.Require(value, path, "offset");
+      const std::vector<double> o = r_.Numbers(off, Join(path, "offset"));
+      if (o.size() != 2 && o.size() != 3)
+        r_.Fail(off.location, Join(path, "offset"),
+                "expected [r2, r3] (or [0, r2, r3]) in the section frame [m], got " +
+                    std::to_string(o.size()) + " numbers");
+      a.offset = o.size() == 2 ? Vec3(0.0, o[0], o[1]) : Vec3(o[0], o[1], o[2]);
+      source.parts.emplace_back("offset", Field(off.location, Join(path, "offset")));
+      if (a.type == ActuatorType::kMuscle)
+        a.max_stress =
+            r_.NonNegativeNumber(r_.Require(value, path, "max_stress"), Join(path, "max_stress"));
+      a.profile = ReadProfile(r_.Require(value, path, profile_key), Join(path, profile_key));
+    } else {
+      NotUsedBy(value, path, {"area", "offset", "pressure", "max_stress", "activation"}, who);
+      a.vector = r_.Vector6(r_.Require(value, path, "vector"), Join(path, "vector"));
+      if (const Node* p = value.Find("profile")) a.profile = ReadProfile(*p, Join(path, "profile"));
+    }
+    spec_.actuators.push_back(std::move(a));
+  }
+}
+
 void SceneReader::ReadAnalysis(const Node* node) {
   AnalysisSettings* a = &spec_.analysis;
   a->statics.time = a->start_time;
@@ -1151,7 +1218,7 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
   r_.CheckKeys(root, "",
                {"name", "description", "units", "gravity", "defaults", "points", "materials",
                 "sections", "bodies", "joints", "loads", "tendons", "forces", "analysis",
-                "outputs", "inputs"});
+                "outputs", "inputs", "actuation"});
   spec_.name = default_name;
   if (const Node* n = root.Find("name")) spec_.name = r_.Text(*n, "name");
   if (const Node* d = root.Find("description"))
@@ -1170,6 +1237,7 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
   ReadLoads(root.Find("loads"));
   ReadTendons(root.Find("tendons"));
   ReadForces(root.Find("forces"));
+  ReadActuation(root.Find("actuation"));
   ReadAnalysis(root.Find("analysis"));
   ReadOutputs(root.Find("outputs"));
 }

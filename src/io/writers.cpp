@@ -13,6 +13,7 @@
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
+#include "screwfem/elements/rod.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 
@@ -219,6 +220,18 @@ void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* ro
 void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row) {
   CalcLineRow(model.force_elements.size(),
               [&](int i) { return CalcForceElementState(model, data, i); }, row);
+}
+
+std::vector<std::string> ActuatorColumns(const Model& model) {
+  std::vector<std::string> columns;
+  for (const Actuator& a : model.actuators) columns.push_back(a.name);
+  return columns;
+}
+
+void CalcActuatorRow(const Model& model, const Data& data, double t, std::vector<double>* row) {
+  row->resize(model.actuators.size());
+  for (std::size_t i = 0; i < model.actuators.size(); ++i)
+    (*row)[i] = ActuatorValue(model.actuators[i], t, data);
 }
 
 // ---- CSV ---------------------------------------------------------------------------------------

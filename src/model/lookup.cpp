@@ -22,5 +22,6 @@ int Model::FindForceElement(const std::string& name) const {
   return FindByName(force_elements, name);
 }
 int Model::FindInput(const std::string& name) const { return FindByName(inputs, name); }
+int Model::FindActuator(const std::string& name) const { return FindByName(actuators, name); }
 
 }  // namespace screwfem

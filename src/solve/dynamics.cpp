@@ -86,6 +86,7 @@ std::vector<double> ProfileBreakpoints(const Model& model) {
     if (j.drive != DriveKind::kNone) add(j.drive_profile);
   for (const Tendon& t : model.tendons) add(t.tension);
   for (const ForceElement& f : model.force_elements) add(f.actuator);
+  for (const Actuator& a : model.actuators) add(a.profile);
   return b;
 }
 

@@ -135,8 +135,32 @@ Model MixedModel() {
   driven.node = b.model().rods[0].nodes[3];
   driven.profile = Profile::Input(b.AddInput("u", 0.0), 0.5).Add(Profile::Constant(0.1));
   b.AddPointLoad(driven);
+  // Rod actuation: a pressure chamber on part of the rod driven by the input, a muscle and a
+  // ramped rest curvature on all of it (several actuators on one element).
+  Actuator chamber;
+  chamber.name = "chamber";
+  chamber.type = ActuatorType::kPressure;
+  chamber.rod = rod;
+  chamber.from = 0.15;
+  chamber.area = 1e-4;
+  chamber.offset = Vec3(0, 0.01, 0.005);
+  chamber.profile = Profile::Input(0, 1e3);
+  b.AddActuator(chamber);
+  Actuator muscle = chamber;
+  muscle.name = "muscle";
+  muscle.type = ActuatorType::kMuscle;
+  muscle.from = 0.0;
+  muscle.max_stress = 1e4;
+  muscle.profile = Profile::SmoothStep(0, 0.05);
+  b.AddActuator(muscle);
+  Actuator curl;
+  curl.name = "curl";
+  curl.type = ActuatorType::kRestStrain;
+  curl.rod = rod;
+  curl.vector << 0, 0, 0, 0, 0.5, 0;
+  curl.profile = Profile::Ramp(0, 0.1);
+  b.AddActuator(curl);
   b.SetGravity(Vec3(0, 0, -9.81));
-  (void)rod;
   return b.Build();
 }
 
@@ -184,13 +208,16 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     EXPECT_GE(integ.restarts, 1);     // and restarted at the ramp's end
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
     // The rows of tendons.csv and forces.csv, once sized.
-    std::vector<double> tendons, forces;
+    std::vector<double> tendons, forces, actuators;
     CalcTendonRow(model, data, &tendons);
     CalcForceRow(model, data, &forces);
+    CalcActuatorRow(model, data, data.time, &actuators);
     g_counting = true;
     CalcTendonRow(model, data, &tendons);
     CalcForceRow(model, data, &forces);
+    CalcActuatorRow(model, data, data.time, &actuators);
     g_counting = false;
+    EXPECT_GT(actuators[1], 0.0);  // the muscle is active
     EXPECT_GT(tendons[2], 0.0);  // the tendon pulls
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the tendon and force rows";
   }

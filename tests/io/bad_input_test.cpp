@@ -599,5 +599,53 @@ TEST(BadInput, UnknownRunTimeInputName) {
               "bad.yaml:7:70", "loads.f.profile.name: unknown input 'uu' (did you mean 'u'?)");
 }
 
+// Actuation (docs/scene-format.md, "actuation"): line 3 is "bodies:", line 4 the free rod r
+// (nodes at s = 0, 1, 2), line 5 "actuation:", line 6 the actuator under test.
+std::string Actuator(const std::string& entry) { return kRod + "actuation:\n  a: " + entry + "\n"; }
+
+TEST(BadInput, ActuatorOnAnUnknownOrRigidBody) {
+  ExpectError(Actuator("{type: pressure, rod: q, area: 1e-4, offset: [0, 0.01], pressure: 1}"),
+              "bad.yaml:6:28", "actuation.a.rod: undefined body 'q'");
+  ExpectError(kHead + "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], free: "
+                      "true}\nactuation:\n  a: {type: rest_strain, rod: b, vector: [0, 0, 0, 0, "
+                      "0, 1]}\n",
+              "bad.yaml:6:31", "actuation.a.rod: 'b' is a rigid body; actuation acts on soft bodies (rods)");
+}
+
+TEST(BadInput, ActuatorTypeAreaAndOffsetAreChecked) {
+  ExpectError(Actuator("{type: balloon, rod: r}"), "bad.yaml:6:13",
+              "actuation.a.type: expected one of pressure, muscle, rest_strain or active_stress, got "
+              "'balloon'");
+  ExpectError(Actuator("{type: pressure, rod: r, area: -1e-4, offset: [0, 0.01], pressure: 1}"),
+              "bad.yaml:6:37", "actuation.a.area: expected a positive number, got '-1e-4'");
+  ExpectError(Actuator("{type: pressure, rod: r, area: 1e-4, offset: [0.01], pressure: 1}"),
+              "bad.yaml:6:51",
+              "actuation.a.offset: expected [r2, r3] (or [0, r2, r3]) in the section frame [m], "
+              "got 1 numbers");
+  ExpectError(Actuator("{type: pressure, rod: r, area: 1e-4, offset: [0, 0.01]}"), "bad.yaml:6:6",
+              "actuation.a: missing key 'pressure'");
+  ExpectError(Actuator("{type: muscle, rod: r, area: 1e-4, offset: [0, 0.01], activation: 1}"),
+              "bad.yaml:6:6", "actuation.a: missing key 'max_stress'");
+  ExpectError(Actuator("{type: pressure, rod: r, area: 1e-4, offset: [0, 0.01], pressure: 1, "
+                       "vector: [1, 0, 0, 0, 0, 0]}"),
+              "bad.yaml:6:75", "actuation.a.vector: 'vector' is not used by type 'pressure'");
+  ExpectError(Actuator("{type: rest_strain, rod: r, vector: [0, 0, 1]}"), "bad.yaml:6:42",
+              "actuation.a.vector");
+}
+
+TEST(BadInput, ActuatorRangeMustLieOnRodNodes) {
+  ExpectError(Actuator("{type: rest_strain, rod: r, from: 0.5, vector: [0, 0, 0, 0, 0, 1]}"),
+              "bad.yaml:6:40",
+              "actuation.a.from: arc length 0.500000 m is not at a node of rod 'r' (the nearest "
+              "node is at 0.000000 m)");
+  ExpectError(Actuator("{type: rest_strain, rod: r, to: 3, vector: [0, 0, 0, 0, 0, 1]}"),
+              "bad.yaml:6:38", "actuation.a.to: must not exceed the rod's length 2.000000 m");
+  ExpectError(Actuator("{type: rest_strain, rod: r, from: 1, to: 1, vector: [0, 0, 0, 0, 0, 1]}"),
+              "bad.yaml:6:47", "actuation.a.to: expected an arc length greater than 'from'");
+  ExpectError(Actuator("{type: active_stress, rod: r, vector: [0, 0, 0, 0, 0, 1], profile: "
+                       "{type: input, name: u}}"),
+              "bad.yaml:6:93", "actuation.a.profile.name: unknown input 'u'");
+}
+
 }  // namespace
 }  // namespace screwfem::bad_input_test

@@ -630,6 +630,48 @@ class ModelBuilderTest(unittest.TestCase):
         np.testing.assert_allclose(tip[:2], [0.729126, 0.572854], atol=2e-6)
         self.assertLess(length, 1.0)
 
+    def test_actuators_from_python_curl_the_rod_and_take_inputs(self):
+        # A cantilever (EA = 1e5 N, EI = 1 N m^2) with a pressure chamber driven by the input
+        # "p": one element bends by kappa3 = -p A r2 / EI exactly (method-next.md T5.2).
+        b = sf.ModelBuilder()
+        section = sf.Section(np.array([1e5, 1e5, 1e5, 1.0, 1.0, 1.0]), np.ones(6))
+        rod = b.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 1, section)
+        b.fix_node(0)
+        chamber = sf.Actuator()
+        chamber.name = "chamber"
+        chamber.type = sf.ActuatorType.PRESSURE
+        chamber.rod = rod
+        chamber.area = 1e-4
+        chamber.offset = [0.0, 0.01, 0.0]
+        chamber.profile = sf.Profile.input(b.add_input("p", 0.0))
+        b.add_actuator(chamber)
+        bad = sf.Actuator()
+        bad.name = "bad"
+        bad.type = sf.ActuatorType.PRESSURE
+        bad.rod = rod
+        bad.offset = [0.0, 0.01, 0.0]
+        with self.assertRaisesRegex(sf.InputError, "actuator 'bad': must be a positive area"):
+            other = sf.ModelBuilder()
+            other.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 1, section)
+            other.fix_node(0)
+            other.add_actuator(bad)
+            other.build()
+        sim = sf.Simulation(sf.Scene(b.build(), "chamber"))
+        self.assertEqual(sim.model.num_actuators, 1)
+        sim.inputs["p"] = 2e5  # p A = 20 N
+        self.assertEqual(sim.actuator_value("chamber"), 2e5)
+        options = sf.StaticOptions()
+        options.load_steps = 2
+        sim.solve_static(options)
+        kappa = -20.0 * 0.01 / 1.0
+        tip = sim.node_frame(1)[:3, 3]
+        np.testing.assert_allclose(tip[:2], (1 + 2e-4) * np.array(
+            [math.sin(kappa) / kappa, (1 - math.cos(kappa)) / kappa]), atol=1e-9)
+        total, elastic = sim.rod_stresses("rod")
+        self.assertEqual(total.shape, (1, 6))
+        self.assertLess(np.abs(total).max(), 1e-8)  # the section transmits nothing
+        np.testing.assert_allclose(elastic[0], [20, 0, 0, 0, 0, -0.2], atol=1e-8)
+
     def test_invalid_joint_side_raises_input_error(self):
         b = sf.ModelBuilder()
         spec = sf.JointSpec()

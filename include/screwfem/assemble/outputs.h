@@ -31,9 +31,12 @@ struct RodPoint {
 };
 RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod, double s);
 
-// Section stress resultants sigma = K (d/L - f0) of every element of a rod (section frame:
-// N, V2, V3, T, M2, M3), written into out (size = number of elements).
-void CalcRodStresses(const Model& model, const Data& data, int rod, std::vector<Vec6>* out);
+// Section stress resultants of every element of a rod (section frame: N, V2, V3, T, M2, M3),
+// written into out (size = number of elements): what the section transmits,
+// sigma = K (d/L - f0 - eps0) - sigma_a with the actuation at data.time (method-next.md §N5.1;
+// K (d/L - f0) without actuators); with `elastic`, also the elastic part K (d/L - f0 - eps0).
+void CalcRodStresses(const Model& model, const Data& data, int rod, std::vector<Vec6>* out,
+                     std::vector<Vec6>* elastic = nullptr);
 
 // The force and moment [N; N m] a joint transmits to its side B (node_b) from side A, world
 // components, the moment about the origin of the joint frame on side B (H_B C_B): the

@@ -119,6 +119,11 @@ class ModelBuilder {
   // `tolerance` [m] (negative: 1e-8 max(1, rod length)); node -1 and the nearest node and its
   // arc-length distance otherwise.
   NodeMatch FindRodNodeAtArcLength(int rod, double s, double tolerance = -1.0) const;
+  // Internal actuation of a rod (model.h, Actuator; method-next.md §N5). Build checks: a valid
+  // rod, [from, to] inside it and at nodes (an error names the nearest node's arc length),
+  // positive area for pressure and muscle, non-negative max_stress, finite offset and vector,
+  // the profile's inputs, unique names. Errors carry EntityKind::kActuator.
+  int AddActuator(const Actuator& actuator);
   int AddPointLoad(const PointLoad& load);
   int AddRodLoad(const RodLoad& load);
   void SetGravity(const Vec3& g);

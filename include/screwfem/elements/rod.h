@@ -52,22 +52,41 @@ void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometr
 void CalcRodGeometry(const SE3& H_A, const SE3& H_B, const Vec3& w_ref, bool gauss_points,
                      bool tangents, RodGeometry* out);
 
+// The actuation of one element at one time (method-next.md §N5.1): a rest-strain change eps0
+// and an active stress sigma_a, section frame, constant over the element.
+struct RodActuation {
+  Vec6 rest_strain = Vec6::Zero();    // eps0
+  Vec6 active_stress = Vec6::Zero();  // sigma_a [N, N m]
+};
+
+// The actuation of element `element` at `time`: eps0 and sigma_a summed over its actuators
+// (model.h, Actuator), each unit vector times ActuatorValue times load_factor (statics scales
+// actuation like loads). False, with both zero, when the element has no actuators.
+bool CalcRodActuation(const Model& model, const Data& data, int element, double time,
+                      double load_factor, RodActuation* out);
+// An actuator's profile value at `time` (run-time inputs through EvalProfile; a muscle's
+// activation clamped to [0, 1]).
+double ActuatorValue(const Actuator& actuator, double time, const Data& data);
+
 struct RodInternal {
   Vec6 d;            // relative motion on the current branch
   Vec6 strain;       // d / L - f0
-  Vec6 stress;       // sigma = K strain (section frame: N, V2, V3, T, M2, M3)
-  double energy;     // L/2 strain^T K strain
+  Vec6 stress;       // sigma = K (strain - eps0) - sigma_a (section frame: N, V2, V3, T, M2, M3)
+  Vec6 elastic_stress;  // K (strain - eps0)
+  double energy;     // L/2 (strain - eps0)^T K (strain - eps0) - L strain^T sigma_a
   Vec12 force;       // g_int = P^T sigma  (node A then node B, node-frame components)
   Mat12 stiffness;   // d g_int / d[dh_A; dh_B], with the geometric term (§2.4)
 };
 
-// Internal forces and consistent tangent of one element (§2.4).
+// Internal forces and consistent tangent of one element (§2.4), with actuation when given
+// (method-next.md §N5.1: the same tangent formula with the total sigma; actuation frozen).
 void CalcRodInternal(const RodElement& element, const Section& section, const SE3& H_A,
-                     const SE3& H_B, const Vec3& w_ref, RodInternal* out);
+                     const SE3& H_B, const Vec3& w_ref, RodInternal* out,
+                     const RodActuation* actuation = nullptr);
 // The same from the element's geometry (out->d is copied from it); without `tangent` the
 // stiffness is left unset.
 void CalcRodInternal(const RodElement& element, const Section& section, const RodGeometry& geometry,
-                     bool tangent, RodInternal* out);
+                     bool tangent, RodInternal* out, const RodActuation* actuation = nullptr);
 
 // Directional derivative of N(xi, d) along dd: d/de N(xi, d + e dd) (for d/dt N, dd = d_dot).
 Mat6x12 CalcRodNDirectional(double xi, const Vec6& d, const Vec6& dd);
@@ -181,9 +200,11 @@ void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& ge
 // right-multiplied by blockdiag(T_A, T_B) when both are given (the node tangent operators of
 // the dynamic iteration). The two share one geometric term D(d, sigma - L s), s the dead
 // force's d-gradient, and one product with P (tests/elements/rod_load_test.cpp compares).
+// With `actuation`, sigma = K (strain - eps0) - sigma_a throughout (method-next.md §N5.1).
 void CalcRodConservative(const RodElement& element, const Section& section,
                          const RodGeometry& geometry, const SE3& H_A, const Vec3& f_w,
-                         const Mat6* T_A, const Mat6* T_B, Vec12* force, Mat12* stiffness);
+                         const Mat6* T_A, const Mat6* T_B, Vec12* force, Mat12* stiffness,
+                         const RodActuation* actuation = nullptr);
 
 // ---- the rod element as an element kind (elements/element.h) --------------------------------
 
@@ -204,8 +225,9 @@ struct RodElementKind {
   static bool Calc(const Model& model, const Data& data, const Item& element,
                    const NodeMotion<2>& motion, const KernelOptions& options,
                    ElementTerms<2>* terms);
-  // Strain energy, kinetic energy of the model's inertia option and the gravity potential of
-  // the element (3-point Gauss over the exact centreline).
+  // Strain energy (with the actuation at data.time: L/2 (eps - eps0)^T K (eps - eps0) -
+  // L eps^T sigma_a), kinetic energy of the model's inertia option and the gravity potential
+  // of the element (3-point Gauss over the exact centreline).
   static void AddEnergy(const Model& model, const Data& data, const Item& element,
                         Energy* energy);
 };

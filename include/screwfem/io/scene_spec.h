@@ -91,6 +91,22 @@ struct ForceSpec {
   Profile force = Profile::Constant(0.0);  // actuator [N], positive pulls the ends together
 };
 
+// Internal actuation of a soft body's rod over [from, to] of its arc length
+// (ModelBuilder::AddActuator; model.h, Actuator): `profile` is the pressure [Pa], the
+// activation [-] or the factor of `vector`, by type.
+struct ActuatorSpec {
+  std::string name;
+  ActuatorType type = ActuatorType::kActiveStress;
+  int body = -1;               // a soft body
+  double from = 0.0;           // [m]
+  double to = -1.0;            // [m]; negative: the rod's end
+  double area = 0.0;           // [m^2]
+  Vec3 offset = Vec3::Zero();  // section frame (0, r2, r3) [m]
+  double max_stress = 0.0;     // [Pa]
+  Vec6 vector = Vec6::Zero();
+  Profile profile = Profile::Constant(1.0);
+};
+
 // A recorded point: a point of a body at `at`, or a point along a soft body at arc length s.
 struct OutputPointSpec {
   std::string name;
@@ -120,6 +136,7 @@ struct SceneSpec {
   std::vector<LoadSpec> loads;
   std::vector<TendonSpec> tendons;
   std::vector<ForceSpec> forces;
+  std::vector<ActuatorSpec> actuators;  // the `actuation:` section
   AnalysisSettings analysis;
   OutputsSpec outputs;
 };
@@ -155,6 +172,7 @@ struct SceneSources {
   std::string file;  // the source name used in messages
   FieldSource root;  // the document
   std::vector<EntitySource> bodies, joints, loads, output_points, tendons, forces;
+  std::vector<EntitySource> actuators;  // parts "rod", "from", "to", "area", "offset", ...
 };
 
 // Reads scene text (docs/scene-format.md) with overrides applied into a spec and the sources

@@ -56,6 +56,12 @@ std::vector<std::string> TendonColumns(const Model& model);
 std::vector<std::string> ForceColumns(const Model& model);
 void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row);
 void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row);
+// actuators.csv: per actuator A of the model (method-next.md §N5), the column A: its profile's
+// value at t (pressure [Pa], activation [-] clamped to [0, 1], or the factor of its vector;
+// elements/rod.h, ActuatorValue); in static analyses the applied value is this times the
+// load_factor column.
+std::vector<std::string> ActuatorColumns(const Model& model);
+void CalcActuatorRow(const Model& model, const Data& data, double t, std::vector<double>* row);
 // reactions.csv: per joint J of the model with constraint rows (every joint but free ones,
 // passive or driven, recorded or not), in model order: J.Fx J.Fy J.Fz J.Mx J.My J.Mz, the force
 // [N] and moment [N m] it transmits to its side B (CalcJointReaction, assemble/outputs.h: world

@@ -17,6 +17,7 @@ enum class EntityKind {
   kNone, kNode, kRod, kBody, kJoint, kPointLoad, kRodLoad,
   kTendon,        // part "eyelets[i]" for one eyelet
   kForceElement,  // part "a" or "b" for one end
+  kActuator,
 };
 struct EntityRef {
   EntityKind kind = EntityKind::kNone;

@@ -43,6 +43,10 @@ struct RodElement {
   int node_a = -1, node_b = -1;
   double length = 0.0;   // reference arc length L = |u(d0)|
   Vec6 d0 = Vec6::Zero();// reference relative motion log(H_A0^-1 H_B0)
+  // Its actuators (method-next.md §N5): Model::element_actuators[first_actuator + i],
+  // i < num_actuators (set by Build).
+  int first_actuator = 0;
+  int num_actuators = 0;
 };
 
 struct Rod {
@@ -137,6 +141,46 @@ struct ForceElement {
   Profile actuator = Profile::Constant(0.0);  // [N], scaled by the load factor in statics
 };
 
+// Internal actuation of a rod (method-next.md §N5): a rest-strain change eps0(t) and an active
+// section stress sigma_a(t) (section frame; axial, shear 2, shear 3, torsion, bending 2,
+// bending 3), constant over each element it covers, so that an element transmits
+// sigma = K (eps - eps0) - sigma_a. Every type is linear in its profile's value v(t):
+//  * kPressure: a chamber of area A at section offset r = (0, r2, r3), pressure v [Pa]:
+//    sigma_a = v A [1, 0, 0, 0, r3, -r2] (the end caps pushed apart, §N5.2);
+//  * kMuscle: fibres of area A at offset r, maximal stress s_max [Pa], activation v clamped to
+//    [0, 1]: sigma_a = -v s_max A [1, 0, 0, 0, r3, -r2] (fibre tension compresses the section);
+//  * kRestStrain: eps0 = v * vector;  * kActiveStress: sigma_a = v * vector.
+enum class ActuatorType { kPressure, kMuscle, kRestStrain, kActiveStress };
+template <>
+struct EnumNames<ActuatorType> {
+  static constexpr std::array<EnumName<ActuatorType>, 4> kValues = {{
+      {ActuatorType::kPressure, "pressure", "a pressurised chamber: area, offset, pressure"},
+      {ActuatorType::kMuscle, "muscle", "contractile fibres: area, offset, max_stress, activation"},
+      {ActuatorType::kRestStrain, "rest_strain", "a rest-strain change: vector times a profile"},
+      {ActuatorType::kActiveStress, "active_stress", "an active section stress: vector times a profile"},
+  }};
+};
+
+struct Actuator {
+  std::string name;
+  ActuatorType type = ActuatorType::kActiveStress;
+  int rod = -1;
+  // The covered reference arc length [from, to] of the rod [m], both at nodes; to < 0: the
+  // rod's end.
+  double from = 0.0, to = -1.0;
+  double area = 0.0;           // kPressure, kMuscle [m^2]
+  Vec3 offset = Vec3::Zero();  // kPressure, kMuscle: centroid (0, r2, r3) in the section [m]
+  double max_stress = 0.0;     // kMuscle [Pa]
+  Vec6 vector = Vec6::Zero();  // kRestStrain [1, 1, 1, 1/m, 1/m, 1/m], kActiveStress [N, N m]
+  // Pressure [Pa], activation [-] or the factor of `vector`; scaled by the load factor in
+  // statics.
+  Profile profile = Profile::Constant(1.0);
+  // Set by Build: the covered elements (global indices first_element .. + num_elements - 1)
+  // and eps0, sigma_a per unit profile value.
+  int first_element = -1, num_elements = 0;
+  Vec6 rest_strain_unit = Vec6::Zero(), active_stress_unit = Vec6::Zero();
+};
+
 enum class JointType {
   kRevolute, kPrismatic, kHelical, kCylindrical, kSpherical, kPlanar, kUniversal, kFixed,
   kFree,
@@ -218,6 +262,8 @@ struct Model {
   std::vector<TendonSegment> tendon_segments;  // of all tendons, tendon by tendon (Build)
   std::vector<ForceElement> force_elements;
   std::vector<ModelInput> inputs;
+  std::vector<Actuator> actuators;
+  std::vector<int> element_actuators;  // actuator indices, element by element (Build)
   Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
   RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
 
@@ -252,6 +298,7 @@ struct Model {
   int FindTendon(const std::string& name) const;
   int FindForceElement(const std::string& name) const;
   int FindInput(const std::string& name) const;
+  int FindActuator(const std::string& name) const;
 };
 
 // The reference frame H_0 of a node, or the identity for kGround (the one ground-or-node
