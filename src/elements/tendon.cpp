@@ -78,7 +78,7 @@ bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& s
     return true;
   }
   PointDistance g;
-  if (!CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, o.tangent, &g)) {
+  if (!CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, false, &g)) {
     t->active = false;  // coinciding eyelets: no direction, no force
     return true;
   }
@@ -88,8 +88,56 @@ bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& s
   t->force_scale = tau * arm;
   t->term_scale = tau * arm;  // the pulls of two segments at an eyelet cancel
   if (!o.tangent) return true;
-  t->stiffness = tau * g.hessian;
-  t->has_stiffness = true;
+  // The iteration-matrix blocks c_K tau d2l T (a tendon has no mass or damping), formed from
+  // the factors of CalcPointDistance's hessian (method-next.md §N4.2) without the hessian
+  // itself. With R^T R = I the string parts are
+  //   P_AA = (I - e_A e_A^T) / l,  P_BB = (I - e_B e_B^T) / l,  P_AB = (R_A^T R_B - e_A e_B^T) / l,
+  // block (X, Y) = s_X s_Y S(r_X)^T P_XY S(r_Y) T_Y (s_A = -1, s_B = +1), and the diagonal blocks
+  // add the rotation of e into the node frame, s_X S(r_X)^T Skew(e_X) [0 I] T_X. So
+  //   block (X, X) = S(r_X)^T [P_XX  s_X Skew(e_X)] [S(r_X) T_X; T_X,bottom]   (one 6x6 product),
+  //   block (X, Y) = -S(r_X)^T P_XY S(r_Y) T_Y                                  (6x3 times 3x6).
+  const SE3& H_A = *x.H[0];
+  const SE3& H_B = *x.H[1];
+  const Vec3& r_A = s.a.offset;
+  const Vec3& r_B = s.b.offset;
+  const Vec3 e_A = -g.gradient.segment<3>(0);  // R_A^T e
+  const Vec3 e_B = g.gradient.segment<3>(6);   // R_B^T e
+  const double k = o.c_stiffness * tau;
+  const double c = k / g.length;
+  // Right factors [S(r) T; T_bottom] (6 x 6), S(r) T = T_top - Skew(r) T_bottom.
+  Mat6 right_A, right_B;
+  right_A.bottomRows<3>() = x.T[0]->bottomRows<3>();
+  right_A.topRows<3>() = x.T[0]->topRows<3>();
+  right_A.topRows<3>().noalias() -= Skew(r_A) * right_A.bottomRows<3>();
+  right_B.bottomRows<3>() = x.T[1]->bottomRows<3>();
+  right_B.topRows<3>() = x.T[1]->topRows<3>();
+  right_B.topRows<3>().noalias() -= Skew(r_B) * right_B.bottomRows<3>();
+  // Left factors S(r_X)^T [P_XX  s_X Skew(e_X)] (6 x 6) and -S(r_A)^T P_AB, -S(r_B)^T P_AB^T.
+  Eigen::Matrix<double, 3, 6> top;
+  Mat6 left;
+  top.leftCols<3>() = c * (Mat3::Identity() - e_A * e_A.transpose());
+  top.rightCols<3>() = -k * Skew(e_A);
+  left.topRows<3>() = top;
+  left.bottomRows<3>().noalias() = Skew(r_A) * top;
+  Mat12& S = t->matrix;
+  S.block<6, 6>(0, 0).noalias() = left * right_A;
+  top.leftCols<3>() = c * (Mat3::Identity() - e_B * e_B.transpose());
+  top.rightCols<3>() = k * Skew(e_B);
+  left.topRows<3>() = top;
+  left.bottomRows<3>().noalias() = Skew(r_B) * top;
+  S.block<6, 6>(6, 6).noalias() = left * right_B;
+  Mat3 P_AB;
+  P_AB.noalias() = H_A.R.transpose() * H_B.R;
+  P_AB.noalias() -= e_A * e_B.transpose();
+  P_AB *= -c;
+  Eigen::Matrix<double, 6, 3> side;
+  side.topRows<3>() = P_AB;
+  side.bottomRows<3>().noalias() = Skew(r_A) * P_AB;
+  S.block<6, 6>(0, 6).noalias() = side * right_B.topRows<3>();
+  side.topRows<3>() = P_AB.transpose();
+  side.bottomRows<3>().noalias() = Skew(r_B) * P_AB.transpose();
+  S.block<6, 6>(6, 0).noalias() = side * right_A.topRows<3>();
+  t->combined = true;
   return true;
 }
 
