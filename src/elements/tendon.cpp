@@ -64,6 +64,9 @@ bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Ve
 }
 
 double TendonTension(const Tendon& tendon, const Data& data, double time, double load_factor) {
+  // Drawn by length: the multiplier (held at zero by its row while slack, assemble.cpp).
+  if (tendon.drive == TendonDrive::kLength)
+    return tendon.row >= 0 && tendon.row < data.lambda.size() ? data.lambda(tendon.row) : 0.0;
   return std::max(0.0, load_factor * EvalProfile(tendon.tension, time, data).value);
 }
 
@@ -213,6 +216,58 @@ LineForceState CalcForceElementState(const Model& model, const Data& data, int e
   s.force = fe.stiffness * (s.length - fe.rest_length) + fe.damping * s.rate +
             EvalProfile(fe.actuator, data.time, data).value;
   return s;
+}
+
+ProfileValue TendonTargetLength(const Tendon& tendon, const Data& data, double time,
+                                double load_factor) {
+  ProfileValue p = EvalProfile(tendon.length, time, data);
+  p.value = tendon.reference_length + load_factor * (p.value - tendon.reference_length);
+  p.rate *= load_factor;
+  p.accel *= load_factor;
+  return p;
+}
+
+double CalcTendonLength(const Model& model, const Data& data, int tendon,
+                        std::vector<Vec6>* gradient) {
+  const Tendon& td = model.tendons[static_cast<std::size_t>(tendon)];
+  if (gradient) gradient->assign(td.eyelets.size(), Vec6::Zero());
+  double L = 0.0;
+  for (std::size_t k = 0; k + 1 < td.eyelets.size(); ++k) {
+    const BodyPoint& a = td.eyelets[k];
+    const BodyPoint& b = td.eyelets[k + 1];
+    PointDistance g;
+    if (!CalcPointDistance(NodeFrame(data, a.node), a.offset, NodeFrame(data, b.node), b.offset,
+                           false, &g))
+      continue;
+    L += g.length;
+    if (gradient) {
+      (*gradient)[k] += g.gradient.head<6>();
+      (*gradient)[k + 1] += g.gradient.tail<6>();
+    }
+  }
+  return L;
+}
+
+int UpdateTendonSlack(const Model& model, Data& data, double time, double load_factor) {
+  int changed = 0;
+  for (std::size_t i = 0; i < model.tendons.size(); ++i) {
+    const Tendon& t = model.tendons[i];
+    if (t.drive != TendonDrive::kLength || t.row < 0) continue;
+    char& slack = data.tendon_slack[i];
+    if (!slack && data.lambda(t.row) < 0.0) {
+      slack = 1;
+      data.lambda(t.row) = 0.0;
+      ++changed;
+    } else if (slack) {
+      const double L = CalcTendonLength(model, data, static_cast<int>(i));
+      const double target = TendonTargetLength(t, data, time, load_factor).value;
+      if (L >= target - 1e-12 * std::max(1.0, target)) {
+        slack = 0;
+        ++changed;
+      }
+    }
+  }
+  return changed;
 }
 
 }  // namespace screwfem
