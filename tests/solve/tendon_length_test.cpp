@@ -56,6 +56,33 @@ TEST(LengthDrivenTendon, StaticTensionCarriesTheHangingWeight) {
   EXPECT_NEAR(s.force, kMass * kG, 1e-8 * kMass * kG);
 }
 
+TEST(LengthDrivenTendon, StaticSlackRuleOnASpringSupportedMass) {
+  // The hanging mass also rests on a spring k in its slider; the cable is let out to 2.3 m.
+  // Stiff spring (m g / k = 0.098 m < 0.3 m): the mass stops above the cable's reach and the
+  // tendon is slack (tension 0). Soft spring (m g / k = 0.981 m): the cable holds the mass at
+  // z = -0.3 with tension m g - 0.3 k.
+  for (const double k : {200.0, 20.0}) {
+    SCOPED_TRACE("k = " + std::to_string(k));
+    ModelBuilder b;
+    const int n = b.AddNode(SE3::Identity(), "mass");
+    b.AddRigidBody("mass", n, kMass, Vec3::Zero(), 0.01 * Mat3::Identity());
+    const int j = b.AddJointAt("slide", JointType::kPrismatic, kGround, n, Vec3::Zero(), Vec3::UnitZ());
+    b.model().joints[static_cast<std::size_t>(j)].stiffness(0) = k;
+    b.SetGravity(Vec3(0.0, 0.0, -kG));
+    b.AddLengthDrivenTendon(
+        "cable", {{kGround, Vec3(-1.0, 0.0, 1.0)}, {kGround, Vec3(0.0, 0.0, 1.0)}, {n, Vec3::Zero()}},
+        Profile::Constant(2.3));
+    const Model m = b.Build();
+    Data d = MakeData(m);
+    const StaticResult r = SolveStatic(m, d, StaticOptions{});
+    ASSERT_TRUE(r.converged) << r.message;
+    const bool slack = kMass * kG / k < 0.3;
+    EXPECT_EQ(d.tendon_slack[0], slack ? 1 : 0);
+    EXPECT_NEAR(Height(d), slack ? -kMass * kG / k : -0.3, 1e-9);
+    EXPECT_NEAR(CalcTendonState(m, d, 0).force, slack ? 0.0 : kMass * kG - 0.3 * k, 1e-8);
+  }
+}
+
 TEST(LengthDrivenTendon, GradientRowIsTheLengthGradient) {
   // Three free bodies, eyelets offset from their frames and one on the ground: the tendon's
   // row of B(q) against central differences of L(q) through the retraction.
