@@ -856,7 +856,14 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
       integ.allow_growth = true;
       integ.h_last = hs;
       data.time = t1;
-      if (left_limit) {
+      // A length-driven tendon went slack or taut, or L_p's rate jumps here: as in Step.
+      const bool switched = data.tendon_slack != integ.slack_start;
+      if (switched) ++integ.tendon_switches;
+      if ((switched || left_limit) && !CatchTendons(model, data, integ)) {
+        result.message = "the inelastic catch of a tendon failed (singular [M B^T; B 0])";
+        return result;
+      }
+      if (left_limit || switched) {
         // method-next.md §N1.2: consistent vdot, lambda and a from the right limits; the PI
         // memory restarts too.
         if (!RestartDynamics(model, data, integ, &result.message)) return result;

@@ -239,5 +239,29 @@ TEST(LengthDrivenTendon, SlackTendonLetsTheMassFallAndCatchesItAgain) {
   EXPECT_NEAR(CalcTendonState(m, d, 0).force, kMass * kG, 1e-6 * kMass * kG);
 }
 
+TEST(LengthDrivenTendon, ErrorControlledStepsCatchTheMassToo) {
+  // The run above with error-controlled steps (AdvanceTo): the same slack phase, catch and
+  // stop, ending at rest on the cable.
+  Profile length = Profile::Constant(2.0);
+  length.Add(Profile::Ramp(0.0, 0.2, 0.1));
+  const Model m = HangingMass(length);
+  Data d = MakeData(m);
+  Integrator integ;
+  DynamicOptions opt;
+  opt.rho_inf = 0.5;
+  opt.absolute_tolerance = opt.relative_tolerance = 1e-6;
+  std::string message;
+  ASSERT_TRUE(InitializeDynamics(m, d, integ, opt, &message)) << message;
+  ASSERT_TRUE(AdvanceTo(m, d, integ, 0.1).ok);
+  EXPECT_EQ(d.tendon_slack[0], 1);
+  ASSERT_TRUE(AdvanceTo(m, d, integ, 0.3).ok);
+  EXPECT_EQ(integ.tendon_switches, 2);
+  EXPECT_EQ(integ.tendon_catches, 2);
+  EXPECT_EQ(d.tendon_slack[0], 0);
+  EXPECT_NEAR(Height(d), -0.1, 1e-9);
+  EXPECT_NEAR(d.v(2), 0.0, 1e-9);
+  EXPECT_NEAR(CalcTendonState(m, d, 0).force, kMass * kG, 1e-6 * kMass * kG);
+}
+
 }  // namespace
 }  // namespace screwfem::tendon_length_test
