@@ -162,6 +162,11 @@ void BindBuild(py::module_& m) {
            "tension profile [N] (>= 0); returns its index.")
       .def("add_actuator", &B::AddActuator, py::arg("actuator"),
            "An Actuator (rest strain or active stress on a rod); returns its index.")
+      .def("add_length_driven_tendon", &B::AddLengthDrivenTendon, py::arg("name"),
+           py::arg("eyelets"), py::arg("length"),
+           "A tendon drawn by length: its route length follows the length profile [m] while it "
+           "is taut, its tension is the constraint's multiplier (tendon_state), and it goes "
+           "slack instead of pushing; returns its index.")
       .def("add_force_element", &B::AddForceElement, py::arg("element"),
            "A ForceElement (spring-damper-actuator between two body points); returns its index.")
       .def("find_rod_node_at_arc_length", &B::FindRodNodeAtArcLength, py::arg("rod"),

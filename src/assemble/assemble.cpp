@@ -335,6 +335,39 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
   }
 }
 
+// Length-driven tendons (method-next.md §N4.3): the row L(q) - L_p(t) and its gradient B_T,
+// the segments' length gradients added node by node into the row and (transposed) into the
+// column. B_T^T lambda and its tangent lambda d2L come from the segments themselves
+// (TendonSegmentKind with tau = lambda). A slack tendon's row is held (Assemble).
+void AddTendonRows(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
+  for (std::size_t ti = 0; ti < m.tendons.size(); ++ti) {
+    const Tendon& t = m.tendons[ti];
+    if (t.row < 0 || d.tendon_slack[ti]) continue;
+    double L = 0.0;
+    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k) {
+      const TendonSegment& seg =
+          m.tendon_segments[static_cast<std::size_t>(t.first_segment) + k];
+      PointDistance g;
+      if (!CalcPointDistance(NodeFrame(d, seg.a.node), seg.a.offset, NodeFrame(d, seg.b.node),
+                             seg.b.offset, false, &g))
+        continue;
+      L += g.length;
+      if (!o.assemble_matrix) continue;
+      const int da = s.NodeDof(seg.a.node), db = s.NodeDof(seg.b.node);
+      if (da >= 0) {
+        const Eigen::Matrix<double, 1, 6> B = g.gradient.head<6>().transpose();
+        s.GradientMatrix(t.row, da, B, &s.NodeT(seg.a.node));
+      }
+      if (db >= 0) {
+        const Eigen::Matrix<double, 1, 6> B = g.gradient.tail<6>().transpose();
+        s.GradientMatrix(t.row, db, B, &s.NodeT(seg.b.node));
+      }
+    }
+    d.residual(m.nv + t.row) +=
+        o.s_constraints * (L - TendonTargetLength(t, d, o.time, o.load_factor).value);
+  }
+}
+
 // The element kinds the assembly calls, in this order (docs/architecture.md, "Add an element
 // kind"); joints follow them.
 using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind,
@@ -433,18 +466,19 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   Scatter s(model, data, options);
   if (!AddKinds(model, data, options, s, kElementKinds)) return false;
   AddJoints(model, data, options, s);
-  // Redundant constraint rows (found at build time): the row becomes dmu_r = -lambda_r / s_L,
-  // which holds their multipliers at zero.
-  for (int r : model.redundant_rows) {
+  AddTendonRows(model, data, options, s);
+  // Redundant constraint rows (found at build time) and slack tendons: the row becomes
+  // dmu_r = -lambda_r / s_L, which holds their multipliers at zero.
+  ForEachHeldRow(model, data, [&](int r) {
     const int g = model.nv + r;
     data.residual(g) = data.lambda(r) / options.s_multipliers;
-    if (!options.assemble_matrix) continue;
+    if (!options.assemble_matrix) return;
     const int p = model.permutation[static_cast<std::size_t>(g)];
     const int lo = std::max(0, p - data.matrix.lower_bandwidth());
     const int hi = std::min(data.matrix.size() - 1, p + data.matrix.upper_bandwidth());
     for (int c = lo; c <= hi; ++c) data.matrix.At(p, c) = 0.0;
     data.matrix.At(p, p) = 1.0;
-  }
+  });
   return data.residual.allFinite();
 }
 
@@ -467,6 +501,28 @@ void ForEachConstraintGradient(const Model& model, const Data& data, Visit&& vis
   }
 }
 
+// Calls visit(tendon, dof, gradient part) for every segment end of every taut length-driven
+// tendon on a node with unknowns: the row's gradient B_T is the sum of these parts.
+template <typename Visit>
+void ForEachTendonGradientPart(const Model& model, const Data& data, Visit&& visit) {
+  for (std::size_t ti = 0; ti < model.tendons.size(); ++ti) {
+    const Tendon& t = model.tendons[ti];
+    if (t.row < 0 || data.tendon_slack[ti]) continue;
+    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k) {
+      const TendonSegment& seg =
+          model.tendon_segments[static_cast<std::size_t>(t.first_segment) + k];
+      PointDistance g;
+      if (!CalcPointDistance(NodeFrame(data, seg.a.node), seg.a.offset,
+                             NodeFrame(data, seg.b.node), seg.b.offset, false, &g))
+        continue;
+      const int da = seg.a.node == kGround ? -1 : model.nodes[static_cast<std::size_t>(seg.a.node)].dof;
+      const int db = seg.b.node == kGround ? -1 : model.nodes[static_cast<std::size_t>(seg.b.node)].dof;
+      if (da >= 0) visit(t, da, Vec6(g.gradient.head<6>()));
+      if (db >= 0) visit(t, db, Vec6(g.gradient.tail<6>()));
+    }
+  }
+}
+
 }  // namespace
 
 void CalcConstraintGradient(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> out) {
@@ -483,7 +539,10 @@ void CalcConstraintGradient(const Model& model, const Data& data, Eigen::Ref<Eig
   });
   for (const Joint& j : model.joints)
     if (j.drive == DriveKind::kPrescribed) out(j.drive_row, j.coord + j.drive_coord) = 1.0;
-  for (int r : model.redundant_rows) out.row(r).setZero();
+  ForEachTendonGradientPart(model, data, [&](const Tendon& t, int dof, const Vec6& b) {
+    out.block<1, 6>(t.row, dof) += b.transpose();
+  });
+  ForEachHeldRow(model, data, [&](int r) { out.row(r).setZero(); });
 }
 
 void CalcConstraintGradientTimes(const Model& model, const Data& data,
@@ -504,7 +563,10 @@ void CalcConstraintGradientTimes(const Model& model, const Data& data,
   });
   for (const Joint& j : model.joints)
     if (j.drive == DriveKind::kPrescribed) out(j.drive_row) = x(j.coord + j.drive_coord);
-  for (int r : model.redundant_rows) out(r) = 0.0;
+  ForEachTendonGradientPart(model, data, [&](const Tendon& t, int dof, const Vec6& b) {
+    out(t.row) += b.dot(x.segment<6>(dof));
+  });
+  ForEachHeldRow(model, data, [&](int r) { out(r) = 0.0; });
 }
 
 void CalcVelocityConstraint(const Model& model, const Data& data, double time,
@@ -512,6 +574,10 @@ void CalcVelocityConstraint(const Model& model, const Data& data, double time,
   CalcConstraintGradientTimes(model, data, data.v, out);
   for (const Joint& j : model.joints)
     if (j.drive == DriveKind::kPrescribed) out(j.drive_row) -= EvalProfile(j.drive_profile, time, data).rate;
+  for (std::size_t ti = 0; ti < model.tendons.size(); ++ti) {
+    const Tendon& t = model.tendons[ti];
+    if (t.row >= 0 && !data.tendon_slack[ti]) out(t.row) -= TendonTargetLength(t, data, time).rate;
+  }
 }
 
 double MaxConstraintViolation(const Model& model, Data& data, double time, double load_factor) {

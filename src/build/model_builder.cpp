@@ -336,6 +336,15 @@ int ModelBuilder::AddTendon(std::string name, std::vector<BodyPoint> eyelets,
   return static_cast<int>(model_.tendons.size()) - 1;
 }
 
+int ModelBuilder::AddLengthDrivenTendon(std::string name, std::vector<BodyPoint> eyelets,
+                                        const Profile& length) {
+  const int index = AddTendon(std::move(name), std::move(eyelets), Profile::Constant(0.0));
+  Tendon& t = model_.tendons[static_cast<std::size_t>(index)];
+  t.drive = TendonDrive::kLength;
+  t.length = length;
+  return index;
+}
+
 int ModelBuilder::AddForceElement(const ForceElement& element) {
   model_.force_elements.push_back(element);
   return static_cast<int>(model_.force_elements.size()) - 1;
@@ -670,6 +679,18 @@ void BuildTendons(Model& m) {
                          {EntityKind::kTendon, index, part}, what);
       }
     }
+    t.reference_length = 0.0;
+    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k)
+      t.reference_length +=
+          (ReferencePosition(m, t.eyelets[k + 1]) - ReferencePosition(m, t.eyelets[k])).norm();
+    if (t.drive == TendonDrive::kLength) {
+      ValidateProfile(m, t.length, label + " length", entity);
+      const double lower = ProfileLowerBound(t.length);
+      if (!(lower > 0.0))
+        throw InputError(label + ": the length profile can become zero or negative (its terms' "
+                                 "lower bound is " + std::to_string(lower) + " m)",
+                         entity);
+    }
     ValidateProfile(m, t.tension, label + " tension", entity);
     const double lower = ProfileLowerBound(t.tension);
     if (lower < 0.0)
@@ -836,6 +857,11 @@ void LayOutUnknowns(Model& m) {
       m.nc += 1;
     }
   }
+  // One row per length-driven tendon, after the joints' rows.
+  for (Tendon& t : m.tendons) {
+    t.row = -1;
+    if (t.drive == TendonDrive::kLength) t.row = m.nc++;
+  }
 }
 
 void CheckJointFramesCoincide(const Model& m) {
@@ -900,6 +926,13 @@ void OrderUnknowns(Model& m) {
     if (GetJointTypeInfo(j.type).spring_law == JointSpringLaw::kRelativeMotion)
       link(nb(j.node_a), nb(j.node_b));
     if (j.drive_row >= 0) link(add_block(m.nv + j.drive_row, 1), coord_block);
+  }
+  // A length-driven tendon's row couples with every eyelet's node (a band as wide as the
+  // tendon's route in the ordering; docs/numerics.md).
+  for (const Tendon& t : m.tendons) {
+    if (t.row < 0) continue;
+    const int tb = add_block(m.nv + t.row, 1);
+    for (const BodyPoint& e : t.eyelets) link(tb, nb(e.node));
   }
   adj.assign(blocks.size(), {});
   for (const auto& [a, b] : edges) {

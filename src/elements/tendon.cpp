@@ -64,6 +64,9 @@ bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Ve
 }
 
 double TendonTension(const Tendon& tendon, const Data& data, double time, double load_factor) {
+  // Drawn by length: the multiplier (held at zero by its row while slack, assemble.cpp).
+  if (tendon.drive == TendonDrive::kLength)
+    return tendon.row >= 0 && tendon.row < data.lambda.size() ? data.lambda(tendon.row) : 0.0;
   return std::max(0.0, load_factor * EvalProfile(tendon.tension, time, data).value);
 }
 
@@ -78,7 +81,7 @@ bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& s
     return true;
   }
   PointDistance g;
-  if (!CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, o.tangent, &g)) {
+  if (!CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, false, &g)) {
     t->active = false;  // coinciding eyelets: no direction, no force
     return true;
   }
@@ -88,8 +91,56 @@ bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& s
   t->force_scale = tau * arm;
   t->term_scale = tau * arm;  // the pulls of two segments at an eyelet cancel
   if (!o.tangent) return true;
-  t->stiffness = tau * g.hessian;
-  t->has_stiffness = true;
+  // The iteration-matrix blocks c_K tau d2l T (a tendon has no mass or damping), formed from
+  // the factors of CalcPointDistance's hessian (method-next.md §N4.2) without the hessian
+  // itself. With R^T R = I the string parts are
+  //   P_AA = (I - e_A e_A^T) / l,  P_BB = (I - e_B e_B^T) / l,  P_AB = (R_A^T R_B - e_A e_B^T) / l,
+  // block (X, Y) = s_X s_Y S(r_X)^T P_XY S(r_Y) T_Y (s_A = -1, s_B = +1), and the diagonal blocks
+  // add the rotation of e into the node frame, s_X S(r_X)^T Skew(e_X) [0 I] T_X. So
+  //   block (X, X) = S(r_X)^T [P_XX  s_X Skew(e_X)] [S(r_X) T_X; T_X,bottom]   (one 6x6 product),
+  //   block (X, Y) = -S(r_X)^T P_XY S(r_Y) T_Y                                  (6x3 times 3x6).
+  const SE3& H_A = *x.H[0];
+  const SE3& H_B = *x.H[1];
+  const Vec3& r_A = s.a.offset;
+  const Vec3& r_B = s.b.offset;
+  const Vec3 e_A = -g.gradient.segment<3>(0);  // R_A^T e
+  const Vec3 e_B = g.gradient.segment<3>(6);   // R_B^T e
+  const double k = o.c_stiffness * tau;
+  const double c = k / g.length;
+  // Right factors [S(r) T; T_bottom] (6 x 6), S(r) T = T_top - Skew(r) T_bottom.
+  Mat6 right_A, right_B;
+  right_A.bottomRows<3>() = x.T[0]->bottomRows<3>();
+  right_A.topRows<3>() = x.T[0]->topRows<3>();
+  right_A.topRows<3>().noalias() -= Skew(r_A) * right_A.bottomRows<3>();
+  right_B.bottomRows<3>() = x.T[1]->bottomRows<3>();
+  right_B.topRows<3>() = x.T[1]->topRows<3>();
+  right_B.topRows<3>().noalias() -= Skew(r_B) * right_B.bottomRows<3>();
+  // Left factors S(r_X)^T [P_XX  s_X Skew(e_X)] (6 x 6) and -S(r_A)^T P_AB, -S(r_B)^T P_AB^T.
+  Eigen::Matrix<double, 3, 6> top;
+  Mat6 left;
+  top.leftCols<3>() = c * (Mat3::Identity() - e_A * e_A.transpose());
+  top.rightCols<3>() = -k * Skew(e_A);
+  left.topRows<3>() = top;
+  left.bottomRows<3>().noalias() = Skew(r_A) * top;
+  Mat12& S = t->matrix;
+  S.block<6, 6>(0, 0).noalias() = left * right_A;
+  top.leftCols<3>() = c * (Mat3::Identity() - e_B * e_B.transpose());
+  top.rightCols<3>() = k * Skew(e_B);
+  left.topRows<3>() = top;
+  left.bottomRows<3>().noalias() = Skew(r_B) * top;
+  S.block<6, 6>(6, 6).noalias() = left * right_B;
+  Mat3 P_AB;
+  P_AB.noalias() = H_A.R.transpose() * H_B.R;
+  P_AB.noalias() -= e_A * e_B.transpose();
+  P_AB *= -c;
+  Eigen::Matrix<double, 6, 3> side;
+  side.topRows<3>() = P_AB;
+  side.bottomRows<3>().noalias() = Skew(r_A) * P_AB;
+  S.block<6, 6>(0, 6).noalias() = side * right_B.topRows<3>();
+  side.topRows<3>() = P_AB.transpose();
+  side.bottomRows<3>().noalias() = Skew(r_B) * P_AB.transpose();
+  S.block<6, 6>(6, 0).noalias() = side * right_A.topRows<3>();
+  t->combined = true;
   return true;
 }
 
@@ -165,6 +216,58 @@ LineForceState CalcForceElementState(const Model& model, const Data& data, int e
   s.force = fe.stiffness * (s.length - fe.rest_length) + fe.damping * s.rate +
             EvalProfile(fe.actuator, data.time, data).value;
   return s;
+}
+
+ProfileValue TendonTargetLength(const Tendon& tendon, const Data& data, double time,
+                                double load_factor) {
+  ProfileValue p = EvalProfile(tendon.length, time, data);
+  p.value = tendon.reference_length + load_factor * (p.value - tendon.reference_length);
+  p.rate *= load_factor;
+  p.accel *= load_factor;
+  return p;
+}
+
+double CalcTendonLength(const Model& model, const Data& data, int tendon,
+                        std::vector<Vec6>* gradient) {
+  const Tendon& td = model.tendons[static_cast<std::size_t>(tendon)];
+  if (gradient) gradient->assign(td.eyelets.size(), Vec6::Zero());
+  double L = 0.0;
+  for (std::size_t k = 0; k + 1 < td.eyelets.size(); ++k) {
+    const BodyPoint& a = td.eyelets[k];
+    const BodyPoint& b = td.eyelets[k + 1];
+    PointDistance g;
+    if (!CalcPointDistance(NodeFrame(data, a.node), a.offset, NodeFrame(data, b.node), b.offset,
+                           false, &g))
+      continue;
+    L += g.length;
+    if (gradient) {
+      (*gradient)[k] += g.gradient.head<6>();
+      (*gradient)[k + 1] += g.gradient.tail<6>();
+    }
+  }
+  return L;
+}
+
+int UpdateTendonSlack(const Model& model, Data& data, double time, double load_factor) {
+  int changed = 0;
+  for (std::size_t i = 0; i < model.tendons.size(); ++i) {
+    const Tendon& t = model.tendons[i];
+    if (t.drive != TendonDrive::kLength || t.row < 0) continue;
+    char& slack = data.tendon_slack[i];
+    if (!slack && data.lambda(t.row) < 0.0) {
+      slack = 1;
+      data.lambda(t.row) = 0.0;
+      ++changed;
+    } else if (slack) {
+      const double L = CalcTendonLength(model, data, static_cast<int>(i));
+      const double target = TendonTargetLength(t, data, time, load_factor).value;
+      if (L >= target - 1e-12 * std::max(1.0, target)) {
+        slack = 0;
+        ++changed;
+      }
+    }
+  }
+  return changed;
 }
 
 }  // namespace screwfem

@@ -305,7 +305,10 @@ void SceneCompiler::AddTendonsAndForces() {
     for (std::size_t k = 0; k < t.eyelets.size(); ++k)
       eyelets.push_back(ResolveBodyPoint(
           t.eyelets[k], PartOf(source, "eyelets[" + std::to_string(k) + "]"), "eyelet"));
-    builder_.AddTendon(t.name, eyelets, t.tension);
+    if (t.by_length)
+      builder_.AddLengthDrivenTendon(t.name, eyelets, t.length);
+    else
+      builder_.AddTendon(t.name, eyelets, t.tension);
   }
   for (std::size_t i = 0; i < spec_.forces.size(); ++i) {
     const ForceSpec& f = spec_.forces[i];

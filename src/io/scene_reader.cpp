@@ -822,7 +822,7 @@ void SceneReader::ReadTendons(const Node* node) {
     src_.tendons.push_back({Field(entry.key_location, path), {}});
     EntitySource& source = src_.tendons.back();
     r_.ExpectMap(value, path);
-    r_.CheckKeys(value, path, {"eyelets", "tension"});
+    r_.CheckKeys(value, path, {"eyelets", "tension", "length"});
     TendonSpec t;
     t.name = entry.key;
     const Node& en = r_.Require(value, path, "eyelets");
@@ -835,9 +835,20 @@ void SceneReader::ReadTendons(const Node* node) {
       source.parts.emplace_back(Index("eyelets", i), Field(en.items[i].location, Index(ep, i)));
       t.eyelets.push_back(ReadBodyPoint(en.items[i], Index(ep, i)));
     }
-    const Node& tn = r_.Require(value, path, "tension");
-    t.tension = ReadProfile(tn, Join(path, "tension"));
-    source.parts.emplace_back("tension", Field(tn.location, Join(path, "tension")));
+    // Drawn by tension or by length (a rheonomic constraint whose multiplier is the tension).
+    const Node* ln = value.Find("length");
+    if (ln != nullptr && value.Find("tension") != nullptr)
+      r_.Fail(ln->location, Join(path, "length"),
+              "give either 'tension' or 'length' (the tendon is drawn by one of them), not both");
+    if (ln != nullptr) {
+      t.by_length = true;
+      t.length = ReadProfile(*ln, Join(path, "length"));
+      source.parts.emplace_back("length", Field(ln->location, Join(path, "length")));
+    } else {
+      const Node& tn = r_.Require(value, path, "tension");
+      t.tension = ReadProfile(tn, Join(path, "tension"));
+      source.parts.emplace_back("tension", Field(tn.location, Join(path, "tension")));
+    }
     spec_.tendons.push_back(std::move(t));
   }
 }

@@ -16,6 +16,7 @@ Data MakeData(const Model& model) {
   d.inputs.resize(static_cast<Eigen::Index>(model.inputs.size()));
   for (std::size_t i = 0; i < model.inputs.size(); ++i)
     d.inputs(static_cast<Eigen::Index>(i)) = model.inputs[i].default_value;
+  d.tendon_slack.assign(model.tendons.size(), 0);
   d.residual = Eigen::VectorXd::Zero(model.num_unknowns());
   d.rhs = Eigen::VectorXd::Zero(model.num_unknowns());
   d.increment = Eigen::VectorXd::Zero(model.num_unknowns());

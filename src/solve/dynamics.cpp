@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 
 #include "screwfem/elements/joint.h"
+#include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/statics.h"
 
@@ -84,7 +85,7 @@ std::vector<double> ProfileBreakpoints(const Model& model) {
   for (const RodLoad& l : model.rod_loads) add(l.profile);
   for (const Joint& j : model.joints)
     if (j.drive != DriveKind::kNone) add(j.drive_profile);
-  for (const Tendon& t : model.tendons) add(t.tension);
+  for (const Tendon& t : model.tendons) add(t.drive == TendonDrive::kLength ? t.length : t.tension);
   for (const ForceElement& f : model.force_elements) add(f.actuator);
   for (const Actuator& a : model.actuators) add(a.profile);
   return b;
@@ -128,6 +129,11 @@ bool ConsistentStart(const Model& model, Data& data, Integrator& integ, std::str
   for (const Joint& j : model.joints)
     if (j.drive == DriveKind::kPrescribed)
       data.residual(nv + j.drive_row) -= EvalProfile(j.drive_profile, data.time, data).accel;
+  for (std::size_t ti = 0; ti < model.tendons.size(); ++ti) {
+    const Tendon& t = model.tendons[ti];
+    if (t.row >= 0 && !data.tendon_slack[ti])
+      data.residual(nv + t.row) -= TendonTargetLength(t, data, data.time).accel;
+  }
   if (!SolveAssembledSystem(model, data)) {
     if (message)
       *message =
@@ -202,6 +208,12 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
           touch(model.nodes[static_cast<std::size_t>(node)].dof, 6);
       if (j.k() > 0) touch(j.coord, j.k());
     }
+    for (const TendonSegment& seg : model.tendon_segments) {
+      if (model.tendons[static_cast<std::size_t>(seg.tendon)].row < 0) continue;
+      for (const int node : {seg.a.node, seg.b.node})
+        if (node != kGround && model.nodes[static_cast<std::size_t>(node)].dof >= 0)
+          touch(model.nodes[static_cast<std::size_t>(node)].dof, 6);
+    }
     integ.ggl_blocks.clear();
     for (int i = 0; i < nv; ++i) {
       if (!touched[static_cast<std::size_t>(i)]) continue;
@@ -243,6 +255,18 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   // One tangent operator per node, then one per joint (used by spherical, planar and free
   // joints, whose coordinates retract by the exponential; see TryStep).
   data.node_tangent.assign(model.nodes.size() + model.joints.size(), Mat6::Identity());
+  integ.slack_start = data.tendon_slack;
+  integ.tendon_switches = integ.tendon_catches = 0;
+  integ.tendon_rate_error = Eigen::VectorXd::Zero(nc);
+  // A length-driven tendon whose route is shorter than its prescribed length starts slack.
+  for (std::size_t ti = 0; ti < model.tendons.size(); ++ti) {
+    const Tendon& t = model.tendons[ti];
+    if (t.row < 0) continue;
+    const double target = TendonTargetLength(t, data, data.time).value;
+    data.tendon_slack[ti] =
+        CalcTendonLength(model, data, static_cast<int>(ti)) < target - 1e-12 * std::max(1.0, target);
+    if (data.tendon_slack[ti]) data.lambda(t.row) = 0.0;
+  }
   std::string why;
   if (!ConsistentStart(model, data, integ, &why)) {
     if (message) *message = "at the start time: " + why;
@@ -315,7 +339,7 @@ void PrepareGglStep(const Model& model, const Data& data, Integrator& integ) {
 // ConstraintFormulation::kGgl: the position-constraint rows of the iteration at the current
 // iterate, B(q) T with the tangent operators the matrix was assembled with (method-next.md
 // §N1.3; Delta x enters q as q_n o exp(h dq + Delta x)), and the factorised B T B_n^T that
-// gives the nu correction (redundant rows and columns: the identity). False if it is singular
+// gives the nu correction (held rows and columns, ForEachHeldRow: the identity). False if it is singular
 // (redundant constraints the build did not find).
 bool FactorizeGglCross(const Model& model, const Data& data, Integrator& integ) {
   Eigen::MatrixXd& bt = integ.ggl_bt;
@@ -348,11 +372,11 @@ bool FactorizeGglCross(const Model& model, const Data& data, Integrator& integ) 
   for (const auto& [first, size] : integ.ggl_blocks)
     integ.ggl_cross.noalias() +=
         bt.middleCols(first, size).lazyProduct(integ.ggl_b.middleCols(first, size).transpose());
-  for (int r : model.redundant_rows) {
+  ForEachHeldRow(model, data, [&](int r) {
     integ.ggl_cross.row(r).setZero();
     integ.ggl_cross.col(r).setZero();
     integ.ggl_cross(r, r) = 1.0;
-  }
+  });
   integ.ggl_cross_lu.compute(integ.ggl_cross);
   // Singular: a pivot below round-off of the largest (rcond() would allocate).
   const auto pivots = integ.ggl_cross_lu.matrixLU().diagonal().cwiseAbs();
@@ -474,7 +498,7 @@ bool Correct(const Model& model, Data& data, Integrator& integ, const StepConsta
     const double s_v = c.h * integ.params.beta / integ.params.gamma;
     integ.ggl_phi = data.residual.tail(model.nc);
     data.residual.tail(model.nc) = s_v * integ.ggl_bv;
-    for (int r : model.redundant_rows) data.residual(model.nv + r) = integ.ggl_phi(r);
+    ForEachHeldRow(model, data, [&](int r) { data.residual(model.nv + r) = integ.ggl_phi(r); });
   }
   bool solved;
   if (factorize) {
@@ -489,7 +513,7 @@ bool Correct(const Model& model, Data& data, Integrator& integ, const StepConsta
     integ.ggl_y = data.increment.head(model.nv);
     integ.ggl_rhs.noalias() = integ.ggl_bt * integ.ggl_y;
     integ.ggl_rhs += integ.ggl_phi;
-    for (int r : model.redundant_rows) integ.ggl_rhs(r) = 0.0;
+    ForEachHeldRow(model, data, [&](int r) { integ.ggl_rhs(r) = 0.0; });
     integ.ggl_dnu.noalias() = integ.ggl_cross_lu.solve(integ.ggl_rhs);
     integ.ggl_nu += integ.ggl_dnu;
     data.increment.head(model.nv).noalias() -= integ.ggl_b.transpose() * integ.ggl_dnu;
@@ -542,6 +566,18 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
   if (ggl) PrepareGglStep(model, data, integ);
   double last_increment = INFINITY, last_res = INFINITY, last_con = INFINITY;
   bool factorized = false;  // data.matrix holds a factorisation from this step
+  // Length-driven tendons (docs/numerics.md, "Length-driven tendons"): at a converged iterate
+  // a taut tendon with negative tension goes slack and a slack one that reached its length
+  // goes taut; Newton then goes on from there with the new rows (at most two switches per
+  // tendon per attempt: a set that keeps changing is accepted as it is).
+  int switches_left = 2 * static_cast<int>(model.tendons.size());
+  const auto active_set_changed = [&]() {
+    if (switches_left <= 0 || UpdateTendonSlack(model, data, o.time) == 0) return false;
+    --switches_left;
+    factorized = false;
+    last_increment = last_res = last_con = INFINITY;
+    return true;
+  };
   for (int it = 0; it <= opt.max_iterations; ++it) {
     UpdateConfiguration(model, data, integ, h);
     const bool need_matrix = full_newton || !factorized;
@@ -562,6 +598,7 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
                       (m.res <= opt.residual_tolerance * m.scale || m.res <= m.floor);
     }
     if (it > 0 && m.residual_ok && may_converge) {
+      if (active_set_changed()) continue;
       Accept(data, integ, c);
       return it;
     }
@@ -585,6 +622,7 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
     }
     if (converged) {
       UpdateConfiguration(model, data, integ, h);
+      if (active_set_changed()) continue;
       Accept(data, integ, c);
       return it + 1;
     }
@@ -604,7 +642,43 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
   return -1;
 }
 
+// Length-driven tendons whose route stretches at another rate than L_p (a tendon caught taut
+// in the step just taken, or L_p's rate jumping at a breakpoint) are caught inelastically: the
+// velocities jump by the mass-weighted projection [M B^T; B 0] [dv; p] = [0; -e], e the taut
+// tendons' rows of B v + dphi/dt (zero restitution) and zero in every other row (the joints
+// keep their velocity constraints as they are). Nothing when every e is within round-off.
+bool CatchTendons(const Model& model, Data& data, Integrator& integ) {
+  if (model.tendons.empty() || model.nc == 0) return true;
+  CalcVelocityConstraint(model, data, data.time, integ.tendon_rate_error);
+  const double scale = 1e-10 * std::max(1.0, data.v.cwiseAbs().maxCoeff() * model.length_scale);
+  bool any = false;
+  for (std::size_t i = 0; i < model.tendons.size(); ++i) {
+    const Tendon& t = model.tendons[i];
+    if (t.row >= 0 && !data.tendon_slack[i])
+      any = any || std::abs(integ.tendon_rate_error(t.row)) > scale;
+  }
+  if (!any) return true;
+  AssemblyOptions o;
+  o.time = data.time;
+  o.dynamics = true;
+  o.c_mass = 1.0;
+  o.c_damping = 0.0;
+  o.c_stiffness = 0.0;
+  if (!Assemble(model, data, o)) return false;
+  data.residual.setZero();
+  for (std::size_t i = 0; i < model.tendons.size(); ++i) {
+    const Tendon& t = model.tendons[i];
+    if (t.row >= 0 && !data.tendon_slack[i])
+      data.residual(model.nv + t.row) = integ.tendon_rate_error(t.row);
+  }
+  if (!SolveAssembledSystem(model, data)) return false;
+  data.v += data.increment.head(model.nv);
+  ++integ.tendon_catches;
+  return true;
+}
+
 void SaveStepStart(const Data& data, Integrator& integ) {
+  integ.slack_start = data.tendon_slack;  // same size: no allocation
   SaveState(data, &integ.q_start);
   integ.v_start = data.v;
   integ.vdot_start = data.vdot;
@@ -618,6 +692,7 @@ void RestoreStepStart(const Model& model, Data& data, Integrator& integ, double 
   data.vdot = integ.vdot_start;
   integ.a = integ.a_start;
   data.lambda = integ.lambda_start;
+  data.tendon_slack = integ.slack_start;
   data.time = t;
   (void)model;
 }
@@ -694,8 +769,20 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
       integ.iterations += its;
       integ.max_iterations_in_step = std::max(integ.max_iterations_in_step, its);
       hs = std::min(h, 2.0 * hs);
+      // A tendon went slack or taut in this step (docs/numerics.md, "Length-driven tendons"):
+      // the forces jump, so restart as at a breakpoint; a tendon caught taut first stops its
+      // route's stretching rate inelastically.
+      const bool switched = data.tendon_slack != integ.slack_start;
+      if (switched) ++integ.tendon_switches;
+      if (switched || at_breakpoint) {
+        if (!CatchTendons(model, data, integ)) {
+          result.message = "the inelastic catch of a tendon failed (singular [M B^T; B 0])";
+          return result;
+        }
+      }
       // method-next.md §N1.2: consistent vdot, lambda and a from the right limits.
-      if (at_breakpoint && !RestartDynamics(model, data, integ, &result.message)) return result;
+      if ((at_breakpoint || switched) && !RestartDynamics(model, data, integ, &result.message))
+        return result;
       continue;
     }
     RestoreStepStart(model, data, integ, t0);
@@ -884,7 +971,14 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
       integ.allow_growth = true;
       integ.h_last = hs;
       data.time = t1;
-      if (left_limit) {
+      // A length-driven tendon went slack or taut, or L_p's rate jumps here: as in Step.
+      const bool switched = data.tendon_slack != integ.slack_start;
+      if (switched) ++integ.tendon_switches;
+      if ((switched || left_limit) && !CatchTendons(model, data, integ)) {
+        result.message = "the inelastic catch of a tendon failed (singular [M B^T; B 0])";
+        return result;
+      }
+      if (left_limit || switched) {
         // method-next.md §N1.2: consistent vdot, lambda and a from the right limits; the PI
         // memory restarts too.
         if (!RestartDynamics(model, data, integ, &result.message)) return result;
@@ -1009,6 +1103,7 @@ void SaveSimulationState(const Data& data, const Integrator& integ, SimulationSt
   state->vdot = data.vdot;
   state->lambda = data.lambda;
   state->inputs = data.inputs;
+  state->tendon_slack = data.tendon_slack;
   state->a = integ.a;
   state->use_last_acceleration = integ.use_last_acceleration;
 }
@@ -1026,6 +1121,7 @@ void RestoreSimulationState(const SimulationState& state, Data& data, Integrator
   data.vdot = state.vdot;
   data.lambda = state.lambda;
   data.inputs = state.inputs;
+  if (state.tendon_slack.size() == data.tendon_slack.size()) data.tendon_slack = state.tendon_slack;
   if (state.a.size() == integ.a.size()) integ.a = state.a;
   integ.use_last_acceleration = state.use_last_acceleration;
 }

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "screwfem/assemble/assemble.h"
+#include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/dynamics.h"
 
@@ -238,11 +239,22 @@ struct StaticSolver {
   LoadStepEnd IterateLoadStep(StaticStep& step, std::string& cause) {
     double last_increment = INFINITY;
     step_dx.setZero();
+    // Length-driven tendons: the active set of the slack rule (docs/numerics.md), updated at
+    // each converged iterate and Newton continued with the new rows (as TryStep does).
+    int switches_left = 2 * static_cast<int>(model.tendons.size());
     for (int it = 0; it <= options.max_iterations; ++it) {
       if (stop.Requested()) return LoadStepEnd::kStopped;
       if (!AssembleAt(true, cause)) return LoadStepEnd::kFailed;
       double res = 0.0;
-      if (Converged(last_increment, step, &res)) {
+      bool converged = Converged(last_increment, step, &res);
+      if (converged && switches_left > 0 &&
+          UpdateTendonSlack(model, data, opt.time, opt.load_factor) > 0) {
+        --switches_left;
+        last_increment = INFINITY;
+        converged = false;
+        if (!AssembleAt(true, cause)) return LoadStepEnd::kFailed;
+      }
+      if (converged) {
         step.iterations = it;
         return LoadStepEnd::kConverged;
       }

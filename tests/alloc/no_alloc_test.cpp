@@ -123,6 +123,13 @@ Model MixedModel() {
   for (std::size_t i = 1; i < b.model().rods[0].nodes.size(); ++i)
     eyelets.push_back({b.model().rods[0].nodes[i], Vec3(0, 0.01, 0.01)});
   b.AddTendon("tendon", eyelets, Profile::Ramp(0, 0.5, 2.0));
+  // A tendon drawn by length from a ground point 0.3 m below the rod's middle node (which the
+  // dead load lifts), shortened by 2 mm until 0.02 s: a constraint row, and at the ramp's end
+  // an inelastic catch (its rate jumps).
+  const int held = b.model().rods[0].nodes[2];
+  const Vec3 below = b.model().nodes[static_cast<std::size_t>(held)].reference.x - Vec3(0, 0, 0.3);
+  b.AddLengthDrivenTendon("winch", {{kGround, below}, {held, Vec3::Zero()}},
+                          Profile::Constant(0.3).Add(Profile::Ramp(0, 0.02, -0.002)));
   ForceElement spring;
   spring.a = {base, Vec3(0, 0.05, 0)};
   spring.b = {b.model().rods[0].nodes[3], Vec3::Zero()};
@@ -205,6 +212,7 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     EXPECT_TRUE(ok);
     EXPECT_NE(data.inputs(0), 0.0);
     EXPECT_GT(integ.iterations, 50);  // the steps really iterated
+    EXPECT_GE(integ.tendon_catches, 1);  // the length-driven tendon's catch ran in them
     EXPECT_GE(integ.restarts, 1);     // and restarted at the ramp's end
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
     // The rows of tendons.csv and forces.csv, once sized.

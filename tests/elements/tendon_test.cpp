@@ -120,8 +120,10 @@ void AssembleKind(const Model& m, const Data& d, const KernelOptions& o, Eigen::
       r->segment<6>(6 * nodes[a]) += t.residual.template segment<6>(6 * a);
       for (int b = 0; b < 2; ++b) {
         if (nodes[b] == kGround) continue;
-        if (K && t.has_stiffness)
-          K->block<6, 6>(6 * nodes[a], 6 * nodes[b]) += t.stiffness.template block<6, 6>(6 * a, 6 * b);
+        // The tendon's kernel forms its matrix (c_K K T; K with the options used here).
+        if (K && (t.has_stiffness || t.combined))
+          K->block<6, 6>(6 * nodes[a], 6 * nodes[b]) +=
+              (t.combined ? t.matrix : t.stiffness).template block<6, 6>(6 * a, 6 * b);
         if (C && t.has_damping)
           C->block<6, 6>(6 * nodes[a], 6 * nodes[b]) += t.damping.template block<6, 6>(6 * a, 6 * b);
       }
@@ -174,6 +176,42 @@ TEST(TendonSegmentKind, SegmentsSumToTensionTimesTheLengthGradientWithTheExactTa
   const LineForceState s = CalcTendonState(c.model, c.data, 0);
   EXPECT_NEAR(s.rate, r.dot(c.data.v.head(r.size())) / tau, 1e-12);
   EXPECT_EQ(s.force, tau);
+}
+
+TEST(TendonSegmentKind, TangentTimesNodeTangentsIsTensionTimesTheHessianTimesThem) {
+  // The kernel forms c_K tau d2l T (elements/tendon.cpp, factored, without the 12 x 12
+  // hessian); the reference is tau times CalcPointDistance's hessian (checked against finite
+  // differences above) times blockdiag(T_A, T_B), with T random (as the node tangents of a
+  // dynamic step).
+  std::mt19937 rng(11);
+  const double tau = 7.25;
+  const Chain c = MakeChain(rng, tau);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  KernelOptions o;
+  o.c_stiffness = 0.37;
+  for (std::size_t k = 0; k < c.model.tendon_segments.size(); ++k) {
+    const TendonSegment& s = c.model.tendon_segments[k];
+    const int nodes[2] = {s.a.node, s.b.node};
+    Mat6 T[2];
+    NodeMotion<2> x;
+    for (int i = 0; i < 2; ++i) {
+      for (int a = 0; a < 6; ++a)
+        for (int b = 0; b < 6; ++b) T[i](a, b) = (a == b ? 1.0 : 0.0) + 0.3 * u(rng);
+      x.H[i] = &NodeFrame(c.data, nodes[i]);
+      x.T[i] = &T[i];
+    }
+    ElementTerms<2> t;
+    ASSERT_TRUE(TendonSegmentKind::Calc(c.model, c.data, static_cast<int>(k), x, o, &t));
+    ASSERT_TRUE(t.active && t.combined);
+    PointDistance g;
+    ASSERT_TRUE(CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, true, &g));
+    Mat12 Tblock = Mat12::Zero();
+    Tblock.topLeftCorner<6, 6>() = T[0];
+    Tblock.bottomRightCorner<6, 6>() = T[1];
+    const Mat12 expected = o.c_stiffness * tau * g.hessian * Tblock;
+    EXPECT_LT((t.matrix - expected).norm(), 1e-13 * expected.norm()) << "segment " << k;
+    EXPECT_LT((t.residual - tau * g.gradient).norm(), 1e-14 * tau);
+  }
 }
 
 TEST(TendonSegmentKind, StatesTensionNeverNegativeAndLoadFactorScalesIt) {

@@ -571,6 +571,22 @@ TEST(BadInput, TendonTensionThatCanBecomeNegative) {
               "bad.yaml:6:3", "a tendon can only pull");
 }
 
+TEST(BadInput, TendonDrawnByTensionAndByLength) {
+  ExpectError(kRod + "tendons:\n  t:\n    eyelets: [{body: r, s: 0}, {body: r, s: 2}]\n"
+                     "    tension: 1\n    length: 1.9\n",
+              "bad.yaml:9:13",
+              "tendons.t.length: give either 'tension' or 'length' (the tendon is drawn by one of "
+              "them), not both");
+}
+
+TEST(BadInput, TendonLengthThatCanReachZero) {
+  ExpectError(kRod + "tendons:\n  t:\n    eyelets: [{body: r, s: 0}, {body: r, s: 2}]\n"
+                     "    length: {type: ramp, value: -3, t1: 1}\n",
+              "bad.yaml:6:3",
+              "tendon 't': the length profile can become zero or negative (its terms' lower bound "
+              "is -3.000000 m)");
+}
+
 TEST(BadInput, CoincidingEyeletsPointAtTheSecond) {
   ExpectError(kRod + "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 1}\n"
                      "      - {body: r, at: B}\n    tension: 1\n",

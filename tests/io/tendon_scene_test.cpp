@@ -4,6 +4,7 @@
 // with the states the kernels compute, and draws both in the ParaView frames.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -87,6 +88,49 @@ TEST(TendonScene, RunWritesTendonAndForceTablesAndDrawsThem) {
   const std::string frame = test::ReadFile(dir.path() + "/vtk/frame_00000.vtp");
   EXPECT_NE(frame.find("NumberOfLines=\"3\""), std::string::npos);
   EXPECT_NE(frame.find("NumberOfPoints=\"21\""), std::string::npos);
+}
+
+TEST(TendonScene, LengthDrivenTendonIsAConstraintRowWhoseTensionIsWritten) {
+  // The finger drawn by length instead of tension: shortened by 0.01 m from 0.01 s to 0.11 s,
+  // the tendon curls it; tendons.csv reports the route's length (the prescribed one while
+  // taut, to the run's constraint tolerance), its rate and the tension (the multiplier, >= 0).
+  const std::string yaml = R"(points: {base: [0, 0, 0], tip: [1, 0, 0]}
+sections:
+  finger: {stiffness: [1e5, 1e5, 1e5, 1, 1, 1], inertia: [0.1, 0.1, 0.1, 1e-3, 1e-3, 1e-3]}
+bodies:
+  finger: {type: soft, from: base, to: tip, section: finger, elements: 4}
+joints:
+  clamp: {type: fixed, at: base, between: [ground, finger]}
+tendons:
+  flexor:
+    eyelets:
+      - {body: finger, s: 0.0, offset: [0, 0.02, 0]}
+      - {body: finger, s: 0.5, offset: [0, 0.02, 0]}
+      - {body: finger, s: 1.0, offset: [0, 0.02, 0]}
+    length: {sum: [{type: constant, value: 1}, {type: ramp, value: -0.01, t0: 0.01, t1: 0.11}]}
+analysis: {type: dynamic, end_time: 0.15, step: 0.005}
+outputs: {interval: 0.05}
+)";
+  const Scene s = ParseScene(yaml, "length.yaml");
+  ASSERT_EQ(s.model.tendons.size(), 1u);
+  EXPECT_EQ(s.model.tendons[0].drive, TendonDrive::kLength);
+  EXPECT_EQ(s.model.tendons[0].row, s.model.nc - 1);
+  test::ScopedDir dir("tendon_length_scene");
+  const RunResult r = RunScene(s, dir.path());
+  ASSERT_TRUE(r.ok) << r.message;
+  const test::Table tendons = test::ReadCsv(dir.path() + "/tendons.csv");
+  ASSERT_TRUE(tendons.well_formed) << tendons.problem;
+  ASSERT_EQ(tendons.rows.size(), 4u);
+  for (const std::vector<double>& row : tendons.rows) {
+    const double t = row[0];
+    EXPECT_NEAR(row[1], 1.0 - 0.01 * std::clamp((t - 0.01) / 0.1, 0.0, 1.0), 1e-5) << "t = " << t;
+    EXPECT_GE(row[3], 0.0);
+  }
+  // The rate while the ramp runs: L_p's -0.1 m/s up to the velocity error of the index-3
+  // iteration (the position row holds, the velocity oscillates about it by a few per cent).
+  EXPECT_NEAR(tendons.rows[1][2], -0.1, 0.01);
+  EXPECT_NEAR(tendons.rows[2][2], -0.1, 0.01);
+  EXPECT_GT(tendons.rows.back()[3], 0.0);       // taut, holding the curl
 }
 
 }  // namespace

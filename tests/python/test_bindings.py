@@ -672,6 +672,30 @@ class ModelBuilderTest(unittest.TestCase):
         self.assertLess(np.abs(total).max(), 1e-8)  # the section transmits nothing
         np.testing.assert_allclose(elastic[0], [20, 0, 0, 0, 0, -0.2], atol=1e-8)
 
+    def test_length_driven_tendon_from_python_reports_its_tension(self):
+        # The tendon test's cantilever drawn by length to the length that 50 N gives: the multiplier,
+        # reported as the tension, is 50 N (tests/solve/tendon_length_test.cpp).
+        section = sf.Section(np.array([1e5, 1e5, 1e5, 1.0, 1.0, 1.0]), np.ones(6))
+        lengths = {}
+        for by_length in (False, True):
+            b = sf.ModelBuilder()
+            rod = b.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 4, section)
+            b.fix_node(b.find_node_at([0, 0, 0]).node)
+            eyelets = [sf.BodyPoint(b.find_rod_node_at_arc_length(rod, 0.25 * i).node,
+                                    [0, 0.02, 0]) for i in range(5)]
+            if by_length:
+                b.add_length_driven_tendon("flexor", eyelets,
+                                           sf.Profile.constant(lengths[False]))
+            else:
+                b.add_tendon("flexor", eyelets, sf.Profile.constant(50.0))
+            sim = sf.Simulation(sf.Scene(b.build(), "tendon"))
+            options = sf.StaticOptions()
+            options.load_steps = 40
+            sim.solve_static(options)
+            lengths[by_length], _, tension = sim.tendon_state("flexor")
+        self.assertAlmostEqual(lengths[True], lengths[False], delta=1e-9)
+        self.assertAlmostEqual(tension, 50.0, delta=1e-6)
+
     def test_invalid_joint_side_raises_input_error(self):
         b = sf.ModelBuilder()
         spec = sf.JointSpec()

@@ -76,16 +76,27 @@ void UpdateBranchReferences(const Model& model, Data& data);
 Energy CalcEnergy(const Model& model, const Data& data);
 
 // The constraint gradient B(q) (nc x nv, method.md §4.3; joint coordinates without tangent
-// operator) at data's configuration times x (velocity layout): out = B x (nc). Rows of
-// redundant constraints are zero. No allocation.
+// operator) at data's configuration times x (velocity layout): out = B x (nc). Rows held at
+// zero (ForEachHeldRow) are zero. No allocation.
 void CalcConstraintGradientTimes(const Model& model, const Data& data,
                                  const Eigen::Ref<const Eigen::VectorXd>& x,
                                  Eigen::Ref<Eigen::VectorXd> out);
-// The velocity constraint B(q) v + d phi/dt at `time` (nc; drives: alpha_dot - q_dot(t)).
+// The velocity constraint B(q) v + d phi/dt at `time` (nc; drives: alpha_dot - q_dot(t);
+// length-driven tendons: dL/dt - dL_p/dt).
 void CalcVelocityConstraint(const Model& model, const Data& data, double time,
                             Eigen::Ref<Eigen::VectorXd> out);
-// The dense constraint gradient B(q) (nc x nv, preallocated), rows of redundant constraints zero.
+// The dense constraint gradient B(q) (nc x nv, preallocated), rows held at zero zero.
 void CalcConstraintGradient(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> out);
+
+// Calls f(row) for every multiplier row held at zero: the redundant constraint rows and the
+// rows of slack length-driven tendons (Data::tendon_slack). Their residual row is
+// lambda_r / s_L with a unit diagonal, their gradient rows are zero.
+template <class F>
+void ForEachHeldRow(const Model& model, const Data& data, F&& f) {
+  for (int r : model.redundant_rows) f(r);
+  for (std::size_t i = 0; i < model.tendons.size(); ++i)
+    if (model.tendons[i].row >= 0 && data.tendon_slack[i]) f(model.tendons[i].row);
+}
 
 // Largest |phi| over all constraint rows at the current state (global order residual rows).
 double MaxConstraintViolation(const Model& model, Data& data, double time, double load_factor);

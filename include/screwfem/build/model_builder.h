@@ -110,6 +110,10 @@ class ModelBuilder {
   // configuration, and a tension profile that cannot become negative (each term's lower bound
   // summed). Errors carry EntityKind::kTendon, part "eyelets[i]" for an eyelet.
   int AddTendon(std::string name, std::vector<BodyPoint> eyelets, const Profile& tension);
+  // A tendon drawn by length (model.h, TendonDrive::kLength): the constraint L(q) = L_p(t) [m]
+  // with the tension as its multiplier, slack while the route is shorter than L_p.
+  int AddLengthDrivenTendon(std::string name, std::vector<BodyPoint> eyelets,
+                            const Profile& length);
   // A spring-damper-actuator between two body points (model.h, ForceElement); a negative
   // rest_length means the reference distance. Build checks: valid, distinct nodes (or the
   // ground), finite values, non-negative stiffness and damping, ends apart in the reference

@@ -32,9 +32,29 @@ struct PointDistance {
 bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Vec3& r_B,
                        bool hessian, PointDistance* out);
 
-// The tension of a tendon at `time`: max(0, load_factor tau(t)) [N] (a tendon cannot push).
+// The tension of a tendon at `time` [N]: drawn by tension, max(0, load_factor tau(t)) (a
+// tendon cannot push); drawn by length, its multiplier data.lambda(row) (the current Newton
+// iterate, not clipped; zero while slack, where its row holds it at zero).
 double TendonTension(const Tendon& tendon, const Data& data, double time,
                      double load_factor = 1.0);
+
+// A length-driven tendon's prescribed length and its first two time derivatives at `time`
+// (method-next.md §N4.3): L_p(t), in statics moved from the reference length by the load
+// factor f: L_ref + f (L_p(t) - L_ref).
+ProfileValue TendonTargetLength(const Tendon& tendon, const Data& data, double time,
+                                double load_factor = 1.0);
+
+// The length L(q) of a tendon in the current state of data [m], and (gradient != nullptr) its
+// gradient dL/d[dh] node by node: gradient[k] is the part on the k-th eyelet's node (6 rows,
+// node-frame components; eyelets on the same node each get their part).
+double CalcTendonLength(const Model& model, const Data& data, int tendon,
+                        std::vector<Vec6>* gradient = nullptr);
+
+// Sets data.tendon_slack for the length-driven tendons from the current state at `time` (the
+// active set of the unilateral constraint L(q) <= L_p(t), docs/numerics.md): a taut tendon
+// whose multiplier is negative goes slack (its multiplier is set to zero); a slack one becomes
+// taut when its length reaches L_p - tolerance. Returns how many tendons changed.
+int UpdateTendonSlack(const Model& model, Data& data, double time, double load_factor = 1.0);
 
 // One straight segment of a tendon between consecutive eyelets: the residual rows
 // tau dl/d[dh_A; dh_B] and the stiffness tau d2l (method-next.md §N4.2, §N4.3 with prescribed

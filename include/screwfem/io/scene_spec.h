@@ -74,11 +74,14 @@ struct BodyPointSpec {
   Vec3 offset = Vec3::Zero();  // soft bodies: section-frame components [m]
 };
 
-// A tendon (ModelBuilder::AddTendon): eyelets in routing order and the tension profile [N].
+// A tendon (ModelBuilder::AddTendon): eyelets in routing order and the tension profile [N];
+// or drawn by length (ModelBuilder::AddLengthDrivenTendon): the length profile [m].
 struct TendonSpec {
   std::string name;
   std::vector<BodyPointSpec> eyelets;
   Profile tension = Profile::Constant(0.0);
+  bool by_length = false;
+  Profile length = Profile::Constant(0.0);
 };
 
 // A spring-damper-actuator between two body points (ModelBuilder::AddForceElement).

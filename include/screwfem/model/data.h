@@ -19,6 +19,8 @@ struct Data {
   std::vector<Vec3> w_ref;         // per rod element: rotation vector on the current branch
   Eigen::VectorXd inputs;          // values of the run-time inputs (Model::inputs), set between
                                    // steps; profiles read them through EvalProfile
+  std::vector<char> tendon_slack;  // per tendon: 1 while a length-driven tendon is slack (its
+                                   // row holds the multiplier at zero; docs/numerics.md)
 
   // Workspaces of the Newton solvers.
   Eigen::VectorXd residual;        // global order, size nv + nc

@@ -116,11 +116,27 @@ struct BodyPoint {
 // friction (method-next.md §N4): its length is the sum of the straight segments between
 // consecutive eyelets and it pulls with a prescribed tension tau(t) >= 0. Each segment is an
 // item of TendonSegmentKind (elements/tendon.h).
+//
+// Or it is drawn by length (method-next.md §N4.3, a motor in position mode): the rheonomic
+// constraint L(q) - L_p(t) = 0, one multiplier row whose multiplier is the tension; unilateral
+// (the tendon goes slack when the solved tension would be negative and is taut again when its
+// path length reaches L_p: Data::tendon_slack, docs/numerics.md "Length-driven tendons").
+enum class TendonDrive {
+  kTension,  // the tension profile
+  kLength,   // the length profile; the tension is the multiplier
+};
+
 struct Tendon {
   std::string name;
   std::vector<BodyPoint> eyelets;             // at least two
   Profile tension = Profile::Constant(0.0);   // [N], scaled by the load factor in statics
+  TendonDrive drive = TendonDrive::kTension;
+  // kLength: the prescribed length L_p(t) [m]; in statics the load factor f moves it from the
+  // reference length: L_ref + f (L_p - L_ref).
+  Profile length = Profile::Constant(0.0);
   int first_segment = -1;  // set by Build: its segments are first_segment + 0 .. eyelets - 2
+  int row = -1;                   // set by Build: kLength's multiplier row (else -1)
+  double reference_length = 0.0;  // set by Build: L in the reference configuration [m]
 };
 
 // One straight segment of a tendon, between consecutive eyelets (made by Build).

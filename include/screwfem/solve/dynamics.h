@@ -173,6 +173,11 @@ struct Integrator {
   // workspace of the consistent-acceleration solve (Bdot v by differences, method.md §5.4).
   std::vector<double> breakpoints;
   Eigen::VectorXd phi_plus, phi_minus, phi_zero, bdot_v, v_work;
+  // Length-driven tendons: Data::tendon_slack at the step's start (restored with it); a step
+  // that changed it ends with a restart, and a taut tendon whose route stretches at another
+  // rate than L_p (caught taut, or L_p's rate jumps at a breakpoint) is caught inelastically.
+  std::vector<char> slack_start;
+  Eigen::VectorXd tendon_rate_error;  // nc
   // ConstraintFormulation::kGgl: the constraint gradient B_n = B(q_n) of the step's start
   // (dense, nc x nv, redundant rows zero), the velocity constraint B v + dphi/dt of the
   // iterate, the constraint values,
@@ -200,6 +205,8 @@ struct Integrator {
   long retries = 0;              // steps redone with full Newton from the zero start
   long estimated_convergences = 0;  // steps accepted by ConvergenceTest::kEstimated
   long restarts = 0;             // re-initialisations at profile breakpoints
+  long tendon_switches = 0;      // steps in which a length-driven tendon went slack or taut
+  long tendon_catches = 0;       // inelastic catches of length-driven tendons (CatchTendons)
   int max_iterations_in_step = 0;
   // Step history (every accepted step or substep, fixed or adaptive): the smallest, largest
   // and summed step sizes, and the steps AdaptiveStep rejected (error estimate above the
@@ -300,6 +307,7 @@ struct SimulationState {
   State q;
   std::vector<Vec3> w_ref;
   Eigen::VectorXd v, vdot, lambda, inputs, a;
+  std::vector<char> tendon_slack;
   bool use_last_acceleration = true;
 };
 void SaveSimulationState(const Data& data, const Integrator& integrator, SimulationState* state);
