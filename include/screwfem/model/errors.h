@@ -17,6 +17,9 @@ enum class EntityKind {
   kNone, kNode, kRod, kBody, kJoint, kPointLoad, kRodLoad,
   kTendon,        // part "eyelets[i]" for one eyelet
   kForceElement,  // part "a" or "b" for one end
+  kContactShape,  // Model::contact_shapes
+  kObstacle,      // Model::obstacles
+  kContactRod,    // Model::contact_rods
 };
 struct EntityRef {
   EntityKind kind = EntityKind::kNone;
