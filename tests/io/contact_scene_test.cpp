@@ -30,7 +30,7 @@ TEST(ContactScene, SlideExampleCompilesShapesObstacleLawAndPairs) {
   // 8 box vertices + 11 rod node spheres against the plane.
   EXPECT_EQ(m.contact_pairs.size(), 8u + 11u);
   EXPECT_EQ(m.contact.friction, 0.3);
-  EXPECT_EQ(m.contact.stiffness, 1e6);
+  EXPECT_EQ(m.contact.stiffness, 1e5);
 }
 
 TEST(ContactScene, RunWritesContactsTableTheBoxStopsAndTheRodRestsAtItsRadius) {
