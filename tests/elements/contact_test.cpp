@@ -364,60 +364,69 @@ TEST(ContactValidation, EnergyNeverIncreasesThroughAnImpactWithDamping) {
   EXPECT_LT(E_prev, 0.1 * kG + 0.5 + 1e-6);
 }
 
-// A clamped cantilever pushed by a tip load P towards a plane below its tip: the plane carries
-// R = P - w / c, w the tip deflection and c the tip compliance of the same rod without the
-// plane (the closed form of a point support at the measured tip position), and c matches
-// Timoshenko's L^3 / (3 EI) + L / (kappa G A).
-TEST(ContactValidation, CantileverPressedOntoAPlaneCarriesThePointSupportReaction) {
+// A clamped cantilever pushed by a tip load P towards a plane (the rod's node spheres) or a
+// fixed sphere (its element capsules) below its tip: the obstacle carries R = P - w / c, w the
+// tip deflection and c the tip compliance of the same rod without the obstacle (the closed
+// form of a point support at the measured tip position), and c matches Timoshenko's
+// L^3 / (3 EI) + L / (kappa G A).
+TEST(ContactValidation, CantileverPressedOntoAPlaneOrASphereCarriesThePointSupportReaction) {
   const double L = 1.0, radius = 0.01, P = 0.2, clearance = 0.002;
   Material mat;
   mat.youngs_modulus = 2e9;
   mat.poisson_ratio = 0.3;
   mat.density = 1000.0;
   const Section section = Section::Circle(radius, mat);
-  auto solve = [&](bool plane, double* tip_z, double* reaction) {
-    ModelBuilder b;
-    const int rod = b.AddStraightRod("beam", Vec3::Zero(), Vec3(L, 0.0, 0.0), 16, section);
-    b.FixNode(b.model().rods[0].nodes.front());
-    PointLoad load;
-    load.node = b.model().rods[0].nodes.back();
-    load.force = Vec3(0.0, 0.0, -P);
-    b.AddPointLoad(load);
-    if (plane) {
-      b.AddContactRod(rod, radius);
-      b.AddObstacle({"floor", ObstacleType::kPlane, Vec3(0.0, 0.0, -radius - clearance),
-                     Vec3::UnitZ(), Vec3::Zero(), 0.0});
-      ContactSettings law;
-      law.stiffness = 1e5;
-      law.onset = 1e-4;
-      b.SetContactSettings(law);
-    }
-    const Model m = b.Build();
-    Data d = MakeData(m);
-    StaticOptions o;
-    o.load_steps = 20;
-    const StaticResult res = SolveStatic(m, d, o);
-    ASSERT_TRUE(res.converged) << res.message;
-    *tip_z = d.H[static_cast<std::size_t>(m.rods[0].nodes.back())].x.z();
-    *reaction = 0.0;
-    for (int i = 0; i < static_cast<int>(m.contact_pairs.size()); ++i) {
-      const ContactState c = CalcContactState(m, d, i);
-      if (!c.active) continue;
-      EXPECT_EQ(m.contact_pairs[static_cast<std::size_t>(i)].node[0], m.rods[0].nodes.back());
-      *reaction += c.normal_force;
-    }
-  };
-  double w_free = 0.0, w = 0.0, R = 0.0, unused = 0.0;
-  solve(false, &w_free, &unused);
-  solve(true, &w, &R);
-  const double c = -w_free / P;
-  const double EI = section.stiffness(4), GA = section.stiffness(2);
-  EXPECT_NEAR(c, L * L * L / (3 * EI) + L / GA, 1e-3 * c);
-  ASSERT_GT(-w_free, clearance);  // it would pass the plane
-  EXPECT_NEAR(R, P + w / c, 1e-3 * P);
-  EXPECT_GT(R, 0.3 * P);
-  // The tip rests at the plane + radius + the law's gap for R.
-  EXPECT_NEAR(w, -clearance + (1e-4 - std::sqrt(2e-4 * R / 1e5)), 1e-3 * clearance);
+  const double sphere_radius = 0.05;
+  for (ObstacleType obstacle : {ObstacleType::kPlane, ObstacleType::kSphere}) {
+    auto solve = [&](bool contact, double* tip_z, double* reaction) {
+      ModelBuilder b;
+      const int rod = b.AddStraightRod("beam", Vec3::Zero(), Vec3(L, 0.0, 0.0), 16, section);
+      b.FixNode(b.model().rods[0].nodes.front());
+      PointLoad load;
+      load.node = b.model().rods[0].nodes.back();
+      load.force = Vec3(0.0, 0.0, -P);
+      b.AddPointLoad(load);
+      if (contact) {
+        b.AddContactRod(rod, radius);
+        if (obstacle == ObstacleType::kPlane)
+          b.AddObstacle({"floor", obstacle, Vec3(0.0, 0.0, -radius - clearance), Vec3::UnitZ(),
+                         Vec3::Zero(), 0.0});
+        else
+          b.AddObstacle({"post", obstacle, Vec3(L, 0.0, -radius - clearance - sphere_radius),
+                         Vec3::UnitZ(), Vec3::Zero(), sphere_radius});
+        ContactSettings law;
+        law.stiffness = 1e5;
+        law.onset = 1e-4;
+        b.SetContactSettings(law);
+      }
+      const Model m = b.Build();
+      Data d = MakeData(m);
+      StaticOptions o;
+      o.load_steps = 20;
+      const StaticResult res = SolveStatic(m, d, o);
+      ASSERT_TRUE(res.converged) << NameOf(obstacle) << ": " << res.message;
+      *tip_z = d.H[static_cast<std::size_t>(m.rods[0].nodes.back())].x.z();
+      *reaction = 0.0;
+      for (int i = 0; i < static_cast<int>(m.contact_pairs.size()); ++i) {
+        const ContactState c = CalcContactState(m, d, i);
+        if (!c.active) continue;
+        const ContactPair& p = m.contact_pairs[static_cast<std::size_t>(i)];
+        EXPECT_TRUE(p.node[0] == m.rods[0].nodes.back() || p.node[1] == m.rods[0].nodes.back());
+        *reaction += c.normal_force * c.normal.z();
+      }
+    };
+    double w_free = 0.0, w = 0.0, R = 0.0, unused = 0.0;
+    solve(false, &w_free, &unused);
+    solve(true, &w, &R);
+    const double c = -w_free / P;
+    const double EI = section.stiffness(4), GA = section.stiffness(2);
+    EXPECT_NEAR(c, L * L * L / (3 * EI) + L / GA, 1e-3 * c);
+    ASSERT_GT(-w_free, clearance);  // it would pass the plane
+    EXPECT_NEAR(R, P + w / c, 1e-3 * P);
+    EXPECT_GT(R, 0.3 * P);
+    // The tip rests at the plane + radius + the law's gap for R.
+    EXPECT_NEAR(w, -clearance + (1e-4 - std::sqrt(2e-4 * R / 1e5)), 1e-3 * clearance);
+  }
 }
 
 }  // namespace
