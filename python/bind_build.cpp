@@ -117,6 +117,43 @@ void BindValues(py::module_& m) {
                      "Pressure [Pa], activation [-] or the factor of `vector` (a Profile; "
                      "Profile.input for a run-time input).");
 
+  py::class_<ContactShape>(m, "ContactShape",
+                           "A collision shape in a rigid body's frame (model.h): sphere (from = "
+                           "centre, radius), capsule (from, to, radius), box (from = centre, to = "
+                           "half sizes along the body axes). Node-frame components [m].")
+      .def(py::init([](int body, ContactShapeType type, const Vec3& from, const Vec3& to,
+                       double radius) { return ContactShape{body, type, from, to, radius}; }),
+           py::arg("body"), py::arg("type"), py::arg("from_"), py::arg("to") = Vec3::Zero(),
+           py::arg("radius") = 0.0)
+      .def_readwrite("body", &ContactShape::body)
+      .def_readwrite("type", &ContactShape::type)
+      .def_readwrite("from_", &ContactShape::from)
+      .def_readwrite("to", &ContactShape::to)
+      .def_readwrite("radius", &ContactShape::radius);
+
+  py::class_<ContactObstacle>(m, "ContactObstacle",
+                              "An obstacle fixed in the world (model.h): plane (point, normal), "
+                              "sphere (point = centre, radius), capsule (point, to, radius).")
+      .def(py::init<>())
+      .def_readwrite("name", &ContactObstacle::name)
+      .def_readwrite("type", &ContactObstacle::type)
+      .def_readwrite("point", &ContactObstacle::point, "[m]")
+      .def_readwrite("normal", &ContactObstacle::normal, "Plane: out of the obstacle.")
+      .def_readwrite("to", &ContactObstacle::to, "[m]")
+      .def_readwrite("radius", &ContactObstacle::radius, "[m]")
+      .def_readwrite("contype", &ContactObstacle::contype)
+      .def_readwrite("conaffinity", &ContactObstacle::conaffinity);
+
+  py::class_<ContactSettings>(m, "ContactSettings",
+                              "The contact law (method-next.md §N6.3); negative values are the "
+                              "defaults set by build().")
+      .def(py::init<>())
+      .def_readwrite("stiffness", &ContactSettings::stiffness, "k_n [N/m]")
+      .def_readwrite("onset", &ContactSettings::onset, "delta [m]")
+      .def_readwrite("damping_ratio", &ContactSettings::damping_ratio)
+      .def_readwrite("friction", &ContactSettings::friction, "mu")
+      .def_readwrite("slip_velocity", &ContactSettings::slip_velocity, "eps_v [m/s]");
+
   py::class_<NodeMatch>(m, "NodeMatch", "Result of ModelBuilder.find_node_at.")
       .def_readonly("node", &NodeMatch::node, "The node within the tolerance, or -1.")
       .def_readonly("nearest", &NodeMatch::nearest, "The nearest node (-1 when there is none).")
@@ -177,6 +214,18 @@ void BindBuild(py::module_& m) {
            "Initial body velocity [v; w] of a node in its frame (AssembleInitialState).")
       .def("add_input", &B::AddInput, py::arg("name"), py::arg("default") = 0.0,
            "A run-time input (Model.inputs) for Profile.input; returns its index.")
+      .def("add_contact_rod", &B::AddContactRod, py::arg("rod"), py::arg("radius"),
+           "The rod takes part in contact as a chain of capsules of radius [m].")
+      .def("add_contact_shape", &B::AddContactShape, py::arg("shape"),
+           "A ContactShape on a rigid body; returns its index.")
+      .def("add_obstacle", &B::AddObstacle, py::arg("obstacle"),
+           "A ContactObstacle fixed in the world; returns its index.")
+      .def("set_contact_group", &B::SetContactGroup, py::arg("rod"), py::arg("index"),
+           py::arg("contype"), py::arg("conaffinity"),
+           "Group bitmasks of a rod (rod=True) or rigid body (MuJoCo's contype/conaffinity).")
+      .def("exclude_contact", &B::ExcludeContact, py::arg("rod"), py::arg("index"),
+           py::arg("obstacle"), "No contact between a rod or rigid body and an obstacle.")
+      .def("set_contact_settings", &B::SetContactSettings, py::arg("settings"))
       .def("build", &B::Build, "The validated Model.");
 }
 

@@ -44,6 +44,8 @@ void BindModel(py::module_& m) {
   BindEnum<RodInertia>(m, "RodInertia", "Rod inertia model (method.md §2.5).");
   BindEnum<LoadFrame>(m, "LoadFrame", "Frame of an applied load's components (model.h).");
   BindEnum<ActuatorType>(m, "ActuatorType", "Kind of a rod actuator (model.h, Actuator).");
+  BindEnum<ContactShapeType>(m, "ContactShapeType", "A rigid body's collision shape (model.h).");
+  BindEnum<ObstacleType>(m, "ObstacleType", "An obstacle fixed in the world (model.h).");
 
   m.def("joint_type_name", &JointTypeName, py::arg("type"),
         "Name of a joint type as written in scene files, e.g. 'revolute'.");

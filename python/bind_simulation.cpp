@@ -19,6 +19,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/rod.h"
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/io/scene.h"
@@ -628,6 +629,23 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           py::arg("element"),
           "force_element_state(element) -> (length [m], rate [m/s], force [N], positive in "
           "tension) of a force element (name), as forces.csv records it.")
+      .def(
+          "contact_states",
+          [](S& s) {
+            py::list out;
+            for (int i = 0; i < static_cast<int>(s.model().contact_pairs.size()); ++i) {
+              const ContactState c = CalcContactState(s.model(), s.data(), i);
+              if (!c.active) continue;
+              out.append(py::dict(py::arg("pair") = i, py::arg("point") = c.point,
+                                  py::arg("normal") = c.normal,
+                                  py::arg("normal_force") = c.normal_force,
+                                  py::arg("friction_force") = c.friction_force,
+                                  py::arg("gap") = c.gap));
+            }
+            return out;
+          },
+          "The active contacts as contacts.csv records them: a list of dicts with pair, point "
+          "[m], normal, normal_force [N], friction_force [N] (world) and gap [m].")
       .def(
           "joint_coordinate",
           [](S& s, long j, int c) {

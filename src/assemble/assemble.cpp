@@ -5,6 +5,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/loads.h"
 #include "screwfem/elements/rigid_body.h"
 #include "screwfem/elements/rod.h"
@@ -371,7 +372,8 @@ void AddTendonRows(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s
 // The element kinds the assembly calls, in this order (docs/architecture.md, "Add an element
 // kind"); joints follow them.
 using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind,
-                                JointSpringKind, TendonSegmentKind, ForceElementKind>;
+                                JointSpringKind, TendonSegmentKind, ForceElementKind,
+                                ContactKind>;
 constexpr ElementKinds* kElementKinds = nullptr;
 }  // namespace
 

@@ -402,6 +402,33 @@ int ModelBuilder::AddInput(std::string name, double default_value) {
   return static_cast<int>(model_.inputs.size()) - 1;
 }
 
+int ModelBuilder::AddContactRod(int rod, double radius) {
+  model_.contact_rods.push_back({rod, radius});
+  return static_cast<int>(model_.contact_rods.size()) - 1;
+}
+
+int ModelBuilder::AddContactShape(const ContactShape& shape) {
+  model_.contact_shapes.push_back(shape);
+  return static_cast<int>(model_.contact_shapes.size()) - 1;
+}
+
+int ModelBuilder::AddObstacle(const ContactObstacle& obstacle) {
+  model_.obstacles.push_back(obstacle);
+  return static_cast<int>(model_.obstacles.size()) - 1;
+}
+
+void ModelBuilder::SetContactGroup(bool rod, int index, unsigned contype, unsigned conaffinity) {
+  model_.contact_groups.push_back({rod, index, contype, conaffinity});
+}
+
+void ModelBuilder::ExcludeContact(bool rod, int index, int obstacle) {
+  model_.contact_exclusions.push_back({rod, index, obstacle});
+}
+
+void ModelBuilder::SetContactSettings(const ContactSettings& settings) {
+  model_.contact = settings;
+}
+
 namespace {
 
 // Node frames are finite rigid transformations with unique names; gravity is finite.
@@ -824,6 +851,185 @@ void BuildForceElements(Model& m) {
   }
 }
 
+// Contact (method-next.md §N6): validates shapes, obstacles and the law, enumerates the
+// (moving shape, obstacle) pairs and resolves the defaults (model.h, ContactSettings).
+void BuildContacts(Model& m) {
+  m.contact_pairs.clear();
+  auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
+  for (std::size_t i = 0; i < m.contact_rods.size(); ++i) {
+    const ContactRod& c = m.contact_rods[i];
+    const EntityRef entity{EntityKind::kContactRod, static_cast<int>(i), {}};
+    if (c.rod < 0 || c.rod >= static_cast<int>(m.rods.size()))
+      throw InputError("contact rod " + std::to_string(i) + ": no rod " + std::to_string(c.rod),
+                       entity);
+    if (!positive(c.radius))
+      throw InputError("contact of rod '" + m.rods[static_cast<std::size_t>(c.rod)].name +
+                           "': the contact radius must be positive, got " + std::to_string(c.radius),
+                       entity);
+  }
+  for (std::size_t i = 0; i < m.contact_shapes.size(); ++i) {
+    const ContactShape& c = m.contact_shapes[i];
+    const EntityRef entity{EntityKind::kContactShape, static_cast<int>(i), {}};
+    if (c.body < 0 || c.body >= static_cast<int>(m.bodies.size()))
+      throw InputError("contact shape " + std::to_string(i) + ": no body " + std::to_string(c.body),
+                       entity);
+    const std::string label = "contact shape of body '" +
+                              m.bodies[static_cast<std::size_t>(c.body)].name + "'";
+    if (!c.from.allFinite() || !c.to.allFinite())
+      throw InputError(label + ": points and sizes must be finite", entity);
+    if (c.type == ContactShapeType::kBox ? !(c.to.minCoeff() > 0.0) : !positive(c.radius))
+      throw InputError(label + (c.type == ContactShapeType::kBox
+                                    ? ": the half sizes must be positive"
+                                    : ": the radius must be positive"),
+                       entity);
+  }
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < m.obstacles.size(); ++i) {
+    ContactObstacle& o = m.obstacles[i];
+    const EntityRef entity{EntityKind::kObstacle, static_cast<int>(i), {}};
+    const std::string label = "obstacle '" + o.name + "'";
+    if (!o.point.allFinite() || !o.normal.allFinite() || !o.to.allFinite())
+      throw InputError(label + ": points and normal must be finite", entity);
+    if (o.type == ObstacleType::kPlane) {
+      if (!(o.normal.norm() > 0.0))
+        throw InputError(label + ": the plane normal must not be zero", entity);
+      o.normal.normalize();
+    } else if (!positive(o.radius)) {
+      throw InputError(label + ": the radius must be positive, got " + std::to_string(o.radius),
+                       entity);
+    }
+    if (!o.name.empty() && !names.insert(o.name).second)
+      throw InputError("duplicate obstacle name '" + o.name + "'", entity);
+  }
+  ContactSettings& law = m.contact;
+  if (!(law.friction >= 0.0) || !std::isfinite(law.friction))
+    throw InputError("contact: the friction coefficient must be finite and >= 0, got " +
+                     std::to_string(law.friction));
+  if (!(law.damping_ratio >= 0.0) || !std::isfinite(law.damping_ratio))
+    throw InputError("contact: the damping ratio must be finite and >= 0");
+  for (double v : {law.stiffness, law.onset, law.slip_velocity})
+    if (!std::isfinite(v) || v == 0.0)
+      throw InputError("contact: stiffness, onset and slip velocity must be positive (or left "
+                       "to their defaults)");
+  if (m.obstacles.empty()) return;
+
+  // Pairs: each moving shape against each obstacle it may touch.
+  auto group = [&](bool rod, int index) {
+    for (const ContactGroup& g : m.contact_groups)
+      if (g.rod == rod && g.index == index) return g;
+    return ContactGroup{rod, index, 1u, 1u};
+  };
+  auto excluded = [&](bool rod, int index, int obstacle) {
+    for (const ContactExclusion& e : m.contact_exclusions)
+      if (e.rod == rod && e.index == index && e.obstacle == obstacle) return true;
+    return false;
+  };
+  const double gravity = m.gravity.norm() > 0.0 ? m.gravity.norm() : 9.81;
+  double r_min = INFINITY, w_max = 0.0;
+  std::vector<double> masses;  // per pair, for the damping
+  for (int oi = 0; oi < static_cast<int>(m.obstacles.size()); ++oi) {
+    const ContactObstacle& o = m.obstacles[static_cast<std::size_t>(oi)];
+    const bool plane = o.type == ObstacleType::kPlane;
+    auto collide = [&](bool rod, int index) {
+      const ContactGroup g = group(rod, index);
+      return ((g.contype & o.conaffinity) | (o.contype & g.conaffinity)) != 0u &&
+             !excluded(rod, index, oi);
+    };
+    for (const ContactRod& c : m.contact_rods) {
+      if (!collide(true, c.rod)) continue;
+      const Rod& rod = m.rods[static_cast<std::size_t>(c.rod)];
+      const double rho_a = rod.section.inertia(0);
+      r_min = std::min(r_min, c.radius);
+      if (plane) {
+        // Node spheres (a chord's closest point to a plane is an end).
+        for (std::size_t k = 0; k < rod.nodes.size(); ++k) {
+          const int node = rod.nodes[k];
+          if (m.nodes[static_cast<std::size_t>(node)].fixed) continue;
+          double length = 0.0;
+          if (k > 0) length += 0.5 * m.elements[static_cast<std::size_t>(rod.first_element + static_cast<int>(k) - 1)].length;
+          if (k + 1 < rod.nodes.size()) length += 0.5 * m.elements[static_cast<std::size_t>(rod.first_element + static_cast<int>(k))].length;
+          ContactPair p;
+          p.node[0] = node;
+          p.radius = c.radius;
+          p.obstacle = oi;
+          p.rod = true;
+          p.owner = c.rod;
+          m.contact_pairs.push_back(p);
+          masses.push_back(rho_a * length);
+        }
+      } else {
+        for (int e = rod.first_element; e < rod.first_element + rod.num_elements; ++e) {
+          const RodElement& el = m.elements[static_cast<std::size_t>(e)];
+          ContactPair p;
+          p.node[0] = el.node_a;
+          p.node[1] = el.node_b;
+          p.end_node[1] = 1;
+          p.radius = c.radius;
+          p.obstacle = oi;
+          p.rod = true;
+          p.owner = c.rod;
+          m.contact_pairs.push_back(p);
+          masses.push_back(rho_a * el.length);
+        }
+      }
+    }
+    for (const ContactShape& c : m.contact_shapes) {
+      if (!collide(false, c.body)) continue;
+      const RigidBody& body = m.bodies[static_cast<std::size_t>(c.body)];
+      if (m.nodes[static_cast<std::size_t>(body.node)].fixed) continue;
+      auto add = [&](const Vec3& a, const Vec3& b, double radius) {
+        ContactPair p;
+        p.node[0] = body.node;
+        p.offset[0] = a;
+        p.offset[1] = b;
+        p.radius = radius;
+        p.obstacle = oi;
+        p.owner = c.body;
+        m.contact_pairs.push_back(p);
+        masses.push_back(body.mass);
+      };
+      switch (c.type) {
+        case ContactShapeType::kSphere:
+          r_min = std::min(r_min, c.radius);
+          add(c.from, c.from, c.radius);
+          break;
+        case ContactShapeType::kCapsule:
+          r_min = std::min(r_min, c.radius);
+          if (plane) {
+            add(c.from, c.from, c.radius);
+            add(c.to, c.to, c.radius);
+          } else {
+            add(c.from, c.to, c.radius);
+          }
+          break;
+        case ContactShapeType::kBox: {
+          // method-next.md §N6.2: 8 vertex spheres and (against curved obstacles) 12 edge
+          // capsules, of radius 0.
+          r_min = std::min(r_min, c.to.minCoeff());
+          Vec3 v[8];
+          for (int k = 0; k < 8; ++k)
+            v[k] = c.from + Vec3((k & 1) ? c.to.x() : -c.to.x(), (k & 2) ? c.to.y() : -c.to.y(),
+                                 (k & 4) ? c.to.z() : -c.to.z());
+          for (int k = 0; k < 8; ++k) add(v[k], v[k], 0.0);
+          if (!plane)
+            for (int k = 0; k < 8; ++k)
+              for (int bit : {1, 2, 4})
+                if (!(k & bit)) add(v[k], v[k | bit], 0.0);
+          break;
+        }
+      }
+    }
+  }
+  // Defaults (method-next.md §N6.4) and the damping of each pair.
+  for (double mass : masses) w_max = std::max(w_max, mass * gravity);
+  if (law.onset < 0.0) law.onset = std::isfinite(r_min) ? 0.01 * r_min : 1e-4;
+  if (law.stiffness < 0.0) law.stiffness = w_max > 0.0 ? 100.0 * w_max / law.onset : 1e6;
+  if (law.slip_velocity < 0.0) law.slip_velocity = 1e-3;
+  for (std::size_t i = 0; i < m.contact_pairs.size(); ++i)
+    m.contact_pairs[i].damping =
+        2.0 * law.damping_ratio * std::sqrt(law.stiffness * std::max(masses[i], 0.0));
+}
+
 // Every node that is not fixed is used by a rod, a body or a joint.
 void CheckConnected(const Model& m, const std::vector<char>& used) {
   const int num_nodes = static_cast<int>(m.nodes.size());
@@ -1001,6 +1207,7 @@ Model ModelBuilder::Build() const {
   BuildTendons(m);
   BuildForceElements(m);
   BuildActuators(m);
+  BuildContacts(m);
   CheckConnected(m, used);
   LayOutUnknowns(m);
   CheckJointFramesCoincide(m);

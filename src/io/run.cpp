@@ -218,6 +218,9 @@ class Run {
         actuators_.Open(outdir + "/actuators.csv", StaticColumns(ActuatorColumns(model_)));
         tables_[num_tables_++] = &actuators_;
       }
+      // Contacts: one row per active pair (long format), flushed with the other tables.
+      if (!model_.contact_pairs.empty())
+        contacts_.Open(outdir + "/contacts.csv", StaticColumns(ContactColumns()));
       if (scene.outputs.vtk) {
         vtk_.emplace();
         vtk_->Open(outdir + "/vtk", model_, scene.outputs.vtk_format, ExpectedFrames(scene));
@@ -230,6 +233,7 @@ class Run {
     } catch (const InputError&) {
       // No header-only tables without a summary that explains them.
       for (std::size_t i = 0; i < num_tables_; ++i) tables_[i]->Close();
+      if (contacts_.path().size() > 0) contacts_.Close();
       PrepareOutputDirectory(outdir, true);
       throw;
     }
@@ -248,8 +252,9 @@ class Run {
     if (finished_) return;
     finished_ = true;
     const bool failed_before = io_error_ || std::string(status) == "failed";
-    if (const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_);
-        w && !failed_before) {
+    const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_);
+    if (!w && contacts_.path().size() > 0 && !contacts_.Flush()) w = &contacts_;
+    if (w && !failed_before) {
       status = "failed";
       message = Format("cannot write at t = %.9g s: ", data_.time) + w->path() + ": " +
                 std::strerror(errno);
@@ -257,6 +262,7 @@ class Run {
     }
     bool closed = true;
     for (std::size_t i = 0; i < num_tables_; ++i) closed = tables_[i]->Close() && closed;
+    if (contacts_.path().size() > 0) closed = contacts_.Close() && closed;
     if (!closed && !failed_before && !io_error_) {
       status = "failed";
       message = "cannot close the tables: " + std::string(std::strerror(errno));
@@ -507,9 +513,14 @@ class Run {
         CalcActuatorRow(model_, data, t, &row_);
         actuators_.WriteRow(t, WithLoadFactor(row_));
       }
+      if (contacts_.path().size() > 0) {
+        for (int i = 0; i < static_cast<int>(model_.contact_pairs.size()); ++i)
+          if (CalcContactRow(model_, data, i, &row_)) contacts_.WriteRow(t, WithLoadFactor(row_));
+      }
       last_row_time_ = t;
       std::size_t batch = 0;
       for (std::size_t i = 0; i < num_tables_; ++i) batch = std::max(batch, tables_[i]->batch_bytes());
+      batch = std::max(batch, contacts_.batch_bytes());
       if (batch >= kRowBatchBytes &&
           !FlushRows(t))
         return false;
@@ -532,6 +543,7 @@ class Run {
   bool FlushRows(double t) {
     if (const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_))
       return WriteFailed(w->path(), t);
+    if (contacts_.path().size() > 0 && !contacts_.Flush()) return WriteFailed(contacts_.path(), t);
     return true;
   }
 
@@ -686,6 +698,7 @@ class Run {
   StaticResult static_;
   bool has_static_ = false;
   CsvWriter points_, joints_, reactions_, energy_, tendons_, forces_, actuators_;
+  CsvWriter contacts_;  // long format (one row per active pair): not flushed together
   // The open tables, flushed together (points, joints, reactions and energy always).
   std::array<CsvWriter*, 7> tables_ = {&points_, &joints_, &reactions_, &energy_, nullptr,
                                        nullptr, nullptr};

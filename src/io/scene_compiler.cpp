@@ -56,6 +56,7 @@ class SceneCompiler {
   void AddLoads();
   void AddTendonsAndForces();
   void AddActuators();
+  void AddContacts();
   // The builder's body point for a spec's (an error at `at` when it is not on a node).
   BodyPoint ResolveBodyPoint(const BodyPointSpec& p, const FieldSource& at,
                              const std::string& what) const;
@@ -86,8 +87,8 @@ class SceneCompiler {
   // Per spec body: the builder's rigid body or rod index, and a rigid body's node.
   std::vector<int> body_index_, body_node_;
   std::vector<char> connected_;
-  // Per builder entity: the spec entity that made it (-1: none).
   std::vector<int> node_body_, rod_body_, rigid_body_, point_load_, rod_load_;
+  std::vector<int> contact_rod_body_, contact_shape_body_;  // spec body of each contact rod, shape
 };
 
 void SceneCompiler::Fail(const EntitySource& source, const InputError& e) const {
@@ -118,6 +119,9 @@ void SceneCompiler::RethrowBuildError(const InputError& e) const {
     case EntityKind::kTendon: pick(src_.tendons, entity.index); break;
     case EntityKind::kForceElement: pick(src_.forces, entity.index); break;
     case EntityKind::kActuator: pick(src_.actuators, entity.index); break;
+    case EntityKind::kContactRod: pick(src_.bodies, owner(contact_rod_body_)); break;
+    case EntityKind::kContactShape: pick(src_.bodies, owner(contact_shape_body_)); break;
+    case EntityKind::kObstacle: break;
     case EntityKind::kNone: break;
   }
   if (source != nullptr) Fail(*source, e);
@@ -425,6 +429,37 @@ void SceneCompiler::CheckReferences() const {
       Fail(src_.root, "outputs: no joint " + std::to_string(j));
 }
 
+// The contact: section, the rods' capsule chains and the rigid bodies' shapes (in body order).
+void SceneCompiler::AddContacts() {
+  const ContactSpec& c = spec_.contact;
+  if (!c.present) return;
+  builder_.SetContactSettings(c.settings);
+  for (const ContactObstacle& o : c.obstacles) builder_.AddObstacle(o);
+  for (std::size_t b = 0; b < spec_.bodies.size(); ++b) {
+    const BodySpec& s = spec_.bodies[b];
+    const int index = body_index_[b];
+    if (s.rigid) {
+      for (ContactShape shape : s.shapes) {
+        shape.body = index;
+        builder_.AddContactShape(shape);
+        contact_shape_body_.push_back(static_cast<int>(b));
+      }
+    } else {
+      if (!(s.contact_radius > 0.0))
+        Fail(BodySource(static_cast<int>(b)).self,
+             "a soft body in a scene with contact needs 'contact_radius' (its section has no "
+             "radius)");
+      builder_.AddContactRod(index, s.contact_radius);
+      contact_rod_body_.push_back(static_cast<int>(b));
+    }
+    if (s.contype != 1u || s.conaffinity != 1u)
+      builder_.SetContactGroup(!s.rigid, index, s.contype, s.conaffinity);
+  }
+  for (const auto& [b, obstacle] : c.exclude)
+    builder_.ExcludeContact(!spec_.bodies[static_cast<std::size_t>(b)].rigid,
+                            body_index_[static_cast<std::size_t>(b)], obstacle);
+}
+
 Scene SceneCompiler::Compile() {
   CheckReferences();
   Scene scene;
@@ -438,6 +473,7 @@ Scene SceneCompiler::Compile() {
   AddLoads();
   AddTendonsAndForces();
   AddActuators();
+  AddContacts();
   CheckConnections();
   scene.analysis = spec_.analysis;
   try {

@@ -36,7 +36,7 @@ const char* const kGroundName = "ground";
 const std::vector<std::string> kBodyKeys = {
     "type", "between", "at",   "mass",    "inertia",  "com", "fixed",      "free",
     "from", "to",      "path", "section", "elements", "up",  "weld_start", "weld_end",
-    "initial_velocity"};
+    "initial_velocity", "contact_radius", "shapes", "contype", "conaffinity"};
 
 std::string Join(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
@@ -83,6 +83,10 @@ class SceneReader {
   void ReadTendons(const Node* node);
   void ReadForces(const Node* node);
   void ReadActuation(const Node* node);
+  void ReadContact(const Node* node);
+  void ReadShapes(const Node& node, const std::string& path, BodySpec& b) const;
+  void ReadGroups(const Node& node, const std::string& path, unsigned* contype,
+                  unsigned* conaffinity) const;
   BodyPointSpec ReadBodyPoint(const Node& node, const std::string& path) const;
   void ReadAnalysis(const Node* node);
   void ReadTimes(const Node& node, const std::string& path);
@@ -116,6 +120,7 @@ class SceneReader {
   std::map<std::string, Material> materials_;
   std::map<std::string, Section> sections_;
   std::vector<std::string> material_names_, section_names_;
+  std::map<std::string, double> section_radius_;  // the contact radius a section implies
 };
 
 // --- values ------------------------------------------------------------------------------------
@@ -367,10 +372,14 @@ void SceneReader::ReadSections(const Node* node) {
       };
       if (kind == "circle") {
         NotUsedBy(value, path, {"width", "height", "outer_radius", "inner_radius"}, "circles");
-        s = Section::Circle(positive("radius"), m);
+        const double radius = positive("radius");
+        s = Section::Circle(radius, m);
+        section_radius_[entry.key] = radius;
       } else if (kind == "rectangle") {
         NotUsedBy(value, path, {"radius", "outer_radius", "inner_radius"}, "rectangles");
-        s = Section::Rectangle(positive("width"), positive("height"), m);
+        const double width = positive("width"), height = positive("height");
+        s = Section::Rectangle(width, height, m);
+        section_radius_[entry.key] = 0.5 * std::min(width, height);
       } else {
         NotUsedBy(value, path, {"radius", "width", "height"}, "tubes");
         const double ro = positive("outer_radius");
@@ -379,6 +388,7 @@ void SceneReader::ReadSections(const Node* node) {
         if (!(ri < ro))
           r_.Fail(in.location, Join(path, "inner_radius"), "expected inner_radius < outer_radius");
         s = Section::Tube(ro, ri, m);
+        section_radius_[entry.key] = ro;
       }
     } else {
       NotUsedBy(value, path,
@@ -484,6 +494,9 @@ void SceneReader::ReadRigidBody(const Node& n, const std::string& path, BodySpec
     com_world = b.origin;
   }
   if (const Node* com = n.Find("com")) com_world = Point(*com, Join(path, "com"));
+  NotUsedBy(n, path, {"contact_radius"}, "rigid bodies (they carry 'shapes')");
+  if (const Node* sh = n.Find("shapes")) ReadShapes(*sh, Join(path, "shapes"), b);
+  ReadGroups(n, path, &b.contype, &b.conaffinity);
   b.mass = r_.PositiveNumber(r_.Require(n, path, "mass"), Join(path, "mass"));
   b.inertia = ReadInertia(r_.Require(n, path, "inertia"), Join(path, "inertia"));
   if (const Node* f = n.Find("fixed")) b.fixed = r_.Bool(*f, Join(path, "fixed"));
@@ -564,6 +577,12 @@ void SceneReader::ReadSoftBody(const Node& n, const std::string& path, BodySpec&
   const int self = static_cast<int>(&b - spec_.bodies.data());
   b.weld_start = ReadWeld(n, path, "weld_start", "start_node", self, source);
   b.weld_end = ReadWeld(n, path, "weld_end", "end_node", self, source);
+  NotUsedBy(n, path, {"shapes"}, "soft bodies (a rod's contact shape is its capsule chain)");
+  if (const auto r = section_radius_.find(section_name); r != section_radius_.end())
+    b.contact_radius = r->second;
+  if (const Node* c = n.Find("contact_radius"))
+    b.contact_radius = r_.PositiveNumber(*c, Join(path, "contact_radius"));
+  ReadGroups(n, path, &b.contype, &b.conaffinity);
 }
 
 // The polyline: from/to (one straight segment) or path (several); the source of each point is
@@ -949,6 +968,125 @@ void SceneReader::ReadActuation(const Node* node) {
   }
 }
 
+// --- contact -----------------------------------------------------------------------------------
+
+void SceneReader::ReadGroups(const Node& n, const std::string& path, unsigned* contype,
+                             unsigned* conaffinity) const {
+  if (const Node* c = n.Find("contype"))
+    *contype = static_cast<unsigned>(r_.Integer(*c, Join(path, "contype"), 0, 1 << 30));
+  if (const Node* c = n.Find("conaffinity"))
+    *conaffinity = static_cast<unsigned>(r_.Integer(*c, Join(path, "conaffinity"), 0, 1 << 30));
+}
+
+void SceneReader::ReadShapes(const Node& node, const std::string& path, BodySpec& b) const {
+  if (!node.IsSequence())
+    r_.Fail(node.location, path, "expected a list of shapes, got " + scene_yaml::Describe(node));
+  for (std::size_t i = 0; i < node.items.size(); ++i) {
+    const Node& v = node.items[i];
+    const std::string sp = Index(path, i);
+    r_.ExpectMap(v, sp);
+    r_.CheckKeys(v, sp, {"type", "center", "from", "to", "radius", "half_sizes"});
+    ContactShape shape;
+    shape.type = r_.Enum<ContactShapeType>(r_.Require(v, sp, "type"), Join(sp, "type"));
+    auto point = [&](const char* key) -> Vec3 {
+      const Vec3 world = Point(r_.Require(v, sp, key), Join(sp, key));
+      return Vec3(world - b.origin);
+    };
+    if (shape.type == ContactShapeType::kCapsule) {
+      NotUsedBy(v, sp, {"center", "half_sizes"}, "capsules");
+      shape.from = point("from");
+      shape.to = point("to");
+    } else {
+      NotUsedBy(v, sp, {"from", "to"}, "spheres and boxes");
+      shape.from = shape.to = point("center");
+    }
+    if (shape.type == ContactShapeType::kBox) {
+      NotUsedBy(v, sp, {"radius"}, "boxes");
+      const Node& hn = r_.Require(v, sp, "half_sizes");
+      shape.to = r_.Vector3(hn, Join(sp, "half_sizes"));
+      if (!(shape.to.minCoeff() > 0.0))
+        r_.Fail(hn.location, Join(sp, "half_sizes"), "expected positive half sizes");
+    } else {
+      NotUsedBy(v, sp, {"half_sizes"}, "spheres and capsules");
+      shape.radius = r_.PositiveNumber(r_.Require(v, sp, "radius"), Join(sp, "radius"));
+    }
+    b.shapes.push_back(shape);
+  }
+}
+
+void SceneReader::ReadContact(const Node* node) {
+  // The bodies' shapes and groups are read with the bodies.
+  if (node == nullptr) return;
+  const std::string path = "contact";
+  r_.ExpectMap(*node, path);
+  r_.CheckKeys(*node, path,
+               {"stiffness", "onset", "damping_ratio", "friction", "slip_velocity", "obstacles",
+                "exclude"});
+  ContactSpec& c = spec_.contact;
+  c.present = true;
+  if (const Node* v = node->Find("stiffness"))
+    c.settings.stiffness = r_.PositiveNumber(*v, Join(path, "stiffness"));
+  if (const Node* v = node->Find("onset"))
+    c.settings.onset = r_.PositiveNumber(*v, Join(path, "onset"));
+  if (const Node* v = node->Find("damping_ratio"))
+    c.settings.damping_ratio = r_.NonNegativeNumber(*v, Join(path, "damping_ratio"));
+  if (const Node* v = node->Find("friction"))
+    c.settings.friction = r_.NonNegativeNumber(*v, Join(path, "friction"));
+  if (const Node* v = node->Find("slip_velocity"))
+    c.settings.slip_velocity = r_.PositiveNumber(*v, Join(path, "slip_velocity"));
+  std::vector<std::string> names;
+  if (const Node* on = node->Find("obstacles")) {
+    const std::string op = Join(path, "obstacles");
+    r_.CheckNames(*on, op, "obstacle");
+    for (const auto& [entry, v] : on->entries) {
+      const std::string p = Join(op, entry.key);
+      r_.ExpectMap(v, p);
+      r_.CheckKeys(v, p, {"type", "point", "normal", "center", "from", "to", "radius", "contype",
+                          "conaffinity"});
+      ContactObstacle o;
+      o.name = entry.key;
+      o.type = r_.Enum<ObstacleType>(r_.Require(v, p, "type"), Join(p, "type"));
+      if (o.type == ObstacleType::kPlane) {
+        NotUsedBy(v, p, {"center", "from", "to", "radius"}, "planes");
+        o.point = Point(r_.Require(v, p, "point"), Join(p, "point"));
+        o.normal = UnitAxis(r_.Require(v, p, "normal"), Join(p, "normal"));
+      } else {
+        o.radius = r_.PositiveNumber(r_.Require(v, p, "radius"), Join(p, "radius"));
+        NotUsedBy(v, p, {"point", "normal"}, "spheres and capsules");
+        if (o.type == ObstacleType::kSphere) {
+          NotUsedBy(v, p, {"from", "to"}, "spheres");
+          o.point = Point(r_.Require(v, p, "center"), Join(p, "center"));
+        } else {
+          NotUsedBy(v, p, {"center"}, "capsules");
+          o.point = Point(r_.Require(v, p, "from"), Join(p, "from"));
+          o.to = Point(r_.Require(v, p, "to"), Join(p, "to"));
+        }
+      }
+      ReadGroups(v, p, &o.contype, &o.conaffinity);
+      c.obstacles.push_back(o);
+      names.push_back(entry.key);
+    }
+  }
+  if (const Node* en = node->Find("exclude")) {
+    const std::string ep = Join(path, "exclude");
+    if (!en->IsSequence())
+      r_.Fail(en->location, ep, "expected a list of [body, obstacle] pairs");
+    for (std::size_t i = 0; i < en->items.size(); ++i) {
+      const Node& pair = en->items[i];
+      const std::string pp = Index(ep, i);
+      if (!pair.IsSequence() || pair.items.size() != 2)
+        r_.Fail(pair.location, pp, "expected [body, obstacle], got " + scene_yaml::Describe(pair));
+      const int body = Body(pair.items[0], Index(pp, 0));
+      const std::string obstacle = r_.Text(pair.items[1], Index(pp, 1));
+      const auto it = std::find(names.begin(), names.end(), obstacle);
+      if (it == names.end())
+        r_.Fail(pair.items[1].location, Index(pp, 1),
+                "undefined obstacle '" + obstacle + "'" + scene_yaml::DidYouMean(obstacle, names));
+      c.exclude.emplace_back(body, static_cast<int>(it - names.begin()));
+    }
+  }
+}
+
 void SceneReader::ReadAnalysis(const Node* node) {
   AnalysisSettings* a = &spec_.analysis;
   a->statics.time = a->start_time;
@@ -1229,7 +1367,7 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
   r_.CheckKeys(root, "",
                {"name", "description", "units", "gravity", "defaults", "points", "materials",
                 "sections", "bodies", "joints", "loads", "tendons", "forces", "analysis",
-                "outputs", "inputs", "actuation"});
+                "outputs", "inputs", "actuation", "contact"});
   spec_.name = default_name;
   if (const Node* n = root.Find("name")) spec_.name = r_.Text(*n, "name");
   if (const Node* d = root.Find("description"))
@@ -1249,6 +1387,7 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
   ReadTendons(root.Find("tendons"));
   ReadForces(root.Find("forces"));
   ReadActuation(root.Find("actuation"));
+  ReadContact(root.Find("contact"));
   ReadAnalysis(root.Find("analysis"));
   ReadOutputs(root.Find("outputs"));
 }

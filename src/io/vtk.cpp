@@ -14,6 +14,7 @@
 #include <tuple>
 
 #include "screwfem/assemble/outputs.h"
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
@@ -107,7 +108,7 @@ void VtkWriter::Open(const std::string& dir, const Model& model, VtkFormat forma
   } else {
     // Room for a frame of shortest doubles (at most 24 characters each) and the cells.
     image_.clear();
-    image_.reserve(4096 + 400 * sources_.size() +
+    image_.reserve(4096 + 480 * sources_.size() +
                    24 * (vert_connectivity_.size() + line_connectivity_.size()) +
                    64 * cell_rod_.size());
   }
@@ -213,6 +214,14 @@ void VtkWriter::LayOut(const Model& model) {
     end_line(-1, -1);
   }
 
+  // Contact pairs: a vertex at each pair's surface point, carrying the contact force.
+  for (std::size_t i = 0; i < model.contact_pairs.size(); ++i) {
+    PointSource s;
+    s.kind = PointSource::Kind::kContact;
+    s.index = static_cast<int>(i);
+    add_vert(add_point(s), -1, -1, -1);
+  }
+
   // Cell data in the order VTK stores the cells: vertices, then lines.
   cell_rod_.insert(cell_rod_.begin(), vert_rod.begin(), vert_rod.end());
   cell_body_.insert(cell_body_.begin(), vert_body.begin(), vert_body.end());
@@ -222,6 +231,7 @@ void VtkWriter::LayOut(const Model& model) {
   for (std::vector<double>& axis : frame_axes_) axis.assign(n, 0.0);
   velocity_.assign(n, 0.0);
   position_.assign(n, 0.0);
+  contact_force_.assign(n, 0.0);
 }
 
 // Positions, frame axes and velocities of the points at data's state (method.md §6).
@@ -238,6 +248,13 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
       x = s.offset;
       R = Mat3::Identity();
       v = Vec3::Zero();
+    } else if (s.kind == PointSource::Kind::kContact) {
+      const ContactState c = CalcContactState(model, data, s.index);
+      x = c.point;
+      R = Mat3::Identity();
+      v = Vec3::Zero();
+      const Vec3 F = c.active ? Vec3(c.normal_force * c.normal + c.friction_force) : Vec3::Zero();
+      for (int k = 0; k < 3; ++k) contact_force_[3 * i + k] = F(k);
     } else if (s.kind == PointSource::Kind::kJoint) {
       const Joint& j = model.joints[static_cast<std::size_t>(s.index)];
       const SE3 H = NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, s.index);
@@ -302,6 +319,8 @@ void VtkWriter::ComposeBinaryImage() {
     array("        ", kFloat64, axis_names[axis], 3, frame_axes_[axis].data(), 3 * n,
           &frame_axes_at_[axis]);
   array("        ", kFloat64, "velocity", 3, velocity_.data(), 3 * n, &velocity_at_);
+  array("        ", kFloat64, "contact_force", 3, contact_force_.data(), 3 * n,
+        &contact_force_at_);
   array("        ", kInt32, "joint_id", 1, point_joint_.data(), n, nullptr);
   f += "      </PointData>\n      <CellData Scalars=\"rod_id\">\n";
   array("        ", kInt32, "rod_id", 1, cell_rod_.data(), cell_rod_.size(), nullptr);
@@ -378,6 +397,7 @@ void VtkWriter::ComposeAsciiImage(double time) {
   doubles("frame_y", frame_axes_[1]);
   doubles("frame_z", frame_axes_[2]);
   doubles("velocity", velocity_);
+  doubles("contact_force", contact_force_);
   integers(kInt32, "joint_id", point_joint_);
   f += "      </PointData>\n      <CellData Scalars=\"rod_id\">\n";
   integers(kInt32, "rod_id", cell_rod_);
@@ -409,6 +429,7 @@ bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time) {
     for (int axis = 0; axis < 3; ++axis)
       std::memcpy(&image_[frame_axes_at_[axis]], frame_axes_[axis].data(), bytes);
     std::memcpy(&image_[velocity_at_], velocity_.data(), bytes);
+    std::memcpy(&image_[contact_force_at_], contact_force_.data(), bytes);
     std::memcpy(&image_[position_at_], position_.data(), bytes);
   } else {
     ComposeAsciiImage(time);

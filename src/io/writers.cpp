@@ -14,6 +14,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/rod.h"
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 
@@ -232,6 +233,29 @@ void CalcActuatorRow(const Model& model, const Data& data, double t, std::vector
   row->resize(model.actuators.size());
   for (std::size_t i = 0; i < model.actuators.size(); ++i)
     (*row)[i] = ActuatorValue(model.actuators[i], t, data);
+std::vector<std::string> ContactColumns() {
+  return {"pair", "rod", "owner", "obstacle", "px", "py", "pz", "nx", "ny", "nz",
+          "fn", "ftx", "fty", "ftz", "gap"};
+}
+
+bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row) {
+  row->resize(15);
+  const ContactState c = CalcContactState(model, data, pair);
+  if (!c.active) return false;
+  const ContactPair& p = model.contact_pairs[static_cast<std::size_t>(pair)];
+  double* r = row->data();
+  r[0] = pair;
+  r[1] = p.rod ? 1.0 : 0.0;
+  r[2] = p.owner;
+  r[3] = p.obstacle;
+  for (int i = 0; i < 3; ++i) {
+    r[4 + i] = c.point(i);
+    r[7 + i] = c.normal(i);
+    r[11 + i] = c.friction_force(i);
+  }
+  r[10] = c.normal_force;
+  r[14] = c.gap;
+  return true;
 }
 
 // ---- CSV ---------------------------------------------------------------------------------------

@@ -167,6 +167,19 @@ Model MixedModel() {
   curl.vector << 0, 0, 0, 0, 0.5, 0;
   curl.profile = Profile::Ramp(0, 0.1);
   b.AddActuator(curl);
+  // Contact: the ball's sphere resting into a ground plane with friction, the rod's capsules
+  // against a fixed capsule across it and its node spheres against the plane.
+  b.AddContactShape({2, ContactShapeType::kSphere, Vec3(0.05, 0, 0), Vec3(0.05, 0, 0), 0.02});
+  b.AddContactRod(rod, 0.01);
+  b.AddObstacle({"ground", ObstacleType::kPlane, Vec3(0, 0, -0.0199), Vec3::UnitZ(),
+                 Vec3::Zero(), 0.0});
+  b.AddObstacle({"post", ObstacleType::kCapsule, Vec3(0.7, -1, 0.0205), Vec3(0.7, 1, 0.0205),
+                 Vec3::Zero(), 0.01});
+  ContactSettings law;
+  law.stiffness = 1e4;
+  law.onset = 1e-3;
+  law.friction = 0.5;
+  b.SetContactSettings(law);
   b.SetGravity(Vec3(0, 0, -9.81));
   return b.Build();
 }
@@ -191,9 +204,11 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     const InputTable table = ParseInputTable("t,u\n0,0\n0.02,1\n0.04,-1\n", "u.csv", model);
     SimulationState saved;
     SaveSimulationState(data, integ, &saved);
-    std::vector<double> reactions, energy;
+    std::vector<double> reactions, energy, contact_row;
     CalcEnergyRow(model, data, &energy);
     CalcReactionRow(model, data, &reactions);
+    CalcContactRow(model, data, 0, &contact_row);
+    int active_steps = 0;  // steps that end with a contact active
     g_allocations = 0;
     g_counting = true;
     bool ok = true;
@@ -205,6 +220,10 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
       ok = Step(model, data, integ, 1e-3).ok && ok;
       CalcEnergyRow(model, data, &energy);
       CalcReactionRow(model, data, &reactions);
+      bool any = false;
+      for (int c = 0; c < static_cast<int>(model.contact_pairs.size()); ++c)
+        any = CalcContactRow(model, data, c, &contact_row) || any;
+      active_steps += any ? 1 : 0;
     }
     SaveSimulationState(data, integ, &saved);
     RestoreSimulationState(saved, data, integ);
@@ -215,6 +234,7 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     EXPECT_GE(integ.tendon_catches, 1);  // the length-driven tendon's catch ran in them
     EXPECT_GE(integ.restarts, 1);     // and restarted at the ramp's end
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
+    EXPECT_GT(active_steps, 10);  // with contacts active
     // The rows of tendons.csv and forces.csv, once sized.
     std::vector<double> tendons, forces, actuators;
     CalcTendonRow(model, data, &tendons);

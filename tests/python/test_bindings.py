@@ -696,6 +696,40 @@ class ModelBuilderTest(unittest.TestCase):
         self.assertAlmostEqual(lengths[True], lengths[False], delta=1e-9)
         self.assertAlmostEqual(tension, 50.0, delta=1e-6)
 
+    def test_contact_from_python_holds_a_sphere_on_a_plane_at_the_equilibrium_gap(self):
+        # method-next.md T6.1: gap g* = delta - sqrt(2 delta m g / k) on the onset branch.
+        b = sf.ModelBuilder()
+        gap = 1e-4 - math.sqrt(2 * 1e-4 * 9.81 / 1e6)
+        frame = np.eye(4)
+        frame[2, 3] = 0.1 + gap
+        node = b.add_node(frame, "ball")
+        b.add_rigid_body("ball", node, 1.0, [0, 0, 0], 0.004 * np.eye(3))
+        b.add_contact_shape(sf.ContactShape(0, sf.ContactShapeType.SPHERE, [0, 0, 0], radius=0.1))
+        ground = sf.ContactObstacle()
+        ground.name = "ground"
+        ground.type = sf.ObstacleType.PLANE
+        b.add_obstacle(ground)
+        law = sf.ContactSettings()
+        law.stiffness = 1e6
+        law.onset = 1e-4
+        law.friction = 0.3
+        b.set_contact_settings(law)
+        b.set_gravity([0, 0, -9.81])
+        sim = sf.Simulation(sf.Scene(b.build(), "contact"))
+        sim.initialize()
+        for _ in range(50):
+            sim.step(1e-3)
+        contacts = sim.contact_states()
+        self.assertEqual(len(contacts), 1)
+        self.assertAlmostEqual(contacts[0]["normal_force"], 9.81, places=6)
+        self.assertAlmostEqual(contacts[0]["gap"], gap, places=10)
+        bad = sf.ModelBuilder()
+        bad.add_rigid_body("b", bad.add_node(np.eye(4)), 1.0, [0, 0, 0], np.eye(3))
+        bad.add_contact_shape(sf.ContactShape(0, sf.ContactShapeType.SPHERE, [0, 0, 0], radius=-1))
+        bad.add_obstacle(ground)
+        with self.assertRaisesRegex(sf.InputError, "the radius must be positive"):
+            bad.build()
+
     def test_invalid_joint_side_raises_input_error(self):
         b = sf.ModelBuilder()
         spec = sf.JointSpec()

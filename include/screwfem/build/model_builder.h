@@ -136,6 +136,19 @@ class ModelBuilder {
   // A run-time input (Model::inputs) that profiles take with Profile::Input(index); returns
   // the index. Names are unique.
   int AddInput(std::string name, double default_value = 0.0);
+  // Contact (method-next.md §N6, elements/contact.h). A rod in contact is a chain of capsules
+  // of `radius` around its element chords (its nodes' spheres against planes); a rigid body
+  // carries shapes in its frame (model.h, ContactShape); obstacles are fixed in the world.
+  // Build pairs every rod and body that has shapes with every obstacle, except excluded pairs
+  // and pairs whose group bitmasks do not match (model.h, ContactGroup), and resolves the
+  // law's defaults (ContactSettings). Errors carry EntityKind::kContactRod, kContactShape or
+  // kObstacle: non-positive sizes, unknown rods or bodies, mu < 0, a zero plane normal.
+  int AddContactRod(int rod, double radius);
+  int AddContactShape(const ContactShape& shape);
+  int AddObstacle(const ContactObstacle& obstacle);
+  void SetContactGroup(bool rod, int index, unsigned contype, unsigned conaffinity);
+  void ExcludeContact(bool rod, int index, int obstacle);
+  void SetContactSettings(const ContactSettings& settings);
   Model& model() { return model_; }
 
   // Validates and computes sizes and the ordering. Throws InputError.

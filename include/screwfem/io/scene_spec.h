@@ -38,6 +38,13 @@ struct BodySpec {
   // Welds: the first (last) node is shared with the node of an earlier soft body at that point.
   int weld_start = -1;  // body index, -1: none
   int weld_end = -1;
+  // Contact (used when the scene has a contact: section). Soft bodies: the capsule radius [m]
+  // (contact_radius, or the section's radius: circle radius, tube outer radius, half the
+  // smaller side of a rectangle). Rigid bodies: shapes, points in the world at the reference
+  // configuration (ContactShape::body is set by the compiler). Group bitmasks of both.
+  double contact_radius = 0.0;
+  std::vector<ContactShape> shapes;
+  unsigned contype = 1, conaffinity = 1;
 };
 
 // A joint between two bodies (or a body and the ground) at joint.point. The compiler finds
@@ -119,6 +126,14 @@ struct OutputPointSpec {
   double arc_length = 0.0;  // [m]
 };
 
+// The contact: section (ModelBuilder::SetContactSettings, AddObstacle, ExcludeContact).
+struct ContactSpec {
+  bool present = false;
+  ContactSettings settings;
+  std::vector<ContactObstacle> obstacles;
+  std::vector<std::pair<int, int>> exclude;  // (body index, obstacle index)
+};
+
 struct OutputsSpec {
   std::vector<OutputPointSpec> points;
   std::vector<int> joints;     // joint indices, in the order recorded
@@ -140,6 +155,7 @@ struct SceneSpec {
   std::vector<TendonSpec> tendons;
   std::vector<ForceSpec> forces;
   std::vector<ActuatorSpec> actuators;  // the `actuation:` section
+  ContactSpec contact;
   AnalysisSettings analysis;
   OutputsSpec outputs;
 };

@@ -64,8 +64,8 @@ class VtkWriter {
  private:
   // Where a point of the frame comes from.
   struct PointSource {
-    enum class Kind { kJoint, kNode, kWorld } kind = Kind::kNode;
-    int index = -1;               // joint index (kJoint) or node index (kNode)
+    enum class Kind { kJoint, kNode, kWorld, kContact } kind = Kind::kNode;
+    int index = -1;  // joint index (kJoint), node index (kNode), contact pair index (kContact)
     Vec3 offset = Vec3::Zero();   // kNode: point in the node frame [m]; kWorld: world point
     bool origin = true;           // kNode: the node frame's origin itself
   };
@@ -83,10 +83,14 @@ class VtkWriter {
   std::vector<int> point_joint_, cell_rod_, cell_body_, cell_joint_;
   // Per-frame values, 3 per point.
   std::vector<double> frame_axes_[3], velocity_, position_;
+  // The contact force on the shape at each contact pair's point (zero elsewhere and when the
+  // pair is inactive), for glyphs.
+  std::vector<double> contact_force_;
   // The file: binary, composed at Open, with the byte offsets of the per-frame values;
   // ascii, recomposed per frame in the same buffer.
   std::string image_;
-  std::size_t time_at_ = 0, frame_axes_at_[3] = {0, 0, 0}, velocity_at_ = 0, position_at_ = 0;
+  std::size_t time_at_ = 0, frame_axes_at_[3] = {0, 0, 0}, velocity_at_ = 0, position_at_ = 0,
+              contact_force_at_ = 0;
   std::vector<double> times_;  // of the frames written, frame i in frame_<i>.vtp
 };
 

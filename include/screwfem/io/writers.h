@@ -62,6 +62,14 @@ void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row
 // load_factor column.
 std::vector<std::string> ActuatorColumns(const Model& model);
 void CalcActuatorRow(const Model& model, const Data& data, double t, std::vector<double>* row);
+// contacts.csv (long format, one row per active contact pair at each output time): pair (index
+// into Model::contact_pairs), rod (1: the shape is a rod's, 0: a rigid body's), owner (rod or
+// body index), obstacle (index), px py pz (the shape's surface point [m], world), nx ny nz (the
+// normal, from the obstacle to the shape), fn [N] (normal force), ftx fty ftz [N] (friction
+// force on the shape, world), gap [m] (elements/contact.h, CalcContactState).
+std::vector<std::string> ContactColumns();
+// The row of pair `pair` into *row (resized once); false when the pair is inactive.
+bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row);
 // reactions.csv: per joint J of the model with constraint rows (every joint but free ones,
 // passive or driven, recorded or not), in model order: J.Fx J.Fy J.Fz J.Mx J.My J.Mz, the force
 // [N] and moment [N m] it transmits to its side B (CalcJointReaction, assemble/outputs.h: world

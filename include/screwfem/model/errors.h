@@ -18,6 +18,9 @@ enum class EntityKind {
   kTendon,        // part "eyelets[i]" for one eyelet
   kForceElement,  // part "a" or "b" for one end
   kActuator,
+  kContactShape,  // Model::contact_shapes
+  kObstacle,      // Model::obstacles
+  kContactRod,    // Model::contact_rods
 };
 struct EntityRef {
   EntityKind kind = EntityKind::kNone;

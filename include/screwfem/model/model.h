@@ -266,6 +266,88 @@ struct ModelInput {
   double default_value = 0.0;  // Data::inputs after MakeData
 };
 
+// Contact (method-next.md §N6; elements/contact.h): penalty normal law and regularised
+// Coulomb friction between moving shapes and obstacles fixed in the world.
+//
+// A collision shape fixed in a rigid body's frame. Sizes in metres, node-frame components.
+enum class ContactShapeType { kSphere, kCapsule, kBox };
+template <>
+struct EnumNames<ContactShapeType> {
+  static constexpr std::array<EnumName<ContactShapeType>, 3> kValues = {{
+      {ContactShapeType::kSphere, "sphere", "centre and radius"},
+      {ContactShapeType::kCapsule, "capsule", "segment from..to and radius"},
+      {ContactShapeType::kBox, "box", "centre and half sizes along the body axes"},
+  }};
+};
+struct ContactShape {
+  int body = -1;  // index into Model::bodies
+  ContactShapeType type = ContactShapeType::kSphere;
+  Vec3 from = Vec3::Zero();  // sphere and box: the centre; capsule: one end of the axis
+  Vec3 to = Vec3::Zero();    // capsule: the other end; box: the half sizes (> 0)
+  double radius = 0.0;       // sphere and capsule (> 0); box: 0
+};
+// A rod taking part in contact: a chain of capsules of `radius` around its element chords.
+struct ContactRod {
+  int rod = -1;
+  double radius = 0.0;  // [m] > 0
+};
+// An obstacle fixed in the world.
+enum class ObstacleType { kPlane, kSphere, kCapsule };
+template <>
+struct EnumNames<ObstacleType> {
+  static constexpr std::array<EnumName<ObstacleType>, 3> kValues = {{
+      {ObstacleType::kPlane, "plane", "the half-space behind a point and a normal"},
+      {ObstacleType::kSphere, "sphere", "a fixed sphere"},
+      {ObstacleType::kCapsule, "capsule", "a fixed capsule (a cylinder with round ends)"},
+  }};
+};
+struct ContactObstacle {
+  std::string name;
+  ObstacleType type = ObstacleType::kPlane;
+  Vec3 point = Vec3::Zero();          // plane: a point of it; sphere: centre; capsule: one end
+  Vec3 normal = Vec3::UnitZ();        // plane: unit normal out of the obstacle (Build normalises)
+  Vec3 to = Vec3::Zero();             // capsule: the other end
+  double radius = 0.0;                // sphere and capsule
+  unsigned contype = 1, conaffinity = 1;
+};
+// Group bitmasks of a rod or body (MuJoCo's contype/conaffinity): a moving entity and an
+// obstacle collide when (contype_1 & conaffinity_2) | (contype_2 & conaffinity_1) is non-zero.
+struct ContactGroup {
+  bool rod = false;  // a rod (index into Model::rods) or a rigid body (Model::bodies)
+  int index = -1;
+  unsigned contype = 1, conaffinity = 1;
+};
+// An excluded (moving entity, obstacle) pair.
+struct ContactExclusion {
+  bool rod = false;
+  int index = -1;
+  int obstacle = -1;
+};
+// The contact law (method-next.md §N6.3). Negative values are defaults set by Build
+// (§N6.4): onset 0.01 r_min, stiffness 100 W_max / onset (W_max the largest weight one pair
+// carries, with |g| = 9.81 m/s^2 when there is no gravity: the resting gap is 0.86 onset),
+// slip velocity 1e-3 m/s.
+struct ContactSettings {
+  double stiffness = -1.0;      // k_n [N/m]
+  double onset = -1.0;          // delta [m]: the force starts at gap delta
+  double damping_ratio = 1.0;   // zeta: c_n = 2 zeta sqrt(k_n m_eff)
+  double friction = 0.0;        // mu >= 0
+  double slip_velocity = -1.0;  // eps_v [m/s]
+};
+// One (moving shape, obstacle) pair, made by Build: the shape is a segment p(s) = (1-s) p_0 +
+// s p_1 with p_j = x_j + R_j c_j of item node j (both ends on node 0 for a rigid shape, whose
+// node 1 is kGround; a sphere has p_0 = p_1), inflated by `radius`.
+struct ContactPair {
+  int node[2] = {kGround, kGround};
+  int end_node[2] = {0, 0};          // which item node carries p_0 and p_1
+  Vec3 offset[2] = {Vec3::Zero(), Vec3::Zero()};
+  double radius = 0.0;
+  int obstacle = -1;
+  double damping = 0.0;  // c_n [N s/m] (Build: from the pair's mass)
+  bool rod = false;      // the owner: a rod or a rigid body (index), for outputs
+  int owner = -1;
+};
+
 struct Model {
   std::vector<Node> nodes;
   std::vector<Rod> rods;
@@ -280,6 +362,15 @@ struct Model {
   std::vector<ModelInput> inputs;
   std::vector<Actuator> actuators;
   std::vector<int> element_actuators;  // actuator indices, element by element (Build)
+  // Contact (elements/contact.h): shapes and obstacles as given, the law with its defaults
+  // resolved and the pairs enumerated by Build.
+  std::vector<ContactShape> contact_shapes;
+  std::vector<ContactRod> contact_rods;
+  std::vector<ContactObstacle> obstacles;
+  std::vector<ContactGroup> contact_groups;
+  std::vector<ContactExclusion> contact_exclusions;
+  ContactSettings contact;
+  std::vector<ContactPair> contact_pairs;
   Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
   RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
 

@@ -1,0 +1,79 @@
+// Frictional contact between moving shapes and obstacles fixed in the world, as an element kind
+// (method-next.md §N6, recommendation (c); docs/numerics.md, "Contact").
+//
+// Each item is a (moving shape, obstacle) pair enumerated by ModelBuilder::Build
+// (model.h, ContactPair): a rod element's chord capsule, a rod node's sphere, or a primitive of
+// a rigid body, against a plane, sphere or capsule fixed in the world. The pair is a segment
+// p(s) = (1-s) p_0 + s p_1 of body points inflated by a radius r; the closest parameter s* and
+// the normal n (from the obstacle to the shape) are found at every evaluation and frozen in the
+// tangent (envelope theorem for the gap gradient). The force acts at the surface point
+// p_s = p(s*) - r n, which moves with the item's node(s) as sum_k W_k (x_k + R_k l_k): weights
+// W_k and node-frame levers l_k = b_k - r R_k^T n (b_k the axis point's offset in node k).
+//
+// Law (method-next.md §N6.3): C1 penalty f_e(g) with onset delta and stiffness k_n, damping
+// -c_n w(g) dg/dt, f_n = max(0, f_e + f_d); regularised Coulomb friction
+// f_t = -mu f_n v_t / sqrt(|v_t|^2 + eps_v^2) at the surface point, applied implicitly.
+// Friction and damping act in dynamics only (statics: frictionless contact).
+#pragma once
+
+#include "screwfem/elements/element.h"
+#include "screwfem/model/model.h"
+
+namespace screwfem {
+
+// The elastic normal force f_e(g) [N] >= 0 and its derivative df_e/dg <= 0 (method-next.md
+// §N6.3): 0 for g >= delta, k (delta - g)^2 / (2 delta) on [0, delta), k (delta/2 - g) below.
+struct NormalLaw {
+  double force = 0.0;
+  double slope = 0.0;
+};
+NormalLaw CalcNormalLaw(double gap, double onset, double stiffness);
+// Its potential Psi(g) = integral from g to delta of f_e [J].
+double ContactPotential(double gap, double onset, double stiffness);
+
+// The geometry of a pair at frames H[0], H[1] of its item nodes.
+struct ContactGeometry {
+  double gap = 0.0;          // signed distance between the surfaces [m]
+  double s = 0.0;            // closest parameter on the shape's segment
+  Vec3 normal = Vec3::UnitZ();  // world, from the obstacle to the shape
+  Vec3 point = Vec3::Zero();    // the surface point p_s of the shape [m], world
+  double weight[2] = {0.0, 0.0};   // W_k
+  Vec3 lever[2] = {Vec3::Zero(), Vec3::Zero()};  // l_k, node-frame components
+};
+// Returns false when the normal is undefined (the shape's axis touches a sphere's centre or a
+// capsule's axis).
+bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3& H_0,
+                         const SE3& H_1, ContactGeometry* out);
+
+struct ContactKind {
+  static constexpr int kNodes = 2;
+  using Item = int;  // index into Model::contact_pairs
+  template <class F>
+  static void ForEach(const Model& model, F&& f) {
+    for (std::size_t i = 0; i < model.contact_pairs.size(); ++i) {
+      const ContactPair& p = model.contact_pairs[i];
+      f(static_cast<int>(i), p.node);
+    }
+  }
+  // Inactive when the gap is at least the onset or the damped force would pull. Residual
+  // -W_k [R_k^T F; l_k x R_k^T F], F = f_n n + f_t; stiffness: the exact derivative at frozen
+  // n and s* (exact for a plane), damping: the exact derivative in the velocities.
+  static bool Calc(const Model& model, const Data& data, const Item& pair,
+                   const NodeMotion<2>& motion, const KernelOptions& options,
+                   ElementTerms<2>* terms);
+  // The penalty potential Psi(g), counted as Energy::spring.
+  static void AddEnergy(const Model& model, const Data& data, const Item& pair, Energy* energy);
+};
+
+// A pair's state for the outputs (contacts.csv, VTK) in the current state of data.
+struct ContactState {
+  bool active = false;            // gap < onset and f_n > 0
+  double gap = 0.0;               // [m]
+  Vec3 point = Vec3::Zero();      // surface point of the shape, world [m]
+  Vec3 normal = Vec3::UnitZ();    // world, from the obstacle to the shape
+  double normal_force = 0.0;      // f_n [N]
+  Vec3 friction_force = Vec3::Zero();  // f_t on the shape, world [N]
+};
+ContactState CalcContactState(const Model& model, const Data& data, int pair);
+
+}  // namespace screwfem

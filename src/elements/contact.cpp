@@ -1,0 +1,269 @@
+#include "screwfem/elements/contact.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace screwfem {
+
+namespace {
+
+double Clamp01(double x) { return std::min(1.0, std::max(0.0, x)); }
+
+// Closest parameters (s, t) of segments P0 + s (P1 - P0) and Q0 + t (Q1 - Q0), clamped to
+// [0, 1] (Ericson, Real-Time Collision Detection, 2005, §5.1.9); parallel segments take s = 0.
+void ClosestSegmentSegment(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1,
+                           double* s, double* t) {
+  const Vec3 d1 = P1 - P0, d2 = Q1 - Q0, r = P0 - Q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  const double tiny = 1e-30;
+  if (a <= tiny && e <= tiny) {
+    *s = *t = 0.0;
+    return;
+  }
+  if (a <= tiny) {
+    *s = 0.0;
+    *t = Clamp01(f / e);
+    return;
+  }
+  const double c = d1.dot(r);
+  if (e <= tiny) {
+    *t = 0.0;
+    *s = Clamp01(-c / a);
+    return;
+  }
+  const double b = d1.dot(d2), denom = a * e - b * b;
+  *s = denom > 1e-14 * a * e ? Clamp01((b * f - c * e) / denom) : 0.0;
+  *t = (b * *s + f) / e;
+  if (*t < 0.0) {
+    *t = 0.0;
+    *s = Clamp01(-c / a);
+  } else if (*t > 1.0) {
+    *t = 1.0;
+    *s = Clamp01((b - c) / a);
+  }
+}
+
+}  // namespace
+
+NormalLaw CalcNormalLaw(double g, double delta, double k) {
+  NormalLaw law;
+  if (g >= delta) return law;
+  if (g >= 0.0) {
+    law.force = k * (delta - g) * (delta - g) / (2.0 * delta);
+    law.slope = -k * (delta - g) / delta;
+  } else {
+    law.force = k * (0.5 * delta - g);
+    law.slope = -k;
+  }
+  return law;
+}
+
+double ContactPotential(double g, double delta, double k) {
+  if (g >= delta) return 0.0;
+  if (g >= 0.0) return k * (delta - g) * (delta - g) * (delta - g) / (6.0 * delta);
+  return k * delta * delta / 6.0 - 0.5 * k * delta * g + 0.5 * k * g * g;
+}
+
+bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3& H_0,
+                         const SE3& H_1, ContactGeometry* out) {
+  const SE3* H[2] = {&H_0, &H_1};
+  const SE3& Ha = *H[pair.end_node[0]];
+  const SE3& Hb = *H[pair.end_node[1]];
+  const Vec3 A = Ha.x + Ha.R * pair.offset[0];
+  const Vec3 B = Hb.x + Hb.R * pair.offset[1];
+  const ContactObstacle& o = model.obstacles[static_cast<std::size_t>(pair.obstacle)];
+  double s = 0.0;
+  Vec3 n;
+  double distance = 0.0;  // from the obstacle's surface (plane) or axis to the shape's axis
+  if (o.type == ObstacleType::kPlane) {
+    n = o.normal;
+    const double ha = n.dot(A - o.point), hb = n.dot(B - o.point);
+    s = hb < ha ? 1.0 : 0.0;
+    distance = std::min(ha, hb);
+  } else {
+    Vec3 q;
+    if (o.type == ObstacleType::kSphere) {
+      const Vec3 d = B - A;
+      const double dd = d.squaredNorm();
+      s = dd > 0.0 ? Clamp01((o.point - A).dot(d) / dd) : 0.0;
+      q = o.point;
+    } else {
+      double t = 0.0;
+      ClosestSegmentSegment(A, B, o.point, o.to, &s, &t);
+      q = o.point + t * (o.to - o.point);
+    }
+    const Vec3 delta = A + s * (B - A) - q;
+    distance = delta.norm();
+    if (!(distance > 0.0)) return false;
+    n = delta / distance;
+    distance -= o.radius;
+  }
+  out->s = s;
+  out->normal = n;
+  out->gap = distance - pair.radius;
+  out->point = A + s * (B - A) - pair.radius * n;
+  const double w[2] = {1.0 - s, s};
+  const SE3* Hk[2] = {&H_0, &H_1};
+  for (int k = 0; k < 2; ++k) {
+    out->weight[k] = 0.0;
+    out->lever[k].setZero();
+  }
+  Vec3 b[2] = {Vec3::Zero(), Vec3::Zero()};
+  for (int j = 0; j < 2; ++j) {
+    out->weight[pair.end_node[j]] += w[j];
+    b[pair.end_node[j]] += w[j] * pair.offset[j];
+  }
+  for (int k = 0; k < 2; ++k) {
+    if (out->weight[k] == 0.0) continue;
+    out->lever[k] = b[k] / out->weight[k] - pair.radius * (Hk[k]->R.transpose() * n);
+  }
+  return true;
+}
+
+bool ContactKind::Calc(const Model& model, const Data&, const Item& item,
+                       const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
+  const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
+  const ContactSettings& law = model.contact;
+  ContactGeometry G;
+  if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G) || G.gap >= law.onset) {
+    t->active = false;
+    return true;
+  }
+  const Vec3& n = G.normal;
+  // The surface point's velocity map J = [W_k R_k [I  -Skew(l_k)]] (3 x 12).
+  Eigen::Matrix<double, 3, 12> J = Eigen::Matrix<double, 3, 12>::Zero();
+  Vec3 m[2];
+  for (int k = 0; k < 2; ++k) {
+    m[k] = x.H[k]->R.transpose() * n;
+    if (G.weight[k] == 0.0) continue;
+    J.block<3, 3>(0, 6 * k) = G.weight[k] * x.H[k]->R;
+    J.block<3, 3>(0, 6 * k + 3) = -G.weight[k] * x.H[k]->R * Skew(G.lever[k]);
+  }
+  const bool dyn = o.dynamics;
+  const Vec3 v_c = dyn ? Vec3(J * x.eta) : Vec3::Zero();
+  const double g_dot = n.dot(v_c);
+  // Normal force (method-next.md §N6.3): f_n = max(0, f_e - c_n w(g) dg/dt).
+  const NormalLaw fe = CalcNormalLaw(G.gap, law.onset, law.stiffness);
+  const double w = std::min(1.0, (law.onset - G.gap) / law.onset);
+  const double dw = G.gap > 0.0 ? -1.0 / law.onset : 0.0;
+  const double c_n = dyn ? pair.damping : 0.0;
+  const double f_n = fe.force - c_n * w * g_dot;
+  if (!(f_n > 0.0)) {
+    t->active = false;
+    return true;
+  }
+  // Regularised Coulomb friction at the surface point (dynamics only).
+  const double mu = dyn ? law.friction : 0.0;
+  const Mat3 P = Mat3::Identity() - n * n.transpose();
+  const Vec3 v_t = P * v_c;
+  const double sv = std::sqrt(v_t.squaredNorm() + law.slip_velocity * law.slip_velocity);
+  const Vec3 u = mu > 0.0 ? Vec3(v_t / sv) : Vec3::Zero();
+  const Vec3 F = f_n * (n - mu * u);
+  // Residual: minus the generalised force of F at the surface point.
+  double arm = 1.0;
+  Vec3 f[2];
+  for (int k = 0; k < 2; ++k) {
+    f[k] = x.H[k]->R.transpose() * F;
+    t->residual.segment<3>(6 * k) = -G.weight[k] * f[k];
+    t->residual.segment<3>(6 * k + 3) = -G.weight[k] * G.lever[k].cross(f[k]);
+    if (G.weight[k] != 0.0) arm = std::max(arm, G.lever[k].norm());
+  }
+  t->force_scale = F.norm() * arm;
+  t->term_scale = t->force_scale;
+  if (!o.tangent) return true;
+  // dv_c/dh at fixed eta (3 x 12): rotation columns W_k R_k (-Skew(y_k) - r Skew(w_k) Skew(m_k)),
+  // y_k = v_k + w_k x l_k.
+  Eigen::Matrix<double, 3, 12> dV = Eigen::Matrix<double, 3, 12>::Zero();
+  if (dyn) {
+    for (int k = 0; k < 2; ++k) {
+      if (G.weight[k] == 0.0) continue;
+      const Vec3 v = x.eta.segment<3>(6 * k), om = x.eta.segment<3>(6 * k + 3);
+      const Vec3 y = v + om.cross(G.lever[k]);
+      dV.block<3, 3>(0, 6 * k + 3) =
+          G.weight[k] * x.H[k]->R * (-Skew(y) - pair.radius * Skew(om) * Skew(m[k]));
+    }
+  }
+  const Eigen::Matrix<double, 12, 1> j = J.transpose() * n;  // dg/dh
+  // df_n/dh and df_n/deta.
+  const double dfn_dg = fe.slope - c_n * dw * g_dot;
+  const Eigen::Matrix<double, 1, 12> dfn_dh =
+      dfn_dg * j.transpose() - c_n * w * (n.transpose() * dV);
+  const Eigen::Matrix<double, 1, 12> dfn_deta = -c_n * w * j.transpose();
+  // dF = (n - mu u) df_n - mu f_n D P dv_c, D = I/s - v_t v_t^T / s^3.
+  const Vec3 a = n - mu * u;
+  Mat3 DP = Mat3::Zero();
+  if (mu > 0.0)
+    DP = mu * f_n * (Mat3::Identity() / sv - v_t * v_t.transpose() / (sv * sv * sv)) * P;
+  Eigen::Matrix<double, 3, 12> dF_dh = a * dfn_dh;
+  if (mu > 0.0) dF_dh.noalias() -= DP * dV;
+  Mat12& K = t->stiffness;
+  K.noalias() = -J.transpose() * dF_dh;
+  // The rotation of the frames at fixed world F: -W_k [0 Skew(f_k); 0 Skew(l_k) Skew(f_k) +
+  // r Skew(f_k) Skew(m_k)].
+  for (int k = 0; k < 2; ++k) {
+    if (G.weight[k] == 0.0) continue;
+    const Mat3 Sf = Skew(f[k]);
+    K.block<3, 3>(6 * k, 6 * k + 3) -= G.weight[k] * Sf;
+    K.block<3, 3>(6 * k + 3, 6 * k + 3) -=
+        G.weight[k] * (Skew(G.lever[k]) * Sf + pair.radius * Sf * Skew(m[k]));
+  }
+  t->has_stiffness = true;
+  if (dyn) {
+    Eigen::Matrix<double, 3, 12> dF_deta = a * dfn_deta;
+    if (mu > 0.0) dF_deta.noalias() -= DP * J;
+    t->damping.noalias() = -J.transpose() * dF_deta;
+    t->has_damping = true;
+  }
+  return true;
+}
+
+void ContactKind::AddEnergy(const Model& model, const Data& data, const Item& item, Energy* E) {
+  const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
+  ContactGeometry G;
+  if (!CalcContactGeometry(model, pair, NodeFrame(data, pair.node[0]),
+                           NodeFrame(data, pair.node[1]), &G))
+    return;
+  E->spring += ContactPotential(G.gap, model.contact.onset, model.contact.stiffness);
+}
+
+ContactState CalcContactState(const Model& model, const Data& data, int item) {
+  const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
+  ContactState out;
+  NodeMotion<2> x;
+  Mat6 identity = Mat6::Identity();
+  for (int k = 0; k < 2; ++k) {
+    x.H[k] = &NodeFrame(data, pair.node[k]);
+    x.T[k] = &identity;
+  }
+  GatherNodeMotion<2>(model, data, pair.node, &x.eta, &x.eta_dot);
+  ContactGeometry G;
+  if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G)) return out;
+  out.gap = G.gap;
+  out.point = G.point;
+  out.normal = G.normal;
+  KernelOptions o;
+  o.time = data.time;
+  o.dynamics = true;
+  o.tangent = false;
+  ElementTerms<2> t;
+  ContactKind::Calc(model, data, item, x, o, &t);
+  if (!t.active) return out;
+  out.active = true;
+  // Recover f_n and f_t from the kernel's law (same expressions, no tangent).
+  const NormalLaw fe = CalcNormalLaw(G.gap, model.contact.onset, model.contact.stiffness);
+  Vec3 v_c = Vec3::Zero();
+  for (int k = 0; k < 2; ++k) {
+    if (G.weight[k] == 0.0) continue;
+    const Vec3 v = x.eta.segment<3>(6 * k), om = x.eta.segment<3>(6 * k + 3);
+    v_c += G.weight[k] * (x.H[k]->R * (v + om.cross(G.lever[k])));
+  }
+  const double w = std::min(1.0, (model.contact.onset - G.gap) / model.contact.onset);
+  out.normal_force = fe.force - pair.damping * w * G.normal.dot(v_c);
+  const Vec3 v_t = v_c - G.normal * G.normal.dot(v_c);
+  const double sv = std::sqrt(v_t.squaredNorm() +
+                              model.contact.slip_velocity * model.contact.slip_velocity);
+  out.friction_force = -model.contact.friction * out.normal_force * v_t / sv;
+  return out;
+}
+
+}  // namespace screwfem
