@@ -344,6 +344,10 @@ void AddTendonRows(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s
   for (std::size_t ti = 0; ti < m.tendons.size(); ++ti) {
     const Tendon& t = m.tendons[ti];
     if (t.row < 0 || d.tendon_slack[ti]) continue;
+    // Stabilised index 2: the row of the matrix linearises dL/dt = B_T v, whose derivative
+    // with respect to the velocities is B_T (no tangent operator; d(B_T v)/dq is left out of
+    // the matrix: simplified Newton on this row).
+    const bool velocity_rows = o.velocity_constraint_tangent != 0.0;
     double L = 0.0;
     for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k) {
       const TendonSegment& seg =
@@ -357,11 +361,11 @@ void AddTendonRows(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s
       const int da = s.NodeDof(seg.a.node), db = s.NodeDof(seg.b.node);
       if (da >= 0) {
         const Eigen::Matrix<double, 1, 6> B = g.gradient.head<6>().transpose();
-        s.GradientMatrix(t.row, da, B, &s.NodeT(seg.a.node));
+        s.GradientMatrix(t.row, da, B, velocity_rows ? nullptr : &s.NodeT(seg.a.node));
       }
       if (db >= 0) {
         const Eigen::Matrix<double, 1, 6> B = g.gradient.tail<6>().transpose();
-        s.GradientMatrix(t.row, db, B, &s.NodeT(seg.b.node));
+        s.GradientMatrix(t.row, db, B, velocity_rows ? nullptr : &s.NodeT(seg.b.node));
       }
     }
     d.residual(m.nv + t.row) +=

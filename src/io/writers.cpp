@@ -233,6 +233,8 @@ void CalcActuatorRow(const Model& model, const Data& data, double t, std::vector
   row->resize(model.actuators.size());
   for (std::size_t i = 0; i < model.actuators.size(); ++i)
     (*row)[i] = ActuatorValue(model.actuators[i], t, data);
+}
+
 std::vector<std::string> ContactColumns() {
   return {"pair", "rod", "owner", "obstacle", "px", "py", "pz", "nx", "ny", "nz",
           "fn", "ftx", "fty", "ftz", "gap"};

@@ -229,6 +229,7 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
     integ.ggl_cross = Eigen::MatrixXd::Identity(nc, nc);
     integ.ggl_cross_lu = Eigen::PartialPivLU<Eigen::MatrixXd>(nc);
     integ.ggl_rhs = Eigen::VectorXd::Zero(nc);
+    integ.ggl_slack.assign(model.tendons.size(), 0);
     integ.max_nu = 0.0;
   }
   integ.error = integ.a_accepted = integ.dense_v0 = integ.dense_vdot0 = integ.dense_v1 =
@@ -244,6 +245,7 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   integ.dense_h = 0.0;
   integ.h_control = integ.err_last = integ.h_last = integ.error_norm = 0.0;
   integ.allow_growth = true;
+  integ.why.reserve(256);
   integ.breakpoints.clear();
   if (options.restart_at_breakpoints) {
     std::vector<double> b = ProfileBreakpoints(model);
@@ -329,10 +331,15 @@ void Predict(Data& data, Integrator& integ, const StepConstants& c, bool from_la
 }
 
 // ConstraintFormulation::kGgl (method-next.md §N1.3): the gradient B_n = B(q_n) of the step's
-// start, which multiplies nu in the configuration update. Data holds q_n.
-void PrepareGglStep(const Model& model, const Data& data, Integrator& integ) {
+// start, which multiplies nu in the configuration update. Data holds q_n. The rows of slack
+// length-driven tendons hold their gradient too (their route's dL/dq at q_n): a tendon caught
+// taut during the step then corrects along it (its row of B T B_n^T is not zero).
+void PrepareGglStep(const Model& model, Data& data, Integrator& integ) {
   if (integ.options.constraints != ConstraintFormulation::kGgl || model.nc == 0) return;
+  std::copy(data.tendon_slack.begin(), data.tendon_slack.end(), integ.ggl_slack.begin());
+  std::fill(data.tendon_slack.begin(), data.tendon_slack.end(), char{0});
   CalcConstraintGradient(model, data, integ.ggl_b);
+  std::copy(integ.ggl_slack.begin(), integ.ggl_slack.end(), data.tendon_slack.begin());
   integ.ggl_nu.setZero();
 }
 
@@ -592,6 +599,13 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
       // The velocity constraint, scaled like its row of the iteration matrix (h beta / gamma),
       // enters the constraint test.
       CalcVelocityConstraint(model, data, o.time, integ.ggl_bv);
+      // A length-driven tendon caught taut in this step keeps its position row (nu) but not
+      // its rate row: its route's rate jumps to L_p's by the inelastic catch after the step
+      // (CatchTendons), as under index 3; asking it of the step would ask an impulse of the
+      // smooth iteration.
+      for (std::size_t ti = 0; ti < model.tendons.size(); ++ti)
+        if (model.tendons[ti].row >= 0 && integ.slack_start[ti] && !data.tendon_slack[ti])
+          integ.ggl_bv(model.tendons[ti].row) = 0.0;
       const double s_v = h * integ.params.beta / integ.params.gamma;
       m.con = std::max(m.con, s_v * integ.ggl_bv.cwiseAbs().maxCoeff());
       m.residual_ok = m.con <= opt.constraint_tolerance &&
@@ -724,7 +738,8 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
   const double snap = 1e-9 * h;
   const double h_min = h * std::ldexp(1.0, -integ.options.max_halvings);
   double hs = h;
-  std::string why;
+  std::string& why = integ.why;  // capacity reserved at set-up: a failed attempt allocates nothing
+  why.clear();
   const DynamicOptions& opt = integ.options;
   const bool conservative = opt.newton_matrix == NewtonMatrix::kFull &&
                             opt.predictor == Predictor::kZero;
@@ -890,7 +905,8 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
                             opt.predictor == Predictor::kZero;
   const double c_err = LocalErrorConstant(integ.params);
   integ.a_accepted = integ.a;
-  std::string why;
+  std::string& why = integ.why;  // capacity reserved at set-up: a failed attempt allocates nothing
+  why.clear();
   for (;;) {
     h = std::clamp(h, opt.min_step, opt.max_step);
     // The step's end: t_limit or the next breakpoint when within 1.1 h; half the way there when

@@ -196,6 +196,8 @@ struct Integrator {
   Eigen::VectorXd ggl_rhs;
   // The column blocks (first unknown, size) where B has entries: the dofs of the nodes joints
   // attach to and the joints' coordinates.
+  std::string why;  // why the last attempt failed (reserved at set-up; Step, AdvanceTo)
+  std::vector<char> ggl_slack;  // Data::tendon_slack while B_n is computed (PrepareGglStep)
   std::vector<std::pair<int, int>> ggl_blocks;
   double max_nu = 0.0;
   bool use_last_acceleration = true;  // predictor of the next step (DynamicOptions::predictor)
