@@ -15,8 +15,10 @@ skipped. One table per benchmark family:
 Each JSON's revision comes from its context (the script passes --benchmark_context=revision=...),
 else from REVISION. Uses the median over repetitions when the JSON holds aggregates, else the
 single run. Times are real time (wall clock; manual time where the benchmark times itself).
-The section "Parameter sweeps on Dask" of an existing OUTPUT_MD (written by
-bench/sweep_bench.py, a history of its runs) is kept, at the end.
+The sections "Spring chain against MuJoCo" (written by hand from the output of
+screwfem_bench_mujoco, which is not a Google Benchmark program) and "Parameter sweeps on Dask"
+(written by bench/sweep_bench.py, a history of its runs) of an existing OUTPUT_MD are kept, at
+the end, in that order.
 A failed benchmark is listed as failed and makes the exit status 1 (after writing the file).
 Standard library only.
 """
@@ -409,7 +411,9 @@ def rod_statics_section(entries):
     ]
 
 
+MUJOCO_SECTION = "## Spring chain against MuJoCo"
 SWEEP_SECTION = "## Parameter sweeps on Dask"
+KEPT_SECTIONS = (MUJOCO_SECTION, SWEEP_SECTION)
 
 
 def main():
@@ -455,13 +459,15 @@ def main():
         "```",
         "",
     ]
-    # The section bench/sweep_bench.py appends to (its runs' history) is kept as it is.
+    # The sections written elsewhere (by hand from screwfem_bench_mujoco's output; the history
+    # bench/sweep_bench.py appends to) are kept as they are, from the first of them to the end.
     kept = ""
     if os.path.exists(out_path):
         with open(out_path, encoding="utf-8") as f:
             old = f.read()
-        if SWEEP_SECTION in old:
-            kept = "\n" + old[old.index(SWEEP_SECTION):]
+        starts = [old.index(h) for h in KEPT_SECTIONS if h in old]
+        if starts:
+            kept = "\n" + old[min(starts):]
     with open(out_path, "w", encoding="utf-8") as f:
         f.write("\n".join(lines) + kept)
     if errors:

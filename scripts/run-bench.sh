@@ -24,7 +24,7 @@ for p in $programs; do
   esac
 done
 
-bash scripts/setup-deps.sh
+bash scripts/setup-deps.sh bench
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DSCREWFEM_BUILD_BENCH=ON
 targets=()
 for p in $programs; do targets+=("screwfem_bench_$p"); done

@@ -9,8 +9,11 @@ set -euo pipefail
 #   main   build + what the main job's figures and viewer pages need (scripts/run-main.sh);
 #   rest   the figures' and viewer's packages + what only the tests use (the sanitizer
 #          compiler, Chromium for the viewer test, venv/pip for the package test, Dask);
+#   bench  build + what only the benchmarks use: MuJoCo, which screwfem_bench_mujoco runs side
+#          by side with screwfem on the same model (bench/RESULTS.md, "Spring chain against
+#          MuJoCo"; the bench builds only when it is found, the tests never need it);
 #   all    everything (the default).
-# Usage: setup-deps.sh [build|main|rest|all]
+# Usage: setup-deps.sh [build|main|rest|bench|all]
 build_packages=(
   build-essential cmake
   libeigen3-dev libyaml-cpp-dev libcli11-dev
@@ -18,6 +21,7 @@ build_packages=(
   pybind11-dev python3-dev python3-numpy
 )
 view_packages=(python3-matplotlib python3-pil libjs-three)
+bench_packages=(libmujoco-dev)
 test_packages=(
   clang python3-venv python3-pip
   python3-dask python3-distributed python3-pandas
@@ -27,9 +31,13 @@ case "${1:-all}" in
   build) packages=("${build_packages[@]}") ;;
   main) packages=("${build_packages[@]}" "${view_packages[@]}") ;;
   rest) packages=("${view_packages[@]}" "${test_packages[@]}") ;;
-  all) packages=("${build_packages[@]}" "${view_packages[@]}" "${test_packages[@]}") ;;
+  bench) packages=("${build_packages[@]}" "${bench_packages[@]}") ;;
+  all)
+    packages=("${build_packages[@]}" "${view_packages[@]}" "${test_packages[@]}"
+      "${bench_packages[@]}")
+    ;;
   *)
-    echo "setup-deps: unknown group '$1' (expected build, main, rest or all)" >&2
+    echo "setup-deps: unknown group '$1' (expected build, main, rest, bench or all)" >&2
     exit 2
     ;;
 esac
