@@ -23,7 +23,7 @@
 //     selected screwfem setting, interleaved in rounds (A B C ... A B C ...), medians and
 //     ratios to MuJoCo.
 // Usage: screwfem_bench_mujoco [--horizon T] [--rounds N] [--block-ms B]
-//                              [--base spherical|revolute]
+//                              [--base spherical|revolute] [--profile mujoco|screwfem]
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
@@ -67,7 +67,7 @@ double MaxDistance(const Trajectory& a, const Trajectory& b) {
 const char* kMjcf = R"(<mujoco model="spring_chain">
   <compiler angle="radian"/>
   <option timestep="0.008" integrator="RK4" gravity="0 0 -9.81">
-    <flag contact="disable" energy="enable"/>
+    <flag contact="disable"/>
   </option>
   <worldbody>
     <body name="link0" pos="0 0 0">
@@ -120,7 +120,12 @@ struct MujocoRun {
   // Runs to `horizon` with step h (kSample / h an integer), records the link ends every 8 ms.
   void Run(double h, double horizon, Trajectory* out) {
     m->opt.timestep = h;
-    mj_resetData(m, d);
+    // The state only (mj_resetData also clears the whole arena, a memset of about 3.7 M
+    // instructions, more than the 125 steps of a run cost together).
+    d->time = 0.0;
+    mju_copy(d->qpos, m->qpos0, m->nq);
+    mju_zero(d->qvel, m->nv);
+    mju_zero(d->qacc_warmstart, m->nv);
     const int per_sample = static_cast<int>(std::lround(kSample / h));
     const int samples = static_cast<int>(std::lround(horizon / kSample));
     out->resize(static_cast<std::size_t>(9 * samples));
@@ -137,9 +142,10 @@ struct MujocoRun {
       }
     }
   }
-  double Energy() {
-    mj_energyPos(m, d);
-    mj_energyVel(m, d);
+  double Energy() {  // at d's state (mj_forward computes it with the energy flag)
+    m->opt.enableflags |= mjENBL_ENERGY;
+    mj_forward(m, d);
+    m->opt.enableflags &= ~mjENBL_ENERGY;
     return d->energy[0] + d->energy[1];
   }
 };
@@ -262,15 +268,21 @@ int Main(int argc, char** argv) {
   double horizon = 1.0;
   int rounds = 11;
   double block = 0.05;  // [s] of timed runs per variant per round
+  // --profile mujoco|screwfem: only 20 runs of MuJoCo at 8 ms or of screwfem at its setting
+  // matching MuJoCo's accuracy on the spherical chain (h = 1 ms, index 3, rho_inf 0.9), for
+  // perf or callgrind.
+  std::string profile;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--horizon") horizon = std::atof(argv[i + 1]);
     else if (a == "--rounds") rounds = std::atoi(argv[i + 1]);
     else if (a == "--block-ms") block = 1e-3 * std::atof(argv[i + 1]);
+    else if (a == "--profile") profile = argv[i + 1];
     else if (a == "--base" && std::string(argv[i + 1]) == "revolute") g_revolute_base = true;
     else if (a == "--base" && std::string(argv[i + 1]) == "spherical") g_revolute_base = false;
     else {
-      std::fprintf(stderr, "usage: %s [--horizon T] [--rounds N] [--block-ms B] [--base spherical|revolute]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--horizon T] [--rounds N] [--block-ms B] [--base spherical|revolute]\n"
+                   "       [--profile mujoco|screwfem]\n", argv[0]);
       return 2;
     }
   }
@@ -284,8 +296,18 @@ int Main(int argc, char** argv) {
   const Model model = BuildChain();
   ScrewfemRun sf(model);
 
-  // 1. Reference and agreement.
   Trajectory ref, ref2, traj;
+  if (!profile.empty()) {
+    const Setting s{false, 1e-3, 0, ConstraintFormulation::kIndex3, 0.9};
+    for (int k = 0; k < 20; ++k) {
+      if (profile == "mujoco") mj.Run(kSample, horizon, &traj);
+      else sf.Run(s, horizon, &traj);
+    }
+    std::printf("%s: 20 runs of %g s\n", profile == "mujoco" ? "MuJoCo RK4, h = 8 ms" :
+                Format(s).c_str(), horizon);
+    return 0;
+  }
+  // 1. Reference and agreement.
   mj.Run(kSample / 256, horizon, &ref);
   mj.Run(kSample / 128, horizon, &ref2);
   std::printf("\n## Reference: MuJoCo RK4 at h = 8 ms / 256 = %.4g ms\n", kSample / 256 * 1e3);
@@ -296,7 +318,6 @@ int Main(int argc, char** argv) {
   double mj_e0 = 0.0;
   {
     mj.Run(kSample / 256, 0.0, &traj);
-    mj_forward(mjm.get(), mjd.get());
     mj_e0 = mj.Energy();
     mj.Run(kSample / 256, horizon, &traj);
     std::printf("MuJoCo energy at 0 / %g s (h = 8 ms/256): %.9f / %.9f J\n", horizon, mj_e0,
