@@ -23,7 +23,7 @@
 //     selected screwfem setting, interleaved in rounds (A B C ... A B C ...), medians and
 //     ratios to MuJoCo.
 // Usage: screwfem_bench_mujoco [--horizon T] [--rounds N] [--block-ms B]
-//                              [--base spherical|revolute] [--profile mujoco|screwfem]
+//                              [--base spherical|revolute|spherical-nospring] [--profile mujoco|screwfem]
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
@@ -51,6 +51,8 @@ constexpr double kLinkLength = 0.5;
 // the same spring (2 N m/rad); a control model without screwfem's spherical-joint spring
 // (bench/RESULTS.md: with it screwfem converges at first order only).
 bool g_revolute_base = false;
+// --base spherical-nospring: the spherical joint without its spring (a second control model).
+bool g_no_base_spring = false;
 
 // Link end points at the sample times k * kSample, k = 1..n: 9 values per sample.
 using Trajectory = std::vector<double>;
@@ -96,6 +98,10 @@ struct MjDataDeleter {
 
 std::unique_ptr<mjModel, MjModelDeleter> LoadMujocoModel() {
   std::string xml = kMjcf;
+  if (g_no_base_spring) {
+    const std::string spring = "type=\"ball\" stiffness=\"2\"";
+    xml.replace(xml.find(spring), spring.size(), "type=\"ball\"");
+  }
   if (g_revolute_base) {
     const std::string ball = "type=\"ball\"";
     xml.replace(xml.find(ball), ball.size(), "type=\"hinge\" axis=\"0 1 0\"");
@@ -171,7 +177,7 @@ Model BuildChain() {
   const int r = b.AddJointAt("r", JointType::kRevolute, nodes[1], nodes[2], Vec3(1.0, 0, 0),
                              Vec3(0.0, 1.0, 1.0).normalized());
   Joint& js = b.model().joints[static_cast<std::size_t>(s)];
-  js.stiffness.head(js.k()).setConstant(2.0);
+  js.stiffness.head(js.k()).setConstant(g_no_base_spring ? 0.0 : 2.0);
   Joint& ju = b.model().joints[static_cast<std::size_t>(u)];
   ju.stiffness.head<2>().setConstant(3.0);
   ju.rest.head<2>() << 0.4, -0.3;
@@ -279,16 +285,20 @@ int Main(int argc, char** argv) {
     else if (a == "--block-ms") block = 1e-3 * std::atof(argv[i + 1]);
     else if (a == "--profile") profile = argv[i + 1];
     else if (a == "--base" && std::string(argv[i + 1]) == "revolute") g_revolute_base = true;
+    else if (a == "--base" && std::string(argv[i + 1]) == "spherical-nospring")
+      g_no_base_spring = true;
     else if (a == "--base" && std::string(argv[i + 1]) == "spherical") g_revolute_base = false;
     else {
-      std::fprintf(stderr, "usage: %s [--horizon T] [--rounds N] [--block-ms B] [--base spherical|revolute]\n"
+      std::fprintf(stderr, "usage: %s [--horizon T] [--rounds N] [--block-ms B] [--base spherical|revolute|spherical-nospring]\n"
                    "       [--profile mujoco|screwfem]\n", argv[0]);
       return 2;
     }
   }
   std::printf("MuJoCo %s (header %d); horizon %g s, link ends sampled every %g ms; base joint %s\n",
               mj_versionString(), mjVERSION_HEADER, horizon, kSample * 1e3,
-              g_revolute_base ? "revolute (about y)" : "spherical");
+              g_revolute_base    ? "revolute (about y)"
+              : g_no_base_spring ? "spherical without spring"
+                                 : "spherical");
 
   auto mjm = LoadMujocoModel();
   std::unique_ptr<mjData, MjDataDeleter> mjd(mj_makeData(mjm.get()));
