@@ -309,9 +309,19 @@ void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
         if (o.assemble_matrix)
           s.GradientMatrix(j.row, db, JointGradientB(g), velocity_rows ? nullptr : &s.NodeT(j.node_b));
       }
-      if (k > 0)
-        s.Gradient(j.row, j.coord, JointGradientCoordinates(g, JointCurrentBasis(m, d, ji), TJ),
-                   nullptr, lam);
+      if (k > 0) {
+        // The coordinates' force B_J^T lambda, in the residual and the multiplier columns,
+        // has no tangent operator (it is the force on the velocity unknowns); the constraint
+        // rows linearise phi along the retraction, B_J T_J.
+        const Mat6X basis = JointCurrentBasis(m, d, ji);
+        const JointMatrix I = Mat6::Identity().topLeftCorner(k, k);
+        const auto BJ = JointGradientCoordinates(g, basis, I);
+        d.residual.segment(j.coord, k).noalias() += o.s_rows * (BJ.transpose() * lam);
+        if (o.assemble_matrix) {
+          s.Block(j.coord, m.nv + j.row, BJ.transpose(), o.s_rows * o.s_multipliers);
+          s.Block(m.nv + j.row, j.coord, JointGradientCoordinates(g, basis, TJ), o.s_constraints);
+        }
+      }
       if (o.constraint_force_tangent && o.assemble_matrix && !o.use_node_tangent)
         AddConstraintForceTangent(m, d, o, s, ji, g, Vec6(lam), da, db);
       if (o.velocity_constraint_tangent != 0.0 && o.assemble_matrix)
