@@ -23,7 +23,8 @@
 //     selected screwfem setting, interleaved in rounds (A B C ... A B C ...), medians and
 //     ratios to MuJoCo.
 // Usage: screwfem_bench_mujoco [--horizon T] [--rounds N] [--block-ms B]
-//                              [--base spherical|revolute|spherical-nospring] [--profile mujoco|screwfem]
+//                              [--base spherical|revolute|spherical-nospring]
+//                              [--profile mujoco|screwfem]
 //                              [--profile-step H]
 #include <mujoco/mujoco.h>
 
@@ -292,7 +293,9 @@ int Main(int argc, char** argv) {
       g_no_base_spring = true;
     else if (a == "--base" && std::string(argv[i + 1]) == "spherical") g_revolute_base = false;
     else {
-      std::fprintf(stderr, "usage: %s [--horizon T] [--rounds N] [--block-ms B] [--base spherical|revolute|spherical-nospring]\n"
+      std::fprintf(stderr,
+                   "usage: %s [--horizon T] [--rounds N] [--block-ms B]\n"
+                   "       [--base spherical|revolute|spherical-nospring]\n"
                    "       [--profile mujoco|screwfem] [--profile-step H]\n", argv[0]);
       return 2;
     }
