@@ -99,13 +99,13 @@ TEST(SpringChain, StabilisedIndexTwoAtRhoInfOneConvergesFastAndConservesEnergyTo
               fine.max_velocity_constraint, fine.max_constraint, index3.energy_error,
               index3.iterations_per_step, index3.max_velocity_constraint);
   // Measured: energy error 1.09e-3 / 2.7e-4 J (ratio 4.04; 1.21e-3 / 3.0e-4 before the spherical
-  // joint's constraint force lost its tangent operator, AddJoints; kinetic energy up to 2 J), 3.58
-  // / 2.92 iterations per step (index 3: 3.90 at h = 1e-3, energy error 1.2e-2 J, |B v| 0.097), |B
-  // v + dphi/dt| 2.8e-8, |phi| 3.7e-14. Before the matrix had Z and the position rows B(q) T of the
-  // iterate (method-next.md §N1.3): 4.32 / 3.63 iterations per step. The velocity constraint is
-  // tolerance-limited, not round-off: its rows enter the constraint test scaled by h beta / gamma =
-  // 5e-4, so constraint_tolerance 1e-11 admits |B v| 2e-8 (and the estimated convergence test a
-  // little more on the last iterate).
+  // joint's constraint force lost its tangent operator, AddJoints; kinetic energy up to 2 J),
+  // 3.58 / 2.92 iterations per step (index 3: 3.90 at h = 1e-3, energy error 1.2e-2 J, |B v|
+  // 0.097), |B v + dphi/dt| 2.8e-8, |phi| 3.7e-14. Before the matrix had Z and the position rows
+  // B(q) T of the iterate (method-next.md §N1.3): 4.32 / 3.63 iterations per step. The velocity
+  // constraint is tolerance-limited, not round-off: its rows enter the constraint test scaled by
+  // h beta / gamma = 5e-4, so constraint_tolerance 1e-11 admits |B v| 2e-8 (and the estimated
+  // convergence test a little more on the last iterate).
   EXPECT_GT(fine.swing, 0.05);  // it moves
   EXPECT_LE(fine.iterations_per_step, 3.0);
   EXPECT_LE(coarse.iterations_per_step, 3.6);
