@@ -4,7 +4,9 @@
 // above. With the regularised law (docs/numerics.md, "Contact") a held cord creeps: every contact
 // slides at the same speed v, where the friction is mu_eff = mu v / sqrt(v^2 + eps_v^2), so the
 // cord settles at the v for which e^{mu_eff theta} = T2/T1. The onset of slip follows from the
-// measured creep speed as T2/T1 raised to mu / mu_eff; it must be e^{mu theta} to 2 %.
+// measured creep speed as T2/T1 raised to mu / mu_eff; it must be e^{mu theta} to 2 %. The
+// second test pulls end 2 at a constant speed by a prescribed drive and reads T2 from the
+// drive's effort (T6.5 as the note states it).
 //
 // Measured (h = 1e-3 s, T2/T1 = 0.98 e^{mu theta}, mu = 0.3, eps_v = 1e-3 m/s): creep
 // 3.450 / 5.192 mm/s (the continuous law: 3.304 / 4.752), onset ratio 1.59936 vs 1.60198
@@ -23,6 +25,7 @@
 
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/joint.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
 
@@ -44,6 +47,7 @@ struct Capstan {
   int end2 = -1;   // the node pulled by T2
   Vec3 pull2;      // its direction
   int contacts = 0;  // wrapped elements
+  int pull = -1;     // the joint pulling end 2, if any
 };
 
 // The cord runs over the top of the cylinder, polar angle from pi/2 + theta/2 down to
@@ -52,7 +56,7 @@ struct Capstan {
 // shape is the wrapped one (no bending moment at the start); EI = 1e-4 T1 R^2 (T6.5: bending
 // adds O(EI / (R^2 T))); EA = GA = 1e4 N; 0.1 kg/m and 1e-5 kg m per length. No gravity: dead loads T1, T2
 // along the legs.
-void MakeCapstan(double theta, double ratio, Capstan* c) {
+void MakeCapstan(double theta, double ratio, Capstan* c, double pull_speed = 0.0) {
   const int n = static_cast<int>(std::ceil(theta / (M_PI / 32.0) - 1e-9));
   const double dtheta = theta / n;
   // Start at the resting gap of the mean normal force per element.
@@ -79,10 +83,29 @@ void MakeCapstan(double theta, double ratio, Capstan* c) {
   load1.node = nodes.front();
   load1.force = -kT1 * Travel(phi0);
   b.AddPointLoad(load1);
-  PointLoad load2;
-  load2.node = nodes.back();
-  load2.force = ratio * kT1 * Travel(phi1);
-  b.AddPointLoad(load2);
+  if (pull_speed > 0.0) {
+    // End 2 on a prismatic joint along its leg, its drive pulling at pull_speed after a start
+    // in five equal velocity steps over 0.05 s (ramps to the end of the run).
+    JointSpec pull;
+    pull.name = "pull";
+    pull.type = JointType::kPrismatic;
+    pull.node_a = kGround;
+    pull.node_b = nodes.back();
+    pull.point = path.back();
+    pull.axis = Travel(phi1);
+    pull.drive = DriveKind::kPrescribed;
+    const double t_end = 10.0;
+    for (int i = 0; i < 5; ++i) {
+      const double t0 = 0.01 * i;
+      pull.drive_profile.Add(Profile::Ramp(t0, t_end, 0.2 * pull_speed * (t_end - t0)));
+    }
+    c->pull = b.AddJoint(pull);
+  } else {
+    PointLoad load2;
+    load2.node = nodes.back();
+    load2.force = ratio * kT1 * Travel(phi1);
+    b.AddPointLoad(load2);
+  }
   b.AddContactRod(rod, kCord);
   b.AddObstacle({"drum", ObstacleType::kCapsule, Vec3(0.0, -0.1, 0.0), Vec3::UnitZ(),
                  Vec3(0.0, 0.1, 0.0), kR});
@@ -108,6 +131,7 @@ struct CapstanRun {
   double v_early = 0.0, v_late = 0.0;  // mean speed of end 2 along its pull [m/s]
   int active = 0;                       // active pairs at the end
   double iterations_per_step = 0.0;
+  double effort_late = 0.0;             // mean drive effort over the last quarter [N]
 };
 
 // `steps` steps of h = 1e-3 s; mean speeds over the third and the last quarter of the run.
@@ -130,6 +154,8 @@ CapstanRun Simulate(Capstan* c, int steps) {
       out.v_early = (s - s_a) / ((b - a) * h);
     }
     if (i == steps) out.v_late = (s - s_b) / ((steps - b) * h);
+    if (i > b && c->pull >= 0)
+      out.effort_late += JointDriveEffort(c->model, c->data, c->pull) / (steps - b);
   }
   for (int i = 0; i < static_cast<int>(c->model.contact_pairs.size()); ++i)
     if (CalcContactState(c->model, c->data, i).active) ++out.active;
@@ -163,6 +189,27 @@ TEST(Capstan, HoldsBelowTheEulerEytelweinRatioAndSlipsAboveIt) {
     const CapstanRun s = Simulate(&slips, 200);
     EXPECT_GT(s.v_late, 20.0 * v_c) << "theta " << theta;
     EXPECT_GT(s.v_late, 1.3 * s.v_early) << "theta " << theta;
+  }
+}
+
+// T6.5 as the note states it: end 2 pulled at a constant speed V = 20 eps_v by a prescribed
+// drive, end 1 loaded by T1; the drive's effort is T2 = T1 e^{mu_eff theta}, with
+// mu_eff = mu V / sqrt(V^2 + eps_v^2) = 0.99875 mu. Measured: T2/T1 = 1.59834 (e^{mu theta} =
+// 1.60198, e^{mu_eff theta} = 1.60104) at theta = pi/2 and 2.55446 (2.56633, 2.56332) at pi,
+// the offsets of the file comment.
+TEST(Capstan, PulledAtConstantSpeedTheDriveCarriesTheEulerEytelweinTension) {
+  for (const double theta : {0.5 * M_PI, M_PI}) {
+    const double V = 20.0 * kSlip;
+    const double mu_eff = kMu * V / std::hypot(V, kSlip);
+    Capstan c;
+    MakeCapstan(theta, 0.0, &c, V);
+    const CapstanRun r = Simulate(&c, 300);
+    EXPECT_EQ(r.active, c.contacts) << "theta " << theta;
+    EXPECT_NEAR(r.v_late, V, 1e-6 * V);  // the drive holds the speed
+    const double ratio = std::abs(r.effort_late) / kT1;
+    EXPECT_NEAR(ratio, std::exp(kMu * theta), 0.02 * std::exp(kMu * theta)) << "theta " << theta;
+    EXPECT_NEAR(ratio, std::exp(mu_eff * theta), 0.005 * std::exp(mu_eff * theta))
+        << "theta " << theta;
   }
 }
 
