@@ -5,6 +5,7 @@
 #   screwfem_bench_dynamics  -> bench/results_dynamics.json  (GRM runs, rod time steps)
 #   screwfem_bench_outputs   -> bench/results_outputs.json   (cost of a run's outputs)
 #   screwfem_bench_tendons   -> bench/results_tendons.json   (cost of tendons on a rod)
+#   screwfem_bench_contact   -> bench/results_contact.json   (cost of contact along a rod)
 # SCREWFEM_BENCH selects the programs (default "statics dynamics outputs"); the results file of a
 # program not run (or whose benchmarks a filter left out entirely) is kept and reported with
 # its own date and revision. Extra arguments go to every program run, e.g.
@@ -16,10 +17,10 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 build_dir=build/release
 jobs=$(nproc 2> /dev/null || echo 2)
-programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons}
+programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons contact}
 for p in $programs; do
   case $p in
-    statics | dynamics | outputs | tendons) ;;
+    statics | dynamics | outputs | tendons | contact) ;;
     *) echo "run-bench.sh: unknown benchmark program '$p' in SCREWFEM_BENCH" >&2; exit 2 ;;
   esac
 done
@@ -52,8 +53,10 @@ for p in $programs; do
   # slow cases: a GRM run takes seconds, a 10000-element rod step about half a second).
   repetitions=()
   if [[ $p == statics ]]; then repetitions=(--benchmark_repetitions=5); fi
-  # tendons: the two variants' repetitions alternate (the same machine load for both).
-  if [[ $p == tendons ]]; then repetitions=(--benchmark_enable_random_interleaving=true); fi
+  # tendons, contact: the variants' repetitions alternate (the same machine load for both).
+  if [[ $p == tendons || $p == contact ]]; then
+    repetitions=(--benchmark_enable_random_interleaving=true)
+  fi
   "$build_dir/bench/screwfem_bench_$p" --benchmark_format=console \
     --benchmark_out="$tmp" --benchmark_out_format=json \
     --benchmark_context=revision="$revision",isa="$isa" \
@@ -64,5 +67,5 @@ done
 
 /usr/bin/python3 bench/make_results.py bench/RESULTS.md "bash scripts/run-bench.sh" "$revision" \
   bench/results_statics.json bench/results_dynamics.json bench/results_outputs.json \
-  bench/results_tendons.json
-echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons}.json"
+  bench/results_tendons.json bench/results_contact.json
+echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact}.json"
