@@ -206,7 +206,7 @@ struct Cantilever {
   StaticResult result;
 };
 
-Cantilever SolveCantilever(int elements, double tension) {
+Cantilever SolveCantilever(int elements, double tension, bool by_length = false) {
   ModelBuilder b;
   const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements, RodSection());
   b.FixNode(b.model().rods[static_cast<std::size_t>(rod)].nodes.front());
@@ -220,7 +220,10 @@ Cantilever SolveCantilever(int elements, double tension) {
   add(0.0);
   for (int e = 0; e < elements; ++e) add((e + 0.5) / elements);
   add(1.0);
-  b.AddTendon("tendon", eyelets, Profile::Constant(tension));
+  if (by_length)  // `tension` is then the prescribed length
+    b.AddLengthDrivenTendon("tendon", eyelets, Profile::Constant(tension));
+  else
+    b.AddTendon("tendon", eyelets, Profile::Constant(tension));
   Cantilever c{b.Build(), {}, {}};
   c.data = MakeData(c.model);
   StaticOptions o;
@@ -279,6 +282,18 @@ TEST(TendonEyelets, StrainEnergyChangesByMinusTensionTimesTendonLength) {
                     CalcTendonState(lo.model, lo.data, 0).length;
   EXPECT_LT(dL, 0.0);
   EXPECT_NEAR(-dU / dL, tau, 1e-4 * tau);
+}
+
+TEST(TendonEyelets, DrawnByLengthTheMultiplierIsTheTensionThatGivesTheLength) {
+  // Drawn by tension 50 N the tendon shortens to L*; drawn to L* by length (its row's gradient
+  // from both nodes of every midpoint eyelet's element), the multiplier is 50 N, same shape.
+  const Cantilever by_tension = SolveCantilever(4, 50.0);
+  ASSERT_TRUE(by_tension.result.converged);
+  const double length = CalcTendonState(by_tension.model, by_tension.data, 0).length;
+  const Cantilever by_length = SolveCantilever(4, length, true);
+  ASSERT_TRUE(by_length.result.converged) << by_length.result.message;
+  EXPECT_LT((by_length.data.H.back().x - by_tension.data.H.back().x).norm(), 1e-9);
+  EXPECT_NEAR(CalcTendonState(by_length.model, by_length.data, 0).force, 50.0, 1e-6);
 }
 
 }  // namespace
