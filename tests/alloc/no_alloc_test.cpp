@@ -22,6 +22,7 @@
 #include "screwfem/io/writers.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
+#include "screwfem/elements/tendon.h"
 
 namespace {
 std::atomic<bool> g_counting{false};
@@ -199,6 +200,9 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
        {ConstraintFormulation::kIndex3, ConstraintFormulation::kGgl}) {
     SCOPED_TRACE(NameOf(constraints));
     const Model model = MixedModel();
+    int span_segments = 0;  // the eyelet between rod nodes makes 4-node tendon items
+    TendonSpanSegmentKind::ForEach(model, [&](int, const int (&)[4]) { ++span_segments; });
+    ASSERT_EQ(span_segments, 2);
     Data data = MakeData(model);
     Integrator integ;
     DynamicOptions options;
