@@ -81,7 +81,24 @@ void BindValues(py::module_& m) {
       .def(py::init([](int node, const Vec3& offset) { return BodyPoint{node, offset}; }),
            py::arg("node"), py::arg("offset") = Vec3::Zero())
       .def_readwrite("node", &BodyPoint::node)
-      .def_readwrite("offset", &BodyPoint::offset);
+      .def_readwrite("offset", &BodyPoint::offset)
+      .def_static(
+          "on_rod",
+          [](int rod, double arc_length, const Vec3& offset) {
+            BodyPoint p{kGround, offset};
+            p.rod = rod;
+            p.arc_length = arc_length;
+            return p;
+          },
+          py::arg("rod"), py::arg("arc_length"), py::arg("offset") = Vec3::Zero(),
+          "A tendon eyelet at reference arc length [m] of a rod: build places it on the node "
+          "there or, between nodes, on the section of the element holding it (offset in that "
+          "section's frame).")
+      .def_readwrite("rod", &BodyPoint::rod, "The rod of an eyelet at an arc length (-1: none).")
+      .def_readwrite("arc_length", &BodyPoint::arc_length, "Its reference arc length [m].")
+      .def_readonly("element", &BodyPoint::element,
+                    "Set by build for an eyelet between nodes: its element (-1: on a node).")
+      .def_readonly("xi", &BodyPoint::xi, "Set by build: its place in the element, in (0, 1).");
 
   py::class_<ForceElement>(m, "ForceElement",
                            "A spring-damper-actuator between two body points (model.h): force "

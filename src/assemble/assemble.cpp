@@ -362,20 +362,15 @@ void AddTendonRows(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s
     for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k) {
       const TendonSegment& seg =
           m.tendon_segments[static_cast<std::size_t>(t.first_segment) + k];
-      PointDistance g;
-      if (!CalcPointDistance(NodeFrame(d, seg.a.node), seg.a.offset, NodeFrame(d, seg.b.node),
-                             seg.b.offset, false, &g))
-        continue;
+      SegmentGradient g;  // eyelets between nodes: parts on both nodes of their element
+      if (!CalcSegmentGradient(m, d, seg, &g)) continue;
       L += g.length;
       if (!o.assemble_matrix) continue;
-      const int da = s.NodeDof(seg.a.node), db = s.NodeDof(seg.b.node);
-      if (da >= 0) {
-        const Eigen::Matrix<double, 1, 6> B = g.gradient.head<6>().transpose();
-        s.GradientMatrix(t.row, da, B, velocity_rows ? nullptr : &s.NodeT(seg.a.node));
-      }
-      if (db >= 0) {
-        const Eigen::Matrix<double, 1, 6> B = g.gradient.tail<6>().transpose();
-        s.GradientMatrix(t.row, db, B, velocity_rows ? nullptr : &s.NodeT(seg.b.node));
+      for (int i = 0; i < g.count; ++i) {
+        const int dof = s.NodeDof(g.nodes[i]);
+        if (dof < 0) continue;
+        const Eigen::Matrix<double, 1, 6> B = g.parts[i].transpose();
+        s.GradientMatrix(t.row, dof, B, velocity_rows ? nullptr : &s.NodeT(g.nodes[i]));
       }
     }
     d.residual(m.nv + t.row) +=
@@ -386,7 +381,8 @@ void AddTendonRows(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s
 // The element kinds the assembly calls, in this order (docs/architecture.md, "Add an element
 // kind"); joints follow them.
 using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind,
-                                JointSpringKind, TendonSegmentKind, ForceElementKind,
+                                JointSpringKind, TendonSegmentKind, TendonSpanSegmentKind,
+                                ForceElementKind,
                                 ContactKind>;
 constexpr ElementKinds* kElementKinds = nullptr;
 }  // namespace
@@ -527,14 +523,12 @@ void ForEachTendonGradientPart(const Model& model, const Data& data, Visit&& vis
     for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k) {
       const TendonSegment& seg =
           model.tendon_segments[static_cast<std::size_t>(t.first_segment) + k];
-      PointDistance g;
-      if (!CalcPointDistance(NodeFrame(data, seg.a.node), seg.a.offset,
-                             NodeFrame(data, seg.b.node), seg.b.offset, false, &g))
-        continue;
-      const int da = seg.a.node == kGround ? -1 : model.nodes[static_cast<std::size_t>(seg.a.node)].dof;
-      const int db = seg.b.node == kGround ? -1 : model.nodes[static_cast<std::size_t>(seg.b.node)].dof;
-      if (da >= 0) visit(t, da, Vec6(g.gradient.head<6>()));
-      if (db >= 0) visit(t, db, Vec6(g.gradient.tail<6>()));
+      SegmentGradient g;
+      if (!CalcSegmentGradient(model, data, seg, &g)) continue;
+      for (int i = 0; i < g.count; ++i) {
+        const int dof = model.nodes[static_cast<std::size_t>(g.nodes[i])].dof;
+        if (dof >= 0) visit(t, dof, g.parts[i]);
+      }
     }
   }
 }

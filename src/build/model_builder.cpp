@@ -674,8 +674,44 @@ std::string BodyPointProblem(const Model& m, const BodyPoint& p) {
 }
 
 Vec3 ReferencePosition(const Model& m, const BodyPoint& p) {
-  const SE3& H = NodeReferenceFrame(m, p.node);
+  SE3 H = NodeReferenceFrame(m, p.node);
+  if (p.element >= 0)  // the section H_A0 exp(xi d0) of the element
+    H = H * ExpSE3(p.xi * m.elements[static_cast<std::size_t>(p.element)].d0);
   return H.x + H.R * p.offset;
+}
+
+// An eyelet at an arc length of a rod (BodyPoint::rod >= 0): on the node there (within 1e-8
+// of the element length) or between the nodes of the element holding it (element, xi, node A).
+// "" when placed, else why not.
+std::string PlaceOnRod(const Model& m, BodyPoint& p) {
+  if (p.rod < 0) return {};
+  if (p.rod >= static_cast<int>(m.rods.size())) return "invalid rod " + std::to_string(p.rod);
+  const Rod& rod = m.rods[static_cast<std::size_t>(p.rod)];
+  if (!(p.arc_length >= 0.0 && p.arc_length <= rod.length * (1.0 + 1e-12)))
+    return "arc length " + std::to_string(p.arc_length) + " m is off the rod (length " +
+           std::to_string(rod.length) + " m)";
+  double s0 = 0.0;
+  for (int k = 0; k < rod.num_elements; ++k) {
+    const int e = rod.first_element + k;
+    const RodElement& el = m.elements[static_cast<std::size_t>(e)];
+    if (p.arc_length <= s0 + el.length || k == rod.num_elements - 1) {
+      const double xi = std::clamp((p.arc_length - s0) / el.length, 0.0, 1.0);
+      p.element = -1;
+      p.xi = 0.0;
+      if (xi <= 1e-8) {
+        p.node = el.node_a;
+      } else if (xi >= 1.0 - 1e-8) {
+        p.node = el.node_b;
+      } else {
+        p.node = el.node_a;
+        p.element = e;
+        p.xi = xi;
+      }
+      return {};
+    }
+    s0 += el.length;
+  }
+  return "rod '" + rod.name + "' has no elements";
 }
 
 // Tendons (method-next.md §N4): eyelets, tension profile, unique names; their segments.
@@ -693,7 +729,8 @@ void BuildTendons(Model& m) {
                        entity);
     for (std::size_t k = 0; k < t.eyelets.size(); ++k) {
       const std::string part = "eyelets[" + std::to_string(k) + "]";
-      const std::string problem = BodyPointProblem(m, t.eyelets[k]);
+      std::string problem = PlaceOnRod(m, t.eyelets[k]);
+      if (problem.empty()) problem = BodyPointProblem(m, t.eyelets[k]);
       if (!problem.empty())
         throw InputError(label + ": eyelet " + std::to_string(k) + ": " + problem,
                          {EntityKind::kTendon, index, part}, problem);
@@ -826,7 +863,9 @@ void BuildForceElements(Model& m) {
     const int index = static_cast<int>(i);
     const EntityRef entity{EntityKind::kForceElement, index, {}};
     for (const auto& [p, part] : {std::pair<const BodyPoint*, const char*>{&f.a, "a"}, {&f.b, "b"}}) {
-      const std::string problem = BodyPointProblem(m, *p);
+      const std::string problem =
+          p->rod >= 0 ? "ends sit on nodes (an arc length between nodes is for tendon eyelets)"
+                      : BodyPointProblem(m, *p);
       if (!problem.empty())
         throw InputError(label + ": end " + part + ": " + problem,
                          {EntityKind::kForceElement, index, part}, problem);
@@ -1118,7 +1157,15 @@ void OrderUnknowns(Model& m) {
   auto nb = [&](int node) { return node == kGround ? -1 : node_block[static_cast<std::size_t>(node)]; };
   for (const RodElement& e : m.elements) link(nb(e.node_a), nb(e.node_b));
   // Tendon segments and force elements couple their two nodes (elements/tendon.h).
-  for (const TendonSegment& s : m.tendon_segments) link(nb(s.a.node), nb(s.b.node));
+  // An eyelet between nodes brings both nodes of its element.
+  for (const TendonSegment& s : m.tendon_segments) {
+    auto node_b = [&](const BodyPoint& p) {
+      return p.element >= 0 ? m.elements[static_cast<std::size_t>(p.element)].node_b : kGround;
+    };
+    const int nodes[4] = {s.a.node, node_b(s.a), s.b.node, node_b(s.b)};
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) link(nb(nodes[i]), nb(nodes[j]));
+  }
   for (const ForceElement& f : m.force_elements) link(nb(f.a.node), nb(f.b.node));
   for (const Joint& j : m.joints) {
     const int coord_block = j.k() > 0 ? add_block(j.coord, j.k()) : -1;
@@ -1138,7 +1185,11 @@ void OrderUnknowns(Model& m) {
   for (const Tendon& t : m.tendons) {
     if (t.row < 0) continue;
     const int tb = add_block(m.nv + t.row, 1);
-    for (const BodyPoint& e : t.eyelets) link(tb, nb(e.node));
+    for (const BodyPoint& e : t.eyelets) {
+      link(tb, nb(e.node));
+      if (e.element >= 0)
+        link(tb, nb(m.elements[static_cast<std::size_t>(e.element)].node_b));
+    }
   }
   adj.assign(blocks.size(), {});
   for (const auto& [a, b] : edges) {

@@ -160,6 +160,22 @@ void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, 
   if (frame == LoadFrame::kWorld) tangent->noalias() -= weight * (N.transpose() * S * N);
 }
 
+Eigen::Matrix<double, 12, 6> CalcRodNTransposeDerivative(double xi, const Vec6& d,
+                                                         const Vec6& F) {
+  // As in AddRodSectionLoad: N^T F = [Ad_m^T F - T^-T(-d) z;  T^-T(d) z],  z = xi T(xi d)^T F.
+  const Vec6 xd = xi * d;
+  const Mat6 T_p = TSE3(xd);
+  const Mat6 Ad_m = Ad(ExpSE3(-xd));
+  const Vec6 tF = T_p.transpose() * F;
+  const Vec6 z = xi * tF;
+  const Mat6 dz = -(xi * xi) * (T_p.transpose() * DTSE3InvT(xd, tF));
+  Eigen::Matrix<double, 12, 6> G;
+  G.topRows<6>() = -xi * (Star(Ad_m.transpose() * F) * TSE3(-xd)) + DTSE3InvT(-d, z) -
+                   TSE3Inv(-d).transpose() * dz;
+  G.bottomRows<6>() = DTSE3InvT(d, z) + TSE3Inv(d).transpose() * dz;
+  return G;
+}
+
 namespace {
 // J(v) = I + A1 V + A2 V^2 (V = Skew(v), phi = |v|): the translation of exp(X) is J(w_X) u_X.
 // With hat = (1/phi) d/dphi and breve = (1/phi) d/dphi of hat (A0 = sin(phi)/phi):

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "screwfem/elements/rod.h"
+
 namespace screwfem {
 
 namespace {
@@ -15,11 +17,78 @@ Eigen::Matrix<double, 6, 3> STimes(const Vec3& r, const Mat3& M) {
   return out;
 }
 
+// The section frame of an eyelet between two nodes, from its element's node frames H_A, H_B:
+// H_E = H_A exp(xi d) with d = log(H_A^-1 H_B) on the element's branch, and (N != nullptr)
+// the interpolation N(xi, d) with dh_E = N [dh_A; dh_B].
+struct SpanEnd {
+  SE3 H;
+  Vec6 d;
+};
+void CalcSpanEnd(const Data& data, const BodyPoint& p, const SE3& H_A, const SE3& H_B,
+                 SpanEnd* out) {
+  out->d = CalcRodRelativeMotion(H_A, H_B, data.w_ref[static_cast<std::size_t>(p.element)]);
+  out->H = H_A * ExpSE3(p.xi * out->d);
+}
+
+int NodeB(const Model& model, const BodyPoint& p) {
+  return model.elements[static_cast<std::size_t>(p.element)].node_b;
+}
+
 }  // namespace
 
 Vec3 BodyPointPosition(const Data& data, const BodyPoint& point) {
   const SE3& H = NodeFrame(data, point.node);
   return H.x + H.R * point.offset;
+}
+
+SE3 BodyPointFrame(const Model& model, const Data& data, const BodyPoint& point) {
+  if (point.element < 0) return NodeFrame(data, point.node);
+  SpanEnd e;
+  CalcSpanEnd(data, point, NodeFrame(data, point.node), NodeFrame(data, NodeB(model, point)), &e);
+  return e.H;
+}
+
+Vec3 BodyPointPosition(const Model& model, const Data& data, const BodyPoint& point) {
+  const SE3 H = BodyPointFrame(model, data, point);
+  return H.x + H.R * point.offset;
+}
+
+bool CalcSegmentGradient(const Model& model, const Data& data, const TendonSegment& segment,
+                         SegmentGradient* out) {
+  const BodyPoint* ends[2] = {&segment.a, &segment.b};
+  SpanEnd span[2];
+  SE3 H[2];
+  for (int k = 0; k < 2; ++k) {
+    const BodyPoint& p = *ends[k];
+    if (p.element < 0) {
+      H[k] = NodeFrame(data, p.node);
+    } else {
+      CalcSpanEnd(data, p, NodeFrame(data, p.node), NodeFrame(data, NodeB(model, p)), &span[k]);
+      H[k] = span[k].H;
+    }
+  }
+  PointDistance g;
+  if (!CalcPointDistance(H[0], segment.a.offset, H[1], segment.b.offset, false, &g)) return false;
+  out->length = g.length;
+  out->count = 0;
+  auto add = [&](int node, const Vec6& part) {
+    if (node == kGround) return;
+    out->nodes[out->count] = node;
+    out->parts[out->count] = part;
+    ++out->count;
+  };
+  for (int k = 0; k < 2; ++k) {
+    const BodyPoint& p = *ends[k];
+    const Vec6 g_E = g.gradient.segment<6>(6 * k);
+    if (p.element < 0) {
+      add(p.node, g_E);
+    } else {
+      const Mat6x12 N = CalcRodN(p.xi, span[k].d);
+      add(p.node, N.leftCols<6>().transpose() * g_E);
+      add(NodeB(model, p), N.rightCols<6>().transpose() * g_E);
+    }
+  }
+  return true;
 }
 
 bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Vec3& r_B,
@@ -144,6 +213,60 @@ bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& s
   return true;
 }
 
+bool TendonSpanSegmentKind::Calc(const Model& model, const Data& data, const Item& segment,
+                                 const NodeMotion<4>& x, const KernelOptions& o,
+                                 ElementTerms<4>* t) {
+  const TendonSegment& s = model.tendon_segments[static_cast<std::size_t>(segment)];
+  const double tau =
+      TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], data, o.time,
+                    o.load_factor);
+  if (tau == 0.0) {
+    t->active = false;
+    return true;
+  }
+  const BodyPoint* ends[2] = {&s.a, &s.b};
+  SpanEnd span[2];
+  SE3 H[2];
+  for (int k = 0; k < 2; ++k) {
+    if (ends[k]->element < 0) {
+      H[k] = *x.H[2 * k];
+    } else {
+      CalcSpanEnd(data, *ends[k], *x.H[2 * k], *x.H[2 * k + 1], &span[k]);
+      H[k] = span[k].H;
+    }
+  }
+  PointDistance g;
+  if (!CalcPointDistance(H[0], s.a.offset, H[1], s.b.offset, o.tangent, &g)) {
+    t->active = false;  // coinciding eyelets: no direction, no force
+    return true;
+  }
+  // dh_E = N_k [dh of the end's two nodes]; an end on a node: [I 0].
+  Eigen::Matrix<double, 12, 24> N = Eigen::Matrix<double, 12, 24>::Zero();
+  for (int k = 0; k < 2; ++k) {
+    if (ends[k]->element < 0)
+      N.block<6, 6>(6 * k, 12 * k).setIdentity();
+    else
+      N.block<6, 12>(6 * k, 12 * k) = CalcRodN(ends[k]->xi, span[k].d);
+  }
+  t->residual.noalias() = tau * (N.transpose() * g.gradient);
+  const double arm = std::max({1.0, s.a.offset.norm(), s.b.offset.norm()});
+  t->force_scale = tau * arm;
+  t->term_scale = tau * arm;
+  if (!o.tangent) return true;
+  // tau (N^T H_l N + blockdiag(G_E P(d))): the eyelet frames' hessian carried to the nodes and
+  // the variation of the interpolation at fixed g_E.
+  const Eigen::Matrix<double, 12, 24> HN = g.hessian * N;
+  t->stiffness.noalias() = tau * (N.transpose() * HN);
+  for (int k = 0; k < 2; ++k) {
+    if (ends[k]->element < 0) continue;
+    const Vec6 g_E = g.gradient.segment<6>(6 * k);
+    t->stiffness.block<12, 12>(12 * k, 12 * k).noalias() +=
+        tau * (CalcRodNTransposeDerivative(ends[k]->xi, span[k].d, g_E) * CalcRodP(span[k].d));
+  }
+  t->has_stiffness = true;
+  return true;
+}
+
 bool ForceElementKind::Calc(const Model& model, const Data& data, const Item& element,
                             const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
   const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
@@ -187,15 +310,16 @@ namespace {
 // Length and rate of the segment between two body points in the current state.
 void AddSegmentState(const Model& model, const Data& data, const BodyPoint& a, const BodyPoint& b,
                      LineForceState* s) {
-  PointDistance g;
-  if (!CalcPointDistance(NodeFrame(data, a.node), a.offset, NodeFrame(data, b.node), b.offset,
-                         false, &g))
+  SegmentGradient g;
+  if (!CalcSegmentGradient(model, data, {-1, a, b}, &g))
     return;  // coinciding points: zero length, no rate
-  const int nodes[2] = {a.node, b.node};
-  Vec12 eta;
-  GatherNodeMotion<2>(model, data, nodes, &eta, nullptr);
   s->length += g.length;
-  s->rate += g.gradient.dot(eta);
+  for (int i = 0; i < g.count; ++i) {
+    const int node[1] = {g.nodes[i]};
+    Vec6 eta;
+    GatherNodeMotion<1>(model, data, node, &eta, nullptr);
+    s->rate += g.parts[i].dot(eta);
+  }
 }
 
 }  // namespace
@@ -227,23 +351,13 @@ ProfileValue TendonTargetLength(const Tendon& tendon, const Data& data, double t
   return p;
 }
 
-double CalcTendonLength(const Model& model, const Data& data, int tendon,
-                        std::vector<Vec6>* gradient) {
+double CalcTendonLength(const Model& model, const Data& data, int tendon) {
   const Tendon& td = model.tendons[static_cast<std::size_t>(tendon)];
-  if (gradient) gradient->assign(td.eyelets.size(), Vec6::Zero());
   double L = 0.0;
   for (std::size_t k = 0; k + 1 < td.eyelets.size(); ++k) {
     const BodyPoint& a = td.eyelets[k];
     const BodyPoint& b = td.eyelets[k + 1];
-    PointDistance g;
-    if (!CalcPointDistance(NodeFrame(data, a.node), a.offset, NodeFrame(data, b.node), b.offset,
-                           false, &g))
-      continue;
-    L += g.length;
-    if (gradient) {
-      (*gradient)[k] += g.gradient.head<6>();
-      (*gradient)[k + 1] += g.gradient.tail<6>();
-    }
+    L += (BodyPointPosition(model, data, b) - BodyPointPosition(model, data, a)).norm();
   }
   return L;
 }

@@ -289,6 +289,22 @@ BodyPoint SceneCompiler::ResolveBodyPoint(const BodyPointSpec& p, const FieldSou
   if (!p.along_rod) return {NodeAt(p.body, p.at, at, what), p.offset};
   const NodeMatch match =
       builder_.FindRodNodeAtArcLength(body_index_[static_cast<std::size_t>(p.body)], p.arc_length);
+  const int rod = body_index_[static_cast<std::size_t>(p.body)];
+  const double length = builder_.RodLength(rod);
+  if (match.node < 0 && what == "eyelet") {
+    // An eyelet between nodes: on the section of the element there (Build places it).
+    if (!(p.arc_length >= 0.0 && p.arc_length <= length * (1.0 + 1e-12))) {
+      std::ostringstream s;
+      s.precision(9);
+      s << "eyelet: arc length " << p.arc_length << " m is off soft body '" << body.name
+        << "' (length " << length << " m)";
+      Fail(at, s.str());
+    }
+    BodyPoint point{kGround, p.offset};
+    point.rod = rod;
+    point.arc_length = p.arc_length;
+    return point;
+  }
   if (match.node < 0) {
     std::ostringstream s;
     s.precision(6);

@@ -16,6 +16,7 @@
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/contact.h"
 #include "screwfem/elements/joint.h"
+#include "screwfem/elements/rod.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
 
@@ -200,6 +201,11 @@ void VtkWriter::LayOut(const Model& model) {
     PointSource s;
     s.kind = p.node == kGround ? PointSource::Kind::kWorld : PointSource::Kind::kNode;
     s.index = p.node;
+    if (p.element >= 0) {  // an eyelet between nodes: on its element's section
+      s.kind = PointSource::Kind::kSection;
+      s.index = p.element;
+      s.xi = p.xi;
+    }
     s.offset = p.offset;
     s.origin = false;
     return add_point(s);
@@ -255,6 +261,20 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
       v = Vec3::Zero();
       const Vec3 F = c.active ? Vec3(c.normal_force * c.normal + c.friction_force) : Vec3::Zero();
       for (int k = 0; k < 3; ++k) contact_force_[3 * i + k] = F(k);
+    } else if (s.kind == PointSource::Kind::kSection) {
+      // H_A exp(xi d) and the interpolated body velocity N(xi, d) [eta_A; eta_B] (method.md §2.5).
+      const RodElement& e = model.elements[static_cast<std::size_t>(s.index)];
+      const SE3& HA = NodeFrame(data, e.node_a);
+      const Vec6 d = CalcRodRelativeMotion(HA, NodeFrame(data, e.node_b),
+                                           data.w_ref[static_cast<std::size_t>(s.index)]);
+      const SE3 H = HA * ExpSE3(s.xi * d);
+      const int nodes[2] = {e.node_a, e.node_b};
+      Vec12 eta;
+      GatherNodeMotion<2>(model, data, nodes, &eta, nullptr);
+      const Vec6 eta_s = CalcRodN(s.xi, d) * eta;
+      x = H.Act(s.offset);
+      R = H.R;
+      v = CalcPointMotion(H, eta_s, Vec6::Zero(), s.offset).velocity;
     } else if (s.kind == PointSource::Kind::kJoint) {
       const Joint& j = model.joints[static_cast<std::size_t>(s.index)];
       const SE3 H = NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, s.index);

@@ -210,7 +210,12 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
     }
     for (const TendonSegment& seg : model.tendon_segments) {
       if (model.tendons[static_cast<std::size_t>(seg.tendon)].row < 0) continue;
-      for (const int node : {seg.a.node, seg.b.node})
+      // An eyelet between rod nodes moves with both nodes of its element.
+      const auto node_b = [&](const BodyPoint& p) {
+        return p.element >= 0 ? model.elements[static_cast<std::size_t>(p.element)].node_b
+                              : kGround;
+      };
+      for (const int node : {seg.a.node, seg.b.node, node_b(seg.a), node_b(seg.b)})
         if (node != kGround && model.nodes[static_cast<std::size_t>(node)].dof >= 0)
           touch(model.nodes[static_cast<std::size_t>(node)].dof, 6);
     }

@@ -22,6 +22,7 @@
 #include "screwfem/io/writers.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
+#include "screwfem/elements/tendon.h"
 
 namespace {
 std::atomic<bool> g_counting{false};
@@ -120,8 +121,16 @@ Model MixedModel() {
   // A tendon from the ground through eyelets on a rigid body and along the rod (a ramped
   // tension), and a spring-damper-actuator between a body and a rod node.
   std::vector<BodyPoint> eyelets = {{kGround, Vec3(0, 0.05, 0)}, {link, Vec3(0.1, 0.02, 0)}};
-  for (std::size_t i = 1; i < b.model().rods[0].nodes.size(); ++i)
+  const std::size_t rod_nodes = b.model().rods[0].nodes.size();
+  for (std::size_t i = 1; i < rod_nodes; ++i) {
     eyelets.push_back({b.model().rods[0].nodes[i], Vec3(0, 0.01, 0.01)});
+    if (i == 1) {  // and one between nodes 1 and 2 (TendonSpanSegmentKind)
+      BodyPoint mid{kGround, Vec3(0, 0.01, -0.01)};
+      mid.rod = rod;
+      mid.arc_length = 1.5 * b.RodLength(rod) / static_cast<double>(rod_nodes - 1);
+      eyelets.push_back(mid);
+    }
+  }
   b.AddTendon("tendon", eyelets, Profile::Ramp(0, 0.5, 2.0));
   // A tendon drawn by length from a ground point 0.3 m below the rod's middle node (which the
   // dead load lifts), shortened by 2 mm until 0.02 s: a constraint row, and at the ramp's end
@@ -191,6 +200,9 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
        {ConstraintFormulation::kIndex3, ConstraintFormulation::kGgl}) {
     SCOPED_TRACE(NameOf(constraints));
     const Model model = MixedModel();
+    int span_segments = 0;  // the eyelet between rod nodes makes 4-node tendon items
+    TendonSpanSegmentKind::ForEach(model, [&](int, const int (&)[4]) { ++span_segments; });
+    ASSERT_EQ(span_segments, 2);
     Data data = MakeData(model);
     Integrator integ;
     DynamicOptions options;

@@ -545,12 +545,13 @@ TEST_F(BadFile, ErrorsInAFileNameTheFile) {
 const std::string kRod =
     kHead + "bodies:\n  r: {type: soft, from: A, to: C, section: s, elements: 2, free: true}\n";
 
-TEST(BadInput, EyeletBetweenRodNodesNamesTheNearestNode) {
+TEST(BadInput, EyeletOffTheRodOrAtAPointBetweenNodes) {
+  // An arc length between nodes is an eyelet on the element's section; beyond the rod's end it
+  // is an error.
   ExpectError(kRod + "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 0}\n"
-                     "      - {body: r, s: 0.5, offset: [0, 0.01, 0]}\n    tension: 1\n",
+                     "      - {body: r, s: 2.5, offset: [0, 0.01, 0]}\n    tension: 1\n",
               "bad.yaml:9:9",
-              "tendons.t.eyelets[1]: eyelet: soft body 'r' has no node at arc length 0.5 m "
-              "(nearest node 0.5 m away)");
+              "tendons.t.eyelets[1]: eyelet: arc length 2.5 m is off soft body 'r' (length 2 m)");
   ExpectError(kRod + "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 0}\n"
                      "      - {body: r, at: [0.5, 0, 0]}\n    tension: 1\n",
               "bad.yaml:9:9", "eyelet: soft body 'r' has no node at [0.5, 0, 0]");

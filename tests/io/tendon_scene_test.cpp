@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <string>
 
 #include "run_test_util.h"
+#include "screwfem/build/model_builder.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
@@ -131,6 +133,64 @@ outputs: {interval: 0.05}
   EXPECT_NEAR(tendons.rows[1][2], -0.1, 0.01);
   EXPECT_NEAR(tendons.rows[2][2], -0.1, 0.01);
   EXPECT_GT(tendons.rows.back()[3], 0.0);       // taut, holding the curl
+}
+
+TEST(TendonScene, EyeletsAtArcLengthsBetweenNodesSitOnTheElementSections) {
+  // Eyelets at element midpoints (s: 0.125, 0.375, ...; nodes at 0, 0.25, ...): the scene
+  // compiles them onto the elements' sections at xi = 1/2, and a static run gives the tip of the
+  // same model built in code (ModelBuilder with BodyPoint rod/arc_length).
+  test::ScopedDir dir("tendon_eyelet_scene");
+  const std::string path = dir.path() + "/midpoints.yaml";
+  std::ofstream(path) << "units: SI\ngravity: [0, 0, 0]\npoints: {base: [0, 0, 0], tip: [1, 0, 0]}\n"
+                         "sections:\n  s: {stiffness: [1e5, 1e5, 1e5, 1, 1, 1], "
+                         "inertia: [0.1, 0.1, 0.1, 1e-3, 1e-3, 1e-3]}\n"
+                         "bodies:\n  r: {type: soft, from: base, to: tip, section: s, elements: 4}\n"
+                         "joints:\n  clamp: {type: fixed, at: base, between: [ground, r]}\n"
+                         "tendons:\n  t:\n    eyelets:\n"
+                         "      - {body: r, s: 0, offset: [0, 0.02, 0]}\n"
+                         "      - {body: r, s: 0.125, offset: [0, 0.02, 0]}\n"
+                         "      - {body: r, s: 0.375, offset: [0, 0.02, 0]}\n"
+                         "      - {body: r, s: 0.625, offset: [0, 0.02, 0]}\n"
+                         "      - {body: r, s: 0.875, offset: [0, 0.02, 0]}\n"
+                         "      - {body: r, s: 1, offset: [0, 0.02, 0]}\n"
+                         "    tension: 50\n"
+                         "analysis: {type: static, load_steps: 20}\n";
+  const Scene s = LoadScene(path);
+  const Tendon& t = s.model.tendons[0];
+  ASSERT_EQ(t.eyelets.size(), 6u);
+  EXPECT_EQ(t.eyelets[0].element, -1);
+  EXPECT_EQ(t.eyelets[5].element, -1);
+  for (std::size_t k = 1; k < 5; ++k) {
+    EXPECT_GE(t.eyelets[k].element, 0);
+    EXPECT_NEAR(t.eyelets[k].xi, 0.5, 1e-12);
+  }
+  Data d = MakeData(s.model);
+  StaticOptions o = s.analysis.statics;
+  const StaticResult r = SolveStatic(s.model, d, o);
+  ASSERT_TRUE(r.converged) << r.message;
+
+  ModelBuilder b;
+  const int rod = b.AddStraightRod(
+      "r", Vec3::Zero(), Vec3::UnitX(), 4,
+      Section::FromDiagonals((Vec6() << 1e5, 1e5, 1e5, 1, 1, 1).finished()));
+  b.FixNode(b.model().rods[0].nodes.front());
+  std::vector<BodyPoint> eyelets;
+  for (double a : {0.0, 0.125, 0.375, 0.625, 0.875, 1.0}) {
+    BodyPoint p{kGround, Vec3(0, 0.02, 0)};
+    p.rod = rod;
+    p.arc_length = a;
+    eyelets.push_back(p);
+  }
+  b.AddTendon("t", eyelets, Profile::Constant(50.0));
+  const Model m = b.Build();
+  Data dm = MakeData(m);
+  StaticOptions om;
+  om.load_steps = 20;
+  ASSERT_TRUE(SolveStatic(m, dm, om).converged);
+  const Vec3 tip = d.H[static_cast<std::size_t>(s.model.rods[0].nodes.back())].x;
+  const Vec3 tip_code = dm.H[static_cast<std::size_t>(m.rods[0].nodes.back())].x;
+  EXPECT_LT((tip - tip_code).norm(), 1e-9);
+  EXPECT_GT(tip.y(), 0.3);  // curled towards the tendon
 }
 
 }  // namespace

@@ -630,6 +630,35 @@ class ModelBuilderTest(unittest.TestCase):
         np.testing.assert_allclose(tip[:2], [0.729126, 0.572854], atol=2e-6)
         self.assertLess(length, 1.0)
 
+    def test_tendon_eyelets_between_nodes_from_python(self):
+        # Eyelets at the midpoints of 8 elements (BodyPoint.on_rod): the rod curls towards the
+        # arc of curvature tau d / EI = 1 1/m (tip error 0.0295 m with 8 elements, second order,
+        # tests/elements/tendon_eyelet_test.cpp).
+        b = sf.ModelBuilder()
+        section = sf.Section(np.array([1e5, 1e5, 1e5, 1.0, 1.0, 1.0]), np.ones(6))
+        rod = b.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 8, section)
+        b.fix_node(b.find_node_at([0, 0, 0]).node)
+        arcs = [0.0] + [(i + 0.5) / 8 for i in range(8)] + [1.0]
+        eyelets = [sf.BodyPoint.on_rod(rod, s, [0, 0.02, 0]) for s in arcs]
+        self.assertEqual(eyelets[1].rod, rod)
+        self.assertEqual(eyelets[1].element, -1)  # placed by build
+        b.add_tendon("flexor", eyelets, sf.Profile.constant(50.0))
+        sim = sf.Simulation(sf.Scene(b.build(), "eyelets"))
+        options = sf.StaticOptions()
+        options.load_steps = 20
+        sim.solve_static(options)
+        self.assertEqual(sim.tendon_state("flexor")[2], 50.0)
+        tip = sim.node_frame(sim.model.rods[0].nodes[-1])[:3, 3]
+        arc = (1 - 5e-4) * np.array([math.sin(1.0), 1 - math.cos(1.0)])
+        self.assertLess(np.linalg.norm(tip[:2] - arc), 0.032)
+        self.assertGreater(np.linalg.norm(tip[:2] - arc), 0.027)
+        with self.assertRaisesRegex(sf.InputError, "off the rod"):
+            bad = sf.ModelBuilder()
+            r = bad.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 2, section)
+            bad.add_tendon("t", [sf.BodyPoint(sf.GROUND, [0, 1, 0]),
+                                 sf.BodyPoint.on_rod(r, 1.5)], sf.Profile.constant(1.0))
+            bad.build()
+
     def test_actuators_from_python_curl_the_rod_and_take_inputs(self):
         # A cantilever (EA = 1e5 N, EI = 1 N m^2) with a pressure chamber driven by the input
         # "p": one element bends by kappa3 = -p A r2 / EI exactly (method-next.md T5.2).

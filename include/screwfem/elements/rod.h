@@ -180,6 +180,11 @@ void AddRodDamping(const RodElement& element, const Section& section, const Mat6
 void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, LoadFrame frame,
                        const Vec3& force, const Vec3& moment, Vec12* g, Mat12* tangent);
 
+// The derivative of N(xi, d)^T F in d at fixed F (12 x 6): d(N^T F)/d[dh_A; dh_B] at fixed F
+// is this times P(d) (the first part of AddRodSectionLoad's tangent; tendon eyelets between
+// nodes, elements/tendon.h).
+Eigen::Matrix<double, 12, 6> CalcRodNTransposeDerivative(double xi, const Vec6& d, const Vec6& F);
+
 // A dead force f_w per unit length (e.g. rho A g) over the element, 3-point Gauss:
 // g and the tangent of -g (both overwritten). The same as the section loads
 // L w_i N_i^T [R_i^T f_w; 0] at the Gauss points (AddRodSectionLoad), computed from the

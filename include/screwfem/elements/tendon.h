@@ -44,11 +44,22 @@ double TendonTension(const Tendon& tendon, const Data& data, double time,
 ProfileValue TendonTargetLength(const Tendon& tendon, const Data& data, double time,
                                 double load_factor = 1.0);
 
-// The length L(q) of a tendon in the current state of data [m], and (gradient != nullptr) its
-// gradient dL/d[dh] node by node: gradient[k] is the part on the k-th eyelet's node (6 rows,
-// node-frame components; eyelets on the same node each get their part).
-double CalcTendonLength(const Model& model, const Data& data, int tendon,
-                        std::vector<Vec6>* gradient = nullptr);
+// The length L(q) of a tendon in the current state of data [m].
+double CalcTendonLength(const Model& model, const Data& data, int tendon);
+
+// The length of one tendon segment and its gradient node by node: parts[i] is
+// dl/d[dh of nodes[i]] (node-frame components), i < count; an eyelet on a node gives one part,
+// an eyelet between nodes two (its element's nodes A and B: parts N_A^T g, N_B^T g with g the
+// gradient on the eyelet's section frame and N the element's interpolation, rod.h CalcRodN).
+// Parts on the ground are left out. False when the eyelets coincide (no direction).
+struct SegmentGradient {
+  double length = 0.0;
+  int count = 0;
+  int nodes[4];
+  Vec6 parts[4];
+};
+bool CalcSegmentGradient(const Model& model, const Data& data, const TendonSegment& segment,
+                         SegmentGradient* out);
 
 // Sets data.tendon_slack for the length-driven tendons from the current state at `time` (the
 // active set of the unilateral constraint L(q) <= L_p(t), docs/numerics.md): a taut tendon
@@ -68,6 +79,7 @@ struct TendonSegmentKind {
   static void ForEach(const Model& model, F&& f) {
     for (std::size_t i = 0; i < model.tendon_segments.size(); ++i) {
       const TendonSegment& s = model.tendon_segments[i];
+      if (s.a.element >= 0 || s.b.element >= 0) continue;  // TendonSpanSegmentKind's
       const int nodes[2] = {s.a.node, s.b.node};
       f(static_cast<int>(i), nodes);
     }
@@ -75,6 +87,41 @@ struct TendonSegmentKind {
   static bool Calc(const Model& model, const Data& data, const Item& segment,
                    const NodeMotion<2>& motion, const KernelOptions& options,
                    ElementTerms<2>* terms);
+  static void AddEnergy(const Model&, const Data&, const Item&, Energy*) {}
+};
+
+// A tendon segment with an eyelet between nodes at one end or both (docs/numerics.md, "Eyelets
+// between nodes"): the eyelet's section frame is H_E = H_A exp(xi d), d = log(H_A^-1 H_B) of
+// its element, and its increment dh_E = N(xi, d) [dh_A; dh_B] (rod.h, CalcRodN). The items
+// couple four nodes: each end's element nodes A and B (an end on a node: that node and the
+// ground). With g_E = dl/d[dh_E] and H_l the hessian of CalcPointDistance on the two eyelet
+// frames, the residual rows are tau N^T g_E and the exact stiffness
+//   tau (N^T H_l N + blockdiag(G_E P(d)))   (N = blockdiag(N_1, N_2)),
+// G_E = d(N^T F)/dd at F = g_E (rod.h, CalcRodNTransposeDerivative), the variation of the
+// interpolation itself.
+struct TendonSpanSegmentKind {
+  static constexpr int kNodes = 4;
+  using Item = int;  // index into Model::tendon_segments
+  template <class F>
+  static void ForEach(const Model& model, F&& f) {
+    for (std::size_t i = 0; i < model.tendon_segments.size(); ++i) {
+      const TendonSegment& s = model.tendon_segments[i];
+      if (s.a.element < 0 && s.b.element < 0) continue;  // TendonSegmentKind's
+      int nodes[4];
+      SpanNodes(model, s.a, nodes);
+      SpanNodes(model, s.b, nodes + 2);
+      f(static_cast<int>(i), nodes);
+    }
+  }
+  // The two nodes of an end: its element's nodes, or its node and the ground.
+  static void SpanNodes(const Model& model, const BodyPoint& p, int* nodes) {
+    nodes[0] = p.node;
+    nodes[1] = p.element >= 0 ? model.elements[static_cast<std::size_t>(p.element)].node_b
+                              : kGround;
+  }
+  static bool Calc(const Model& model, const Data& data, const Item& segment,
+                   const NodeMotion<4>& motion, const KernelOptions& options,
+                   ElementTerms<4>* terms);
   static void AddEnergy(const Model&, const Data&, const Item&, Energy*) {}
 };
 
@@ -111,7 +158,11 @@ struct LineForceState {
 };
 LineForceState CalcTendonState(const Model& model, const Data& data, int tendon);
 LineForceState CalcForceElementState(const Model& model, const Data& data, int element);
-// The world position of a body point in the current state.
+// The world position of a body point on a node (or the ground) in the current state.
 Vec3 BodyPointPosition(const Data& data, const BodyPoint& point);
+// The frame a body point is fixed in, in the current state: its node's, or for a point between
+// nodes the section frame H_A exp(xi d) of its element; and the point's world position.
+SE3 BodyPointFrame(const Model& model, const Data& data, const BodyPoint& point);
+Vec3 BodyPointPosition(const Model& model, const Data& data, const BodyPoint& point);
 
 }  // namespace screwfem

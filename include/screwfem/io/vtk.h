@@ -64,8 +64,10 @@ class VtkWriter {
  private:
   // Where a point of the frame comes from.
   struct PointSource {
-    enum class Kind { kJoint, kNode, kWorld, kContact } kind = Kind::kNode;
+    // kSection: a tendon eyelet between rod nodes, on the section at xi of element `index`.
+    enum class Kind { kJoint, kNode, kWorld, kContact, kSection } kind = Kind::kNode;
     int index = -1;  // joint index (kJoint), node index (kNode), contact pair index (kContact)
+    double xi = 0.0;  // kSection
     Vec3 offset = Vec3::Zero();   // kNode: point in the node frame [m]; kWorld: world point
     bool origin = true;           // kNode: the node frame's origin itself
   };
