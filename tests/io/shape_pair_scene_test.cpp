@@ -6,7 +6,9 @@
 
 #include <string>
 
+#include "run_test_util.h"
 #include "screwfem/elements/shape_pair.h"
+#include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
 
 namespace screwfem::shape_pair_scene_test {
@@ -58,6 +60,44 @@ TEST(ShapePairScene, BodiesPairUnlessExcludedAndARodWithItselfWhenAsked) {
     EXPECT_TRUE(p.side[0].rod && p.side[1].rod);
     EXPECT_GE(p.side[1].element - p.side[0].element, 4);
   }
+}
+
+// A 1 kg sphere resting on a fixed one (k = 1e5 N/m, onset 1e-4 m: the penetration branch,
+// gap onset/2 - m g / k): pair_contacts.csv carries its weight along +z at that gap.
+TEST(ShapePairScene, RunWritesPairContactsWithTheRestingSpheresWeight) {
+  const double gap = 0.5e-4 - 9.81 / 1e5;
+  const std::string text = R"(gravity: [0, 0, -9.81]
+bodies:
+  low: {type: rigid, at: [0, 0, 1], mass: 1, inertia: [1, 1, 1], fixed: true,
+        shapes: [{type: sphere, center: [0, 0, 1], radius: 0.1}]}
+  top: {type: rigid, at: [0, 0, )" + std::to_string(1.2 + gap) + R"(], mass: 1,
+        inertia: [0.004, 0.004, 0.004], free: true,
+        shapes: [{type: sphere, center: [0, 0, )" + std::to_string(1.2 + gap) + R"(], radius: 0.1}]}
+contact: {stiffness: 1e5, onset: 1e-4}
+analysis: {type: dynamic, end_time: 0.05, step: 1e-3}
+outputs: {interval: 0.01}
+)";
+  test::ScopedDir dir("shape_pair_scene");
+  const Scene s = ParseScene(text, "rest.yaml");
+  ASSERT_EQ(s.model.shape_pairs.size(), 1u);
+  const RunResult r = RunScene(s, dir.path());
+  ASSERT_TRUE(r.ok) << r.message;
+  const test::Table c = test::ReadCsv(dir.path() + "/pair_contacts.csv");
+  ASSERT_TRUE(c.well_formed) << c.problem;
+  ASSERT_EQ(c.columns.size(), 22u);
+  EXPECT_EQ(c.columns[14], "nx");
+  ASSERT_GE(c.rows.size(), 5u);
+  const std::vector<double>& last = c.rows.back();
+  EXPECT_NEAR(last[0], 0.05, 1e-12);
+  // Side A is the first body (low): the normal points from the resting sphere down to it.
+  EXPECT_EQ(last[2], 0.0);
+  EXPECT_EQ(last[3], 0.0);
+  EXPECT_EQ(last[6], 1.0);
+  EXPECT_NEAR(last[16], -1.0, 1e-12);  // nz
+  EXPECT_NEAR(last[17], 9.81, 1e-6);   // fn
+  EXPECT_NEAR(last[21], gap, 1e-9);
+  EXPECT_NEAR(last[10], 1.1, 1e-9);        // paz: the surface point of A
+  EXPECT_NEAR(last[13], 1.1 + gap, 1e-9);  // pbz
 }
 
 TEST(ShapePairScene, BadInputIsReportedAtFileLineColumnNamingTheField) {

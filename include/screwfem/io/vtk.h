@@ -64,8 +64,10 @@ class VtkWriter {
  private:
   // Where a point of the frame comes from.
   struct PointSource {
-    enum class Kind { kJoint, kNode, kWorld, kContact } kind = Kind::kNode;
-    int index = -1;  // joint index (kJoint), node index (kNode), contact pair index (kContact)
+    // kPairContact: side `offset.x()` (0: A, 1: B) of a pair of moving shapes
+    enum class Kind { kJoint, kNode, kWorld, kContact, kPairContact } kind = Kind::kNode;
+    int index = -1;  // joint index (kJoint), node index (kNode), contact pair index (kContact,
+                     // kPairContact: into Model::shape_pairs)
     Vec3 offset = Vec3::Zero();   // kNode: point in the node frame [m]; kWorld: world point
     bool origin = true;           // kNode: the node frame's origin itself
   };
