@@ -856,7 +856,8 @@ void BuildForceElements(Model& m) {
 }
 
 // Pairs between moving shapes (elements/shape_pair.h), enumerated once: every two contact
-// entities (a rod: its element capsules; a body: its spheres and capsules, boxes are left out)
+// entities (a rod: its element capsules; a body: its spheres, capsules and boxes, a box only
+// against spheres)
 // whose group bitmasks match, that are not excluded and not joined (a shared node or a joint
 // between their nodes); a rod with itself when ContactSettings::self, skipping elements whose
 // nearest ends are closer along the rod than self_skip. All pairs of segments are stored: O(n^2)
@@ -883,7 +884,6 @@ void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
     entities.push_back({true, c.rod, static_cast<int>(i), m.rods[static_cast<std::size_t>(c.rod)].nodes});
   }
   for (const ContactShape& c : m.contact_shapes) {
-    if (c.type == ContactShapeType::kBox) continue;
     bool seen = false;
     for (const Entity& e : entities) seen = seen || (!e.rod && e.index == c.body);
     if (!seen) entities.push_back({false, c.body, -1, {m.bodies[static_cast<std::size_t>(c.body)].node}});
@@ -949,12 +949,16 @@ void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
     }
     const RigidBody& body = m.bodies[static_cast<std::size_t>(e.index)];
     for (const ContactShape& c : m.contact_shapes) {
-      if (c.body != e.index || c.type == ContactShapeType::kBox) continue;
+      if (c.body != e.index) continue;
       Segment g;
       g.side.node[0] = body.node;
       g.side.offset[0] = c.from;
       g.side.offset[1] = c.type == ContactShapeType::kCapsule ? c.to : c.from;
       g.side.radius = c.radius;
+      if (c.type == ContactShapeType::kBox) {
+        g.side.half = c.to;
+        g.side.radius = 0.0;
+      }
       g.side.owner = e.index;
       g.mass = fixed(body.node) ? INFINITY : body.mass;
       g.first = g.last = 0;
@@ -964,18 +968,25 @@ void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
     return out;
   };
   const double gravity = m.gravity.norm() > 0.0 ? m.gravity.norm() : 9.81;
+  auto sphere = [](const ShapePairSide& s) {
+    return !s.rod && s.half.x() == 0.0 && s.offset[0] == s.offset[1];
+  };
   auto add = [&](const Segment& a, const Segment& b) {
     if (std::isinf(a.mass) && std::isinf(b.mass)) return;
+    // A box pairs with spheres only (the box on side B); segments against boxes are left out.
+    const bool box_a = a.side.half.x() > 0.0, box_b = b.side.half.x() > 0.0;
+    if ((box_a && !sphere(b.side)) || (box_b && !sphere(a.side))) return;
     ShapePair p;
-    p.side[0] = a.side;
-    p.side[1] = b.side;
+    p.side[0] = box_a ? b.side : a.side;
+    p.side[1] = box_a ? a.side : b.side;
     m.shape_pairs.push_back(p);
     const double reduced = std::isinf(a.mass)   ? b.mass
                            : std::isinf(b.mass) ? a.mass
                                                 : a.mass * b.mass / (a.mass + b.mass);
     masses->push_back(reduced);
     *w_max = std::max(*w_max, std::min(a.mass, b.mass) * gravity);
-    *r_min = std::min(*r_min, std::min(a.side.radius, b.side.radius));
+    *r_min = std::min(*r_min, std::min(box_a ? a.side.half.minCoeff() : a.side.radius,
+                                         box_b ? b.side.half.minCoeff() : b.side.radius));
   };
   for (std::size_t i = 0; i < entities.size(); ++i) {
     const Entity& a = entities[i];

@@ -73,7 +73,7 @@ void SetLevers(const ShapePair& pair, const SE3* const (&H)[4], ShapePairGeometr
     Vec3 b[2] = {Vec3::Zero(), Vec3::Zero()};
     for (int j = 0; j < 2; ++j) {
       out->weight[2 * side + sd.end_node[j]] += w[j];
-      b[sd.end_node[j]] += w[j] * sd.offset[j];
+      b[sd.end_node[j]] += w[j] * (sd.half.x() > 0.0 ? out->box_point : sd.offset[j]);
     }
     const double sign = side == 0 ? 1.0 : -1.0;
     for (int i = 0; i < 2; ++i) {
@@ -91,10 +91,40 @@ bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], doub
   Vec3 A0, A1, B0, B1;
   SideEnds(pair.side[0], H, 0, &A0, &A1);
   SideEnds(pair.side[1], H, 2, &B0, &B1);
-  // Bounding spheres of the two capsules.
+  // Bounding spheres of the two capsules (a box: of its corners).
+  const Vec3& half = pair.side[1].half;
   const double bound = 0.5 * ((A1 - A0).norm() + (B1 - B0).norm()) + pair.side[0].radius +
-                       pair.side[1].radius + reject;
+                       pair.side[1].radius + half.norm() + reject;
   if ((0.5 * (A0 + A1 - B0 - B1)).squaredNorm() > bound * bound) return false;
+  if (half.x() > 0.0) {
+    // A sphere (A0 = A1) against a box centred at B0: clamp the centre into the box; inside,
+    // leave through the face nearest to it.
+    const SE3& Hb = *H[2];
+    const Vec3 c = Hb.R.transpose() * (A0 - B0);
+    Vec3 q = c.cwiseMax(-half).cwiseMin(half);
+    Vec3 d_local;
+    double distance;
+    if (q != c) {
+      d_local = c - q;
+      distance = d_local.norm();
+      d_local /= distance;
+    } else {
+      int axis = 0;
+      (half - c.cwiseAbs()).minCoeff(&axis);
+      const double sign = c(axis) >= 0.0 ? 1.0 : -1.0;
+      q(axis) = sign * half(axis);
+      d_local = sign * Vec3::Unit(axis);
+      distance = sign * c(axis) - half(axis);  // <= 0
+    }
+    out->s[0] = out->s[1] = 0.0;
+    out->box_point = pair.side[1].offset[0] + q;
+    out->normal = Hb.R * d_local;
+    out->gap = distance - pair.side[0].radius;
+    out->point[0] = A0 - pair.side[0].radius * out->normal;
+    out->point[1] = Hb.x + Hb.R * out->box_point;
+    SetLevers(pair, H, out);
+    return true;
+  }
   double s = 0.0, t = 0.0;
   ClosestSegments(A0, A1, B0, B1, &s, &t);
   const Vec3 p = A0 + s * (A1 - A0), q = B0 + t * (B1 - B0);
@@ -116,7 +146,9 @@ void FreezeShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4],
   SideEnds(pair.side[0], H, 0, &A0, &A1);
   SideEnds(pair.side[1], H, 2, &B0, &B1);
   *out = frozen;
-  const Vec3 p = A0 + frozen.s[0] * (A1 - A0), q = B0 + frozen.s[1] * (B1 - B0);
+  const Vec3 p = A0 + frozen.s[0] * (A1 - A0);
+  const Vec3 q = pair.side[1].half.x() > 0.0 ? Vec3(H[2]->x + H[2]->R * frozen.box_point)
+                                             : Vec3(B0 + frozen.s[1] * (B1 - B0));
   const Vec3& n = frozen.normal;
   out->gap = n.dot(p - q) - pair.side[0].radius - pair.side[1].radius;
   out->point[0] = p - pair.side[0].radius * n;

@@ -35,7 +35,7 @@ struct Case {
   Eigen::Matrix<double, 24, 1> eta;
 };
 
-enum class Kind { kRodRod, kRodCapsule, kSphereCapsule, kParallelRods };
+enum class Kind { kRodRod, kRodCapsule, kSphereCapsule, kParallelRods, kSphereBox };
 
 Case MakeCase(Kind kind, double mu, unsigned seed) {
   std::mt19937 rng(seed);
@@ -83,6 +83,12 @@ Case MakeCase(Kind kind, double mu, unsigned seed) {
       rigid_side(b, Vec3(0.02, 0.01, -0.03), Vec3(-0.06, 0.02, 0.01), 0.03);
       b.node[0] = 2;
       break;
+    case Kind::kSphereBox:
+      rigid_side(a, Vec3(0.03, -0.02, 0.01), Vec3(0.03, -0.02, 0.01), 0.05);
+      rigid_side(b, Vec3(0.02, 0.01, -0.03), Vec3(0.02, 0.01, -0.03), 0.0);
+      b.half = Vec3(0.04, 0.06, 0.03);
+      b.node[0] = 2;
+      break;
   }
   if (a.node[1] == kGround) a.node[1] = 1;  // a rigid side's node 1 carries nothing
   if (b.node[1] == kGround) b.node[1] = 3;
@@ -124,9 +130,10 @@ ElementTerms<4> Terms(const Case& c, const SE3 (&frames)[4], const Eigen::Matrix
 }
 
 TEST(ShapePairKind, TangentsMatchFiniteDifferencesAtTheFrozenClosestPointsAndInTheVelocities) {
-  for (Kind kind : {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule, Kind::kParallelRods}) {
+  for (Kind kind : {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule, Kind::kParallelRods,
+                    Kind::kSphereBox}) {
     for (const double mu : {0.0, 0.4}) {
-      for (unsigned seed : {1u, 2u}) {
+      for (unsigned seed : {1u, 2u, 3u}) {
         const Case c = MakeCase(kind, mu, seed);
         KernelOptions o;
         o.dynamics = true;
@@ -162,7 +169,7 @@ TEST(ShapePairKind, TangentsMatchFiniteDifferencesAtTheFrozenClosestPointsAndInT
 }
 
 TEST(ShapePairKind, StaticForceIsTheGradientOfThePenaltyPotential) {
-  for (Kind kind : {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule}) {
+  for (Kind kind : {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule, Kind::kSphereBox}) {
     const Case c = MakeCase(kind, 0.4, 7);
     KernelOptions o;  // statics: no damping, no friction
     const Eigen::Matrix<double, 24, 1> r = Terms(c, c.H, c.eta, o, nullptr).residual;
@@ -320,6 +327,46 @@ TEST(ShapePairValidation, HeadOnSpheresConserveMomentumAndReboundElasticallyWith
   std::printf("momentum drift %.3e %.3e\n", drift[0], drift[1]);
   EXPECT_LT(drift[0], 1e-3);  // measured 4.6e-4 and 1.2e-4 (kg m/s + kg m^2/s)
   EXPECT_GT(drift[0] / drift[1], 3.0);  // second order
+}
+
+// A 1 kg sphere (r = 0.1) resting on the middle of a fixed box's top face, where no vertex or
+// edge is near (k = 1e5, onset 1e-4: the penetration branch, gap onset/2 - m g / k); and a
+// sphere whose centre is inside the box leaves through the nearest face.
+TEST(ShapePairValidation, SphereRestsOnTheMiddleOfABoxFace) {
+  const double gap = 0.5e-4 - 9.81 / 1e5;
+  ModelBuilder b;
+  const int box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+  b.FixNode(box);
+  b.AddRigidBody("table", box, 1.0, Vec3::Zero(), Mat3::Identity());
+  b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.5, 0.4, 0.05), 0.0});
+  const int ball = b.AddNode(SE3{Mat3::Identity(), Vec3(0.1, -0.05, 0.1 + gap)});
+  b.AddRigidBody("ball", ball, 1.0, Vec3::Zero(), 0.004 * Mat3::Identity());
+  b.AddContactShape({1, ContactShapeType::kSphere, Vec3::Zero(), Vec3::Zero(), 0.1});
+  ContactSettings law;
+  law.stiffness = 1e5;
+  law.onset = 1e-4;
+  b.SetContactSettings(law);
+  b.SetGravity(Vec3(0.0, 0.0, -9.81));
+  TwoSpheres s;
+  s.model = b.Build();
+  ASSERT_EQ(s.model.shape_pairs.size(), 1u);
+  EXPECT_GT(s.model.shape_pairs[0].side[1].half.x(), 0.0);  // the box is side B
+  s.data = MakeData(s.model);
+  std::string message;
+  ASSERT_TRUE(AssembleInitialState(s.model, s.data, &message)) << message;
+  ASSERT_TRUE(InitializeDynamics(s.model, s.data, s.integ, DynamicOptions{}, &message)) << message;
+  for (int i = 0; i < 50; ++i) ASSERT_TRUE(Step(s.model, s.data, s.integ, 1e-3).ok);
+  const ShapePairState c = CalcShapePairState(s.model, s.data, 0);
+  ASSERT_TRUE(c.active);
+  EXPECT_NEAR(c.normal_force, 9.81, 1e-6);
+  EXPECT_NEAR(c.gap, gap, 1e-9);
+  EXPECT_NEAR(c.normal.z(), 1.0, 1e-12);
+  EXPECT_NEAR(s.data.H[1].x.z(), 0.1 + gap, 1e-9);
+  // The centre inside the box, 0.01 below the top face: the exit is up, the gap -0.11.
+  s.data.H[1].x = Vec3(0.1, -0.05, -0.01);
+  const ShapePairState inside = CalcShapePairState(s.model, s.data, 0);
+  EXPECT_NEAR(inside.gap, -0.11, 1e-12);
+  EXPECT_NEAR(inside.normal.z(), 1.0, 1e-12);
 }
 
 // Two equal cantilevers crossing at right angles: the upper one's tip (loaded by P) over the
