@@ -169,7 +169,11 @@ void BindValues(py::module_& m) {
       .def_readwrite("onset", &ContactSettings::onset, "delta [m]")
       .def_readwrite("damping_ratio", &ContactSettings::damping_ratio)
       .def_readwrite("friction", &ContactSettings::friction, "mu")
-      .def_readwrite("slip_velocity", &ContactSettings::slip_velocity, "eps_v [m/s]");
+      .def_readwrite("slip_velocity", &ContactSettings::slip_velocity, "eps_v [m/s]")
+      .def_readwrite("self", &ContactSettings::self, "Rod self-contact.")
+      .def_readwrite("self_skip", &ContactSettings::self_skip,
+                     "Self-contact skips element pairs whose nearest ends are closer along the "
+                     "rod [m] (default 4 r).");
 
   py::class_<NodeMatch>(m, "NodeMatch", "Result of ModelBuilder.find_node_at.")
       .def_readonly("node", &NodeMatch::node, "The node within the tolerance, or -1.")
@@ -242,6 +246,9 @@ void BindBuild(py::module_& m) {
            "Group bitmasks of a rod (rod=True) or rigid body (MuJoCo's contype/conaffinity).")
       .def("exclude_contact", &B::ExcludeContact, py::arg("rod"), py::arg("index"),
            py::arg("obstacle"), "No contact between a rod or rigid body and an obstacle.")
+      .def("exclude_contact_pair", &B::ExcludeContactPair, py::arg("rod_a"), py::arg("index_a"),
+           py::arg("rod_b"), py::arg("index_b"),
+           "No contact between two moving entities (each a rod or a rigid body, by index).")
       .def("set_contact_settings", &B::SetContactSettings, py::arg("settings"))
       .def("build", &B::Build, "The validated Model.");
 }

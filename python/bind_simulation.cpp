@@ -20,6 +20,7 @@
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/rod.h"
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/shape_pair.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/io/scene.h"
@@ -646,6 +647,27 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           },
           "The active contacts as contacts.csv records them: a list of dicts with pair, point "
           "[m], normal, normal_force [N], friction_force [N] (world) and gap [m].")
+      .def(
+          "pair_contact_states",
+          [](S& s) {
+            py::list out;
+            for (int i = 0; i < static_cast<int>(s.model().shape_pairs.size()); ++i) {
+              const ShapePairState c = CalcShapePairState(s.model(), s.data(), i);
+              if (!c.active) continue;
+              const ShapePair& p = s.model().shape_pairs[static_cast<std::size_t>(i)];
+              out.append(py::dict(
+                  py::arg("pair") = i, py::arg("rod_a") = p.side[0].rod,
+                  py::arg("owner_a") = p.side[0].owner, py::arg("rod_b") = p.side[1].rod,
+                  py::arg("owner_b") = p.side[1].owner, py::arg("point_a") = c.point[0],
+                  py::arg("point_b") = c.point[1], py::arg("normal") = c.normal,
+                  py::arg("normal_force") = c.normal_force,
+                  py::arg("friction_force") = c.friction_force, py::arg("gap") = c.gap));
+            }
+            return out;
+          },
+          "The active contacts between moving shapes as pair_contacts.csv records them: dicts "
+          "with pair, rod_a/owner_a, rod_b/owner_b, point_a and point_b [m], normal (from B to "
+          "A), normal_force [N], friction_force [N] (on A, world) and gap [m].")
       .def(
           "joint_coordinate",
           [](S& s, long j, int c) {

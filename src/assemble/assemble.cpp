@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/shape_pair.h"
 #include "screwfem/elements/loads.h"
 #include "screwfem/elements/rigid_body.h"
 #include "screwfem/elements/rod.h"
@@ -382,8 +383,7 @@ void AddTendonRows(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s
 // kind"); joints follow them.
 using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind,
                                 JointSpringKind, TendonSegmentKind, TendonSpanSegmentKind,
-                                ForceElementKind,
-                                ContactKind>;
+                                ForceElementKind, ContactKind, ShapePairKind>;
 constexpr ElementKinds* kElementKinds = nullptr;
 }  // namespace
 

@@ -425,6 +425,10 @@ void ModelBuilder::ExcludeContact(bool rod, int index, int obstacle) {
   model_.contact_exclusions.push_back({rod, index, obstacle});
 }
 
+void ModelBuilder::ExcludeContactPair(bool rod_a, int index_a, bool rod_b, int index_b) {
+  model_.contact_pair_exclusions.push_back({{rod_a, rod_b}, {index_a, index_b}});
+}
+
 void ModelBuilder::SetContactSettings(const ContactSettings& settings) {
   model_.contact = settings;
 }
@@ -890,6 +894,162 @@ void BuildForceElements(Model& m) {
   }
 }
 
+// Pairs between moving shapes (elements/shape_pair.h), enumerated once: every two contact
+// entities (a rod: its element capsules; a body: its spheres, capsules and boxes, a box only
+// against spheres)
+// whose group bitmasks match, that are not excluded and not joined (a shared node or a joint
+// between their nodes); a rod with itself when ContactSettings::self, skipping elements whose
+// nearest ends are closer along the rod than self_skip. All pairs of segments are stored: O(n^2)
+// for self-contact (a grid broad phase is the next step); the kernel rejects a pair apart by
+// its bounding spheres before the closest points. `gravity_weight`: w_max gets the lighter
+// side's weight; masses: the reduced mass of each pair, for the damping.
+template <class Group>
+void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
+                     std::vector<double>* masses) {
+  m.shape_pairs.clear();
+  ContactSettings& law = m.contact;
+  if (!std::isfinite(law.self_skip) || law.self_skip == 0.0)
+    throw InputError("contact: self_skip must be positive (or left to its default)");
+  // Entities: rods (contact_rods) and bodies with sphere or capsule shapes.
+  struct Entity {
+    bool rod;
+    int index;      // rod or body index
+    int contact;    // contact_rods index (rods)
+    std::vector<int> nodes;
+  };
+  std::vector<Entity> entities;
+  for (std::size_t i = 0; i < m.contact_rods.size(); ++i) {
+    const ContactRod& c = m.contact_rods[i];
+    entities.push_back({true, c.rod, static_cast<int>(i), m.rods[static_cast<std::size_t>(c.rod)].nodes});
+  }
+  for (const ContactShape& c : m.contact_shapes) {
+    bool seen = false;
+    for (const Entity& e : entities) seen = seen || (!e.rod && e.index == c.body);
+    if (!seen) entities.push_back({false, c.body, -1, {m.bodies[static_cast<std::size_t>(c.body)].node}});
+  }
+  for (const ContactPairExclusion& x : m.contact_pair_exclusions)
+    for (int k = 0; k < 2; ++k) {
+      const std::size_t size = x.rod[k] ? m.rods.size() : m.bodies.size();
+      if (x.index[k] < 0 || x.index[k] >= static_cast<int>(size))
+        throw InputError(std::string("contact exclusion: no ") + (x.rod[k] ? "rod " : "body ") +
+                         std::to_string(x.index[k]));
+    }
+  auto excluded = [&](const Entity& a, const Entity& b) {
+    for (const ContactPairExclusion& x : m.contact_pair_exclusions)
+      for (int k = 0; k < 2; ++k)
+        if (x.rod[k] == a.rod && x.index[k] == a.index && x.rod[1 - k] == b.rod &&
+            x.index[1 - k] == b.index)
+          return true;
+    return false;
+  };
+  auto joined = [&](const Entity& a, const Entity& b) {
+    auto has = [](const Entity& e, int node) {
+      return std::find(e.nodes.begin(), e.nodes.end(), node) != e.nodes.end();
+    };
+    for (int n : a.nodes)
+      if (has(b, n)) return true;
+    for (const Joint& j : m.joints)
+      if ((has(a, j.node_a) && has(b, j.node_b)) || (has(a, j.node_b) && has(b, j.node_a)))
+        return true;
+    return false;
+  };
+  // The segments of an entity: sides with their masses.
+  struct Segment {
+    ShapePairSide side;
+    double mass;  // INFINITY when every node of the side is fixed
+    int first, last;  // rod: the element's position along the rod and its arc-length span
+    double s0, s1;
+  };
+  auto fixed = [&](int node) { return node == kGround || m.nodes[static_cast<std::size_t>(node)].fixed; };
+  auto segments = [&](const Entity& e) {
+    std::vector<Segment> out;
+    if (e.rod) {
+      const Rod& rod = m.rods[static_cast<std::size_t>(e.index)];
+      const double radius = m.contact_rods[static_cast<std::size_t>(e.contact)].radius;
+      double arc = 0.0;
+      for (int k = 0; k < rod.num_elements; ++k) {
+        const RodElement& el = m.elements[static_cast<std::size_t>(rod.first_element + k)];
+        Segment g;
+        g.side.node[0] = el.node_a;
+        g.side.node[1] = el.node_b;
+        g.side.end_node[1] = 1;
+        g.side.radius = radius;
+        g.side.rod = true;
+        g.side.owner = e.index;
+        g.side.element = rod.first_element + k;
+        g.mass = fixed(el.node_a) && fixed(el.node_b) ? INFINITY : rod.section.inertia(0) * el.length;
+        g.first = g.last = k;
+        g.s0 = arc;
+        arc += el.length;
+        g.s1 = arc;
+        out.push_back(g);
+      }
+      return out;
+    }
+    const RigidBody& body = m.bodies[static_cast<std::size_t>(e.index)];
+    for (const ContactShape& c : m.contact_shapes) {
+      if (c.body != e.index) continue;
+      Segment g;
+      g.side.node[0] = body.node;
+      g.side.offset[0] = c.from;
+      g.side.offset[1] = c.type == ContactShapeType::kCapsule ? c.to : c.from;
+      g.side.radius = c.radius;
+      if (c.type == ContactShapeType::kBox) {
+        g.side.half = c.to;
+        g.side.radius = 0.0;
+      }
+      g.side.owner = e.index;
+      g.mass = fixed(body.node) ? INFINITY : body.mass;
+      g.first = g.last = 0;
+      g.s0 = g.s1 = 0.0;
+      out.push_back(g);
+    }
+    return out;
+  };
+  const double gravity = m.gravity.norm() > 0.0 ? m.gravity.norm() : 9.81;
+  auto sphere = [](const ShapePairSide& s) {
+    return !s.rod && s.half.x() == 0.0 && s.offset[0] == s.offset[1];
+  };
+  auto add = [&](const Segment& a, const Segment& b) {
+    if (std::isinf(a.mass) && std::isinf(b.mass)) return;
+    // A box pairs with spheres only (the box on side B); segments against boxes are left out.
+    const bool box_a = a.side.half.x() > 0.0, box_b = b.side.half.x() > 0.0;
+    if ((box_a && !sphere(b.side)) || (box_b && !sphere(a.side))) return;
+    ShapePair p;
+    p.side[0] = box_a ? b.side : a.side;
+    p.side[1] = box_a ? a.side : b.side;
+    m.shape_pairs.push_back(p);
+    const double reduced = std::isinf(a.mass)   ? b.mass
+                           : std::isinf(b.mass) ? a.mass
+                                                : a.mass * b.mass / (a.mass + b.mass);
+    masses->push_back(reduced);
+    *w_max = std::max(*w_max, std::min(a.mass, b.mass) * gravity);
+    *r_min = std::min(*r_min, std::min(box_a ? a.side.half.minCoeff() : a.side.radius,
+                                         box_b ? b.side.half.minCoeff() : b.side.radius));
+  };
+  for (std::size_t i = 0; i < entities.size(); ++i) {
+    const Entity& a = entities[i];
+    const ContactGroup ga = group(a.rod, a.index);
+    const std::vector<Segment> sa = segments(a);
+    for (std::size_t k = i + 1; k < entities.size(); ++k) {
+      const Entity& b = entities[k];
+      const ContactGroup gb = group(b.rod, b.index);
+      if (((ga.contype & gb.conaffinity) | (gb.contype & ga.conaffinity)) == 0u) continue;
+      if (excluded(a, b) || joined(a, b)) continue;
+      const std::vector<Segment> sb = segments(b);
+      for (const Segment& x : sa)
+        for (const Segment& y : sb) add(x, y);
+    }
+    if (a.rod && law.self) {
+      const double skip = law.self_skip > 0.0 ? law.self_skip
+                                              : 4.0 * m.contact_rods[static_cast<std::size_t>(a.contact)].radius;
+      for (std::size_t x = 0; x < sa.size(); ++x)
+        for (std::size_t y = x + 2; y < sa.size(); ++y)
+          if (sa[y].s0 - sa[x].s1 >= skip) add(sa[x], sa[y]);
+    }
+  }
+}
+
 // Contact (method-next.md §N6): validates shapes, obstacles and the law, enumerates the
 // (moving shape, obstacle) pairs and resolves the defaults (model.h, ContactSettings).
 void BuildContacts(Model& m) {
@@ -950,8 +1110,6 @@ void BuildContacts(Model& m) {
     if (!std::isfinite(v) || v == 0.0)
       throw InputError("contact: stiffness, onset and slip velocity must be positive (or left "
                        "to their defaults)");
-  if (m.obstacles.empty()) return;
-
   // Pairs: each moving shape against each obstacle it may touch.
   auto group = [&](bool rod, int index) {
     for (const ContactGroup& g : m.contact_groups)
@@ -1059,6 +1217,8 @@ void BuildContacts(Model& m) {
       }
     }
   }
+  std::vector<double> pair_masses;  // per shape pair: the reduced mass
+  BuildShapePairs(m, group, &r_min, &w_max, &pair_masses);
   // Defaults (method-next.md §N6.4) and the damping of each pair.
   for (double mass : masses) w_max = std::max(w_max, mass * gravity);
   if (law.onset < 0.0) law.onset = std::isfinite(r_min) ? 0.01 * r_min : 1e-4;
@@ -1067,6 +1227,9 @@ void BuildContacts(Model& m) {
   for (std::size_t i = 0; i < m.contact_pairs.size(); ++i)
     m.contact_pairs[i].damping =
         2.0 * law.damping_ratio * std::sqrt(law.stiffness * std::max(masses[i], 0.0));
+  for (std::size_t i = 0; i < m.shape_pairs.size(); ++i)
+    m.shape_pairs[i].damping =
+        2.0 * law.damping_ratio * std::sqrt(law.stiffness * std::max(pair_masses[i], 0.0));
 }
 
 // Every node that is not fixed is used by a rod, a body or a joint.
@@ -1167,6 +1330,11 @@ void OrderUnknowns(Model& m) {
       for (int j = i + 1; j < 4; ++j) link(nb(nodes[i]), nb(nodes[j]));
   }
   for (const ForceElement& f : m.force_elements) link(nb(f.a.node), nb(f.b.node));
+  // A pair of moving shapes couples the nodes of its two sides (elements/shape_pair.h): the
+  // band grows with the pairs that Build enumerates (all of them, active or not).
+  for (const ShapePair& p : m.shape_pairs)
+    for (int a : p.side[0].node)
+      for (int b : p.side[1].node) link(nb(a), nb(b));
   for (const Joint& j : m.joints) {
     const int coord_block = j.k() > 0 ? add_block(j.coord, j.k()) : -1;
     if (j.row >= 0) {

@@ -221,6 +221,8 @@ class Run {
       // Contacts: one row per active pair (long format), flushed with the other tables.
       if (!model_.contact_pairs.empty())
         contacts_.Open(outdir + "/contacts.csv", StaticColumns(ContactColumns()));
+      if (!model_.shape_pairs.empty())
+        pair_contacts_.Open(outdir + "/pair_contacts.csv", StaticColumns(PairContactColumns()));
       if (scene.outputs.vtk) {
         vtk_.emplace();
         vtk_->Open(outdir + "/vtk", model_, scene.outputs.vtk_format, ExpectedFrames(scene));
@@ -234,6 +236,7 @@ class Run {
       // No header-only tables without a summary that explains them.
       for (std::size_t i = 0; i < num_tables_; ++i) tables_[i]->Close();
       if (contacts_.path().size() > 0) contacts_.Close();
+      if (pair_contacts_.path().size() > 0) pair_contacts_.Close();
       PrepareOutputDirectory(outdir, true);
       throw;
     }
@@ -254,6 +257,7 @@ class Run {
     const bool failed_before = io_error_ || std::string(status) == "failed";
     const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_);
     if (!w && contacts_.path().size() > 0 && !contacts_.Flush()) w = &contacts_;
+    if (!w && pair_contacts_.path().size() > 0 && !pair_contacts_.Flush()) w = &pair_contacts_;
     if (w && !failed_before) {
       status = "failed";
       message = Format("cannot write at t = %.9g s: ", data_.time) + w->path() + ": " +
@@ -263,6 +267,7 @@ class Run {
     bool closed = true;
     for (std::size_t i = 0; i < num_tables_; ++i) closed = tables_[i]->Close() && closed;
     if (contacts_.path().size() > 0) closed = contacts_.Close() && closed;
+    if (pair_contacts_.path().size() > 0) closed = pair_contacts_.Close() && closed;
     if (!closed && !failed_before && !io_error_) {
       status = "failed";
       message = "cannot close the tables: " + std::string(std::strerror(errno));
@@ -517,10 +522,16 @@ class Run {
         for (int i = 0; i < static_cast<int>(model_.contact_pairs.size()); ++i)
           if (CalcContactRow(model_, data, i, &row_)) contacts_.WriteRow(t, WithLoadFactor(row_));
       }
+      if (pair_contacts_.path().size() > 0) {
+        for (int i = 0; i < static_cast<int>(model_.shape_pairs.size()); ++i)
+          if (CalcPairContactRow(model_, data, i, &row_))
+            pair_contacts_.WriteRow(t, WithLoadFactor(row_));
+      }
       last_row_time_ = t;
       std::size_t batch = 0;
       for (std::size_t i = 0; i < num_tables_; ++i) batch = std::max(batch, tables_[i]->batch_bytes());
       batch = std::max(batch, contacts_.batch_bytes());
+      batch = std::max(batch, pair_contacts_.batch_bytes());
       if (batch >= kRowBatchBytes &&
           !FlushRows(t))
         return false;
@@ -544,6 +555,8 @@ class Run {
     if (const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_))
       return WriteFailed(w->path(), t);
     if (contacts_.path().size() > 0 && !contacts_.Flush()) return WriteFailed(contacts_.path(), t);
+    if (pair_contacts_.path().size() > 0 && !pair_contacts_.Flush())
+      return WriteFailed(pair_contacts_.path(), t);
     return true;
   }
 
@@ -699,6 +712,7 @@ class Run {
   bool has_static_ = false;
   CsvWriter points_, joints_, reactions_, energy_, tendons_, forces_, actuators_;
   CsvWriter contacts_;  // long format (one row per active pair): not flushed together
+  CsvWriter pair_contacts_;  // the same for pairs of moving shapes (pair_contacts.csv)
   // The open tables, flushed together (points, joints, reactions and energy always).
   std::array<CsvWriter*, 7> tables_ = {&points_, &joints_, &reactions_, &energy_, nullptr,
                                        nullptr, nullptr};

@@ -474,6 +474,11 @@ void SceneCompiler::AddContacts() {
   for (const auto& [b, obstacle] : c.exclude)
     builder_.ExcludeContact(!spec_.bodies[static_cast<std::size_t>(b)].rigid,
                             body_index_[static_cast<std::size_t>(b)], obstacle);
+  for (const auto& [a, b] : c.exclude_bodies)
+    builder_.ExcludeContactPair(!spec_.bodies[static_cast<std::size_t>(a)].rigid,
+                                body_index_[static_cast<std::size_t>(a)],
+                                !spec_.bodies[static_cast<std::size_t>(b)].rigid,
+                                body_index_[static_cast<std::size_t>(b)]);
 }
 
 Scene SceneCompiler::Compile() {

@@ -1021,7 +1021,7 @@ void SceneReader::ReadContact(const Node* node) {
   r_.ExpectMap(*node, path);
   r_.CheckKeys(*node, path,
                {"stiffness", "onset", "damping_ratio", "friction", "slip_velocity", "obstacles",
-                "exclude"});
+                "exclude", "self", "self_skip"});
   ContactSpec& c = spec_.contact;
   c.present = true;
   if (const Node* v = node->Find("stiffness"))
@@ -1034,6 +1034,9 @@ void SceneReader::ReadContact(const Node* node) {
     c.settings.friction = r_.NonNegativeNumber(*v, Join(path, "friction"));
   if (const Node* v = node->Find("slip_velocity"))
     c.settings.slip_velocity = r_.PositiveNumber(*v, Join(path, "slip_velocity"));
+  if (const Node* v = node->Find("self")) c.settings.self = r_.Bool(*v, Join(path, "self"));
+  if (const Node* v = node->Find("self_skip"))
+    c.settings.self_skip = r_.PositiveNumber(*v, Join(path, "self_skip"));
   std::vector<std::string> names;
   if (const Node* on = node->Find("obstacles")) {
     const std::string op = Join(path, "obstacles");
@@ -1070,19 +1073,35 @@ void SceneReader::ReadContact(const Node* node) {
   if (const Node* en = node->Find("exclude")) {
     const std::string ep = Join(path, "exclude");
     if (!en->IsSequence())
-      r_.Fail(en->location, ep, "expected a list of [body, obstacle] pairs");
+      r_.Fail(en->location, ep, "expected a list of [body, obstacle] or [body, body] pairs");
     for (std::size_t i = 0; i < en->items.size(); ++i) {
       const Node& pair = en->items[i];
       const std::string pp = Index(ep, i);
       if (!pair.IsSequence() || pair.items.size() != 2)
-        r_.Fail(pair.location, pp, "expected [body, obstacle], got " + scene_yaml::Describe(pair));
+        r_.Fail(pair.location, pp,
+                "expected [body, obstacle] or [body, body], got " + scene_yaml::Describe(pair));
       const int body = Body(pair.items[0], Index(pp, 0));
-      const std::string obstacle = r_.Text(pair.items[1], Index(pp, 1));
-      const auto it = std::find(names.begin(), names.end(), obstacle);
-      if (it == names.end())
+      const std::string other = r_.Text(pair.items[1], Index(pp, 1));
+      const auto it = std::find(names.begin(), names.end(), other);
+      if (it != names.end()) {
+        c.exclude.emplace_back(body, static_cast<int>(it - names.begin()));
+        continue;
+      }
+      // Not an obstacle: a second body (a pair of moving bodies that never touch).
+      std::vector<std::string> known = names;
+      int second = -1;
+      for (std::size_t b = 0; b < spec_.bodies.size(); ++b) {
+        known.push_back(spec_.bodies[b].name);
+        if (spec_.bodies[b].name == other) second = static_cast<int>(b);
+      }
+      if (second < 0)
         r_.Fail(pair.items[1].location, Index(pp, 1),
-                "undefined obstacle '" + obstacle + "'" + scene_yaml::DidYouMean(obstacle, names));
-      c.exclude.emplace_back(body, static_cast<int>(it - names.begin()));
+                "undefined obstacle '" + other + "' (nor a body)" +
+                    scene_yaml::DidYouMean(other, known));
+      if (second == body)
+        r_.Fail(pair.items[1].location, Index(pp, 1),
+                "a body cannot be excluded from itself (rod self-contact: 'self: false')");
+      c.exclude_bodies.emplace_back(body, second);
     }
   }
 }

@@ -15,6 +15,7 @@
 
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/shape_pair.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/rod.h"
 #include "screwfem/io/writers.h"
@@ -227,6 +228,15 @@ void VtkWriter::LayOut(const Model& model) {
     s.index = static_cast<int>(i);
     add_vert(add_point(s), -1, -1, -1);
   }
+  // Pairs of moving shapes: a vertex at each side's surface point, carrying the force on it.
+  for (std::size_t i = 0; i < model.shape_pairs.size(); ++i)
+    for (int side = 0; side < 2; ++side) {
+      PointSource s;
+      s.kind = PointSource::Kind::kPairContact;
+      s.index = static_cast<int>(i);
+      s.offset.x() = side;
+      add_vert(add_point(s), -1, -1, -1);
+    }
 
   // Cell data in the order VTK stores the cells: vertices, then lines.
   cell_rod_.insert(cell_rod_.begin(), vert_rod.begin(), vert_rod.end());
@@ -275,6 +285,14 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
       x = H.Act(s.offset);
       R = H.R;
       v = CalcPointMotion(H, eta_s, Vec6::Zero(), s.offset).velocity;
+    } else if (s.kind == PointSource::Kind::kPairContact) {
+      const ShapePairState c = CalcShapePairState(model, data, s.index);
+      const int side = s.offset.x() > 0.5 ? 1 : 0;
+      x = c.point[side];
+      R = Mat3::Identity();
+      v = Vec3::Zero();
+      const Vec3 F = c.active ? Vec3(c.normal_force * c.normal + c.friction_force) : Vec3::Zero();
+      for (int k = 0; k < 3; ++k) contact_force_[3 * i + k] = side == 0 ? F(k) : -F(k);
     } else if (s.kind == PointSource::Kind::kJoint) {
       const Joint& j = model.joints[static_cast<std::size_t>(s.index)];
       const SE3 H = NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, s.index);

@@ -15,6 +15,7 @@
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/rod.h"
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/shape_pair.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 
@@ -257,6 +258,34 @@ bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<
   }
   r[10] = c.normal_force;
   r[14] = c.gap;
+  return true;
+}
+
+std::vector<std::string> PairContactColumns() {
+  return {"pair", "rod_a", "owner_a", "element_a", "rod_b", "owner_b", "element_b", "pax", "pay",
+          "paz", "pbx", "pby", "pbz", "nx", "ny", "nz", "fn", "ftx", "fty", "ftz", "gap"};
+}
+
+bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row) {
+  row->resize(21);
+  const ShapePairState c = CalcShapePairState(model, data, pair);
+  if (!c.active) return false;
+  const ShapePair& p = model.shape_pairs[static_cast<std::size_t>(pair)];
+  double* r = row->data();
+  r[0] = pair;
+  for (int k = 0; k < 2; ++k) {
+    r[1 + 3 * k] = p.side[k].rod ? 1.0 : 0.0;
+    r[2 + 3 * k] = p.side[k].owner;
+    r[3 + 3 * k] = p.side[k].element;
+  }
+  for (int i = 0; i < 3; ++i) {
+    r[7 + i] = c.point[0](i);
+    r[10 + i] = c.point[1](i);
+    r[13 + i] = c.normal(i);
+    r[17 + i] = c.friction_force(i);
+  }
+  r[16] = c.normal_force;
+  r[20] = c.gap;
   return true;
 }
 

@@ -17,6 +17,7 @@
 
 #include <unistd.h>
 
+#include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/input_table.h"
 #include "screwfem/io/vtk.h"
 #include "screwfem/io/writers.h"
@@ -184,6 +185,11 @@ Model MixedModel() {
                  Vec3::Zero(), 0.0});
   b.AddObstacle({"post", ObstacleType::kCapsule, Vec3(0.7, -1, 0.0205), Vec3(0.7, 1, 0.0205),
                  Vec3::Zero(), 0.01});
+  // A pair of moving shapes (elements/shape_pair.h): a free puck's sphere resting on the rod's
+  // capsule at its pinned end, at the resting gap.
+  const int puck = b.AddNode(SE3::Translation(Vec3(0.99, 0, 0.03056)), "puck");
+  const int puck_body = b.AddRigidBody("puck", puck, 0.1, Vec3::Zero(), 1e-5 * Mat3::Identity());
+  b.AddContactShape({puck_body, ContactShapeType::kSphere, Vec3::Zero(), Vec3::Zero(), 0.02});
   ContactSettings law;
   law.stiffness = 1e4;
   law.onset = 1e-3;
@@ -224,6 +230,8 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     CalcReactionRow(model, data, &reactions);
     CalcContactRow(model, data, 0, &contact_row);
     int active_steps = 0;  // steps that end with a contact active
+    int pair_steps = 0;    // ... with a pair of moving shapes active
+    ASSERT_FALSE(model.shape_pairs.empty());
     g_allocations = 0;
     g_counting = true;
     bool ok = true;
@@ -239,6 +247,10 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
       for (int c = 0; c < static_cast<int>(model.contact_pairs.size()); ++c)
         any = CalcContactRow(model, data, c, &contact_row) || any;
       active_steps += any ? 1 : 0;
+      bool pair = false;
+      for (int c = 0; c < static_cast<int>(model.shape_pairs.size()); ++c)
+        pair = CalcShapePairState(model, data, c).active || pair;
+      pair_steps += pair ? 1 : 0;
     }
     SaveSimulationState(data, integ, &saved);
     RestoreSimulationState(saved, data, integ);
@@ -250,6 +262,7 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     EXPECT_GE(integ.restarts, 1);     // and restarted at the ramp's end
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
     EXPECT_GT(active_steps, 10);  // with contacts active
+    EXPECT_GT(pair_steps, 10);    // and the pair of moving shapes
     // The rows of tendons.csv and forces.csv, once sized.
     std::vector<double> tendons, forces, actuators;
     CalcTendonRow(model, data, &tendons);

@@ -149,6 +149,11 @@ class ModelBuilder {
   void SetContactGroup(bool rod, int index, unsigned contype, unsigned conaffinity);
   void ExcludeContact(bool rod, int index, int obstacle);
   void SetContactSettings(const ContactSettings& settings);
+  // Pairs between moving shapes (elements/shape_pair.h): Build also pairs every two contact
+  // entities (rods, bodies with shapes; a box only against spheres) whose bitmasks match,
+  // unless excluded here or joined (a shared node or a joint between their nodes); a rod with
+  // itself when ContactSettings::self.
+  void ExcludeContactPair(bool rod_a, int index_a, bool rod_b, int index_b);
   Model& model() { return model_; }
 
   // Validates and computes sizes and the ordering. Throws InputError.

@@ -132,6 +132,7 @@ struct ContactSpec {
   ContactSettings settings;
   std::vector<ContactObstacle> obstacles;
   std::vector<std::pair<int, int>> exclude;  // (body index, obstacle index)
+  std::vector<std::pair<int, int>> exclude_bodies;  // (body index, body index): moving pairs
 };
 
 struct OutputsSpec {

@@ -65,8 +65,10 @@ class VtkWriter {
   // Where a point of the frame comes from.
   struct PointSource {
     // kSection: a tendon eyelet between rod nodes, on the section at xi of element `index`.
-    enum class Kind { kJoint, kNode, kWorld, kContact, kSection } kind = Kind::kNode;
-    int index = -1;  // joint index (kJoint), node index (kNode), contact pair index (kContact)
+    // kPairContact: side `offset.x()` (0: A, 1: B) of a pair of moving shapes
+    enum class Kind { kJoint, kNode, kWorld, kContact, kSection, kPairContact } kind = Kind::kNode;
+    int index = -1;  // joint index (kJoint), node index (kNode), contact pair index (kContact,
+                     // kPairContact: into Model::shape_pairs), element (kSection)
     double xi = 0.0;  // kSection
     Vec3 offset = Vec3::Zero();   // kNode: point in the node frame [m]; kWorld: world point
     bool origin = true;           // kNode: the node frame's origin itself

@@ -70,6 +70,14 @@ void CalcActuatorRow(const Model& model, const Data& data, double t, std::vector
 std::vector<std::string> ContactColumns();
 // The row of pair `pair` into *row (resized once); false when the pair is inactive.
 bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row);
+// pair_contacts.csv (long format, one row per active pair of moving shapes at each output time;
+// elements/shape_pair.h, CalcShapePairState): pair (index into Model::shape_pairs); for side A
+// then side B: rod (1: a rod's element capsule, 0: a rigid body's shape), owner (rod or body
+// index), element (the rod element's index, -1 for a body); pax pay paz and pbx pby pbz (the two
+// surface points [m], world), nx ny nz (the normal, from B to A), fn [N] (normal force),
+// ftx fty ftz [N] (friction force on A, world; B carries the opposite), gap [m].
+std::vector<std::string> PairContactColumns();
+bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row);
 // reactions.csv: per joint J of the model with constraint rows (every joint but free ones,
 // passive or driven, recorded or not), in model order: J.Fx J.Fy J.Fz J.Mx J.My J.Mz, the force
 // [N] and moment [N m] it transmits to its side B (CalcJointReaction, assemble/outputs.h: world

@@ -340,6 +340,10 @@ struct ContactSettings {
   double damping_ratio = 1.0;   // zeta: c_n = 2 zeta sqrt(k_n m_eff)
   double friction = 0.0;        // mu >= 0
   double slip_velocity = -1.0;  // eps_v [m/s]
+  // Pairs between moving shapes (elements/shape_pair.h): rod self-contact on/off, and the arc
+  // length between two elements' nearest ends below which they never collide (default 4 r).
+  bool self = false;
+  double self_skip = -1.0;  // [m]
 };
 // One (moving shape, obstacle) pair, made by Build: the shape is a segment p(s) = (1-s) p_0 +
 // s p_1 with p_j = x_j + R_j c_j of item node j (both ends on node 0 for a rigid shape, whose
@@ -353,6 +357,32 @@ struct ContactPair {
   double damping = 0.0;  // c_n [N s/m] (Build: from the pair's mass)
   bool rod = false;      // the owner: a rod or a rigid body (index), for outputs
   int owner = -1;
+};
+// One side of a pair between two moving shapes (elements/shape_pair.h): a segment p(s) =
+// (1-s) p_0 + s p_1 with p_j = x_j + R_j c_j of the side's item node end_node[j] (a rigid shape
+// or a rod node sphere: both ends on node 0 and node 1 is kGround), inflated by `radius`.
+struct ShapePairSide {
+  int node[2] = {kGround, kGround};
+  int end_node[2] = {0, 0};
+  Vec3 offset[2] = {Vec3::Zero(), Vec3::Zero()};
+  double radius = 0.0;
+  bool rod = false;  // the owner: a rod or a rigid body (index), for outputs
+  int owner = -1;
+  int element = -1;  // a rod side: the element (index into Model::elements)
+  // A box side (always side B, against a sphere): half sizes > 0 along the node axes, centre
+  // offset[0]; zero for a segment side.
+  Vec3 half = Vec3::Zero();
+};
+// A pair of moving shapes made by Build (rigid-rigid, rod-rigid, rod-rod, rod self-contact):
+// the normal points from side 1 (B) to side 0 (A).
+struct ShapePair {
+  ShapePairSide side[2];
+  double damping = 0.0;  // c_n [N s/m] (Build: from the pair's reduced mass)
+};
+// An excluded pair of moving entities (scene `contact: exclude: [[a, b]]` with two bodies or rods).
+struct ContactPairExclusion {
+  bool rod[2] = {false, false};
+  int index[2] = {-1, -1};
 };
 
 struct Model {
@@ -378,6 +408,8 @@ struct Model {
   std::vector<ContactExclusion> contact_exclusions;
   ContactSettings contact;
   std::vector<ContactPair> contact_pairs;
+  std::vector<ContactPairExclusion> contact_pair_exclusions;
+  std::vector<ShapePair> shape_pairs;  // between moving shapes (Build)
   Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
   RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
 

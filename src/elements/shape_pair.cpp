@@ -1,0 +1,311 @@
+#include "screwfem/elements/shape_pair.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "screwfem/elements/contact.h"
+
+namespace screwfem {
+
+namespace {
+
+double Clamp01(double x) { return std::min(1.0, std::max(0.0, x)); }
+
+// Closest parameters (s, t) of segments P0 + s (P1 - P0) and Q0 + t (Q1 - Q0), clamped to
+// [0, 1] (Ericson, Real-Time Collision Detection, 2005, §5.1.9). Parallel segments take the
+// middle of the overlap of their projections (method-next.md §N6.5: the force then does not jump
+// between the element's nodes), or the nearest ends when they do not overlap.
+void ClosestSegments(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1, double* s,
+                     double* t) {
+  const Vec3 d1 = P1 - P0, d2 = Q1 - Q0, r = P0 - Q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  const double tiny = 1e-30;
+  if (a <= tiny && e <= tiny) {
+    *s = *t = 0.0;
+    return;
+  }
+  if (a <= tiny) {
+    *s = 0.0;
+    *t = Clamp01(f / e);
+    return;
+  }
+  const double c = d1.dot(r);
+  if (e <= tiny) {
+    *t = 0.0;
+    *s = Clamp01(-c / a);
+    return;
+  }
+  const double b = d1.dot(d2), denom = a * e - b * b;
+  if (denom > 1e-10 * a * e) {
+    *s = Clamp01((b * f - c * e) / denom);
+  } else {
+    const double s0 = -c / a, s1 = (b - c) / a;  // Q0, Q1 projected onto P's line
+    const double lo = std::max(0.0, std::min(s0, s1)), hi = std::min(1.0, std::max(s0, s1));
+    *s = lo <= hi ? 0.5 * (lo + hi) : (std::max(s0, s1) < 0.0 ? 0.0 : 1.0);
+  }
+  *t = (b * *s + f) / e;
+  if (*t < 0.0) {
+    *t = 0.0;
+    *s = Clamp01(-c / a);
+  } else if (*t > 1.0) {
+    *t = 1.0;
+    *s = Clamp01((b - c) / a);
+  }
+}
+
+void SideEnds(const ShapePairSide& side, const SE3* const (&H)[4], int first, Vec3* P0,
+              Vec3* P1) {
+  const SE3& Ha = *H[first + side.end_node[0]];
+  const SE3& Hb = *H[first + side.end_node[1]];
+  *P0 = Ha.x + Ha.R * side.offset[0];
+  *P1 = Hb.x + Hb.R * side.offset[1];
+}
+
+// Weights and levers of the item nodes at parameters s and normal n.
+void SetLevers(const ShapePair& pair, const SE3* const (&H)[4], ShapePairGeometry* out) {
+  for (int k = 0; k < 4; ++k) {
+    out->weight[k] = 0.0;
+    out->lever[k].setZero();
+  }
+  for (int side = 0; side < 2; ++side) {
+    const ShapePairSide& sd = pair.side[side];
+    const double w[2] = {1.0 - out->s[side], out->s[side]};
+    Vec3 b[2] = {Vec3::Zero(), Vec3::Zero()};
+    for (int j = 0; j < 2; ++j) {
+      out->weight[2 * side + sd.end_node[j]] += w[j];
+      b[sd.end_node[j]] += w[j] * (sd.half.x() > 0.0 ? out->box_point : sd.offset[j]);
+    }
+    const double sign = side == 0 ? 1.0 : -1.0;
+    for (int i = 0; i < 2; ++i) {
+      const int k = 2 * side + i;
+      if (out->weight[k] == 0.0) continue;
+      out->lever[k] = b[i] / out->weight[k] - sign * sd.radius * (H[k]->R.transpose() * out->normal);
+    }
+  }
+}
+
+}  // namespace
+
+bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], double reject,
+                           ShapePairGeometry* out) {
+  Vec3 A0, A1, B0, B1;
+  SideEnds(pair.side[0], H, 0, &A0, &A1);
+  SideEnds(pair.side[1], H, 2, &B0, &B1);
+  // Bounding spheres of the two capsules (a box: of its corners).
+  const Vec3& half = pair.side[1].half;
+  const double bound = 0.5 * ((A1 - A0).norm() + (B1 - B0).norm()) + pair.side[0].radius +
+                       pair.side[1].radius + half.norm() + reject;
+  if ((0.5 * (A0 + A1 - B0 - B1)).squaredNorm() > bound * bound) return false;
+  if (half.x() > 0.0) {
+    // A sphere (A0 = A1) against a box centred at B0: clamp the centre into the box; inside,
+    // leave through the face nearest to it.
+    const SE3& Hb = *H[2];
+    const Vec3 c = Hb.R.transpose() * (A0 - B0);
+    Vec3 q = c.cwiseMax(-half).cwiseMin(half);
+    Vec3 d_local;
+    double distance;
+    if (q != c) {
+      d_local = c - q;
+      distance = d_local.norm();
+      d_local /= distance;
+    } else {
+      int axis = 0;
+      (half - c.cwiseAbs()).minCoeff(&axis);
+      const double sign = c(axis) >= 0.0 ? 1.0 : -1.0;
+      q(axis) = sign * half(axis);
+      d_local = sign * Vec3::Unit(axis);
+      distance = sign * c(axis) - half(axis);  // <= 0
+    }
+    out->s[0] = out->s[1] = 0.0;
+    out->box_point = pair.side[1].offset[0] + q;
+    out->normal = Hb.R * d_local;
+    out->gap = distance - pair.side[0].radius;
+    out->point[0] = A0 - pair.side[0].radius * out->normal;
+    out->point[1] = Hb.x + Hb.R * out->box_point;
+    SetLevers(pair, H, out);
+    return true;
+  }
+  double s = 0.0, t = 0.0;
+  ClosestSegments(A0, A1, B0, B1, &s, &t);
+  const Vec3 p = A0 + s * (A1 - A0), q = B0 + t * (B1 - B0);
+  const double distance = (p - q).norm();
+  if (!(distance > 0.0)) return false;
+  out->s[0] = s;
+  out->s[1] = t;
+  out->normal = (p - q) / distance;
+  out->gap = distance - pair.side[0].radius - pair.side[1].radius;
+  out->point[0] = p - pair.side[0].radius * out->normal;
+  out->point[1] = q + pair.side[1].radius * out->normal;
+  SetLevers(pair, H, out);
+  return true;
+}
+
+void FreezeShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4],
+                             const ShapePairGeometry& frozen, ShapePairGeometry* out) {
+  Vec3 A0, A1, B0, B1;
+  SideEnds(pair.side[0], H, 0, &A0, &A1);
+  SideEnds(pair.side[1], H, 2, &B0, &B1);
+  *out = frozen;
+  const Vec3 p = A0 + frozen.s[0] * (A1 - A0);
+  const Vec3 q = pair.side[1].half.x() > 0.0 ? Vec3(H[2]->x + H[2]->R * frozen.box_point)
+                                             : Vec3(B0 + frozen.s[1] * (B1 - B0));
+  const Vec3& n = frozen.normal;
+  out->gap = n.dot(p - q) - pair.side[0].radius - pair.side[1].radius;
+  out->point[0] = p - pair.side[0].radius * n;
+  out->point[1] = q + pair.side[1].radius * n;
+  SetLevers(pair, H, out);
+}
+
+bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePairGeometry& G,
+                        const NodeMotion<4>& x, const KernelOptions& o, ElementTerms<4>* t) {
+  const ContactSettings& law = model.contact;
+  if (G.gap >= law.onset) {
+    t->active = false;
+    return true;
+  }
+  const Vec3& n = G.normal;
+  const double sign[4] = {1.0, 1.0, -1.0, -1.0};
+  const double radius[4] = {pair.side[0].radius, pair.side[0].radius, pair.side[1].radius,
+                            pair.side[1].radius};
+  // The relative velocity map of the surface points, J = [sign_k W_k R_k [I  -Skew(l_k)]].
+  Eigen::Matrix<double, 3, 24> J = Eigen::Matrix<double, 3, 24>::Zero();
+  Vec3 m[4];
+  for (int k = 0; k < 4; ++k) {
+    m[k] = x.H[k]->R.transpose() * n;
+    if (G.weight[k] == 0.0) continue;
+    const double w = sign[k] * G.weight[k];
+    J.block<3, 3>(0, 6 * k) = w * x.H[k]->R;
+    J.block<3, 3>(0, 6 * k + 3) = -w * x.H[k]->R * Skew(G.lever[k]);
+  }
+  const bool dyn = o.dynamics;
+  const Vec3 v_c = dyn ? Vec3(J * x.eta) : Vec3::Zero();
+  const double g_dot = n.dot(v_c);
+  const NormalLaw fe = CalcNormalLaw(G.gap, law.onset, law.stiffness);
+  const double w = std::min(1.0, (law.onset - G.gap) / law.onset);
+  const double dw = G.gap > 0.0 ? -1.0 / law.onset : 0.0;
+  const double c_n = dyn ? pair.damping : 0.0;
+  const double f_n = fe.force - c_n * w * g_dot;
+  if (!(f_n > 0.0)) {
+    t->active = false;
+    return true;
+  }
+  const double mu = dyn ? law.friction : 0.0;
+  const Mat3 P = Mat3::Identity() - n * n.transpose();
+  const Vec3 v_t = P * v_c;
+  const double sv = std::sqrt(v_t.squaredNorm() + law.slip_velocity * law.slip_velocity);
+  const Vec3 u = mu > 0.0 ? Vec3(v_t / sv) : Vec3::Zero();
+  const Vec3 F = f_n * (n - mu * u);  // on A
+  double arm = 1.0;
+  Vec3 f[4];
+  for (int k = 0; k < 4; ++k) {
+    f[k] = sign[k] * (x.H[k]->R.transpose() * F);
+    t->residual.segment<3>(6 * k) = -G.weight[k] * f[k];
+    t->residual.segment<3>(6 * k + 3) = -G.weight[k] * G.lever[k].cross(f[k]);
+    if (G.weight[k] != 0.0) arm = std::max(arm, G.lever[k].norm());
+  }
+  t->force_scale = F.norm() * arm;
+  t->term_scale = t->force_scale;
+  if (!o.tangent) return true;
+  // dv_c/dh at fixed eta: rotation columns sign_k W_k R_k (-Skew(y_k) - sign_k r_k Skew(w_k)
+  // Skew(m_k)), y_k = v_k + w_k x l_k.
+  Eigen::Matrix<double, 3, 24> dV = Eigen::Matrix<double, 3, 24>::Zero();
+  if (dyn) {
+    for (int k = 0; k < 4; ++k) {
+      if (G.weight[k] == 0.0) continue;
+      const Vec3 v = x.eta.segment<3>(6 * k), om = x.eta.segment<3>(6 * k + 3);
+      const Vec3 y = v + om.cross(G.lever[k]);
+      dV.block<3, 3>(0, 6 * k + 3) =
+          sign[k] * G.weight[k] * x.H[k]->R *
+          (-Skew(y) - sign[k] * radius[k] * Skew(om) * Skew(m[k]));
+    }
+  }
+  const Eigen::Matrix<double, 24, 1> j = J.transpose() * n;  // dg/dh
+  const double dfn_dg = fe.slope - c_n * dw * g_dot;
+  const Eigen::Matrix<double, 1, 24> dfn_dh =
+      dfn_dg * j.transpose() - c_n * w * (n.transpose() * dV);
+  const Vec3 a = n - mu * u;
+  Mat3 DP = Mat3::Zero();
+  if (mu > 0.0)
+    DP = mu * f_n * (Mat3::Identity() / sv - v_t * v_t.transpose() / (sv * sv * sv)) * P;
+  Eigen::Matrix<double, 3, 24> dF_dh = a * dfn_dh;
+  if (mu > 0.0) dF_dh.noalias() -= DP * dV;
+  auto& K = t->stiffness;
+  K.noalias() = -J.transpose() * dF_dh;
+  // The rotation of the frames at fixed world F.
+  for (int k = 0; k < 4; ++k) {
+    if (G.weight[k] == 0.0) continue;
+    const Mat3 Sf = Skew(f[k]);
+    K.block<3, 3>(6 * k, 6 * k + 3) -= G.weight[k] * Sf;
+    K.block<3, 3>(6 * k + 3, 6 * k + 3) -=
+        G.weight[k] * (Skew(G.lever[k]) * Sf + sign[k] * radius[k] * Sf * Skew(m[k]));
+  }
+  t->has_stiffness = true;
+  if (dyn) {
+    const Eigen::Matrix<double, 1, 24> dfn_deta = -c_n * w * j.transpose();
+    Eigen::Matrix<double, 3, 24> dF_deta = a * dfn_deta;
+    if (mu > 0.0) dF_deta.noalias() -= DP * J;
+    t->damping.noalias() = -J.transpose() * dF_deta;
+    t->has_damping = true;
+  }
+  return true;
+}
+
+bool ShapePairKind::Calc(const Model& model, const Data&, const Item& item,
+                         const NodeMotion<4>& x, const KernelOptions& o, ElementTerms<4>* t) {
+  const ShapePair& pair = model.shape_pairs[static_cast<std::size_t>(item)];
+  ShapePairGeometry G;
+  if (!CalcShapePairGeometry(pair, x.H, model.contact.onset, &G)) {
+    t->active = false;
+    return true;
+  }
+  return CalcShapePairTerms(model, pair, G, x, o, t);
+}
+
+void ShapePairKind::AddEnergy(const Model& model, const Data& data, const Item& item, Energy* E) {
+  const ShapePair& pair = model.shape_pairs[static_cast<std::size_t>(item)];
+  const SE3* H[4] = {&NodeFrame(data, pair.side[0].node[0]), &NodeFrame(data, pair.side[0].node[1]),
+                     &NodeFrame(data, pair.side[1].node[0]), &NodeFrame(data, pair.side[1].node[1])};
+  ShapePairGeometry G;
+  if (!CalcShapePairGeometry(pair, H, model.contact.onset, &G)) return;
+  E->spring += ContactPotential(G.gap, model.contact.onset, model.contact.stiffness);
+}
+
+ShapePairState CalcShapePairState(const Model& model, const Data& data, int item) {
+  const ShapePair& pair = model.shape_pairs[static_cast<std::size_t>(item)];
+  ShapePairState out;
+  const int nodes[4] = {pair.side[0].node[0], pair.side[0].node[1], pair.side[1].node[0],
+                        pair.side[1].node[1]};
+  NodeMotion<4> x;
+  const Mat6 identity = Mat6::Identity();
+  for (int k = 0; k < 4; ++k) {
+    x.H[k] = &NodeFrame(data, nodes[k]);
+    x.T[k] = &identity;
+  }
+  GatherNodeMotion<4>(model, data, nodes, &x.eta, &x.eta_dot);
+  ShapePairGeometry G;
+  if (!CalcShapePairGeometry(pair, x.H, model.contact.onset, &G)) return out;
+  out.gap = G.gap;
+  out.point[0] = G.point[0];
+  out.point[1] = G.point[1];
+  out.normal = G.normal;
+  if (G.gap >= model.contact.onset) return out;
+  Vec3 v_c = Vec3::Zero();
+  for (int k = 0; k < 4; ++k) {
+    if (G.weight[k] == 0.0) continue;
+    const Vec3 v = x.eta.segment<3>(6 * k), om = x.eta.segment<3>(6 * k + 3);
+    v_c += (k < 2 ? 1.0 : -1.0) * G.weight[k] * (x.H[k]->R * (v + om.cross(G.lever[k])));
+  }
+  const NormalLaw fe = CalcNormalLaw(G.gap, model.contact.onset, model.contact.stiffness);
+  const double w = std::min(1.0, (model.contact.onset - G.gap) / model.contact.onset);
+  const double f_n = fe.force - pair.damping * w * G.normal.dot(v_c);
+  if (!(f_n > 0.0)) return out;
+  out.active = true;
+  out.normal_force = f_n;
+  const Vec3 v_t = v_c - G.normal * G.normal.dot(v_c);
+  const double sv = std::sqrt(v_t.squaredNorm() +
+                              model.contact.slip_velocity * model.contact.slip_velocity);
+  out.friction_force = -model.contact.friction * f_n * v_t / sv;
+  return out;
+}
+
+}  // namespace screwfem
