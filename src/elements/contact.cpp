@@ -9,40 +9,6 @@ namespace {
 
 double Clamp01(double x) { return std::min(1.0, std::max(0.0, x)); }
 
-// Closest parameters (s, t) of segments P0 + s (P1 - P0) and Q0 + t (Q1 - Q0), clamped to
-// [0, 1] (Ericson, Real-Time Collision Detection, 2005, §5.1.9); parallel segments take s = 0.
-void ClosestSegmentSegment(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1,
-                           double* s, double* t) {
-  const Vec3 d1 = P1 - P0, d2 = Q1 - Q0, r = P0 - Q0;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  const double tiny = 1e-30;
-  if (a <= tiny && e <= tiny) {
-    *s = *t = 0.0;
-    return;
-  }
-  if (a <= tiny) {
-    *s = 0.0;
-    *t = Clamp01(f / e);
-    return;
-  }
-  const double c = d1.dot(r);
-  if (e <= tiny) {
-    *t = 0.0;
-    *s = Clamp01(-c / a);
-    return;
-  }
-  const double b = d1.dot(d2), denom = a * e - b * b;
-  *s = denom > 1e-14 * a * e ? Clamp01((b * f - c * e) / denom) : 0.0;
-  *t = (b * *s + f) / e;
-  if (*t < 0.0) {
-    *t = 0.0;
-    *s = Clamp01(-c / a);
-  } else if (*t > 1.0) {
-    *t = 1.0;
-    *s = Clamp01((b - c) / a);
-  }
-}
-
 }  // namespace
 
 NormalLaw CalcNormalLaw(double g, double delta, double k) {
@@ -89,7 +55,7 @@ bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3&
       q = o.point;
     } else {
       double t = 0.0;
-      ClosestSegmentSegment(A, B, o.point, o.to, &s, &t);
+      ClosestSegmentParameters(A, B, o.point, o.to, &s, &t);
       q = o.point + t * (o.to - o.point);
     }
     const Vec3 delta = A + s * (B - A) - q;
@@ -264,6 +230,44 @@ ContactState CalcContactState(const Model& model, const Data& data, int item) {
                               model.contact.slip_velocity * model.contact.slip_velocity);
   out.friction_force = -model.contact.friction * out.normal_force * v_t / sv;
   return out;
+}
+
+void ClosestSegmentParameters(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1,
+                              double* s, double* t) {
+  const Vec3 d1 = P1 - P0, d2 = Q1 - Q0, r = P0 - Q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  const double tiny = 1e-30;
+  if (a <= tiny && e <= tiny) {
+    *s = *t = 0.0;
+    return;
+  }
+  if (a <= tiny) {
+    *s = 0.0;
+    *t = Clamp01(f / e);
+    return;
+  }
+  const double c = d1.dot(r);
+  if (e <= tiny) {
+    *t = 0.0;
+    *s = Clamp01(-c / a);
+    return;
+  }
+  const double b = d1.dot(d2), denom = a * e - b * b;
+  if (denom > 1e-10 * a * e) {
+    *s = Clamp01((b * f - c * e) / denom);
+  } else {
+    const double s0 = -c / a, s1 = (b - c) / a;  // Q0, Q1 projected onto P's line
+    const double lo = std::max(0.0, std::min(s0, s1)), hi = std::min(1.0, std::max(s0, s1));
+    *s = lo <= hi ? 0.5 * (lo + hi) : (std::max(s0, s1) < 0.0 ? 0.0 : 1.0);
+  }
+  *t = (b * *s + f) / e;
+  if (*t < 0.0) {
+    *t = 0.0;
+    *s = Clamp01(-c / a);
+  } else if (*t > 1.0) {
+    *t = 1.0;
+    *s = Clamp01((b - c) / a);
+  }
 }
 
 }  // namespace screwfem

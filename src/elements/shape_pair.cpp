@@ -9,50 +9,6 @@ namespace screwfem {
 
 namespace {
 
-double Clamp01(double x) { return std::min(1.0, std::max(0.0, x)); }
-
-// Closest parameters (s, t) of segments P0 + s (P1 - P0) and Q0 + t (Q1 - Q0), clamped to
-// [0, 1] (Ericson, Real-Time Collision Detection, 2005, §5.1.9). Parallel segments take the
-// middle of the overlap of their projections (method-next.md §N6.5: the force then does not jump
-// between the element's nodes), or the nearest ends when they do not overlap.
-void ClosestSegments(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1, double* s,
-                     double* t) {
-  const Vec3 d1 = P1 - P0, d2 = Q1 - Q0, r = P0 - Q0;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  const double tiny = 1e-30;
-  if (a <= tiny && e <= tiny) {
-    *s = *t = 0.0;
-    return;
-  }
-  if (a <= tiny) {
-    *s = 0.0;
-    *t = Clamp01(f / e);
-    return;
-  }
-  const double c = d1.dot(r);
-  if (e <= tiny) {
-    *t = 0.0;
-    *s = Clamp01(-c / a);
-    return;
-  }
-  const double b = d1.dot(d2), denom = a * e - b * b;
-  if (denom > 1e-10 * a * e) {
-    *s = Clamp01((b * f - c * e) / denom);
-  } else {
-    const double s0 = -c / a, s1 = (b - c) / a;  // Q0, Q1 projected onto P's line
-    const double lo = std::max(0.0, std::min(s0, s1)), hi = std::min(1.0, std::max(s0, s1));
-    *s = lo <= hi ? 0.5 * (lo + hi) : (std::max(s0, s1) < 0.0 ? 0.0 : 1.0);
-  }
-  *t = (b * *s + f) / e;
-  if (*t < 0.0) {
-    *t = 0.0;
-    *s = Clamp01(-c / a);
-  } else if (*t > 1.0) {
-    *t = 1.0;
-    *s = Clamp01((b - c) / a);
-  }
-}
-
 void SideEnds(const ShapePairSide& side, const SE3* const (&H)[4], int first, Vec3* P0,
               Vec3* P1) {
   const SE3& Ha = *H[first + side.end_node[0]];
@@ -126,7 +82,7 @@ bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], doub
     return true;
   }
   double s = 0.0, t = 0.0;
-  ClosestSegments(A0, A1, B0, B1, &s, &t);
+  ClosestSegmentParameters(A0, A1, B0, B1, &s, &t);
   const Vec3 p = A0 + s * (A1 - A0), q = B0 + t * (B1 - B0);
   const double distance = (p - q).norm();
   if (!(distance > 0.0)) return false;

@@ -31,12 +31,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string Format(const char* format, double a, double b = 0.0) {
-  char buf[160];
-  std::snprintf(buf, sizeof buf, format, a, b);
-  return buf;
-}
-
 void ValidateSettings(const Scene& scene) {
   const AnalysisSettings& a = scene.analysis;
   const auto require = [](bool ok, const char* field, const std::string& what) {
@@ -260,7 +254,7 @@ class Run {
     if (!w && pair_contacts_.path().size() > 0 && !pair_contacts_.Flush()) w = &pair_contacts_;
     if (w && !failed_before) {
       status = "failed";
-      message = Format("cannot write at t = %.9g s: ", data_.time) + w->path() + ": " +
+      message = FormatNumbers("cannot write at t = %.9g s: ", data_.time) + w->path() + ": " +
                 std::strerror(errno);
       io_error_ = true;
     }
@@ -281,7 +275,7 @@ class Run {
     status_ = status;
     message_ = std::move(message);
     if (io_error_ && points_.failed())
-      message_ += Format("; the tables hold the %g rows up to t = %.9g s",
+      message_ += FormatNumbers("; the tables hold the %g rows up to t = %.9g s",
                          static_cast<double>(points_.rows()), points_.last_time());
     if (progress_) progress_->Finish(data_.time, integ_.steps);
     WriteSummary();
@@ -326,7 +320,7 @@ class Run {
   bool AssembleInitial() {
     std::string why;
     if (AssembleInitialState(model_, data_, &why)) return true;
-    Finish("failed", Format("initial state at t = %.9g s: ", data_.time) + why);
+    Finish("failed", FormatNumbers("initial state at t = %.9g s: ", data_.time) + why);
     return false;
   }
 
@@ -344,11 +338,11 @@ class Run {
     has_static_ = true;
     if (finished_) return;  // a write error while recording the path
     if (static_.interrupted) {
-      Interrupted(Format("static solution interrupted at load factor %.6g", static_.load_factor));
+      Interrupted(FormatNumbers("static solution interrupted at load factor %.6g", static_.load_factor));
       return;
     }
     if (!static_.converged) {
-      Finish("failed", Format(static_.limit_point ? "static solution stopped at load factor %.9g: "
+      Finish("failed", FormatNumbers(static_.limit_point ? "static solution stopped at load factor %.9g: "
                                                   : "static solution failed at load factor %.9g: ",
                               static_.load_factor) +
                            static_.message);
@@ -378,12 +372,12 @@ class Run {
       static_ = SolveStatic(model_, data_, so, options_.stop);
       has_static_ = true;
       if (static_.interrupted) {
-        Interrupted(Format("static preload at t = %.9g s interrupted at load factor %.6g",
+        Interrupted(FormatNumbers("static preload at t = %.9g s interrupted at load factor %.6g",
                            a.start_time, static_.load_factor));
         return;
       }
       if (!static_.converged) {
-        Finish("failed", Format("static preload at t = %.9g s failed at load factor %.6g: ",
+        Finish("failed", FormatNumbers("static preload at t = %.9g s failed at load factor %.6g: ",
                                 a.start_time, static_.load_factor) +
                              static_.message);
         return;
@@ -392,7 +386,7 @@ class Run {
     }
     std::string why;
     if (!InitializeDynamics(model_, data_, integ_, a.dynamic, &why)) {
-      Finish("failed", Format("cannot start the dynamic analysis at t = %.9g s: ", a.start_time) + why);
+      Finish("failed", FormatNumbers("cannot start the dynamic analysis at t = %.9g s: ", a.start_time) + why);
       return;
     }
     max_constraint_ = CalcMaxJointConstraint(model_, data_, data_.time);
@@ -414,7 +408,7 @@ class Run {
                                 a.align_steps ? ProfileBreakpoints(model_) : std::vector<double>{});
     while (!schedule.Done(data_.time)) {
       if (options_.stop.Requested()) {
-        Interrupted(Format("at t = %.9g s; the last recorded row is at t = %.9g s", data_.time,
+        Interrupted(FormatNumbers("at t = %.9g s; the last recorded row is at t = %.9g s", data_.time,
                            last_row_time_));
         return;
       }
@@ -428,7 +422,7 @@ class Run {
           a.adaptive_steps ? AdaptiveStep(model_, data_, integ_, a.end_time, options_.stop)
                            : Step(model_, data_, integ_, t_next - data_.time, options_.stop);
       if (step.interrupted) {
-        Interrupted(Format("at t = %.9g s (within a halved step); the last recorded row is at "
+        Interrupted(FormatNumbers("at t = %.9g s (within a halved step); the last recorded row is at "
                            "t = %.9g s",
                            data_.time, last_row_time_));
         return;
@@ -562,7 +556,7 @@ class Run {
 
   bool WriteFailed(const std::string& path, double t) {
     io_error_ = true;
-    Finish("failed", Format("cannot write at t = %.9g s: ", t) + path + ": " + std::strerror(errno));
+    Finish("failed", FormatNumbers("cannot write at t = %.9g s: ", t) + path + ": " + std::strerror(errno));
     return false;
   }
 

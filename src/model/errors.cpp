@@ -10,4 +10,10 @@ void InternalCheckFailed(const char* condition, const char* file, int line) {
   std::abort();
 }
 
+std::string FormatNumbers(const char* format, double a, double b, double c) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, format, a, b, c);
+  return buf;
+}
+
 }  // namespace screwfem

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "screwfem/assemble/assemble.h"
+#include "screwfem/model/errors.h"
 
 namespace screwfem {
 
@@ -29,12 +30,6 @@ Eigen::VectorXd MinimumNormSolve(Eigen::MatrixXd B, const std::vector<char>& hel
   for (int c = 0; c < B.cols(); ++c)
     if (held[static_cast<std::size_t>(c)]) B.col(c).setZero();
   return B.completeOrthogonalDecomposition().solve(rhs);
-}
-
-std::string Format(const char* format, double a, double b = 0.0) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, format, a, b);
-  return buf;
 }
 
 }  // namespace
@@ -79,7 +74,7 @@ bool AssembleInitialState(const Model& model, Data& data, std::string* message) 
       if (violation <= tol) break;
       if (it == kMaxAssemblyIterations) {
         if (message)
-          *message = Format(
+          *message = FormatNumbers(
               "cannot assemble the initial joint coordinates: the constraints stay violated by "
               "%.3g after %.0f Gauss-Newton iterations (do the given coordinates contradict the "
               "joints or the drives?)",
@@ -119,7 +114,7 @@ bool AssembleInitialState(const Model& model, Data& data, std::string* message) 
     const double scale = std::max(1.0, data.v.cwiseAbs().maxCoeff() * model.length_scale);
     if (!(r.cwiseAbs().maxCoeff() <= 1e-10 * scale)) {
       if (message)
-        *message = Format(
+        *message = FormatNumbers(
             "the initial velocities contradict the constraints: B v + dphi/dt stays at %.3g "
             "(given body velocities and joint rates over-determine the motion)",
             r.cwiseAbs().maxCoeff());

@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "screwfem/assemble/assemble.h"
+#include "screwfem/model/errors.h"
 
 namespace screwfem {
 
@@ -37,12 +38,6 @@ void ReadAssembledMatrix(const Model& model, const Data& data, Eigen::MatrixXd* 
         (*B)(gi - nv, gj) = A.At(pi, pj);
     }
   }
-}
-
-std::string Format(const char* fmt, double a, double b = 0.0) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, fmt, a, b);
-  return buf;
 }
 
 }  // namespace
@@ -105,7 +100,7 @@ void CalcReducedMatrices(const LinearizedSystem& sys, ModalResult* result, Eigen
   const double k_norm = Kr->norm();
   result->stiffness_asymmetry = k_norm > 0.0 ? (*Kr - Kr->transpose()).norm() / k_norm : 0.0;
   if (result->stiffness_asymmetry > 1e-6)
-    result->warnings.push_back(Format(
+    result->warnings.push_back(FormatNumbers(
         "the stiffness is not symmetric (relative asymmetry %.3g; follower loads or a "
         "non-equilibrium state): its symmetric part is used",
         result->stiffness_asymmetry));
@@ -174,7 +169,7 @@ void CalcFrequenciesAndDamping(const LinearizedSystem& sys, double eigenvalue_sc
   }
   if (negative > 0)
     result->warnings.push_back(
-        Format("%g negative eigenvalue(s): the equilibrium is unstable", negative));
+        FormatNumbers("%g negative eigenvalue(s): the equilibrium is unstable", negative));
 }
 
 }  // namespace
@@ -189,7 +184,7 @@ ModalResult CalcModes(const Model& model, Data& data, const ModalOptions& option
   result.relative_residual = sys.relative_residual;
   if (sys.relative_residual > 1e-6)
     result.warnings.push_back(
-        Format("the state is not an equilibrium (relative residual %.3g): the modes describe "
+        FormatNumbers("the state is not an equilibrium (relative residual %.3g): the modes describe "
                "the linearisation about a non-equilibrium state",
                sys.relative_residual));
   const Eigen::MatrixXd& Z = sys.null_space;

@@ -30,12 +30,6 @@ bool SolveFactorizedSystem(const Model& model, Data& data) {
 
 namespace {
 
-std::string Format(const char* fmt, double a, double b = 0.0, double c = 0.0) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, fmt, a, b, c);
-  return buf;
-}
-
 std::string ElementLabel(const Model& m, int e) {
   const RodElement& el = m.elements[static_cast<std::size_t>(e)];
   const Rod& rod = m.rods[static_cast<std::size_t>(el.rod)];
@@ -168,7 +162,7 @@ struct StaticSolver {
     if (ok) return true;
     if (data.failed_element >= 0) {
       cause = ElementLabel(model, data.failed_element) +
-              Format(" rotates by %.4g rad, beyond what one helical element represents "
+              FormatNumbers(" rotates by %.4g rad, beyond what one helical element represents "
                      "(2 pi); use more elements",
                      data.failed_rotation);
     } else {
@@ -259,7 +253,7 @@ struct StaticSolver {
         return LoadStepEnd::kConverged;
       }
       if (it == options.max_iterations) {
-        cause = Format("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
+        cause = FormatNumbers("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
                        options.max_iterations, res, res / std::max(data.force_scale, 1e-300));
         return LoadStepEnd::kFailed;
       }
@@ -315,7 +309,7 @@ int MaxSteps(const StaticOptions& o) {
 }
 
 std::string StepCapMessage(int steps, double s) {
-  return Format("static solve stopped after %g steps (max_steps) at load factor %.9g, before "
+  return FormatNumbers("static solve stopped after %g steps (max_steps) at load factor %.9g, before "
                 "reaching the end load factor; raise analysis.statics.max_steps or the step size",
                 steps, s);
 }
@@ -358,13 +352,13 @@ StaticResult SolveByLoadSteps(StaticSolver& S, const StaticStepCallback& on_step
     here.Restore(model, data);
     if (speed < 10.0 * path_speed0) return false;
     if (std::isfinite(speed))
-      *why = Format("|dx/ds| grew %.3g-fold since the start", speed / path_speed0);
+      *why = FormatNumbers("|dx/ds| grew %.3g-fold since the start", speed / path_speed0);
     return true;
   };
   const auto limit_point_result = [&](const std::string& why) {
     result.limit_point = true;
     result.message =
-        Format("limit point at load factor %.9g: load stepping finds no equilibrium on this "
+        FormatNumbers("limit point at load factor %.9g: load stepping finds no equilibrium on this "
                "path at a load factor %.3g further (",
                result.load_factor, dp_min * std::abs(span)) +
         why +
@@ -388,7 +382,7 @@ StaticResult SolveByLoadSteps(StaticSolver& S, const StaticStepCallback& on_step
     if (end == LoadStepEnd::kStopped) {
       saved.Restore(model, data);
       result.interrupted = true;
-      result.message = Format("static solve interrupted at load factor %.9g", result.load_factor);
+      result.message = FormatNumbers("static solve interrupted at load factor %.9g", result.load_factor);
       return result;
     }
     result.total_iterations += step.iterations;
@@ -435,7 +429,7 @@ StaticResult SolveByLoadSteps(StaticSolver& S, const StaticStepCallback& on_step
     if (dp >= dp_min * (1.0 - 1e-12)) continue;
     std::string why;
     if (at_limit_point(&why)) return limit_point_result(why);
-    result.message = Format("static solve failed at load factor %.9g (last converged %.9g): ",
+    result.message = FormatNumbers("static solve failed at load factor %.9g (last converged %.9g): ",
                             s_target, result.load_factor) +
                      last_cause;
     return result;
@@ -475,7 +469,7 @@ class ArcLengthPath {
     if (!S_.PathTangent(cause)) {
       saved_.Restore(model, data);
       result_.message = "arc-length continuation cannot start at load factor " +
-                        Format("%.9g: ", s_) + cause;
+                        FormatNumbers("%.9g: ", s_) + cause;
       return result_;
     }
     saved_.Restore(model, data);
@@ -506,7 +500,7 @@ class ArcLengthPath {
       if (end == LoadStepEnd::kStopped) {
         saved_.Restore(model, data);
         result_.interrupted = true;
-        result_.message = Format("static solve interrupted at load factor %.9g", s_);
+        result_.message = FormatNumbers("static solve interrupted at load factor %.9g", s_);
         return result_;
       }
       result_.total_iterations += step.iterations;
@@ -540,7 +534,7 @@ class ArcLengthPath {
         saved_.Restore(model, data);
         if (e2 == LoadStepEnd::kStopped) {
           result_.interrupted = true;
-          result_.message = Format("static solve interrupted at load factor %.9g", s_);
+          result_.message = FormatNumbers("static solve interrupted at load factor %.9g", s_);
           return result_;
         }
         // Retry with a shorter arc: the crossing moves closer to the converged state.
@@ -559,7 +553,7 @@ class ArcLengthPath {
       ++result_.halvings;
       dl *= 0.5;
       if (dl < dl_min * (1.0 - 1e-12)) {
-        result_.message = Format("arc-length continuation failed at load factor %.9g: the arc "
+        result_.message = FormatNumbers("arc-length continuation failed at load factor %.9g: the arc "
                                  "length fell below its minimum %.3g: ",
                                  s_, dl_min) +
                           last_cause;
@@ -588,7 +582,7 @@ class ArcLengthPath {
         return LoadStepEnd::kConverged;
       }
       if (it == o.max_iterations) {
-        cause = Format("Newton did not converge in %g iterations (residual %.3g)",
+        cause = FormatNumbers("Newton did not converge in %g iterations (residual %.3g)",
                        o.max_iterations, res);
         return LoadStepEnd::kFailed;
       }

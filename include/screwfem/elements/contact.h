@@ -76,4 +76,12 @@ struct ContactState {
 };
 ContactState CalcContactState(const Model& model, const Data& data, int pair);
 
+// Closest parameters (s, t) of segments P0 + s (P1 - P0) and Q0 + t (Q1 - Q0), clamped to
+// [0, 1] (Ericson, Real-Time Collision Detection, 2005, section 5.1.9). Parallel segments take
+// the middle of the overlap of their projections (method-next.md section N6.5: the force then
+// does not jump between an element's nodes), or the nearest ends when they do not overlap.
+// Shared by the obstacle pairs (capsule obstacles) and the pairs of moving shapes.
+void ClosestSegmentParameters(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1,
+                              double* s, double* t);
+
 }  // namespace screwfem

@@ -43,6 +43,11 @@ class InputError : public std::runtime_error {
   std::string detail_;
 };
 
+// A message with up to three numbers printed by `format` (printf conventions, each number a
+// double: "%g", "%.3g", ...), for the solvers' and the run loop's reports. Not for use inside a
+// time step: it allocates.
+std::string FormatNumbers(const char* format, double a, double b = 0.0, double c = 0.0);
+
 class SolverError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
