@@ -10,6 +10,7 @@
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <new>
@@ -240,7 +241,12 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
         SetInputsAt(table, data.time + 1e-3, data);  // the CLI's --inputs
       else
         data.inputs(0) = 0.02 * i;  // Python's sim.inputs["u"] = ...
-      { const StepResult r = Step(model, data, integ, 1e-3); if (!r.ok) fprintf(stderr, "DBG t=%g %s\n", data.time, r.message.c_str()); ok = r.ok && ok; }
+      {
+        const StepResult r = Step(model, data, integ, 1e-3);
+        if (!r.ok)
+          std::fprintf(stderr, "step failed at t = %g s: %s\n", data.time, r.message.c_str());
+        ok = r.ok && ok;
+      }
       CalcEnergyRow(model, data, &energy);
       CalcReactionRow(model, data, &reactions);
       bool any = false;
@@ -333,7 +339,12 @@ TEST(NoAllocation, ParaViewFramesAllocateNothing) {
     g_allocations = 0;
     bool ok = true;
     for (int i = 0; i < 20; ++i) {
-      { const StepResult r = Step(model, data, integ, 1e-3); if (!r.ok) fprintf(stderr, "DBG t=%g %s\n", data.time, r.message.c_str()); ok = r.ok && ok; }
+      {
+        const StepResult r = Step(model, data, integ, 1e-3);
+        if (!r.ok)
+          std::fprintf(stderr, "step failed at t = %g s: %s\n", data.time, r.message.c_str());
+        ok = r.ok && ok;
+      }
       data.time += 1e-3;
       g_counting = true;
       ok = writer.WriteFrame(model, data, data.time) && ok;

@@ -11,7 +11,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdio>
 #include <random>
 
 #include "screwfem/build/model_builder.h"
@@ -303,7 +302,6 @@ TEST(ShapePairValidation, HeadOnSpheresConserveMomentumAndReboundElasticallyWith
     const double v_rel = (s.data.v.segment<3>(0) - s.data.v.segment<3>(6)).x();
     errors[k] = std::abs(v_rel + 1.5) / 1.5;
   }
-  std::printf("rebound errors %.3e %.3e %.3e\n", errors[0], errors[1], errors[2]);
   // Measured 3.0e-3, 2.4e-3, 2.8e-4: not a clean order (the kinks), but elastic to < 0.5 %.
   for (double e : errors) EXPECT_LT(e, 5e-3);
   EXPECT_LT(errors[2], 0.2 * errors[0]);
@@ -324,7 +322,6 @@ TEST(ShapePairValidation, HeadOnSpheresConserveMomentumAndReboundElasticallyWith
     }
     EXPECT_GT(spin, 0.1);  // friction at the surface points spun the spheres
   }
-  std::printf("momentum drift %.3e %.3e\n", drift[0], drift[1]);
   EXPECT_LT(drift[0], 1e-3);  // measured 4.6e-4 and 1.2e-4 (kg m/s + kg m^2/s)
   EXPECT_GT(drift[0] / drift[1], 3.0);  // second order
 }
