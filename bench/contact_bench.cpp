@@ -11,7 +11,8 @@
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/contact.h"
 #include "screwfem/solve/dynamics.h"
-#include "screwfem/solve/initial_state.h"
+
+#include "timed_steps.h"
 
 namespace screwfem {
 namespace {
@@ -58,33 +59,11 @@ void BM_RodContactStep(benchmark::State& state) {
   const Model model = RodOnPlane(variant);
   DynamicOptions options;
   options.rho_inf = 0.8;
-  Data data = MakeData(model);
-  Integrator integ;
-  long steps = 0, iterations = 0;
-  for (auto _ : state) {
-    state.PauseTiming();
-    data = MakeData(model);
-    if (!AssembleInitialState(model, data) || !InitializeDynamics(model, data, integ, options)) {
-      state.SkipWithError("InitializeDynamics failed");
-      return;
-    }
-    for (int i = 0; i < kWarmupSteps; ++i) {
-      Step(model, data, integ, kStep);
-      data.time += kStep;
-    }
-    const long before = integ.iterations;
-    state.ResumeTiming();
-    for (int i = 0; i < kTimedSteps; ++i) {
-      if (!Step(model, data, integ, kStep).ok) {
-        state.SkipWithError("step failed");
-        return;
-      }
-      data.time += kStep;
-    }
-    steps += kTimedSteps;
-    iterations += integ.iterations - before;
-    benchmark::DoNotOptimize(data.v.data());
-  }
+  Data data;
+  TimedStepCounts counts;
+  if (!RunTimedSteps(state, model, options, true, kWarmupSteps, kTimedSteps, kStep, data,
+                     &counts))
+    return;
   int active = 0;
   for (int i = 0; i < static_cast<int>(model.contact_pairs.size()); ++i)
     if (CalcContactState(model, data, i).active) ++active;
@@ -93,7 +72,7 @@ void BM_RodContactStep(benchmark::State& state) {
   state.counters["unknowns"] = model.num_unknowns();
   state.counters["pairs"] = static_cast<double>(model.contact_pairs.size());
   state.counters["active"] = active;
-  state.counters["newton_per_step"] = steps > 0 ? static_cast<double>(iterations) / steps : 0.0;
+  state.counters["newton_per_step"] = counts.NewtonPerStep();
   state.counters["timed_steps"] = kTimedSteps;
   const std::size_t mid = model.rods.front().nodes[kElements / 2];
   state.counters["mid_z"] = data.H[mid].x.z();

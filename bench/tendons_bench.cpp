@@ -11,6 +11,8 @@
 #include "screwfem/build/model_builder.h"
 #include "screwfem/solve/dynamics.h"
 
+#include "timed_steps.h"
+
 namespace screwfem {
 namespace {
 
@@ -46,37 +48,15 @@ void BM_RodTendonStep(benchmark::State& state) {
   const Model model = CantileverWithTendons(static_cast<int>(state.range(0)));
   DynamicOptions options;
   options.rho_inf = 0.8;
-  Data data = MakeData(model);
-  Integrator integ;
-  long steps = 0, iterations = 0;
-  for (auto _ : state) {
-    state.PauseTiming();
-    data = MakeData(model);
-    if (!InitializeDynamics(model, data, integ, options)) {
-      state.SkipWithError("InitializeDynamics failed");
-      return;
-    }
-    for (int i = 0; i < kWarmupSteps; ++i) {
-      Step(model, data, integ, kStep);
-      data.time += kStep;
-    }
-    const long before = integ.iterations;
-    state.ResumeTiming();
-    for (int i = 0; i < kTimedSteps; ++i) {
-      if (!Step(model, data, integ, kStep).ok) {
-        state.SkipWithError("step failed");
-        return;
-      }
-      data.time += kStep;
-    }
-    steps += kTimedSteps;
-    iterations += integ.iterations - before;
-    benchmark::DoNotOptimize(data.v.data());
-  }
+  Data data;
+  TimedStepCounts counts;
+  if (!RunTimedSteps(state, model, options, false, kWarmupSteps, kTimedSteps, kStep, data,
+                     &counts))
+    return;
   state.counters["tendons"] = static_cast<double>(state.range(0));
   state.counters["unknowns"] = model.num_unknowns();
   state.counters["bandwidth"] = model.bandwidth;
-  state.counters["newton_per_step"] = steps > 0 ? static_cast<double>(iterations) / steps : 0.0;
+  state.counters["newton_per_step"] = counts.NewtonPerStep();
   state.counters["timed_steps"] = kTimedSteps;
   state.counters["tip_y"] = data.H[static_cast<std::size_t>(model.rods.front().nodes.back())].x.y();
 }
