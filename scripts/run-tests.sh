@@ -5,9 +5,11 @@
 #   2. Release build in build/release, its ctest suite, and every example program
 #      (build/release/examples/**/*_example, run from the repository root without arguments);
 #   3. AddressSanitizer + UndefinedBehaviorSanitizer build in build/asan (clang, with the
-#      libFuzzer harnesses of tests/fuzz) and its ctest suite;
-#   4. the two fuzz targets, concurrently, for SCREWFEM_FUZZ_SECONDS each (default 25) on the
-#      seed corpus (examples/, tests/data/, tests/fuzz/regressions/): any crash, sanitizer
+#      libFuzzer harnesses of tests/fuzz) and its ctest suite: every example scene's first
+#      steps, the fuzz regression corpus, and the linalg and build test programs (the whole
+#      suite under the sanitizers is scripts/run-sanitizers.sh, on demand);
+#   4. the two fuzz targets, concurrently, for SCREWFEM_FUZZ_SECONDS each (default 20) on the
+#      seed corpus (the example scenes, tests/data/, tests/fuzz/regressions/): any crash, sanitizer
 #      report, leak, timeout (10 s per input) or out-of-memory (1024 MB) fails the job, and
 #      the failing input is copied into tests/fuzz/regressions/NAME/ (commit it: ctest
 #      replays that corpus in every build).
@@ -19,7 +21,6 @@ set -uo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 release_dir=build/release
-asan_dir=build/asan
 jobs=$(nproc 2> /dev/null || echo 2)
 [[ $jobs -ge 2 ]] || jobs=2
 
@@ -102,14 +103,14 @@ run_examples() {
 # run_fuzzers DIR: both libFuzzer targets at once (one per core), each for
 # SCREWFEM_FUZZ_SECONDS; one pass or one failure per target in the counts.
 run_fuzzers() {
-  local dir=$1 seconds=${SCREWFEM_FUZZ_SECONDS:-25} name work pids=() status
+  local dir=$1 seconds=${SCREWFEM_FUZZ_SECONDS:-20} name work pids=() status
   begin "fuzzing (2 x ${seconds} s)"
   for name in parse build; do
     work=$dir/fuzz/$name
     rm -rf "$work"
     mkdir -p "$work/corpus" "$work/artifacts"
     # The first directory receives new inputs; the others are read-only seeds.
-    "$dir/tests/fuzz/screwfem_fuzz_$name" "$work/corpus" examples/grm tests/data \
+    "$dir/tests/fuzz/screwfem_fuzz_$name" "$work/corpus" examples/*/ tests/data \
       "tests/fuzz/regressions/$name" -max_total_time="$seconds" -timeout=10 \
       -rss_limit_mb=1024 -max_len=65536 -print_final_stats=1 \
       -artifact_prefix="$work/artifacts/" > "$work/log.txt" 2>&1 &
@@ -178,49 +179,23 @@ else
 fi
 
 if [[ $release_built -eq 1 ]]; then
-  # The sanitizers also run inside the build (gtest_discover_tests executes the tests).
-  export ASAN_OPTIONS=detect_leaks=1
-  export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-  # RelWithDebInfo without -DNDEBUG: optimised with assert() and eigen_assert active, as
-  # cmake/ScrewfemTargets.cmake intends for the sanitizer build. -O1 -g1 (line tables, enough
-  # for the sanitizers' stack traces) compiles in less than half the time of -O2 -g with the
-  # sanitizers on; the suite itself then runs somewhat slower. SCREWFEM_NATIVE=OFF: the
-  # portable instruction set (the Release build above uses the machine's), so the suite
-  # passes on both code paths of Eigen's vectorisation.
-  # Clang (not GCC): it provides libFuzzer, so this one tree serves the sanitizer suite and
-  # the fuzzers; it also compiles the sanitizer build faster than GCC (README.md, "Fuzzing").
-  # SCREWFEM_KERNEL_TESTS=OFF: the kernels' own unit tests (tests/lie, tests/elements: fixed-size
-  # arithmetic against closed forms and finite differences) run in the Release suite only; here
-  # the same kernels run inside every solver and validation test.
-  if configure_and_build "ASan+UBSan" "$asan_dir" -DSCREWFEM_SANITIZE=ON \
-      -DCMAKE_CXX_COMPILER=clang++ -DSCREWFEM_FUZZ=ON \
-      -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
-      -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_BUILD_EXAMPLES=OFF -DSCREWFEM_NATIVE=OFF \
-      -DSCREWFEM_KERNEL_TESTS=OFF; then
-    # Left out of the sanitizer run, and run in the Release suite above:
-    #  - the full-length GRM soft runs, the GRM convergence study, three of the four full rigid
-    #    GRM runs and the cantilever's free-vibration history (20 to 50 s each at -O1 with the
-    #    sanitizers and the fuzzer's coverage instrumentation); the same code paths run under
-    #    the sanitizers in GrmRigid.ActuatedJointsFollowTheirBangBangProfiles and the shorter
-    #    validation problems;
-    #  - the error-controlled GRM run (GrmAdaptive: two full rigid GRM runs, 100 s with the
-    #    sanitizers); the AdaptiveSteps tests run the same step control under the sanitizers;
-    #  - the convergence-order studies of the integrator, the free rod and the soft joint (a
-    #    dozen runs each); the other tests of those suites run the same code under the
-    #    sanitizers;
-    #  - the capstan's holding test (four runs of the wrapped cord, 2.2 s in Release on a loaded
-    #    machine); Capstan.PulledAtConstantSpeed runs the same cord under the sanitizers;
-    #  - the tests of the Python tools (plots, viewer, VTK reader): Python code, with nothing
-    #    of screwfem's C++ in them but the run that makes their input (run by the other Cli
-    #    tests here).
-    asan_excluded='^(GrmSoftK|GrmSoftKd|GrmSoftKParallel|GrmSoftKdParallel|GrmConvergence|GrmAdaptive)\.'
-    asan_excluded+='|^CantileverFrequency\.FreeVibration'
-    asan_excluded+='|^Capstan\.HoldsBelow'
-    asan_excluded+='|^GrmRigid\.(RecordedPoint|FreeJointPoint|ActuatedJointRates)'
-    asan_excluded+='|^GeneralizedAlpha\.(EstimatedConvergence|SimplifiedNewtonAndPredictors)'
-    asan_excluded+='|^SoftJointJ1\.CoordinateFollows|^FreeRod\.MomentumAndEnergy'
-    asan_excluded+='|^viewer_chromium$|^tools_|^Cli\.Plot(DrawsPoints|Animate)'
-    run_ctest "ASan+UBSan" "$asan_dir" -E "$asan_excluded"
+  source scripts/sanitizer-config.sh
+  # The sanitizer stage (scripts/sanitizer-config.sh) instruments the product: the libraries,
+  # the command-line program and the fuzz harnesses. It runs
+  #  - every example scene's first steps through the instrumented program (test
+  #    sanitizer_example_scenes: rods, rigid bodies, joints, tendons, pressure, rest curvature,
+  #    contact, run-time inputs, and the files they write);
+  #  - the regression corpus of the fuzzers, then both fuzzers for 20 s each (parsing and
+  #    building from random scenes);
+  #  - two test programs: tests/linalg (the banded storage and its index arithmetic) and
+  #    tests/build (the model builder and the redundancy analysis).
+  # The other test programs (the io and solve tests, the validation problems, the kernels' own
+  # tests, the allocation counts) run in the Release suite above, and under the sanitizers in
+  # scripts/run-sanitizers.sh, on demand: building and running them instrumented took 550 s
+  # more, and the whole test command must stay under 15 minutes (README.md, "Tests").
+  if configure_and_build "ASan+UBSan" "$asan_dir" "${asan_cmake_args[@]}" \
+      -DSCREWFEM_TEST_PROGRAMS="linalg;build"; then
+    run_ctest "ASan+UBSan" "$asan_dir" -E "$asan_always_excluded"
     run_fuzzers "$asan_dir"
   fi
 else
