@@ -435,6 +435,11 @@ and indices out of range IndexError.)doc")
           "restarts", [](const S& s) { return s.integrator().restarts; },
           "Re-initialisations at profile breakpoints (DynamicOptions.restart_at_breakpoints).")
       .def_property_readonly(
+          "perturbed_start_skips",
+          [](const S& s) { return s.integrator().perturbed_start_skips; },
+          "Starts and restarts left unperturbed by DynamicOptions.perturbed_start because the "
+          "step does not resolve the change of the acceleration.")
+      .def_property_readonly(
           "rejected_steps", [](const S& s) { return s.integrator().rejected; },
           "Attempts the error control rejected (advance_to).")
       .def_property_readonly(

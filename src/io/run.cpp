@@ -663,6 +663,7 @@ class Run {
     j.Field("step_retries", integ_.retries);
     j.Field("estimated_convergences", integ_.estimated_convergences);
     j.Field("restarts", integ_.restarts);
+    j.Field("perturbed_start_skips", integ_.perturbed_start_skips);
     // The step history: every accepted step (or substep of a halved one), and the attempts
     // the error control rejected.
     j.Key("step_history").BeginObject();

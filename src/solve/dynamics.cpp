@@ -168,8 +168,18 @@ bool ApplyPerturbedStart(const Model& model, Data& data, Integrator& integ, doub
   data.v += h * data.vdot;
   data.time = t + h;
   const bool ok = ConsistentStart(model, data, integ, why);
-  // integ.a holds vdot_s now.
-  if (ok)
+  // integ.a holds vdot_s now. The finite difference vdot_s - vdot estimates h times the
+  // derivative of the acceleration only where the step resolves it; a larger change than
+  // kPerturbedStartMaxChange |vdot| comes from modes it does not resolve, and the step then
+  // starts from a = vdot.
+  bool perturb = ok;
+  if (ok) {
+    integ.v_work = integ.a - integ.perturb_vdot;
+    const double change = ScaledIncrementSize(model, integ.v_work);
+    perturb = change <= kPerturbedStartMaxChange * ScaledIncrementSize(model, integ.perturb_vdot);
+    if (!perturb) ++integ.perturbed_start_skips;
+  }
+  if (perturb)
     integ.a = integ.perturb_vdot +
               (integ.params.alpha_m - integ.params.alpha_f) * (integ.a - integ.perturb_vdot);
   else

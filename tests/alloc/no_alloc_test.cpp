@@ -215,10 +215,12 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     DynamicOptions options;
     options.rho_inf = 0.8;
     options.constraints = constraints;
-    // Not the perturbed start: on this model (contacts, actuators, a tendon going slack at the
-    // ramp's end) GGL with the perturbed start diverges in the step after the restart at
-    // 0.02 s (docs/numerics.md, "Stabilised index 2": known limit).
-    options.perturbed_start = false;
+    // The perturbed start is asked for, and left out at every start and restart: on this model
+    // (stiff rod, penalty contacts, a tendon going slack at the ramp's end) the acceleration
+    // changes over a step by 60 to 1000 times itself, modes the step does not resolve; applied
+    // anyway, the perturbation made both formulations diverge after the restart at 0.02 s
+    // (docs/numerics.md, "Stabilised index 2").
+    options.perturbed_start = true;
     std::string message;
     ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
     for (int i = 0; i < 3; ++i) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
@@ -266,6 +268,7 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     EXPECT_GT(integ.iterations, 50);  // the steps really iterated
     EXPECT_GE(integ.tendon_catches, 1);  // the length-driven tendon's catch ran in them
     EXPECT_GE(integ.restarts, 1);     // and restarted at the ramp's end
+    EXPECT_GE(integ.perturbed_start_skips, 2);  // at the start and at the restarts
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
     EXPECT_GT(active_steps, 10);  // with contacts active
     EXPECT_GT(pair_steps, 10);    // and the pair of moving shapes

@@ -68,6 +68,12 @@ struct EnumNames<ConstraintFormulation> {
   }};
 };
 
+// DynamicOptions::perturbed_start: the largest change of the consistent acceleration over the
+// next step, relative to the acceleration, for which the start is perturbed (docs/numerics.md,
+// "Stabilised index 2": 0.003 on the four-bar and the spring chain, 60 to 1000 on a rod with
+// penalty contacts whose axial modes the step does not resolve).
+inline constexpr double kPerturbedStartMaxChange = 0.5;
+
 struct DynamicOptions {
   double rho_inf = 0.9;          // spectral radius at infinity (1: no numerical damping)
   int max_iterations = 20;       // Newton iterations per step
@@ -121,6 +127,11 @@ struct DynamicOptions {
   // (vdot_s - vdot), vdot_s the consistent acceleration at the state predicted one step ahead
   // (q exp(h v + h^2 vdot / 2), v + h vdot, t + h; h = the next step). One more solve of
   // [M B^T; B 0] per start and restart; nothing changes at rho_inf = 1 (alpha_m = alpha_f).
+  // Applied only where the step resolves the change of the acceleration: when
+  // |vdot_s - vdot| > kPerturbedStartMaxChange |vdot| (scaled infinity norms, as for Newton's
+  // increments) the perturbation is a finite difference across modes the step does not
+  // resolve (stiff contacts, axial modes of a rod, a tendon going slack), and the step starts
+  // from a = vdot instead (counted in Integrator::perturbed_start_skips).
   bool perturbed_start = false;
   // How the joints' constraints enter the step (docs/numerics.md, "Stabilised index 2"):
   //   kIndex3: phi(q) = 0 at the end of each step (method.md §5.2);
@@ -207,6 +218,7 @@ struct Integrator {
   long retries = 0;              // steps redone with full Newton from the zero start
   long estimated_convergences = 0;  // steps accepted by ConvergenceTest::kEstimated
   long restarts = 0;             // re-initialisations at profile breakpoints
+  long perturbed_start_skips = 0;  // starts and restarts left unperturbed (perturbed_start)
   long tendon_switches = 0;      // steps in which a length-driven tendon went slack or taut
   long tendon_catches = 0;       // inelastic catches of length-driven tendons (CatchTendons)
   int max_iterations_in_step = 0;
