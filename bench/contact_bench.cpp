@@ -151,6 +151,7 @@ void BM_GripperSolver(benchmark::State& state) {
   state.counters["unknowns"] = model.num_unknowns();
   state.counters["pairs"] = static_cast<double>(model.shape_pairs.size() +
                                                 model.contact_pairs.size());
+  state.counters["bandwidth"] = model.bandwidth;
 }
 // The smallest time over the repetitions (the run least disturbed by other load).
 double SmallestGripperTime(const std::vector<double>& v) {
