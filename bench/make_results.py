@@ -13,6 +13,7 @@ skipped. One table per benchmark family:
   rod statics      BM_Assemble/<elements>, BM_Solve/<elements> (statics_bench.cpp)
   tendons          BM_RodTendonStep/<tendons>                (tendons_bench.cpp)
   contact          BM_RodContactStep/<variant>               (contact_bench.cpp)
+  gripper          BM_GripperSolver/gripper                  (contact_bench.cpp)
 Each JSON's revision comes from its context (the script passes --benchmark_context=revision=...),
 else from REVISION. Uses the median over repetitions when the JSON holds aggregates, else the
 single run. Times are real time (wall clock; manual time where the benchmark times itself).
@@ -449,6 +450,62 @@ def contact_section(entries):
     ]
 
 
+GRIPPER_TARGET = 1.0  # issue 16: the gripper example runs faster than real time on one core
+
+
+def gripper_section(entries):
+    runs = family(entries, "GripperSolver")
+    if not runs:
+        return []
+    rows, verdicts = [], []
+    for case, e in sorted(runs.items()):
+        label = f"`{case}`"
+        if e.error:
+            rows.append(failed_row(14, label, e))
+            continue
+        simulated = e.counter("simulated_seconds")
+        factor = e.counter("real_time_factor")
+        cpu_factor = simulated / e.cpu if e.cpu > 0 else float("nan")
+        best = e.best_real
+        best_factor = simulated / best if best else float("nan")
+        steps, newton = e.counter("steps"), e.counter("newton_iterations")
+        rows.append(
+            f"| {label} | {format_number(simulated)} s | {format_time(e.real)} "
+            f"| {format_time(best) if best else '–'} | {format_time(e.cpu)} "
+            f"| {format_number(factor)} | {format_number(best_factor)} | {format_number(cpu_factor)} "
+            f"| {format_number(steps)} | {format_number(newton / steps if steps else float('nan'))} "
+            f"| {format_number(e.counter('halvings'))} | {format_number(e.counter('unknowns'))} "
+            f"| {format_number(e.counter('bandwidth'))} | {e.repetitions} |")
+        verdict = "met" if factor >= GRIPPER_TARGET else "NOT met"
+        verdicts.append(
+            f"`{case}`: real-time factor **{factor:.3g}** (median; best run {best_factor:.3g}, "
+            f"CPU time {cpu_factor:.3g}); target faster than real time on one core: {verdict}.")
+    return [
+        "## Gripper example",
+        "",
+        "`examples/gripper/gripper.yaml` as it stands (two pneumatic fingers of 8 elements on a",
+        "driven wrist lift a ball from the ground and hold it: 0 to 3 s, h = 2e-3 s, the finger-ball",
+        "pairs and the ground plane), solver only: `AssembleInitialState`, `InitializeDynamics`",
+        "and `Step` over the scene's step schedule, without outputs (`BM_GripperSolver` in",
+        "`bench/contact_bench.cpp`, as the GRM's solver-only runs). One run per repetition;",
+        f"{statistic(runs.values())}; single thread. Real-time factor = simulated seconds / wall",
+        "seconds (*CPU*: / CPU seconds, without the waits for a busy processor). Every finger",
+        "element pairs with the ball and every pair links its nodes in the band (docs/numerics.md,",
+        "\"Contact between moving shapes\"), so the ball couples to all finger nodes and the",
+        "iteration matrix is nearly full (*half-bandwidth*): the banded factorisation took 31 % of",
+        "the run's CPU time in a profile (perf), the rod kernels most of the rest.",
+        "",
+        "| Scene | Simulated | Wall time per run | Best | CPU time per run | Real-time factor "
+        "| Best factor | CPU factor | Steps | Newton per step | Halvings | Unknowns | Half-bandwidth "
+        "| Runs |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        *rows,
+        "",
+        *verdicts,
+        "",
+    ]
+
+
 def rod_statics_section(entries):
     assemble, solve = family(entries, "Assemble"), family(entries, "Solve")
     if not assemble and not solve:
@@ -520,6 +577,7 @@ def main():
         *rod_statics_section(entries),
         *tendon_section(entries),
         *contact_section(entries),
+        *gripper_section(entries),
         "## Machine and run",
         "",
         f"- CPU: {cpu_model()} ({nproc()} cores available, `nproc`)",
