@@ -895,8 +895,8 @@ void BuildForceElements(Model& m) {
 }
 
 // Pairs between moving shapes (elements/shape_pair.h), enumerated once: every two contact
-// entities (a rod: its element capsules; a body: its spheres, capsules and boxes, a box only
-// against spheres)
+// entities (a rod: its element capsules; a body: its spheres, capsules and boxes; a box is side
+// B against any segment, and two boxes make 24 pairs: the 12 edges of each against the other)
 // whose group bitmasks match, that are not excluded and not joined (a shared node or a joint
 // between their nodes); a rod with itself when ContactSettings::self, skipping elements whose
 // nearest ends are closer along the rod than self_skip. All pairs of segments are stored: O(n^2)
@@ -910,7 +910,7 @@ void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
   ContactSettings& law = m.contact;
   if (!std::isfinite(law.self_skip) || law.self_skip == 0.0)
     throw InputError("contact: self_skip must be positive (or left to its default)");
-  // Entities: rods (contact_rods) and bodies with sphere or capsule shapes.
+  // Entities: rods (contact_rods) and bodies with shapes (spheres, capsules, boxes).
   struct Entity {
     bool rod;
     int index;      // rod or body index
@@ -1007,25 +1007,49 @@ void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
     return out;
   };
   const double gravity = m.gravity.norm() > 0.0 ? m.gravity.norm() : 9.81;
-  auto sphere = [](const ShapePairSide& s) {
-    return !s.rod && s.half.x() == 0.0 && s.offset[0] == s.offset[1];
-  };
+  auto is_box = [](const ShapePairSide& s) { return s.half.x() > 0.0; };
   auto add = [&](const Segment& a, const Segment& b) {
     if (std::isinf(a.mass) && std::isinf(b.mass)) return;
-    // A box pairs with spheres only (the box on side B); segments against boxes are left out.
-    const bool box_a = a.side.half.x() > 0.0, box_b = b.side.half.x() > 0.0;
-    if ((box_a && !sphere(b.side)) || (box_b && !sphere(a.side))) return;
-    ShapePair p;
-    p.side[0] = box_a ? b.side : a.side;
-    p.side[1] = box_a ? a.side : b.side;
-    m.shape_pairs.push_back(p);
     const double reduced = std::isinf(a.mass)   ? b.mass
                            : std::isinf(b.mass) ? a.mass
                                                 : a.mass * b.mass / (a.mass + b.mass);
-    masses->push_back(reduced);
+    auto push = [&](const ShapePairSide& side_a, const ShapePairSide& side_b) {
+      ShapePair p;
+      p.side[0] = side_a;
+      p.side[1] = side_b;
+      m.shape_pairs.push_back(p);
+      masses->push_back(reduced);
+    };
+    const bool box_a = is_box(a.side), box_b = is_box(b.side);
+    if (box_a && box_b) {
+      // Box-box: the 12 edges of each box (segments of radius 0) against the other box.
+      for (int first = 0; first < 2; ++first) {
+        const ShapePairSide& edges = first == 0 ? a.side : b.side;
+        const ShapePairSide& box = first == 0 ? b.side : a.side;
+        const Vec3& h = edges.half;
+        for (int k = 0; k < 8; ++k)
+          for (int bit : {1, 2, 4}) {
+            if (k & bit) continue;
+            auto corner = [&](int c) {
+              return Vec3(edges.offset[0] + Vec3((c & 1) ? h.x() : -h.x(), (c & 2) ? h.y() : -h.y(),
+                                                 (c & 4) ? h.z() : -h.z()));
+            };
+            ShapePairSide edge = edges;
+            edge.half.setZero();
+            edge.radius = 0.0;
+            edge.offset[0] = corner(k);
+            edge.offset[1] = corner(k | bit);
+            push(edge, box);
+          }
+      }
+    } else if (box_a) {
+      push(b.side, a.side);  // the box is side B
+    } else {
+      push(a.side, b.side);
+    }
     *w_max = std::max(*w_max, std::min(a.mass, b.mass) * gravity);
     *r_min = std::min(*r_min, std::min(box_a ? a.side.half.minCoeff() : a.side.radius,
-                                         box_b ? b.side.half.minCoeff() : b.side.radius));
+                                       box_b ? b.side.half.minCoeff() : b.side.radius));
   };
   for (std::size_t i = 0; i < entities.size(); ++i) {
     const Entity& a = entities[i];

@@ -40,6 +40,80 @@ void SetLevers(const ShapePair& pair, const SE3* const (&H)[4], ShapePairGeometr
   }
 }
 
+// Signed distance from a point c to the box |x_i| <= h_i (box frame): the distance outside,
+// minus the depth below the nearest face inside. Convex in c.
+double BoxSignedDistance(const Vec3& c, const Vec3& h) {
+  const Vec3 q = c.cwiseAbs() - h;
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+// The parameter s in [0, 1] of the point a + s d (box frame) nearest to the box |x_i| <= h_i
+// or deepest in it: the minimum of the convex function BoxSignedDistance(a + s d) over the
+// segment, exactly. Outside the box it is the root of a piecewise quadratic (sum over the
+// axes out of the box of (|c_i| - h_i)^2, pieces between the breakpoints |c_i| = h_i); inside
+// it is the maximum of the six lines +-c_i(s) - h_i, least at an end or where two lines cross.
+// So the minimum is among: the ends, the breakpoints, each piece's clamped minimiser and the
+// crossings of the lines; every candidate is evaluated. A flat minimum (a segment parallel to
+// a face) takes the middle of the set where the distance is least (as parallel segments do).
+double BoxSegmentParameter(const Vec3& a, const Vec3& d, const Vec3& h) {
+  double candidate[40];
+  int n = 0;
+  candidate[n++] = 0.0;
+  candidate[n++] = 1.0;
+  auto inside = [](double s) { return s > 0.0 && s < 1.0; };
+  // Breakpoints |a_i + s d_i| = h_i, sorted with the ends: the pieces.
+  double breaks[8];
+  int nb = 0;
+  breaks[nb++] = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    if (d(i) == 0.0) continue;
+    for (double sign : {-1.0, 1.0}) {
+      const double s = (sign * h(i) - a(i)) / d(i);
+      if (inside(s)) breaks[nb++] = s;
+    }
+  }
+  breaks[nb++] = 1.0;
+  for (int k = 1; k < nb; ++k)  // insertion sort of at most 8 values
+    for (int j = k; j > 0 && breaks[j - 1] > breaks[j]; --j) std::swap(breaks[j - 1], breaks[j]);
+  for (int k = 1; k < nb - 1; ++k) candidate[n++] = breaks[k];
+  for (int k = 0; k + 1 < nb; ++k) {
+    const double lo = breaks[k], hi = breaks[k + 1];
+    const Vec3 mid = a + 0.5 * (lo + hi) * d;
+    double num = 0.0, den = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(mid(i)) <= h(i)) continue;
+      const double sign = mid(i) > 0.0 ? 1.0 : -1.0;
+      num -= d(i) * (a(i) - sign * h(i));
+      den += d(i) * d(i);
+    }
+    if (den > 0.0) candidate[n++] = std::clamp(num / den, lo, hi);
+  }
+  // Crossings of the lines sign_i c_i(s) - h_i (15 pairs, the centre planes c_i = 0 included).
+  for (int l = 0; l < 6; ++l)
+    for (int m = l + 1; m < 6; ++m) {
+      const int i = l / 2, j = m / 2;
+      const double si = (l % 2) ? 1.0 : -1.0, sj = (m % 2) ? 1.0 : -1.0;
+      const double den = si * d(i) - sj * d(j);
+      if (den == 0.0) continue;
+      const double s = (sj * a(j) - h(j) - si * a(i) + h(i)) / den;
+      if (inside(s)) candidate[n++] = s;
+    }
+  double value[40];
+  double best = INFINITY;
+  for (int k = 0; k < n; ++k) {
+    value[k] = BoxSignedDistance(a + candidate[k] * d, h);
+    best = std::min(best, value[k]);
+  }
+  const double tolerance = 1e-12 * (h.maxCoeff() + d.norm());
+  double s_lo = 1.0, s_hi = 0.0;
+  for (int k = 0; k < n; ++k)
+    if (value[k] <= best + tolerance) {
+      s_lo = std::min(s_lo, candidate[k]);
+      s_hi = std::max(s_hi, candidate[k]);
+    }
+  return 0.5 * (s_lo + s_hi);
+}
+
 }  // namespace
 
 bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], double reject,
@@ -53,10 +127,13 @@ bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], doub
                        pair.side[1].radius + half.norm() + reject;
   if ((0.5 * (A0 + A1 - B0 - B1)).squaredNorm() > bound * bound) return false;
   if (half.x() > 0.0) {
-    // A sphere (A0 = A1) against a box centred at B0: clamp the centre into the box; inside,
-    // leave through the face nearest to it.
+    // A segment (a sphere: A0 = A1) against a box centred at B0: the point of the segment
+    // nearest to the box, or deepest in it, clamped into the box; a point inside leaves through
+    // the face nearest to it.
     const SE3& Hb = *H[2];
-    const Vec3 c = Hb.R.transpose() * (A0 - B0);
+    const Vec3 a = Hb.R.transpose() * (A0 - B0), d = Hb.R.transpose() * (A1 - A0);
+    const double s = BoxSegmentParameter(a, d, half);
+    const Vec3 c = a + s * d;
     Vec3 q = c.cwiseMax(-half).cwiseMin(half);
     Vec3 d_local;
     double distance;
@@ -72,11 +149,12 @@ bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], doub
       d_local = sign * Vec3::Unit(axis);
       distance = sign * c(axis) - half(axis);  // <= 0
     }
-    out->s[0] = out->s[1] = 0.0;
+    out->s[0] = s;
+    out->s[1] = 0.0;
     out->box_point = pair.side[1].offset[0] + q;
     out->normal = Hb.R * d_local;
     out->gap = distance - pair.side[0].radius;
-    out->point[0] = A0 - pair.side[0].radius * out->normal;
+    out->point[0] = A0 + s * (A1 - A0) - pair.side[0].radius * out->normal;
     out->point[1] = Hb.x + Hb.R * out->box_point;
     SetLevers(pair, H, out);
     return true;

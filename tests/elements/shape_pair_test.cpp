@@ -2,10 +2,12 @@
 // residual against the gradient of the penalty potential, the stiffness against central
 // differences through the retraction at the frozen closest parameters and normal (what the
 // tangent linearises), the damping and friction blocks against differences in the velocities,
-// for rod-rod, rod-capsule, sphere-capsule and parallel rod pairs; the closest points against
-// sampling; and closed forms: a head-on impact of two free spheres (momentum conserved, the
-// undamped rebound elastic to O(h^2)), and two crossing cantilevers pressed together (the
-// contact force from the compliances).
+// for rod-rod, rod-capsule, sphere-capsule, parallel rod, sphere-box and segment-box pairs (a
+// face, an edge, a corner, penetrating, a box edge); the closest points against sampling; and
+// closed forms: a head-on impact of two free spheres (momentum conserved, the undamped rebound
+// elastic to O(h^2)), two crossing cantilevers pressed together (the contact force from the
+// compliances), a capsule resting on a box face, a cantilever on a box edge, a box dropped onto
+// a box (rest height, energy), and a rod folded onto itself (self-contact force).
 #include "screwfem/elements/shape_pair.h"
 
 #include <gtest/gtest.h>
@@ -13,6 +15,7 @@
 #include <cmath>
 #include <random>
 
+#include "screwfem/assemble/assemble.h"
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/contact.h"
 #include "screwfem/solve/dynamics.h"
@@ -34,7 +37,30 @@ struct Case {
   Eigen::Matrix<double, 24, 1> eta;
 };
 
-enum class Kind { kRodRod, kRodCapsule, kSphereCapsule, kParallelRods, kSphereBox };
+enum class Kind {
+  kRodRod,
+  kRodCapsule,
+  kSphereCapsule,
+  kParallelRods,
+  kSphereBox,
+  // A segment against a box (half sizes 0.04, 0.06, 0.03), placed in the box frame so that the
+  // box's closest point is on a face, an edge or a corner, or the segment's end is 0.01 deep.
+  kRodBoxFace,
+  kRodBoxEdge,
+  kCapsuleBoxCorner,
+  kRodBoxPenetrating,
+  kBoxEdgeBox,  // a segment of radius 0 (an edge of another box) across an edge
+};
+const Kind kSegmentBoxKinds[] = {Kind::kRodBoxFace, Kind::kRodBoxEdge, Kind::kCapsuleBoxCorner,
+                                 Kind::kRodBoxPenetrating, Kind::kBoxEdgeBox};
+// How many coordinates of the box's closest point (box frame) are on the box's surface: 1 on a
+// face, 2 on an edge, 3 at a corner.
+int BoxFeature(const ShapePair& pair, const ShapePairGeometry& G) {
+  const Vec3 q = G.box_point - pair.side[1].offset[0];
+  int on = 0;
+  for (int i = 0; i < 3; ++i) on += std::abs(std::abs(q(i)) - pair.side[1].half(i)) < 1e-12 ? 1 : 0;
+  return on;
+}
 
 Case MakeCase(Kind kind, double mu, unsigned seed) {
   std::mt19937 rng(seed);
@@ -88,6 +114,30 @@ Case MakeCase(Kind kind, double mu, unsigned seed) {
       b.half = Vec3(0.04, 0.06, 0.03);
       b.node[0] = 2;
       break;
+    case Kind::kRodBoxFace:
+    case Kind::kRodBoxEdge:
+    case Kind::kCapsuleBoxCorner:
+    case Kind::kRodBoxPenetrating:
+    case Kind::kBoxEdgeBox: {
+      rigid_side(b, Vec3(0.02, 0.01, -0.03), Vec3(0.02, 0.01, -0.03), 0.0);
+      b.half = Vec3(0.04, 0.06, 0.03);
+      b.node[0] = 2;
+      // Segment ends in the box frame (from the box's centre) -> world.
+      auto world = [&](const Vec3& local) { return Vec3(c.H[2].x + c.H[2].R * (b.offset[0] + local)); };
+      auto body = [&](const Vec3& local) { return Vec3(c.H[0].R.transpose() * (world(local) - c.H[0].x)); };
+      if (kind == Kind::kRodBoxFace) {
+        rod_side(a, 0, world(Vec3(-0.02, 0.01, 0.042)), world(Vec3(0.03, -0.02, 0.06)));
+      } else if (kind == Kind::kRodBoxEdge) {
+        rod_side(a, 0, world(Vec3(0.0, 0.0, 0.045)), world(Vec3(0.08, 0.01, 0.025)));
+      } else if (kind == Kind::kCapsuleBoxCorner) {
+        rigid_side(a, body(Vec3(0.07, 0.03, 0.05)), body(Vec3(0.02, 0.1, 0.045)), 0.01);
+      } else if (kind == Kind::kRodBoxPenetrating) {
+        rod_side(a, 0, world(Vec3(-0.03, 0.0, 0.025)), world(Vec3(0.02, 0.01, 0.02)));
+      } else {
+        rigid_side(a, body(Vec3(0.01, -0.01, 0.038)), body(Vec3(0.07, 0.02, 0.028)), 0.0);
+      }
+      break;
+    }
   }
   if (a.node[1] == kGround) a.node[1] = 1;  // a rigid side's node 1 carries nothing
   if (b.node[1] == kGround) b.node[1] = 3;
@@ -96,7 +146,8 @@ Case MakeCase(Kind kind, double mu, unsigned seed) {
   ShapePairGeometry G;
   EXPECT_TRUE(CalcShapePairGeometry(c.pair, H, 1.0, &G));
   const double target = c.model.contact.onset * (0.1 + 0.4 * u(rng));
-  for (int k = 2; k < 4; ++k) c.H[k].x += (G.gap - target) * G.normal;
+  if (kind != Kind::kRodBoxPenetrating)  // that one stays 0.01 deep (gap -0.02)
+    for (int k = 2; k < 4; ++k) c.H[k].x += (G.gap - target) * G.normal;
   for (int i = 0; i < 24; ++i) c.eta(i) = 0.3 * u(rng);
   return c;
 }
@@ -130,7 +181,8 @@ ElementTerms<4> Terms(const Case& c, const SE3 (&frames)[4], const Eigen::Matrix
 
 TEST(ShapePairKind, TangentsMatchFiniteDifferencesAtTheFrozenClosestPointsAndInTheVelocities) {
   for (Kind kind : {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule, Kind::kParallelRods,
-                    Kind::kSphereBox}) {
+                    Kind::kSphereBox, Kind::kRodBoxFace, Kind::kRodBoxEdge, Kind::kCapsuleBoxCorner,
+                    Kind::kRodBoxPenetrating, Kind::kBoxEdgeBox}) {
     for (const double mu : {0.0, 0.4}) {
       for (unsigned seed : {1u, 2u, 3u}) {
         const Case c = MakeCase(kind, mu, seed);
@@ -168,7 +220,9 @@ TEST(ShapePairKind, TangentsMatchFiniteDifferencesAtTheFrozenClosestPointsAndInT
 }
 
 TEST(ShapePairKind, StaticForceIsTheGradientOfThePenaltyPotential) {
-  for (Kind kind : {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule, Kind::kSphereBox}) {
+  for (Kind kind : {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule, Kind::kSphereBox,
+                    Kind::kRodBoxFace, Kind::kRodBoxEdge, Kind::kCapsuleBoxCorner,
+                    Kind::kRodBoxPenetrating, Kind::kBoxEdgeBox}) {
     const Case c = MakeCase(kind, 0.4, 7);
     KernelOptions o;  // statics: no damping, no friction
     const Eigen::Matrix<double, 24, 1> r = Terms(c, c.H, c.eta, o, nullptr).residual;
@@ -224,6 +278,64 @@ TEST(ShapePairGeometry, GapIsTheSampledMinimumDistanceAlsoForParallelSegments) {
     EXPECT_GT(G.gap, sampled - 1e-4) << trial;
     // The surface points are the gap apart along the normal.
     EXPECT_NEAR(G.normal.dot(G.point[0] - G.point[1]), G.gap, 1e-12);
+  }
+}
+
+// The signed distance from a point (box frame) to the box |x_i| <= h_i, for the sampling.
+double SampledBoxDistance(const Vec3& c, const Vec3& h) {
+  const Vec3 q = c.cwiseAbs() - h;
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+TEST(ShapePairGeometry, SegmentBoxGapIsTheSampledMinimumSignedDistanceOnEveryFeature) {
+  // The designed configurations touch the feature they are named after.
+  const int feature[] = {1, 2, 3, 1, 2};
+  for (int k = 0; k < 5; ++k) {
+    const Case c = MakeCase(kSegmentBoxKinds[k], 0.0, 5);
+    const SE3* H[4] = {&c.H[0], &c.H[1], &c.H[2], &c.H[3]};
+    ShapePairGeometry G;
+    ASSERT_TRUE(CalcShapePairGeometry(c.pair, H, 1.0, &G));
+    EXPECT_EQ(BoxFeature(c.pair, G), feature[k]) << k;
+    EXPECT_NEAR(G.normal.dot(G.point[0] - G.point[1]), G.gap, 1e-12) << k;
+    if (kSegmentBoxKinds[k] == Kind::kRodBoxPenetrating) {
+      EXPECT_NEAR(G.gap, -0.02, 1e-12);  // the end 0.01 below the top face, radius 0.01
+      EXPECT_NEAR(G.s[0], 1.0, 1e-12);
+      EXPECT_NEAR((c.H[2].R.transpose() * G.normal).z(), 1.0, 1e-12);  // out through the top
+    }
+  }
+  // Random segments (outside, touching, through the box, parallel to a face) against sampling.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Vec3 h(0.04, 0.06, 0.03), centre(0.01, -0.02, 0.03);
+  for (int trial = 0; trial < 60; ++trial) {
+    ShapePair pair;
+    pair.side[0].node[1] = 1;
+    pair.side[0].end_node[1] = 1;
+    pair.side[0].radius = 0.005;
+    pair.side[1].node[0] = 2;
+    pair.side[1].node[1] = 3;
+    pair.side[1].offset[0] = pair.side[1].offset[1] = centre;
+    pair.side[1].half = h;
+    SE3 F[4];
+    F[2] = SE3{ExpSO3(Vec3(u(rng), u(rng), u(rng))), 0.05 * Vec3(u(rng), u(rng), u(rng))};
+    Vec3 a = 0.1 * Vec3(u(rng), u(rng), u(rng)), b = 0.1 * Vec3(u(rng), u(rng), u(rng));
+    if (trial % 5 == 0) b.z() = a.z();  // parallel to the top and bottom faces
+    F[0].x = F[2].x + F[2].R * (centre + a);
+    F[1].x = F[2].x + F[2].R * (centre + b);
+    const SE3* H[4] = {&F[0], &F[1], &F[2], &F[3]};
+    ShapePairGeometry G;
+    ASSERT_TRUE(CalcShapePairGeometry(pair, H, 10.0, &G));
+    double best = INFINITY;
+    const int ns = 20000;
+    for (int i = 0; i <= ns; ++i)
+      best = std::min(best, SampledBoxDistance(a + (b - a) * (double(i) / ns), h));
+    const double sampled = best - 0.005;
+    EXPECT_LE(G.gap, sampled + 1e-12) << trial;
+    EXPECT_GT(G.gap, sampled - 2e-5) << trial;
+    // The box point is on the surface, the gap apart from side A's surface point along n.
+    EXPECT_GE(BoxFeature(pair, G), 1) << trial;
+    EXPECT_NEAR(G.normal.dot(G.point[0] - G.point[1]), G.gap, 1e-12) << trial;
+    EXPECT_NEAR(SampledBoxDistance(a + G.s[0] * (b - a), h) - 0.005, G.gap, 1e-12) << trial;
   }
 }
 
@@ -366,6 +478,181 @@ TEST(ShapePairValidation, SphereRestsOnTheMiddleOfABoxFace) {
   EXPECT_NEAR(inside.normal.z(), 1.0, 1e-12);
 }
 
+// A 1 kg capsule (axis along x, 0.2 m, r = 0.02) lying flat on the top face of a fixed box,
+// off the box's centre (k = 1e5, onset 1e-4): it carries m g at the penetration-branch gap, its
+// contact point is the middle of the segment (the flat minimum's middle, under the centre of
+// mass: the moment balance of one point per pair), and it does not tilt.
+TEST(ShapePairValidation, CapsuleRestsFlatOnABoxFace) {
+  const double gap = 0.5e-4 - 9.81 / 1e5, r = 0.02;
+  ModelBuilder b;
+  const int box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+  b.FixNode(box);
+  b.AddRigidBody("table", box, 1.0, Vec3::Zero(), Mat3::Identity());
+  b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.5, 0.4, 0.05), 0.0});
+  const int bar = b.AddNode(SE3{Mat3::Identity(), Vec3(0.1, -0.05, r + gap)});
+  b.AddRigidBody("bar", bar, 1.0, Vec3::Zero(), Vec3(1e-4, 4e-3, 4e-3).asDiagonal());
+  b.AddContactShape({1, ContactShapeType::kCapsule, Vec3(-0.1, 0.0, 0.0), Vec3(0.1, 0.0, 0.0), r});
+  ContactSettings law;
+  law.stiffness = 1e5;
+  law.onset = 1e-4;
+  law.friction = 0.5;
+  b.SetContactSettings(law);
+  b.SetGravity(Vec3(0.0, 0.0, -9.81));
+  TwoSpheres s;
+  s.model = b.Build();
+  ASSERT_EQ(s.model.shape_pairs.size(), 1u);
+  EXPECT_FALSE(s.model.shape_pairs[0].side[0].half.x() > 0.0);  // the capsule is side A
+  s.data = MakeData(s.model);
+  std::string message;
+  ASSERT_TRUE(AssembleInitialState(s.model, s.data, &message)) << message;
+  ASSERT_TRUE(InitializeDynamics(s.model, s.data, s.integ, DynamicOptions{}, &message)) << message;
+  for (int i = 0; i < 50; ++i) ASSERT_TRUE(Step(s.model, s.data, s.integ, 1e-3).ok);
+  const ShapePairState c = CalcShapePairState(s.model, s.data, 0);
+  ASSERT_TRUE(c.active);
+  EXPECT_NEAR(c.normal_force, 9.81, 1e-6);
+  EXPECT_NEAR(c.gap, gap, 1e-9);
+  EXPECT_NEAR(c.normal.z(), 1.0, 1e-12);
+  EXPECT_NEAR(c.point[0].x(), 0.1, 1e-12);  // under the centre of mass
+  EXPECT_NEAR(s.data.H[1].x.z(), r + gap, 1e-9);
+  EXPECT_LT(LogSO3(s.data.H[1].R).norm(), 1e-12);
+}
+
+// A cantilever (8 elements, L = 0.5, r = 5 mm, tip load P) whose last element crosses the top
+// edge of a fixed box, `clearance` below its surface, at the element's middle x_e = L - h/2
+// (the box lies under x_e - 0.02 .. x_e; the chord falls towards the tip, so the edge is its
+// nearest point). The force R, split equally to the element's nodes, and the tip load give
+// the edge point's deflection 0.5 (C(L-h, L) + C(L, L)) P - c_low R = clearance - g with the
+// cantilever flexibility C and c_low = 1/4 (C11 + 2 C12 + C22) (as for the crossing
+// cantilevers below).
+TEST(ShapePairValidation, CantileverRestsOnABoxEdge) {
+  const double L = 0.5, radius = 0.005, P = 0.2, clearance = 0.002;
+  const int ne = 8;
+  const double h = L / ne, x_e = L - 0.5 * h, top = -radius - clearance;
+  Material mat;
+  mat.youngs_modulus = 2e9;
+  mat.poisson_ratio = 0.3;
+  mat.density = 1000.0;
+  const Section section = Section::Circle(radius, mat);
+  ModelBuilder b;
+  const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(L, 0.0, 0.0), ne, section);
+  b.FixNode(b.model().rods[0].nodes.front());
+  PointLoad load;
+  load.node = b.model().rods[0].nodes.back();
+  load.force = Vec3(0.0, 0.0, -P);
+  b.AddPointLoad(load);
+  const int box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+  b.FixNode(box);
+  const int table = b.AddRigidBody("table", box, 1.0, Vec3::Zero(), Mat3::Identity());
+  b.AddContactShape({table, ContactShapeType::kBox, Vec3(x_e - 0.01, 0.0, top - 0.025),
+                     Vec3(0.01, 0.05, 0.025), 0.0});
+  b.AddContactRod(rod, radius);
+  ContactSettings law;
+  law.stiffness = 1e5;
+  law.onset = 1e-4;
+  b.SetContactSettings(law);
+  const Model m = b.Build();
+  ASSERT_EQ(m.shape_pairs.size(), static_cast<std::size_t>(ne));
+  Data d = MakeData(m);
+  StaticOptions o;
+  o.load_steps = 10;
+  const StaticResult res = SolveStatic(m, d, o);
+  ASSERT_TRUE(res.converged) << res.message;
+  double R = 0.0, gap = 0.0;
+  int active = 0;
+  for (int i = 0; i < ne; ++i) {
+    const ShapePairState c = CalcShapePairState(m, d, i);
+    if (!c.active) continue;
+    ++active;
+    EXPECT_EQ(m.shape_pairs[static_cast<std::size_t>(i)].side[0].element, ne - 1);
+    EXPECT_NEAR(c.point[1].x(), x_e, 1e-12);  // on the edge
+    EXPECT_NEAR(c.point[1].z(), top, 1e-12);
+    R += c.normal_force * c.normal.z();
+    gap = c.gap;
+  }
+  EXPECT_EQ(active, 1);
+  const double EI = section.stiffness(4), GA = section.stiffness(2);
+  auto C = [&](double x, double y) {
+    const double lo = std::min(x, y), hi = std::max(x, y);
+    return lo * lo * (3 * hi - lo) / (6 * EI) + lo / GA;
+  };
+  const double c_edge = 0.5 * (C(L - h, L) + C(L, L));
+  const double c_low = 0.25 * (C(L - h, L - h) + 2 * C(L - h, L) + C(L, L));
+  ASSERT_GT(c_edge * P, clearance);  // without the box the rod would pass through its edge
+  EXPECT_NEAR(R, (c_edge * P - clearance + gap) / c_low, 2e-3 * R);
+  EXPECT_NEAR(gap, 1e-4 - std::sqrt(2e-4 * R / 1e5), 1e-9);
+}
+
+// A 1 kg box (half sizes 0.05, 0.04, 0.03) dropped flat from 2 mm onto a fixed box: 24 pairs
+// (the 12 edges of each box against the other). At rest its bottom face is carried by 8 points,
+// the middles of its 4 bottom edges (flat minima) and the lower ends of its 4 vertical edges
+// (the corners), all at one gap by symmetry: m g / 8 each, so it rests at 0.03 + g with
+// f_e(g) = m g / 8 on the quadratic branch, g = delta - sqrt(2 delta m g / (8 k)). With
+// rho_inf = 1 (no numerical dissipation) the total energy (kinetic, gravity, penalty) may rise
+// only by the trapezoidal rule's error at the release of the bounce, which falls with h.
+TEST(ShapePairValidation, BoxDroppedOnABoxComesToRestOnItsEdgesAndCorners) {
+  const double m_box = 1.0, k = 1e5, delta = 1e-4, drop = 0.002;
+  const double gap = delta - std::sqrt(2.0 * delta * m_box * 9.81 / (8.0 * k));
+  const double steps[2] = {1e-3, 2.5e-4};
+  double rise[2] = {0.0, 0.0};
+  for (int run = 0; run < 2; ++run) {
+    ModelBuilder b;
+    const int base = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+    b.FixNode(base);
+    b.AddRigidBody("table", base, 1.0, Vec3::Zero(), Mat3::Identity());
+    b.AddContactShape(
+        {0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.3, 0.3, 0.05), 0.0});
+    const Vec3 half(0.05, 0.04, 0.03);
+    const int node = b.AddNode(SE3{Mat3::Identity(), Vec3(0.02, -0.01, half.z() + drop)});
+    const Vec3 J = m_box / 3.0 * Vec3(half.y() * half.y() + half.z() * half.z(),
+                                       half.x() * half.x() + half.z() * half.z(),
+                                       half.x() * half.x() + half.y() * half.y());
+    b.AddRigidBody("block", node, m_box, Vec3::Zero(), J.asDiagonal());
+    b.AddContactShape({1, ContactShapeType::kBox, Vec3::Zero(), half, 0.0});
+    ContactSettings law;
+    law.stiffness = k;
+    law.onset = delta;
+    law.friction = 0.3;
+    b.SetContactSettings(law);
+    b.SetGravity(Vec3(0.0, 0.0, -9.81));
+    TwoSpheres s;
+    s.model = b.Build();
+    ASSERT_EQ(s.model.shape_pairs.size(), 24u);
+    s.data = MakeData(s.model);
+    std::string message;
+    ASSERT_TRUE(AssembleInitialState(s.model, s.data, &message)) << message;
+    DynamicOptions opt;
+    opt.rho_inf = 1.0;
+    ASSERT_TRUE(InitializeDynamics(s.model, s.data, s.integ, opt, &message)) << message;
+    double energy = CalcEnergy(s.model, s.data).total();
+    const int n = static_cast<int>(std::lround(0.12 / steps[run]));
+    for (int i = 0; i < n; ++i) {
+      ASSERT_TRUE(Step(s.model, s.data, s.integ, steps[run]).ok) << i;
+      const double e = CalcEnergy(s.model, s.data).total();
+      rise[run] = std::max(rise[run], e - energy);
+      energy = e;
+    }
+    double force = 0.0;
+    int active = 0;
+    for (int i = 0; i < 24; ++i) {
+      const ShapePairState c = CalcShapePairState(s.model, s.data, i);
+      if (!c.active) continue;
+      ++active;
+      EXPECT_NEAR(c.normal_force, 9.81 / 8.0, 1e-6) << i;
+      EXPECT_NEAR(c.gap, gap, 1e-9) << i;
+      force += c.normal_force * c.normal.z();
+    }
+    EXPECT_EQ(active, 8);
+    EXPECT_NEAR(force, 9.81, 1e-6);
+    EXPECT_NEAR(s.data.H[1].x.z(), half.z() + gap, 1e-9);
+    EXPECT_LT(s.data.v.segment<6>(s.model.nodes[1].dof).norm(), 1e-6);
+  }
+  // Measured: 6.2e-5 J at h = 1e-3 (3.2e-3 of the 0.0196 J released, in the step where the
+  // bounce leaves the penalty range: omega h = 0.9 per contact), 1e-16 J (round-off) at 2.5e-4.
+  const double released = m_box * 9.81 * drop;
+  EXPECT_LT(rise[0], 5e-3 * released);
+  EXPECT_LT(rise[1], 1e-12);
+}
+
 // Two equal cantilevers crossing at right angles: the upper one's tip (loaded by P) over the
 // middle of the lower one's last element, `clearance` between the surfaces. With the
 // cantilever's flexibility C(x, y) = min^2 (3 max - min) / (6 EI) + min / GA, the upper tip
@@ -428,6 +715,78 @@ TEST(ShapePairValidation, CrossingCantileversPressedTogetherShareTheLoadByTheirC
   const double w_upper = d.H[static_cast<std::size_t>(m.rods[0].nodes.back())].x.z();
   // The linear closed form for the tip (measured 2.3e-3 relative: rotations of 0.015 rad).
   EXPECT_NEAR(w_upper, -c_up * (P - R), 5e-3 * c_up * P);
+}
+
+// Self-contact: one rod folded back over itself (path (0,0,0) -> (a,0,0) -> (a,0,H) -> (a-e,0,H)
+// -> (a-e-L,0,H), H = 2r + clearance), everything up to (a-e,0,H) held fixed, so the last
+// segment is a cantilever of length L clamped there and lying over the rod's own first segment.
+// A tip load P presses its tip onto that segment (rod self-contact, `self: true`): the tip
+// deflects by C(L, L) (P - R) = clearance - g, so R = P - (clearance - g) / C(L, L) with the
+// flexibility C(L, L) = L^3 / (3 EI) + L / GA; the contact is the only one, at the tip, and no
+// pair interpenetrates.
+TEST(ShapePairValidation, RodFoldedOntoItselfCarriesTheTipLoadByItsFlexibility) {
+  const double L = 0.3, radius = 0.005, P = 0.2, clearance = 0.001, a = 0.4, e = 0.03;
+  const double H = 2.0 * radius + clearance;
+  const int ne = 8;
+  Material mat;
+  mat.youngs_modulus = 2e9;
+  mat.poisson_ratio = 0.3;
+  mat.density = 1000.0;
+  const Section section = Section::Circle(radius, mat);
+  ModelBuilder b;
+  const int rod = b.AddRodAlongPath(
+      "fold", {Vec3::Zero(), Vec3(a, 0, 0), Vec3(a, 0, H), Vec3(a - e, 0, H), Vec3(a - e - L, 0, H)},
+      ne, section, Vec3::UnitY());
+  const std::vector<int> nodes = b.model().rods[0].nodes;
+  ASSERT_EQ(nodes.size(), static_cast<std::size_t>(4 * ne + 1));
+  for (int k = 0; k <= 3 * ne; ++k) b.FixNode(nodes[static_cast<std::size_t>(k)]);
+  PointLoad load;
+  load.node = nodes.back();
+  load.force = Vec3(0.0, 0.0, -P);
+  b.AddPointLoad(load);
+  b.AddContactRod(rod, radius);
+  ContactSettings law;
+  law.stiffness = 1e5;
+  law.onset = 1e-4;
+  law.self = true;
+  b.SetContactSettings(law);
+  const Model m = b.Build();
+  ASSERT_FALSE(m.shape_pairs.empty());
+  Data d = MakeData(m);
+  StaticOptions o;
+  o.load_steps = 10;
+  const StaticResult res = SolveStatic(m, d, o);
+  ASSERT_TRUE(res.converged) << res.message;
+  double R = 0.0, gap = 0.0, least_gap = INFINITY;
+  int active = 0;
+  for (int i = 0; i < static_cast<int>(m.shape_pairs.size()); ++i) {
+    const ShapePair& p = m.shape_pairs[static_cast<std::size_t>(i)];
+    const SE3* frames[4] = {&NodeFrame(d, p.side[0].node[0]), &NodeFrame(d, p.side[0].node[1]),
+                           &NodeFrame(d, p.side[1].node[0]), &NodeFrame(d, p.side[1].node[1])};
+    ShapePairGeometry G;
+    if (CalcShapePairGeometry(p, frames, 1.0, &G)) least_gap = std::min(least_gap, G.gap);
+    const ShapePairState c = CalcShapePairState(m, d, i);
+    if (!c.active) continue;
+    ++active;
+    EXPECT_TRUE(p.side[0].owner == 0 && p.side[1].owner == 0);
+    // The lower element under the tip (x = 0.07: element 1) and the last element's tip.
+    EXPECT_EQ(std::min(p.side[0].element, p.side[1].element), 1);
+    EXPECT_EQ(std::max(p.side[0].element, p.side[1].element), 4 * ne - 1);
+    R += std::abs(c.normal_force * c.normal.z());
+    gap = c.gap;
+  }
+  EXPECT_EQ(active, 1);
+  EXPECT_GT(least_gap, 0.0);  // no interpenetration (the force acts from gap = onset down)
+  const double EI = section.stiffness(4), GA = section.stiffness(2);
+  // The rod's strain is one value per element (its midpoint's), so the cantilever's flexibility
+  // is the midpoint rule of the integral of (L - x)^2 / EI: L^3 / 3 - L h^2 / 12 (second order).
+  const double h = L / ne;
+  const double C = (L * L * L / 3.0 - L * h * h / 12.0) / EI + L / GA;
+  ASSERT_GT(C * P, clearance);  // the tip alone would pass through the rod's first segment
+  EXPECT_NEAR(R, P - (clearance - gap) / C, 1e-4 * R);
+  EXPECT_NEAR(gap, 1e-4 - std::sqrt(2e-4 * R / 1e5), 1e-9);
+  const double tip = d.H[static_cast<std::size_t>(nodes.back())].x.z();
+  EXPECT_NEAR(H - tip, C * (P - R), 1e-4 * C * P);
 }
 
 }  // namespace

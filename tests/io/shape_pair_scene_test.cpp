@@ -100,6 +100,54 @@ outputs: {interval: 0.01}
   EXPECT_NEAR(last[13], 1.1 + gap, 1e-9);  // pbz
 }
 
+// Boxes from a scene: a fixed box pairs with a capsule (1 pair), a rod (one per element) and
+// another box (24: the 12 edges of each against the other); the capsule, lying flat on the box
+// off its centre, carries its weight at the penetration-branch gap (pair_contacts.csv), the
+// contact point under its centre of mass.
+TEST(ShapePairScene, BoxesPairWithCapsulesRodsAndBoxesAndCarryARestingCapsule) {
+  const double gap = 0.5e-4 - 9.81 / 1e5;
+  const std::string z = std::to_string(0.02 + gap);
+  const std::string bodies = R"(gravity: [0, 0, -9.81]
+sections:
+  rubber: {shape: circle, radius: 0.01, material: {E: 1e7, nu: 0.45, density: 1100}}
+bodies:
+  table: {type: rigid, at: [0, 0, 0], mass: 1, inertia: [1, 1, 1], fixed: true,
+          shapes: [{type: box, center: [0, 0, -0.05], half_sizes: [0.5, 0.4, 0.05]}]}
+  bar: {type: rigid, at: [0.1, -0.05, )" + z + R"(], mass: 1, inertia: [1e-4, 4e-3, 4e-3], free: true,
+        shapes: [{type: capsule, from: [0, -0.05, )" + z + R"(], to: [0.2, -0.05, )" + z +
+                             R"(], radius: 0.02}]}
+)";
+  const std::string more = R"(  block: {type: rigid, at: [0, 0.3, 1], mass: 1, inertia: [1, 1, 1], free: true,
+          shapes: [{type: box, center: [0, 0.3, 1], half_sizes: [0.05, 0.04, 0.03]}]}
+  rod: {type: soft, from: [0, 0, 2], to: [1, 0, 2], section: rubber, elements: 5, free: true}
+contact: {exclude: [[bar, block], [bar, rod], [block, rod]]}
+)";
+  const Model m = ParseScene(bodies + more, "boxes.yaml").model;
+  EXPECT_EQ(m.shape_pairs.size(), 1u + 24u + 5u);
+  for (const ShapePair& p : m.shape_pairs) {
+    EXPECT_GT(p.side[1].half.x(), 0.0);  // the box is side B
+    EXPECT_EQ(p.side[0].half.x(), 0.0);
+  }
+  const std::string text = bodies + R"(contact: {stiffness: 1e5, onset: 1e-4, friction: 0.5}
+analysis: {type: dynamic, end_time: 0.05, step: 1e-3}
+outputs: {interval: 0.01}
+)";
+  test::ScopedDir dir("shape_pair_box_scene");
+  const Scene s = ParseScene(text, "rest.yaml");
+  ASSERT_EQ(s.model.shape_pairs.size(), 1u);
+  const RunResult r = RunScene(s, dir.path());
+  ASSERT_TRUE(r.ok) << r.message;
+  const test::Table c = test::ReadCsv(dir.path() + "/pair_contacts.csv");
+  ASSERT_TRUE(c.well_formed) << c.problem;
+  ASSERT_GE(c.rows.size(), 5u);
+  const std::vector<double>& last = c.rows.back();
+  EXPECT_NEAR(last[16], 1.0, 1e-12);  // nz: from the box (B) up to the capsule (A)
+  EXPECT_NEAR(last[17], 9.81, 1e-6);  // fn
+  EXPECT_NEAR(last[21], gap, 1e-9);
+  EXPECT_NEAR(last[8], 0.1, 1e-9);  // pax: under the centre of mass
+  EXPECT_NEAR(last[13], 0.0, 1e-12);  // pbz: the box's top face
+}
+
 TEST(ShapePairScene, BadInputIsReportedAtFileLineColumnNamingTheField) {
   auto expect = [](const std::string& text, const std::string& location, const std::string& what) {
     const std::string message = Error(text);

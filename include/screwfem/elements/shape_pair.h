@@ -2,12 +2,15 @@
 // docs/numerics.md, "Contact between moving shapes").
 //
 // Each item is a ShapePair (model.h) enumerated by ModelBuilder::Build: rigid-rigid between
-// primitives of different bodies, rod-rigid (a rod element's chord capsule against a body's
-// sphere or capsule), rod-rod and rod self-contact. Each side is a segment of body points
+// primitives of different bodies (sphere, capsule, box; box-box as the 12 edges of each box
+// against the other), rod-rigid (a rod element's chord capsule against a body's sphere,
+// capsule or box), rod-rod and rod self-contact. Each side is a segment of body points
 // inflated by a radius; side A uses item nodes 0 and 1, side B nodes 2 and 3. The closest
 // parameters (s, t) of the two segments (clamped; the middle of the overlap for parallel
-// segments; for a sphere against a box side B the closest point of the box, or the exit
-// through the nearest face when the centre is inside) and the normal n from B to A are found at every evaluation and frozen in the tangent
+// segments; for a segment or sphere against a box side B the point of the segment nearest to
+// the box or deepest in it, by an exact 1-D minimisation of the box's signed distance, with
+// the closest point of the box, or the exit through the nearest face when that point is
+// inside) and the normal n from B to A are found at every evaluation and frozen in the tangent
 // (envelope theorem for the gap gradient), as in ContactKind. The force F = f_n n + f_t acts on
 // A at its surface point p_A - r_A n and -F on B at p_B + r_B n; friction and damping use the
 // RELATIVE velocity of the two surface points. Same law as ContactKind (C1 penalty, damping
@@ -28,6 +31,7 @@ struct ShapePairGeometry {
   double weight[4] = {0.0, 0.0, 0.0, 0.0};       // W_k of item node k (on its side)
   Vec3 lever[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // node frame
   Vec3 box_point = Vec3::Zero();  // a box side B: the closest point of the box, node frame
+  // (s[0] is then the parameter of side A's nearest or deepest point, s[1] = 0)
 };
 // Returns false when the pair is certainly apart (bounding spheres of the two capsules further
 // than `reject` apart: the cheap test before the closest points) or the normal is undefined

@@ -369,8 +369,9 @@ struct ShapePairSide {
   bool rod = false;  // the owner: a rod or a rigid body (index), for outputs
   int owner = -1;
   int element = -1;  // a rod side: the element (index into Model::elements)
-  // A box side (always side B, against a sphere): half sizes > 0 along the node axes, centre
-  // offset[0]; zero for a segment side.
+  // A box side (always side B, against a segment side: a sphere, a capsule, a rod element or
+  // an edge of another box): half sizes > 0 along the node axes, centre offset[0]; zero for a
+  // segment side.
   Vec3 half = Vec3::Zero();
 };
 // A pair of moving shapes made by Build (rigid-rigid, rod-rigid, rod-rod, rod self-contact):
