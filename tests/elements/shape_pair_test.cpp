@@ -347,6 +347,14 @@ struct TwoSpheres {
   Integrator integ;
 };
 
+// The data of s->model, its consistent initial state and the integrator's start.
+void StartDynamics(TwoSpheres* s, const DynamicOptions& opt) {
+  s->data = MakeData(s->model);
+  std::string message;
+  ASSERT_TRUE(AssembleInitialState(s->model, s->data, &message)) << message;
+  ASSERT_TRUE(InitializeDynamics(s->model, s->data, s->integ, opt, &message)) << message;
+}
+
 void MakeTwoSpheres(TwoSpheres* s, double mu, double zeta, double offset, double rho_inf) {
   ModelBuilder b;
   const double r = 0.05;
@@ -366,12 +374,9 @@ void MakeTwoSpheres(TwoSpheres* s, double mu, double zeta, double offset, double
   b.SetInitialVelocity(n1, (Vec6() << 1.0, 0.0, 0.0, 0.0, 0.0, 0.0).finished());
   b.SetInitialVelocity(n2, (Vec6() << -0.5, 0.0, 0.0, 0.0, 0.0, 0.0).finished());
   s->model = b.Build();
-  s->data = MakeData(s->model);
   DynamicOptions opt;
   opt.rho_inf = rho_inf;
-  std::string message;
-  ASSERT_TRUE(AssembleInitialState(s->model, s->data, &message)) << message;
-  ASSERT_TRUE(InitializeDynamics(s->model, s->data, s->integ, opt, &message)) << message;
+  StartDynamics(s, opt);
 }
 
 Vec3 Momentum(const TwoSpheres& s) {
@@ -460,10 +465,7 @@ TEST(ShapePairValidation, SphereRestsOnTheMiddleOfABoxFace) {
   s.model = b.Build();
   ASSERT_EQ(s.model.shape_pairs.size(), 1u);
   EXPECT_GT(s.model.shape_pairs[0].side[1].half.x(), 0.0);  // the box is side B
-  s.data = MakeData(s.model);
-  std::string message;
-  ASSERT_TRUE(AssembleInitialState(s.model, s.data, &message)) << message;
-  ASSERT_TRUE(InitializeDynamics(s.model, s.data, s.integ, DynamicOptions{}, &message)) << message;
+  ASSERT_NO_FATAL_FAILURE(StartDynamics(&s, DynamicOptions{}));
   for (int i = 0; i < 50; ++i) ASSERT_TRUE(Step(s.model, s.data, s.integ, 1e-3).ok);
   const ShapePairState c = CalcShapePairState(s.model, s.data, 0);
   ASSERT_TRUE(c.active);
@@ -502,10 +504,7 @@ TEST(ShapePairValidation, CapsuleRestsFlatOnABoxFace) {
   s.model = b.Build();
   ASSERT_EQ(s.model.shape_pairs.size(), 1u);
   EXPECT_FALSE(s.model.shape_pairs[0].side[0].half.x() > 0.0);  // the capsule is side A
-  s.data = MakeData(s.model);
-  std::string message;
-  ASSERT_TRUE(AssembleInitialState(s.model, s.data, &message)) << message;
-  ASSERT_TRUE(InitializeDynamics(s.model, s.data, s.integ, DynamicOptions{}, &message)) << message;
+  ASSERT_NO_FATAL_FAILURE(StartDynamics(&s, DynamicOptions{}));
   for (int i = 0; i < 50; ++i) ASSERT_TRUE(Step(s.model, s.data, s.integ, 1e-3).ok);
   const ShapePairState c = CalcShapePairState(s.model, s.data, 0);
   ASSERT_TRUE(c.active);
@@ -617,12 +616,9 @@ TEST(ShapePairValidation, BoxDroppedOnABoxComesToRestOnItsEdgesAndCorners) {
     TwoSpheres s;
     s.model = b.Build();
     ASSERT_EQ(s.model.shape_pairs.size(), 24u);
-    s.data = MakeData(s.model);
-    std::string message;
-    ASSERT_TRUE(AssembleInitialState(s.model, s.data, &message)) << message;
     DynamicOptions opt;
     opt.rho_inf = 1.0;
-    ASSERT_TRUE(InitializeDynamics(s.model, s.data, s.integ, opt, &message)) << message;
+    ASSERT_NO_FATAL_FAILURE(StartDynamics(&s, opt));
     double energy = CalcEnergy(s.model, s.data).total();
     const int n = static_cast<int>(std::lround(0.12 / steps[run]));
     for (int i = 0; i < n; ++i) {
