@@ -26,6 +26,17 @@ bodies:
   rod: {type: soft, from: [0, 1, 0], to: [1, 1, 0], section: rubber, elements: 10, free: true}
 )";
 
+// Runs a scene with one pair of shapes into a scratch directory and reads its
+// pair_contacts.csv.
+test::Table RunOnePairScene(const std::string& text, const char* dir_name) {
+  test::ScopedDir dir(dir_name);
+  const Scene s = ParseScene(text, "rest.yaml");
+  EXPECT_EQ(s.model.shape_pairs.size(), 1u);
+  const RunResult r = RunScene(s, dir.path());
+  EXPECT_TRUE(r.ok) << r.message;
+  return test::ReadCsv(dir.path() + "/pair_contacts.csv");
+}
+
 std::string Error(const std::string& text) {
   try {
     ParseScene(text, "bad.yaml");
@@ -77,12 +88,7 @@ contact: {stiffness: 1e5, onset: 1e-4}
 analysis: {type: dynamic, end_time: 0.05, step: 1e-3}
 outputs: {interval: 0.01}
 )";
-  test::ScopedDir dir("shape_pair_scene");
-  const Scene s = ParseScene(text, "rest.yaml");
-  ASSERT_EQ(s.model.shape_pairs.size(), 1u);
-  const RunResult r = RunScene(s, dir.path());
-  ASSERT_TRUE(r.ok) << r.message;
-  const test::Table c = test::ReadCsv(dir.path() + "/pair_contacts.csv");
+  const test::Table c = RunOnePairScene(text, "shape_pair_scene");
   ASSERT_TRUE(c.well_formed) << c.problem;
   ASSERT_EQ(c.columns.size(), 22u);
   EXPECT_EQ(c.columns[14], "nx");
@@ -132,12 +138,7 @@ contact: {exclude: [[bar, block], [bar, rod], [block, rod]]}
 analysis: {type: dynamic, end_time: 0.05, step: 1e-3}
 outputs: {interval: 0.01}
 )";
-  test::ScopedDir dir("shape_pair_box_scene");
-  const Scene s = ParseScene(text, "rest.yaml");
-  ASSERT_EQ(s.model.shape_pairs.size(), 1u);
-  const RunResult r = RunScene(s, dir.path());
-  ASSERT_TRUE(r.ok) << r.message;
-  const test::Table c = test::ReadCsv(dir.path() + "/pair_contacts.csv");
+  const test::Table c = RunOnePairScene(text, "shape_pair_box_scene");
   ASSERT_TRUE(c.well_formed) << c.problem;
   ASSERT_GE(c.rows.size(), 5u);
   const std::vector<double>& last = c.rows.back();
