@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 #include <string>
 
@@ -770,6 +771,25 @@ void BuildTendons(Model& m) {
     t.first_segment = static_cast<int>(m.tendon_segments.size());
     for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k)
       m.tendon_segments.push_back({index, t.eyelets[k], t.eyelets[k + 1]});
+  }
+  // The segments on nodes, grouped by node pair in the order of their first segments.
+  m.tendon_segment_groups.clear();
+  m.tendon_group_segments.clear();
+  std::map<std::pair<int, int>, std::vector<int>> by_pair;
+  std::vector<std::pair<int, int>> order;
+  for (std::size_t i = 0; i < m.tendon_segments.size(); ++i) {
+    const TendonSegment& s = m.tendon_segments[i];
+    if (s.a.element >= 0 || s.b.element >= 0) continue;  // TendonSpanSegmentKind's
+    std::vector<int>& list = by_pair[{s.a.node, s.b.node}];
+    if (list.empty()) order.emplace_back(s.a.node, s.b.node);
+    list.push_back(static_cast<int>(i));
+  }
+  for (const auto& key : order) {
+    const std::vector<int>& list = by_pair[key];
+    m.tendon_segment_groups.push_back({key.first, key.second,
+                                       static_cast<int>(m.tendon_group_segments.size()),
+                                       static_cast<int>(list.size())});
+    m.tendon_group_segments.insert(m.tendon_group_segments.end(), list.begin(), list.end());
   }
 }
 

@@ -139,76 +139,122 @@ double TendonTension(const Tendon& tendon, const Data& data, double time, double
   return std::max(0.0, load_factor * EvalProfile(tendon.tension, time, data).value);
 }
 
-bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& segment,
+namespace {
+
+// out = C T for a node tangent operator T = [A B; 0 A] (3 x 3 blocks: the SE(3) tangent of
+// lie/se3.h, or the identity), C with 6 columns: [C_1 A, C_1 B + C_2 A], three products of
+// 3 x 3 blocks instead of one 6 x 6.
+template <class In, class Out>
+void TimesNodeTangent(const Eigen::MatrixBase<In>& C, const Mat6& T,
+                      const Eigen::MatrixBase<Out>& out_const) {
+  Eigen::MatrixBase<Out>& out = const_cast<Eigen::MatrixBase<Out>&>(out_const);
+  const Mat3 A = T.topLeftCorner<3, 3>();
+  const Mat3 B = T.topRightCorner<3, 3>();
+  out.template leftCols<3>().noalias() = C.template leftCols<3>() * A;
+  out.template rightCols<3>().noalias() = C.template leftCols<3>() * B;
+  out.template rightCols<3>().noalias() += C.template rightCols<3>() * A;
+}
+
+// rows [M; Skew(r) M] of S(r)^T M for a 3 x 6 block M (Skew(r) M column by column as r x m).
+void AddSTimes(const Vec3& r, const Eigen::Matrix<double, 3, 6>& M, Mat6* out) {
+  out->topRows<3>() += M;
+  for (int j = 0; j < 6; ++j) out->block<3, 1>(3, j) += r.cross(M.col(j));
+}
+
+// M Skew(r) for a 3 x 3 block M: its row i is m_i x r (m_i the row i of M).
+Mat3 TimesSkew(const Mat3& M, const Vec3& r) {
+  Mat3 out;
+  for (int i = 0; i < 3; ++i) out.row(i) = Vec3(M.row(i).transpose().cross(r)).transpose();
+  return out;
+}
+
+}  // namespace
+
+bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& group,
                              const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
-  const TendonSegment& s = model.tendon_segments[static_cast<std::size_t>(segment)];
-  const double tau =
-      TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], data, o.time,
-                    o.load_factor);
-  if (tau == 0.0) {
+  const TendonSegmentGroup& grp = model.tendon_segment_groups[static_cast<std::size_t>(group)];
+  const SE3& H_A = *x.H[0];
+  const SE3& H_B = *x.H[1];
+  // The stiffness blocks c_K tau d2l before the node tangents, summed over the group's segments
+  // (method-next.md §N4.2, the factors of CalcPointDistance's hessian; a tendon has no mass or
+  // damping). With R^T R = I, e_X = R_X^T e, s_A = -1, s_B = +1, P_X = (I - e_X e_X^T) / l and
+  // P_AB = (R_A^T R_B - e_A e_B^T) / l:
+  //   K_XX = S(r_X)^T [P_X   s_X Skew(e_X) - P_X Skew(r_X)]   (the string, and the rotation of e
+  //                                                            into the node frame on dtheta_X),
+  //   K_AB = S(r_A)^T [-P_AB   P_AB Skew(r_B)],   K_BA = K_AB^T,
+  // all times c_K tau; S(r)^T M = [M; Skew(r) M].
+  Mat6 K_AA, K_BB, K_AB;
+  bool any = false;
+  double scale = 0.0;
+  for (int i = 0; i < grp.count; ++i) {
+    const TendonSegment& s = model.tendon_segments[static_cast<std::size_t>(
+        model.tendon_group_segments[static_cast<std::size_t>(grp.first + i)])];
+    const double tau =
+        TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], data, o.time,
+                      o.load_factor);
+    if (tau == 0.0) continue;
+    PointDistance g;
+    if (!CalcPointDistance(H_A, s.a.offset, H_B, s.b.offset, false, &g))
+      continue;  // coinciding eyelets: no direction, no force
+    if (!any) {
+      any = true;
+      t->residual.setZero();
+      if (o.tangent) {
+        K_AA.setZero();
+        K_BB.setZero();
+        K_AB.setZero();
+      }
+    }
+    // method-next.md §N4.3, prescribed tension: residual +tau dl/dq, tangent tau d2l.
+    t->residual.noalias() += tau * g.gradient;
+    const double arm = std::max({1.0, s.a.offset.norm(), s.b.offset.norm()});
+    scale = std::max(scale, tau * arm);  // the pulls of two segments at an eyelet cancel
+    if (!o.tangent) continue;
+    const Vec3& r_A = s.a.offset;
+    const Vec3& r_B = s.b.offset;
+    const Vec3 e_A = -g.gradient.segment<3>(0);  // R_A^T e
+    const Vec3 e_B = g.gradient.segment<3>(6);   // R_B^T e
+    const double k = o.c_stiffness * tau;
+    const double c = k / g.length;
+    Eigen::Matrix<double, 3, 6> top;
+    Mat3 P = c * (Mat3::Identity() - e_A * e_A.transpose());
+    top.leftCols<3>() = P;
+    top.rightCols<3>() = -k * Skew(e_A) - TimesSkew(P, r_A);
+    AddSTimes(r_A, top, &K_AA);
+    P = c * (Mat3::Identity() - e_B * e_B.transpose());
+    top.leftCols<3>() = P;
+    top.rightCols<3>() = k * Skew(e_B) - TimesSkew(P, r_B);
+    AddSTimes(r_B, top, &K_BB);
+    P.noalias() = H_A.R.transpose() * H_B.R;
+    P.noalias() -= e_A * e_B.transpose();
+    P *= c;
+    top.leftCols<3>() = -P;
+    top.rightCols<3>() = TimesSkew(P, r_B);
+    AddSTimes(r_A, top, &K_AB);
+  }
+  if (!any) {
     t->active = false;
     return true;
   }
-  PointDistance g;
-  if (!CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, false, &g)) {
-    t->active = false;  // coinciding eyelets: no direction, no force
-    return true;
-  }
-  // method-next.md §N4.3, prescribed tension: residual +tau dl/dq, tangent tau d2l.
-  t->residual = tau * g.gradient;
-  const double arm = std::max({1.0, s.a.offset.norm(), s.b.offset.norm()});
-  t->force_scale = tau * arm;
-  t->term_scale = tau * arm;  // the pulls of two segments at an eyelet cancel
+  t->force_scale = scale;
+  t->term_scale = scale;
   if (!o.tangent) return true;
-  // The iteration-matrix blocks c_K tau d2l T (a tendon has no mass or damping), formed from
-  // the factors of CalcPointDistance's hessian (method-next.md §N4.2) without the hessian
-  // itself. With R^T R = I the string parts are
-  //   P_AA = (I - e_A e_A^T) / l,  P_BB = (I - e_B e_B^T) / l,  P_AB = (R_A^T R_B - e_A e_B^T) / l,
-  // block (X, Y) = s_X s_Y S(r_X)^T P_XY S(r_Y) T_Y (s_A = -1, s_B = +1), and the diagonal blocks
-  // add the rotation of e into the node frame, s_X S(r_X)^T Skew(e_X) [0 I] T_X. So
-  //   block (X, X) = S(r_X)^T [P_XX  s_X Skew(e_X)] [S(r_X) T_X; T_X,bottom]   (one 6x6 product),
-  //   block (X, Y) = -S(r_X)^T P_XY S(r_Y) T_Y                                  (6x3 times 3x6).
-  const SE3& H_A = *x.H[0];
-  const SE3& H_B = *x.H[1];
-  const Vec3& r_A = s.a.offset;
-  const Vec3& r_B = s.b.offset;
-  const Vec3 e_A = -g.gradient.segment<3>(0);  // R_A^T e
-  const Vec3 e_B = g.gradient.segment<3>(6);   // R_B^T e
-  const double k = o.c_stiffness * tau;
-  const double c = k / g.length;
-  // Right factors [S(r) T; T_bottom] (6 x 6), S(r) T = T_top - Skew(r) T_bottom.
-  Mat6 right_A, right_B;
-  right_A.bottomRows<3>() = x.T[0]->bottomRows<3>();
-  right_A.topRows<3>() = x.T[0]->topRows<3>();
-  right_A.topRows<3>().noalias() -= Skew(r_A) * right_A.bottomRows<3>();
-  right_B.bottomRows<3>() = x.T[1]->bottomRows<3>();
-  right_B.topRows<3>() = x.T[1]->topRows<3>();
-  right_B.topRows<3>().noalias() -= Skew(r_B) * right_B.bottomRows<3>();
-  // Left factors S(r_X)^T [P_XX  s_X Skew(e_X)] (6 x 6) and -S(r_A)^T P_AB, -S(r_B)^T P_AB^T.
-  Eigen::Matrix<double, 3, 6> top;
-  Mat6 left;
-  top.leftCols<3>() = c * (Mat3::Identity() - e_A * e_A.transpose());
-  top.rightCols<3>() = -k * Skew(e_A);
-  left.topRows<3>() = top;
-  left.bottomRows<3>().noalias() = Skew(r_A) * top;
+  // S = K blockdiag(T_A, T_B), column block by column block.
   Mat12& S = t->matrix;
-  S.block<6, 6>(0, 0).noalias() = left * right_A;
-  top.leftCols<3>() = c * (Mat3::Identity() - e_B * e_B.transpose());
-  top.rightCols<3>() = k * Skew(e_B);
-  left.topRows<3>() = top;
-  left.bottomRows<3>().noalias() = Skew(r_B) * top;
-  S.block<6, 6>(6, 6).noalias() = left * right_B;
-  Mat3 P_AB;
-  P_AB.noalias() = H_A.R.transpose() * H_B.R;
-  P_AB.noalias() -= e_A * e_B.transpose();
-  P_AB *= -c;
-  Eigen::Matrix<double, 6, 3> side;
-  side.topRows<3>() = P_AB;
-  side.bottomRows<3>().noalias() = Skew(r_A) * P_AB;
-  S.block<6, 6>(0, 6).noalias() = side * right_B.topRows<3>();
-  side.topRows<3>() = P_AB.transpose();
-  side.bottomRows<3>().noalias() = Skew(r_B) * P_AB.transpose();
-  S.block<6, 6>(6, 0).noalias() = side * right_A.topRows<3>();
+  if (o.node_tangent) {
+    Eigen::Matrix<double, 12, 6> C;
+    C.topRows<6>() = K_AA;
+    C.bottomRows<6>() = K_AB.transpose();
+    TimesNodeTangent(C, *x.T[0], S.leftCols<6>());
+    C.topRows<6>() = K_AB;
+    C.bottomRows<6>() = K_BB;
+    TimesNodeTangent(C, *x.T[1], S.rightCols<6>());
+  } else {
+    S.topLeftCorner<6, 6>() = K_AA;
+    S.topRightCorner<6, 6>() = K_AB;
+    S.bottomLeftCorner<6, 6>() = K_AB.transpose();
+    S.bottomRightCorner<6, 6>() = K_BB;
+  }
   t->combined = true;
   return true;
 }

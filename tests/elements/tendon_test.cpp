@@ -63,13 +63,15 @@ TEST(PointDistance, GradientAndHessianMatchFiniteDifferencesThroughTheRetraction
 }
 
 // A chain of four free nodes (rigid bodies) and the ground, with a tendon through eyelets on
-// all of them and a force element between two of them.
+// all of them and a force element between two of them; with `second_tension` > 0 a second
+// tendon through nodes 1 to 3 (its segments share their node pairs with the first tendon's:
+// TendonSegmentKind items of two segments).
 struct Chain {
   Model model;
   Data data;
 };
 
-Chain MakeChain(std::mt19937& rng, double tension) {
+Chain MakeChain(std::mt19937& rng, double tension, double second_tension = 0.0) {
   ModelBuilder b;
   std::vector<BodyPoint> eyelets;
   eyelets.push_back({kGround, Vec3(-0.5, 0.1, 0.0)});
@@ -79,6 +81,9 @@ Chain MakeChain(std::mt19937& rng, double tension) {
     eyelets.push_back({n, RandomVec3(rng, 0.1)});
   }
   b.AddTendon("t", eyelets, Profile::Constant(tension));
+  if (second_tension > 0.0)
+    b.AddTendon("t2", {{1, RandomVec3(rng, 0.1)}, {2, RandomVec3(rng, 0.1)}, {3, RandomVec3(rng, 0.1)}},
+                Profile::Constant(second_tension));
   ForceElement fe;
   fe.name = "spring";
   fe.a = {1, RandomVec3(rng, 0.1)};
@@ -150,17 +155,22 @@ Eigen::MatrixXd FiniteDifference(const Chain& c, F&& f, double eps) {
 
 TEST(TendonSegmentKind, SegmentsSumToTensionTimesTheLengthGradientWithTheExactTangent) {
   std::mt19937 rng(3);
-  const double tau = 12.5;
-  const Chain c = MakeChain(rng, tau);
-  ASSERT_EQ(c.model.tendon_segments.size(), 4u);  // ground + 4 eyelets
+  const double tau = 12.5, tau2 = 4.75;
+  const Chain c = MakeChain(rng, tau, tau2);
+  ASSERT_EQ(c.model.tendon_segments.size(), 6u);  // ground + 4 eyelets, and 3 eyelets
+  // One item per node pair: (ground, 0), (0, 1), and (1, 2), (2, 3) with both tendons.
+  ASSERT_EQ(c.model.tendon_segment_groups.size(), 4u);
+  EXPECT_EQ(c.model.tendon_segment_groups[2].count, 2);
+  EXPECT_EQ(c.model.tendon_segment_groups[3].count, 2);
   KernelOptions o;
   Eigen::VectorXd r;
   Eigen::MatrixXd K;
   AssembleKind<TendonSegmentKind>(c.model, c.data, o, &r, &K, nullptr);
-  // Force = gradient of the potential tau L(q) (constant tension).
+  // Force = gradient of the potential tau L + tau2 L2 (constant tensions).
   const Eigen::MatrixXd dV = FiniteDifference(
       c, [&](const Data& d) {
-        return Eigen::VectorXd::Constant(1, tau * CalcTendonState(c.model, d, 0).length);
+        return Eigen::VectorXd::Constant(1, tau * CalcTendonState(c.model, d, 0).length +
+                                                tau2 * CalcTendonState(c.model, d, 1).length);
       }, 1e-6);
   EXPECT_LT(RelativeError(r, dV.transpose()), 1e-8);
   const Eigen::MatrixXd dr = FiniteDifference(
@@ -172,46 +182,61 @@ TEST(TendonSegmentKind, SegmentsSumToTensionTimesTheLengthGradientWithTheExactTa
   EXPECT_LT(RelativeError(K, dr), 1e-7);
   // The tangent is not symmetric (the rotation terms, method-next.md §N4.2).
   EXPECT_GT((K - K.transpose()).norm(), 1e-3 * K.norm());
-  // The rate is the gradient times the velocities.
-  const LineForceState s = CalcTendonState(c.model, c.data, 0);
-  EXPECT_NEAR(s.rate, r.dot(c.data.v.head(r.size())) / tau, 1e-12);
+  // The rate is the gradient times the velocities (the first tendon alone).
+  const Chain one = MakeChain(rng, tau);
+  AssembleKind<TendonSegmentKind>(one.model, one.data, o, &r, nullptr, nullptr);
+  const LineForceState s = CalcTendonState(one.model, one.data, 0);
+  EXPECT_NEAR(s.rate, r.dot(one.data.v.head(r.size())) / tau, 1e-12);
   EXPECT_EQ(s.force, tau);
 }
 
 TEST(TendonSegmentKind, TangentTimesNodeTangentsIsTensionTimesTheHessianTimesThem) {
-  // The kernel forms c_K tau d2l T (elements/tendon.cpp, factored, without the 12 x 12
-  // hessian); the reference is tau times CalcPointDistance's hessian (checked against finite
-  // differences above) times blockdiag(T_A, T_B), with T random (as the node tangents of a
-  // dynamic step).
+  // The kernel forms c_K sum(tau d2l) T over the segments of an item (elements/tendon.cpp,
+  // factored, without the 12 x 12 hessians, and with the block structure [A B; 0 A] of the
+  // SE(3) node tangents); the reference is the sum of tau times CalcPointDistance's hessian
+  // (checked against finite differences above) times blockdiag(T_A, T_B), with T = TSE3 of
+  // random increments (the node tangents of a dynamic step).
   std::mt19937 rng(11);
-  const double tau = 7.25;
-  const Chain c = MakeChain(rng, tau);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double tau = 7.25, tau2 = 2.5;
+  const Chain c = MakeChain(rng, tau, tau2);
   KernelOptions o;
   o.c_stiffness = 0.37;
-  for (std::size_t k = 0; k < c.model.tendon_segments.size(); ++k) {
-    const TendonSegment& s = c.model.tendon_segments[k];
-    const int nodes[2] = {s.a.node, s.b.node};
+  o.node_tangent = true;
+  int pairs = 0;
+  for (std::size_t k = 0; k < c.model.tendon_segment_groups.size(); ++k) {
+    const TendonSegmentGroup& group = c.model.tendon_segment_groups[k];
+    const int nodes[2] = {group.node_a, group.node_b};
     Mat6 T[2];
     NodeMotion<2> x;
     for (int i = 0; i < 2; ++i) {
-      for (int a = 0; a < 6; ++a)
-        for (int b = 0; b < 6; ++b) T[i](a, b) = (a == b ? 1.0 : 0.0) + 0.3 * u(rng);
+      T[i] = TSE3((Vec6() << RandomVec3(rng, 0.3), RandomVec3(rng, 0.6)).finished());
       x.H[i] = &NodeFrame(c.data, nodes[i]);
       x.T[i] = &T[i];
     }
     ElementTerms<2> t;
     ASSERT_TRUE(TendonSegmentKind::Calc(c.model, c.data, static_cast<int>(k), x, o, &t));
     ASSERT_TRUE(t.active && t.combined);
-    PointDistance g;
-    ASSERT_TRUE(CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, true, &g));
     Mat12 Tblock = Mat12::Zero();
     Tblock.topLeftCorner<6, 6>() = T[0];
     Tblock.bottomRightCorner<6, 6>() = T[1];
-    const Mat12 expected = o.c_stiffness * tau * g.hessian * Tblock;
-    EXPECT_LT((t.matrix - expected).norm(), 1e-13 * expected.norm()) << "segment " << k;
-    EXPECT_LT((t.residual - tau * g.gradient).norm(), 1e-14 * tau);
+    Mat12 expected = Mat12::Zero();
+    Vec12 residual = Vec12::Zero();
+    for (int i = 0; i < group.count; ++i) {
+      const TendonSegment& s = c.model.tendon_segments[static_cast<std::size_t>(
+          c.model.tendon_group_segments[static_cast<std::size_t>(group.first + i)])];
+      ASSERT_EQ(s.a.node, nodes[0]);
+      ASSERT_EQ(s.b.node, nodes[1]);
+      const double tension = s.tendon == 0 ? tau : tau2;
+      PointDistance g;
+      ASSERT_TRUE(CalcPointDistance(*x.H[0], s.a.offset, *x.H[1], s.b.offset, true, &g));
+      expected += o.c_stiffness * tension * g.hessian * Tblock;
+      residual += tension * g.gradient;
+    }
+    pairs += group.count == 2;
+    EXPECT_LT((t.matrix - expected).norm(), 1e-13 * expected.norm()) << "item " << k;
+    EXPECT_LT((t.residual - residual).norm(), 1e-14 * tau) << "item " << k;
   }
+  EXPECT_EQ(pairs, 2);
 }
 
 TEST(TendonSegmentKind, StatesTensionNeverNegativeAndLoadFactorScalesIt) {

@@ -68,8 +68,8 @@ Vec6 ClampReaction(const Cantilever& c) {
   };
   const RodElement& e = c.model.elements[0];
   add(RodElementKind{}, 0, e.node_a, e.node_b);
-  const TendonSegment& s = c.model.tendon_segments[0];
-  add(TendonSegmentKind{}, 0, s.a.node, s.b.node);
+  const TendonSegmentGroup& s = c.model.tendon_segment_groups[0];  // the first segment alone
+  add(TendonSegmentKind{}, 0, s.node_a, s.node_b);
   return -rows;
 }
 

@@ -5,8 +5,8 @@
 // first two derivatives under the right-trivialised increments of the two frames
 // (CalcPointDistance). A frictionless tendon with prescribed tension tau is the sum of its
 // straight segments: its generalised force tau dL/dq is the sum of tau times each segment's
-// length gradient, so each segment is a 2-node item (TendonSegmentKind) and the tendon needs
-// no coupling beyond consecutive eyelets. A force element (ForceElementKind) is one segment
+// length gradient, so each segment couples only its two eyelets' nodes (TendonSegmentKind, one
+// 2-node item per node pair) and the tendon needs no coupling beyond consecutive eyelets. A force element (ForceElementKind) is one segment
 // with a spring-damper-actuator law.
 #pragma once
 
@@ -67,24 +67,25 @@ bool CalcSegmentGradient(const Model& model, const Data& data, const TendonSegme
 // taut when its length reaches L_p - tolerance. Returns how many tendons changed.
 int UpdateTendonSlack(const Model& model, Data& data, double time, double load_factor = 1.0);
 
-// One straight segment of a tendon between consecutive eyelets: the residual rows
-// tau dl/d[dh_A; dh_B] and the stiffness tau d2l (method-next.md §N4.2, §N4.3 with prescribed
-// tension); the segments of a tendon add up to tau dL/dq and its exact tangent. No energy
-// (the tension may vary in time; at constant tension the potential is tau L, and the tests
-// check the forces against it).
+// The straight segments of tendons between two nodes (eyelets on nodes): the residual rows
+// tau dl/d[dh_A; dh_B] and the stiffness tau d2l of each (method-next.md §N4.2, §N4.3 with
+// prescribed tension); the segments of a tendon add up to tau dL/dq and its exact tangent. One
+// item is one Model::tendon_segment_groups entry, the segments of all tendons along the same
+// node pair (Build), summed before the node tangents are applied. No energy (the tension may
+// vary in time; at constant tension the potential is tau L, and the tests check the forces
+// against it).
 struct TendonSegmentKind {
   static constexpr int kNodes = 2;
-  using Item = int;  // index into Model::tendon_segments
+  using Item = int;  // index into Model::tendon_segment_groups
   template <class F>
   static void ForEach(const Model& model, F&& f) {
-    for (std::size_t i = 0; i < model.tendon_segments.size(); ++i) {
-      const TendonSegment& s = model.tendon_segments[i];
-      if (s.a.element >= 0 || s.b.element >= 0) continue;  // TendonSpanSegmentKind's
-      const int nodes[2] = {s.a.node, s.b.node};
+    for (std::size_t i = 0; i < model.tendon_segment_groups.size(); ++i) {
+      const TendonSegmentGroup& g = model.tendon_segment_groups[i];
+      const int nodes[2] = {g.node_a, g.node_b};
       f(static_cast<int>(i), nodes);
     }
   }
-  static bool Calc(const Model& model, const Data& data, const Item& segment,
+  static bool Calc(const Model& model, const Data& data, const Item& group,
                    const NodeMotion<2>& motion, const KernelOptions& options,
                    ElementTerms<2>* terms);
   static void AddEnergy(const Model&, const Data&, const Item&, Energy*) {}

@@ -152,6 +152,13 @@ struct TendonSegment {
   BodyPoint a, b;
 };
 
+// Segments of Model::tendon_segments between the same two nodes: indices
+// tendon_group_segments[first, first + count).
+struct TendonSegmentGroup {
+  int node_a = -1, node_b = -1;
+  int first = 0, count = 0;
+};
+
 // A spring-damper-actuator between two body points (either may be on the ground): along the
 // line between them a force f = stiffness (l - rest_length) + damping dl/dt + actuator(t),
 // positive pulling the points together (tension).
@@ -396,6 +403,11 @@ struct Model {
   std::vector<RodLoad> rod_loads;
   std::vector<Tendon> tendons;
   std::vector<TendonSegment> tendon_segments;  // of all tendons, tendon by tendon (Build)
+  // The segments with both eyelets on nodes, grouped by their (ordered) node pair (Build): one
+  // TendonSegmentKind item per group, so the segments of several tendons along one element are
+  // one 2-node item (one scatter, one application of the node tangents).
+  std::vector<TendonSegmentGroup> tendon_segment_groups;
+  std::vector<int> tendon_group_segments;  // segment indices, group by group
   std::vector<ForceElement> force_elements;
   std::vector<ModelInput> inputs;
   std::vector<Actuator> actuators;
