@@ -185,7 +185,7 @@ def grm_section(entries):
             if e is None:
                 continue
             if e.error:
-                rows.append(failed_row(16, label, e))
+                rows.append(failed_row(15, label, e))
                 continue
             steps, newton = e.counter("steps"), e.counter("newton_iterations")
             factor = e.counter("real_time_factor")
