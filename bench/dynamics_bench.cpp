@@ -93,9 +93,9 @@ Scene LoadGrm(int index, const std::string& step = "1e-3") {
 }
 
 // The solver alone over the scene's span: InitializeDynamics, then Step over the step schedule
-// (profile breakpoints on step ends, as RunScene does) or, with `step: auto`, AdvanceTo the end
-// (the error-controlled steps RunScene takes, without its output rows: AdaptiveStep lands on
-// the end time and on the breakpoints by itself). `on_step`, if given, is called after the
+// (profile breakpoints on step ends, as RunScene does) or, with `step: auto`, AdaptiveStep to
+// the end time as RunScene and AdvanceTo do (the error-controlled steps RunScene takes, without
+// its output rows: AdaptiveStep lands on the end time and on the breakpoints by itself). `on_step`, if given, is called after the
 // start and after every step (the accuracy runs record rows there; not in the timed runs).
 template <typename OnStep>
 bool SimulateGrm(const Scene& scene, Data& data, Integrator& integ, std::string* message,
@@ -132,8 +132,8 @@ bool SimulateGrm(const Scene& scene, Data& data, Integrator& integ, std::string*
 }
 
 // Accuracy of the rigid GRM's two timed variants (fixed h = 1e-3 s and step: auto), measured
-// once per program against a reference at h = 1.25e-4 s (whose own error, 5e-4 mm against
-// h = 6.25e-5 s, is below 1 % of the errors compared; bench/grm_accuracy.py): the largest
+// once per program against a reference at h = 1.25e-4 s (whose own P8 error, 0.0024 mm against
+// h = 6.25e-5 s, is 1.5 % of the errors compared; bench/grm_accuracy.py): the largest
 // distance of P8 from the reference's and the largest difference of a passive joint's
 // coordinate (J1, J2p, J3p, J4) over rows every 1 ms, 0 to 2 s (rows inside error-controlled
 // steps from the dense output, InterpolateStep, as RunScene writes them).
