@@ -53,8 +53,9 @@ for p in $programs; do
   # slow cases: a GRM run takes seconds, a 10000-element rod step about half a second).
   repetitions=()
   if [[ $p == statics ]]; then repetitions=(--benchmark_repetitions=5); fi
-  # tendons, contact: the variants' repetitions alternate (the same machine load for both).
-  if [[ $p == tendons || $p == contact ]]; then
+  # tendons, contact, dynamics: the variants' repetitions alternate (the same machine load for
+  # all; dynamics: the fixed and the error-controlled rigid GRM).
+  if [[ $p == tendons || $p == contact || $p == dynamics ]]; then
     repetitions=(--benchmark_enable_random_interleaving=true)
   fi
   "$build_dir/bench/screwfem_bench_$p" --benchmark_format=console \
