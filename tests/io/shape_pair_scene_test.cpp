@@ -91,8 +91,9 @@ outputs: {interval: 0.01}
 )";
   const test::Table c = RunOnePairScene(text, "shape_pair_scene");
   ASSERT_TRUE(c.well_formed) << c.problem;
-  ASSERT_EQ(c.columns.size(), 22u);
+  ASSERT_EQ(c.columns.size(), 23u);
   EXPECT_EQ(c.columns[14], "nx");
+  EXPECT_EQ(c.columns[22], "part");
   ASSERT_GE(c.rows.size(), 5u);
   const std::vector<double>& last = c.rows.back();
   EXPECT_NEAR(last[0], 0.05, 1e-12);
@@ -105,6 +106,7 @@ outputs: {interval: 0.01}
   EXPECT_NEAR(last[21], gap, 1e-9);
   EXPECT_NEAR(last[10], 1.1, 1e-9);        // paz: the surface point of A
   EXPECT_NEAR(last[13], 1.1 + gap, 1e-9);  // pbz
+  EXPECT_EQ(last[22], -1.0);               // part: two spheres, one point
 }
 
 // Boxes from a scene: a fixed box pairs with a capsule (2 pairs: the ends of the segment
@@ -148,6 +150,7 @@ outputs: {interval: 0.01}
     EXPECT_NEAR(last[17], 0.5 * 9.81, 1e-6);  // fn
     EXPECT_NEAR(last[21], gap, 1e-9);
     EXPECT_NEAR(last[8], 0.2 * k, 1e-9);  // pax: the segment's ends
+    EXPECT_EQ(last[22], k);               // part
     EXPECT_NEAR(last[13], 0.0, 1e-12);  // pbz: the box's top face
   }
 }
