@@ -253,7 +253,9 @@ TEST(ShapePairFace, CapsuleOverhangingAnEdgeRestsOnTwoPointsByTheLeverRule) {
 // failed (docs/numerics.md, limitation (v)); the clipped ends move continuously with the tilt.
 // Measured: tilt 4e-17 rad after 0.4 s (1e-6 at 0.125 s), the energy rising in no step by more
 // than 6e-17 J, every step converged, one of the 400 retried in halves (the slam: the far edge
-// arrives at 0.5 m/s, 5 onsets per step).
+// arrives at about 0.6 m/s, 6 onsets per step). At rho_inf = 1 the energy rises once, by
+// 1.25e-2 J, where the corner first lands (0.2 m/s, 2 onsets per step: not resolved); at
+// h = 5e-4 by no more than 1e-9 J (docs/numerics.md).
 TEST(ShapePairFace, BoxDroppedTiltedOntoABoxTipsFlatAndRestsAtALargeStep) {
   const double m_box = 1.0, theta = 0.2, drop = 0.002, h = 1e-3;
   const Vec3 half(0.05, 0.04, 0.03);
