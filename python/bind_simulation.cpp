@@ -666,13 +666,15 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
                   py::arg("owner_b") = p.side[1].owner, py::arg("point_a") = c.point[0],
                   py::arg("point_b") = c.point[1], py::arg("normal") = c.normal,
                   py::arg("normal_force") = c.normal_force,
-                  py::arg("friction_force") = c.friction_force, py::arg("gap") = c.gap));
+                  py::arg("friction_force") = c.friction_force, py::arg("gap") = c.gap,
+                  py::arg("part") = p.part));
             }
             return out;
           },
           "The active contacts between moving shapes as pair_contacts.csv records them: dicts "
           "with pair, rod_a/owner_a, rod_b/owner_b, point_a and point_b [m], normal (from B to "
-          "A), normal_force [N], friction_force [N] (on A, world) and gap [m].")
+          "A), normal_force [N], friction_force [N] (on A, world), gap [m] and part (0 or 1: "
+          "the two ends of a segment clipped to a box face; -1: a pair's single point).")
       .def(
           "joint_coordinate",
           [](S& s, long j, int c) {

@@ -916,7 +916,8 @@ void BuildForceElements(Model& m) {
 
 // Pairs between moving shapes (elements/shape_pair.h), enumerated once: every two contact
 // entities (a rod: its element capsules; a body: its spheres, capsules and boxes; a box is side
-// B against any segment, and two boxes make 24 pairs: the 12 edges of each against the other)
+// B against any segment, as two pairs (ShapePair::part) for a segment of positive length, and
+// two boxes make 48 pairs: the 12 edges of each against the other)
 // whose group bitmasks match, that are not excluded and not joined (a shared node or a joint
 // between their nodes); a rod with itself when ContactSettings::self, skipping elements whose
 // nearest ends are closer along the rod than self_skip. All pairs of segments are stored: O(n^2)
@@ -1037,8 +1038,16 @@ void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
       ShapePair p;
       p.side[0] = side_a;
       p.side[1] = side_b;
-      m.shape_pairs.push_back(p);
-      masses->push_back(reduced);
+      // A segment of positive length against a box: two points (the ends of the segment
+      // clipped to the face), so that a segment lying on a face balances any moment over it.
+      const bool segment = side_a.end_node[0] != side_a.end_node[1] ||
+                           side_a.offset[0] != side_a.offset[1];
+      for (int part = is_box(side_b) && segment ? 0 : -1; part < 2; ++part) {
+        p.part = part;
+        m.shape_pairs.push_back(p);
+        masses->push_back(reduced);
+        if (part < 0) break;
+      }
     };
     const bool box_a = is_box(a.side), box_b = is_box(b.side);
     if (box_a && box_b) {

@@ -114,6 +114,43 @@ double BoxSegmentParameter(const Vec3& a, const Vec3& d, const Vec3& h) {
   return 0.5 * (s_lo + s_hi);
 }
 
+// A segment carried at two points by a box (ShapePair::part): the face is the one the
+// segment's nearest point s_near is furthest out of (the largest coordinate of c - q, c the
+// point and q its clamp into the box), or, inside, the face it leaves through; the segment is
+// clipped to the prism over that face (|c_j(s)| <= h_j for the two other axes), and part 0
+// takes the lower end of the clipped interval, part 1 the upper. Each end is then a sphere of
+// the segment's radius against the box. A segment lying on a face is so carried at the ends of
+// its part over the face, at points that move continuously as it tilts (the nearest point
+// jumps from one end to the other as the tilt changes sign). When the segment misses the
+// prism (it lies beside an edge), part 0 takes s_near and part 1 is inactive (false).
+bool BoxFaceClipParameter(const Vec3& a, const Vec3& d, const Vec3& h, double s_near, int part,
+                          double* s) {
+  const Vec3 c = a + s_near * d;
+  const Vec3 q = c.cwiseMax(-h).cwiseMin(h);
+  int axis = 0;
+  if (q != c)
+    (c - q).cwiseAbs().maxCoeff(&axis);
+  else
+    (h - c.cwiseAbs()).minCoeff(&axis);
+  double lo = 0.0, hi = 1.0;
+  for (int j = 0; j < 3; ++j) {
+    if (j == axis) continue;
+    if (d(j) == 0.0) {
+      if (std::abs(a(j)) > h(j)) lo = 2.0;  // outside the prism all along
+      continue;
+    }
+    const double s1 = (-h(j) - a(j)) / d(j), s2 = (h(j) - a(j)) / d(j);
+    lo = std::max(lo, std::min(s1, s2));
+    hi = std::min(hi, std::max(s1, s2));
+  }
+  if (lo <= hi) {
+    *s = part == 0 ? lo : hi;
+    return true;
+  }
+  *s = s_near;
+  return part == 0;
+}
+
 }  // namespace
 
 bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], double reject,
@@ -132,7 +169,8 @@ bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], doub
     // the face nearest to it.
     const SE3& Hb = *H[2];
     const Vec3 a = Hb.R.transpose() * (A0 - B0), d = Hb.R.transpose() * (A1 - A0);
-    const double s = BoxSegmentParameter(a, d, half);
+    double s = BoxSegmentParameter(a, d, half);
+    if (pair.part >= 0 && !BoxFaceClipParameter(a, d, half, s, pair.part, &s)) return false;
     const Vec3 c = a + s * d;
     Vec3 q = c.cwiseMax(-half).cwiseMin(half);
     Vec3 d_local;

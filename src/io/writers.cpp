@@ -263,11 +263,11 @@ bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<
 
 std::vector<std::string> PairContactColumns() {
   return {"pair", "rod_a", "owner_a", "element_a", "rod_b", "owner_b", "element_b", "pax", "pay",
-          "paz", "pbx", "pby", "pbz", "nx", "ny", "nz", "fn", "ftx", "fty", "ftz", "gap"};
+          "paz", "pbx", "pby", "pbz", "nx", "ny", "nz", "fn", "ftx", "fty", "ftz", "gap", "part"};
 }
 
 bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row) {
-  row->resize(21);
+  row->resize(22);
   const ShapePairState c = CalcShapePairState(model, data, pair);
   if (!c.active) return false;
   const ShapePair& p = model.shape_pairs[static_cast<std::size_t>(pair)];
@@ -286,6 +286,7 @@ bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vec
   }
   r[16] = c.normal_force;
   r[20] = c.gap;
+  r[21] = p.part;  // 0, 1: the clipped ends of a segment on a box; -1: one point
   return true;
 }
 

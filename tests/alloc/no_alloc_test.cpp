@@ -10,6 +10,7 @@
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -361,6 +362,54 @@ TEST(NoAllocation, ParaViewFramesAllocateNothing) {
 }
 
 #ifdef SCREWFEM_COUNT_MALLOC
+// Shape pairs carried at two points (a box's edges clipped to the other box's face,
+// ShapePair::part): a box dropped tilted onto a fixed box lands on an edge and tips, through
+// steps with a retry in halves, and its pair_contacts.csv rows.
+TEST(NoAllocation, TwoPointBoxPairsAllocateNothing) {
+  using namespace screwfem;
+  const Vec3 half(0.05, 0.04, 0.03);
+  ModelBuilder b;
+  const int base = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+  b.FixNode(base);
+  b.AddRigidBody("table", base, 1.0, Vec3::Zero(), Mat3::Identity());
+  b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.3, 0.3, 0.05), 0.0});
+  const double lowest = half.y() * std::sin(0.2) + half.z() * std::cos(0.2);
+  const int node = b.AddNode(SE3{ExpSO3(Vec3(0.2, 0.0, 0.0)), Vec3(0.02, -0.01, lowest + 0.002)});
+  b.AddRigidBody("block", node, 1.0, Vec3::Zero(), Vec3(8e-4, 1.1e-3, 1.4e-3).asDiagonal());
+  b.AddContactShape({1, ContactShapeType::kBox, Vec3::Zero(), half, 0.0});
+  ContactSettings law;
+  law.stiffness = 1e5;
+  law.onset = 1e-4;
+  law.friction = 0.3;
+  b.SetContactSettings(law);
+  b.SetGravity(Vec3(0.0, 0.0, -9.81));
+  const Model model = b.Build();
+  Data data = MakeData(model);
+  Integrator integ;
+  DynamicOptions options;
+  options.rho_inf = 0.8;
+  std::string message;
+  ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
+  std::vector<double> row;
+  CalcPairContactRow(model, data, 0, &row);
+  int parts = 0, halved = 0;
+  g_allocations = 0;
+  g_counting = true;
+  bool ok = true;
+  for (int i = 0; i < 150; ++i) {
+    const StepResult r = Step(model, data, integ, 1e-3);
+    ok = r.ok && ok;
+    halved += r.substeps > 1 ? 1 : 0;
+    for (int c = 0; c < static_cast<int>(model.shape_pairs.size()); ++c)
+      if (CalcPairContactRow(model, data, c, &row) && row[21] >= 0.0) ++parts;
+  }
+  g_counting = false;
+  EXPECT_TRUE(ok);
+  EXPECT_GT(parts, 100);   // two-point pairs were active
+  EXPECT_GE(halved, 1);    // and a step was retried in halves
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the box's steps";
+}
+
 TEST(NoAllocation, CounterSeesEigenAllocations) {
   g_allocations = 0;
   g_counting = true;

@@ -4,6 +4,7 @@
 // `self_skip`), and bad input is reported at file:line:col.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "run_test_util.h"
@@ -26,12 +27,12 @@ bodies:
   rod: {type: soft, from: [0, 1, 0], to: [1, 1, 0], section: rubber, elements: 10, free: true}
 )";
 
-// Runs a scene with one pair of shapes into a scratch directory and reads its
-// pair_contacts.csv.
-test::Table RunOnePairScene(const std::string& text, const char* dir_name) {
+// Runs a scene with `pairs` pairs of shapes (one pair of bodies: a segment on a box is two)
+// into a scratch directory and reads its pair_contacts.csv.
+test::Table RunOnePairScene(const std::string& text, const char* dir_name, std::size_t pairs = 1) {
   test::ScopedDir dir(dir_name);
   const Scene s = ParseScene(text, "rest.yaml");
-  EXPECT_EQ(s.model.shape_pairs.size(), 1u);
+  EXPECT_EQ(s.model.shape_pairs.size(), pairs);
   const RunResult r = RunScene(s, dir.path());
   EXPECT_TRUE(r.ok) << r.message;
   return test::ReadCsv(dir.path() + "/pair_contacts.csv");
@@ -90,8 +91,9 @@ outputs: {interval: 0.01}
 )";
   const test::Table c = RunOnePairScene(text, "shape_pair_scene");
   ASSERT_TRUE(c.well_formed) << c.problem;
-  ASSERT_EQ(c.columns.size(), 22u);
+  ASSERT_EQ(c.columns.size(), 23u);
   EXPECT_EQ(c.columns[14], "nx");
+  EXPECT_EQ(c.columns[22], "part");
   ASSERT_GE(c.rows.size(), 5u);
   const std::vector<double>& last = c.rows.back();
   EXPECT_NEAR(last[0], 0.05, 1e-12);
@@ -104,14 +106,15 @@ outputs: {interval: 0.01}
   EXPECT_NEAR(last[21], gap, 1e-9);
   EXPECT_NEAR(last[10], 1.1, 1e-9);        // paz: the surface point of A
   EXPECT_NEAR(last[13], 1.1 + gap, 1e-9);  // pbz
+  EXPECT_EQ(last[22], -1.0);               // part: two spheres, one point
 }
 
-// Boxes from a scene: a fixed box pairs with a capsule (1 pair), a rod (one per element) and
-// another box (24: the 12 edges of each against the other); the capsule, lying flat on the box
-// off its centre, carries its weight at the penetration-branch gap (pair_contacts.csv), the
-// contact point under its centre of mass.
+// Boxes from a scene: a fixed box pairs with a capsule (2 pairs: the ends of the segment
+// clipped to the face), a rod (2 per element) and another box (48: the 12 edges of each against
+// the other, 2 points each); the capsule, lying flat on the box off its centre, carries half its
+// weight at each end at the quadratic-branch gap (pair_contacts.csv).
 TEST(ShapePairScene, BoxesPairWithCapsulesRodsAndBoxesAndCarryARestingCapsule) {
-  const double gap = 0.5e-4 - 9.81 / 1e5;
+  const double gap = 1e-4 - std::sqrt(2e-4 * 0.5 * 9.81 / 1e5);
   const std::string z = std::to_string(0.02 + gap);
   const std::string bodies = R"(gravity: [0, 0, -9.81]
 sections:
@@ -129,7 +132,7 @@ bodies:
 contact: {exclude: [[bar, block], [bar, rod], [block, rod]]}
 )";
   const Model m = ParseScene(bodies + more, "boxes.yaml").model;
-  EXPECT_EQ(m.shape_pairs.size(), 1u + 24u + 5u);
+  EXPECT_EQ(m.shape_pairs.size(), 2u + 48u + 10u);
   for (const ShapePair& p : m.shape_pairs) {
     EXPECT_GT(p.side[1].half.x(), 0.0);  // the box is side B
     EXPECT_EQ(p.side[0].half.x(), 0.0);
@@ -138,15 +141,18 @@ contact: {exclude: [[bar, block], [bar, rod], [block, rod]]}
 analysis: {type: dynamic, end_time: 0.05, step: 1e-3}
 outputs: {interval: 0.01}
 )";
-  const test::Table c = RunOnePairScene(text, "shape_pair_box_scene");
+  const test::Table c = RunOnePairScene(text, "shape_pair_box_scene", 2);
   ASSERT_TRUE(c.well_formed) << c.problem;
   ASSERT_GE(c.rows.size(), 5u);
-  const std::vector<double>& last = c.rows.back();
-  EXPECT_NEAR(last[16], 1.0, 1e-12);  // nz: from the box (B) up to the capsule (A)
-  EXPECT_NEAR(last[17], 9.81, 1e-6);  // fn
-  EXPECT_NEAR(last[21], gap, 1e-9);
-  EXPECT_NEAR(last[8], 0.1, 1e-9);  // pax: under the centre of mass
-  EXPECT_NEAR(last[13], 0.0, 1e-12);  // pbz: the box's top face
+  for (int k = 0; k < 2; ++k) {  // the last output's two rows: parts 0 and 1
+    const std::vector<double>& last = c.rows[c.rows.size() - 2 + static_cast<std::size_t>(k)];
+    EXPECT_NEAR(last[16], 1.0, 1e-12);  // nz: from the box (B) up to the capsule (A)
+    EXPECT_NEAR(last[17], 0.5 * 9.81, 1e-6);  // fn
+    EXPECT_NEAR(last[21], gap, 1e-9);
+    EXPECT_NEAR(last[8], 0.2 * k, 1e-9);  // pax: the segment's ends
+    EXPECT_EQ(last[22], k);               // part
+    EXPECT_NEAR(last[13], 0.0, 1e-12);  // pbz: the box's top face
+  }
 }
 
 TEST(ShapePairScene, BadInputIsReportedAtFileLineColumnNamingTheField) {

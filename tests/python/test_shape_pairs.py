@@ -54,6 +54,7 @@ class ShapePairTest(unittest.TestCase):
         self.assertAlmostEqual(c["gap"], gap, places=10)
         self.assertAlmostEqual(c["normal"][2], -1.0, places=12)  # from top (B) to low (A)
         self.assertEqual((c["owner_a"], c["owner_b"]), (0, 1))
+        self.assertEqual(c["part"], -1)  # two spheres: one point
 
     def test_excluded_pair_never_touches(self):
         sim, _ = resting_spheres(True)

@@ -10,8 +10,11 @@
 // segments; for a segment or sphere against a box side B the point of the segment nearest to
 // the box or deepest in it, by an exact 1-D minimisation of the box's signed distance, with
 // the closest point of the box, or the exit through the nearest face when that point is
-// inside) and the normal n from B to A are found at every evaluation and frozen in the tangent
-// (envelope theorem for the gap gradient), as in ContactKind. The force F = f_n n + f_t acts on
+// inside; a segment of positive length against a box is two items, ShapePair::part 0 and 1,
+// the two ends of the segment clipped to the prism over the box face, so that a segment lying
+// on a face is carried at two points) and the normal n from B to A are found at every
+// evaluation and frozen in the tangent (envelope theorem for the gap gradient), as in
+// ContactKind. The force F = f_n n + f_t acts on
 // A at its surface point p_A - r_A n and -F on B at p_B + r_B n; friction and damping use the
 // RELATIVE velocity of the two surface points. Same law as ContactKind (C1 penalty, damping
 // -c_n w(g) dg/dt, regularised Coulomb friction applied implicitly; statics frictionless).
@@ -31,11 +34,12 @@ struct ShapePairGeometry {
   double weight[4] = {0.0, 0.0, 0.0, 0.0};       // W_k of item node k (on its side)
   Vec3 lever[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // node frame
   Vec3 box_point = Vec3::Zero();  // a box side B: the closest point of the box, node frame
-  // (s[0] is then the parameter of side A's nearest or deepest point, s[1] = 0)
+  // (s[0] is then the parameter of side A's nearest or deepest point, or, for a pair with
+  // ShapePair::part >= 0, of that end of side A clipped to the face; s[1] = 0)
 };
 // Returns false when the pair is certainly apart (bounding spheres of the two capsules further
-// than `reject` apart: the cheap test before the closest points) or the normal is undefined
-// (the two axes meet).
+// than `reject` apart: the cheap test before the closest points), the normal is undefined
+// (the two axes meet), or it is part 1 of a segment that misses the prism over the box face.
 bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], double reject,
                            ShapePairGeometry* out);
 // The geometry the tangent linearises: s and n frozen at `frozen`, the gap n . (p_A - p_B) -

@@ -75,7 +75,8 @@ bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<
 // then side B: rod (1: a rod's element capsule, 0: a rigid body's shape), owner (rod or body
 // index), element (the rod element's index, -1 for a body); pax pay paz and pbx pby pbz (the two
 // surface points [m], world), nx ny nz (the normal, from B to A), fn [N] (normal force),
-// ftx fty ftz [N] (friction force on A, world; B carries the opposite), gap [m].
+// ftx fty ftz [N] (friction force on A, world; B carries the opposite), gap [m], part (ShapePair::
+// part: 0 or 1 for the two clipped ends of a segment against a box, -1 for a single point).
 std::vector<std::string> PairContactColumns();
 bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row);
 // reactions.csv: per joint J of the model with constraint rows (every joint but free ones,

@@ -386,6 +386,11 @@ struct ShapePairSide {
 struct ShapePair {
   ShapePairSide side[2];
   double damping = 0.0;  // c_n [N s/m] (Build: from the pair's reduced mass)
+  // A segment of positive length against a box is two pairs, part 0 and part 1: the lower and
+  // the upper end of the segment clipped to the prism over the box face it is nearest to (the
+  // two points that carry a segment lying on a face; docs/numerics.md, "Box-box"). -1: one
+  // point, the segment's nearest point (every other pair).
+  int part = -1;
 };
 // An excluded pair of moving entities (scene `contact: exclude: [[a, b]]` with two bodies or rods).
 struct ContactPairExclusion {
