@@ -119,12 +119,12 @@ Vec6 CalcMomentum(const Model& model, const Data& data) {
     const int nodes[2] = {el.node_a, el.node_b};
     Vec12 eta_ab;
     GatherNodeMotion<2>(model, data, nodes, &eta_ab, nullptr);
-    for (int i = 0; i < kGauss3Points; ++i) {
-      const double xi = kGauss3Xi[i];
-      const Vec6 eta = CalcRodN(xi, d) * eta_ab;
-      AddWorldMomentum(HA * ExpSE3(xi * d),
-                       el.length * kGauss3W[i] * section.inertia.cwiseProduct(eta), &out);
-    }
+    Vec6 eta[kRodGaussPoints];
+    SE3 G[kRodGaussPoints];
+    CalcRodGaussVelocities(d, eta_ab, eta, &G);
+    for (int i = 0; i < kRodGaussPoints; ++i)
+      AddWorldMomentum(HA * G[i], el.length * kRodGaussW[i] * section.inertia.cwiseProduct(eta[i]),
+                       &out);
   }
   return out;
 }

@@ -24,6 +24,29 @@ Mat6x12 CalcRodN(double xi, const Vec6& d) {
   return N;
 }
 
+void CalcRodGaussVelocities(const Vec6& d, const Vec12& eta_ab, Vec6 (&eta)[kRodGaussPoints],
+                            SE3 (*G)[kRodGaussPoints]) {
+  const double phi = d.tail<3>().norm();
+  TSeries scaled[kRodGaussPoints];
+  for (int i = 0; i < kRodGaussPoints; ++i) scaled[i] = CalcTSeries(kRodGaussXi[i] * phi);
+  Mat6 Ti, T[kRodGaussPoints];
+  TSE3InvAndScaledTSE3(d, CalcTSeries(phi), kRodGaussPoints, kRodGaussXi, scaled, &Ti, T);
+  const Vec6 eta_a = eta_ab.head<6>();
+  // d_dot = P eta_AB = T^-1(d) (eta_B - eta_A) + ad(d) eta_A   (T^-1(-d) = T^-1(d) - ad(d)).
+  Vec6 d_dot = Bracket(d, eta_a);
+  d_dot.noalias() += Ti * (eta_ab.tail<6>() - eta_a);
+  for (int i = 0; i < kRodGaussPoints; ++i) {
+    const double xi = kRodGaussXi[i];
+    const SE3 g = ExpSE3(xi * d);
+    // Ad(g^-1) eta_A = [R^T (u - x x w); R^T w] (translation first).
+    eta[i].head<3>().noalias() =
+        g.R.transpose() * (eta_a.head<3>() - g.x.cross(eta_a.tail<3>()));
+    eta[i].tail<3>().noalias() = g.R.transpose() * eta_a.tail<3>();
+    eta[i].noalias() += xi * (T[i] * d_dot);
+    if (G) (*G)[i] = g;
+  }
+}
+
 namespace {
 // s X Y for X, Y of the block form [A B; 0 A] of T and T^-1 (method.md §1.3):
 // s [A_x A_y, A_x B_y + B_x A_y; 0, A_x A_y], three 3x3 products instead of a 6x6 one.

@@ -207,10 +207,10 @@ double CalcRodKineticEnergy(RodInertia option, const RodElement& element, const 
     }
     return energy;
   }
-  for (int i = 0; i < kRodGaussPoints; ++i) {
-    const Vec6 eta = CalcRodN(kRodGaussXi[i], d) * eta_ab;
-    energy += 0.5 * L * kRodGaussW[i] * eta.dot(section.inertia.cwiseProduct(eta));
-  }
+  Vec6 eta[kRodGaussPoints];
+  CalcRodGaussVelocities(d, eta_ab, eta);
+  for (int i = 0; i < kRodGaussPoints; ++i)
+    energy += 0.5 * L * kRodGaussW[i] * eta[i].dot(section.inertia.cwiseProduct(eta[i]));
   return energy;
 }
 

@@ -319,6 +319,28 @@ TEST(RodN, IsTheExactVelocityFieldOfTheHelicalInterpolation) {
   }
 }
 
+TEST(RodN, GaussVelocitiesWithoutNAreNTimesTheNodeVelocities) {
+  // CalcRodGaussVelocities (the energy and momentum outputs): Ad(exp(-xi d)) eta_A +
+  // xi T(xi d) P eta_AB at the Gauss points equals N(xi, d) eta_AB, and its frames exp(xi d);
+  // small and large rotations (the series branch of T near 0).
+  std::mt19937 rng(34);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (const double rotation : {0.0, 1e-7, 0.8, 2.5, 4.0}) {
+    const Vec6 d = RandomRelativeMotion(rng, rotation, 1.2);
+    Vec12 eta_ab;
+    for (int i = 0; i < 12; ++i) eta_ab(i) = n(rng);
+    Vec6 eta[kRodGaussPoints];
+    SE3 G[kRodGaussPoints];
+    CalcRodGaussVelocities(d, eta_ab, eta, &G);
+    for (int i = 0; i < kRodGaussPoints; ++i) {
+      const Vec6 expected = CalcRodN(kRodGaussXi[i], d) * eta_ab;
+      EXPECT_LT((eta[i] - expected).norm(), 1e-13 * eta_ab.norm()) << "rotation " << rotation;
+      const SE3 g = ExpSE3(kRodGaussXi[i] * d);
+      EXPECT_LT((G[i].R - g.R).norm() + (G[i].x - g.x).norm(), 1e-15);
+    }
+  }
+}
+
 // ---- distributed dead load ----
 
 TEST(RodDistributedDeadForce, TangentIsTheDerivativeOfTheLoadVector) {

@@ -26,6 +26,14 @@ Mat6x12 CalcRodP(const Vec6& d);
 // eta(xi) = N(xi, d) [eta_A; eta_B], xi in [0, 1].
 Mat6x12 CalcRodN(double xi, const Vec6& d);
 
+// The same interpolation applied at the rod's Gauss points without forming N (for the energy
+// and momentum outputs): with d_dot = P(d) eta_AB,
+//   eta(xi) = Ad(exp(-xi d)) eta_A + xi T(xi d) d_dot,
+// which is N(xi, d) eta_AB since T^-1(d) eta_B - T^-1(-d) eta_A = P eta_AB. eta[i] at xi_i;
+// G (optional) receives the section frames relative to node A, exp(xi_i d).
+void CalcRodGaussVelocities(const Vec6& d, const Vec12& eta_ab,
+                            Vec6 (&eta)[kRodGaussPoints], SE3 (*G)[kRodGaussPoints] = nullptr);
+
 // What the kernels of one element share, computed once per element and assembly (the
 // kernels below that take it are the ones the assembly calls; the overloads taking H or d
 // compute it themselves):
