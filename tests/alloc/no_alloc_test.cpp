@@ -26,6 +26,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/tendon.h"
+#include "elements/tilted_box_drop.h"
 
 namespace {
 std::atomic<bool> g_counting{false};
@@ -367,23 +368,8 @@ TEST(NoAllocation, ParaViewFramesAllocateNothing) {
 // steps with a retry in halves, and its pair_contacts.csv rows.
 TEST(NoAllocation, TwoPointBoxPairsAllocateNothing) {
   using namespace screwfem;
-  const Vec3 half(0.05, 0.04, 0.03);
-  ModelBuilder b;
-  const int base = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
-  b.FixNode(base);
-  b.AddRigidBody("table", base, 1.0, Vec3::Zero(), Mat3::Identity());
-  b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.3, 0.3, 0.05), 0.0});
-  const double lowest = half.y() * std::sin(0.2) + half.z() * std::cos(0.2);
-  const int node = b.AddNode(SE3{ExpSO3(Vec3(0.2, 0.0, 0.0)), Vec3(0.02, -0.01, lowest + 0.002)});
-  b.AddRigidBody("block", node, 1.0, Vec3::Zero(), Vec3(8e-4, 1.1e-3, 1.4e-3).asDiagonal());
-  b.AddContactShape({1, ContactShapeType::kBox, Vec3::Zero(), half, 0.0});
-  ContactSettings law;
-  law.stiffness = 1e5;
-  law.onset = 1e-4;
-  law.friction = 0.3;
-  b.SetContactSettings(law);
-  b.SetGravity(Vec3(0.0, 0.0, -9.81));
-  const Model model = b.Build();
+  const Model model =
+      tilted_box_drop::MakeTiltedBoxDrop(0.2, 0.002, Vec3(8e-4, 1.1e-3, 1.4e-3));
   Data data = MakeData(model);
   Integrator integ;
   DynamicOptions options;

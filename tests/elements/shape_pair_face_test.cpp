@@ -18,6 +18,8 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
 
+#include "tilted_box_drop.h"
+
 namespace screwfem::shape_pair_face_test {
 namespace {
 
@@ -257,27 +259,12 @@ TEST(ShapePairFace, CapsuleOverhangingAnEdgeRestsOnTwoPointsByTheLeverRule) {
 // 1.25e-2 J, where the corner first lands (0.2 m/s, 2 onsets per step: not resolved); at
 // h = 5e-4 by no more than 1e-9 J (docs/numerics.md).
 TEST(ShapePairFace, BoxDroppedTiltedOntoABoxTipsFlatAndRestsAtALargeStep) {
-  const double m_box = 1.0, theta = 0.2, drop = 0.002, h = 1e-3;
-  const Vec3 half(0.05, 0.04, 0.03);
-  ModelBuilder b;
-  const int base = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
-  b.FixNode(base);
-  b.AddRigidBody("table", base, 1.0, Vec3::Zero(), Mat3::Identity());
-  b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.3, 0.3, 0.05), 0.0});
-  const double lowest = half.y() * std::sin(theta) + half.z() * std::cos(theta);
-  const int node = b.AddNode(SE3{ExpSO3(Vec3(theta, 0.0, 0.0)), Vec3(0.02, -0.01, lowest + drop)});
+  const double m_box = tilted_box_drop::kMass, theta = 0.2, drop = 0.002, h = 1e-3;
+  const Vec3& half = tilted_box_drop::kHalf;
   const Vec3 J = m_box / 3.0 * Vec3(half.y() * half.y() + half.z() * half.z(),
                                      half.x() * half.x() + half.z() * half.z(),
                                      half.x() * half.x() + half.y() * half.y());
-  b.AddRigidBody("block", node, m_box, Vec3::Zero(), J.asDiagonal());
-  b.AddContactShape({1, ContactShapeType::kBox, Vec3::Zero(), half, 0.0});
-  ContactSettings law;
-  law.stiffness = 1e5;
-  law.onset = 1e-4;
-  law.friction = 0.3;
-  b.SetContactSettings(law);
-  b.SetGravity(Vec3(0.0, 0.0, -9.81));
-  const Model m = b.Build();
+  const Model m = tilted_box_drop::MakeTiltedBoxDrop(theta, drop, J);
   ASSERT_EQ(m.shape_pairs.size(), 48u);
   Data d = MakeData(m);
   Integrator integ;
