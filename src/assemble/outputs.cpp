@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "screwfem/assemble/assemble.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/quadrature.h"
 #include "screwfem/elements/rigid_body.h"
@@ -92,41 +93,9 @@ Vec6 CalcJointReaction(const Model& model, const Data& data, int joint) {
   return out;
 }
 
-namespace {
-// Adds the momentum h = [p; L] (body frame, about the frame origin) of a frame H to the world
-// momentum about the world origin.
-void AddWorldMomentum(const SE3& H, const Vec6& h, Vec6* out) {
-  const Vec3 p = H.R * h.head<3>();
-  out->head<3>() += p;
-  out->tail<3>() += H.R * h.tail<3>() + H.x.cross(p);
-}
-}  // namespace
-
 Vec6 CalcMomentum(const Model& model, const Data& data) {
-  Vec6 out = Vec6::Zero();
-  for (const RigidBody& b : model.bodies) {
-    const Node& n = model.nodes[static_cast<std::size_t>(b.node)];
-    if (n.dof < 0) continue;
-    AddWorldMomentum(data.H[static_cast<std::size_t>(b.node)],
-                     RigidBodyMass(b) * data.v.segment<6>(n.dof), &out);
-  }
-  for (std::size_t e = 0; e < model.elements.size(); ++e) {
-    const RodElement& el = model.elements[e];
-    const Section& section = model.rods[static_cast<std::size_t>(el.rod)].section;
-    const SE3& HA = data.H[static_cast<std::size_t>(el.node_a)];
-    const Vec6 d = CalcRodRelativeMotion(HA, data.H[static_cast<std::size_t>(el.node_b)],
-                                         data.w_ref[e]);
-    const int nodes[2] = {el.node_a, el.node_b};
-    Vec12 eta_ab;
-    GatherNodeMotion<2>(model, data, nodes, &eta_ab, nullptr);
-    Vec6 eta[kRodGaussPoints];
-    SE3 G[kRodGaussPoints];
-    CalcRodGaussVelocities(d, eta_ab, eta, &G);
-    for (int i = 0; i < kRodGaussPoints; ++i)
-      AddWorldMomentum(HA * G[i], el.length * kRodGaussW[i] * section.inertia.cwiseProduct(eta[i]),
-                       &out);
-  }
-  return out;
+  // Summed with the energies, item by item (Energy::momentum: RigidBodyKind and RodElementKind).
+  return CalcEnergy(model, data).momentum;
 }
 
 }  // namespace screwfem

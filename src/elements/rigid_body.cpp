@@ -59,6 +59,7 @@ void RigidBodyKind::AddEnergy(const Model& model, const Data& data, const Item& 
     const Vec6 eta = data.v.segment<6>(dof);
     const Vec3 vc = eta.head<3>() + eta.tail<3>().cross(b.com);
     E->kinetic += 0.5 * b.mass * vc.squaredNorm() + 0.5 * eta.tail<3>().dot(b.inertia * eta.tail<3>());
+    E->AddMomentum(H, RigidBodyMass(b) * eta);
   }
   E->gravity -= b.mass * model.gravity.dot(H.Act(b.com));
 }

@@ -143,11 +143,26 @@ void RodElementKind::AddEnergy(const Model& m, const Data& d, const Item& e, Ene
   const int nodes[2] = {el.node_a, el.node_b};
   Vec12 eta_ab;
   GatherNodeMotion<2>(m, d, nodes, &eta_ab, nullptr);
-  // 1/2 eta_AB^T M_e eta_AB of the model's inertia option (M_e(d) for option A).
-  E->kinetic += CalcRodKineticEnergy(m.rod_inertia, el, sec, rel, eta_ab);
-  for (int i = 0; i < kGauss3Points; ++i) {
-    const Vec3 xg = (HA * ExpSE3(kGauss3Xi[i] * rel)).x;
-    E->gravity -= el.length * kGauss3W[i] * sec.inertia(0) * m.gravity.dot(xg);
+  // Gravity and momentum at the Gauss points' sections H_A exp(xi d), with the exact velocity
+  // field (whatever the inertia option: the momentum of the helical interpolation).
+  Vec6 eta[kRodGaussPoints];
+  SE3 G[kRodGaussPoints];
+  CalcRodGaussVelocities(rel, eta_ab, eta, &G);
+  // 1/2 eta_AB^T M_e eta_AB of the model's inertia option (M_e(d) for option A: the Gauss
+  // points' velocities above, as CalcRodKineticEnergy sums them).
+  if (m.rod_inertia == RodInertia::kConstant) {
+    E->kinetic += CalcRodKineticEnergy(m.rod_inertia, el, sec, rel, eta_ab);
+  } else {
+    double kinetic = 0.0;
+    for (int i = 0; i < kRodGaussPoints; ++i)
+      kinetic += 0.5 * el.length * kRodGaussW[i] * eta[i].dot(sec.inertia.cwiseProduct(eta[i]));
+    E->kinetic += kinetic;
+  }
+  for (int i = 0; i < kRodGaussPoints; ++i) {
+    const SE3 Hg = HA * G[i];
+    const double w = el.length * kRodGaussW[i];
+    E->gravity -= w * sec.inertia(0) * m.gravity.dot(Hg.x);
+    E->AddMomentum(Hg, w * sec.inertia.cwiseProduct(eta[i]));
   }
 }
 

@@ -102,8 +102,8 @@ std::vector<std::string> EnergyColumns() {
 }
 
 void CalcEnergyRow(const Model& model, const Data& data, std::vector<double>* row) {
-  const Energy e = CalcEnergy(model, data);
-  const Vec6 h = CalcMomentum(model, data);
+  const Energy e = CalcEnergy(model, data);  // with the momentum, in one pass
+  const Vec6& h = e.momentum;
   row->resize(11);
   double* r = row->data();
   r[0] = e.kinetic;

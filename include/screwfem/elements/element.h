@@ -14,7 +14,7 @@
 //     // (terms->failure says why); the assembly then stops.
 //     static bool Calc(const Model&, const Data&, const Item&, const NodeMotion<N>&,
 //                      const KernelOptions&, ElementTerms<N>*);
-//     // Adds the item's energies.
+//     // Adds the item's energies (and the momentum of its mass, Energy::momentum).
 //     static void AddEnergy(const Model&, const Data&, const Item&, Energy*);
 //   };
 //
@@ -83,6 +83,16 @@ struct Energy {
   double spring = 0.0;    // joint springs (towards their rest, incl. series-elastic drives)
   double gravity = 0.0;   // potential of gravity, zero at the world origin
   double total() const { return kinetic + strain + spring + gravity; }
+  // Not an energy, summed in the same pass over the items (the kinetic energy's velocities
+  // serve both): linear momentum [kg m/s] and angular momentum about the world origin
+  // [kg m^2/s], world components (outputs.h, CalcMomentum).
+  Vec6 momentum = Vec6::Zero();
+  // Adds the momentum h = [p; L] of a frame H (body components, about the frame's origin).
+  void AddMomentum(const SE3& H, const Vec6& h) {
+    const Vec3 p = H.R * h.head<3>();
+    momentum.head<3>() += p;
+    momentum.tail<3>() += H.R * h.tail<3>() + H.x.cross(p);
+  }
 };
 
 }  // namespace screwfem
