@@ -95,8 +95,9 @@ Scene LoadGrm(int index, const std::string& step = "1e-3") {
 // The solver alone over the scene's span: InitializeDynamics, then Step over the step schedule
 // (profile breakpoints on step ends, as RunScene does) or, with `step: auto`, AdaptiveStep to
 // the end time as RunScene and AdvanceTo do (the error-controlled steps RunScene takes, without
-// its output rows: AdaptiveStep lands on the end time and on the breakpoints by itself). `on_step`, if given, is called after the
-// start and after every step (the accuracy runs record rows there; not in the timed runs).
+// its output rows: AdaptiveStep lands on the end time and on the breakpoints by itself).
+// `on_step` is called after the start and after every step (the accuracy runs record rows
+// there; the timed runs pass a no-op).
 template <typename OnStep>
 bool SimulateGrm(const Scene& scene, Data& data, Integrator& integ, std::string* message,
                  OnStep&& on_step) {
@@ -162,7 +163,8 @@ GrmRows RecordGrmRows(const Scene& scene) {
   };
   std::vector<int> p8, joints;
   for (const char* c : {"x", "y", "z"}) p8.push_back(column(point_columns, std::string("P8.") + c));
-  for (const char* j : kGrmPassiveJoints) joints.push_back(column(joint_columns, std::string(j) + ".q"));
+  for (const char* j : kGrmPassiveJoints)
+    joints.push_back(column(joint_columns, std::string(j) + ".q"));
   GrmRows rows;
   if (std::count(p8.begin(), p8.end(), -1) + std::count(joints.begin(), joints.end(), -1) > 0)
     return rows;
@@ -180,7 +182,8 @@ GrmRows RecordGrmRows(const Scene& scene) {
     const double t_end = data.time;
     const double snap = 1e-9 * kGrmRowInterval;
     if (scene.analysis.adaptive_steps && next_row > 0) {
-      for (double t = next_row * kGrmRowInterval; t < t_end - snap; t = ++next_row * kGrmRowInterval) {
+      for (double t = next_row * kGrmRowInterval; t < t_end - snap;
+           t = ++next_row * kGrmRowInterval) {
         InterpolateStep(model, data, integ, t, dense);
         record(dense);
       }

@@ -16,6 +16,12 @@ namespace screwfem {
 
 namespace {
 
+// Corner k (0..7) of a box with centre c and half sizes h: bit 0, 1, 2 of k select +h_x, +h_y,
+// +h_z (else -h); corners k and k | bit (bit not in k) end an edge.
+Vec3 BoxCorner(const Vec3& c, const Vec3& h, int k) {
+  return c + Vec3((k & 1) ? h.x() : -h.x(), (k & 2) ? h.y() : -h.y(), (k & 4) ? h.z() : -h.z());
+}
+
 std::string NodeLabel(const Model& m, int node) {
   if (node == kGround) return "ground";
   const Node& n = m.nodes[static_cast<std::size_t>(node)];
@@ -1038,15 +1044,20 @@ void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
       ShapePair p;
       p.side[0] = side_a;
       p.side[1] = side_b;
+      auto store = [&](int part) {
+        p.part = part;
+        m.shape_pairs.push_back(p);
+        masses->push_back(reduced);
+      };
       // A segment of positive length against a box: two points (the ends of the segment
       // clipped to the face), so that a segment lying on a face balances any moment over it.
       const bool segment = side_a.end_node[0] != side_a.end_node[1] ||
                            side_a.offset[0] != side_a.offset[1];
-      for (int part = is_box(side_b) && segment ? 0 : -1; part < 2; ++part) {
-        p.part = part;
-        m.shape_pairs.push_back(p);
-        masses->push_back(reduced);
-        if (part < 0) break;
+      if (is_box(side_b) && segment) {
+        store(0);
+        store(1);
+      } else {
+        store(-1);
       }
     };
     const bool box_a = is_box(a.side), box_b = is_box(b.side);
@@ -1059,15 +1070,11 @@ void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
         for (int k = 0; k < 8; ++k)
           for (int bit : {1, 2, 4}) {
             if (k & bit) continue;
-            auto corner = [&](int c) {
-              return Vec3(edges.offset[0] + Vec3((c & 1) ? h.x() : -h.x(), (c & 2) ? h.y() : -h.y(),
-                                                 (c & 4) ? h.z() : -h.z()));
-            };
             ShapePairSide edge = edges;
             edge.half.setZero();
             edge.radius = 0.0;
-            edge.offset[0] = corner(k);
-            edge.offset[1] = corner(k | bit);
+            edge.offset[0] = BoxCorner(edges.offset[0], h, k);
+            edge.offset[1] = BoxCorner(edges.offset[0], h, k | bit);
             push(edge, box);
           }
       }
@@ -1257,9 +1264,7 @@ void BuildContacts(Model& m) {
           // capsules, of radius 0.
           r_min = std::min(r_min, c.to.minCoeff());
           Vec3 v[8];
-          for (int k = 0; k < 8; ++k)
-            v[k] = c.from + Vec3((k & 1) ? c.to.x() : -c.to.x(), (k & 2) ? c.to.y() : -c.to.y(),
-                                 (k & 4) ? c.to.z() : -c.to.z());
+          for (int k = 0; k < 8; ++k) v[k] = BoxCorner(c.from, c.to, k);
           for (int k = 0; k < 8; ++k) add(v[k], v[k], 0.0);
           if (!plane)
             for (int k = 0; k < 8; ++k)

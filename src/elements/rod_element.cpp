@@ -148,16 +148,11 @@ void RodElementKind::AddEnergy(const Model& m, const Data& d, const Item& e, Ene
   Vec6 eta[kRodGaussPoints];
   SE3 G[kRodGaussPoints];
   CalcRodGaussVelocities(rel, eta_ab, eta, &G);
-  // 1/2 eta_AB^T M_e eta_AB of the model's inertia option (M_e(d) for option A: the Gauss
-  // points' velocities above, as CalcRodKineticEnergy sums them).
-  if (m.rod_inertia == RodInertia::kConstant) {
-    E->kinetic += CalcRodKineticEnergy(m.rod_inertia, el, sec, rel, eta_ab);
-  } else {
-    double kinetic = 0.0;
-    for (int i = 0; i < kRodGaussPoints; ++i)
-      kinetic += 0.5 * el.length * kRodGaussW[i] * eta[i].dot(sec.inertia.cwiseProduct(eta[i]));
-    E->kinetic += kinetic;
-  }
+  // 1/2 eta_AB^T M_e eta_AB of the model's inertia option (M_e(d) for option A: from the Gauss
+  // points' velocities above).
+  E->kinetic += m.rod_inertia == RodInertia::kConstant
+                    ? CalcRodKineticEnergy(m.rod_inertia, el, sec, rel, eta_ab)
+                    : CalcRodKineticEnergyExact(el, sec, eta);
   for (int i = 0; i < kRodGaussPoints; ++i) {
     const SE3 Hg = HA * G[i];
     const double w = el.length * kRodGaussW[i];

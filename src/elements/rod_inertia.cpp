@@ -209,8 +209,15 @@ double CalcRodKineticEnergy(RodInertia option, const RodElement& element, const 
   }
   Vec6 eta[kRodGaussPoints];
   CalcRodGaussVelocities(d, eta_ab, eta);
+  return CalcRodKineticEnergyExact(element, section, eta);
+}
+
+double CalcRodKineticEnergyExact(const RodElement& element, const Section& section,
+                                 const Vec6 (&eta)[kRodGaussPoints]) {
+  double energy = 0.0;
   for (int i = 0; i < kRodGaussPoints; ++i)
-    energy += 0.5 * L * kRodGaussW[i] * eta[i].dot(section.inertia.cwiseProduct(eta[i]));
+    energy +=
+        0.5 * element.length * kRodGaussW[i] * eta[i].dot(section.inertia.cwiseProduct(eta[i]));
   return energy;
 }
 

@@ -144,15 +144,13 @@ namespace {
 // out = C T for a node tangent operator T = [A B; 0 A] (3 x 3 blocks: the SE(3) tangent of
 // lie/se3.h, or the identity), C with 6 columns: [C_1 A, C_1 B + C_2 A], three products of
 // 3 x 3 blocks instead of one 6 x 6.
-template <class In, class Out>
-void TimesNodeTangent(const Eigen::MatrixBase<In>& C, const Mat6& T,
-                      const Eigen::MatrixBase<Out>& out_const) {
-  Eigen::MatrixBase<Out>& out = const_cast<Eigen::MatrixBase<Out>&>(out_const);
+void TimesNodeTangent(const Eigen::Matrix<double, 12, 6>& C, const Mat6& T,
+                      Eigen::Ref<Eigen::Matrix<double, 12, 6>> out) {
   const Mat3 A = T.topLeftCorner<3, 3>();
   const Mat3 B = T.topRightCorner<3, 3>();
-  out.template leftCols<3>().noalias() = C.template leftCols<3>() * A;
-  out.template rightCols<3>().noalias() = C.template leftCols<3>() * B;
-  out.template rightCols<3>().noalias() += C.template rightCols<3>() * A;
+  out.leftCols<3>().noalias() = C.leftCols<3>() * A;
+  out.rightCols<3>().noalias() = C.leftCols<3>() * B;
+  out.rightCols<3>().noalias() += C.rightCols<3>() * A;
 }
 
 // rows [M; Skew(r) M] of S(r)^T M for a 3 x 6 block M (Skew(r) M column by column as r x m).

@@ -535,6 +535,45 @@ TEST(ShapePairValidation, CapsuleRestsFlatOnABoxFace) {
   EXPECT_LT(LogSO3(s.data.H[1].R).norm(), 1e-12);
 }
 
+// The rod section (r, E = 2 GPa, nu = 0.3, 1000 kg/m^3) and the contact law (k = 1e5 N/m, onset
+// 0.1 mm) of the static cantilever tests below.
+Section CantileverSection(double radius) {
+  Material mat;
+  mat.youngs_modulus = 2e9;
+  mat.poisson_ratio = 0.3;
+  mat.density = 1000.0;
+  return Section::Circle(radius, mat);
+}
+
+ContactSettings CantileverLaw() {
+  ContactSettings law;
+  law.stiffness = 1e5;
+  law.onset = 1e-4;
+  return law;
+}
+
+// The static equilibrium from the reference configuration, in 10 load steps.
+StaticResult SolveInTenSteps(const Model& m, Data* d) {
+  *d = MakeData(m);
+  StaticOptions o;
+  o.load_steps = 10;
+  return SolveStatic(m, *d, o);
+}
+
+// The flexibility of a clamped cantilever with the section s (bending and shear): deflection
+// at x under a unit load at y, C(x, y) = min^2 (3 max - min) / (6 EI) + min / GA.
+double CantileverFlexibility(const Section& s, double x, double y) {
+  const double lo = std::min(x, y), hi = std::max(x, y);
+  return lo * lo * (3 * hi - lo) / (6 * s.stiffness(4)) + lo / s.stiffness(2);
+}
+
+// The deflection of the last element's midpoint (length h, ending at L) under a unit force split
+// equally to its two nodes: 1/4 (C(L-h, L-h) + 2 C(L-h, L) + C(L, L)).
+double LastElementMidpointFlexibility(const Section& s, double L, double h) {
+  return 0.25 * (CantileverFlexibility(s, L - h, L - h) + 2 * CantileverFlexibility(s, L - h, L) +
+                 CantileverFlexibility(s, L, L));
+}
+
 // A cantilever (8 elements, L = 0.5, r = 5 mm, tip load P) whose last element crosses the top
 // edge of a fixed box, `clearance` below its surface, at the element's middle x_e = L - h/2
 // (the box lies under x_e - 0.02 .. x_e; the chord falls towards the tip, so the edge is its
@@ -546,11 +585,7 @@ TEST(ShapePairValidation, CantileverRestsOnABoxEdge) {
   const double L = 0.5, radius = 0.005, P = 0.2, clearance = 0.002;
   const int ne = 8;
   const double h = L / ne, x_e = L - 0.5 * h, top = -radius - clearance;
-  Material mat;
-  mat.youngs_modulus = 2e9;
-  mat.poisson_ratio = 0.3;
-  mat.density = 1000.0;
-  const Section section = Section::Circle(radius, mat);
+  const Section section = CantileverSection(radius);
   ModelBuilder b;
   const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(L, 0.0, 0.0), ne, section);
   b.FixNode(b.model().rods[0].nodes.front());
@@ -564,16 +599,11 @@ TEST(ShapePairValidation, CantileverRestsOnABoxEdge) {
   b.AddContactShape({table, ContactShapeType::kBox, Vec3(x_e - 0.01, 0.0, top - 0.025),
                      Vec3(0.01, 0.05, 0.025), 0.0});
   b.AddContactRod(rod, radius);
-  ContactSettings law;
-  law.stiffness = 1e5;
-  law.onset = 1e-4;
-  b.SetContactSettings(law);
+  b.SetContactSettings(CantileverLaw());
   const Model m = b.Build();
   ASSERT_EQ(m.shape_pairs.size(), static_cast<std::size_t>(2 * ne));  // two parts per element
-  Data d = MakeData(m);
-  StaticOptions o;
-  o.load_steps = 10;
-  const StaticResult res = SolveStatic(m, d, o);
+  Data d;
+  const StaticResult res = SolveInTenSteps(m, &d);
   ASSERT_TRUE(res.converged) << res.message;
   double R = 0.0, gap = 0.0;
   int active = 0;
@@ -589,13 +619,9 @@ TEST(ShapePairValidation, CantileverRestsOnABoxEdge) {
     gap = c.gap;
   }
   EXPECT_EQ(active, 1);
-  const double EI = section.stiffness(4), GA = section.stiffness(2);
-  auto C = [&](double x, double y) {
-    const double lo = std::min(x, y), hi = std::max(x, y);
-    return lo * lo * (3 * hi - lo) / (6 * EI) + lo / GA;
-  };
-  const double c_edge = 0.5 * (C(L - h, L) + C(L, L));
-  const double c_low = 0.25 * (C(L - h, L - h) + 2 * C(L - h, L) + C(L, L));
+  const double c_edge = 0.5 * (CantileverFlexibility(section, L - h, L) +
+                               CantileverFlexibility(section, L, L));
+  const double c_low = LastElementMidpointFlexibility(section, L, h);
   ASSERT_GT(c_edge * P, clearance);  // without the box the rod would pass through its edge
   EXPECT_NEAR(R, (c_edge * P - clearance + gap) / c_low, 2e-3 * R);
   EXPECT_NEAR(gap, 1e-4 - std::sqrt(2e-4 * R / 1e5), 1e-9);
@@ -679,11 +705,7 @@ TEST(ShapePairValidation, CrossingCantileversPressedTogetherShareTheLoadByTheirC
   const double L = 0.5, radius = 0.005, P = 0.2, clearance = 0.002;
   const int ne = 8;
   const double h = L / ne;
-  Material mat;
-  mat.youngs_modulus = 2e9;
-  mat.poisson_ratio = 0.3;
-  mat.density = 1000.0;
-  const Section section = Section::Circle(radius, mat);
+  const Section section = CantileverSection(radius);
   ModelBuilder b;
   const int upper = b.AddStraightRod("upper", Vec3(-L, 0.0, 0.0), Vec3::Zero(), ne, section);
   const double z = -2.0 * radius - clearance;
@@ -697,16 +719,11 @@ TEST(ShapePairValidation, CrossingCantileversPressedTogetherShareTheLoadByTheirC
   b.AddPointLoad(load);
   b.AddContactRod(upper, radius);
   b.AddContactRod(lower, radius);
-  ContactSettings law;
-  law.stiffness = 1e5;
-  law.onset = 1e-4;
-  b.SetContactSettings(law);
+  b.SetContactSettings(CantileverLaw());
   const Model m = b.Build();
   ASSERT_EQ(m.shape_pairs.size(), static_cast<std::size_t>(ne * ne));
-  Data d = MakeData(m);
-  StaticOptions o;
-  o.load_steps = 10;
-  const StaticResult res = SolveStatic(m, d, o);
+  Data d;
+  const StaticResult res = SolveInTenSteps(m, &d);
   ASSERT_TRUE(res.converged) << res.message;
   double R = 0.0, gap = 0.0;
   int active = 0;
@@ -718,13 +735,8 @@ TEST(ShapePairValidation, CrossingCantileversPressedTogetherShareTheLoadByTheirC
     gap = c.gap;
   }
   EXPECT_EQ(active, 1);
-  const double EI = section.stiffness(4), GA = section.stiffness(2);
-  auto C = [&](double x, double y) {
-    const double lo = std::min(x, y), hi = std::max(x, y);
-    return lo * lo * (3 * hi - lo) / (6 * EI) + lo / GA;
-  };
-  const double c_up = C(L, L);
-  const double c_low = 0.25 * (C(L - h, L - h) + 2 * C(L - h, L) + C(L, L));
+  const double c_up = CantileverFlexibility(section, L, L);
+  const double c_low = LastElementMidpointFlexibility(section, L, h);
   ASSERT_GT(c_up * P, clearance);  // the upper tip alone would pass through the lower rod
   EXPECT_NEAR(R, (c_up * P - clearance + gap) / (c_up + c_low), 2e-3 * R);
   EXPECT_NEAR(gap, 1e-4 - std::sqrt(2e-4 * R / 1e5), 1e-9);
@@ -744,11 +756,7 @@ TEST(ShapePairValidation, RodFoldedOntoItselfCarriesTheTipLoadByItsFlexibility) 
   const double L = 0.3, radius = 0.005, P = 0.2, clearance = 0.001, a = 0.4, e = 0.03;
   const double H = 2.0 * radius + clearance;
   const int ne = 8;
-  Material mat;
-  mat.youngs_modulus = 2e9;
-  mat.poisson_ratio = 0.3;
-  mat.density = 1000.0;
-  const Section section = Section::Circle(radius, mat);
+  const Section section = CantileverSection(radius);
   ModelBuilder b;
   const int rod = b.AddRodAlongPath(
       "fold", {Vec3::Zero(), Vec3(a, 0, 0), Vec3(a, 0, H), Vec3(a - e, 0, H), Vec3(a - e - L, 0, H)},
@@ -761,17 +769,13 @@ TEST(ShapePairValidation, RodFoldedOntoItselfCarriesTheTipLoadByItsFlexibility) 
   load.force = Vec3(0.0, 0.0, -P);
   b.AddPointLoad(load);
   b.AddContactRod(rod, radius);
-  ContactSettings law;
-  law.stiffness = 1e5;
-  law.onset = 1e-4;
+  ContactSettings law = CantileverLaw();
   law.self = true;
   b.SetContactSettings(law);
   const Model m = b.Build();
   ASSERT_FALSE(m.shape_pairs.empty());
-  Data d = MakeData(m);
-  StaticOptions o;
-  o.load_steps = 10;
-  const StaticResult res = SolveStatic(m, d, o);
+  Data d;
+  const StaticResult res = SolveInTenSteps(m, &d);
   ASSERT_TRUE(res.converged) << res.message;
   double R = 0.0, gap = 0.0, least_gap = INFINITY;
   int active = 0;

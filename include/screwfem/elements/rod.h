@@ -162,6 +162,9 @@ void CalcRodInertia(RodInertia option, const RodElement& element, const Section&
 // quadrature as the inertia forces, so that the power of g_ine is its exact time derivative).
 double CalcRodKineticEnergy(RodInertia option, const RodElement& element, const Section& section,
                             const Vec6& d, const Vec12& eta_ab);
+// Option A's, from the section velocities at the Gauss points (CalcRodGaussVelocities).
+double CalcRodKineticEnergyExact(const RodElement& element, const Section& section,
+                                 const Vec6 (&eta)[kRodGaussPoints]);
 
 // Damping forces of one element, added to *force and their eta_AB-derivative to *damping:
 //  * strain-rate (material) damping, sigma_v = D_s d_dot / L with D_s = section.damping +

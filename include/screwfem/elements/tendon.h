@@ -6,8 +6,8 @@
 // (CalcPointDistance). A frictionless tendon with prescribed tension tau is the sum of its
 // straight segments: its generalised force tau dL/dq is the sum of tau times each segment's
 // length gradient, so each segment couples only its two eyelets' nodes (TendonSegmentKind, one
-// 2-node item per node pair) and the tendon needs no coupling beyond consecutive eyelets. A force element (ForceElementKind) is one segment
-// with a spring-damper-actuator law.
+// 2-node item per node pair) and the tendon needs no coupling beyond consecutive eyelets. A
+// force element (ForceElementKind) is one segment with a spring-damper-actuator law.
 #pragma once
 
 #include "screwfem/elements/element.h"
