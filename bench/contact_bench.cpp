@@ -18,6 +18,7 @@
 
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/io/schedule.h"
 #include "screwfem/solve/dynamics.h"
@@ -149,7 +150,7 @@ void BM_GripperSolver(benchmark::State& state) {
   state.counters["halvings"] = static_cast<double>(halvings) / n;
   state.counters["elements"] = static_cast<double>(model.elements.size());
   state.counters["unknowns"] = model.num_unknowns();
-  state.counters["pairs"] = static_cast<double>(model.shape_pairs.size() +
+  state.counters["pairs"] = static_cast<double>(AllShapePairs(model).size() +
                                                 model.contact_pairs.size());
   state.counters["bandwidth"] = model.bandwidth;
 }

@@ -656,12 +656,14 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "pair_contact_states",
           [](S& s) {
             py::list out;
-            for (int i = 0; i < static_cast<int>(s.model().shape_pairs.size()); ++i) {
+            UpdateShapePairs(s.model(), s.data());  // the pairs of the state as it is now
+            for (int i = 0; i < s.data().num_shape_pairs; ++i) {
               const ShapePairState c = CalcShapePairState(s.model(), s.data(), i);
               if (!c.active) continue;
-              const ShapePair& p = s.model().shape_pairs[static_cast<std::size_t>(i)];
+              const ShapePair& p = s.data().shape_pairs[static_cast<std::size_t>(i)];
               out.append(py::dict(
-                  py::arg("pair") = i, py::arg("rod_a") = p.side[0].rod,
+                  py::arg("pair") = static_cast<long>(ShapePairKey(s.model(), p)),
+                  py::arg("rod_a") = p.side[0].rod,
                   py::arg("owner_a") = p.side[0].owner, py::arg("rod_b") = p.side[1].rod,
                   py::arg("owner_b") = p.side[1].owner, py::arg("point_a") = c.point[0],
                   py::arg("point_b") = c.point[1], py::arg("normal") = c.normal,
@@ -672,7 +674,8 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
             return out;
           },
           "The active contacts between moving shapes as pair_contacts.csv records them: dicts "
-          "with pair, rod_a/owner_a, rod_b/owner_b, point_a and point_b [m], normal (from B to "
+          "with pair (the key of its two contact segments), rod_a/owner_a, rod_b/owner_b, "
+          "point_a and point_b [m], normal (from B to "
           "A), normal_force [N], friction_force [N] (on A, world), gap [m] and part (0 or 1: "
           "the two ends of a segment clipped to a box face; -1: a pair's single point).")
       .def(

@@ -180,6 +180,16 @@ KernelOptions MakeKernelOptions(const AssemblyOptions& o) {
   return k;
 }
 
+// The items of a kind: from the Model, or from the Data for a kind whose items are found
+// during the run (kItemsInData: the pairs of the contact broad phase).
+template <class Kind, class F>
+void ForEachItem(const Model& m, const Data& d, F&& f) {
+  if constexpr (requires { Kind::kItemsInData; })
+    Kind::ForEach(m, d, f);
+  else
+    Kind::ForEach(m, f);
+}
+
 // Every item of one element kind: gather, compute, scatter. Stops at the first item whose
 // kernel fails (a rod element past its rotation limit) and records it in data.
 template <class Kind>
@@ -187,7 +197,7 @@ bool AddKind(const Model& m, Data& d, const AssemblyOptions& o, const KernelOpti
              Scatter& s) {
   constexpr int N = Kind::kNodes;
   bool ok = true;
-  Kind::ForEach(m, [&](const typename Kind::Item& item, const int (&nodes)[N]) {
+  ForEachItem<Kind>(m, d, [&](const typename Kind::Item& item, const int (&nodes)[N]) {
     if (!ok) return;
     int dofs[N];
     NodeMotion<N> x;
@@ -213,7 +223,7 @@ bool AddKinds(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s,
 
 template <class... Kinds>
 void AddKindEnergies(const Model& m, const Data& d, Energy* E, std::tuple<Kinds...>*) {
-  (Kinds::ForEach(m, [&](const typename Kinds::Item& item, const int(&)[Kinds::kNodes]) {
+  (ForEachItem<Kinds>(m, d, [&](const typename Kinds::Item& item, const int(&)[Kinds::kNodes]) {
      Kinds::AddEnergy(m, d, item, E);
    }),
    ...);
@@ -476,6 +486,8 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   data.force_scale = 0.0;
   data.term_scale = 0.0;
   Scatter s(model, data, options);
+  // The pairs of moving shapes near each other in this state (elements/shape_pair.h).
+  UpdateShapePairs(model, data);
   if (!AddKinds(model, data, options, s, kElementKinds)) return false;
   AddJoints(model, data, options, s);
   AddTendonRows(model, data, options, s);

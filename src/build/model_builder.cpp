@@ -10,17 +10,12 @@
 #include <set>
 #include <string>
 
+#include "screwfem/elements/shape_pair.h"
 #include "screwfem/model/errors.h"
 
 namespace screwfem {
 
 namespace {
-
-// Corner k (0..7) of a box with centre c and half sizes h: bit 0, 1, 2 of k select +h_x, +h_y,
-// +h_z (else -h); corners k and k | bit (bit not in k) end an edge.
-Vec3 BoxCorner(const Vec3& c, const Vec3& h, int k) {
-  return c + Vec3((k & 1) ? h.x() : -h.x(), (k & 2) ? h.y() : -h.y(), (k & 4) ? h.z() : -h.z());
-}
 
 std::string NodeLabel(const Model& m, int node) {
   if (node == kGround) return "ground";
@@ -920,20 +915,20 @@ void BuildForceElements(Model& m) {
   }
 }
 
-// Pairs between moving shapes (elements/shape_pair.h), enumerated once: every two contact
-// entities (a rod: its element capsules; a body: its spheres, capsules and boxes; a box is side
-// B against any segment, as two pairs (ShapePair::part) for a segment of positive length, and
-// two boxes make 48 pairs: the 12 edges of each against the other)
-// whose group bitmasks match, that are not excluded and not joined (a shared node or a joint
-// between their nodes); a rod with itself when ContactSettings::self, skipping elements whose
-// nearest ends are closer along the rod than self_skip. All pairs of segments are stored: O(n^2)
-// for self-contact (a grid broad phase is the next step); the kernel rejects a pair apart by
-// its bounding spheres before the closest points. `gravity_weight`: w_max gets the lighter
-// side's weight; masses: the reduced mass of each pair, for the damping.
+// The moving shapes (elements/shape_pair.h) as segments for the broad phase, and which two
+// contact entities (a rod: its element capsules; a body: its spheres, capsules and boxes) may
+// touch: their group bitmasks match, they are not excluded and not joined (a shared node or a
+// joint between their nodes); a rod with itself when ContactSettings::self, skipping elements
+// whose nearest ends are closer along the rod than self_skip. No pair of segments is listed
+// here: the broad phase finds them per assembly (UpdateShapePairs), in time linear in the
+// segments. r_min gets the smallest size and w_max the largest weight a pair can carry (the
+// lighter side of the heaviest pair) for the law's defaults.
 template <class Group>
-void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
-                     std::vector<double>* masses) {
-  m.shape_pairs.clear();
+void BuildContactSegments(Model& m, const Group& group, double* r_min, double* w_max) {
+  m.contact_segments.clear();
+  m.contact_entity_pairs.clear();
+  m.contact_entity_self_skip.clear();
+  m.num_contact_entities = 0;
   ContactSettings& law = m.contact;
   if (!std::isfinite(law.self_skip) || law.self_skip == 0.0)
     throw InputError("contact: self_skip must be positive (or left to its default)");
@@ -1034,78 +1029,63 @@ void BuildShapePairs(Model& m, const Group& group, double* r_min, double* w_max,
     return out;
   };
   const double gravity = m.gravity.norm() > 0.0 ? m.gravity.norm() : 9.81;
-  auto is_box = [](const ShapePairSide& s) { return s.half.x() > 0.0; };
-  auto add = [&](const Segment& a, const Segment& b) {
-    if (std::isinf(a.mass) && std::isinf(b.mass)) return;
-    const double reduced = std::isinf(a.mass)   ? b.mass
-                           : std::isinf(b.mass) ? a.mass
-                                                : a.mass * b.mass / (a.mass + b.mass);
-    auto push = [&](const ShapePairSide& side_a, const ShapePairSide& side_b) {
-      ShapePair p;
-      p.side[0] = side_a;
-      p.side[1] = side_b;
-      auto store = [&](int part) {
-        p.part = part;
-        m.shape_pairs.push_back(p);
-        masses->push_back(reduced);
-      };
-      // A segment of positive length against a box: two points (the ends of the segment
-      // clipped to the face), so that a segment lying on a face balances any moment over it.
-      const bool segment = side_a.end_node[0] != side_a.end_node[1] ||
-                           side_a.offset[0] != side_a.offset[1];
-      if (is_box(side_b) && segment) {
-        store(0);
-        store(1);
-      } else {
-        store(-1);
-      }
-    };
-    const bool box_a = is_box(a.side), box_b = is_box(b.side);
-    if (box_a && box_b) {
-      // Box-box: the 12 edges of each box (segments of radius 0) against the other box.
-      for (int first = 0; first < 2; ++first) {
-        const ShapePairSide& edges = first == 0 ? a.side : b.side;
-        const ShapePairSide& box = first == 0 ? b.side : a.side;
-        const Vec3& h = edges.half;
-        for (int k = 0; k < 8; ++k)
-          for (int bit : {1, 2, 4}) {
-            if (k & bit) continue;
-            ShapePairSide edge = edges;
-            edge.half.setZero();
-            edge.radius = 0.0;
-            edge.offset[0] = BoxCorner(edges.offset[0], h, k);
-            edge.offset[1] = BoxCorner(edges.offset[0], h, k | bit);
-            push(edge, box);
-          }
-      }
-    } else if (box_a) {
-      push(b.side, a.side);  // the box is side B
-    } else {
-      push(a.side, b.side);
+  const int ne = static_cast<int>(entities.size());
+  m.num_contact_entities = ne;
+  m.contact_entity_pairs.assign(static_cast<std::size_t>(ne * ne), 0);
+  m.contact_entity_self_skip.assign(static_cast<std::size_t>(ne), -1.0);
+  // Per entity: the largest finite segment mass (-1: none), whether a segment is fixed, the
+  // smallest size (radius, or a box's smallest half size).
+  std::vector<double> heaviest(static_cast<std::size_t>(ne), -1.0), smallest(static_cast<std::size_t>(ne), INFINITY);
+  std::vector<char> has_fixed(static_cast<std::size_t>(ne), 0);
+  for (int e = 0; e < ne; ++e) {
+    for (const Segment& g : segments(entities[static_cast<std::size_t>(e)])) {
+      ContactSegment cs;
+      cs.side = g.side;
+      cs.mass = g.mass;
+      cs.entity = e;
+      cs.s0 = g.s0;
+      cs.s1 = g.s1;
+      m.contact_segments.push_back(cs);
+      const std::size_t k = static_cast<std::size_t>(e);
+      if (std::isinf(g.mass))
+        has_fixed[k] = 1;
+      else
+        heaviest[k] = std::max(heaviest[k], g.mass);
+      smallest[k] = std::min(smallest[k], g.side.half.x() > 0.0 ? g.side.half.minCoeff()
+                                                                 : g.side.radius);
     }
-    *w_max = std::max(*w_max, std::min(a.mass, b.mass) * gravity);
-    *r_min = std::min(*r_min, std::min(box_a ? a.side.half.minCoeff() : a.side.radius,
-                                       box_b ? b.side.half.minCoeff() : b.side.radius));
+  }
+  // The law's defaults over the pairs that can occur: max over pairs of min(m_x, m_y) is the
+  // lighter entity's heaviest segment (or the heaviest of one side against a fixed segment).
+  auto weigh = [&](int a, int b) {
+    const std::size_t ka = static_cast<std::size_t>(a), kb = static_cast<std::size_t>(b);
+    double w = std::min(heaviest[ka], heaviest[kb]);
+    if (has_fixed[ka]) w = std::max(w, heaviest[kb]);
+    if (has_fixed[kb]) w = std::max(w, heaviest[ka]);
+    if (w > 0.0) *w_max = std::max(*w_max, w * gravity);
+    *r_min = std::min(*r_min, std::min(smallest[ka], smallest[kb]));
   };
-  for (std::size_t i = 0; i < entities.size(); ++i) {
-    const Entity& a = entities[i];
+  for (int i = 0; i < ne; ++i) {
+    const Entity& a = entities[static_cast<std::size_t>(i)];
     const ContactGroup ga = group(a.rod, a.index);
-    const std::vector<Segment> sa = segments(a);
-    for (std::size_t k = i + 1; k < entities.size(); ++k) {
-      const Entity& b = entities[k];
+    for (int k = i + 1; k < ne; ++k) {
+      const Entity& b = entities[static_cast<std::size_t>(k)];
       const ContactGroup gb = group(b.rod, b.index);
       if (((ga.contype & gb.conaffinity) | (gb.contype & ga.conaffinity)) == 0u) continue;
       if (excluded(a, b) || joined(a, b)) continue;
-      const std::vector<Segment> sb = segments(b);
-      for (const Segment& x : sa)
-        for (const Segment& y : sb) add(x, y);
+      m.contact_entity_pairs[static_cast<std::size_t>(i * ne + k)] = 1;
+      m.contact_entity_pairs[static_cast<std::size_t>(k * ne + i)] = 1;
+      weigh(i, k);
     }
     if (a.rod && law.self) {
       const double skip = law.self_skip > 0.0 ? law.self_skip
                                               : 4.0 * m.contact_rods[static_cast<std::size_t>(a.contact)].radius;
-      for (std::size_t x = 0; x < sa.size(); ++x)
-        for (std::size_t y = x + 2; y < sa.size(); ++y)
-          if (sa[y].s0 - sa[x].s1 >= skip) add(sa[x], sa[y]);
+      m.contact_entity_self_skip[static_cast<std::size_t>(i)] = skip;
+      const Rod& rod = m.rods[static_cast<std::size_t>(a.index)];
+      double length = 0.0;
+      for (int e = 0; e < rod.num_elements; ++e)
+        length += m.elements[static_cast<std::size_t>(rod.first_element + e)].length;
+      if (length > skip) weigh(i, i);  // two of its elements can be skip apart
     }
   }
 }
@@ -1275,8 +1255,7 @@ void BuildContacts(Model& m) {
       }
     }
   }
-  std::vector<double> pair_masses;  // per shape pair: the reduced mass
-  BuildShapePairs(m, group, &r_min, &w_max, &pair_masses);
+  BuildContactSegments(m, group, &r_min, &w_max);
   // Defaults (method-next.md §N6.4) and the damping of each pair.
   for (double mass : masses) w_max = std::max(w_max, mass * gravity);
   if (law.onset < 0.0) law.onset = std::isfinite(r_min) ? 0.01 * r_min : 1e-4;
@@ -1285,9 +1264,6 @@ void BuildContacts(Model& m) {
   for (std::size_t i = 0; i < m.contact_pairs.size(); ++i)
     m.contact_pairs[i].damping =
         2.0 * law.damping_ratio * std::sqrt(law.stiffness * std::max(masses[i], 0.0));
-  for (std::size_t i = 0; i < m.shape_pairs.size(); ++i)
-    m.shape_pairs[i].damping =
-        2.0 * law.damping_ratio * std::sqrt(law.stiffness * std::max(pair_masses[i], 0.0));
 }
 
 // Every node that is not fixed is used by a rod, a body or a joint.
@@ -1388,11 +1364,35 @@ void OrderUnknowns(Model& m) {
       for (int j = i + 1; j < 4; ++j) link(nb(nodes[i]), nb(nodes[j]));
   }
   for (const ForceElement& f : m.force_elements) link(nb(f.a.node), nb(f.b.node));
-  // A pair of moving shapes couples the nodes of its two sides (elements/shape_pair.h): the
-  // band grows with the pairs that Build enumerates (all of them, active or not).
-  for (const ShapePair& p : m.shape_pairs)
-    for (int a : p.side[0].node)
-      for (int b : p.side[1].node) link(nb(a), nb(b));
+  // A pair of moving shapes couples the nodes of its two sides (elements/shape_pair.h). Two
+  // entities that may touch (or a rod that may touch itself) are linked here, every node of one
+  // with every node of the other, when the product of their node counts is at most
+  // ContactSettings::band_pair_nodes (bodies, short rods: the band has room for the coupling);
+  // the couplings of the others that fall outside the band enter the solve as a low-rank
+  // update (Data::coupling), so that long rods do not widen the band.
+  {
+    const int ne = m.num_contact_entities;
+    std::vector<std::vector<int>> entity_nodes(static_cast<std::size_t>(ne));
+    for (const ContactSegment& g : m.contact_segments)
+      for (int k : g.side.node)
+        if (nb(k) >= 0) entity_nodes[static_cast<std::size_t>(g.entity)].push_back(k);
+    for (std::vector<int>& list : entity_nodes) {
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+    }
+    for (int a = 0; a < ne; ++a)
+      for (int b = a; b < ne; ++b) {
+        const bool touch = a == b ? m.contact_entity_self_skip[static_cast<std::size_t>(a)] >= 0.0
+                                  : m.contact_entity_pairs[static_cast<std::size_t>(a * ne + b)] != 0;
+        const std::vector<int>& na = entity_nodes[static_cast<std::size_t>(a)];
+        const std::vector<int>& nbs = entity_nodes[static_cast<std::size_t>(b)];
+        if (!touch || static_cast<double>(na.size()) * static_cast<double>(nbs.size()) >
+                          static_cast<double>(m.contact.band_pair_nodes))
+          continue;
+        for (int x : na)
+          for (int y : nbs) link(nb(x), nb(y));
+      }
+  }
   for (const Joint& j : m.joints) {
     const int coord_block = j.k() > 0 ? add_block(j.coord, j.k()) : -1;
     if (j.row >= 0) {

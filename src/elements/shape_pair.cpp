@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "screwfem/elements/contact.h"
 
@@ -322,9 +323,243 @@ bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePa
   return true;
 }
 
-bool ShapePairKind::Calc(const Model& model, const Data&, const Item& item,
+namespace {
+
+// The world ends of a side's segment, and its box (inflated by pad): a box side's corners.
+void SegmentBox(const ContactSegment& g, const Data& d, double pad, Vec3* lo, Vec3* hi) {
+  const ShapePairSide& sd = g.side;
+  const SE3& Ha = NodeFrame(d, sd.node[sd.end_node[0]]);
+  if (sd.half.x() > 0.0) {
+    // |R h| per axis: the half extent of the rotated box.
+    const Vec3 c = Ha.x + Ha.R * sd.offset[0];
+    const Vec3 e = Ha.R.cwiseAbs() * sd.half;
+    *lo = c - e - Vec3::Constant(pad);
+    *hi = c + e + Vec3::Constant(pad);
+    return;
+  }
+  const SE3& Hb = NodeFrame(d, sd.node[sd.end_node[1]]);
+  const Vec3 p0 = Ha.x + Ha.R * sd.offset[0], p1 = Hb.x + Hb.R * sd.offset[1];
+  const double r = sd.radius + pad;
+  *lo = p0.cwiseMin(p1) - Vec3::Constant(r);
+  *hi = p0.cwiseMax(p1) + Vec3::Constant(r);
+}
+
+bool BoxesOverlap(const ShapePairGrid& g, int i, int j) {
+  const std::size_t a = static_cast<std::size_t>(i), b = static_cast<std::size_t>(j);
+  return (g.lo[a].array() <= g.hi[b].array()).all() && (g.lo[b].array() <= g.hi[a].array()).all();
+}
+
+// Makes the items of segments i and j if they may touch, and gives each to sink(pair).
+template <class Sink>
+class PairWriter {
+ public:
+  PairWriter(const Model& m, Sink& sink) : m_(m), sink_(sink) {}
+  void Consider(int i, int j) {
+    const ContactSegment& a = m_.contact_segments[static_cast<std::size_t>(i)];
+    const ContactSegment& b = m_.contact_segments[static_cast<std::size_t>(j)];
+    if (a.entity == b.entity) {
+      const double skip = m_.contact_entity_self_skip[static_cast<std::size_t>(a.entity)];
+      if (skip < 0.0 || std::max(b.s0 - a.s1, a.s0 - b.s1) < skip) return;
+    } else if (!m_.contact_entity_pairs[static_cast<std::size_t>(
+                   a.entity * m_.num_contact_entities + b.entity)]) {
+      return;
+    }
+    if (std::isinf(a.mass) && std::isinf(b.mass)) return;
+    const double reduced = std::isinf(a.mass)   ? b.mass
+                           : std::isinf(b.mass) ? a.mass
+                                                : a.mass * b.mass / (a.mass + b.mass);
+    damping_ = 2.0 * m_.contact.damping_ratio *
+               std::sqrt(m_.contact.stiffness * std::max(reduced, 0.0));
+    const bool box_a = IsBox(a.side), box_b = IsBox(b.side);
+    if (box_a && box_b) {
+      // Box-box: the 12 edges of each box (segments of radius 0) against the other box.
+      for (int first = 0; first < 2; ++first) {
+        const ContactSegment& edges = first == 0 ? a : b;
+        const ContactSegment& box = first == 0 ? b : a;
+        const Vec3& h = edges.side.half;
+        for (int k = 0; k < 8; ++k)
+          for (int bit : {1, 2, 4}) {
+            if (k & bit) continue;
+            ShapePairSide edge = edges.side;
+            edge.half.setZero();
+            edge.radius = 0.0;
+            edge.offset[0] = BoxCorner(edges.side.offset[0], h, k);
+            edge.offset[1] = BoxCorner(edges.side.offset[0], h, k | bit);
+            Push(edge, box.side, first == 0 ? i : j, first == 0 ? j : i);
+          }
+      }
+    } else if (box_a) {
+      Push(b.side, a.side, j, i);  // the box is side B
+    } else {
+      Push(a.side, b.side, i, j);
+    }
+  }
+
+ private:
+  static bool IsBox(const ShapePairSide& s) { return s.half.x() > 0.0; }
+  void Push(const ShapePairSide& side_a, const ShapePairSide& side_b, int seg_a, int seg_b) {
+    // A segment of positive length against a box: two points (the ends of the segment clipped
+    // to the face), so that a segment lying on a face balances any moment over it.
+    const bool segment =
+        side_a.end_node[0] != side_a.end_node[1] || side_a.offset[0] != side_a.offset[1];
+    if (IsBox(side_b) && segment) {
+      Store(side_a, side_b, seg_a, seg_b, 0);
+      Store(side_a, side_b, seg_a, seg_b, 1);
+    } else {
+      Store(side_a, side_b, seg_a, seg_b, -1);
+    }
+  }
+  void Store(const ShapePairSide& side_a, const ShapePairSide& side_b, int seg_a, int seg_b,
+             int part) {
+    ShapePair p;
+    p.side[0] = side_a;
+    p.side[1] = side_b;
+    p.segment[0] = seg_a;
+    p.segment[1] = seg_b;
+    p.damping = damping_;
+    p.part = part;
+    sink_(p);
+  }
+
+  const Model& m_;
+  Sink& sink_;
+  double damping_ = 0.0;
+};
+
+std::uint32_t CellHash(const Eigen::Vector3i& c) {
+  return static_cast<std::uint32_t>(c.x()) * 73856093u ^
+         static_cast<std::uint32_t>(c.y()) * 19349663u ^
+         static_cast<std::uint32_t>(c.z()) * 83492791u;
+}
+
+// The broad phase once (UpdateShapePairs).
+void FindShapePairs(const Model& model, Data& data) {
+  data.num_shape_pairs = 0;
+  data.shape_pair_overflow = false;
+  const int n = static_cast<int>(model.contact_segments.size());
+  if (n == 0) return;
+  ShapePairGrid& g = data.shape_pair_grid;
+  g.box_tests = 0;
+  // Boxes inflated by the radii and half the onset: surfaces nearer than the onset have
+  // overlapping boxes. The cell: the largest box of a rod element (or of any segment when
+  // there is no rod); a larger box is tested against all.
+  const double pad = 0.5 * model.contact.onset;
+  double cell = 0.0, cell_any = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    SegmentBox(model.contact_segments[k], data, pad, &g.lo[k], &g.hi[k]);
+    const double extent = (g.hi[k] - g.lo[k]).maxCoeff();
+    if (!std::isfinite(extent)) return;  // a state that is not finite: no pair (the step fails)
+    cell_any = std::max(cell_any, extent);
+    if (model.contact_segments[k].side.rod) cell = std::max(cell, extent);
+  }
+  if (cell == 0.0) cell = cell_any;
+  if (!(cell > 0.0)) return;
+  const double inv = 1.0 / cell;
+  auto cell_of = [&](const Vec3& p) {
+    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() * inv)),
+                           static_cast<int>(std::floor(p.y() * inv)),
+                           static_cast<int>(std::floor(p.z() * inv)));
+  };
+  // Cells beyond the int range: every segment is large (tested against all).
+  const double limit = 1e9 * cell;
+  const int buckets = static_cast<int>(g.bucket_start.size()) - 1;
+  const std::uint32_t mask = static_cast<std::uint32_t>(buckets - 1);
+  std::fill(g.bucket_start.begin(), g.bucket_start.end(), 0);
+  int num_large = 0;
+  // Counting sort of the entries (segment, cell) into the buckets: count, prefix, fill.
+  auto for_cells = [&](int i, auto&& f) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    const Eigen::Vector3i a = cell_of(g.lo[k]), b = cell_of(g.hi[k]);
+    for (int x = a.x(); x <= b.x(); ++x)
+      for (int y = a.y(); y <= b.y(); ++y)
+        for (int z = a.z(); z <= b.z(); ++z) f(Eigen::Vector3i(x, y, z));
+  };
+  for (int i = 0; i < n; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    const bool large = (g.hi[k] - g.lo[k]).maxCoeff() > cell ||
+                       g.lo[k].cwiseAbs().maxCoeff() > limit ||
+                       g.hi[k].cwiseAbs().maxCoeff() > limit;
+    g.large[k] = large;
+    if (large) {
+      g.large_segments[static_cast<std::size_t>(num_large++)] = i;
+      continue;
+    }
+    for_cells(i, [&](const Eigen::Vector3i& c) { ++g.bucket_start[(CellHash(c) & mask) + 1]; });
+  }
+  for (int b = 0; b < buckets; ++b)
+    g.bucket_start[static_cast<std::size_t>(b + 1)] += g.bucket_start[static_cast<std::size_t>(b)];
+  // Fill: bucket_start[b] advances to the end of bucket b, then is restored from b - 1's end.
+  for (int i = 0; i < n; ++i) {
+    if (g.large[static_cast<std::size_t>(i)]) continue;
+    for_cells(i, [&](const Eigen::Vector3i& c) {
+      const std::size_t e = static_cast<std::size_t>(g.bucket_start[CellHash(c) & mask]++);
+      g.entry_segment[e] = i;
+      g.entry_cell[e] = c;
+    });
+  }
+  for (int b = buckets; b > 0; --b)
+    g.bucket_start[static_cast<std::size_t>(b)] = g.bucket_start[static_cast<std::size_t>(b - 1)];
+  g.bucket_start[0] = 0;
+  auto sink = [&data](const ShapePair& p) {
+    if (data.num_shape_pairs >= static_cast<int>(data.shape_pairs.size())) {
+      data.shape_pair_overflow = true;
+      return;
+    }
+    data.shape_pairs[static_cast<std::size_t>(data.num_shape_pairs++)] = p;
+  };
+  PairWriter<decltype(sink)> writer(model, sink);
+  // Two segments sharing a cell; each pair once, in the cell of the corner max(lo_i, lo_j).
+  for (int b = 0; b < buckets; ++b) {
+    const int first = g.bucket_start[static_cast<std::size_t>(b)];
+    const int end = g.bucket_start[static_cast<std::size_t>(b + 1)];
+    for (int x = first; x < end; ++x)
+      for (int y = x + 1; y < end; ++y) {
+        const Eigen::Vector3i& c = g.entry_cell[static_cast<std::size_t>(x)];
+        if (c != g.entry_cell[static_cast<std::size_t>(y)]) continue;  // a hash collision
+        const int i = g.entry_segment[static_cast<std::size_t>(x)];
+        const int j = g.entry_segment[static_cast<std::size_t>(y)];
+        ++g.box_tests;
+        if (!BoxesOverlap(g, i, j)) continue;
+        const std::size_t ki = static_cast<std::size_t>(i), kj = static_cast<std::size_t>(j);
+        if (cell_of(g.lo[ki].cwiseMax(g.lo[kj])) != c) continue;
+        writer.Consider(std::min(i, j), std::max(i, j));
+      }
+  }
+  // Large segments against every other (two large ones once).
+  for (int q = 0; q < num_large; ++q) {
+    const int i = g.large_segments[static_cast<std::size_t>(q)];
+    for (int j = 0; j < n; ++j) {
+      if (j == i || (g.large[static_cast<std::size_t>(j)] && j < i)) continue;
+      ++g.box_tests;
+      if (BoxesOverlap(g, i, j)) writer.Consider(std::min(i, j), std::max(i, j));
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<ShapePair> AllShapePairs(const Model& model) {
+  std::vector<ShapePair> out;
+  auto sink = [&out](const ShapePair& p) { out.push_back(p); };
+  PairWriter<decltype(sink)> writer(model, sink);
+  const int n = static_cast<int>(model.contact_segments.size());
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j) writer.Consider(i, j);
+  return out;
+}
+
+void UpdateShapePairs(const Model& model, Data& data) {
+  FindShapePairs(model, data);
+  while (data.shape_pair_overflow) {
+    GrowShapePairPool(data);
+    FindShapePairs(model, data);
+  }
+}
+
+bool ShapePairKind::Calc(const Model& model, const Data& data, const Item& item,
                          const NodeMotion<4>& x, const KernelOptions& o, ElementTerms<4>* t) {
-  const ShapePair& pair = model.shape_pairs[static_cast<std::size_t>(item)];
+  const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(item)];
   ShapePairGeometry G;
   if (!CalcShapePairGeometry(pair, x.H, model.contact.onset, &G)) {
     t->active = false;
@@ -334,7 +569,7 @@ bool ShapePairKind::Calc(const Model& model, const Data&, const Item& item,
 }
 
 void ShapePairKind::AddEnergy(const Model& model, const Data& data, const Item& item, Energy* E) {
-  const ShapePair& pair = model.shape_pairs[static_cast<std::size_t>(item)];
+  const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(item)];
   const SE3* H[4] = {&NodeFrame(data, pair.side[0].node[0]), &NodeFrame(data, pair.side[0].node[1]),
                      &NodeFrame(data, pair.side[1].node[0]), &NodeFrame(data, pair.side[1].node[1])};
   ShapePairGeometry G;
@@ -343,7 +578,7 @@ void ShapePairKind::AddEnergy(const Model& model, const Data& data, const Item& 
 }
 
 ShapePairState CalcShapePairState(const Model& model, const Data& data, int item) {
-  const ShapePair& pair = model.shape_pairs[static_cast<std::size_t>(item)];
+  const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(item)];
   ShapePairState out;
   const int nodes[4] = {pair.side[0].node[0], pair.side[0].node[1], pair.side[1].node[0],
                         pair.side[1].node[1]};

@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "screwfem/assemble/assemble.h"
+#include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/progress.h"
 #include "screwfem/io/schedule.h"
 #include "screwfem/solve/initial_state.h"
@@ -215,7 +216,7 @@ class Run {
       // Contacts: one row per active pair (long format), flushed with the other tables.
       if (!model_.contact_pairs.empty())
         contacts_.Open(outdir + "/contacts.csv", StaticColumns(ContactColumns()));
-      if (!model_.shape_pairs.empty())
+      if (MayHaveShapePairs(model_))
         pair_contacts_.Open(outdir + "/pair_contacts.csv", StaticColumns(PairContactColumns()));
       if (scene.outputs.vtk) {
         vtk_.emplace();
@@ -517,7 +518,7 @@ class Run {
           if (CalcContactRow(model_, data, i, &row_)) contacts_.WriteRow(t, WithLoadFactor(row_));
       }
       if (pair_contacts_.path().size() > 0) {
-        for (int i = 0; i < static_cast<int>(model_.shape_pairs.size()); ++i)
+        for (int i = 0; i < data.num_shape_pairs; ++i)
           if (CalcPairContactRow(model_, data, i, &row_))
             pair_contacts_.WriteRow(t, WithLoadFactor(row_));
       }

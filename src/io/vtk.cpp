@@ -228,15 +228,18 @@ void VtkWriter::LayOut(const Model& model) {
     s.index = static_cast<int>(i);
     add_vert(add_point(s), -1, -1, -1);
   }
-  // Pairs of moving shapes: a vertex at each side's surface point, carrying the force on it.
-  for (std::size_t i = 0; i < model.shape_pairs.size(); ++i)
-    for (int side = 0; side < 2; ++side) {
+  // Moving shapes: a vertex per contact segment (the pairs change from step to step), at the
+  // force-weighted mean of its contact points, carrying the sum of its contact forces.
+  if (MayHaveShapePairs(model))
+    for (std::size_t i = 0; i < model.contact_segments.size(); ++i) {
       PointSource s;
       s.kind = PointSource::Kind::kPairContact;
       s.index = static_cast<int>(i);
-      s.offset.x() = side;
       add_vert(add_point(s), -1, -1, -1);
     }
+  segment_force_.assign(model.contact_segments.size(), Vec3::Zero());
+  segment_point_.assign(model.contact_segments.size(), Vec3::Zero());
+  segment_weight_.assign(model.contact_segments.size(), 0.0);
 
   // Cell data in the order VTK stores the cells: vertices, then lines.
   cell_rod_.insert(cell_rod_.begin(), vert_rod.begin(), vert_rod.end());
@@ -252,6 +255,22 @@ void VtkWriter::LayOut(const Model& model) {
 
 // Positions, frame axes and velocities of the points at data's state (method.md §6).
 void VtkWriter::CalcPoints(const Model& model, const Data& data) {
+  // The contact forces on each contact segment, and their points weighted by |F|.
+  std::fill(segment_force_.begin(), segment_force_.end(), Vec3::Zero());
+  std::fill(segment_point_.begin(), segment_point_.end(), Vec3::Zero());
+  std::fill(segment_weight_.begin(), segment_weight_.end(), 0.0);
+  for (int p = 0; p < data.num_shape_pairs && !segment_force_.empty(); ++p) {
+    const ShapePairState c = CalcShapePairState(model, data, p);
+    if (!c.active) continue;
+    const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(p)];
+    const Vec3 F = c.normal_force * c.normal + c.friction_force;
+    for (int side = 0; side < 2; ++side) {
+      const std::size_t g = static_cast<std::size_t>(pair.segment[side]);
+      segment_force_[g] += side == 0 ? F : Vec3(-F);
+      segment_point_[g] += F.norm() * c.point[side];
+      segment_weight_[g] += F.norm();
+    }
+  }
   const auto node_point = [&](int node, const Vec3& p) {
     return node == kGround ? PointMotion{p, Vec3::Zero(), Vec3::Zero()}
                            : CalcNodePointMotion(model, data, node, p);
@@ -286,13 +305,19 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
       R = H.R;
       v = CalcPointMotion(H, eta_s, Vec6::Zero(), s.offset).velocity;
     } else if (s.kind == PointSource::Kind::kPairContact) {
-      const ShapePairState c = CalcShapePairState(model, data, s.index);
-      const int side = s.offset.x() > 0.5 ? 1 : 0;
-      x = c.point[side];
+      const std::size_t g = static_cast<std::size_t>(s.index);
+      const double w = segment_weight_[g];
+      if (w > 0.0) {
+        x = segment_point_[g] / w;
+      } else {  // no contact: the middle of the segment (or the box's centre)
+        const ShapePairSide& sd = model.contact_segments[g].side;
+        const SE3& Ha = NodeFrame(data, sd.node[sd.end_node[0]]);
+        const SE3& Hb = NodeFrame(data, sd.node[sd.end_node[1]]);
+        x = 0.5 * (Ha.Act(sd.offset[0]) + Hb.Act(sd.half.x() > 0.0 ? sd.offset[0] : sd.offset[1]));
+      }
       R = Mat3::Identity();
       v = Vec3::Zero();
-      const Vec3 F = c.active ? Vec3(c.normal_force * c.normal + c.friction_force) : Vec3::Zero();
-      for (int k = 0; k < 3; ++k) contact_force_[3 * i + k] = side == 0 ? F(k) : -F(k);
+      for (int k = 0; k < 3; ++k) contact_force_[3 * i + k] = segment_force_[g](k);
     } else if (s.kind == PointSource::Kind::kJoint) {
       const Joint& j = model.joints[static_cast<std::size_t>(s.index)];
       const SE3 H = NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, s.index);

@@ -270,9 +270,9 @@ bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vec
   row->resize(22);
   const ShapePairState c = CalcShapePairState(model, data, pair);
   if (!c.active) return false;
-  const ShapePair& p = model.shape_pairs[static_cast<std::size_t>(pair)];
+  const ShapePair& p = data.shape_pairs[static_cast<std::size_t>(pair)];
   double* r = row->data();
-  r[0] = pair;
+  r[0] = ShapePairKey(model, p);
   for (int k = 0; k < 2; ++k) {
     r[1 + 3 * k] = p.side[k].rod ? 1.0 : 0.0;
     r[2 + 3 * k] = p.side[k].owner;

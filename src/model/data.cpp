@@ -1,5 +1,7 @@
 #include "screwfem/model/data.h"
 
+#include <algorithm>
+
 namespace screwfem {
 
 Data MakeData(const Model& model) {
@@ -21,10 +23,30 @@ Data MakeData(const Model& model) {
   d.rhs = Eigen::VectorXd::Zero(model.num_unknowns());
   d.increment = Eigen::VectorXd::Zero(model.num_unknowns());
   d.node_tangent.assign(model.nodes.size(), Mat6::Identity());
+  // The broad phase: each segment in at most 8 cells, twice as many buckets as entries.
+  const std::size_t segments = model.contact_segments.size();
+  if (segments > 0) {
+    ShapePairGrid& g = d.shape_pair_grid;
+    g.lo.resize(segments);
+    g.hi.resize(segments);
+    g.large.resize(segments);
+    g.entry_segment.resize(8 * segments);
+    g.entry_cell.resize(8 * segments);
+    std::size_t buckets = 1;
+    while (buckets < 16 * segments) buckets *= 2;
+    g.bucket_start.resize(buckets + 1);
+    g.large_segments.resize(segments);
+    d.shape_pairs.resize(4 * segments + 64);
+  }
   d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
   if (static_cast<int>(model.pattern_last.size()) == model.num_unknowns())
     d.matrix.SetPattern(model.pattern_last, model.pattern_last);
   return d;
+}
+
+void GrowShapePairPool(Data& data) {
+  data.shape_pairs.resize(std::max<std::size_t>(64, 2 * data.shape_pairs.size()));
+  data.shape_pair_overflow = false;
 }
 
 }  // namespace screwfem

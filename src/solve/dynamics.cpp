@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 
 #include "screwfem/elements/joint.h"
+#include "screwfem/elements/shape_pair.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/statics.h"
@@ -1123,6 +1124,7 @@ void InterpolateStep(const Model& model, const Data& data, Integrator& integ, do
   out.vdot = (1.0 - th) * integ.dense_vdot0 + th * integ.dense_vdot1;
   out.lambda = (1.0 - th) * integ.dense_lambda0 + th * integ.dense_lambda1;
   out.w_ref = data.w_ref;
+  UpdateShapePairs(model, out);  // the pairs of moving shapes near each other in this state
   out.time = t;
 }
 

@@ -236,7 +236,7 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     CalcContactRow(model, data, 0, &contact_row);
     int active_steps = 0;  // steps that end with a contact active
     int pair_steps = 0;    // ... with a pair of moving shapes active
-    ASSERT_FALSE(model.shape_pairs.empty());
+    ASSERT_FALSE(AllShapePairs(model).empty());
     g_allocations = 0;
     g_counting = true;
     bool ok = true;
@@ -258,7 +258,7 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
         any = CalcContactRow(model, data, c, &contact_row) || any;
       active_steps += any ? 1 : 0;
       bool pair = false;
-      for (int c = 0; c < static_cast<int>(model.shape_pairs.size()); ++c)
+      for (int c = 0; c < data.num_shape_pairs; ++c)
         pair = CalcShapePairState(model, data, c).active || pair;
       pair_steps += pair ? 1 : 0;
     }
@@ -386,7 +386,7 @@ TEST(NoAllocation, TwoPointBoxPairsAllocateNothing) {
     const StepResult r = Step(model, data, integ, 1e-3);
     ok = r.ok && ok;
     halved += r.substeps > 1 ? 1 : 0;
-    for (int c = 0; c < static_cast<int>(model.shape_pairs.size()); ++c)
+    for (int c = 0; c < data.num_shape_pairs; ++c)
       if (CalcPairContactRow(model, data, c, &row) && row[21] >= 0.0) ++parts;
   }
   g_counting = false;

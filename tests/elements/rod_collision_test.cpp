@@ -38,7 +38,7 @@ struct Collision {
 // friction or at g = 0).
 Vec3 FrictionCouple(const Model& m, const Data& d) {
   Vec3 M = Vec3::Zero();
-  for (std::size_t k = 0; k < m.shape_pairs.size(); ++k) {
+  for (std::size_t k = 0; k < static_cast<std::size_t>(d.num_shape_pairs); ++k) {
     const ShapePairState c = CalcShapePairState(m, d, static_cast<int>(k));
     if (c.active) M += (c.point[0] - c.point[1]).cross(c.friction_force);
   }
@@ -82,7 +82,7 @@ Collision Collide(double h, double cross_x, double cross_y, double slide, double
     }
   }
   const Model m = b.Build();
-  EXPECT_EQ(m.shape_pairs.size(), 36u);
+  EXPECT_EQ(AllShapePairs(m).size(), 36u);
   Data d = MakeData(m);
   Integrator integ;
   std::string message;
@@ -109,11 +109,11 @@ Collision Collide(double h, double cross_x, double cross_y, double slide, double
     couple = next;
     out.angular_residual =
         std::max(out.angular_residual, (hm.tail<3>() - h0.tail<3>() - impulse).norm());
-    for (std::size_t k = 0; k < m.shape_pairs.size(); ++k)
+    for (std::size_t k = 0; k < static_cast<std::size_t>(d.num_shape_pairs); ++k)
       out.max_force = std::max(out.max_force, CalcShapePairState(m, d, static_cast<int>(k)).normal_force);
   }
   out.apart_at_end = true;
-  for (std::size_t k = 0; k < m.shape_pairs.size(); ++k)
+  for (std::size_t k = 0; k < static_cast<std::size_t>(d.num_shape_pairs); ++k)
     out.apart_at_end = out.apart_at_end && !CalcShapePairState(m, d, static_cast<int>(k)).active;
   out.energy_after = CalcEnergy(m, d).total();
   for (std::size_t k = 0; k < m.nodes.size(); ++k)

@@ -51,10 +51,9 @@ SE3 Tilted(double x, double z, double theta) {
 
 // The terms of pair `k` of model m with the capsule at frame H (the box at the identity) and
 // body velocity eta of the capsule; frozen geometry when given. Inactive: zeros.
-ElementTerms<4> PairTerms(const Model& m, int k, const SE3& H, const Vec6& eta,
+ElementTerms<4> PairTerms(const Model& m, const ShapePair& pair, const SE3& H, const Vec6& eta,
                           const KernelOptions& o, const ShapePairGeometry* frozen,
                           ShapePairGeometry* geometry = nullptr) {
-  const ShapePair& pair = m.shape_pairs[static_cast<std::size_t>(k)];
   const SE3 box{Mat3::Identity(), Vec3::Zero()};
   // Item nodes: A = the capsule (node 0; node 1 carries nothing), B = the box.
   const SE3* F[4] = {&H, &box, &box, &box};
@@ -85,21 +84,25 @@ ElementTerms<4> PairTerms(const Model& m, int k, const SE3& H, const Vec6& eta,
   }
   return t;
 }
+// Pair k of all the pairs of m (AllShapePairs).
+ElementTerms<4> PairTerms(const Model& m, int k, const SE3& H, const Vec6& eta,
+                          const KernelOptions& o, const ShapePairGeometry* frozen,
+                          ShapePairGeometry* geometry = nullptr) {
+  return PairTerms(m, AllShapePairs(m)[static_cast<std::size_t>(k)], H, eta, o, frozen,
+                   geometry);
+}
 
 // The static generalized force on the capsule (its node's 6 rows) from the pairs listed.
 Vec6 CapsuleForce(const Model& m, const SE3& H, bool two_parts) {
   KernelOptions o;
   o.tangent = false;
   Vec6 f = Vec6::Zero();
-  for (int k = 0; k < static_cast<int>(m.shape_pairs.size()); ++k) {
-    ShapePair single = m.shape_pairs[static_cast<std::size_t>(k)];
+  for (ShapePair single : AllShapePairs(m)) {
     if (!two_parts) {
       if (single.part == 1) continue;
       single.part = -1;  // the single nearest point
     }
-    Model copy_free = m;  // (small model: the copy is cheap)
-    copy_free.shape_pairs[static_cast<std::size_t>(k)] = single;
-    f += PairTerms(copy_free, k, H, Vec6::Zero(), o, nullptr).residual.head<6>();
+    f += PairTerms(m, single, H, Vec6::Zero(), o, nullptr).residual.head<6>();
   }
   return f;
 }
@@ -113,7 +116,7 @@ Vec6 CapsuleForce(const Model& m, const SE3& H, bool two_parts) {
 TEST(ShapePairFace, ForceIsContinuousAsTheSegmentTiltsThroughFlat) {
   const double z = 0.02 + 5e-5;
   const Model m = MakeCapsuleOnBox(Tilted(0.03, z, 0.0), 0.0, 9.81);
-  ASSERT_EQ(m.shape_pairs.size(), 2u);
+  ASSERT_EQ(AllShapePairs(m).size(), 2u);
   // |d(force)/d(theta)| from the tangent (the rotation about the capsule's y axis, which is the
   // world y axis for a tilt about y) of both parts.
   auto slope = [&](double theta) {
@@ -219,7 +222,7 @@ TEST(ShapePairFace, CapsuleOverhangingAnEdgeRestsOnTwoPointsByTheLeverRule) {
   const double tilt = std::asin((g[0] - g[1]) / span);  // about +y: the +x end down
   // Start at the equilibrium height, flat: the capsule settles (zeta = 1, mu = 0.5).
   const Model m = MakeCapsuleOnBox(Tilted(0.075, 0.02 + 0.5 * (g[0] + g[1]), 0.0), 0.5, m_g);
-  ASSERT_EQ(m.shape_pairs.size(), 2u);
+  ASSERT_EQ(AllShapePairs(m).size(), 2u);
   Data d = MakeData(m);
   Integrator integ;
   std::string message;
@@ -265,7 +268,7 @@ TEST(ShapePairFace, BoxDroppedTiltedOntoABoxTipsFlatAndRestsAtALargeStep) {
                                      half.x() * half.x() + half.z() * half.z(),
                                      half.x() * half.x() + half.y() * half.y());
   const Model m = tilted_box_drop::MakeTiltedBoxDrop(theta, drop, J);
-  ASSERT_EQ(m.shape_pairs.size(), 48u);
+  ASSERT_EQ(AllShapePairs(m).size(), 48u);
   Data d = MakeData(m);
   Integrator integ;
   std::string message;

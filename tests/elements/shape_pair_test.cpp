@@ -420,7 +420,7 @@ TEST(ShapePairValidation, HeadOnSpheresConserveMomentumAndReboundElasticallyWith
   for (int k = 0; k < 3; ++k) {
     TwoSpheres s;
     MakeTwoSpheres(&s, 0.0, 0.0, 0.0, 1.0);
-    ASSERT_EQ(s.model.shape_pairs.size(), 1u);
+    ASSERT_EQ(AllShapePairs(s.model).size(), 1u);
     const int n = static_cast<int>(std::lround(0.03 / steps[k]));
     double max_force = 0.0;
     for (int i = 0; i < n; ++i) {
@@ -477,8 +477,8 @@ TEST(ShapePairValidation, SphereRestsOnTheMiddleOfABoxFace) {
   b.SetGravity(Vec3(0.0, 0.0, -9.81));
   TwoSpheres s;
   s.model = b.Build();
-  ASSERT_EQ(s.model.shape_pairs.size(), 1u);
-  EXPECT_GT(s.model.shape_pairs[0].side[1].half.x(), 0.0);  // the box is side B
+  ASSERT_EQ(AllShapePairs(s.model).size(), 1u);
+  EXPECT_GT(AllShapePairs(s.model)[0].side[1].half.x(), 0.0);  // the box is side B
   ASSERT_NO_FATAL_FAILURE(StartDynamics(&s, DynamicOptions{}));
   for (int i = 0; i < 50; ++i) ASSERT_TRUE(Step(s.model, s.data, s.integ, 1e-3).ok);
   const ShapePairState c = CalcShapePairState(s.model, s.data, 0);
@@ -516,10 +516,10 @@ TEST(ShapePairValidation, CapsuleRestsFlatOnABoxFace) {
   b.SetGravity(Vec3(0.0, 0.0, -9.81));
   TwoSpheres s;
   s.model = b.Build();
-  ASSERT_EQ(s.model.shape_pairs.size(), 2u);
+  ASSERT_EQ(AllShapePairs(s.model).size(), 2u);
   for (int k = 0; k < 2; ++k) {
-    EXPECT_FALSE(s.model.shape_pairs[static_cast<std::size_t>(k)].side[0].half.x() > 0.0);
-    EXPECT_EQ(s.model.shape_pairs[static_cast<std::size_t>(k)].part, k);
+    EXPECT_FALSE(AllShapePairs(s.model)[static_cast<std::size_t>(k)].side[0].half.x() > 0.0);
+    EXPECT_EQ(AllShapePairs(s.model)[static_cast<std::size_t>(k)].part, k);
   }
   ASSERT_NO_FATAL_FAILURE(StartDynamics(&s, DynamicOptions{}));
   for (int i = 0; i < 50; ++i) ASSERT_TRUE(Step(s.model, s.data, s.integ, 1e-3).ok);
@@ -601,18 +601,18 @@ TEST(ShapePairValidation, CantileverRestsOnABoxEdge) {
   b.AddContactRod(rod, radius);
   b.SetContactSettings(CantileverLaw());
   const Model m = b.Build();
-  ASSERT_EQ(m.shape_pairs.size(), static_cast<std::size_t>(2 * ne));  // two parts per element
+  ASSERT_EQ(AllShapePairs(m).size(), static_cast<std::size_t>(2 * ne));  // two parts per element
   Data d;
   const StaticResult res = SolveInTenSteps(m, &d);
   ASSERT_TRUE(res.converged) << res.message;
   double R = 0.0, gap = 0.0;
   int active = 0;
-  for (int i = 0; i < 2 * ne; ++i) {
+  for (int i = 0; i < d.num_shape_pairs; ++i) {
     const ShapePairState c = CalcShapePairState(m, d, i);
     if (!c.active) continue;
     ++active;
-    EXPECT_EQ(m.shape_pairs[static_cast<std::size_t>(i)].side[0].element, ne - 1);
-    EXPECT_EQ(m.shape_pairs[static_cast<std::size_t>(i)].part, 1);  // the clipped end at the edge
+    EXPECT_EQ(d.shape_pairs[static_cast<std::size_t>(i)].side[0].element, ne - 1);
+    EXPECT_EQ(d.shape_pairs[static_cast<std::size_t>(i)].part, 1);  // the clipped end at the edge
     EXPECT_NEAR(c.point[1].x(), x_e, 1e-12);  // on the edge
     EXPECT_NEAR(c.point[1].z(), top, 1e-12);
     R += c.normal_force * c.normal.z();
@@ -661,7 +661,7 @@ TEST(ShapePairValidation, BoxDroppedOnABoxComesToRestOnItsEdgesAndCorners) {
     b.SetGravity(Vec3(0.0, 0.0, -9.81));
     TwoSpheres s;
     s.model = b.Build();
-    ASSERT_EQ(s.model.shape_pairs.size(), 48u);
+    ASSERT_EQ(AllShapePairs(s.model).size(), 48u);
     DynamicOptions opt;
     opt.rho_inf = 1.0;
     ASSERT_NO_FATAL_FAILURE(StartDynamics(&s, opt));
@@ -721,13 +721,13 @@ TEST(ShapePairValidation, CrossingCantileversPressedTogetherShareTheLoadByTheirC
   b.AddContactRod(lower, radius);
   b.SetContactSettings(CantileverLaw());
   const Model m = b.Build();
-  ASSERT_EQ(m.shape_pairs.size(), static_cast<std::size_t>(ne * ne));
+  ASSERT_EQ(AllShapePairs(m).size(), static_cast<std::size_t>(ne * ne));
   Data d;
   const StaticResult res = SolveInTenSteps(m, &d);
   ASSERT_TRUE(res.converged) << res.message;
   double R = 0.0, gap = 0.0;
   int active = 0;
-  for (int i = 0; i < static_cast<int>(m.shape_pairs.size()); ++i) {
+  for (int i = 0; i < d.num_shape_pairs; ++i) {
     const ShapePairState c = CalcShapePairState(m, d, i);
     if (!c.active) continue;
     ++active;
@@ -773,14 +773,14 @@ TEST(ShapePairValidation, RodFoldedOntoItselfCarriesTheTipLoadByItsFlexibility) 
   law.self = true;
   b.SetContactSettings(law);
   const Model m = b.Build();
-  ASSERT_FALSE(m.shape_pairs.empty());
+  ASSERT_FALSE(AllShapePairs(m).empty());
   Data d;
   const StaticResult res = SolveInTenSteps(m, &d);
   ASSERT_TRUE(res.converged) << res.message;
   double R = 0.0, gap = 0.0, least_gap = INFINITY;
   int active = 0;
-  for (int i = 0; i < static_cast<int>(m.shape_pairs.size()); ++i) {
-    const ShapePair& p = m.shape_pairs[static_cast<std::size_t>(i)];
+  for (int i = 0; i < d.num_shape_pairs; ++i) {
+    const ShapePair& p = d.shape_pairs[static_cast<std::size_t>(i)];
     const SE3* frames[4] = {&NodeFrame(d, p.side[0].node[0]), &NodeFrame(d, p.side[0].node[1]),
                            &NodeFrame(d, p.side[1].node[0]), &NodeFrame(d, p.side[1].node[1])};
     ShapePairGeometry G;

@@ -32,7 +32,7 @@ bodies:
 test::Table RunOnePairScene(const std::string& text, const char* dir_name, std::size_t pairs = 1) {
   test::ScopedDir dir(dir_name);
   const Scene s = ParseScene(text, "rest.yaml");
-  EXPECT_EQ(s.model.shape_pairs.size(), pairs);
+  EXPECT_EQ(AllShapePairs(s.model).size(), pairs);
   const RunResult r = RunScene(s, dir.path());
   EXPECT_TRUE(r.ok) << r.message;
   return test::ReadCsv(dir.path() + "/pair_contacts.csv");
@@ -50,10 +50,10 @@ std::string Error(const std::string& text) {
 TEST(ShapePairScene, BodiesPairUnlessExcludedAndARodWithItselfWhenAsked) {
   // a: 1 sphere, b: 2 shapes, the rod: 10 capsules.
   const Model m = ParseScene(kScene + "contact: {}\n", "s.yaml").model;
-  EXPECT_EQ(m.shape_pairs.size(), 1u * 2u + 1u * 10u + 2u * 10u);
+  EXPECT_EQ(AllShapePairs(m).size(), 1u * 2u + 1u * 10u + 2u * 10u);
   const Model x = ParseScene(kScene + "contact: {exclude: [[a, b], [rod, b]]}\n", "s.yaml").model;
-  EXPECT_EQ(x.shape_pairs.size(), 10u);
-  for (const ShapePair& p : x.shape_pairs) {
+  EXPECT_EQ(AllShapePairs(x).size(), 10u);
+  for (const ShapePair& p : AllShapePairs(x)) {
     EXPECT_TRUE(p.side[0].rod != p.side[1].rod);  // the rod with a
     EXPECT_EQ(p.side[p.side[0].rod ? 1 : 0].owner, 0);
   }
@@ -67,8 +67,8 @@ TEST(ShapePairScene, BodiesPairUnlessExcludedAndARodWithItselfWhenAsked) {
   int count = 0;
   for (int i = 0; i < 10; ++i)
     for (int k = i + 4; k < 10; ++k) ++count;
-  EXPECT_EQ(s.shape_pairs.size(), static_cast<std::size_t>(count));
-  for (const ShapePair& p : s.shape_pairs) {
+  EXPECT_EQ(AllShapePairs(s).size(), static_cast<std::size_t>(count));
+  for (const ShapePair& p : AllShapePairs(s)) {
     EXPECT_TRUE(p.side[0].rod && p.side[1].rod);
     EXPECT_GE(p.side[1].element - p.side[0].element, 4);
   }
@@ -132,8 +132,8 @@ bodies:
 contact: {exclude: [[bar, block], [bar, rod], [block, rod]]}
 )";
   const Model m = ParseScene(bodies + more, "boxes.yaml").model;
-  EXPECT_EQ(m.shape_pairs.size(), 2u + 48u + 10u);
-  for (const ShapePair& p : m.shape_pairs) {
+  EXPECT_EQ(AllShapePairs(m).size(), 2u + 48u + 10u);
+  for (const ShapePair& p : AllShapePairs(m)) {
     EXPECT_GT(p.side[1].half.x(), 0.0);  // the box is side B
     EXPECT_EQ(p.side[0].half.x(), 0.0);
   }

@@ -20,6 +20,8 @@
 // -c_n w(g) dg/dt, regularised Coulomb friction applied implicitly; statics frictionless).
 #pragma once
 
+#include <vector>
+
 #include "screwfem/elements/element.h"
 #include "screwfem/model/model.h"
 
@@ -52,16 +54,59 @@ bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePa
                         const NodeMotion<4>& x, const KernelOptions& options,
                         ElementTerms<4>* terms);
 
+// Corner k (0..7) of a box with centre c and half sizes h: bit 0, 1, 2 of k select +h_x, +h_y,
+// +h_z (else -h); corners k and k | bit (bit not in k) end an edge.
+inline Vec3 BoxCorner(const Vec3& c, const Vec3& h, int k) {
+  return c + Vec3((k & 1) ? h.x() : -h.x(), (k & 2) ? h.y() : -h.y(), (k & 4) ? h.z() : -h.z());
+}
+
+// The broad phase: finds the pairs of Model::contact_segments whose boxes, inflated by their
+// radii and half the onset, overlap, and that may touch (Model::contact_entity_pairs, self
+// skip), and writes their ShapePair items into data.shape_pairs (a box is side B; a segment of
+// positive length against a box is two items, parts 0 and 1; two boxes are the 12 edges of
+// each against the other). Every pair whose surfaces are nearer than the onset is found. A
+// uniform grid (cells of the largest rod element's box) hashed into buckets by a counting sort:
+// time linear in the segments for shapes of bounded density; a segment larger than a cell (a
+// body's shape) is tested against every segment. Allocates nothing unless the pool (sized by
+// MakeData) is full: then it is doubled (GrowShapePairPool) and the search repeated, a
+// geometric growth that ends once the pool holds what the run needs. Called by Assemble and
+// InterpolateStep; call it before reading data.shape_pairs of a state set otherwise.
+void UpdateShapePairs(const Model& model, Data& data);
+// Every pair of shapes that may touch, wherever they are: O(n^2) in the segments (the broad
+// phase's reference in tests; allocates).
+std::vector<ShapePair> AllShapePairs(const Model& model);
+
+// True when two moving shapes of the model may touch (two entities allowed to, or a rod with
+// itself): the model has pairs of moving shapes to output.
+inline bool MayHaveShapePairs(const Model& model) {
+  for (char allowed : model.contact_entity_pairs)
+    if (allowed) return true;
+  for (double skip : model.contact_entity_self_skip)
+    if (skip >= 0.0) return true;
+  return false;
+}
+
+// A pair's name that stays the same while the broad phase reorders the pairs: its two contact
+// segments a (side A) and b as a x num_segments + b (two boxes' edges: the boxes).
+inline double ShapePairKey(const Model& model, const ShapePair& pair) {
+  return static_cast<double>(pair.segment[0]) *
+             static_cast<double>(model.contact_segments.size()) +
+         static_cast<double>(pair.segment[1]);
+}
+
 struct ShapePairKind {
   static constexpr int kNodes = 4;
-  using Item = int;  // index into Model::shape_pairs
+  using Item = int;  // index into data.shape_pairs
+  // The items are the pairs the broad phase found (Data), not fixed in the Model: the assembly
+  // calls this form of ForEach (elements/element.h).
+  static constexpr bool kItemsInData = true;
   template <class F>
-  static void ForEach(const Model& model, F&& f) {
-    for (std::size_t i = 0; i < model.shape_pairs.size(); ++i) {
-      const ShapePair& p = model.shape_pairs[i];
+  static void ForEach(const Model&, const Data& data, F&& f) {
+    for (int i = 0; i < data.num_shape_pairs; ++i) {
+      const ShapePair& p = data.shape_pairs[static_cast<std::size_t>(i)];
       const int nodes[4] = {p.side[0].node[0], p.side[0].node[1], p.side[1].node[0],
                             p.side[1].node[1]};
-      f(static_cast<int>(i), nodes);
+      f(i, nodes);
     }
   }
   // Inactive when apart (gap >= onset) or the damped force would pull. Residual -J^T F with
@@ -75,8 +120,8 @@ struct ShapePairKind {
   static void AddEnergy(const Model& model, const Data& data, const Item& pair, Energy* energy);
 };
 
-// A pair's state for the outputs (contacts.csv, VTK) in the current state of data; the
-// forces act on side A (side B carries their opposite).
+// A pair's state for the outputs (pair_contacts.csv, VTK) in the current state of data (pair:
+// index into data.shape_pairs); the forces act on side A (side B carries their opposite).
 struct ShapePairState {
   bool active = false;
   double gap = 0.0;

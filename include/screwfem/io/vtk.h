@@ -65,10 +65,10 @@ class VtkWriter {
   // Where a point of the frame comes from.
   struct PointSource {
     // kSection: a tendon eyelet between rod nodes, on the section at xi of element `index`.
-    // kPairContact: side `offset.x()` (0: A, 1: B) of a pair of moving shapes
+    // kPairContact: a contact segment (Model::contact_segments) of the moving shapes
     enum class Kind { kJoint, kNode, kWorld, kContact, kSection, kPairContact } kind = Kind::kNode;
     int index = -1;  // joint index (kJoint), node index (kNode), contact pair index (kContact,
-                     // kPairContact: into Model::shape_pairs), element (kSection)
+                     // kPairContact: a contact segment), element (kSection)
     double xi = 0.0;  // kSection
     Vec3 offset = Vec3::Zero();   // kNode: point in the node frame [m]; kWorld: world point
     bool origin = true;           // kNode: the node frame's origin itself
@@ -90,6 +90,10 @@ class VtkWriter {
   // The contact force on the shape at each contact pair's point (zero elsewhere and when the
   // pair is inactive), for glyphs.
   std::vector<double> contact_force_;
+  // Per contact segment, filled at each frame from the pairs the broad phase found: the sum of
+  // the contact forces on it, and of its contact points weighted by |F| (and the weights).
+  std::vector<Vec3> segment_force_, segment_point_;
+  std::vector<double> segment_weight_;
   // The file: binary, composed at Open, with the byte offsets of the per-frame values;
   // ascii, recomposed per frame in the same buffer.
   std::string image_;

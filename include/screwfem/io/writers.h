@@ -71,13 +71,15 @@ std::vector<std::string> ContactColumns();
 // The row of pair `pair` into *row (resized once); false when the pair is inactive.
 bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row);
 // pair_contacts.csv (long format, one row per active pair of moving shapes at each output time;
-// elements/shape_pair.h, CalcShapePairState): pair (index into Model::shape_pairs); for side A
+// elements/shape_pair.h, CalcShapePairState): pair (ShapePairKey: the two contact segments,
+// a x num_segments + b, the same number at every time for the same two shapes); for side A
 // then side B: rod (1: a rod's element capsule, 0: a rigid body's shape), owner (rod or body
 // index), element (the rod element's index, -1 for a body); pax pay paz and pbx pby pbz (the two
 // surface points [m], world), nx ny nz (the normal, from B to A), fn [N] (normal force),
 // ftx fty ftz [N] (friction force on A, world; B carries the opposite), gap [m], part (ShapePair::
 // part: 0 or 1 for the two clipped ends of a segment against a box, -1 for a single point).
 std::vector<std::string> PairContactColumns();
+// The row of pair `pair` (index into data.shape_pairs, as the broad phase found them).
 bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row);
 // reactions.csv: per joint J of the model with constraint rows (every joint but free ones,
 // passive or driven, recorded or not), in model order: J.Fx J.Fy J.Fz J.Mx J.My J.Mz, the force

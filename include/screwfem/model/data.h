@@ -9,6 +9,18 @@
 
 namespace screwfem {
 
+// The broad phase's workspace (UpdateShapePairs, elements/shape_pair.h): a uniform grid of
+// cells hashed into buckets, filled by a counting sort; every array sized by MakeData.
+struct ShapePairGrid {
+  std::vector<Vec3> lo, hi;             // per contact segment: its box, inflated [m]
+  std::vector<char> large;              // per segment: larger than a cell (tested against all)
+  std::vector<int> bucket_start;        // per bucket (a power of two, + 1): first entry
+  std::vector<int> entry_segment;       // entries (a segment in a cell), bucket by bucket
+  std::vector<Eigen::Vector3i> entry_cell;  // the entry's cell
+  std::vector<int> large_segments;      // the segments larger than a cell
+  long box_tests = 0;  // box-overlap tests of the last search (its cost, for tests)
+};
+
 struct Data {
   double time = 0.0;
   std::vector<SE3> H;              // node frames
@@ -21,6 +33,14 @@ struct Data {
                                    // steps; profiles read them through EvalProfile
   std::vector<char> tendon_slack;  // per tendon: 1 while a length-driven tendon is slack (its
                                    // row holds the multiplier at zero; docs/numerics.md)
+
+  // Pairs of moving shapes near each other at the last assembly (UpdateShapePairs,
+  // elements/shape_pair.h): the first num_shape_pairs entries of a pool sized by MakeData and
+  // grown between steps when a step finds it full (GrowShapePairPool).
+  std::vector<ShapePair> shape_pairs;
+  int num_shape_pairs = 0;
+  bool shape_pair_overflow = false;  // the last broad phase found more pairs than the pool
+  ShapePairGrid shape_pair_grid;
 
   // Workspaces of the Newton solvers.
   Eigen::VectorXd residual;        // global order, size nv + nc
@@ -38,6 +58,10 @@ struct Data {
 
 // Allocates Data for a model and sets the reference state (at rest).
 Data MakeData(const Model& model);
+
+// Doubles the pool of shape pairs (Data::shape_pairs; at least 64) and clears the overflow
+// flag: called between steps when a broad phase found the pool full (allocates).
+void GrowShapePairPool(Data& data);
 
 // The one evaluation of a profile by a kernel or solver: at time t, with this simulation's
 // run-time input values (a profile with ProfileTerm::kInput terms reads data.inputs).

@@ -351,6 +351,9 @@ struct ContactSettings {
   // length between two elements' nearest ends below which they never collide (default 4 r).
   bool self = false;
   double self_skip = -1.0;  // [m]
+  // Two entities whose node counts multiply to at most this are coupled inside the band of the
+  // solver's matrix; the others by off-band blocks (docs/numerics.md, "Pairs and the band").
+  int band_pair_nodes = 64;
 };
 // One (moving shape, obstacle) pair, made by Build: the shape is a segment p(s) = (1-s) p_0 +
 // s p_1 with p_j = x_j + R_j c_j of item node j (both ends on node 0 for a rigid shape, whose
@@ -381,16 +384,26 @@ struct ShapePairSide {
   // segment side.
   Vec3 half = Vec3::Zero();
 };
-// A pair of moving shapes made by Build (rigid-rigid, rod-rigid, rod-rod, rod self-contact):
-// the normal points from side 1 (B) to side 0 (A).
+// A pair of moving shapes found by the broad phase (rigid-rigid, rod-rigid, rod-rod, rod
+// self-contact; UpdateShapePairs, elements/shape_pair.h): the normal points from side 1 (B) to
+// side 0 (A).
 struct ShapePair {
   ShapePairSide side[2];
-  double damping = 0.0;  // c_n [N s/m] (Build: from the pair's reduced mass)
+  int segment[2] = {-1, -1};  // the two Model::contact_segments (side A's shape first)
+  double damping = 0.0;  // c_n [N s/m] (from the two segments' reduced mass)
   // A segment of positive length against a box is two pairs, part 0 and part 1: the lower and
   // the upper end of the segment clipped to the prism over the box face it is nearest to (the
   // two points that carry a segment lying on a face; docs/numerics.md, "Box-box"). -1: one
   // point, the segment's nearest point (every other pair).
   int part = -1;
+};
+// A shape the broad phase sorts (Build): a rod element's capsule, or a body's sphere, capsule
+// or box, as the side of a pair it would be.
+struct ContactSegment {
+  ShapePairSide side;
+  double mass = 0.0;  // the element's or body's mass; INFINITY when all its nodes are fixed
+  int entity = -1;    // the contact entity (a rod or a body): index of Model's entity tables
+  double s0 = 0.0, s1 = 0.0;  // a rod element: its arc-length span along the rod [m]
 };
 // An excluded pair of moving entities (scene `contact: exclude: [[a, b]]` with two bodies or rods).
 struct ContactPairExclusion {
@@ -427,7 +440,14 @@ struct Model {
   ContactSettings contact;
   std::vector<ContactPair> contact_pairs;
   std::vector<ContactPairExclusion> contact_pair_exclusions;
-  std::vector<ShapePair> shape_pairs;  // between moving shapes (Build)
+  // Moving shapes (elements/shape_pair.h): the segments, and which two entities (rods, bodies
+  // with shapes) may touch: contact_entity_pairs[a * n + b] != 0 for n entities (Build); a rod
+  // touches itself when contact_entity_self_skip[a] >= 0 (the arc length between two elements'
+  // nearest ends below which they do not). The pairs are found per assembly (Data).
+  std::vector<ContactSegment> contact_segments;
+  int num_contact_entities = 0;
+  std::vector<char> contact_entity_pairs;
+  std::vector<double> contact_entity_self_skip;
   Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
   RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
 
