@@ -9,6 +9,7 @@
 // that the replacements match and warns at inlined call sites.
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -26,6 +27,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/tendon.h"
+#include "screwfem/linalg/band_coupling.h"
 #include "elements/tilted_box_drop.h"
 
 namespace {
@@ -405,6 +407,55 @@ TEST(NoAllocation, CounterSeesEigenAllocations) {
   EXPECT_EQ(v.sum(), 1000.0);
 }
 #endif
+
+// Off-band couplings of the banded LU (linalg/band_coupling.h): after Resize, a few rounds of
+// Clear, Add, Factorize, Correct and ForEachEntry allocate nothing.
+TEST(NoAllocation, BandCouplingAllocatesNothingAfterResize) {
+  using namespace screwfem;
+  const int n = 60, kl = 7, ku = 7;
+  BandedLU lu;
+  lu.Resize(n, kl, ku);
+  lu.SetZero();
+  const auto band = [](int i, int j) { return i == j ? 4.0 : 0.1 * std::sin(1.0 + i + 3.0 * j); };
+  for (int j = 0; j < n; ++j)
+    for (int i = std::max(0, j - ku); i <= std::min(n - 1, j + kl); ++i) lu.At(i, j) = band(i, j);
+  ASSERT_EQ(lu.Factorize(), -1);
+  BandCoupling coupling;
+  coupling.Resize(n, 6, 3);
+  Eigen::VectorXd x(n), b(n), r(n);
+  Eigen::Matrix<double, 6, 6> B;
+  for (int c = 0; c < 6; ++c)
+    for (int i = 0; i < 6; ++i) B(i, c) = std::cos(0.3 * i + 1.7 * c);
+  bool ok = true;
+  double sum = 0.0;
+  g_allocations = 0;
+  g_counting = true;
+  for (int round = 0; round < 3; ++round) {
+    coupling.Clear();
+    const int p = 1 + round, q = 40 + 2 * round;
+    ok = coupling.Add(p, q, B, 1.0) && ok;
+    ok = coupling.Add(q, p, B.transpose(), -0.5) && ok;
+    ok = coupling.Add(q, q, B, 0.25) && ok;
+    ok = !coupling.Add(20, 30, B, 1.0) && ok;  // two more blocks than max_blocks = 3
+    ok = coupling.Factorize(lu) && ok;
+    for (int i = 0; i < n; ++i) b(i) = std::sin(0.1 * i + round);
+    x = b;
+    lu.Solve(x);
+    coupling.Correct(lu, x);
+    coupling.ForEachEntry([&sum](int, int, double value) { sum += value; });
+  }
+  g_counting = false;
+  EXPECT_TRUE(ok);
+  EXPECT_TRUE(std::isfinite(sum));
+  // The last round solved the whole matrix: residual with A's band and the stored entries.
+  for (int i = 0; i < n; ++i) {
+    r(i) = -b(i);
+    for (int j = std::max(0, i - kl); j <= std::min(n - 1, i + ku); ++j) r(i) += band(i, j) * x(j);
+  }
+  coupling.ForEachEntry([&](int i, int j, double value) { r(i) += value * x(j); });
+  EXPECT_LT(r.norm(), 1e-12 * b.norm());
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in BandCoupling after Resize";
+}
 
 TEST(NoAllocation, CounterSeesAllocations) {
   // The counter itself works (otherwise the test above could not fail).
