@@ -54,9 +54,18 @@ class Scatter {
     // The factorisation relies on the model's sparsity pattern (pattern_last is constant over
     // a block of unknowns, so the first row and column stand for all).
     const std::vector<int>& pattern = o_.pattern_last ? *o_.pattern_last : m_.pattern_last;
-    SCREWFEM_CHECK(pattern.empty() ||
-                   (pj + block.cols() - 1 <= pattern[static_cast<std::size_t>(pi)] &&
-                    pi + block.rows() - 1 <= pattern[static_cast<std::size_t>(pj)]));
+    const bool inside =
+        pattern.empty() ? d_.matrix.InBand(pi, pj + static_cast<int>(block.cols()) - 1) &&
+                              d_.matrix.InBand(pi + static_cast<int>(block.rows()) - 1, pj)
+                        : pj + block.cols() - 1 <= pattern[static_cast<std::size_t>(pi)] &&
+                              pi + block.rows() - 1 <= pattern[static_cast<std::size_t>(pj)];
+    if (!inside) {
+      // Only the node blocks of pairs of moving shapes may lie outside (Data::coupling); a
+      // block that does not fit the coupling's room is left out of this matrix.
+      SCREWFEM_CHECK(off_band_ && block.rows() == 6 && block.cols() == 6);
+      d_.coupling.Add(pi, pj, block, scale);
+      return;
+    }
     for (Eigen::Index j = 0; j < block.cols(); ++j) {
       double* const col = &d_.matrix.At(pi, pj + static_cast<int>(j));
       for (Eigen::Index i = 0; i < block.rows(); ++i) col[i] += scale * block(i, j);
@@ -107,6 +116,8 @@ class Scatter {
   }
   // An item's terms (elements/element.h): its node rows, and its matrix blocks combined by the
   // kernel or here. dofs and x as gathered for the item (GatherItem).
+  // While true, node blocks outside the band pattern go to the off-band coupling.
+  void AllowOffBand(bool allow) { off_band_ = allow; }
   template <int N>
   void Add(const int (&dofs)[N], const NodeMotion<N>& x, const ElementTerms<N>& t) {
     if (!t.active) return;
@@ -151,6 +162,7 @@ class Scatter {
   const Model& m_;
   Data& d_;
   const AssemblyOptions& o_;
+  bool off_band_ = false;
 };
 
 // The node state of one item, as its kernel reads it (elements/element.h, NodeMotion), and
@@ -197,6 +209,8 @@ bool AddKind(const Model& m, Data& d, const AssemblyOptions& o, const KernelOpti
              Scatter& s) {
   constexpr int N = Kind::kNodes;
   bool ok = true;
+  // A kind whose items couple nodes the band pattern may not hold (kOffBandBlocks).
+  s.AllowOffBand(requires { Kind::kOffBandBlocks; });
   ForEachItem<Kind>(m, d, [&](const typename Kind::Item& item, const int (&nodes)[N]) {
     if (!ok) return;
     int dofs[N];
@@ -211,6 +225,7 @@ bool AddKind(const Model& m, Data& d, const AssemblyOptions& o, const KernelOpti
     }
     s.Add(dofs, x, t);
   });
+  s.AllowOffBand(false);
   return ok;
 }
 
@@ -481,7 +496,15 @@ void UpdateBranchReferences(const Model& model, Data& data) {
 
 bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   data.residual.setZero();
-  if (options.assemble_matrix) data.matrix.SetZero();
+  if (options.assemble_matrix) {
+    data.matrix.SetZero();
+    // The off-band coupling: doubled when the last assembly overflowed it, up to
+    // kMaxCoupledNodes (beyond, the blocks that do not fit are left out of the matrix).
+    if (data.coupling.overflowed() && data.coupling.max_blocks() < kMaxCoupledNodes)
+      data.coupling.Resize(data.coupling.size(), 6,
+                           std::min(2 * data.coupling.max_blocks(), kMaxCoupledNodes));
+    data.coupling.Clear();
+  }
   data.failed_element = -1;
   data.force_scale = 0.0;
   data.term_scale = 0.0;

@@ -37,6 +37,15 @@ Data MakeData(const Model& model) {
     g.bucket_start.resize(buckets + 1);
     g.large_segments.resize(segments);
     d.shape_pairs.resize(4 * segments + 64);
+    // Off-band couplings: room for 32 nodes at first (or every node of the shapes).
+    std::vector<int> nodes;
+    for (const ContactSegment& segment : model.contact_segments)
+      for (int k : segment.side.node)
+        if (k != kGround && model.nodes[static_cast<std::size_t>(k)].dof >= 0) nodes.push_back(k);
+    std::sort(nodes.begin(), nodes.end());
+    const int distinct =
+        static_cast<int>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
+    d.coupling.Resize(model.num_unknowns(), 6, std::min(distinct, 32));
   }
   d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
   if (static_cast<int>(model.pattern_last.size()) == model.num_unknowns())

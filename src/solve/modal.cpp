@@ -38,6 +38,11 @@ void ReadAssembledMatrix(const Model& model, const Data& data, Eigen::MatrixXd* 
         (*B)(gi - nv, gj) = A.At(pi, pj);
     }
   }
+  // The node blocks outside the band (pairs of moving shapes, Data::coupling).
+  data.coupling.ForEachEntry([&](int pi, int pj, double value) {
+    const int gi = global[static_cast<std::size_t>(pi)], gj = global[static_cast<std::size_t>(pj)];
+    if (gi < nv && gj < nv) (*top_left)(gi, gj) += value;
+  });
 }
 
 }  // namespace

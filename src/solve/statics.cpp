@@ -15,6 +15,7 @@ namespace screwfem {
 
 bool SolveAssembledSystem(const Model& model, Data& data) {
   if (data.matrix.Factorize() >= 0) return false;
+  if (!data.coupling.Factorize(data.matrix)) return false;  // the off-band blocks (Woodbury)
   return SolveFactorizedSystem(model, data);
 }
 
@@ -23,6 +24,7 @@ bool SolveFactorizedSystem(const Model& model, Data& data) {
   for (int i = 0; i < n; ++i)
     data.rhs(model.permutation[static_cast<std::size_t>(i)]) = -data.residual(i);
   data.matrix.Solve(data.rhs);
+  data.coupling.Correct(data.matrix, data.rhs);
   for (int i = 0; i < n; ++i)
     data.increment(i) = data.rhs(model.permutation[static_cast<std::size_t>(i)]);
   return data.increment.allFinite();

@@ -25,6 +25,7 @@
 #include "screwfem/io/vtk.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/solve/initial_state.h"
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/linalg/band_coupling.h"
@@ -396,6 +397,53 @@ TEST(NoAllocation, TwoPointBoxPairsAllocateNothing) {
   EXPECT_GT(parts, 100);   // two-point pairs were active
   EXPECT_GE(halved, 1);    // and a step was retried in halves
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the box's steps";
+}
+
+// Two crossing rods of 20 elements (not linked in the band: 21 x 21 nodes > band_pair_nodes)
+// pressed together: the broad phase's pool and the off-band coupling (Data::coupling, the
+// Woodbury solve) through the steps of the impact.
+TEST(NoAllocation, BroadPhaseAndOffBandCouplingAllocateNothing) {
+  using namespace screwfem;
+  Material mat;
+  mat.youngs_modulus = 1e8;
+  mat.poisson_ratio = 0.4;
+  mat.density = 1000.0;
+  const double r = 0.005;
+  const Section section = Section::Circle(r, mat);
+  ModelBuilder b;
+  const int a = b.AddStraightRod("a", Vec3(-0.1, 0, 0), Vec3(0.1, 0, 0), 20, section);
+  const double z = 2 * r + 0.002;
+  const int c = b.AddStraightRod("b", Vec3(0.03, -0.1, z), Vec3(0.03, 0.1, z), 20, section);
+  b.AddContactRod(a, r);
+  b.AddContactRod(c, r);
+  ContactSettings law;
+  law.stiffness = 100.0;
+  law.onset = 1e-3;
+  b.SetContactSettings(law);
+  for (int node : b.model().rods[1].nodes) {
+    const Mat3& R = b.model().nodes[static_cast<std::size_t>(node)].reference.R;
+    Vec6 eta = Vec6::Zero();
+    eta.head<3>() = R.transpose() * Vec3(0, 0, -0.1);
+    b.SetInitialVelocity(node, eta);
+  }
+  const Model model = b.Build();
+  Data data = MakeData(model);
+  Integrator integ;
+  std::string message;
+  ASSERT_TRUE(AssembleInitialState(model, data, &message)) << message;
+  ASSERT_TRUE(InitializeDynamics(model, data, integ, DynamicOptions{}, &message)) << message;
+  int coupled = 0;
+  g_allocations = 0;
+  g_counting = true;
+  bool ok = true;
+  for (int i = 0; i < 40; ++i) {
+    ok = Step(model, data, integ, 1e-3).ok && ok;
+    coupled += data.coupling.blocks() > 0 ? 1 : 0;
+  }
+  g_counting = false;
+  EXPECT_TRUE(ok);
+  EXPECT_GT(coupled, 10);  // steps whose matrix had off-band blocks
+  EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the rods' steps";
 }
 
 TEST(NoAllocation, CounterSeesEigenAllocations) {

@@ -18,6 +18,12 @@
 //     static void AddEnergy(const Model&, const Data&, const Item&, Energy*);
 //   };
 //
+// Two optional traits: `static constexpr bool kItemsInData = true;` for a kind whose items are
+// found during the run (the contact broad phase's pairs): the assembly then calls
+// `ForEach(model, data, f)` instead; `static constexpr bool kOffBandBlocks = true;` for a kind
+// whose node blocks may lie outside the model's band pattern: they go to Data::coupling (a
+// low-rank update of the banded solve) instead of failing the pattern check.
+//
 // The assembly (assemble/assemble.cpp) loops over the registered kinds, gathers the node
 // motion, calls Calc and scatters ElementTerms into the global residual and the banded
 // iteration matrix; CalcEnergy sums AddEnergy. A kind never touches global arrays.

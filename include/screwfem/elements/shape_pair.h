@@ -100,6 +100,8 @@ struct ShapePairKind {
   // The items are the pairs the broad phase found (Data), not fixed in the Model: the assembly
   // calls this form of ForEach (elements/element.h).
   static constexpr bool kItemsInData = true;
+  // Its node blocks between two entities that the band does not link go to Data::coupling.
+  static constexpr bool kOffBandBlocks = true;
   template <class F>
   static void ForEach(const Model&, const Data& data, F&& f) {
     for (int i = 0; i < data.num_shape_pairs; ++i) {

@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "screwfem/linalg/band_coupling.h"
 #include "screwfem/linalg/banded_lu.h"
 #include "screwfem/model/model.h"
 
@@ -20,6 +21,10 @@ struct ShapePairGrid {
   std::vector<int> large_segments;      // the segments larger than a cell
   long box_tests = 0;  // box-overlap tests of the last search (its cost, for tests)
 };
+
+// The most nodes the off-band coupling of the iteration matrix holds (Data::coupling: its
+// factorisation costs 6 banded solves per node and a dense LU of 6 x that size; 128 nodes: 14 MB).
+constexpr int kMaxCoupledNodes = 128;
 
 struct Data {
   double time = 0.0;
@@ -48,6 +53,12 @@ struct Data {
   Eigen::VectorXd increment;       // global order, size nv + nc
   std::vector<Mat6> node_tangent;  // T(h dq_i) per node for the dynamic iteration matrix
   BandedLU matrix;                 // permuted, banded iteration matrix
+  // Its node blocks outside the band pattern (pairs of moving shapes between entities not
+  // linked in the band, ContactSettings::band_pair_nodes): a low-rank update solved with the
+  // Woodbury identity (SolveAssembledSystem). Room for 32 nodes from MakeData, doubled at the
+  // next assembly when an assembly overflowed it, up to kMaxCoupledNodes (blocks that did not
+  // fit are left out of that matrix: a quasi-Newton step, the residual stays exact).
+  BandCoupling coupling;
 
   // Diagnostics of the last assembly.
   double force_scale = 0.0;        // largest generalised-force term that entered the residual
