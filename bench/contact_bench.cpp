@@ -38,7 +38,8 @@ constexpr int kWarmupSteps = 5;
 constexpr int kTimedSteps = 20;
 constexpr double kRadius = 0.01;  // contact radius [m]
 
-// 0: no contact; 1: resting on the plane; 2: sliding along its axis at 0.5 m/s, mu = 0.3.
+// 0: no contact; 1: resting on the plane; 2: sliding along its axis at 0.5 m/s, mu = 0.3;
+// 3: as 1 with self-contact on (the broad phase over the 1000 elements at every assembly).
 // The GRM arm section of the rod benchmarks (EA = GA = 1e6 N, EI = GJ = 1 N m^2,
 // rhoA = 0.1 kg/m), 1 m along x; the contact law's defaults (onset 0.01 r, stiffness
 // 100 W_max / onset), friction 0.3, slip velocity 1e-3 m/s; started at the resting gap of an
@@ -60,6 +61,7 @@ Model RodOnPlane(int variant) {
     ContactSettings law;
     law.friction = 0.3;
     law.slip_velocity = 1e-3;
+    law.self = variant == 3;  // the rod with itself: the broad phase at every assembly
     builder.SetContactSettings(law);
   }
   if (variant == 2)
@@ -79,9 +81,14 @@ void BM_RodContactStep(benchmark::State& state) {
   if (!RunTimedSteps(state, model, options, true, kWarmupSteps, kTimedSteps, kStep, data,
                      &counts))
     return;
-  int active = 0;
+  int active = 0, self_active = 0;
   for (int i = 0; i < static_cast<int>(model.contact_pairs.size()); ++i)
     if (CalcContactState(model, data, i).active) ++active;
+  for (int i = 0; i < data.num_shape_pairs; ++i)
+    if (CalcShapePairState(model, data, i).active) ++self_active;
+  state.counters["self_active"] = self_active;
+  state.counters["coupled_nodes"] = data.coupling.blocks();
+  state.counters["bandwidth"] = model.bandwidth;
   state.counters["variant"] = variant;
   state.counters["elements"] = kElements;
   state.counters["unknowns"] = model.num_unknowns();
@@ -93,7 +100,7 @@ void BM_RodContactStep(benchmark::State& state) {
   state.counters["mid_z"] = data.H[mid].x.z();
   state.counters["mid_vx"] = (data.H[mid].R * data.v.segment<3>(6 * mid)).x();
 }
-BENCHMARK(BM_RodContactStep)->Arg(0)->Arg(1)->Arg(2)->Repetitions(7)->MinTime(0.2)
+BENCHMARK(BM_RodContactStep)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Repetitions(7)->MinTime(0.2)
     ->Unit(benchmark::kMillisecond);
 
 // One benchmark iteration: the whole gripper run (0 to 3 s, h = 2e-3 s), solver only.

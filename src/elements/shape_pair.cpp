@@ -437,7 +437,7 @@ void FindShapePairs(const Model& model, Data& data) {
   data.num_shape_pairs = 0;
   data.shape_pair_overflow = false;
   const int n = static_cast<int>(model.contact_segments.size());
-  if (n == 0) return;
+  if (n == 0 || !MayHaveShapePairs(model)) return;
   ShapePairGrid& g = data.shape_pair_grid;
   g.box_tests = 0;
   // Boxes inflated by the radii and half the onset: surfaces nearer than the onset have

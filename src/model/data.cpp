@@ -23,9 +23,12 @@ Data MakeData(const Model& model) {
   d.rhs = Eigen::VectorXd::Zero(model.num_unknowns());
   d.increment = Eigen::VectorXd::Zero(model.num_unknowns());
   d.node_tangent.assign(model.nodes.size(), Mat6::Identity());
-  // The broad phase: each segment in at most 8 cells, twice as many buckets as entries.
+  // The broad phase: each segment in at most 8 cells, twice as many buckets as entries. The
+  // off-band coupling: room for 32 nodes at first (or every node of the shapes; none without
+  // pairs of moving shapes).
   const std::size_t segments = model.contact_segments.size();
-  if (segments > 0) {
+  int coupled_nodes = 0;
+  if (segments > 0 && MayHaveShapePairs(model)) {
     ShapePairGrid& g = d.shape_pair_grid;
     g.lo.resize(segments);
     g.hi.resize(segments);
@@ -37,7 +40,6 @@ Data MakeData(const Model& model) {
     g.bucket_start.resize(buckets + 1);
     g.large_segments.resize(segments);
     d.shape_pairs.resize(4 * segments + 64);
-    // Off-band couplings: room for 32 nodes at first (or every node of the shapes).
     std::vector<int> nodes;
     for (const ContactSegment& segment : model.contact_segments)
       for (int k : segment.side.node)
@@ -45,8 +47,9 @@ Data MakeData(const Model& model) {
     std::sort(nodes.begin(), nodes.end());
     const int distinct =
         static_cast<int>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
-    d.coupling.Resize(model.num_unknowns(), 6, std::min(distinct, 32));
+    coupled_nodes = std::min(distinct, 32);
   }
+  d.coupling.Resize(model.num_unknowns(), 6, coupled_nodes);
   d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
   if (static_cast<int>(model.pattern_last.size()) == model.num_unknowns())
     d.matrix.SetPattern(model.pattern_last, model.pattern_last);

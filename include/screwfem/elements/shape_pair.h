@@ -1,7 +1,8 @@
 // Frictional contact between two moving shapes, as an element kind (method-next.md §N6.2-N6.3;
 // docs/numerics.md, "Contact between moving shapes").
 //
-// Each item is a ShapePair (model.h) enumerated by ModelBuilder::Build: rigid-rigid between
+// Each item is a ShapePair (model.h) found by the broad phase (UpdateShapePairs, below, at every
+// assembly, into Data::shape_pairs) among the Model's contact segments: rigid-rigid between
 // primitives of different bodies (sphere, capsule, box; box-box as the 12 edges of each box
 // against the other), rod-rigid (a rod element's chord capsule against a body's sphere,
 // capsule or box), rod-rod and rod self-contact. Each side is a segment of body points
@@ -75,16 +76,6 @@ void UpdateShapePairs(const Model& model, Data& data);
 // Every pair of shapes that may touch, wherever they are: O(n^2) in the segments (the broad
 // phase's reference in tests; allocates).
 std::vector<ShapePair> AllShapePairs(const Model& model);
-
-// True when two moving shapes of the model may touch (two entities allowed to, or a rod with
-// itself): the model has pairs of moving shapes to output.
-inline bool MayHaveShapePairs(const Model& model) {
-  for (char allowed : model.contact_entity_pairs)
-    if (allowed) return true;
-  for (double skip : model.contact_entity_self_skip)
-    if (skip >= 0.0) return true;
-  return false;
-}
 
 // A pair's name that stays the same while the broad phase reorders the pairs: its two contact
 // segments a (side A) and b as a x num_segments + b (two boxes' edges: the boxes).

@@ -485,6 +485,16 @@ struct Model {
   int FindActuator(const std::string& name) const;
 };
 
+// True when two moving shapes of the model may touch (two entities allowed to, or a rod with
+// itself): the broad phase has something to find and the run pairs to output.
+inline bool MayHaveShapePairs(const Model& model) {
+  for (char allowed : model.contact_entity_pairs)
+    if (allowed) return true;
+  for (double skip : model.contact_entity_self_skip)
+    if (skip >= 0.0) return true;
+  return false;
+}
+
 // The reference frame H_0 of a node, or the identity for kGround (the one ground-or-node
 // lookup of reference frames; model/data.h has the current-frame one).
 inline const SE3& NodeReferenceFrame(const Model& model, int node) {
