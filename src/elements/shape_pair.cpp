@@ -440,18 +440,30 @@ void FindShapePairs(const Model& model, Data& data) {
   if (n == 0 || !MayHaveShapePairs(model)) return;
   ShapePairGrid& g = data.shape_pair_grid;
   g.box_tests = 0;
+  const int chunks = static_cast<int>(g.chunk_first.size()) - 1;
+  auto first_of = [&](int c) { return g.chunk_first[static_cast<std::size_t>(c)]; };
+  auto segment = [&](int i) -> const ContactSegment& {
+    return model.contact_segments[static_cast<std::size_t>(i)];
+  };
   // Boxes inflated by the radii and half the onset: surfaces nearer than the onset have
-  // overlapping boxes. The cell: the largest box of a rod element (or of any segment when
-  // there is no rod); a larger box is tested against all.
+  // overlapping boxes. A chunk's box holds its segments'. The cell: the largest box of a rod's
+  // chunk (or of any chunk when there is no rod); a larger box is tested against all.
   const double pad = 0.5 * model.contact.onset;
   double cell = 0.0, cell_any = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const std::size_t k = static_cast<std::size_t>(i);
-    SegmentBox(model.contact_segments[k], data, pad, &g.lo[k], &g.hi[k]);
+  for (int c = 0; c < chunks; ++c) {
+    const std::size_t k = static_cast<std::size_t>(c);
+    g.lo[k] = Vec3::Constant(INFINITY);
+    g.hi[k] = Vec3::Constant(-INFINITY);
+    for (int i = first_of(c); i < first_of(c + 1); ++i) {
+      const std::size_t q = static_cast<std::size_t>(i);
+      SegmentBox(segment(i), data, pad, &g.segment_lo[q], &g.segment_hi[q]);
+      g.lo[k] = g.lo[k].cwiseMin(g.segment_lo[q]);
+      g.hi[k] = g.hi[k].cwiseMax(g.segment_hi[q]);
+    }
     const double extent = (g.hi[k] - g.lo[k]).maxCoeff();
     if (!std::isfinite(extent)) return;  // a state that is not finite: no pair (the step fails)
     cell_any = std::max(cell_any, extent);
-    if (model.contact_segments[k].side.rod) cell = std::max(cell, extent);
+    if (segment(first_of(c)).side.rod) cell = std::max(cell, extent);
   }
   if (cell == 0.0) cell = cell_any;
   if (!(cell > 0.0)) return;
@@ -461,41 +473,41 @@ void FindShapePairs(const Model& model, Data& data) {
                            static_cast<int>(std::floor(p.y() * inv)),
                            static_cast<int>(std::floor(p.z() * inv)));
   };
-  // Cells beyond the int range: every segment is large (tested against all).
+  // Cells beyond the int range: every chunk is large (tested against all).
   const double limit = 1e9 * cell;
   const int buckets = static_cast<int>(g.bucket_start.size()) - 1;
   const std::uint32_t mask = static_cast<std::uint32_t>(buckets - 1);
   std::fill(g.bucket_start.begin(), g.bucket_start.end(), 0);
   int num_large = 0;
-  // Counting sort of the entries (segment, cell) into the buckets: count, prefix, fill.
-  auto for_cells = [&](int i, auto&& f) {
-    const std::size_t k = static_cast<std::size_t>(i);
+  // Counting sort of the entries (chunk, cell) into the buckets: count, prefix, fill.
+  auto for_cells = [&](int c, auto&& f) {
+    const std::size_t k = static_cast<std::size_t>(c);
     const Eigen::Vector3i a = cell_of(g.lo[k]), b = cell_of(g.hi[k]);
     for (int x = a.x(); x <= b.x(); ++x)
       for (int y = a.y(); y <= b.y(); ++y)
         for (int z = a.z(); z <= b.z(); ++z) f(Eigen::Vector3i(x, y, z));
   };
-  for (int i = 0; i < n; ++i) {
-    const std::size_t k = static_cast<std::size_t>(i);
+  for (int c = 0; c < chunks; ++c) {
+    const std::size_t k = static_cast<std::size_t>(c);
     const bool large = (g.hi[k] - g.lo[k]).maxCoeff() > cell ||
                        g.lo[k].cwiseAbs().maxCoeff() > limit ||
                        g.hi[k].cwiseAbs().maxCoeff() > limit;
     g.large[k] = large;
     if (large) {
-      g.large_segments[static_cast<std::size_t>(num_large++)] = i;
+      g.large_segments[static_cast<std::size_t>(num_large++)] = c;
       continue;
     }
-    for_cells(i, [&](const Eigen::Vector3i& c) { ++g.bucket_start[(CellHash(c) & mask) + 1]; });
+    for_cells(c, [&](const Eigen::Vector3i& v) { ++g.bucket_start[(CellHash(v) & mask) + 1]; });
   }
   for (int b = 0; b < buckets; ++b)
     g.bucket_start[static_cast<std::size_t>(b + 1)] += g.bucket_start[static_cast<std::size_t>(b)];
   // Fill: bucket_start[b] advances to the end of bucket b, then is restored from b - 1's end.
-  for (int i = 0; i < n; ++i) {
-    if (g.large[static_cast<std::size_t>(i)]) continue;
-    for_cells(i, [&](const Eigen::Vector3i& c) {
-      const std::size_t e = static_cast<std::size_t>(g.bucket_start[CellHash(c) & mask]++);
-      g.entry_segment[e] = i;
-      g.entry_cell[e] = c;
+  for (int c = 0; c < chunks; ++c) {
+    if (g.large[static_cast<std::size_t>(c)]) continue;
+    for_cells(c, [&](const Eigen::Vector3i& v) {
+      const std::size_t e = static_cast<std::size_t>(g.bucket_start[CellHash(v) & mask]++);
+      g.entry_segment[e] = c;
+      g.entry_cell[e] = v;
     });
   }
   for (int b = buckets; b > 0; --b)
@@ -509,31 +521,66 @@ void FindShapePairs(const Model& model, Data& data) {
     data.shape_pairs[static_cast<std::size_t>(data.num_shape_pairs++)] = p;
   };
   PairWriter<decltype(sink)> writer(model, sink);
-  // Two segments sharing a cell; each pair once, in the cell of the corner max(lo_i, lo_j).
+  auto segments_overlap = [&](int i, int j) {
+    ++g.box_tests;
+    const std::size_t a = static_cast<std::size_t>(i), b = static_cast<std::size_t>(j);
+    return (g.segment_lo[a].array() <= g.segment_hi[b].array()).all() &&
+           (g.segment_lo[b].array() <= g.segment_hi[a].array()).all();
+  };
+  // Two chunks whose boxes overlap: their segments' pairs, unless no two of their segments may
+  // touch (other entities that may not; the same rod with every two elements within the skip).
+  auto chunk_pair = [&](int a, int b) {
+    const int a0 = first_of(a), a1 = first_of(a + 1), b0 = first_of(b), b1 = first_of(b + 1);
+    const int ea = segment(a0).entity, eb = segment(b0).entity;
+    if (ea == eb) {
+      const double skip = model.contact_entity_self_skip[static_cast<std::size_t>(ea)];
+      const double far = std::max(segment(b1 - 1).s0 - segment(a0).s1,
+                                  segment(a1 - 1).s0 - segment(b0).s1);
+      if (skip < 0.0 || far < skip) return;
+    } else if (!model.contact_entity_pairs[static_cast<std::size_t>(
+                   ea * model.num_contact_entities + eb)]) {
+      return;
+    }
+    for (int i = a0; i < a1; ++i)
+      for (int j = b0; j < b1; ++j)
+        if (segments_overlap(i, j)) writer.Consider(std::min(i, j), std::max(i, j));
+  };
+  // Two chunks sharing a cell; each pair once, in the cell of the corner max(lo_a, lo_b).
   for (int b = 0; b < buckets; ++b) {
     const int first = g.bucket_start[static_cast<std::size_t>(b)];
     const int end = g.bucket_start[static_cast<std::size_t>(b + 1)];
     for (int x = first; x < end; ++x)
       for (int y = x + 1; y < end; ++y) {
-        const Eigen::Vector3i& c = g.entry_cell[static_cast<std::size_t>(x)];
-        if (c != g.entry_cell[static_cast<std::size_t>(y)]) continue;  // a hash collision
+        const Eigen::Vector3i& v = g.entry_cell[static_cast<std::size_t>(x)];
+        if (v != g.entry_cell[static_cast<std::size_t>(y)]) continue;  // a hash collision
         const int i = g.entry_segment[static_cast<std::size_t>(x)];
         const int j = g.entry_segment[static_cast<std::size_t>(y)];
         ++g.box_tests;
         if (!BoxesOverlap(g, i, j)) continue;
         const std::size_t ki = static_cast<std::size_t>(i), kj = static_cast<std::size_t>(j);
-        if (cell_of(g.lo[ki].cwiseMax(g.lo[kj])) != c) continue;
-        writer.Consider(std::min(i, j), std::max(i, j));
+        if (cell_of(g.lo[ki].cwiseMax(g.lo[kj])) != v) continue;
+        chunk_pair(std::min(i, j), std::max(i, j));
       }
   }
-  // Large segments against every other (two large ones once).
+  // Large chunks against every other (two large ones once).
   for (int q = 0; q < num_large; ++q) {
     const int i = g.large_segments[static_cast<std::size_t>(q)];
-    for (int j = 0; j < n; ++j) {
+    for (int j = 0; j < chunks; ++j) {
       if (j == i || (g.large[static_cast<std::size_t>(j)] && j < i)) continue;
       ++g.box_tests;
-      if (BoxesOverlap(g, i, j)) writer.Consider(std::min(i, j), std::max(i, j));
+      if (BoxesOverlap(g, i, j)) chunk_pair(std::min(i, j), std::max(i, j));
     }
+  }
+  // Inside a chunk of a rod touching itself: only when its span exceeds the skip (a skip set
+  // below a diameter).
+  for (int c = 0; c < chunks; ++c) {
+    const int c0 = first_of(c), c1 = first_of(c + 1);
+    const double skip =
+        model.contact_entity_self_skip[static_cast<std::size_t>(segment(c0).entity)];
+    if (c1 - c0 < 3 || skip < 0.0 || segment(c1 - 1).s0 - segment(c0).s1 < skip) continue;
+    for (int i = c0; i < c1; ++i)
+      for (int j = i + 2; j < c1; ++j)
+        if (segments_overlap(i, j)) writer.Consider(i, j);
   }
 }
 

@@ -30,6 +30,22 @@ Data MakeData(const Model& model) {
   int coupled_nodes = 0;
   if (segments > 0 && MayHaveShapePairs(model)) {
     ShapePairGrid& g = d.shape_pair_grid;
+    // Chunks: consecutive elements of one rod spanning at most a diameter (and 16 elements).
+    g.chunk_first.clear();
+    for (std::size_t i = 0; i < segments; ++i) {
+      const ContactSegment& s = model.contact_segments[i];
+      if (!g.chunk_first.empty()) {
+        const std::size_t first = static_cast<std::size_t>(g.chunk_first.back());
+        const ContactSegment& f = model.contact_segments[first];
+        if (s.side.rod && f.side.rod && s.entity == f.entity && i - first < 16 &&
+            s.s1 - f.s0 <= 2.0 * s.side.radius * (1.0 + 1e-9))
+          continue;
+      }
+      g.chunk_first.push_back(static_cast<int>(i));
+    }
+    g.chunk_first.push_back(static_cast<int>(segments));
+    g.segment_lo.resize(segments);
+    g.segment_hi.resize(segments);
     g.lo.resize(segments);
     g.hi.resize(segments);
     g.large.resize(segments);

@@ -33,15 +33,17 @@ Section RodSection(double radius) {
   return Section::Circle(radius, mat);
 }
 
-// Three free rods of 12 elements (self-contact on) and three free bodies (a sphere, a capsule
-// and a box): every kind of pair.
-Model MakeScene() {
+// Three free rods of 12 elements and one of 40 elements 5 mm long (radius 10 mm: chunks of 4
+// elements in the grid), self-contact on with the given skip (negative: the default 4 r),
+// and three free bodies (a sphere, a capsule and a box): every kind of pair.
+Model MakeScene(double self_skip) {
   const double r = 0.01;
   ModelBuilder b;
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 4; ++k) {
     const double y = 0.1 * k;
     const int rod = b.AddStraightRod("rod" + std::to_string(k), Vec3(0.0, y, 0.0),
-                                     Vec3(0.36, y, 0.0), 12, RodSection(r));
+                                     Vec3(k < 3 ? 0.36 : 0.2, y, 0.0), k < 3 ? 12 : 40,
+                                     RodSection(r));
     b.AddContactRod(rod, r);
   }
   const Mat3 J = 1e-4 * Mat3::Identity();
@@ -59,6 +61,7 @@ Model MakeScene() {
   law.stiffness = 1e3;
   law.onset = 0.01;
   law.self = true;
+  law.self_skip = self_skip;
   b.SetContactSettings(law);
   return b.Build();
 }
@@ -81,9 +84,15 @@ void Scatter(const Model& m, std::mt19937& rng, Data* d) {
 
 // In 40 random scatterings the broad phase finds every pair of AllShapePairs (the O(n^2)
 // reference) whose surfaces are nearer than the onset, lists no pair twice and none that the
-// reference does not have (they may touch: groups, exclusions, self skip).
-TEST(ShapePairBroadPhase, FindsEveryPairNearerThanTheOnsetOnce) {
-  const Model m = MakeScene();
+// reference does not have (they may touch: groups, exclusions, self skip); with the default
+// skip (chunks of the fine rod never pair with their neighbours) and with a skip of 8 mm
+// (elements 3 apart in one chunk of the fine rod may touch).
+class ShapePairBroadPhase : public ::testing::TestWithParam<double> {};
+
+TEST_P(ShapePairBroadPhase, FindsEveryPairNearerThanTheOnsetOnce) {
+  const Model m = MakeScene(GetParam());
+  Data fresh = MakeData(m);
+  ASSERT_EQ(fresh.shape_pair_grid.chunk_first.size(), 3u * 12u + 10u + 3u + 1u);
   const std::vector<ShapePair> all = AllShapePairs(m);
   std::set<PairKey> possible;
   for (const ShapePair& p : all) possible.insert(KeyOf(p));
@@ -114,12 +123,13 @@ TEST(ShapePairBroadPhase, FindsEveryPairNearerThanTheOnsetOnce) {
   EXPECT_GT(near, 400);        // the scatterings do bring many shapes together
   EXPECT_LT(found, 20 * near);  // and the boxes keep the candidates few
 }
+INSTANTIATE_TEST_SUITE_P(Skips, ShapePairBroadPhase, ::testing::Values(-1.0, 0.008));
 
 // A rod of n elements (r = 5 mm, 1 cm long) laid on a flat spiral whose turns are 11 mm apart
 // (1 mm between the surfaces, less than the onset): every element is near the elements of the
 // next turn. The pairs found and the box tests of the search both grow as n (the reference
 // lists n^2 / 2), and the pairs are those of the reference nearer than the onset.
-TEST(ShapePairBroadPhase, CostGrowsLinearlyWithTheElements) {
+TEST(ShapePairBroadPhaseCost, GrowsLinearlyWithTheElements) {
   const double r = 0.005, ds = 0.01, pitch = 2.0 * r + 0.001;
   std::vector<double> pairs, tests;
   const int sizes[3] = {250, 500, 1000};
@@ -157,7 +167,7 @@ TEST(ShapePairBroadPhase, CostGrowsLinearlyWithTheElements) {
       EXPECT_LT(d.num_shape_pairs, 3 * near);
     }
   }
-  // Measured: 763 / 1689 / 3556 pairs and 8718 / 19862 / 41754 box tests, 11.4 / 11.8 / 11.7
+  // Measured: 763 / 1689 / 3556 pairs and 9481 / 21551 / 45310 box tests, 12.4 / 12.8 / 12.7
   // tests per pair (the pairs per element rise from 3.1 to 3.6 as the outermost turn, which
   // has no neighbour outside, becomes a smaller part of the rod).
   for (int k = 0; k < 2; ++k) {

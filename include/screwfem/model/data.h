@@ -12,13 +12,18 @@ namespace screwfem {
 
 // The broad phase's workspace (UpdateShapePairs, elements/shape_pair.h): a uniform grid of
 // cells hashed into buckets, filled by a counting sort; every array sized by MakeData.
+// The grid sorts chunks: runs of consecutive elements of one rod about a diameter long (at most
+// 16), or one body shape, so that a rod of elements shorter than its radius does not pair
+// each element with the tens of neighbours its box overlaps, all within the self skip.
 struct ShapePairGrid {
-  std::vector<Vec3> lo, hi;             // per contact segment: its box, inflated [m]
-  std::vector<char> large;              // per segment: larger than a cell (tested against all)
+  std::vector<int> chunk_first;         // chunk c: segments [chunk_first[c], chunk_first[c + 1])
+  std::vector<Vec3> segment_lo, segment_hi;  // per contact segment: its box, inflated [m]
+  std::vector<Vec3> lo, hi;             // per chunk: the union of its segments' boxes
+  std::vector<char> large;              // per chunk: larger than a cell (tested against all)
   std::vector<int> bucket_start;        // per bucket (a power of two, + 1): first entry
-  std::vector<int> entry_segment;       // entries (a segment in a cell), bucket by bucket
+  std::vector<int> entry_segment;       // entries (a chunk in a cell), bucket by bucket
   std::vector<Eigen::Vector3i> entry_cell;  // the entry's cell
-  std::vector<int> large_segments;      // the segments larger than a cell
+  std::vector<int> large_segments;      // the chunks larger than a cell
   long box_tests = 0;  // box-overlap tests of the last search (its cost, for tests)
 };
 
