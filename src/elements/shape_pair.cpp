@@ -494,7 +494,7 @@ void FindShapePairs(const Model& model, Data& data) {
                        g.hi[k].cwiseAbs().maxCoeff() > limit;
     g.large[k] = large;
     if (large) {
-      g.large_segments[static_cast<std::size_t>(num_large++)] = c;
+      g.large_chunks[static_cast<std::size_t>(num_large++)] = c;
       continue;
     }
     for_cells(c, [&](const Eigen::Vector3i& v) { ++g.bucket_start[(CellHash(v) & mask) + 1]; });
@@ -506,7 +506,7 @@ void FindShapePairs(const Model& model, Data& data) {
     if (g.large[static_cast<std::size_t>(c)]) continue;
     for_cells(c, [&](const Eigen::Vector3i& v) {
       const std::size_t e = static_cast<std::size_t>(g.bucket_start[CellHash(v) & mask]++);
-      g.entry_segment[e] = c;
+      g.entry_chunk[e] = c;
       g.entry_cell[e] = v;
     });
   }
@@ -553,8 +553,8 @@ void FindShapePairs(const Model& model, Data& data) {
       for (int y = x + 1; y < end; ++y) {
         const Eigen::Vector3i& v = g.entry_cell[static_cast<std::size_t>(x)];
         if (v != g.entry_cell[static_cast<std::size_t>(y)]) continue;  // a hash collision
-        const int i = g.entry_segment[static_cast<std::size_t>(x)];
-        const int j = g.entry_segment[static_cast<std::size_t>(y)];
+        const int i = g.entry_chunk[static_cast<std::size_t>(x)];
+        const int j = g.entry_chunk[static_cast<std::size_t>(y)];
         ++g.box_tests;
         if (!BoxesOverlap(g, i, j)) continue;
         const std::size_t ki = static_cast<std::size_t>(i), kj = static_cast<std::size_t>(j);
@@ -564,7 +564,7 @@ void FindShapePairs(const Model& model, Data& data) {
   }
   // Large chunks against every other (two large ones once).
   for (int q = 0; q < num_large; ++q) {
-    const int i = g.large_segments[static_cast<std::size_t>(q)];
+    const int i = g.large_chunks[static_cast<std::size_t>(q)];
     for (int j = 0; j < chunks; ++j) {
       if (j == i || (g.large[static_cast<std::size_t>(j)] && j < i)) continue;
       ++g.box_tests;

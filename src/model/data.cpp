@@ -49,12 +49,12 @@ Data MakeData(const Model& model) {
     g.lo.resize(segments);
     g.hi.resize(segments);
     g.large.resize(segments);
-    g.entry_segment.resize(8 * segments);
+    g.entry_chunk.resize(8 * segments);
     g.entry_cell.resize(8 * segments);
     std::size_t buckets = 1;
     while (buckets < 16 * segments) buckets *= 2;
     g.bucket_start.resize(buckets + 1);
-    g.large_segments.resize(segments);
+    g.large_chunks.resize(segments);
     d.shape_pairs.resize(4 * segments + 64);
     std::vector<int> nodes;
     for (const ContactSegment& segment : model.contact_segments)

@@ -66,9 +66,10 @@ inline Vec3 BoxCorner(const Vec3& c, const Vec3& h, int k) {
 // skip), and writes their ShapePair items into data.shape_pairs (a box is side B; a segment of
 // positive length against a box is two items, parts 0 and 1; two boxes are the 12 edges of
 // each against the other). Every pair whose surfaces are nearer than the onset is found. A
-// uniform grid (cells of the largest rod element's box) hashed into buckets by a counting sort:
-// time linear in the segments for shapes of bounded density; a segment larger than a cell (a
-// body's shape) is tested against every segment. Allocates nothing unless the pool (sized by
+// uniform grid of chunks (runs of rod elements about a diameter long, or one body shape;
+// ShapePairGrid), cells of the largest rod chunk's box, hashed into buckets by a counting sort:
+// time linear in the segments for shapes of bounded density; a chunk larger than a cell (a
+// body's shape) is tested against every chunk. Allocates nothing unless the pool (sized by
 // MakeData) is full: then it is doubled (GrowShapePairPool) and the search repeated, a
 // geometric growth that ends once the pool holds what the run needs. Called by Assemble and
 // InterpolateStep; call it before reading data.shape_pairs of a state set otherwise.

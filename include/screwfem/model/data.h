@@ -21,9 +21,9 @@ struct ShapePairGrid {
   std::vector<Vec3> lo, hi;             // per chunk: the union of its segments' boxes
   std::vector<char> large;              // per chunk: larger than a cell (tested against all)
   std::vector<int> bucket_start;        // per bucket (a power of two, + 1): first entry
-  std::vector<int> entry_segment;       // entries (a chunk in a cell), bucket by bucket
+  std::vector<int> entry_chunk;         // entries (a chunk in a cell), bucket by bucket
   std::vector<Eigen::Vector3i> entry_cell;  // the entry's cell
-  std::vector<int> large_segments;      // the chunks larger than a cell
+  std::vector<int> large_chunks;        // the chunks larger than a cell
   long box_tests = 0;  // box-overlap tests of the last search (its cost, for tests)
 };
 
