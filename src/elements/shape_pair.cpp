@@ -344,9 +344,10 @@ void SegmentBox(const ContactSegment& g, const Data& d, double pad, Vec3* lo, Ve
   *hi = p0.cwiseMax(p1) + Vec3::Constant(r);
 }
 
-bool BoxesOverlap(const ShapePairGrid& g, int i, int j) {
+// Whether boxes i and j of the arrays lo, hi (chunks' or segments') overlap.
+bool BoxesOverlap(const std::vector<Vec3>& lo, const std::vector<Vec3>& hi, int i, int j) {
   const std::size_t a = static_cast<std::size_t>(i), b = static_cast<std::size_t>(j);
-  return (g.lo[a].array() <= g.hi[b].array()).all() && (g.lo[b].array() <= g.hi[a].array()).all();
+  return (lo[a].array() <= hi[b].array()).all() && (lo[b].array() <= hi[a].array()).all();
 }
 
 // Makes the items of segments i and j if they may touch, and gives each to sink(pair).
@@ -523,9 +524,7 @@ void FindShapePairs(const Model& model, Data& data) {
   PairWriter<decltype(sink)> writer(model, sink);
   auto segments_overlap = [&](int i, int j) {
     ++g.box_tests;
-    const std::size_t a = static_cast<std::size_t>(i), b = static_cast<std::size_t>(j);
-    return (g.segment_lo[a].array() <= g.segment_hi[b].array()).all() &&
-           (g.segment_lo[b].array() <= g.segment_hi[a].array()).all();
+    return BoxesOverlap(g.segment_lo, g.segment_hi, i, j);
   };
   // Two chunks whose boxes overlap: their segments' pairs, unless no two of their segments may
   // touch (other entities that may not; the same rod with every two elements within the skip).
@@ -556,7 +555,7 @@ void FindShapePairs(const Model& model, Data& data) {
         const int i = g.entry_chunk[static_cast<std::size_t>(x)];
         const int j = g.entry_chunk[static_cast<std::size_t>(y)];
         ++g.box_tests;
-        if (!BoxesOverlap(g, i, j)) continue;
+        if (!BoxesOverlap(g.lo, g.hi, i, j)) continue;
         const std::size_t ki = static_cast<std::size_t>(i), kj = static_cast<std::size_t>(j);
         if (cell_of(g.lo[ki].cwiseMax(g.lo[kj])) != v) continue;
         chunk_pair(std::min(i, j), std::max(i, j));
@@ -568,7 +567,7 @@ void FindShapePairs(const Model& model, Data& data) {
     for (int j = 0; j < chunks; ++j) {
       if (j == i || (g.large[static_cast<std::size_t>(j)] && j < i)) continue;
       ++g.box_tests;
-      if (BoxesOverlap(g, i, j)) chunk_pair(std::min(i, j), std::max(i, j));
+      if (BoxesOverlap(g.lo, g.hi, i, j)) chunk_pair(std::min(i, j), std::max(i, j));
     }
   }
   // Inside a chunk of a rod touching itself: only when its span exceeds the skip (a skip set

@@ -10,6 +10,8 @@
 #include <random>
 #include <vector>
 
+#include "linalg/band_matrix.h"
+
 namespace screwfem::band_coupling_test {
 namespace {
 
@@ -34,12 +36,24 @@ Eigen::VectorXd RandomVector(std::mt19937& rng, int n) {
   return b;
 }
 
-void Load(const Eigen::MatrixXd& A, int kl, int ku, BandedLU* lu) {
-  const int n = static_cast<int>(A.rows());
-  lu->Resize(n, kl, ku);
-  lu->SetZero();
-  for (int j = 0; j < n; ++j)
-    for (int i = std::max(0, j - ku); i <= std::min(n - 1, j + kl); ++i) lu->At(i, j) = A(i, j);
+using band_matrix::Load;
+
+// A random banded matrix of n = 60 unknowns with kl = ku = 7 (RandomBanded) and its banded
+// factors.
+constexpr int kN = 60, kBand = 7;
+struct Band {
+  Eigen::MatrixXd A;
+  BandedLU lu;
+};
+void FactorizeRandomBand(std::mt19937& rng, bool saddle, Band* band) {
+  band->A = RandomBanded(rng, kN, kBand, kBand, saddle);
+  Load(band->A, kBand, kBand, &band->lu);
+  ASSERT_EQ(band->lu.Factorize(), -1);
+}
+// The n x n identity in a band of 2, factorised.
+void FactorizeIdentity(int n, BandedLU* lu) {
+  Load(Eigen::MatrixXd::Identity(n, n), 2, 2, lu);
+  ASSERT_EQ(lu->Factorize(), -1);
 }
 
 // One Add: block (p_i, p_j) += scale * B.
@@ -88,17 +102,16 @@ const std::vector<std::pair<int, int>> kFarPairs = {{0, 53},  {53, 0}, {20, 37},
                                                     {53, 20}, {0, 53}, {37, 37}, {20, 20}};
 
 TEST(BandCoupling, WoodburySolveMatchesDenseLUOfTheWholeMatrix) {
-  const int n = 60, kl = 7, ku = 7;
   std::mt19937 rng(11);
   for (const bool saddle : {false, true}) {
     for (int trial = 0; trial < 3; ++trial) {
-      const Eigen::MatrixXd A = RandomBanded(rng, n, kl, ku, saddle);
-      BandedLU lu;
-      Load(A, kl, ku, &lu);
-      ASSERT_EQ(lu.Factorize(), -1);
+      Band band;
+      ASSERT_NO_FATAL_FAILURE(FactorizeRandomBand(rng, saddle, &band));
+      const BandedLU& lu = band.lu;
+      const int n = kN;
       BandCoupling coupling;
       coupling.Resize(n, kBlock, 4);
-      Eigen::MatrixXd full = A;
+      Eigen::MatrixXd full = band.A;
       AddAll(RandomEntries(rng, kFarPairs), &coupling, &full);
       EXPECT_EQ(coupling.blocks(), 4);
       EXPECT_FALSE(coupling.overflowed());
@@ -124,8 +137,7 @@ TEST(BandCoupling, DeterminantSignFollowsTheWholeMatrix) {
   // entry of A + P E P^T (one negative eigenvalue), -2 on two unknowns flips it back.
   const int n = 30;
   BandedLU lu;
-  Load(Eigen::MatrixXd::Identity(n, n), 2, 2, &lu);
-  ASSERT_EQ(lu.Factorize(), -1);
+  ASSERT_NO_FATAL_FAILURE(FactorizeIdentity(n, &lu));
   BandCoupling coupling;
   coupling.Resize(n, kBlock, 4);
   for (int flipped = 1; flipped <= 3; ++flipped) {
@@ -139,9 +151,9 @@ TEST(BandCoupling, DeterminantSignFollowsTheWholeMatrix) {
 }
 
 TEST(BandCoupling, ForEachEntryGivesBackTheAddedMatrix) {
-  const int n = 60, kl = 7, ku = 7;
+  const int n = kN;
   std::mt19937 rng(5);
-  const Eigen::MatrixXd A = RandomBanded(rng, n, kl, ku, false);
+  const Eigen::MatrixXd A = RandomBanded(rng, n, kBand, kBand, false);
   BandCoupling coupling;
   coupling.Resize(n, kBlock, 4);
   Eigen::MatrixXd full = A;
@@ -158,12 +170,12 @@ TEST(BandCoupling, ForEachEntryGivesBackTheAddedMatrix) {
 
 TEST(BandCoupling, OverlappingBlocksAddUp) {
   // Starts 10 and 13 share unknowns 13..15: P has them twice, the identity still holds.
-  const int n = 60, kl = 7, ku = 7;
+  const int n = kN;
   std::mt19937 rng(3);
-  const Eigen::MatrixXd A = RandomBanded(rng, n, kl, ku, true);
-  BandedLU lu;
-  Load(A, kl, ku, &lu);
-  ASSERT_EQ(lu.Factorize(), -1);
+  Band band;
+  ASSERT_NO_FATAL_FAILURE(FactorizeRandomBand(rng, true, &band));
+  const Eigen::MatrixXd& A = band.A;
+  const BandedLU& lu = band.lu;
   BandCoupling coupling;
   coupling.Resize(n, kBlock, 4);
   Eigen::MatrixXd full = A;
@@ -174,12 +186,11 @@ TEST(BandCoupling, OverlappingBlocksAddUp) {
 }
 
 TEST(BandCoupling, EmptyCouplingLeavesTheBandedSolutionUnchanged) {
-  const int n = 60, kl = 7, ku = 7;
+  const int n = kN;
   std::mt19937 rng(8);
-  const Eigen::MatrixXd A = RandomBanded(rng, n, kl, ku, true);
-  BandedLU lu;
-  Load(A, kl, ku, &lu);
-  ASSERT_EQ(lu.Factorize(), -1);
+  Band band;
+  ASSERT_NO_FATAL_FAILURE(FactorizeRandomBand(rng, true, &band));
+  const BandedLU& lu = band.lu;
   BandCoupling coupling;
   coupling.Resize(n, kBlock, 3);
   EXPECT_TRUE(coupling.empty());
@@ -193,12 +204,12 @@ TEST(BandCoupling, EmptyCouplingLeavesTheBandedSolutionUnchanged) {
 }
 
 TEST(BandCoupling, OverflowAddsNothingUntilClearThenSlotsAreReused) {
-  const int n = 60, kl = 7, ku = 7;
+  const int n = kN;
   std::mt19937 rng(21);
-  const Eigen::MatrixXd A = RandomBanded(rng, n, kl, ku, true);
-  BandedLU lu;
-  Load(A, kl, ku, &lu);
-  ASSERT_EQ(lu.Factorize(), -1);
+  Band band;
+  ASSERT_NO_FATAL_FAILURE(FactorizeRandomBand(rng, true, &band));
+  const Eigen::MatrixXd& A = band.A;
+  const BandedLU& lu = band.lu;
   BandCoupling coupling;
   coupling.Resize(n, kBlock, 2);
   EXPECT_EQ(coupling.max_blocks(), 2);
@@ -234,8 +245,7 @@ TEST(BandCoupling, SingularWholeMatrixGivesASingularG) {
   // A = I, E = -I on one block: A + P E P^T has a zero 6 x 6 diagonal block; G = I - I.
   const int n = 30;
   BandedLU lu;
-  Load(Eigen::MatrixXd::Identity(n, n), 2, 2, &lu);
-  ASSERT_EQ(lu.Factorize(), -1);
+  ASSERT_NO_FATAL_FAILURE(FactorizeIdentity(n, &lu));
   BandCoupling coupling;
   coupling.Resize(n, kBlock, 2);
   ASSERT_TRUE(coupling.Add(9, 9, Eigen::MatrixXd::Identity(kBlock, kBlock), -1.0));

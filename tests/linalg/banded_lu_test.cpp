@@ -10,17 +10,12 @@
 #include <random>
 #include <vector>
 
+#include "linalg/band_matrix.h"
+
 namespace screwfem::banded_lu_test {
 namespace {
 
-// Copies the band of a dense matrix into a freshly zeroed BandedLU.
-void Load(const Eigen::MatrixXd& A, int kl, int ku, BandedLU* lu) {
-  const int n = static_cast<int>(A.rows());
-  lu->Resize(n, kl, ku);
-  lu->SetZero();
-  for (int j = 0; j < n; ++j)
-    for (int i = std::max(0, j - ku); i <= std::min(n - 1, j + kl); ++i) lu->At(i, j) = A(i, j);
-}
+using band_matrix::Load;
 
 Eigen::MatrixXd RandomBanded(std::mt19937& rng, int n, int kl, int ku) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
