@@ -138,60 +138,51 @@ std::string PlaceOnRod(const Model& m, BodyPoint& p) {
 
 }  // namespace
 
-// Tendons (method-next.md §N4): eyelets, tension profile, unique names; their segments.
-void BuildTendons(Model& m) {
-  m.tendon_segments.clear();
-  std::set<std::string> names;
-  for (std::size_t i = 0; i < m.tendons.size(); ++i) {
-    Tendon& t = m.tendons[i];
-    const std::string label = "tendon '" + t.name + "'";
-    const int index = static_cast<int>(i);
-    const EntityRef entity{EntityKind::kTendon, index, {}};
-    if (t.eyelets.size() < 2)
-      throw InputError(label + ": needs at least two eyelets (it runs between them), got " +
-                           std::to_string(t.eyelets.size()),
-                       entity);
-    for (std::size_t k = 0; k < t.eyelets.size(); ++k) {
-      const std::string part = "eyelets[" + std::to_string(k) + "]";
-      std::string problem = PlaceOnRod(m, t.eyelets[k]);
-      if (problem.empty()) problem = BodyPointProblem(m, t.eyelets[k]);
-      if (!problem.empty())
-        throw InputError(label + ": eyelet " + std::to_string(k) + ": " + problem,
-                         {EntityKind::kTendon, index, part}, problem);
-      if (k == 0) continue;
-      const double l = (ReferencePosition(m, t.eyelets[k]) - ReferencePosition(m, t.eyelets[k - 1])).norm();
-      if (!(l > 1e-9 * std::max(1.0, m.length_scale))) {
-        const std::string what = "coincides with eyelet " + std::to_string(k - 1) +
-                                 " in the reference configuration (no direction between them)";
-        throw InputError(label + ": eyelet " + std::to_string(k) + " " + what,
-                         {EntityKind::kTendon, index, part}, what);
-      }
+namespace {
+
+// Places the eyelets of tendon `index` (PlaceOnRod) and checks them: valid body points, and
+// consecutive eyelets apart in the reference configuration.
+void PlaceTendonEyelets(const Model& m, Tendon& t, int index, const std::string& label) {
+  for (std::size_t k = 0; k < t.eyelets.size(); ++k) {
+    const std::string part = "eyelets[" + std::to_string(k) + "]";
+    std::string problem = PlaceOnRod(m, t.eyelets[k]);
+    if (problem.empty()) problem = BodyPointProblem(m, t.eyelets[k]);
+    if (!problem.empty())
+      throw InputError(label + ": eyelet " + std::to_string(k) + ": " + problem,
+                       {EntityKind::kTendon, index, part}, problem);
+    if (k == 0) continue;
+    const double l = (ReferencePosition(m, t.eyelets[k]) - ReferencePosition(m, t.eyelets[k - 1])).norm();
+    if (!(l > 1e-9 * std::max(1.0, m.length_scale))) {
+      const std::string what = "coincides with eyelet " + std::to_string(k - 1) +
+                               " in the reference configuration (no direction between them)";
+      throw InputError(label + ": eyelet " + std::to_string(k) + " " + what,
+                       {EntityKind::kTendon, index, part}, what);
     }
-    t.reference_length = 0.0;
-    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k)
-      t.reference_length +=
-          (ReferencePosition(m, t.eyelets[k + 1]) - ReferencePosition(m, t.eyelets[k])).norm();
-    if (t.drive == TendonDrive::kLength) {
-      ValidateProfile(m, t.length, label + " length", entity);
-      const double lower = ProfileLowerBound(t.length);
-      if (!(lower > 0.0))
-        throw InputError(label + ": the length profile can become zero or negative (its terms' "
-                                 "lower bound is " + std::to_string(lower) + " m)",
-                         entity);
-    }
-    ValidateProfile(m, t.tension, label + " tension", entity);
-    const double lower = ProfileLowerBound(t.tension);
-    if (lower < 0.0)
-      throw InputError(label + ": the tension profile can become negative (its terms' lower "
-                               "bound is " + std::to_string(lower) + " N); a tendon can only pull",
-                       entity);
-    if (!t.name.empty() && !names.insert(t.name).second)
-      throw InputError("duplicate tendon name '" + t.name + "'", entity);
-    t.first_segment = static_cast<int>(m.tendon_segments.size());
-    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k)
-      m.tendon_segments.push_back({index, t.eyelets[k], t.eyelets[k + 1]});
   }
-  // The segments on nodes, grouped by node pair in the order of their first segments.
+}
+
+// The profiles of a tendon: valid inputs; a length (drawn by length) that stays positive and a
+// tension that cannot become negative, by their terms' lower bounds (ProfileLowerBound).
+void CheckTendonProfiles(const Model& m, const Tendon& t, const std::string& label,
+                         const EntityRef& entity) {
+  if (t.drive == TendonDrive::kLength) {
+    ValidateProfile(m, t.length, label + " length", entity);
+    const double lower = ProfileLowerBound(t.length);
+    if (!(lower > 0.0))
+      throw InputError(label + ": the length profile can become zero or negative (its terms' "
+                               "lower bound is " + std::to_string(lower) + " m)",
+                       entity);
+  }
+  ValidateProfile(m, t.tension, label + " tension", entity);
+  const double lower = ProfileLowerBound(t.tension);
+  if (lower < 0.0)
+    throw InputError(label + ": the tension profile can become negative (its terms' lower "
+                             "bound is " + std::to_string(lower) + " N); a tendon can only pull",
+                     entity);
+}
+
+// The segments on nodes, grouped by node pair in the order of their first segments.
+void GroupTendonSegments(Model& m) {
   m.tendon_segment_groups.clear();
   m.tendon_group_segments.clear();
   std::map<std::pair<int, int>, std::vector<int>> by_pair;
@@ -212,78 +203,112 @@ void BuildTendons(Model& m) {
   }
 }
 
-// Actuators (method-next.md §N5): rod, range at nodes, values; eps0 and sigma_a per unit
-// profile value; the per-element lists of Model::element_actuators.
-void BuildActuators(Model& m) {
+}  // namespace
+
+// Tendons (method-next.md §N4): eyelets, tension profile, unique names; their segments.
+void BuildTendons(Model& m) {
+  m.tendon_segments.clear();
   std::set<std::string> names;
-  for (std::size_t i = 0; i < m.actuators.size(); ++i) {
-    Actuator& a = m.actuators[i];
-    const std::string label = "actuator '" + a.name + "'";
+  for (std::size_t i = 0; i < m.tendons.size(); ++i) {
+    Tendon& t = m.tendons[i];
+    const std::string label = "tendon '" + t.name + "'";
     const int index = static_cast<int>(i);
-    const EntityRef entity{EntityKind::kActuator, index, {}};
-    const auto fail = [&](const std::string& part, const std::string& what) {
-      throw InputError(label + ": " + what, {EntityKind::kActuator, index, part}, what);
-    };
-    if (a.rod < 0 || a.rod >= static_cast<int>(m.rods.size()))
-      fail("rod", "invalid rod " + std::to_string(a.rod));
-    if (!IsEnumValue(a.type)) fail("type", "invalid actuator type");
-    const Rod& rod = m.rods[static_cast<std::size_t>(a.rod)];
-    const double to = a.to < 0.0 ? rod.length : a.to;
-    const double tol = 1e-8 * std::max(1.0, rod.length);
-    if (!(a.from >= 0.0) || !std::isfinite(a.from))
-      fail("from", "must be a finite arc length >= 0, got " + std::to_string(a.from));
-    if (!(to <= rod.length + tol) || !std::isfinite(to))
-      fail("to", "must not exceed the rod's length " + std::to_string(rod.length) + " m, got " +
-                     std::to_string(to));
-    if (!(to > a.from + tol))
-      fail("to", "must be greater than from (" + std::to_string(a.from) + " m), got " +
-                     std::to_string(to));
-    // The range's ends at nodes: the first element starting at `from`, the last ending at `to`.
-    int first = -1, last = -1;
-    double s = 0.0, near_from = INFINITY, near_to = INFINITY;
-    for (int k = 0; k < rod.num_elements; ++k) {
-      const double L = m.elements[static_cast<std::size_t>(rod.first_element + k)].length;
-      if (std::abs(s - a.from) <= tol) first = k;
-      if (std::abs(s - a.from) < std::abs(near_from - a.from)) near_from = s;
-      s += L;
-      if (std::abs(s - to) <= tol) last = k;
-      if (std::abs(s - to) < std::abs(near_to - to)) near_to = s;
-    }
-    if (first < 0)
-      fail("from", "arc length " + std::to_string(a.from) + " m is not at a node of rod '" +
-                       rod.name + "' (the nearest node is at " + std::to_string(near_from) + " m)");
-    if (last < 0)
-      fail("to", "arc length " + std::to_string(to) + " m is not at a node of rod '" + rod.name +
-                     "' (the nearest node is at " + std::to_string(near_to) + " m)");
-    a.first_element = rod.first_element + first;
-    a.num_elements = last - first + 1;
-    a.rest_strain_unit.setZero();
-    a.active_stress_unit.setZero();
-    const bool chamber = a.type == ActuatorType::kPressure || a.type == ActuatorType::kMuscle;
-    if (chamber) {
-      if (!(a.area > 0.0) || !std::isfinite(a.area))
-        fail("area", "must be a positive area [m^2], got " + std::to_string(a.area));
-      if (!a.offset.allFinite()) fail("offset", "must be finite");
-      // sigma_a per unit pressure: A [e1; r x e1] (method-next.md §N5.2).
-      Vec6 unit;
-      unit << 1.0, 0.0, 0.0, 0.0, a.offset(2), -a.offset(1);
-      unit *= a.area;
-      if (a.type == ActuatorType::kMuscle) {
-        if (!(a.max_stress >= 0.0) || !std::isfinite(a.max_stress))
-          fail("max_stress", "must be finite and non-negative [Pa], got " +
-                                 std::to_string(a.max_stress));
-        unit *= -a.max_stress;
-      }
-      a.active_stress_unit = unit;
-    } else {
-      if (!a.vector.allFinite()) fail("vector", "must be finite");
-      (a.type == ActuatorType::kRestStrain ? a.rest_strain_unit : a.active_stress_unit) = a.vector;
-    }
-    ValidateProfile(m, a.profile, label + " profile", entity);
-    if (!a.name.empty() && !names.insert(a.name).second)
-      throw InputError("duplicate actuator name '" + a.name + "'", entity);
+    const EntityRef entity{EntityKind::kTendon, index, {}};
+    if (t.eyelets.size() < 2)
+      throw InputError(label + ": needs at least two eyelets (it runs between them), got " +
+                           std::to_string(t.eyelets.size()),
+                       entity);
+    PlaceTendonEyelets(m, t, index, label);
+    t.reference_length = 0.0;
+    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k)
+      t.reference_length +=
+          (ReferencePosition(m, t.eyelets[k + 1]) - ReferencePosition(m, t.eyelets[k])).norm();
+    CheckTendonProfiles(m, t, label, entity);
+    if (!t.name.empty() && !names.insert(t.name).second)
+      throw InputError("duplicate tendon name '" + t.name + "'", entity);
+    t.first_segment = static_cast<int>(m.tendon_segments.size());
+    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k)
+      m.tendon_segments.push_back({index, t.eyelets[k], t.eyelets[k + 1]});
   }
-  // Per element, its actuators in order (several on one element add).
+  GroupTendonSegments(m);
+}
+
+namespace {
+
+// Throws the InputError of an actuator for one of its parts.
+struct ActuatorError {
+  const std::string& label;
+  int index;
+  [[noreturn]] void operator()(const std::string& part, const std::string& what) const {
+    throw InputError(label + ": " + what, {EntityKind::kActuator, index, part}, what);
+  }
+};
+
+// The range [from, to] of an actuator on its rod (a negative `to`: the rod's end) must start
+// and end at nodes: sets first_element and num_elements; an error names the nearest node's arc
+// length.
+void PlaceActuatorRange(const Model& m, Actuator& a, const ActuatorError& fail) {
+  const Rod& rod = m.rods[static_cast<std::size_t>(a.rod)];
+  const double to = a.to < 0.0 ? rod.length : a.to;
+  const double tol = 1e-8 * std::max(1.0, rod.length);
+  if (!(a.from >= 0.0) || !std::isfinite(a.from))
+    fail("from", "must be a finite arc length >= 0, got " + std::to_string(a.from));
+  if (!(to <= rod.length + tol) || !std::isfinite(to))
+    fail("to", "must not exceed the rod's length " + std::to_string(rod.length) + " m, got " +
+                   std::to_string(to));
+  if (!(to > a.from + tol))
+    fail("to", "must be greater than from (" + std::to_string(a.from) + " m), got " +
+                   std::to_string(to));
+  // The range's ends at nodes: the first element starting at `from`, the last ending at `to`.
+  int first = -1, last = -1;
+  double s = 0.0, near_from = INFINITY, near_to = INFINITY;
+  for (int k = 0; k < rod.num_elements; ++k) {
+    const double L = m.elements[static_cast<std::size_t>(rod.first_element + k)].length;
+    if (std::abs(s - a.from) <= tol) first = k;
+    if (std::abs(s - a.from) < std::abs(near_from - a.from)) near_from = s;
+    s += L;
+    if (std::abs(s - to) <= tol) last = k;
+    if (std::abs(s - to) < std::abs(near_to - to)) near_to = s;
+  }
+  if (first < 0)
+    fail("from", "arc length " + std::to_string(a.from) + " m is not at a node of rod '" +
+                     rod.name + "' (the nearest node is at " + std::to_string(near_from) + " m)");
+  if (last < 0)
+    fail("to", "arc length " + std::to_string(to) + " m is not at a node of rod '" + rod.name +
+                   "' (the nearest node is at " + std::to_string(near_to) + " m)");
+  a.first_element = rod.first_element + first;
+  a.num_elements = last - first + 1;
+}
+
+// eps0 and sigma_a per unit profile value: a pressure or muscle chamber's stress from its area
+// and offset, else the actuator's vector.
+void SetActuatorUnits(Actuator& a, const ActuatorError& fail) {
+  a.rest_strain_unit.setZero();
+  a.active_stress_unit.setZero();
+  const bool chamber = a.type == ActuatorType::kPressure || a.type == ActuatorType::kMuscle;
+  if (chamber) {
+    if (!(a.area > 0.0) || !std::isfinite(a.area))
+      fail("area", "must be a positive area [m^2], got " + std::to_string(a.area));
+    if (!a.offset.allFinite()) fail("offset", "must be finite");
+    // sigma_a per unit pressure: A [e1; r x e1] (method-next.md §N5.2).
+    Vec6 unit;
+    unit << 1.0, 0.0, 0.0, 0.0, a.offset(2), -a.offset(1);
+    unit *= a.area;
+    if (a.type == ActuatorType::kMuscle) {
+      if (!(a.max_stress >= 0.0) || !std::isfinite(a.max_stress))
+        fail("max_stress", "must be finite and non-negative [Pa], got " +
+                               std::to_string(a.max_stress));
+      unit *= -a.max_stress;
+    }
+    a.active_stress_unit = unit;
+  } else {
+    if (!a.vector.allFinite()) fail("vector", "must be finite");
+    (a.type == ActuatorType::kRestStrain ? a.rest_strain_unit : a.active_stress_unit) = a.vector;
+  }
+}
+
+// Per element, its actuators in order (several on one element add).
+void ListElementActuators(Model& m) {
   m.element_actuators.clear();
   for (std::size_t e = 0; e < m.elements.size(); ++e) {
     RodElement& el = m.elements[e];
@@ -295,6 +320,30 @@ void BuildActuators(Model& m) {
     }
     el.num_actuators = static_cast<int>(m.element_actuators.size()) - el.first_actuator;
   }
+}
+
+}  // namespace
+
+// Actuators (method-next.md §N5): rod, range at nodes, values; eps0 and sigma_a per unit
+// profile value; the per-element lists of Model::element_actuators.
+void BuildActuators(Model& m) {
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < m.actuators.size(); ++i) {
+    Actuator& a = m.actuators[i];
+    const std::string label = "actuator '" + a.name + "'";
+    const int index = static_cast<int>(i);
+    const EntityRef entity{EntityKind::kActuator, index, {}};
+    const ActuatorError fail{label, index};
+    if (a.rod < 0 || a.rod >= static_cast<int>(m.rods.size()))
+      fail("rod", "invalid rod " + std::to_string(a.rod));
+    if (!IsEnumValue(a.type)) fail("type", "invalid actuator type");
+    PlaceActuatorRange(m, a, fail);
+    SetActuatorUnits(a, fail);
+    ValidateProfile(m, a.profile, label + " profile", entity);
+    if (!a.name.empty() && !names.insert(a.name).second)
+      throw InputError("duplicate actuator name '" + a.name + "'", entity);
+  }
+  ListElementActuators(m);
 }
 
 // Force elements: ends, values, rest length (the reference distance when negative), names.
