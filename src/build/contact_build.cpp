@@ -1,0 +1,478 @@
+// The contact build step (build/build_steps.h): validates contact rods, shapes, obstacles and
+// the law, lists the (moving shape, obstacle) pairs and the segments of the moving shapes with
+// the entity pairs that may touch, and resolves the law's defaults.
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "build_steps.h"
+#include "screwfem/elements/shape_pair.h"
+#include "screwfem/model/errors.h"
+
+namespace screwfem::build_steps {
+
+namespace {
+
+bool IsPositiveSize(double x) { return std::isfinite(x) && x > 0.0; }
+
+// The weight per unit mass for the law's defaults: |g|, or standard gravity without gravity.
+double ContactGravity(const Model& m) {
+  return m.gravity.norm() > 0.0 ? m.gravity.norm() : 9.81;
+}
+
+// The group bitmasks of a rod or body (model.h, ContactGroup): the first set, else 1 and 1.
+ContactGroup ContactGroupOf(const Model& m, bool rod, int index) {
+  for (const ContactGroup& g : m.contact_groups)
+    if (g.rod == rod && g.index == index) return g;
+  return ContactGroup{rod, index, 1u, 1u};
+}
+
+// ---- Moving shapes: entities, their segments and the entity pairs that may touch ----------
+
+// Entities: rods (contact_rods) and bodies with shapes (spheres, capsules, boxes).
+struct ContactEntity {
+  bool rod;
+  int index;      // rod or body index
+  int contact;    // contact_rods index (rods)
+  std::vector<int> nodes;
+};
+
+// The segments of an entity: sides with their masses.
+struct EntitySegment {
+  ShapePairSide side;
+  double mass;  // INFINITY when every node of the side is fixed
+  int first, last;  // rod: the element's position along the rod and its arc-length span
+  double s0, s1;
+};
+
+// Per entity: the largest finite segment mass (-1: none), whether a segment is fixed, the
+// smallest size (radius, or a box's smallest half size).
+struct EntitySizes {
+  std::vector<double> heaviest, smallest;
+  std::vector<char> has_fixed;
+};
+
+std::vector<ContactEntity> ListContactEntities(const Model& m) {
+  std::vector<ContactEntity> entities;
+  for (std::size_t i = 0; i < m.contact_rods.size(); ++i) {
+    const ContactRod& c = m.contact_rods[i];
+    entities.push_back({true, c.rod, static_cast<int>(i), m.rods[static_cast<std::size_t>(c.rod)].nodes});
+  }
+  for (const ContactShape& c : m.contact_shapes) {
+    bool seen = false;
+    for (const ContactEntity& e : entities) seen = seen || (!e.rod && e.index == c.body);
+    if (!seen) entities.push_back({false, c.body, -1, {m.bodies[static_cast<std::size_t>(c.body)].node}});
+  }
+  return entities;
+}
+
+// The pair exclusions name existing rods and bodies.
+void CheckPairExclusions(const Model& m) {
+  for (const ContactPairExclusion& x : m.contact_pair_exclusions)
+    for (int k = 0; k < 2; ++k) {
+      const std::size_t size = x.rod[k] ? m.rods.size() : m.bodies.size();
+      if (x.index[k] < 0 || x.index[k] >= static_cast<int>(size))
+        throw InputError(std::string("contact exclusion: no ") + (x.rod[k] ? "rod " : "body ") +
+                         std::to_string(x.index[k]));
+    }
+}
+
+bool PairExcluded(const Model& m, const ContactEntity& a, const ContactEntity& b) {
+  for (const ContactPairExclusion& x : m.contact_pair_exclusions)
+    for (int k = 0; k < 2; ++k)
+      if (x.rod[k] == a.rod && x.index[k] == a.index && x.rod[1 - k] == b.rod &&
+          x.index[1 - k] == b.index)
+        return true;
+  return false;
+}
+
+// Joined: a shared node or a joint between their nodes.
+bool EntitiesJoined(const Model& m, const ContactEntity& a, const ContactEntity& b) {
+  auto has = [](const ContactEntity& e, int node) {
+    return std::find(e.nodes.begin(), e.nodes.end(), node) != e.nodes.end();
+  };
+  for (int n : a.nodes)
+    if (has(b, n)) return true;
+  for (const Joint& j : m.joints)
+    if ((has(a, j.node_a) && has(b, j.node_b)) || (has(a, j.node_b) && has(b, j.node_a)))
+      return true;
+  return false;
+}
+
+bool FixedOrGround(const Model& m, int node) {
+  return node == kGround || m.nodes[static_cast<std::size_t>(node)].fixed;
+}
+
+// A rod's segments: its element capsules, with their arc-length spans.
+std::vector<EntitySegment> RodSegments(const Model& m, const ContactEntity& e) {
+  std::vector<EntitySegment> out;
+  const Rod& rod = m.rods[static_cast<std::size_t>(e.index)];
+  const double radius = m.contact_rods[static_cast<std::size_t>(e.contact)].radius;
+  double arc = 0.0;
+  for (int k = 0; k < rod.num_elements; ++k) {
+    const RodElement& el = m.elements[static_cast<std::size_t>(rod.first_element + k)];
+    EntitySegment g;
+    g.side.node[0] = el.node_a;
+    g.side.node[1] = el.node_b;
+    g.side.end_node[1] = 1;
+    g.side.radius = radius;
+    g.side.rod = true;
+    g.side.owner = e.index;
+    g.side.element = rod.first_element + k;
+    g.mass = FixedOrGround(m, el.node_a) && FixedOrGround(m, el.node_b)
+                 ? INFINITY
+                 : rod.section.inertia(0) * el.length;
+    g.first = g.last = k;
+    g.s0 = arc;
+    arc += el.length;
+    g.s1 = arc;
+    out.push_back(g);
+  }
+  return out;
+}
+
+// A body's segments: its spheres, capsules and boxes (a box: half sizes, radius 0).
+std::vector<EntitySegment> BodySegments(const Model& m, const ContactEntity& e) {
+  std::vector<EntitySegment> out;
+  const RigidBody& body = m.bodies[static_cast<std::size_t>(e.index)];
+  for (const ContactShape& c : m.contact_shapes) {
+    if (c.body != e.index) continue;
+    EntitySegment g;
+    g.side.node[0] = body.node;
+    g.side.offset[0] = c.from;
+    g.side.offset[1] = c.type == ContactShapeType::kCapsule ? c.to : c.from;
+    g.side.radius = c.radius;
+    if (c.type == ContactShapeType::kBox) {
+      g.side.half = c.to;
+      g.side.radius = 0.0;
+    }
+    g.side.owner = e.index;
+    g.mass = FixedOrGround(m, body.node) ? INFINITY : body.mass;
+    g.first = g.last = 0;
+    g.s0 = g.s1 = 0.0;
+    out.push_back(g);
+  }
+  return out;
+}
+
+// Every entity's segments into Model::contact_segments, in entity order; the entities' sizes.
+EntitySizes AddContactSegments(Model& m, const std::vector<ContactEntity>& entities) {
+  const int ne = static_cast<int>(entities.size());
+  EntitySizes sizes;
+  sizes.heaviest.assign(static_cast<std::size_t>(ne), -1.0);
+  sizes.smallest.assign(static_cast<std::size_t>(ne), INFINITY);
+  sizes.has_fixed.assign(static_cast<std::size_t>(ne), 0);
+  for (int e = 0; e < ne; ++e) {
+    const ContactEntity& entity = entities[static_cast<std::size_t>(e)];
+    for (const EntitySegment& g : entity.rod ? RodSegments(m, entity) : BodySegments(m, entity)) {
+      ContactSegment cs;
+      cs.side = g.side;
+      cs.mass = g.mass;
+      cs.entity = e;
+      cs.s0 = g.s0;
+      cs.s1 = g.s1;
+      m.contact_segments.push_back(cs);
+      const std::size_t k = static_cast<std::size_t>(e);
+      if (std::isinf(g.mass))
+        sizes.has_fixed[k] = 1;
+      else
+        sizes.heaviest[k] = std::max(sizes.heaviest[k], g.mass);
+      sizes.smallest[k] = std::min(sizes.smallest[k], g.side.half.x() > 0.0
+                                                          ? g.side.half.minCoeff()
+                                                          : g.side.radius);
+    }
+  }
+  return sizes;
+}
+
+// The law's defaults over the pairs that can occur: max over pairs of min(m_x, m_y) is the
+// lighter entity's heaviest segment (or the heaviest of one side against a fixed segment).
+void WeighEntityPair(const EntitySizes& sizes, int a, int b, double gravity, double* r_min,
+                     double* w_max) {
+  const std::size_t ka = static_cast<std::size_t>(a), kb = static_cast<std::size_t>(b);
+  double w = std::min(sizes.heaviest[ka], sizes.heaviest[kb]);
+  if (sizes.has_fixed[ka]) w = std::max(w, sizes.heaviest[kb]);
+  if (sizes.has_fixed[kb]) w = std::max(w, sizes.heaviest[ka]);
+  if (w > 0.0) *w_max = std::max(*w_max, w * gravity);
+  *r_min = std::min(*r_min, std::min(sizes.smallest[ka], sizes.smallest[kb]));
+}
+
+// Model::contact_entity_pairs (both orders) for the entities that may touch, and the self skip
+// of each rod in self-contact; weighs every pair that can occur.
+void PairContactEntities(Model& m, const std::vector<ContactEntity>& entities,
+                         const EntitySizes& sizes, double* r_min, double* w_max) {
+  const ContactSettings& law = m.contact;
+  const double gravity = ContactGravity(m);
+  const int ne = static_cast<int>(entities.size());
+  for (int i = 0; i < ne; ++i) {
+    const ContactEntity& a = entities[static_cast<std::size_t>(i)];
+    const ContactGroup ga = ContactGroupOf(m, a.rod, a.index);
+    for (int k = i + 1; k < ne; ++k) {
+      const ContactEntity& b = entities[static_cast<std::size_t>(k)];
+      const ContactGroup gb = ContactGroupOf(m, b.rod, b.index);
+      if (((ga.contype & gb.conaffinity) | (gb.contype & ga.conaffinity)) == 0u) continue;
+      if (PairExcluded(m, a, b) || EntitiesJoined(m, a, b)) continue;
+      m.contact_entity_pairs[static_cast<std::size_t>(i * ne + k)] = 1;
+      m.contact_entity_pairs[static_cast<std::size_t>(k * ne + i)] = 1;
+      WeighEntityPair(sizes, i, k, gravity, r_min, w_max);
+    }
+    if (a.rod && law.self) {
+      const double skip = law.self_skip > 0.0 ? law.self_skip
+                                              : 4.0 * m.contact_rods[static_cast<std::size_t>(a.contact)].radius;
+      m.contact_entity_self_skip[static_cast<std::size_t>(i)] = skip;
+      const Rod& rod = m.rods[static_cast<std::size_t>(a.index)];
+      double length = 0.0;
+      for (int e = 0; e < rod.num_elements; ++e)
+        length += m.elements[static_cast<std::size_t>(rod.first_element + e)].length;
+      // Two of its elements can be skip apart.
+      if (length > skip) WeighEntityPair(sizes, i, i, gravity, r_min, w_max);
+    }
+  }
+}
+
+// The moving shapes (elements/shape_pair.h) as segments for the broad phase, and which two
+// contact entities (a rod: its element capsules; a body: its spheres, capsules and boxes) may
+// touch: their group bitmasks match, they are not excluded and not joined (a shared node or a
+// joint between their nodes); a rod with itself when ContactSettings::self, skipping elements
+// whose nearest ends are closer along the rod than self_skip. No pair of segments is listed
+// here: the broad phase finds them per assembly (UpdateShapePairs), in time linear in the
+// segments. r_min gets the smallest size and w_max the largest weight a pair can carry (the
+// lighter side of the heaviest pair) for the law's defaults.
+void BuildContactSegments(Model& m, double* r_min, double* w_max) {
+  m.contact_segments.clear();
+  m.contact_entity_pairs.clear();
+  m.contact_entity_self_skip.clear();
+  m.num_contact_entities = 0;
+  const ContactSettings& law = m.contact;
+  if (!std::isfinite(law.self_skip) || law.self_skip == 0.0)
+    throw InputError("contact: self_skip must be positive (or left to its default)");
+  const std::vector<ContactEntity> entities = ListContactEntities(m);
+  CheckPairExclusions(m);
+  const int ne = static_cast<int>(entities.size());
+  m.num_contact_entities = ne;
+  m.contact_entity_pairs.assign(static_cast<std::size_t>(ne * ne), 0);
+  m.contact_entity_self_skip.assign(static_cast<std::size_t>(ne), -1.0);
+  const EntitySizes sizes = AddContactSegments(m, entities);
+  PairContactEntities(m, entities, sizes, r_min, w_max);
+}
+
+// ---- Validation -----------------------------------------------------------------------------
+
+void ValidateContactRods(const Model& m) {
+  for (std::size_t i = 0; i < m.contact_rods.size(); ++i) {
+    const ContactRod& c = m.contact_rods[i];
+    const EntityRef entity{EntityKind::kContactRod, static_cast<int>(i), {}};
+    if (c.rod < 0 || c.rod >= static_cast<int>(m.rods.size()))
+      throw InputError("contact rod " + std::to_string(i) + ": no rod " + std::to_string(c.rod),
+                       entity);
+    if (!IsPositiveSize(c.radius))
+      throw InputError("contact of rod '" + m.rods[static_cast<std::size_t>(c.rod)].name +
+                           "': the contact radius must be positive, got " + std::to_string(c.radius),
+                       entity);
+  }
+}
+
+void ValidateContactShapes(const Model& m) {
+  for (std::size_t i = 0; i < m.contact_shapes.size(); ++i) {
+    const ContactShape& c = m.contact_shapes[i];
+    const EntityRef entity{EntityKind::kContactShape, static_cast<int>(i), {}};
+    if (c.body < 0 || c.body >= static_cast<int>(m.bodies.size()))
+      throw InputError("contact shape " + std::to_string(i) + ": no body " + std::to_string(c.body),
+                       entity);
+    const std::string label = "contact shape of body '" +
+                              m.bodies[static_cast<std::size_t>(c.body)].name + "'";
+    if (!c.from.allFinite() || !c.to.allFinite())
+      throw InputError(label + ": points and sizes must be finite", entity);
+    if (c.type == ContactShapeType::kBox ? !(c.to.minCoeff() > 0.0) : !IsPositiveSize(c.radius))
+      throw InputError(label + (c.type == ContactShapeType::kBox
+                                    ? ": the half sizes must be positive"
+                                    : ": the radius must be positive"),
+                       entity);
+  }
+}
+
+// Obstacles: finite, a non-zero plane normal (normalised here) or a positive radius, unique
+// names.
+void ValidateObstacles(Model& m) {
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < m.obstacles.size(); ++i) {
+    ContactObstacle& o = m.obstacles[i];
+    const EntityRef entity{EntityKind::kObstacle, static_cast<int>(i), {}};
+    const std::string label = "obstacle '" + o.name + "'";
+    if (!o.point.allFinite() || !o.normal.allFinite() || !o.to.allFinite())
+      throw InputError(label + ": points and normal must be finite", entity);
+    if (o.type == ObstacleType::kPlane) {
+      if (!(o.normal.norm() > 0.0))
+        throw InputError(label + ": the plane normal must not be zero", entity);
+      o.normal.normalize();
+    } else if (!IsPositiveSize(o.radius)) {
+      throw InputError(label + ": the radius must be positive, got " + std::to_string(o.radius),
+                       entity);
+    }
+    if (!o.name.empty() && !names.insert(o.name).second)
+      throw InputError("duplicate obstacle name '" + o.name + "'", entity);
+  }
+}
+
+// The law: friction and damping ratio finite and >= 0; stiffness, onset and slip velocity
+// positive or negative (left to their defaults).
+void ValidateContactLaw(const Model& m) {
+  const ContactSettings& law = m.contact;
+  if (!(law.friction >= 0.0) || !std::isfinite(law.friction))
+    throw InputError("contact: the friction coefficient must be finite and >= 0, got " +
+                     std::to_string(law.friction));
+  if (!(law.damping_ratio >= 0.0) || !std::isfinite(law.damping_ratio))
+    throw InputError("contact: the damping ratio must be finite and >= 0");
+  for (double v : {law.stiffness, law.onset, law.slip_velocity})
+    if (!std::isfinite(v) || v == 0.0)
+      throw InputError("contact: stiffness, onset and slip velocity must be positive (or left "
+                       "to their defaults)");
+}
+
+// ---- Pairs of a moving shape and an obstacle ------------------------------------------------
+
+bool ObstacleExcluded(const Model& m, bool rod, int index, int obstacle) {
+  for (const ContactExclusion& e : m.contact_exclusions)
+    if (e.rod == rod && e.index == index && e.obstacle == obstacle) return true;
+  return false;
+}
+
+// Whether a rod or body may touch obstacle oi: the group bitmasks match and it is not excluded.
+bool MayTouchObstacle(const Model& m, int oi, bool rod, int index) {
+  const ContactObstacle& o = m.obstacles[static_cast<std::size_t>(oi)];
+  const ContactGroup g = ContactGroupOf(m, rod, index);
+  return ((g.contype & o.conaffinity) | (o.contype & g.conaffinity)) != 0u &&
+         !ObstacleExcluded(m, rod, index, oi);
+}
+
+// A contact rod against obstacle oi: its node spheres against a plane, its element capsules
+// against curved obstacles; each pair's mass (for the damping) into `masses`.
+void AddRodObstaclePairs(Model& m, const ContactRod& c, int oi, double* r_min,
+                         std::vector<double>* masses) {
+  const bool plane = m.obstacles[static_cast<std::size_t>(oi)].type == ObstacleType::kPlane;
+  const Rod& rod = m.rods[static_cast<std::size_t>(c.rod)];
+  const double rho_a = rod.section.inertia(0);
+  *r_min = std::min(*r_min, c.radius);
+  if (plane) {
+    // Node spheres (a chord's closest point to a plane is an end).
+    for (std::size_t k = 0; k < rod.nodes.size(); ++k) {
+      const int node = rod.nodes[k];
+      if (m.nodes[static_cast<std::size_t>(node)].fixed) continue;
+      double length = 0.0;
+      if (k > 0) length += 0.5 * m.elements[static_cast<std::size_t>(rod.first_element + static_cast<int>(k) - 1)].length;
+      if (k + 1 < rod.nodes.size()) length += 0.5 * m.elements[static_cast<std::size_t>(rod.first_element + static_cast<int>(k))].length;
+      ContactPair p;
+      p.node[0] = node;
+      p.radius = c.radius;
+      p.obstacle = oi;
+      p.rod = true;
+      p.owner = c.rod;
+      m.contact_pairs.push_back(p);
+      masses->push_back(rho_a * length);
+    }
+  } else {
+    for (int e = rod.first_element; e < rod.first_element + rod.num_elements; ++e) {
+      const RodElement& el = m.elements[static_cast<std::size_t>(e)];
+      ContactPair p;
+      p.node[0] = el.node_a;
+      p.node[1] = el.node_b;
+      p.end_node[1] = 1;
+      p.radius = c.radius;
+      p.obstacle = oi;
+      p.rod = true;
+      p.owner = c.rod;
+      m.contact_pairs.push_back(p);
+      masses->push_back(rho_a * el.length);
+    }
+  }
+}
+
+// A body's contact shape against obstacle oi (none when the body's node is fixed); each pair's
+// mass, the body's, into `masses`.
+void AddShapeObstaclePairs(Model& m, const ContactShape& c, int oi, double* r_min,
+                           std::vector<double>* masses) {
+  const bool plane = m.obstacles[static_cast<std::size_t>(oi)].type == ObstacleType::kPlane;
+  const RigidBody& body = m.bodies[static_cast<std::size_t>(c.body)];
+  if (m.nodes[static_cast<std::size_t>(body.node)].fixed) return;
+  auto add = [&](const Vec3& a, const Vec3& b, double radius) {
+    ContactPair p;
+    p.node[0] = body.node;
+    p.offset[0] = a;
+    p.offset[1] = b;
+    p.radius = radius;
+    p.obstacle = oi;
+    p.owner = c.body;
+    m.contact_pairs.push_back(p);
+    masses->push_back(body.mass);
+  };
+  switch (c.type) {
+    case ContactShapeType::kSphere:
+      *r_min = std::min(*r_min, c.radius);
+      add(c.from, c.from, c.radius);
+      break;
+    case ContactShapeType::kCapsule:
+      *r_min = std::min(*r_min, c.radius);
+      if (plane) {
+        add(c.from, c.from, c.radius);
+        add(c.to, c.to, c.radius);
+      } else {
+        add(c.from, c.to, c.radius);
+      }
+      break;
+    case ContactShapeType::kBox: {
+      // method-next.md §N6.2: 8 vertex spheres and (against curved obstacles) 12 edge
+      // capsules, of radius 0.
+      *r_min = std::min(*r_min, c.to.minCoeff());
+      Vec3 v[8];
+      for (int k = 0; k < 8; ++k) v[k] = BoxCorner(c.from, c.to, k);
+      for (int k = 0; k < 8; ++k) add(v[k], v[k], 0.0);
+      if (!plane)
+        for (int k = 0; k < 8; ++k)
+          for (int bit : {1, 2, 4})
+            if (!(k & bit)) add(v[k], v[k | bit], 0.0);
+      break;
+    }
+  }
+}
+
+// Defaults (method-next.md §N6.4) and the damping of each pair.
+void ResolveContactLaw(Model& m, const std::vector<double>& masses, double r_min,
+                       double w_max) {
+  ContactSettings& law = m.contact;
+  const double gravity = ContactGravity(m);
+  for (double mass : masses) w_max = std::max(w_max, mass * gravity);
+  if (law.onset < 0.0) law.onset = std::isfinite(r_min) ? 0.01 * r_min : 1e-4;
+  if (law.stiffness < 0.0) law.stiffness = w_max > 0.0 ? 100.0 * w_max / law.onset : 1e6;
+  if (law.slip_velocity < 0.0) law.slip_velocity = 1e-3;
+  for (std::size_t i = 0; i < m.contact_pairs.size(); ++i)
+    m.contact_pairs[i].damping =
+        2.0 * law.damping_ratio * std::sqrt(law.stiffness * std::max(masses[i], 0.0));
+}
+
+}  // namespace
+
+// Contact (method-next.md §N6): validates shapes, obstacles and the law, enumerates the
+// (moving shape, obstacle) pairs and resolves the defaults (model.h, ContactSettings).
+void BuildContacts(Model& m) {
+  m.contact_pairs.clear();
+  ValidateContactRods(m);
+  ValidateContactShapes(m);
+  ValidateObstacles(m);
+  ValidateContactLaw(m);
+  // Pairs: each moving shape against each obstacle it may touch.
+  double r_min = INFINITY, w_max = 0.0;
+  std::vector<double> masses;  // per pair, for the damping
+  for (int oi = 0; oi < static_cast<int>(m.obstacles.size()); ++oi) {
+    for (const ContactRod& c : m.contact_rods)
+      if (MayTouchObstacle(m, oi, true, c.rod)) AddRodObstaclePairs(m, c, oi, &r_min, &masses);
+    for (const ContactShape& c : m.contact_shapes)
+      if (MayTouchObstacle(m, oi, false, c.body))
+        AddShapeObstaclePairs(m, c, oi, &r_min, &masses);
+  }
+  BuildContactSegments(m, &r_min, &w_max);
+  ResolveContactLaw(m, masses, r_min, w_max);
+}
+
+}  // namespace screwfem::build_steps
