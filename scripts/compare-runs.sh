@@ -5,7 +5,7 @@
 # OLD_PROGRAM and NEW_PROGRAM are two builds' app/screwfem (e.g. a worktree of the revision
 # before the change). Tables, JSON and VTK files are compared whole, except the wall-clock
 # fields of summary.json (wall_time, steps_per_second and the like), which are dropped before
-# comparing. Prints one line per scene and exits non-zero when any output differs or a run's
+# comparing, and the run's lock file (it holds the process id). Prints one line per scene and exits non-zero when any output differs or a run's
 # exit status differs.
 set -uo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -28,7 +28,7 @@ with open(sys.argv[1]) as f:
 def drop(o):
     if isinstance(o, dict):
         return {k: drop(v) for k, v in o.items()
-                if not any(w in k for w in ("wall", "per_second", "seconds_", "cpu", "elapsed"))}
+                if not any(w in k for w in ("wall", "per_second", "seconds", "real_time", "cpu", "elapsed"))}
     if isinstance(o, list):
         return [drop(v) for v in o]
     return o
@@ -61,7 +61,7 @@ for scene in $scenes; do
         status="differs: $rel"
         break
       fi
-    done < <(find "$out/old/$name" -type f | sort)
+    done < <(find "$out/old/$name" -type f ! -name .screwfem.lock | sort)
   fi
   [[ "$status" == same ]] || differ=1
   printf '%-50s exit %d  %s\n' "$scene" "$s_old" "$status"
