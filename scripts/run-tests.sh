@@ -13,6 +13,8 @@
 #      report, leak, timeout (10 s per input) or out-of-memory (1024 MB) fails the job, and
 #      the failing input is copied into tests/fuzz/regressions/NAME/ (commit it: ctest
 #      replays that corpus in every build).
+#   5. the lint (scripts/lint.sh): every C++ file as .clang-format lays it out, and commit
+#      subjects of at most 72 characters with a body; a broken rule counts as one failure.
 # Runs every phase even after a failure (except the sanitizer build when the Release build
 # failed), prints the time of each phase, and ends with the line "N passed, M failed" summed
 # over both ctest runs and the examples; a failed build or a ctest run without a summary counts
@@ -170,6 +172,10 @@ configure_and_build "Release" "$release_dir" -DCMAKE_BUILD_TYPE=Release \
   -DSCREWFEM_BUILD_BENCH=OFF
 release_status=$?
 wait_for_rest
+# The house rules a machine can check: the C++ layout (.clang-format) and the commit messages.
+begin "lint"
+bash scripts/lint.sh || fail "lint (scripts/lint.sh)"
+end "lint"
 if [[ $release_status -eq 0 ]]; then
   run_ctest "Release" "$release_dir"
   run_examples "$release_dir"

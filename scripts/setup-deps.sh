@@ -8,7 +8,8 @@ set -euo pipefail
 #   build  what configuring and compiling the Release tree needs;
 #   main   build + what the main job's figures and viewer pages need (scripts/run-main.sh);
 #   rest   the figures' and viewer's packages + what only the tests use (the sanitizer
-#          compiler, Chromium for the viewer test, venv/pip for the package test, Dask);
+#          compiler, clang-format for the lint, Chromium for the viewer test, venv/pip for
+#          the package test, Dask);
 #   bench  build + what only the benchmarks use: MuJoCo, which screwfem_bench_mujoco runs side
 #          by side with screwfem on the same model (bench/RESULTS.md, "Spring chain against
 #          MuJoCo"; the bench builds only when it is found, the tests never need it);
@@ -23,7 +24,7 @@ build_packages=(
 view_packages=(python3-matplotlib python3-pil libjs-three)
 bench_packages=(libmujoco-dev)
 test_packages=(
-  clang python3-venv python3-pip
+  clang clang-format python3-venv python3-pip
   python3-dask python3-distributed python3-pandas
   chromium python3-websocket
 )

@@ -5,12 +5,7 @@
 #include <tuple>
 #include <type_traits>
 
-#include "screwfem/elements/contact.h"
-#include "screwfem/elements/shape_pair.h"
-#include "screwfem/elements/loads.h"
-#include "screwfem/elements/rigid_body.h"
-#include "screwfem/elements/rod.h"
-#include "screwfem/elements/tendon.h"
+#include "screwfem/elements/registry.h"
 #include "screwfem/model/errors.h"
 
 namespace screwfem {
@@ -24,9 +19,9 @@ class Scatter {
  public:
   Scatter(const Model& m, Data& d, const AssemblyOptions& o) : m_(m), d_(d), o_(o) {}
 
-  int NodeDof(int node) const {
-    return node == kGround ? -1 : m_.nodes[static_cast<std::size_t>(node)].dof;
-  }
+  int NodeDof(int node) const { return screwfem::NodeDof(m_, node); }
+  // The global residual, for constraint kinds that add their rows and forces themselves.
+  Eigen::VectorXd& Residual() { return d_.residual; }
   // Records the size of terms that cancel inside a residual entry (round-off floor estimate).
   void Term(double magnitude) { d_.term_scale = std::max(d_.term_scale, o_.s_rows * magnitude); }
   const Mat6& NodeT(int node) const { return d_.node_tangent[static_cast<std::size_t>(node)]; }
@@ -192,16 +187,6 @@ KernelOptions MakeKernelOptions(const AssemblyOptions& o) {
   return k;
 }
 
-// The items of a kind: from the Model, or from the Data for a kind whose items are found
-// during the run (kItemsInData: the pairs of the contact broad phase).
-template <class Kind, class F>
-void ForEachItem(const Model& m, const Data& d, F&& f) {
-  if constexpr (requires { Kind::kItemsInData; })
-    Kind::ForEach(m, d, f);
-  else
-    Kind::ForEach(m, f);
-}
-
 // Every item of one element kind: gather, compute, scatter. Stops at the first item whose
 // kernel fails (a rod element past its rotation limit) and records it in data.
 template <class Kind>
@@ -244,171 +229,15 @@ void AddKindEnergies(const Model& m, const Data& d, Energy* E, std::tuple<Kinds.
    ...);
 }
 
-// d(B^T lambda)/dq of joint ji (statics' exact tangent) into the blocks over its node A, node
-// B and coordinates (dofs -1: absent).
-void AddConstraintForceTangent(const Model& m, const Data& d, const AssemblyOptions& o,
-                               Scatter& s, int ji, const JointGradient& g, const Vec6& lambda,
-                               int da, int db) {
-  const Joint& j = m.joints[static_cast<std::size_t>(ji)];
-  JointForceTangent K;
-  CalcJointConstraintForceTangent(j, g, lambda, JointCurrentBasis(m, d, ji), &K);
-  const int k = j.k();
-  const int dofs[3] = {da, db, k > 0 ? j.coord : -1};
-  const int sizes[3] = {6, 6, k}, offsets[3] = {0, 6, 12};
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b)
-      if (dofs[a] >= 0 && dofs[b] >= 0)
-        s.Block(dofs[a], dofs[b], K.block(offsets[a], offsets[b], sizes[a], sizes[b]),
-                o.s_rows * o.c_stiffness);
+// Every item of one constraint kind with rows that are not held: its rows, gradient and
+// forces (elements/constraint.h).
+template <class Kind>
+void AddConstraintKind(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
+  Kind::ForEach(m, [&](const typename Kind::Item& item) {
+    if (Kind::Active(m, d, item)) Kind::Assemble(m, d, item, o, s);
+  });
 }
 
-// Z = d(B v)/dq of joint ji at the current v (stabilised index 2) into its constraint rows,
-// with the tangent operators of the columns, scaled by s_C o.velocity_constraint_tangent.
-void AddVelocityConstraintTangent(const Model& m, const Data& d, const AssemblyOptions& o,
-                                  Scatter& s, int ji, const JointGradient& g,
-                                  const JointMatrix& TJ, int da, int db) {
-  const Joint& j = m.joints[static_cast<std::size_t>(ji)];
-  const int k = j.k();
-  const Vec6 v_a = da >= 0 ? Vec6(d.v.segment<6>(da)) : Vec6::Zero();
-  const Vec6 v_b = db >= 0 ? Vec6(d.v.segment<6>(db)) : Vec6::Zero();
-  JointVelocityTangent Z;
-  CalcJointVelocityConstraintTangent(j, g, da >= 0 ? &v_a : nullptr, db >= 0 ? &v_b : nullptr,
-                                     d.v.segment(k > 0 ? j.coord : 0, k),
-                                     JointCurrentBasis(m, d, ji), &Z);
-  const double scale = o.s_constraints * o.velocity_constraint_tangent;
-  const int row = m.nv + j.row;
-  const bool tangent = o.use_node_tangent;
-  if (da >= 0)
-    s.Block(row, da, tangent ? Mat6(Z.leftCols<6>() * s.NodeT(j.node_a)) : Mat6(Z.leftCols<6>()),
-            scale);
-  if (db >= 0)
-    s.Block(row, db,
-            tangent ? Mat6(Z.middleCols<6>(6) * s.NodeT(j.node_b)) : Mat6(Z.middleCols<6>(6)),
-            scale);
-  if (k > 0) {
-    // The coordinates' constraint rows hold B_J T_J (AddJoints); those of B v need B_J.
-    const Mat6X basis = JointCurrentBasis(m, d, ji);
-    const JointMatrix I = Mat6::Identity().topLeftCorner(k, k);
-    s.Block(row, j.coord, Mat6X(Z.rightCols(k) * TJ), scale);
-    s.Block(row, j.coord,
-            Mat6X(JointGradientCoordinates(g, basis, I) - JointGradientCoordinates(g, basis, TJ)),
-            o.s_constraints);
-  }
-}
-
-// Joints (method.md §4): the constraint rows and their gradient, and the forces of springs,
-// dampers and drives on the coordinates, from the joint kernel (elements/joint.h).
-void AddJoints(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
-  for (std::size_t jj = 0; jj < m.joints.size(); ++jj) {
-    const Joint& j = m.joints[jj];
-    const int ji = static_cast<int>(jj);
-    const int k = j.k();
-    // In dynamics the coordinates of joints without global coordinates (spherical, planar,
-    // free) retract as H_J = H_J,n exp(A_J x), x = h dq_J, so their matrix columns carry the
-    // subgroup's tangent operator A_J^T T(A_J x) A_J (method.md §5.2), stored after the node
-    // tangents by the integrator. Global coordinates retract additively: no tangent.
-    JointMatrix TJ = Mat6::Identity().topLeftCorner(k, k);
-    if (o.use_node_tangent && !JointHasGlobalCoordinates(j.type) &&
-        d.node_tangent.size() > m.nodes.size() + jj)
-      TJ = d.node_tangent[m.nodes.size() + jj].topLeftCorner(k, k);
-    if (j.row >= 0) {
-      JointGradient g;
-      CalcJointGradient(j, NodeFrame(d, j.node_a), NodeFrame(d, j.node_b),
-                        JointRelativeFrame(m, d, ji), &g);
-      const Eigen::Ref<const Eigen::VectorXd> lam = d.lambda.segment(j.row, 6);
-      d.residual.segment<6>(m.nv + j.row) += o.s_constraints * g.phi;
-      // Stabilised index 2: the constraint rows of the matrix linearise B(q) v, whose
-      // derivative with respect to the velocities is B itself (no tangent operator).
-      const bool velocity_rows = o.velocity_constraint_tangent != 0.0;
-      // The residual gets B^T lambda as transposed products applied to the vector (the same
-      // with and without the matrix), the matrix the blocks themselves.
-      Vec6 bt_a, bt_b;
-      JointGradientTransposeTimes(g, lam, &bt_a, &bt_b);
-      const int da = s.NodeDof(j.node_a), db = s.NodeDof(j.node_b);  // -1: ground or fixed
-      if (da >= 0) {
-        d.residual.segment<6>(da).noalias() += o.s_rows * bt_a;
-        if (o.assemble_matrix)
-          s.GradientMatrix(j.row, da, JointGradientA(g), velocity_rows ? nullptr : &s.NodeT(j.node_a));
-      }
-      if (db >= 0) {
-        d.residual.segment<6>(db).noalias() += o.s_rows * bt_b;
-        if (o.assemble_matrix)
-          s.GradientMatrix(j.row, db, JointGradientB(g), velocity_rows ? nullptr : &s.NodeT(j.node_b));
-      }
-      if (k > 0) {
-        // The coordinates' force B_J^T lambda, in the residual and the multiplier columns,
-        // has no tangent operator (it is the force on the velocity unknowns); the constraint
-        // rows linearise phi along the retraction, B_J T_J.
-        const Mat6X basis = JointCurrentBasis(m, d, ji);
-        const JointMatrix I = Mat6::Identity().topLeftCorner(k, k);
-        const auto BJ = JointGradientCoordinates(g, basis, I);
-        d.residual.segment(j.coord, k).noalias() += o.s_rows * (BJ.transpose() * lam);
-        if (o.assemble_matrix) {
-          s.Block(j.coord, m.nv + j.row, BJ.transpose(), o.s_rows * o.s_multipliers);
-          s.Block(m.nv + j.row, j.coord, JointGradientCoordinates(g, basis, TJ), o.s_constraints);
-        }
-      }
-      if (o.constraint_force_tangent && o.assemble_matrix && !o.use_node_tangent)
-        AddConstraintForceTangent(m, d, o, s, ji, g, Vec6(lam), da, db);
-      if (o.velocity_constraint_tangent != 0.0 && o.assemble_matrix)
-        AddVelocityConstraintTangent(m, d, o, s, ji, g, TJ, da, db);
-    }
-    if (k == 0) continue;
-    // Springs, dampers and drives act on the coordinates.
-    JointCoordinateTerms c;
-    CalcJointCoordinateTerms(m, d, ji, o.time, o.load_factor, o.dynamics, o.assemble_matrix, &c);
-    s.Term(c.term_scale);
-    if (j.drive == DriveKind::kPrescribed) {
-      d.residual(m.nv + j.drive_row) += o.s_constraints * c.drive_constraint;
-      s.Block(j.coord + j.drive_coord, m.nv + j.drive_row, Eigen::Matrix<double, 1, 1>::Ones(),
-              o.s_rows * o.s_multipliers);
-      s.Block(m.nv + j.drive_row, j.coord + j.drive_coord, Eigen::Matrix<double, 1, 1>::Ones(),
-              o.s_constraints);
-    }
-    s.Rows(j.coord, c.force.head(k));
-    const JointMatrix S = o.c_stiffness * c.stiffness.topLeftCorner(k, k) * TJ +
-                          o.c_damping * c.damping.topLeftCorner(k, k);
-    s.Block(j.coord, j.coord, S, o.s_rows);
-  }
-}
-
-// Length-driven tendons (method-next.md §N4.3): the row L(q) - L_p(t) and its gradient B_T,
-// the segments' length gradients added node by node into the row and (transposed) into the
-// column. B_T^T lambda and its tangent lambda d2L come from the segments themselves
-// (TendonSegmentKind with tau = lambda). A slack tendon's row is held (Assemble).
-void AddTendonRows(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s) {
-  for (std::size_t ti = 0; ti < m.tendons.size(); ++ti) {
-    const Tendon& t = m.tendons[ti];
-    if (t.row < 0 || d.tendon_slack[ti]) continue;
-    // Stabilised index 2: the row of the matrix linearises dL/dt = B_T v, whose derivative
-    // with respect to the velocities is B_T (no tangent operator; d(B_T v)/dq is left out of
-    // the matrix: simplified Newton on this row).
-    const bool velocity_rows = o.velocity_constraint_tangent != 0.0;
-    double L = 0.0;
-    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k) {
-      const TendonSegment& seg =
-          m.tendon_segments[static_cast<std::size_t>(t.first_segment) + k];
-      SegmentGradient g;  // eyelets between nodes: parts on both nodes of their element
-      if (!CalcSegmentGradient(m, d, seg, &g)) continue;
-      L += g.length;
-      if (!o.assemble_matrix) continue;
-      for (int i = 0; i < g.count; ++i) {
-        const int dof = s.NodeDof(g.nodes[i]);
-        if (dof < 0) continue;
-        const Eigen::Matrix<double, 1, 6> B = g.parts[i].transpose();
-        s.GradientMatrix(t.row, dof, B, velocity_rows ? nullptr : &s.NodeT(g.nodes[i]));
-      }
-    }
-    d.residual(m.nv + t.row) +=
-        o.s_constraints * (L - TendonTargetLength(t, d, o.time, o.load_factor).value);
-  }
-}
-
-// The element kinds the assembly calls, in this order (docs/architecture.md, "Add an element
-// kind"); joints follow them.
-using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind,
-                                JointSpringKind, TendonSegmentKind, TendonSpanSegmentKind,
-                                ForceElementKind, ContactKind, ShapePairKind>;
 constexpr ElementKinds* kElementKinds = nullptr;
 }  // namespace
 
@@ -416,30 +245,28 @@ std::vector<int> ConstraintForceTangentPattern(const Model& model, int* bandwidt
   std::vector<int> last = model.pattern_last;
   *bandwidth = model.bandwidth;
   if (static_cast<int>(last.size()) != model.num_unknowns()) return last;
-  // The permuted range [first, first + size) of a block of unknowns starting at global g.
+  // d(B^T lambda)/dq of a joint couples every pair of its column blocks (node A, node B, the
+  // coordinates): the permuted range [first, first + size) of each, from the kind's columns.
   struct Range {
     int first = -1, size = 0;
   };
-  const auto range = [&](int g, int size) {
-    return g < 0 || size == 0 ? Range{} : Range{model.permutation[static_cast<std::size_t>(g)], size};
-  };
-  const auto node_dof = [&](int node) {
-    return node == kGround ? -1 : model.nodes[static_cast<std::size_t>(node)].dof;
-  };
-  for (const Joint& j : model.joints) {
-    if (j.row < 0) continue;
-    const Range r[3] = {range(node_dof(j.node_a), 6), range(node_dof(j.node_b), 6),
-                        range(j.coord, j.k())};
-    for (const Range& a : r)
-      for (const Range& b : r) {
-        if (a.first < 0 || b.first < 0) continue;
+  JointConstraintKind::ForEach(model, [&](int ji) {
+    Range r[3];
+    int n = 0;
+    JointConstraintKind::ForEachColumn(model, ji, [&](int g, int size) {
+      if (size > 0) r[n++] = Range{model.permutation[static_cast<std::size_t>(g)], size};
+    });
+    for (int ia = 0; ia < n; ++ia)
+      for (int ib = 0; ib < n; ++ib) {
+        const Range& a = r[ia];
+        const Range& b = r[ib];
         for (int i = 0; i < a.size; ++i) {
           int& l = last[static_cast<std::size_t>(a.first + i)];
           l = std::max(l, b.first + b.size - 1);
           *bandwidth = std::max(*bandwidth, l - (a.first + i));
         }
       }
-  }
+  });
   return last;
 }
 
@@ -512,8 +339,8 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   // The pairs of moving shapes near each other in this state (elements/shape_pair.h).
   UpdateShapePairs(model, data);
   if (!AddKinds(model, data, options, s, kElementKinds)) return false;
-  AddJoints(model, data, options, s);
-  AddTendonRows(model, data, options, s);
+  ForEachKind<ConstraintKinds>(
+      [&]<class Kind>() { AddConstraintKind<Kind>(model, data, options, s); });
   // Redundant constraint rows (found at build time) and slack tendons: the row becomes
   // dmu_r = -lambda_r / s_L, which holds their multipliers at zero.
   ForEachHeldRow(model, data, [&](int r) {
@@ -531,61 +358,34 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
 
 namespace {
 
-// Calls visit(joint, its index, gradient factors, dof of node A, dof of node B; -1 for the
-// ground) for every joint with constraint rows, at the current configuration.
-template <typename Visit>
-void ForEachConstraintGradient(const Model& model, const Data& data, Visit&& visit) {
-  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
-    const Joint& j = model.joints[jj];
-    if (j.row < 0) continue;
-    const int ji = static_cast<int>(jj);
-    JointGradient g;
-    CalcJointGradient(j, NodeFrame(data, j.node_a), NodeFrame(data, j.node_b),
-                      JointRelativeFrame(model, data, ji), &g);
-    const int da = j.node_a == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_a)].dof;
-    const int db = j.node_b == kGround ? -1 : model.nodes[static_cast<std::size_t>(j.node_b)].dof;
-    visit(j, ji, g, da, db);
-  }
+// f.template operator()<Kind>(item) for every item of every constraint kind whose rows are not
+// held by its state (a slack tendon's).
+template <class F>
+void ForEachActiveConstraint(const Model& model, const Data& data, F&& f) {
+  ForEachKind<ConstraintKinds>([&]<class Kind>() {
+    Kind::ForEach(model, [&](const typename Kind::Item& item) {
+      if (Kind::RowCount(model, item) > 0 && Kind::Active(model, data, item))
+        f.template operator()<Kind>(item);
+    });
+  });
 }
 
-// Calls visit(tendon, dof, gradient part) for every segment end of every taut length-driven
-// tendon on a node with unknowns: the row's gradient B_T is the sum of these parts.
-template <typename Visit>
-void ForEachTendonGradientPart(const Model& model, const Data& data, Visit&& visit) {
-  for (std::size_t ti = 0; ti < model.tendons.size(); ++ti) {
-    const Tendon& t = model.tendons[ti];
-    if (t.row < 0 || data.tendon_slack[ti]) continue;
-    for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k) {
-      const TendonSegment& seg =
-          model.tendon_segments[static_cast<std::size_t>(t.first_segment) + k];
-      SegmentGradient g;
-      if (!CalcSegmentGradient(model, data, seg, &g)) continue;
-      for (int i = 0; i < g.count; ++i) {
-        const int dof = model.nodes[static_cast<std::size_t>(g.nodes[i])].dof;
-        if (dof >= 0) visit(t, dof, g.parts[i]);
-      }
-    }
-  }
+// f(row, target) for every rheonomic row (phi = g(q) - target(t)) that is not held.
+template <class F>
+void ForEachConstraintTarget(const Model& model, const Data& data, double time, F&& f) {
+  ForEachActiveConstraint(model, data, [&]<class Kind>(const typename Kind::Item& item) {
+    Kind::ForEachTarget(model, data, item, time, f);
+  });
 }
 
 }  // namespace
 
 void CalcConstraintGradient(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> out) {
   out.setZero();
-  ForEachConstraintGradient(model, data, [&](const Joint& j, int ji, const JointGradient& g,
-                                             int da, int db) {
-    if (da >= 0) out.block<6, 6>(j.row, da) += JointGradientA(g);
-    if (db >= 0) out.block<6, 6>(j.row, db) += JointGradientB(g);
-    if (j.k() > 0) {
-      const JointMatrix I = Mat6::Identity().topLeftCorner(j.k(), j.k());
-      out.block(j.row, j.coord, 6, j.k()) +=
-          JointGradientCoordinates(g, JointCurrentBasis(model, data, ji), I);
-    }
-  });
-  for (const Joint& j : model.joints)
-    if (j.drive == DriveKind::kPrescribed) out(j.drive_row, j.coord + j.drive_coord) = 1.0;
-  ForEachTendonGradientPart(model, data, [&](const Tendon& t, int dof, const Vec6& b) {
-    out.block<1, 6>(t.row, dof) += b.transpose();
+  ForEachActiveConstraint(model, data, [&]<class Kind>(const typename Kind::Item& item) {
+    Kind::ForEachGradientBlock(model, data, item, [&](int row, int col, const auto& B) {
+      out.block(row, col, B.rows(), B.cols()) += B;
+    });
   });
   ForEachHeldRow(model, data, [&](int r) { out.row(r).setZero(); });
 }
@@ -594,22 +394,8 @@ void CalcConstraintGradientTimes(const Model& model, const Data& data,
                                  const Eigen::Ref<const Eigen::VectorXd>& x,
                                  Eigen::Ref<Eigen::VectorXd> out) {
   out.setZero();
-  ForEachConstraintGradient(model, data, [&](const Joint& j, int ji, const JointGradient& g,
-                                             int da, int db) {
-    const Vec6 xa = da >= 0 ? Vec6(x.segment<6>(da)) : Vec6::Zero();
-    const Vec6 xb = db >= 0 ? Vec6(x.segment<6>(db)) : Vec6::Zero();
-    Vec6 bx = JointGradientTimes(g, da >= 0 ? &xa : nullptr, db >= 0 ? &xb : nullptr);
-    if (j.k() > 0) {
-      const JointMatrix I = Mat6::Identity().topLeftCorner(j.k(), j.k());
-      bx += JointGradientCoordinates(g, JointCurrentBasis(model, data, ji), I) *
-            x.segment(j.coord, j.k());
-    }
-    out.segment<6>(j.row) = bx;
-  });
-  for (const Joint& j : model.joints)
-    if (j.drive == DriveKind::kPrescribed) out(j.drive_row) = x(j.coord + j.drive_coord);
-  ForEachTendonGradientPart(model, data, [&](const Tendon& t, int dof, const Vec6& b) {
-    out(t.row) += b.dot(x.segment<6>(dof));
+  ForEachActiveConstraint(model, data, [&]<class Kind>(const typename Kind::Item& item) {
+    Kind::GradientTimes(model, data, item, x, out);
   });
   ForEachHeldRow(model, data, [&](int r) { out(r) = 0.0; });
 }
@@ -617,12 +403,14 @@ void CalcConstraintGradientTimes(const Model& model, const Data& data,
 void CalcVelocityConstraint(const Model& model, const Data& data, double time,
                             Eigen::Ref<Eigen::VectorXd> out) {
   CalcConstraintGradientTimes(model, data, data.v, out);
-  for (const Joint& j : model.joints)
-    if (j.drive == DriveKind::kPrescribed) out(j.drive_row) -= EvalProfile(j.drive_profile, time, data).rate;
-  for (std::size_t ti = 0; ti < model.tendons.size(); ++ti) {
-    const Tendon& t = model.tendons[ti];
-    if (t.row >= 0 && !data.tendon_slack[ti]) out(t.row) -= TendonTargetLength(t, data, time).rate;
-  }
+  ForEachConstraintTarget(model, data, time,
+                          [&](int row, const ProfileValue& target) { out(row) -= target.rate; });
+}
+
+void SubtractConstraintAccelerations(const Model& model, const Data& data, double time,
+                                     Eigen::Ref<Eigen::VectorXd> rows) {
+  ForEachConstraintTarget(model, data, time,
+                          [&](int row, const ProfileValue& target) { rows(row) -= target.accel; });
 }
 
 double MaxConstraintViolation(const Model& model, Data& data, double time, double load_factor) {

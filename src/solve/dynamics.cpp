@@ -127,14 +127,7 @@ bool ConsistentStart(const Model& model, Data& data, Integrator& integ, std::str
     return false;
   }
   data.residual.tail(nc) = integ.bdot_v;
-  for (const Joint& j : model.joints)
-    if (j.drive == DriveKind::kPrescribed)
-      data.residual(nv + j.drive_row) -= EvalProfile(j.drive_profile, data.time, data).accel;
-  for (std::size_t ti = 0; ti < model.tendons.size(); ++ti) {
-    const Tendon& t = model.tendons[ti];
-    if (t.row >= 0 && !data.tendon_slack[ti])
-      data.residual(nv + t.row) -= TendonTargetLength(t, data, data.time).accel;
-  }
+  SubtractConstraintAccelerations(model, data, data.time, data.residual.tail(nc));
   if (!SolveAssembledSystem(model, data)) {
     if (message)
       *message =

@@ -13,6 +13,7 @@
 // s_L = 1 / (beta h^2).
 #pragma once
 
+#include "screwfem/elements/constraint.h"
 #include "screwfem/elements/element.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/model/data.h"
@@ -20,27 +21,8 @@
 
 namespace screwfem {
 
-struct AssemblyOptions {
-  double time = 0.0;          // profiles are evaluated at this time
-  double load_factor = 1.0;   // multiplies every load and prescribed motion (statics)
-  bool dynamics = false;      // include inertia and damping forces
-  double c_mass = 0.0, c_damping = 0.0, c_stiffness = 1.0;
-  double s_rows = 1.0, s_constraints = 1.0, s_multipliers = 1.0;
-  bool use_node_tangent = false;
-  bool assemble_matrix = true;
-  // Statics: adds the derivative of the constraint forces, d(B^T lambda)/dq at fixed lambda
-  // (CalcJointConstraintForceTangent), to the matrix: the exact tangent. Its blocks couple a
-  // joint's two nodes and its coordinates, outside model.pattern_last: give the pattern that
-  // holds them (ConstraintForceTangentPattern) and a matrix sized for it. Not with
-  // use_node_tangent.
-  bool constraint_force_tangent = false;
-  const std::vector<int>* pattern_last = nullptr;  // null: model.pattern_last
-  // Stabilised index 2 (method-next.md §N1.3): adds s_C times this factor times Z T, the
-  // derivative of the velocity constraint B(q) v at the current v
-  // (CalcJointVelocityConstraintTangent), to the joints' constraint rows of the matrix, whose
-  // right-hand side is then the scaled velocity constraint. 0: not added (index 3, statics).
-  double velocity_constraint_tangent = 0.0;
-};
+// AssemblyOptions (what an assembly computes and how it scales): elements/constraint.h.
+
 
 // model.pattern_last widened by the blocks of d(B^T lambda)/dq (each constrained joint couples
 // its nodes and coordinates with each other), and the half-bandwidth it needs.
@@ -87,6 +69,11 @@ void CalcVelocityConstraint(const Model& model, const Data& data, double time,
                             Eigen::Ref<Eigen::VectorXd> out);
 // The dense constraint gradient B(q) (nc x nv, preallocated), rows held at zero zero.
 void CalcConstraintGradient(const Model& model, const Data& data, Eigen::Ref<Eigen::MatrixXd> out);
+// rows(r) -= the second time derivative of the target of every rheonomic row r that is not
+// held (phi = g(q) - target(t): drives q_ddot(t), length-driven tendons L_p_ddot(t)); rows has
+// the nc constraint rows. The acceleration-level constraint B vdot + dB/dt v = rows.
+void SubtractConstraintAccelerations(const Model& model, const Data& data, double time,
+                                     Eigen::Ref<Eigen::VectorXd> rows);
 
 // Calls f(row) for every multiplier row held at zero: the redundant constraint rows and the
 // rows of slack length-driven tendons (Data::tendon_slack). Their residual row is
