@@ -2,11 +2,13 @@
 // unknowns and multipliers, and the solver ordering with its band pattern.
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "build_steps.h"
 #include "screwfem/elements/joint.h"
+#include "screwfem/elements/registry.h"
 #include "screwfem/linalg/banded_lu.h"
 #include "screwfem/model/errors.h"
 
@@ -63,8 +65,8 @@ namespace {
 // their row with the coordinates). The term d(B^T lambda)/dq, which would couple the two
 // nodes of a joint, is not assembled (method.md §5.2). The permuted matrix has these blocks
 // only: model.pattern_last, checked by the assembly. Blocks are numbered in the order they are
-// added: the free nodes' (NodeBlocks), then the joints' (AddJointBlocks), then the
-// length-driven tendons' rows (AddTendonRowBlocks).
+// added: the free nodes' (NodeBlocks), then the constraint kinds' coordinates and rows in the
+// order of the rows (AddConstraintBlocks).
 struct BlockGraph {
   struct Block {
     int start, size;
@@ -101,20 +103,21 @@ BlockGraph NodeBlocks(const Model& m) {
   return g;
 }
 
-// Rod elements couple their nodes.
-// Tendon segments and force elements couple their two nodes (elements/tendon.h).
-// An eyelet between nodes brings both nodes of its element.
+// Every item of every element kind couples its nodes with each other: the kinds' own lists
+// of items and nodes (elements/registry.h: rod elements, tendon segments, force elements, the
+// springs of free joints, ...), so a new kind needs no code here. The kinds whose items are
+// found during the run (the pairs of the contact broad phase) are linked by
+// LinkContactEntities.
 void LinkElementNodes(const Model& m, BlockGraph& g) {
-  for (const RodElement& e : m.elements) g.Link(g.OfNode(e.node_a), g.OfNode(e.node_b));
-  for (const TendonSegment& s : m.tendon_segments) {
-    auto node_b = [&](const BodyPoint& p) {
-      return p.element >= 0 ? m.elements[static_cast<std::size_t>(p.element)].node_b : kGround;
-    };
-    const int nodes[4] = {s.a.node, node_b(s.a), s.b.node, node_b(s.b)};
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) g.Link(g.OfNode(nodes[i]), g.OfNode(nodes[j]));
-  }
-  for (const ForceElement& f : m.force_elements) g.Link(g.OfNode(f.a.node), g.OfNode(f.b.node));
+  ForEachKind<ElementKinds>([&]<class Kind>() {
+    if constexpr (!requires { Kind::kItemsInData; }) {
+      constexpr int N = Kind::kNodes;
+      Kind::ForEach(m, [&](const typename Kind::Item&, const int(&nodes)[N]) {
+        for (int i = 0; i < N; ++i)
+          for (int j = i + 1; j < N; ++j) g.Link(g.OfNode(nodes[i]), g.OfNode(nodes[j]));
+      });
+    }
+  });
 }
 
 // A pair of moving shapes couples the nodes of its two sides (elements/shape_pair.h). Two
@@ -148,36 +151,55 @@ void LinkContactEntities(const Model& m, BlockGraph& g) {
     }
 }
 
-// Per joint: a block of its coordinates; a block of its 6 constraint rows, coupled with both
-// nodes and the coordinates; a prescribed drive's row, coupled with the coordinates.
-void AddJointBlocks(const Model& m, BlockGraph& g) {
-  for (const Joint& j : m.joints) {
-    const int coord_block = j.k() > 0 ? g.Add(j.coord, j.k()) : -1;
-    if (j.row >= 0) {
-      const int cb = g.Add(m.nv + j.row, 6);
-      g.Link(cb, g.OfNode(j.node_a));
-      g.Link(cb, g.OfNode(j.node_b));
-      g.Link(cb, coord_block);
-    }
-    // A joint whose springs act on the nodes' relative motion (a free joint) couples them.
-    if (GetJointTypeInfo(j.type).spring_law == JointSpringLaw::kRelativeMotion)
-      g.Link(g.OfNode(j.node_a), g.OfNode(j.node_b));
-    if (j.drive_row >= 0) g.Link(g.Add(m.nv + j.drive_row, 1), coord_block);
+// The constraint kinds (elements/registry.h): per item, a block of its rows, linked with every
+// block of unknowns its rows act on (ForEachColumn: nodes, a joint's coordinates). Unknowns
+// that are no node's (a joint's coordinates) become a block of their own the first time an
+// item names them. Items are taken in the order of their rows (LayOutUnknowns: a joint's six
+// rows and then its drive's, joint by joint, then the length-driven tendons'), so a joint's
+// coordinates come just before its rows and its drive's row after them: the numbering of the
+// blocks decides the ties of the ordering, and it does not depend on the order of the kinds.
+void AddConstraintBlocks(const Model& m, BlockGraph& g) {
+  struct Entry {
+    int row, kind, item;
+  };
+  std::vector<Entry> entries;
+  int kind = 0;
+  ForEachKind<ConstraintKinds>([&]<class Kind>() {
+    static_assert(std::is_same_v<typename Kind::Item, int>, "constraint items are indices");
+    Kind::ForEach(m, [&](int item) {
+      if (Kind::RowCount(m, item) > 0) entries.push_back({Kind::FirstRow(m, item), kind, item});
+    });
+    ++kind;
+  });
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& a, const Entry& b) { return a.row < b.row; });
+  // The block holding each unknown (-1: none yet); node blocks are known.
+  std::vector<int> block_of(static_cast<std::size_t>(m.nv), -1);
+  for (std::size_t b = 0; b < g.blocks.size(); ++b)
+    for (int i = 0; i < g.blocks[b].size; ++i)
+      block_of[static_cast<std::size_t>(g.blocks[b].start + i)] = static_cast<int>(b);
+  std::vector<int> columns;
+  for (const Entry& e : entries) {
+    columns.clear();
+    int k = 0;
+    ForEachKind<ConstraintKinds>([&]<class Kind>() {
+      if (k++ != e.kind) return;
+      Kind::ForEachColumn(m, e.item, [&](int first, int size) {
+        int& block = block_of[static_cast<std::size_t>(first)];
+        if (block < 0) {
+          block = g.Add(first, size);
+          for (int i = 1; i < size; ++i) block_of[static_cast<std::size_t>(first + i)] = block;
+        }
+        columns.push_back(block);
+      });
+      const int rows = g.Add(m.nv + Kind::FirstRow(m, e.item), Kind::RowCount(m, e.item));
+      for (int c : columns) g.Link(rows, c);
+    });
   }
-}
-
-// A length-driven tendon's row couples with every eyelet's node (a band as wide as the
-// tendon's route in the ordering; docs/numerics.md).
-void AddTendonRowBlocks(const Model& m, BlockGraph& g) {
-  for (const Tendon& t : m.tendons) {
-    if (t.row < 0) continue;
-    const int tb = g.Add(m.nv + t.row, 1);
-    for (const BodyPoint& e : t.eyelets) {
-      g.Link(tb, g.OfNode(e.node));
-      if (e.element >= 0)
-        g.Link(tb, g.OfNode(m.elements[static_cast<std::size_t>(e.element)].node_b));
-    }
-  }
+  // Unknowns no row acts on (none today: every joint with coordinates has rows) still need a
+  // place in the ordering.
+  for (int i = 0; i < m.nv; ++i)
+    if (block_of[static_cast<std::size_t>(i)] < 0) block_of[static_cast<std::size_t>(i)] = g.Add(i, 1);
 }
 
 // The neighbours of every block, sorted and without repeats.
@@ -247,8 +269,7 @@ void OrderUnknowns(Model& m) {
   BlockGraph g = NodeBlocks(m);
   LinkElementNodes(m, g);
   LinkContactEntities(m, g);
-  AddJointBlocks(m, g);
-  AddTendonRowBlocks(m, g);
+  AddConstraintBlocks(m, g);
   const std::vector<std::vector<int>> adj = BlockAdjacency(g);
   const std::vector<int> block_pos = PermuteBlocks(m, g, adj);
   SetBandPattern(m, g, adj, block_pos);
