@@ -12,7 +12,6 @@
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
-#include "screwfem/solve/statics.h"
 
 namespace screwfem {
 

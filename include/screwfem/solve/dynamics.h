@@ -17,6 +17,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/data.h"
 #include "screwfem/model/enum_names.h"
+#include "screwfem/solve/common.h"
 #include "screwfem/solve/stop.h"
 
 namespace screwfem {
@@ -153,10 +154,6 @@ struct DynamicOptions {
   double max_step = std::numeric_limits<double>::infinity();
   double initial_step = 0.0;
 };
-
-// Ranges of the iteration limits (scene files: analysis.max_iterations, max_halvings).
-inline constexpr int kMaxNewtonIterations = 1000;
-inline constexpr int kMaxHalvings = 30;
 
 // Throws InputError "<owner>.<field>: what is expected" unless every setting is in range:
 // rho_inf in [0, 1]; absolute and relative tolerances finite and > 0 (relative may be 0);
