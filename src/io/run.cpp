@@ -20,7 +20,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/progress.h"
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/solve/initial_state.h"
 #include "screwfem/io/vtk.h"
 #include "screwfem/io/writers.h"

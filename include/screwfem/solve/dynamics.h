@@ -18,6 +18,7 @@
 #include "screwfem/model/data.h"
 #include "screwfem/model/enum_names.h"
 #include "screwfem/solve/common.h"
+#include "screwfem/solve/schedule.h"  // ProfileBreakpoints, the breakpoints steps end on
 #include "screwfem/solve/stop.h"
 
 namespace screwfem {
@@ -251,10 +252,6 @@ struct StepResult {
   int substeps = 1;        // 1 unless the step was halved
   std::string message;     // on failure: when and why (allocated only on failure)
 };
-
-// Every breakpoint (Profile::Breakpoints) of the model's load, drive, tendon tension and force
-// element actuator profiles, unsorted.
-std::vector<double> ProfileBreakpoints(const Model& model);
 
 // Computes consistent initial accelerations and multipliers (method.md §5.4) at data.time
 // from data's configuration and velocities, and allocates the workspace. Profiles use their
