@@ -236,22 +236,4 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
   }
 }
 
-StepResult AdvanceTo(const Model& model, Data& data, Integrator& integ, double t_end,
-                     const StopRequest& stop) {
-  StepResult total;
-  total.substeps = 0;
-  while (data.time < t_end) {
-    const StepResult r = AdaptiveStep(model, data, integ, t_end, stop);
-    total.iterations += r.iterations;
-    total.substeps += r.substeps;
-    if (!r.ok) {
-      total.interrupted = r.interrupted;
-      total.message = r.message;
-      return total;
-    }
-  }
-  total.ok = true;
-  return total;
-}
-
 }  // namespace screwfem

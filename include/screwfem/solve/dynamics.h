@@ -290,12 +290,6 @@ double LocalErrorConstant(const GeneralizedAlpha& p);
 StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integrator, double t_limit,
                         const StopRequest& stop = {});
 
-// Error-controlled steps until data.time == t_end exactly (AdaptiveStep with t_limit = t_end).
-// The controller's state carries over between calls, so stepping to a series of output times
-// costs at most one shortened step per call.
-StepResult AdvanceTo(const Model& model, Data& data, Integrator& integrator, double t_end,
-                     const StopRequest& stop = {});
-
 // Dense output: sets `out` (a Data of the same model, e.g. a copy of data) to the state at time
 // t inside the last accepted AdaptiveStep [t_n, t_n + h] (method-next.md §N2.3): node frames
 // H_n exp(psi(theta)) with the cubic Hermite increment psi in the Lie algebra that matches
