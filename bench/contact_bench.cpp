@@ -20,7 +20,7 @@
 #include "screwfem/elements/contact.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/scene.h"
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/solve/dynamics.h"
 
 #include "timed_steps.h"

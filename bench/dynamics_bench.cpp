@@ -45,7 +45,7 @@
 
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"

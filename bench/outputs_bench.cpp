@@ -33,7 +33,7 @@
 
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/solve/dynamics.h"
 
 #ifndef SCREWFEM_SOURCE_DIR

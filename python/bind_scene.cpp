@@ -1,7 +1,7 @@
-// Scenes and runs (include/screwfem/io/scene.h, run.h, schedule.h) and the solver settings they
-// carry (solve/dynamics.h, solve/statics.h). Settings are plain read-write structures; nested
-// settings are references into their owner (scene.analysis.dynamic.rho_inf = 1 edits the
-// scene).
+// Scenes and runs (include/screwfem/io/scene.h, run.h; solve/schedule.h) and the solver
+// settings they carry (solve/dynamics.h, solve/statics.h). Settings are plain read-write
+// structures; nested settings are references into their owner (scene.analysis.dynamic.rho_inf
+// = 1 edits the scene).
 #include <pybind11/eigen.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -14,7 +14,7 @@
 #include "bind.h"
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/statics.h"
 

@@ -26,6 +26,7 @@
 #include "screwfem/io/scene.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
+#include "screwfem/solve/advance.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
 #include "screwfem/solve/statics.h"
@@ -75,13 +76,16 @@ class Simulation {
       throw std::logic_error("Simulation.step: call initialize() first (again after solve_static)");
     if (!(std::isfinite(h) && h > 0.0)) throw InputError("Simulation.step: h must be a time > 0 s");
     PythonSignals signals;
-    StepResult r = Step(model(), data_, integrator_, h, signals.request());
+    // One step of exactly h (Advance to t + h with fixed steps of h).
+    StepResult r = screwfem::Advance(model(), data_, integrator_, StepPolicy::Fixed(h),
+                                     data_.time + h, nullptr, signals.request());
     signals.ThrowIfRaised();
     if (!r.ok) RaiseSolverError(r.message, py::cast(r));
     return r;
   }
 
-  // Error-controlled steps to t_end exactly (AdvanceTo); the controller's state carries over.
+  // Error-controlled steps to t_end exactly (Advance, as AdvanceTo); the controller's state
+  // carries over.
   StepResult AdvanceToTime(double t_end) {
     if (!initialized_)
       throw std::logic_error(
@@ -89,7 +93,8 @@ class Simulation {
     if (!(std::isfinite(t_end) && t_end >= data_.time))
       throw InputError("Simulation.advance_to: t_end must be a finite time >= the current time");
     PythonSignals signals;
-    StepResult r = AdvanceTo(model(), data_, integrator_, t_end, signals.request());
+    StepResult r = screwfem::Advance(model(), data_, integrator_, StepPolicy::ErrorControlled(),
+                                     t_end, nullptr, signals.request());
     signals.ThrowIfRaised();
     if (!r.ok) RaiseSolverError(r.message, py::cast(r));
     return r;
@@ -472,7 +477,8 @@ saddle-point system is singular, InputError for invalid options.)doc")
       .def("step", &S::Advance, py::arg("h"),
            R"doc(step(h) -> StepResult
 
-Advances the state by h [s] (generalized-alpha, possibly in halved substeps). Returns the
+Advances the state by one step of h [s] (Advance with fixed steps of h: generalized-alpha,
+possibly in halved substeps, a substep ending on each profile breakpoint inside). Returns the
 StepResult on success. On failure the state is left at the start of the step and SolverError
 is raised, with the StepResult (ok False, message) as its `result`. Requires initialize().
 A signal (Ctrl-C) between substeps ends the call with the signal's exception
@@ -480,9 +486,10 @@ A signal (Ctrl-C) between substeps ends the call with the signal's exception
       .def("advance_to", &S::AdvanceToTime, py::arg("t_end"),
            R"doc(advance_to(t_end) -> StepResult
 
-Error-controlled steps (AdvanceTo, docs/numerics.md "Adaptive time steps") until the time is
-exactly t_end: a local error estimate per step, a PI controller within the options' min_step
-and max_step, steps ending on profile breakpoints. The tolerances are the options'
+Error-controlled steps (Advance with error-controlled steps, as AdvanceTo in C++;
+docs/numerics.md "Adaptive time steps") until the time is exactly t_end: a local error
+estimate per step, a PI controller within the options' min_step and max_step, steps ending on
+profile breakpoints. The tolerances are the options'
 absolute_tolerance and relative_tolerance (DynamicOptions). Returns the StepResult (substeps:
 the accepted steps of this call). Call it with successive output times: the controller keeps
 its step between calls. On failure SolverError, the state at the last accepted step.)doc")

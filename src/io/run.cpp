@@ -20,8 +20,9 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/progress.h"
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/advance.h"
 #include "screwfem/solve/initial_state.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/io/vtk.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
@@ -405,61 +406,86 @@ class Run {
       progress_->Update(data_.time, 0);
     }
 
+    // Fixed steps end on the schedule's step ends (profile breakpoints inserted with
+    // align_steps); step: auto: error-controlled steps, which land exactly on end_time (and on
+    // profile breakpoints), the rows and frames due inside a step interpolated. Run-time inputs
+    // from a table are held over each step (Recorder::BeforeStep).
     const StepSchedule schedule(a.start_time, a.end_time, a.step,
                                 a.align_steps ? ProfileBreakpoints(model_) : std::vector<double>{});
-    while (!schedule.Done(data_.time)) {
-      if (options_.stop.Requested()) {
-        Interrupted(FormatNumbers("at t = %.9g s; the last recorded row is at t = %.9g s", data_.time,
-                           last_row_time_));
-        return;
-      }
-      // step: auto: one error-controlled step, which lands exactly on end_time (and on profile
-      // breakpoints); the rows and frames due inside it are interpolated. Run-time inputs from
-      // a table are held over each step: at the step's end with fixed steps (t_next), at its
-      // start with error-controlled steps (whose end is not known before the step).
-      double t_next = a.adaptive_steps ? a.end_time : schedule.Next(data_.time);
-      SetInputsAt(options_.inputs, a.adaptive_steps ? data_.time : t_next, data_);
-      const StepResult step =
-          a.adaptive_steps ? AdaptiveStep(model_, data_, integ_, a.end_time, options_.stop)
-                           : Step(model_, data_, integ_, t_next - data_.time, options_.stop);
-      if (step.interrupted) {
-        Interrupted(FormatNumbers("at t = %.9g s (within a halved step); the last recorded row is at "
-                           "t = %.9g s",
-                           data_.time, last_row_time_));
-        return;
-      }
-      if (!step.ok) {
-        Finish("failed", step.message);
-        return;
-      }
-      if (a.adaptive_steps) {
-        if (!RecordInsideStep(rows, frames)) return;
-      } else {
-        data_.time = t_next;
-      }
-      t_next = data_.time;
-      max_constraint_ = std::max(max_constraint_, CalcMaxJointConstraint(model_, data_, t_next));
-      max_rotation_ = std::max(max_rotation_, MaxElementRotation(data_));
-
-      const bool last = schedule.Done(t_next);
-      const bool row = last || rows.Due(t_next), frame = last || frames.Due(t_next);
-      if (row || frame) {
-        if (!Record(t_next, row, frame)) return;
-        if (row) rows.Recorded(t_next);
-        if (frame) frames.Recorded(t_next);
-      }
-      if (options_.on_step) {
-        if (!FlushRows(t_next)) return;
-        options_.on_step(t_next);
-      }
-      if (progress_) progress_->Update(t_next, integ_.steps);
-      if (Clock::now() - last_summary_ > std::chrono::seconds(2)) {
-        if (!FlushRows(t_next)) return;
-        WriteSummary();
-      }
+    const StepPolicy policy = a.adaptive_steps ? StepPolicy::ErrorControlled(a.step)
+                                               : StepPolicy::OnSchedule(schedule);
+    Recorder recorder(*this, rows, frames);
+    const AdvanceResult r =
+        Advance(model_, data_, integ_, policy, a.end_time, &recorder, options_.stop);
+    if (r.stopped) return;  // a write error ended the run
+    if (r.interrupted) {
+      Interrupted(r.interrupted_in_step
+                      ? FormatNumbers("at t = %.9g s (within a halved step); the last recorded "
+                                      "row is at t = %.9g s",
+                                      data_.time, last_row_time_)
+                      : FormatNumbers("at t = %.9g s; the last recorded row is at t = %.9g s",
+                                      data_.time, last_row_time_));
+      return;
+    }
+    if (!r.ok) {
+      Finish("failed", r.message);
+      return;
     }
     Finish("completed", {});
   }
+
+  // The run loop's side of Advance: the inputs held over a step, the rows and frames due at
+  // its end or (error-controlled steps) interpolated inside it, and after each step the
+  // largest constraint residual and rotation, the on_step callback, the progress bar and the
+  // summary every 2 s.
+  class Recorder : public AdvanceObserver {
+   public:
+    Recorder(Run& run, OutputClock& rows, OutputClock& frames)
+        : run_(run), rows_(rows), frames_(frames) {}
+
+    void BeforeStep(double t_inputs) override {
+      SetInputsAt(run_.options_.inputs, t_inputs, run_.data_);
+    }
+    double NextOutputTime() const override { return std::min(rows_.Next(), frames_.Next()); }
+    // The rows and frames due strictly inside the last AdaptiveStep, from the state
+    // interpolated on the Lie group (InterpolateStep, method-next.md §N2.3); false if writing
+    // failed.
+    bool OutputInsideStep(double t) override {
+      InterpolateStep(run_.model_, run_.data_, run_.integ_, t, run_.dense_);
+      const bool row = rows_.Next() <= t, frame = frames_.Next() <= t;
+      if (!run_.Record(t, row, frame, run_.dense_)) return false;
+      if (row) rows_.Recorded(t);
+      if (frame) frames_.Recorded(t);
+      return true;
+    }
+    bool AfterStep(bool last) override {
+      const double t = run_.data_.time;
+      run_.max_constraint_ =
+          std::max(run_.max_constraint_, CalcMaxJointConstraint(run_.model_, run_.data_, t));
+      run_.max_rotation_ = std::max(run_.max_rotation_, MaxElementRotation(run_.data_));
+      const bool row = last || rows_.Due(t), frame = last || frames_.Due(t);
+      if (row || frame) {
+        if (!run_.Record(t, row, frame)) return false;
+        if (row) rows_.Recorded(t);
+        if (frame) frames_.Recorded(t);
+      }
+      if (run_.options_.on_step) {
+        if (!run_.FlushRows(t)) return false;
+        run_.options_.on_step(t);
+      }
+      if (run_.progress_) run_.progress_->Update(t, run_.integ_.steps);
+      if (Clock::now() - run_.last_summary_ > std::chrono::seconds(2)) {
+        if (!run_.FlushRows(t)) return false;
+        run_.WriteSummary();
+      }
+      return true;
+    }
+
+   private:
+    Run& run_;
+    OutputClock& rows_;
+    OutputClock& frames_;
+  };
 
   // Ends the run after a stop request: "interrupted" (SIGINT, a Python KeyboardInterrupt or a
   // flag without a signal number) or "terminated" (SIGTERM, SIGHUP), naming the signal.
@@ -470,22 +496,6 @@ class Run {
     std::string message = terminated ? "terminated" : "interrupted";
     if (name != nullptr) message += std::string(" by ") + name;
     Finish(terminated ? "terminated" : "interrupted", message + " " + when);
-  }
-
-  // The rows and frames due strictly inside the last AdaptiveStep, from the state interpolated
-  // on the Lie group (InterpolateStep, method-next.md §N2.3); false if writing failed.
-  bool RecordInsideStep(OutputClock& rows, OutputClock& frames) {
-    const double inside = data_.time - 1e-9 * integ_.dense_h;
-    for (;;) {
-      const double t_row = rows.Next(), t_frame = frames.Next();
-      const double t = std::min(t_row, t_frame);
-      if (!(t < inside)) return true;
-      InterpolateStep(model_, data_, integ_, t, dense_);
-      const bool row = t_row <= t, frame = t_frame <= t;
-      if (!Record(t, row, frame, dense_)) return false;
-      if (row) rows.Recorded(t);
-      if (frame) frames.Recorded(t);
-    }
   }
 
   // Writes the rows (and the ParaView frame) of the current state; on a write error ends the

@@ -11,7 +11,7 @@
 
 #include "scene_yaml.h"
 #include "screwfem/io/scene_spec.h"
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/model/errors.h"
 
 namespace screwfem {

@@ -24,6 +24,7 @@
 #include "screwfem/io/input_table.h"
 #include "screwfem/io/vtk.h"
 #include "screwfem/io/writers.h"
+#include "screwfem/solve/advance.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
 #include "screwfem/build/model_builder.h"
@@ -325,6 +326,58 @@ TEST(NoAllocation, AdaptiveStepsAndDenseOutputAllocateNothing) {
     EXPECT_GE(integ.rejected, 1);   // some were rejected
     EXPECT_GE(integ.restarts, 1);   // and restarted at the ramp's end
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside adaptive steps";
+  }
+}
+
+// The stepping loop (Advance) around those steps: fixed steps on a schedule with the profile
+// breakpoints inserted, and error-controlled steps reporting output times inside them to an
+// observer that interpolates the state there, allocate nothing either.
+TEST(NoAllocation, AdvanceWithAnObserverAllocatesNothing) {
+  struct Outputs : AdvanceObserver {
+    Outputs(const Model& m, const Data& d, Integrator& i, Data& out)
+        : model(m), data(d), integ(i), dense(out) {}
+    double NextOutputTime() const override { return 2e-3 * static_cast<double>(next); }
+    bool OutputInsideStep(double t) override {
+      InterpolateStep(model, data, integ, t, dense);
+      ++next;
+      ++inside;
+      return true;
+    }
+    bool AfterStep(bool) override {
+      while (NextOutputTime() <= data.time) ++next;
+      return true;
+    }
+    const Model& model;
+    const Data& data;
+    Integrator& integ;
+    Data& dense;
+    long next = 1, inside = 0;
+  };
+  const Model model = MixedModel();
+  for (const StepKind kind : {StepKind::kFixed, StepKind::kErrorControlled}) {
+    Data data = MakeData(model);
+    Integrator integ;
+    DynamicOptions options;
+    options.rho_inf = 0.8;
+    options.initial_step = 5e-3;
+    std::string message;
+    ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
+    Data dense = data;
+    Outputs outputs(model, data, integ, dense);
+    const StepSchedule schedule(0.0, 0.05, 1e-3, ProfileBreakpoints(model));
+    const StepPolicy policy = kind == StepKind::kFixed ? StepPolicy::OnSchedule(schedule)
+                                                       : StepPolicy::ErrorControlled();
+    g_allocations = 0;
+    g_counting = true;
+    const AdvanceResult r = Advance(model, data, integ, policy, 0.05, &outputs);
+    g_counting = false;
+    EXPECT_TRUE(r.ok) << r.message;
+    EXPECT_GT(r.steps, 5);            // the steps really ran
+    EXPECT_GE(integ.restarts, 1);     // through the ramp's end
+    if (kind == StepKind::kErrorControlled) {
+      EXPECT_GT(outputs.inside, 0);
+    }
+    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside Advance";
   }
 }
 

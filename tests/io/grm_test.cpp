@@ -26,7 +26,7 @@
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/solve/dynamics.h"
 
 namespace screwfem::grm_test {

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "run_test_util.h"
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/build/model_builder.h"

@@ -15,6 +15,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/tendon.h"
+#include "screwfem/solve/advance.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/statics.h"
 

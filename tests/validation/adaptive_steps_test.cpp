@@ -20,6 +20,7 @@
 #include "screwfem/build/model_builder.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/model/model.h"
+#include "screwfem/solve/advance.h"
 #include "screwfem/solve/dynamics.h"
 #include "validation/elliptic.h"
 

@@ -17,6 +17,8 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/data.h"
 #include "screwfem/model/enum_names.h"
+#include "screwfem/solve/common.h"
+#include "screwfem/solve/schedule.h"  // ProfileBreakpoints, the breakpoints steps end on
 #include "screwfem/solve/stop.h"
 
 namespace screwfem {
@@ -154,10 +156,6 @@ struct DynamicOptions {
   double initial_step = 0.0;
 };
 
-// Ranges of the iteration limits (scene files: analysis.max_iterations, max_halvings).
-inline constexpr int kMaxNewtonIterations = 1000;
-inline constexpr int kMaxHalvings = 30;
-
 // Throws InputError "<owner>.<field>: what is expected" unless every setting is in range:
 // rho_inf in [0, 1]; absolute and relative tolerances finite and > 0 (relative may be 0);
 // 0 < min_step <= max_step (max_step may be infinite); initial_step >= 0 and finite; max_iterations in [1, kMaxNewtonIterations]; max_halvings in
@@ -255,10 +253,6 @@ struct StepResult {
   std::string message;     // on failure: when and why (allocated only on failure)
 };
 
-// Every breakpoint (Profile::Breakpoints) of the model's load, drive, tendon tension and force
-// element actuator profiles, unsorted.
-std::vector<double> ProfileBreakpoints(const Model& model);
-
 // Computes consistent initial accelerations and multipliers (method.md §5.4) at data.time
 // from data's configuration and velocities, and allocates the workspace. Profiles use their
 // right limit at the start time. Returns false with a message if the saddle-point system is
@@ -295,12 +289,6 @@ double LocalErrorConstant(const GeneralizedAlpha& p);
 // fails or is interrupted.
 StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integrator, double t_limit,
                         const StopRequest& stop = {});
-
-// Error-controlled steps until data.time == t_end exactly (AdaptiveStep with t_limit = t_end).
-// The controller's state carries over between calls, so stepping to a series of output times
-// costs at most one shortened step per call.
-StepResult AdvanceTo(const Model& model, Data& data, Integrator& integrator, double t_end,
-                     const StopRequest& stop = {});
 
 // Dense output: sets `out` (a Data of the same model, e.g. a copy of data) to the state at time
 // t inside the last accepted AdaptiveStep [t_n, t_n + h] (method-next.md §N2.3): node frames

@@ -8,16 +8,10 @@
 
 #include "screwfem/model/data.h"
 #include "screwfem/model/enum_names.h"
+#include "screwfem/solve/common.h"  // SolveAssembledSystem, SolveFactorizedSystem
 #include "screwfem/solve/stop.h"
 
 namespace screwfem {
-
-// Solves data.matrix * x = -data.residual (the system left by Assemble) into data.increment
-// (global order). Returns false when the matrix is singular.
-bool SolveAssembledSystem(const Model& model, Data& data);
-// The same with the factorisation data.matrix already holds (from an earlier
-// SolveAssembledSystem): only data.residual is read.
-bool SolveFactorizedSystem(const Model& model, Data& data);
 
 // How the load factor s moves (scene key analysis.statics.method; method-next.md §N3,
 // docs/numerics.md "Path-following statics"):
@@ -76,7 +70,8 @@ struct StaticOptions {
 };
 
 // Range of StaticOptions::load_steps (scene files: analysis.load_steps); max_iterations and
-// max_halvings have the ranges of the dynamic solver (kMaxNewtonIterations, kMaxHalvings).
+// max_halvings have the ranges of the dynamic solver (kMaxNewtonIterations, kMaxHalvings;
+// common.h).
 inline constexpr int kMaxLoadSteps = 1000000;
 
 inline constexpr int kMaxStaticSteps = 10000000;

@@ -1,12 +1,52 @@
-#include "screwfem/io/schedule.h"
+#include "screwfem/solve/schedule.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <utility>
 
 #include "screwfem/model/errors.h"
 
 namespace screwfem {
+
+std::vector<double> ProfileBreakpoints(const Model& model) {
+  std::vector<double> b;
+  const auto add = [&b](const Profile& profile) {
+    const std::vector<double> p = profile.Breakpoints();
+    b.insert(b.end(), p.begin(), p.end());
+  };
+  for (const PointLoad& l : model.point_loads) add(l.profile);
+  for (const RodLoad& l : model.rod_loads) add(l.profile);
+  for (const Joint& j : model.joints)
+    if (j.drive != DriveKind::kNone) add(j.drive_profile);
+  for (const Tendon& t : model.tendons) add(t.drive == TendonDrive::kLength ? t.length : t.tension);
+  for (const ForceElement& f : model.force_elements) add(f.actuator);
+  for (const Actuator& a : model.actuators) add(a.profile);
+  return b;
+}
+
+std::vector<double> SortedBreakpoints(std::vector<double> breakpoints, double after, double before,
+                                      double tolerance) {
+  std::sort(breakpoints.begin(), breakpoints.end());
+  std::vector<double> sorted;
+  for (double b : breakpoints)
+    if (b > after + tolerance && b < before - tolerance &&
+        (sorted.empty() || b > sorted.back() + tolerance))
+      sorted.push_back(b);
+  return sorted;
+}
+
+double NextBreakpoint(const std::vector<double>& breakpoints, double t, double tolerance) {
+  const auto it = std::upper_bound(breakpoints.begin(), breakpoints.end(), t + tolerance);
+  return it != breakpoints.end() ? *it : std::numeric_limits<double>::infinity();
+}
+
+double SnapToBreakpoint(const std::vector<double>& breakpoints, double t, double end,
+                        double tolerance) {
+  const double bp = NextBreakpoint(breakpoints, t, tolerance);
+  return std::abs(bp - end) <= tolerance ? bp : end;
+}
 
 std::string TimeGridProblem(double start, double end, double step) {
   const double t_max = std::max(std::abs(start), std::abs(end));
@@ -34,19 +74,12 @@ void ValidateTimeGrid(double start, double end, double step, const std::string& 
 }
 
 StepSchedule::StepSchedule(double start, double end, double step, std::vector<double> breakpoints)
-    : start_(start), end_(end), step_(step), tolerance_(1e-9 * step) {
-  std::sort(breakpoints.begin(), breakpoints.end());
-  for (double b : breakpoints)
-    if (b > start_ + tolerance_ && b < end_ - tolerance_ &&
-        (targets_.empty() || b > targets_.back() + tolerance_))
-      targets_.push_back(b);
-  targets_.push_back(end_);
-}
+    : start_(start), end_(end), step_(step), tolerance_(1e-9 * step),
+      breakpoints_(SortedBreakpoints(std::move(breakpoints), start, end, 1e-9 * step)) {}
 
 double StepSchedule::Next(double t) const {
   // The next breakpoint (or the end) after t.
-  const auto it = std::upper_bound(targets_.begin(), targets_.end(), t + tolerance_);
-  const double target = it != targets_.end() ? *it : end_;
+  const double target = std::min(NextBreakpoint(breakpoints_, t, tolerance_), end_);
   // The next grid point, skipping any within kSnap steps of t (t was a breakpoint just before it).
   // (At most two more grid points: n is the grid index of t; bounded also for t outside the
   // precondition, where n + 1 may round to n.)
@@ -54,7 +87,7 @@ double StepSchedule::Next(double t) const {
   double grid = start_ + n * step_;
   for (int k = 0; k < 2 && grid <= t + kSnap * step_; ++k) grid = start_ + (++n) * step_;
   // A breakpoint before the grid point, or just after it, replaces it.
-  return target <= grid + kSnap * step_ ? target : grid;
+  return EndsOnBreakpoint(grid, target, kSnap * step_) ? target : grid;
 }
 
 }  // namespace screwfem

@@ -1,6 +1,7 @@
-// The step ends of a dynamic run (run.h): a uniform grid with the profile breakpoints
-// inserted, so that jumps of prescribed accelerations and load rates fall on step ends
-// (method.md §5.5).
+// Where time steps end. The profile breakpoints (the times where a drive or load profile has a
+// kink or a jump) and the one rule that puts a step's end on them, used by the step schedule of
+// a run (StepSchedule: a uniform grid with the breakpoints inserted, method.md §5.5), by Step's
+// substeps and by AdaptiveStep; and the check that a run's step ends are representable.
 #pragma once
 
 #include <cmath>
@@ -8,9 +9,32 @@
 #include <vector>
 
 #include "screwfem/model/data.h"
-#include "screwfem/solve/dynamics.h"  // ProfileBreakpoints
 
 namespace screwfem {
+
+// Every breakpoint (Profile::Breakpoints) of the model's load, drive, tendon tension and force
+// element actuator profiles, unsorted.
+std::vector<double> ProfileBreakpoints(const Model& model);
+
+// The breakpoints sorted, those after `after + tolerance` and before `before - tolerance` only,
+// and each more than `tolerance` after the one before it.
+std::vector<double> SortedBreakpoints(std::vector<double> breakpoints, double after, double before,
+                                      double tolerance);
+
+// The first of the sorted `breakpoints` after t + tolerance, or infinity.
+double NextBreakpoint(const std::vector<double>& breakpoints, double t, double tolerance);
+
+// `end`, or the first breakpoint after t when that lies within `tolerance` of end (either
+// side): a step end that is a breakpoint up to the rounding of start + h.
+double SnapToBreakpoint(const std::vector<double>& breakpoints, double t, double end,
+                        double tolerance);
+
+// Whether a step that would end at `end` ends on the breakpoint `breakpoint` instead: when the
+// breakpoint comes before the end, or at most `margin` after it (then the step is shortened
+// or stretched to end exactly on it).
+inline bool EndsOnBreakpoint(double end, double breakpoint, double margin) {
+  return breakpoint <= end + margin;
+}
 
 // Relative accuracy to which the step ends of a dynamic run must be representable. A time t
 // is a double, and consecutive doubles near t are u(t) = 2^(floor(log2 |t|) - 52) apart (about
@@ -30,6 +54,10 @@ std::string TimeGridProblem(double start, double end, double step);
 // by runs, scenes and the Python StepSchedule.
 void ValidateTimeGrid(double start, double end, double step, const std::string& owner);
 
+// The step ends of a dynamic run with fixed steps (Advance, StepPolicy): a uniform grid with
+// the profile breakpoints inserted, so that jumps of prescribed accelerations and load rates
+// fall on step ends (method.md §5.5). Each end is computed from the start and the step's
+// index, so round-off does not accumulate over the run.
 class StepSchedule {
  public:
   // A grid end within this fraction of a step of a breakpoint is moved onto the breakpoint,
@@ -50,10 +78,12 @@ class StepSchedule {
   bool Accepts(double t) const {
     return std::isfinite(t) && t >= start_ - tolerance_ && !Done(t);
   }
+  double step() const { return step_; }
+  double end() const { return end_; }
 
  private:
   double start_, end_, step_, tolerance_;
-  std::vector<double> targets_;  // sorted breakpoints in (start, end), then end
+  std::vector<double> breakpoints_;  // sorted breakpoints in (start, end)
 };
 
 }  // namespace screwfem
