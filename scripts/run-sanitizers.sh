@@ -23,7 +23,7 @@ end "dependencies"
 
 begin "build (ASan+UBSan, all test programs)"
 cmake -S . -B "$asan_dir" "${asan_cmake_args[@]}" \
-  -DSCREWFEM_TEST_PROGRAMS="lie;linalg;elements;build;solve;validation;alloc;io"
+  -DSCREWFEM_TEST_PROGRAMS="lie;linalg;model;elements;assemble;build;solve;validation;alloc;io"
 cmake --build "$asan_dir" -j"$jobs"
 end "build (ASan+UBSan, all test programs)"
 

@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 
 #include "screwfem/elements/joint.h"
+#include "screwfem/elements/registry.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 #include "step_stages.h"
@@ -179,24 +180,7 @@ void AllocateGglWorkspace(const Model& model, Integrator& integ) {
   const auto touch = [&](int first, int size) {
     for (int i = first; i < first + size; ++i) touched[static_cast<std::size_t>(i)] = 1;
   };
-  for (const Joint& j : model.joints) {
-    if (j.row < 0 && j.drive != DriveKind::kPrescribed) continue;
-    for (const int node : {j.node_a, j.node_b})
-      if (node != kGround && model.nodes[static_cast<std::size_t>(node)].dof >= 0)
-        touch(model.nodes[static_cast<std::size_t>(node)].dof, 6);
-    if (j.k() > 0) touch(j.coord, j.k());
-  }
-  for (const TendonSegment& seg : model.tendon_segments) {
-    if (model.tendons[static_cast<std::size_t>(seg.tendon)].row < 0) continue;
-    // An eyelet between rod nodes moves with both nodes of its element.
-    const auto node_b = [&](const BodyPoint& p) {
-      return p.element >= 0 ? model.elements[static_cast<std::size_t>(p.element)].node_b
-                            : kGround;
-    };
-    for (const int node : {seg.a.node, seg.b.node, node_b(seg.a), node_b(seg.b)})
-      if (node != kGround && model.nodes[static_cast<std::size_t>(node)].dof >= 0)
-        touch(model.nodes[static_cast<std::size_t>(node)].dof, 6);
-  }
+  ForEachConstraintColumn(model, touch);  // the constraint kinds' columns (registry.h)
   integ.ggl_blocks.clear();
   for (int i = 0; i < nv; ++i) {
     if (!touched[static_cast<std::size_t>(i)]) continue;

@@ -6,6 +6,7 @@
 #include <limits>
 #include <utility>
 
+#include "screwfem/elements/registry.h"
 #include "screwfem/model/errors.h"
 
 namespace screwfem {
@@ -16,13 +17,7 @@ std::vector<double> ProfileBreakpoints(const Model& model) {
     const std::vector<double> p = profile.Breakpoints();
     b.insert(b.end(), p.begin(), p.end());
   };
-  for (const PointLoad& l : model.point_loads) add(l.profile);
-  for (const RodLoad& l : model.rod_loads) add(l.profile);
-  for (const Joint& j : model.joints)
-    if (j.drive != DriveKind::kNone) add(j.drive_profile);
-  for (const Tendon& t : model.tendons) add(t.drive == TendonDrive::kLength ? t.length : t.tension);
-  for (const ForceElement& f : model.force_elements) add(f.actuator);
-  for (const Actuator& a : model.actuators) add(a.profile);
+  ForEachKindProfile(model, add);
   return b;
 }
 

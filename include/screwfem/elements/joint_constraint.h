@@ -39,6 +39,12 @@ struct JointConstraintKind {
     if (j.k() > 0) f(j.coord, j.k());
   }
   static bool Active(const Model&, const Data&, const Item&) { return true; }
+  // The profiles of its force and series-elastic drives (prescribed ones: DriveConstraintKind).
+  template <class F>
+  static void ForEachProfile(const Model& model, F&& f) {
+    for (const Joint& j : model.joints)
+      if (j.drive == DriveKind::kForce || j.drive == DriveKind::kSeriesElastic) f(j.drive_profile);
+  }
 
   // The constraint rows and their gradient (B^T lambda in the residual as transposed products
   // applied to the vector, the same with and without the matrix; the matrix the blocks
@@ -247,6 +253,11 @@ struct DriveConstraintKind {
     f(Column(m, ji), 1);
   }
   static bool Active(const Model&, const Data&, const Item&) { return true; }
+  template <class F>
+  static void ForEachProfile(const Model& model, F&& f) {
+    for (const Joint& j : model.joints)
+      if (j.drive == DriveKind::kPrescribed) f(j.drive_profile);
+  }
 
   // The row alpha_c - f q(t) and its unit gradient (the multiplier's force on the coordinate
   // is in the joint's coordinate force, JointConstraintKind).

@@ -15,6 +15,10 @@ struct PointLoadKind {
   static constexpr int kNodes = 1;
   using Item = int;  // index into Model::point_loads
   template <class F>
+  static void ForEachProfile(const Model& model, F&& f) {
+    for (const PointLoad& l : model.point_loads) f(l.profile);
+  }
+  template <class F>
   static void ForEach(const Model& model, F&& f) {
     for (std::size_t i = 0; i < model.point_loads.size(); ++i) {
       const int nodes[1] = {model.point_loads[i].node};
@@ -35,6 +39,10 @@ struct PointLoadKind {
 // distributed load, the section at xi for a concentrated one.
 struct RodLoadKind {
   static constexpr int kNodes = 2;
+  template <class F>
+  static void ForEachProfile(const Model& model, F&& f) {
+    for (const RodLoad& l : model.rod_loads) f(l.profile);
+  }
   struct Item {
     int load = -1;     // index into Model::rod_loads
     int element = -1;  // global element index

@@ -44,6 +44,18 @@ void ForEachItem(const Model& m, const Data& d, F&& f) {
     Kind::ForEach(m, f);
 }
 
+// f(profile) for every profile that an item of a kind evaluates (the kinds' optional
+// ForEachProfile): loads, drives, tendons, force elements, actuators. The steps of a run end on
+// their breakpoints (solve/schedule.h, ProfileBreakpoints).
+template <class F>
+void ForEachKindProfile(const Model& model, F&& f) {
+  const auto visit = [&]<class Kind>() {
+    if constexpr (requires { Kind::ForEachProfile(model, f); }) Kind::ForEachProfile(model, f);
+  };
+  ForEachKind<ElementKinds>(visit);
+  ForEachKind<ConstraintKinds>(visit);
+}
+
 // f(first_unknown, size) for every block of unknowns that constraint rows act on, kind by kind
 // and item by item (a block may come more than once).
 template <class F>

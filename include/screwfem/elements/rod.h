@@ -231,6 +231,11 @@ void CalcRodConservative(const RodElement& element, const Section& section,
 struct RodElementKind {
   static constexpr int kNodes = 2;
   using Item = int;  // global element index
+  // The actuators' profiles (pressure, activation, strain: CalcRodActuation).
+  template <class F>
+  static void ForEachProfile(const Model& model, F&& f) {
+    for (const Actuator& a : model.actuators) f(a.profile);
+  }
   template <class F>
   static void ForEach(const Model& model, F&& f) {
     for (std::size_t e = 0; e < model.elements.size(); ++e) {

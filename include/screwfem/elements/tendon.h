@@ -77,6 +77,12 @@ int UpdateTendonSlack(const Model& model, Data& data, double time, double load_f
 struct TendonSegmentKind {
   static constexpr int kNodes = 2;
   using Item = int;  // index into Model::tendon_segment_groups
+  // The tensions of the tendons drawn by tension (those drawn by length: TendonLengthKind).
+  template <class F>
+  static void ForEachProfile(const Model& model, F&& f) {
+    for (const Tendon& t : model.tendons)
+      if (t.drive != TendonDrive::kLength) f(t.tension);
+  }
   template <class F>
   static void ForEach(const Model& model, F&& f) {
     for (std::size_t i = 0; i < model.tendon_segment_groups.size(); ++i) {
@@ -146,6 +152,10 @@ ForceElementForce ForceElementLaw(const ForceElement& element, const Data& data,
 struct ForceElementKind {
   static constexpr int kNodes = 2;
   using Item = int;  // index into Model::force_elements
+  template <class F>
+  static void ForEachProfile(const Model& model, F&& f) {
+    for (const ForceElement& e : model.force_elements) f(e.actuator);
+  }
   template <class F>
   static void ForEach(const Model& model, F&& f) {
     for (std::size_t i = 0; i < model.force_elements.size(); ++i) {

@@ -34,6 +34,11 @@ struct TendonLengthKind {
         if (NodeDof(m, node) >= 0) f(NodeDof(m, node), 6);
     }
   }
+  template <class F>
+  static void ForEachProfile(const Model& model, F&& f) {
+    for (const Tendon& t : model.tendons)
+      if (t.drive == TendonDrive::kLength) f(t.length);
+  }
   static bool Active(const Model&, const Data& d, const Item& ti) {
     return !d.tendon_slack[static_cast<std::size_t>(ti)];
   }

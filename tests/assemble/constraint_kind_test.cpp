@@ -1,4 +1,5 @@
-// The constraint kinds (elements/constraint.h, registry.h) against their own definitions, on a
+// The constraint kinds (elements/constraint.h, registry.h) and the constraint functions of
+// assemble/assemble.h against their own definitions, on a
 // mechanism that has every kind: a rod on a driven revolute joint to the ground (joint rows, a
 // prescribed drive with a time-varying profile), a rigid body on its tip by a spherical joint
 // (coordinates that retract by the exponential) and a length-driven tendon from the ground
