@@ -13,6 +13,8 @@ namespace screwfem {
 
 namespace {
 
+// One switch over the term kinds (about 90 lines): each case is a few lines of closed-form value,
+// rate and acceleration, which read best side by side (as in Validate() and Breakpoints()).
 ProfileValue EvalTerm(const ProfileTerm& p, double t, const Eigen::VectorXd* inputs) {
   ProfileValue r;
   const double s = p.scale;

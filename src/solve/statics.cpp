@@ -300,128 +300,182 @@ std::string StepCapMessage(int steps, double s) {
 }
 
 // Load stepping (method.md §5.6) with a bounded increment and step count.
-StaticResult SolveByLoadSteps(StaticSolver& S, const StaticStepCallback& on_step) {
-  const Model& model = S.model;
-  Data& data = S.data;
-  const StaticOptions& options = S.options;
-  StaticResult result;
-  Checkpoint saved;
-  saved.Save(data);
-  const double s0 = options.start_load_factor, span = options.end_load_factor - s0;
-  result.load_factor = s0;
-  // Progress p in [0, 1] along the load path, s = s0 + p span.
-  const double dp0 = span == 0.0 ? 1.0 : 1.0 / std::max(options.load_steps, 1);
-  const double dp_min = dp0 * std::ldexp(1.0, -options.max_halvings);
-  const int max_steps = MaxSteps(options);
-  double p = 0.0, dp = dp0;
-  // |dx/ds| at the start, for the limit-point diagnosis (NaN: unknown, e.g. singular).
-  double path_speed0 = NAN;
-  std::string last_cause;
-  if (span != 0.0) {
-    S.opt.load_factor = s0;
-    std::string ignored;
-    if (S.PathTangent(ignored)) path_speed0 = ScaledIncrementSize(model, S.x_f.head(model.nv));
-    saved.Restore(model, data);
+class LoadStepPath {
+ public:
+  LoadStepPath(StaticSolver& s, const StaticStepCallback& on_step)
+      : S_(s),
+        on_step_(on_step),
+        s0_(s.options.start_load_factor),
+        span_(s.options.end_load_factor - s0_),
+        dp0_(span_ == 0.0 ? 1.0 : 1.0 / std::max(s.options.load_steps, 1)),
+        dp_min_(dp0_ * std::ldexp(1.0, -s.options.max_halvings)),
+        dp_(dp0_) {}
+
+  StaticResult Run() {
+    saved_.Save(S_.data);
+    result_.load_factor = s0_;
+    const int max_steps = MaxSteps(S_.options);
+    MeasureStartSpeed();
+    while (p_ < 1.0) {
+      if (result_.load_steps >= max_steps) {
+        result_.message = StepCapMessage(result_.load_steps, result_.load_factor);
+        return result_;
+      }
+      // Snap to 1 when only round-off separates p + dp from it (ten steps of 0.1 sum to
+      // 1 - 1e-16, which would otherwise cost an extra load step).
+      const double target = p_ + dp_ >= 1.0 - 1e-12 ? 1.0 : p_ + dp_;
+      const double s_target = target == 1.0 ? S_.options.end_load_factor : s0_ + target * span_;
+      S_.opt.load_factor = s_target;
+      StaticStep step;
+      step.load_factor = s_target;
+      const LoadStepEnd end = S_.IterateLoadStep(step, last_cause_);
+      if (end == LoadStepEnd::kStopped) return Interrupted();
+      result_.total_iterations += step.iterations;
+      if (end == LoadStepEnd::kConverged) {
+        std::string why;
+        const JumpCheck check = CheckForJump(target, &why);
+        if (check == JumpCheck::kLimitPoint) return LimitPointResult(why);
+        if (check == JumpCheck::kAccept) {
+          Accept(std::move(step), target, s_target);
+          continue;
+        }
+      }
+      if (RetryShorter()) continue;
+      return FailureResult(s_target);
+    }
+    result_.converged = true;
+    return result_;
   }
-  double path_speed = path_speed0;  // |dx/ds| at the last converged state
+
+ private:
+  // What CheckForJump makes of a converged step.
+  enum class JumpCheck { kAccept, kRetry, kLimitPoint };
+
+  // path_speed0_ (and path_speed_) from dx/ds at the start load factor; leaves data unchanged.
+  void MeasureStartSpeed() {
+    if (span_ != 0.0) {
+      S_.opt.load_factor = s0_;
+      std::string ignored;
+      if (S_.PathTangent(ignored))
+        path_speed0_ = ScaledIncrementSize(S_.model, S_.x_f.head(S_.model.nv));
+      saved_.Restore(S_.model, S_.data);
+    }
+    path_speed_ = path_speed0_;
+  }
+
+  // A jump: the step's correction is more than ten times what dx/ds at the last converged
+  // state predicts (on one branch it is at most twice that, up to a limit point where x
+  // varies like sqrt(s* - s)): Newton left the path across a limit point and converged on
+  // another branch (a snap-through). Halve; at the smallest increment, stop at a limit
+  // point, and otherwise accept.
+  JumpCheck CheckForJump(double target, std::string* why) {
+    const Model& model = S_.model;
+    Data& data = S_.data;
+    const double predicted = path_speed_ * std::abs((target - p_) * span_);
+    const bool jumped =
+        std::isfinite(path_speed_) && ScaledIncrementSize(model, S_.step_dx) >
+                                          10.0 * predicted + 100.0 * S_.options.increment_tolerance;
+    if (!jumped) return JumpCheck::kAccept;
+    if (dp_ > dp_min_ * (1.0 + 1e-12)) {
+      last_cause_ = "the step jumped to another branch of the path";
+      return JumpCheck::kRetry;
+    }
+    Checkpoint next;
+    next.Save(data);
+    saved_.Restore(model, data);
+    if (AtLimitPoint(why)) return JumpCheck::kLimitPoint;
+    next.Restore(model, data);
+    return JumpCheck::kAccept;
+  }
+
+  // The converged step to progress `target` (load factor s_target) becomes the last converged
+  // state; the increment grows again, up to dp0.
+  void Accept(StaticStep&& step, double target, double s_target) {
+    const Model& model = S_.model;
+    path_speed_ =
+        S_.PathTangentAfterStep() ? ScaledIncrementSize(model, S_.x_f.head(model.nv)) : NAN;
+    UpdateBranchReferences(model, S_.data);
+    saved_.Save(S_.data);
+    p_ = target;
+    result_.load_factor = s_target;
+    ++result_.load_steps;
+    if (on_step_) on_step_(step);
+    result_.steps.push_back(std::move(step));
+    dp_ = std::min(dp0_, 1.5 * dp_);
+  }
+
+  // Failed load step: back to the last converged state, retry with half the increment,
+  // down to the smallest increment dp0 / 2^max_halvings. False below it.
+  bool RetryShorter() {
+    saved_.Restore(S_.model, S_.data);
+    ++result_.halvings;
+    dp_ *= 0.5;
+    return dp_ >= dp_min_ * (1.0 - 1e-12);
+  }
+
   // At the last converged state (data): a limit point of the path when dx/ds has grown
   // tenfold since the start (it grows like (s* - s)^-1/2 towards a limit point) or the tangent
   // is singular there. Leaves data unchanged.
-  const auto at_limit_point = [&](std::string* why) {
-    if (result.load_steps == 0 || span == 0.0 || !std::isfinite(path_speed0)) return false;
+  bool AtLimitPoint(std::string* why) {
+    if (result_.load_steps == 0 || span_ == 0.0 || !std::isfinite(path_speed0_)) return false;
+    const Model& model = S_.model;
     Checkpoint here;
-    here.Save(data);
+    here.Save(S_.data);
     double speed = INFINITY;
-    S.opt.load_factor = result.load_factor;
-    if (S.PathTangent(*why)) speed = ScaledIncrementSize(model, S.x_f.head(model.nv));
-    here.Restore(model, data);
-    if (speed < 10.0 * path_speed0) return false;
+    S_.opt.load_factor = result_.load_factor;
+    if (S_.PathTangent(*why)) speed = ScaledIncrementSize(model, S_.x_f.head(model.nv));
+    here.Restore(model, S_.data);
+    if (speed < 10.0 * path_speed0_) return false;
     if (std::isfinite(speed))
-      *why = FormatNumbers("|dx/ds| grew %.3g-fold since the start", speed / path_speed0);
+      *why = FormatNumbers("|dx/ds| grew %.3g-fold since the start", speed / path_speed0_);
     return true;
-  };
-  const auto limit_point_result = [&](const std::string& why) {
-    result.limit_point = true;
-    result.message =
-        FormatNumbers("limit point at load factor %.9g: load stepping finds no equilibrium on this "
-               "path at a load factor %.3g further (",
-               result.load_factor, dp_min * std::abs(span)) +
+  }
+
+  StaticResult LimitPointResult(const std::string& why) {
+    result_.limit_point = true;
+    result_.message =
+        FormatNumbers(
+            "limit point at load factor %.9g: load stepping finds no equilibrium on "
+            "this path at a load factor %.3g further (",
+            result_.load_factor, dp_min_ * std::abs(span_)) +
         why +
         "); arc-length continuation (analysis.statics.method: arclength) follows the path "
         "through limit points";
-    return result;
-  };
-  while (p < 1.0) {
-    if (result.load_steps >= max_steps) {
-      result.message = StepCapMessage(result.load_steps, result.load_factor);
-      return result;
-    }
-    // Snap to 1 when only round-off separates p + dp from it (ten steps of 0.1 sum to
-    // 1 - 1e-16, which would otherwise cost an extra load step).
-    const double target = p + dp >= 1.0 - 1e-12 ? 1.0 : p + dp;
-    const double s_target = target == 1.0 ? options.end_load_factor : s0 + target * span;
-    S.opt.load_factor = s_target;
-    StaticStep step;
-    step.load_factor = s_target;
-    LoadStepEnd end = S.IterateLoadStep(step, last_cause);
-    if (end == LoadStepEnd::kStopped) {
-      saved.Restore(model, data);
-      result.interrupted = true;
-      result.message = FormatNumbers("static solve interrupted at load factor %.9g", result.load_factor);
-      return result;
-    }
-    result.total_iterations += step.iterations;
-    if (end == LoadStepEnd::kConverged) {
-      // A jump: the step's correction is more than ten times what dx/ds at the last converged
-      // state predicts (on one branch it is at most twice that, up to a limit point where x
-      // varies like sqrt(s* - s)): Newton left the path across a limit point and converged on
-      // another branch (a snap-through). Halve; at the smallest increment, stop at a limit
-      // point, and otherwise accept.
-      const double predicted = path_speed * std::abs((target - p) * span);
-      if (std::isfinite(path_speed) &&
-          ScaledIncrementSize(model, S.step_dx) > 10.0 * predicted + 100.0 * options.increment_tolerance) {
-        if (dp > dp_min * (1.0 + 1e-12)) {
-          end = LoadStepEnd::kFailed;
-          last_cause = "the step jumped to another branch of the path";
-        } else {
-          Checkpoint next;
-          next.Save(data);
-          saved.Restore(model, data);
-          std::string why;
-          if (at_limit_point(&why)) return limit_point_result(why);
-          next.Restore(model, data);
-        }
-      }
-      if (end == LoadStepEnd::kConverged) {
-        path_speed = S.PathTangentAfterStep() ? ScaledIncrementSize(model, S.x_f.head(model.nv))
-                                              : NAN;
-        UpdateBranchReferences(model, data);
-        saved.Save(data);
-        p = target;
-        result.load_factor = s_target;
-        ++result.load_steps;
-        if (on_step) on_step(step);
-        result.steps.push_back(std::move(step));
-        dp = std::min(dp0, 1.5 * dp);
-        continue;
-      }
-    }
-    // Failed load step: back to the last converged state, retry with half the increment,
-    // down to the smallest increment dp0 / 2^max_halvings.
-    saved.Restore(model, data);
-    ++result.halvings;
-    dp *= 0.5;
-    if (dp >= dp_min * (1.0 - 1e-12)) continue;
-    std::string why;
-    if (at_limit_point(&why)) return limit_point_result(why);
-    result.message = FormatNumbers("static solve failed at load factor %.9g (last converged %.9g): ",
-                            s_target, result.load_factor) +
-                     last_cause;
-    return result;
+    return result_;
   }
-  result.converged = true;
-  return result;
-}
+
+  StaticResult Interrupted() {
+    saved_.Restore(S_.model, S_.data);
+    result_.interrupted = true;
+    result_.message =
+        FormatNumbers("static solve interrupted at load factor %.9g", result_.load_factor);
+    return result_;
+  }
+
+  // No equilibrium at s_target even with the smallest increment.
+  StaticResult FailureResult(double s_target) {
+    std::string why;
+    if (AtLimitPoint(&why)) return LimitPointResult(why);
+    result_.message =
+        FormatNumbers("static solve failed at load factor %.9g (last converged %.9g): ", s_target,
+                      result_.load_factor) +
+        last_cause_;
+    return result_;
+  }
+
+  StaticSolver& S_;
+  const StaticStepCallback& on_step_;
+  StaticResult result_;
+  Checkpoint saved_;  // the last converged state
+  // Progress p in [0, 1] along the load path, s = s0 + p span.
+  const double s0_, span_;
+  const double dp0_, dp_min_;
+  double p_ = 0.0, dp_;
+  // |dx/ds| at the start, for the limit-point diagnosis (NaN: unknown, e.g. singular).
+  double path_speed0_ = NAN;
+  double path_speed_ = NAN;  // |dx/ds| at the last converged state
+  std::string last_cause_;
+};
 
 }  // namespace
 
@@ -658,7 +712,7 @@ StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& op
                          const StopRequest& stop, const StaticStepCallback& on_step) {
   StaticSolver solver(model, data, options, stop);
   if (options.method == StaticMethod::kArcLength) return ArcLengthPath(solver, on_step).Run();
-  return SolveByLoadSteps(solver, on_step);
+  return LoadStepPath(solver, on_step).Run();
 }
 
 }  // namespace screwfem
