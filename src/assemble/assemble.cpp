@@ -273,8 +273,13 @@ std::vector<int> ConstraintForceTangentPattern(const Model& model, int* bandwidt
 Energy CalcEnergy(const Model& model, const Data& data) {
   Energy E;
   AddKindEnergies(model, data, &E, kElementKinds);
-  for (std::size_t jj = 0; jj < model.joints.size(); ++jj)
-    E.spring += JointSpringEnergy(model, data, static_cast<int>(jj));
+  // The constraint kinds that store energy (a joint's springs on its coordinates).
+  ForEachKind<ConstraintKinds>([&]<class Kind>() {
+    if constexpr (requires { &Kind::AddEnergy; })
+      Kind::ForEach(model, [&](const typename Kind::Item& item) {
+        Kind::AddEnergy(model, data, item, &E);
+      });
+  });
   return E;
 }
 

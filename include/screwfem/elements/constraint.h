@@ -39,6 +39,10 @@
 //     // The readout: the generalised force its rows apply along their own direction (the
 //     // multipliers as efforts: a drive's force or torque, a tendon's tension).
 //     static void Effort(const Model&, const Data&, const Item&, Eigen::Ref<Eigen::VectorXd>);
+//     // Optional: the energy it stores (CalcEnergy sums it with the element kinds').
+//     static void AddEnergy(const Model&, const Data&, const Item&, Energy*);
+//     // Optional: f(profile) for every profile its items evaluate (the run's breakpoints).
+//     template <class F> static void ForEachProfile(const Model&, F&& f);
 //   };
 //
 // The constraint kinds are listed in one place (elements/registry.h). The assembly loops over

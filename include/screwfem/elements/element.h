@@ -22,7 +22,9 @@
 // found during the run (the contact broad phase's pairs): the assembly then calls
 // `ForEach(model, data, f)` instead; `static constexpr bool kOffBandBlocks = true;` for a kind
 // whose node blocks may lie outside the model's band pattern: they go to Data::coupling (a
-// low-rank update of the banded solve) instead of failing the pattern check.
+// low-rank update of the banded solve) instead of failing the pattern check. And an optional
+// `template <class F> static void ForEachProfile(const Model&, F&& f)` calls f(profile) for
+// every profile its items evaluate: the steps of a run end on their breakpoints.
 //
 // The assembly (assemble/assemble.cpp) loops over the registered kinds, gathers the node
 // motion, calls Calc and scatters ElementTerms into the global residual and the banded

@@ -101,6 +101,12 @@ struct JointConstraintKind {
     out.segment<6>(j.row) = bx;
   }
 
+  // The energy of its springs on the coordinates (towards their rest, series-elastic drives
+  // included); a free joint's springs are JointSpringKind's.
+  static void AddEnergy(const Model& m, const Data& d, const Item& ji, Energy* energy) {
+    energy->spring += JointSpringEnergy(m, d, ji);
+  }
+
   // Scleronomic: phi depends on q alone.
   template <class F>
   static void ForEachTarget(const Model&, const Data&, const Item&, double, F&&) {}
