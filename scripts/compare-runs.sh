@@ -4,9 +4,10 @@
 #   bash scripts/compare-runs.sh OLD_PROGRAM NEW_PROGRAM [OUTDIR]
 # OLD_PROGRAM and NEW_PROGRAM are two builds' app/screwfem (e.g. a worktree of the revision
 # before the change). Tables, JSON and VTK files are compared whole, except the wall-clock
-# fields of summary.json (wall_time, steps_per_second and the like), which are dropped before
-# comparing. Prints one line per scene and exits non-zero when any output differs or a run's
-# exit status differs.
+# fields of summary.json (wall_time, steps_per_second, real_time_factor and the like), which
+# are dropped before comparing, and the output lock .screwfem.lock (it holds the run's process
+# id). Prints one line per scene and exits non-zero when any output differs or a run's exit
+# status differs.
 set -uo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -28,7 +29,8 @@ with open(sys.argv[1]) as f:
 def drop(o):
     if isinstance(o, dict):
         return {k: drop(v) for k, v in o.items()
-                if not any(w in k for w in ("wall", "per_second", "seconds_", "cpu", "elapsed"))}
+                if not any(w in k for w in ("wall", "per_second", "seconds_", "cpu", "elapsed",
+                                          "real_time"))}
     if isinstance(o, list):
         return [drop(v) for v in o]
     return o
@@ -50,6 +52,7 @@ for scene in $scenes; do
   else
     while IFS= read -r f; do
       rel=${f#"$out/old/$name/"}
+      [[ "$rel" == .screwfem.lock ]] && continue  # the run's process id (io/run.h)
       g="$out/new/$name/$rel"
       if [[ ! -e "$g" ]]; then
         status="missing $rel"
