@@ -30,6 +30,54 @@ double ContactPotential(double g, double delta, double k) {
   return k * delta * delta / 6.0 - 0.5 * k * delta * g + 0.5 * k * g * g;
 }
 
+ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping,
+                                   bool dynamics) {
+  ContactLawParameters p;
+  p.stiffness = settings.stiffness;
+  p.onset = settings.onset;
+  p.damping = dynamics ? damping : 0.0;
+  p.friction = dynamics ? settings.friction : 0.0;
+  p.slip_velocity = settings.slip_velocity;
+  return p;
+}
+
+ContactNormal ContactNormalLaw(double gap, double gap_rate, const ContactLawParameters& law) {
+  const NormalLaw fe = CalcNormalLaw(gap, law.onset, law.stiffness);
+  const double w = std::min(1.0, (law.onset - gap) / law.onset);
+  const double dw = gap > 0.0 ? -1.0 / law.onset : 0.0;
+  const double c_n = law.damping;
+  ContactNormal out;
+  out.force = fe.force - c_n * w * gap_rate;
+  out.dforce_dgap = fe.slope - c_n * dw * gap_rate;
+  out.dforce_drate = -c_n * w;
+  return out;
+}
+
+ContactForce ContactForceLaw(double gap, const Vec3& n, const Vec3& v_c,
+                             const ContactLawParameters& law, bool tangent) {
+  ContactForce out;
+  if (gap >= law.onset) return out;
+  // Normal force (method-next.md §N6.3): f_n = max(0, f_e - c_n w(g) dg/dt).
+  out.normal = ContactNormalLaw(gap, n.dot(v_c), law);
+  const double f_n = out.normal.force;
+  if (!(f_n > 0.0)) return out;
+  out.active = true;
+  // Regularised Coulomb friction at the surface point.
+  const double mu = law.friction;
+  const Mat3 P = Mat3::Identity() - n * n.transpose();
+  const Vec3 v_t = P * v_c;
+  const double sv = std::sqrt(v_t.squaredNorm() + law.slip_velocity * law.slip_velocity);
+  const Vec3 slip = v_t / sv;
+  const Vec3 u = mu > 0.0 ? slip : Vec3::Zero();
+  out.direction = n - mu * u;
+  out.force = f_n * out.direction;
+  out.friction = -mu * f_n * slip;
+  if (tangent && mu > 0.0)
+    out.slip_tangent =
+        mu * f_n * (Mat3::Identity() / sv - v_t * v_t.transpose() / (sv * sv * sv)) * P;
+  return out;
+}
+
 bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3& H_0,
                          const SE3& H_1, ContactGeometry* out) {
   const SE3* H[2] = {&H_0, &H_1};
@@ -86,45 +134,44 @@ bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3&
   return true;
 }
 
+namespace {
+
+// The surface point's velocity map J = [W_k R_k [I  -Skew(l_k)]] (3 x 12) and m_k = R_k^T n.
+void CalcSurfaceVelocityMap(const ContactGeometry& G, const NodeMotion<2>& x,
+                            Eigen::Matrix<double, 3, 12>* J, Vec3 (&m)[2]) {
+  J->setZero();
+  for (int k = 0; k < 2; ++k) {
+    m[k] = x.H[k]->R.transpose() * G.normal;
+    if (G.weight[k] == 0.0) continue;
+    J->block<3, 3>(0, 6 * k) = G.weight[k] * x.H[k]->R;
+    J->block<3, 3>(0, 6 * k + 3) = -G.weight[k] * x.H[k]->R * Skew(G.lever[k]);
+  }
+}
+
+}  // namespace
+
 bool ContactKind::Calc(const Model& model, const Data&, const Item& item,
                        const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
   const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
-  const ContactSettings& law = model.contact;
   ContactGeometry G;
-  if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G) || G.gap >= law.onset) {
+  if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G) || G.gap >= model.contact.onset) {
     t->active = false;
     return true;
   }
   const Vec3& n = G.normal;
-  // The surface point's velocity map J = [W_k R_k [I  -Skew(l_k)]] (3 x 12).
-  Eigen::Matrix<double, 3, 12> J = Eigen::Matrix<double, 3, 12>::Zero();
+  Eigen::Matrix<double, 3, 12> J;
   Vec3 m[2];
-  for (int k = 0; k < 2; ++k) {
-    m[k] = x.H[k]->R.transpose() * n;
-    if (G.weight[k] == 0.0) continue;
-    J.block<3, 3>(0, 6 * k) = G.weight[k] * x.H[k]->R;
-    J.block<3, 3>(0, 6 * k + 3) = -G.weight[k] * x.H[k]->R * Skew(G.lever[k]);
-  }
+  CalcSurfaceVelocityMap(G, x, &J, m);
   const bool dyn = o.dynamics;
   const Vec3 v_c = dyn ? Vec3(J * x.eta) : Vec3::Zero();
-  const double g_dot = n.dot(v_c);
-  // Normal force (method-next.md §N6.3): f_n = max(0, f_e - c_n w(g) dg/dt).
-  const NormalLaw fe = CalcNormalLaw(G.gap, law.onset, law.stiffness);
-  const double w = std::min(1.0, (law.onset - G.gap) / law.onset);
-  const double dw = G.gap > 0.0 ? -1.0 / law.onset : 0.0;
-  const double c_n = dyn ? pair.damping : 0.0;
-  const double f_n = fe.force - c_n * w * g_dot;
-  if (!(f_n > 0.0)) {
+  // The law (ContactForceLaw): friction and damping in dynamics only.
+  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dyn);
+  const ContactForce c = ContactForceLaw(G.gap, n, v_c, law, o.tangent);
+  if (!c.active) {
     t->active = false;
     return true;
   }
-  // Regularised Coulomb friction at the surface point (dynamics only).
-  const double mu = dyn ? law.friction : 0.0;
-  const Mat3 P = Mat3::Identity() - n * n.transpose();
-  const Vec3 v_t = P * v_c;
-  const double sv = std::sqrt(v_t.squaredNorm() + law.slip_velocity * law.slip_velocity);
-  const Vec3 u = mu > 0.0 ? Vec3(v_t / sv) : Vec3::Zero();
-  const Vec3 F = f_n * (n - mu * u);
+  const Vec3& F = c.force;
   // Residual: minus the generalised force of F at the surface point.
   double arm = 1.0;
   Vec3 f[2];
@@ -151,17 +198,13 @@ bool ContactKind::Calc(const Model& model, const Data&, const Item& item,
   }
   const Eigen::Matrix<double, 12, 1> j = J.transpose() * n;  // dg/dh
   // df_n/dh and df_n/deta.
-  const double dfn_dg = fe.slope - c_n * dw * g_dot;
   const Eigen::Matrix<double, 1, 12> dfn_dh =
-      dfn_dg * j.transpose() - c_n * w * (n.transpose() * dV);
-  const Eigen::Matrix<double, 1, 12> dfn_deta = -c_n * w * j.transpose();
+      c.normal.dforce_dgap * j.transpose() + c.normal.dforce_drate * (n.transpose() * dV);
+  const Eigen::Matrix<double, 1, 12> dfn_deta = c.normal.dforce_drate * j.transpose();
   // dF = (n - mu u) df_n - mu f_n D P dv_c, D = I/s - v_t v_t^T / s^3.
-  const Vec3 a = n - mu * u;
-  Mat3 DP = Mat3::Zero();
-  if (mu > 0.0)
-    DP = mu * f_n * (Mat3::Identity() / sv - v_t * v_t.transpose() / (sv * sv * sv)) * P;
-  Eigen::Matrix<double, 3, 12> dF_dh = a * dfn_dh;
-  if (mu > 0.0) dF_dh.noalias() -= DP * dV;
+  const bool friction = law.friction > 0.0;
+  Eigen::Matrix<double, 3, 12> dF_dh = c.direction * dfn_dh;
+  if (friction) dF_dh.noalias() -= c.slip_tangent * dV;
   Mat12& K = t->stiffness;
   K.noalias() = -J.transpose() * dF_dh;
   // The rotation of the frames at fixed world F: -W_k [0 Skew(f_k); 0 Skew(l_k) Skew(f_k) +
@@ -175,8 +218,8 @@ bool ContactKind::Calc(const Model& model, const Data&, const Item& item,
   }
   t->has_stiffness = true;
   if (dyn) {
-    Eigen::Matrix<double, 3, 12> dF_deta = a * dfn_deta;
-    if (mu > 0.0) dF_deta.noalias() -= DP * J;
+    Eigen::Matrix<double, 3, 12> dF_deta = c.direction * dfn_deta;
+    if (friction) dF_deta.noalias() -= c.slip_tangent * J;
     t->damping.noalias() = -J.transpose() * dF_deta;
     t->has_damping = true;
   }
@@ -207,28 +250,18 @@ ContactState CalcContactState(const Model& model, const Data& data, int item) {
   out.gap = G.gap;
   out.point = G.point;
   out.normal = G.normal;
-  KernelOptions o;
-  o.time = data.time;
-  o.dynamics = true;
-  o.tangent = false;
-  ElementTerms<2> t;
-  ContactKind::Calc(model, data, item, x, o, &t);
-  if (!t.active) return out;
+  if (G.gap >= model.contact.onset) return out;
+  // The kernel's velocity map and law, with damping and friction (dynamics).
+  Eigen::Matrix<double, 3, 12> J;
+  Vec3 m[2];
+  CalcSurfaceVelocityMap(G, x, &J, m);
+  const Vec3 v_c = J * x.eta;
+  const ContactForce c = ContactForceLaw(
+      G.gap, G.normal, v_c, ContactLawFor(model.contact, pair.damping, true), false);
+  if (!c.active) return out;
   out.active = true;
-  // Recover f_n and f_t from the kernel's law (same expressions, no tangent).
-  const NormalLaw fe = CalcNormalLaw(G.gap, model.contact.onset, model.contact.stiffness);
-  Vec3 v_c = Vec3::Zero();
-  for (int k = 0; k < 2; ++k) {
-    if (G.weight[k] == 0.0) continue;
-    const Vec3 v = x.eta.segment<3>(6 * k), om = x.eta.segment<3>(6 * k + 3);
-    v_c += G.weight[k] * (x.H[k]->R * (v + om.cross(G.lever[k])));
-  }
-  const double w = std::min(1.0, (model.contact.onset - G.gap) / model.contact.onset);
-  out.normal_force = fe.force - pair.damping * w * G.normal.dot(v_c);
-  const Vec3 v_t = v_c - G.normal * G.normal.dot(v_c);
-  const double sv = std::sqrt(v_t.squaredNorm() +
-                              model.contact.slip_velocity * model.contact.slip_velocity);
-  out.friction_force = -model.contact.friction * out.normal_force * v_t / sv;
+  out.normal_force = c.normal.force;
+  out.friction_force = c.friction;
   return out;
 }
 

@@ -270,6 +270,21 @@ void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient&
     out->col(13) += v_j(0) * (g.Tinv - ad(g.phi)) * ad(Vec6(basis.col(1))) * basis.col(0);
 }
 
+JointCoordinateSpring JointCoordinateSpringLaw(const Joint& j, int c, double alpha,
+                                               double alpha_dot, const ProfileValue& drive,
+                                               double load_factor, bool dynamics) {
+  JointCoordinateSpring out;
+  out.rest = j.rest(c);
+  // A series-elastic drive moves the rest of its coordinate to q(t) (method.md §4.5).
+  if (j.drive == DriveKind::kSeriesElastic && c == j.drive_coord) {
+    out.rest += load_factor * drive.value;
+    out.rest_rate = load_factor * drive.rate;
+  }
+  out.force = j.stiffness(c) * (alpha - out.rest);
+  if (dynamics) out.force += j.damping(c) * (alpha_dot - out.rest_rate);
+  return out;
+}
+
 void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, double time,
                               double load_factor, bool dynamics, bool tangent,
                               JointCoordinateTerms* out) {
@@ -283,25 +298,18 @@ void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, d
   if (k == 0) return;
   const auto alpha = data.q_joint.segment(j.coord - model.nv_nodes, k);
   const auto alpha_dot = data.v.segment(j.coord, k);
-  // A series-elastic drive moves the rest of its coordinate to q(t) (method.md §4.5).
-  Vec6 rest = j.rest, rest_rate = Vec6::Zero();
   ProfileValue drive{};
   if (j.drive != DriveKind::kNone) drive = EvalProfile(j.drive_profile, time, data);
-  if (j.drive == DriveKind::kSeriesElastic) {
-    rest(j.drive_coord) += load_factor * drive.value;
-    rest_rate(j.drive_coord) = load_factor * drive.rate;
-  }
   Vec6& f = out->force;
   if (GetJointTypeInfo(j.type).spring_law == JointSpringLaw::kCoordinates) {
     for (int c = 0; c < k; ++c) {
-      out->term_scale =
-          std::max(out->term_scale, j.stiffness(c) * (std::abs(alpha(c)) + std::abs(rest(c))));
-      f(c) = j.stiffness(c) * (alpha(c) - rest(c));
+      const JointCoordinateSpring spring =
+          JointCoordinateSpringLaw(j, c, alpha(c), alpha_dot(c), drive, load_factor, dynamics);
+      out->term_scale = std::max(
+          out->term_scale, j.stiffness(c) * (std::abs(alpha(c)) + std::abs(spring.rest)));
+      f(c) = spring.force;
       out->stiffness(c, c) = j.stiffness(c);
-      if (dynamics) {
-        f(c) += j.damping(c) * (alpha_dot(c) - rest_rate(c));
-        out->damping(c, c) = j.damping(c);
-      }
+      if (dynamics) out->damping(c, c) = j.damping(c);
     }
   } else if (j.stiffness.head(k).squaredNorm() > 0.0 || j.damping.head(k).squaredNorm() > 0.0) {
     // Energy 1/2 delta^T K delta, delta = A^T log(H_J) (method.md §4.5): f = A^T T^-T(xi) A K
@@ -423,11 +431,12 @@ double JointDriveEffort(const Model& model, const Data& data, int joint) {
     case DriveKind::kForce:
       return EvalProfile(j.drive_profile, data.time, data).value;
     case DriveKind::kSeriesElastic: {
+      // Minus the kernel's spring-damper force (0.0 - f: a spring at rest reports +0, not -0).
       const int c = j.coord + j.drive_coord;
-      const ProfileValue q = EvalProfile(j.drive_profile, data.time, data);
-      const double alpha = data.q_joint(c - model.nv_nodes);
-      return j.stiffness(j.drive_coord) * (q.value + j.rest(j.drive_coord) - alpha) +
-             j.damping(j.drive_coord) * (q.rate - data.v(c));
+      const JointCoordinateSpring spring = JointCoordinateSpringLaw(
+          j, j.drive_coord, data.q_joint(c - model.nv_nodes), data.v(c),
+          EvalProfile(j.drive_profile, data.time, data), 1.0, true);
+      return 0.0 - spring.force;
     }
   }
   return 0.0;

@@ -229,10 +229,28 @@ void FreezeShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4],
   SetLevers(pair, H, out);
 }
 
+namespace {
+
+// The relative velocity map of the surface points, J = [sign_k W_k R_k [I  -Skew(l_k)]]
+// (3 x 24), and m_k = R_k^T n.
+void CalcRelativeVelocityMap(const ShapePairGeometry& G, const NodeMotion<4>& x,
+                             Eigen::Matrix<double, 3, 24>* J, Vec3 (&m)[4]) {
+  const double sign[4] = {1.0, 1.0, -1.0, -1.0};
+  J->setZero();
+  for (int k = 0; k < 4; ++k) {
+    m[k] = x.H[k]->R.transpose() * G.normal;
+    if (G.weight[k] == 0.0) continue;
+    const double w = sign[k] * G.weight[k];
+    J->block<3, 3>(0, 6 * k) = w * x.H[k]->R;
+    J->block<3, 3>(0, 6 * k + 3) = -w * x.H[k]->R * Skew(G.lever[k]);
+  }
+}
+
+}  // namespace
+
 bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePairGeometry& G,
                         const NodeMotion<4>& x, const KernelOptions& o, ElementTerms<4>* t) {
-  const ContactSettings& law = model.contact;
-  if (G.gap >= law.onset) {
+  if (G.gap >= model.contact.onset) {
     t->active = false;
     return true;
   }
@@ -240,34 +258,19 @@ bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePa
   const double sign[4] = {1.0, 1.0, -1.0, -1.0};
   const double radius[4] = {pair.side[0].radius, pair.side[0].radius, pair.side[1].radius,
                             pair.side[1].radius};
-  // The relative velocity map of the surface points, J = [sign_k W_k R_k [I  -Skew(l_k)]].
-  Eigen::Matrix<double, 3, 24> J = Eigen::Matrix<double, 3, 24>::Zero();
+  Eigen::Matrix<double, 3, 24> J;
   Vec3 m[4];
-  for (int k = 0; k < 4; ++k) {
-    m[k] = x.H[k]->R.transpose() * n;
-    if (G.weight[k] == 0.0) continue;
-    const double w = sign[k] * G.weight[k];
-    J.block<3, 3>(0, 6 * k) = w * x.H[k]->R;
-    J.block<3, 3>(0, 6 * k + 3) = -w * x.H[k]->R * Skew(G.lever[k]);
-  }
+  CalcRelativeVelocityMap(G, x, &J, m);
   const bool dyn = o.dynamics;
   const Vec3 v_c = dyn ? Vec3(J * x.eta) : Vec3::Zero();
-  const double g_dot = n.dot(v_c);
-  const NormalLaw fe = CalcNormalLaw(G.gap, law.onset, law.stiffness);
-  const double w = std::min(1.0, (law.onset - G.gap) / law.onset);
-  const double dw = G.gap > 0.0 ? -1.0 / law.onset : 0.0;
-  const double c_n = dyn ? pair.damping : 0.0;
-  const double f_n = fe.force - c_n * w * g_dot;
-  if (!(f_n > 0.0)) {
+  // The law (ContactForceLaw): friction and damping in dynamics only.
+  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dyn);
+  const ContactForce c = ContactForceLaw(G.gap, n, v_c, law, o.tangent);
+  if (!c.active) {
     t->active = false;
     return true;
   }
-  const double mu = dyn ? law.friction : 0.0;
-  const Mat3 P = Mat3::Identity() - n * n.transpose();
-  const Vec3 v_t = P * v_c;
-  const double sv = std::sqrt(v_t.squaredNorm() + law.slip_velocity * law.slip_velocity);
-  const Vec3 u = mu > 0.0 ? Vec3(v_t / sv) : Vec3::Zero();
-  const Vec3 F = f_n * (n - mu * u);  // on A
+  const Vec3& F = c.force;  // on A
   double arm = 1.0;
   Vec3 f[4];
   for (int k = 0; k < 4; ++k) {
@@ -293,15 +296,11 @@ bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePa
     }
   }
   const Eigen::Matrix<double, 24, 1> j = J.transpose() * n;  // dg/dh
-  const double dfn_dg = fe.slope - c_n * dw * g_dot;
   const Eigen::Matrix<double, 1, 24> dfn_dh =
-      dfn_dg * j.transpose() - c_n * w * (n.transpose() * dV);
-  const Vec3 a = n - mu * u;
-  Mat3 DP = Mat3::Zero();
-  if (mu > 0.0)
-    DP = mu * f_n * (Mat3::Identity() / sv - v_t * v_t.transpose() / (sv * sv * sv)) * P;
-  Eigen::Matrix<double, 3, 24> dF_dh = a * dfn_dh;
-  if (mu > 0.0) dF_dh.noalias() -= DP * dV;
+      c.normal.dforce_dgap * j.transpose() + c.normal.dforce_drate * (n.transpose() * dV);
+  const bool friction = law.friction > 0.0;
+  Eigen::Matrix<double, 3, 24> dF_dh = c.direction * dfn_dh;
+  if (friction) dF_dh.noalias() -= c.slip_tangent * dV;
   auto& K = t->stiffness;
   K.noalias() = -J.transpose() * dF_dh;
   // The rotation of the frames at fixed world F.
@@ -314,9 +313,9 @@ bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePa
   }
   t->has_stiffness = true;
   if (dyn) {
-    const Eigen::Matrix<double, 1, 24> dfn_deta = -c_n * w * j.transpose();
-    Eigen::Matrix<double, 3, 24> dF_deta = a * dfn_deta;
-    if (mu > 0.0) dF_deta.noalias() -= DP * J;
+    const Eigen::Matrix<double, 1, 24> dfn_deta = c.normal.dforce_drate * j.transpose();
+    Eigen::Matrix<double, 3, 24> dF_deta = c.direction * dfn_deta;
+    if (friction) dF_deta.noalias() -= c.slip_tangent * J;
     t->damping.noalias() = -J.transpose() * dF_deta;
     t->has_damping = true;
   }
@@ -642,22 +641,17 @@ ShapePairState CalcShapePairState(const Model& model, const Data& data, int item
   out.point[1] = G.point[1];
   out.normal = G.normal;
   if (G.gap >= model.contact.onset) return out;
-  Vec3 v_c = Vec3::Zero();
-  for (int k = 0; k < 4; ++k) {
-    if (G.weight[k] == 0.0) continue;
-    const Vec3 v = x.eta.segment<3>(6 * k), om = x.eta.segment<3>(6 * k + 3);
-    v_c += (k < 2 ? 1.0 : -1.0) * G.weight[k] * (x.H[k]->R * (v + om.cross(G.lever[k])));
-  }
-  const NormalLaw fe = CalcNormalLaw(G.gap, model.contact.onset, model.contact.stiffness);
-  const double w = std::min(1.0, (model.contact.onset - G.gap) / model.contact.onset);
-  const double f_n = fe.force - pair.damping * w * G.normal.dot(v_c);
-  if (!(f_n > 0.0)) return out;
+  // The kernel's velocity map and law, with damping and friction (dynamics).
+  Eigen::Matrix<double, 3, 24> J;
+  Vec3 m[4];
+  CalcRelativeVelocityMap(G, x, &J, m);
+  const Vec3 v_c = J * x.eta;
+  const ContactForce c = ContactForceLaw(
+      G.gap, G.normal, v_c, ContactLawFor(model.contact, pair.damping, true), false);
+  if (!c.active) return out;
   out.active = true;
-  out.normal_force = f_n;
-  const Vec3 v_t = v_c - G.normal * G.normal.dot(v_c);
-  const double sv = std::sqrt(v_t.squaredNorm() +
-                              model.contact.slip_velocity * model.contact.slip_velocity);
-  out.friction_force = -model.contact.friction * f_n * v_t / sv;
+  out.normal_force = c.normal.force;
+  out.friction_force = c.friction;
   return out;
 }
 

@@ -311,6 +311,14 @@ bool TendonSpanSegmentKind::Calc(const Model& model, const Data& data, const Ite
   return true;
 }
 
+ForceElementForce ForceElementLaw(const ForceElement& fe, const Data& data, double length,
+                                  double rate, double time, double load_factor) {
+  ForceElementForce out;
+  out.actuator = load_factor * EvalProfile(fe.actuator, time, data).value;
+  out.force = fe.stiffness * (length - fe.rest_length) + fe.damping * rate + out.actuator;
+  return out;
+}
+
 bool ForceElementKind::Calc(const Model& model, const Data& data, const Item& element,
                             const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
   const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
@@ -319,10 +327,10 @@ bool ForceElementKind::Calc(const Model& model, const Data& data, const Item& el
     t->active = false;  // coinciding ends: no direction, no force
     return true;
   }
-  const double actuator = o.load_factor * EvalProfile(fe.actuator, o.time, data).value;
   const bool damped = o.dynamics && fe.damping != 0.0;
   const double rate = damped ? g.gradient.dot(x.eta) : 0.0;
-  const double f = fe.stiffness * (g.length - fe.rest_length) + fe.damping * rate + actuator;
+  const ForceElementForce law = ForceElementLaw(fe, data, g.length, rate, o.time, o.load_factor);
+  const double f = law.force, actuator = law.actuator;
   t->residual = f * g.gradient;
   const double arm = std::max({1.0, fe.a.offset.norm(), fe.b.offset.norm()});
   t->force_scale = std::abs(f) * arm;
@@ -381,8 +389,7 @@ LineForceState CalcForceElementState(const Model& model, const Data& data, int e
   const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
   LineForceState s;
   AddSegmentState(model, data, fe.a, fe.b, &s);
-  s.force = fe.stiffness * (s.length - fe.rest_length) + fe.damping * s.rate +
-            EvalProfile(fe.actuator, data.time, data).value;
+  s.force = ForceElementLaw(fe, data, s.length, s.rate, data.time, 1.0).force;
   return s;
 }
 

@@ -147,6 +147,68 @@ TEST(ContactKind, TangentsMatchFiniteDifferencesThroughTheRetractionAndInTheVelo
   }
 }
 
+// What contacts.csv reports (CalcContactState) is the force the kernel puts in the residual:
+// the world force -sum_k R_k r_k of its translation rows is f_n n + f_t, its moment about the
+// origin is that of the force at the reported surface point, f_n is the normal component and
+// f_t is tangential, opposes the slip and stays within the friction cone.
+TEST(ContactKind, ReportedForceIsTheForceInTheKernelsResidual) {
+  int active = 0;
+  for (const double mu : {0.0, 0.4}) {
+    for (unsigned seed : {1u, 2u, 3u, 4u}) {
+      Scene s = MakeTouchingScene(mu, seed);
+      KernelOptions o;
+      o.dynamics = true;
+      o.tangent = false;
+      for (int i = 0; i < static_cast<int>(s.model.contact_pairs.size()); ++i) {
+        const ContactPair& pair = s.model.contact_pairs[static_cast<std::size_t>(i)];
+        NodeMotion<2> x;
+        const Mat6 I = Mat6::Identity();
+        for (int k = 0; k < 2; ++k) {
+          x.H[k] = &NodeFrame(s.data, pair.node[k]);
+          x.T[k] = &I;
+        }
+        GatherNodeMotion<2>(s.model, s.data, pair.node, &x.eta, &x.eta_dot);
+        ElementTerms<2> t;
+        ASSERT_TRUE(ContactKind::Calc(s.model, s.data, i, x, o, &t));
+        const ContactState c = CalcContactState(s.model, s.data, i);
+        ASSERT_EQ(c.active, t.active) << "mu " << mu << " seed " << seed << " pair " << i;
+        if (!t.active) continue;
+        ++active;
+        Vec3 F = Vec3::Zero(), M = Vec3::Zero();
+        for (int k = 0; k < 2; ++k) {
+          const Vec3 f = -(x.H[k]->R * t.residual.segment<3>(6 * k));
+          F += f;
+          M += x.H[k]->x.cross(f) - x.H[k]->R * t.residual.segment<3>(6 * k + 3);
+        }
+        const Vec3 reported = c.normal_force * c.normal + c.friction_force;
+        const double scale = F.norm();
+        EXPECT_LT((F - reported).norm(), 1e-13 * scale) << "mu " << mu << " seed " << seed;
+        EXPECT_LT((M - c.point.cross(reported)).norm(), 1e-12 * scale);
+        EXPECT_NEAR(c.normal.dot(F), c.normal_force, 1e-13 * scale);
+        EXPECT_LT(std::abs(c.normal.dot(c.friction_force)), 1e-13 * scale);
+        EXPECT_LE(c.friction_force.norm(), mu * c.normal_force * (1.0 + 1e-14));
+        // The slip: the surface point's velocity minus its normal part.
+        Vec3 v = Vec3::Zero();
+        ContactGeometry G;
+        ASSERT_TRUE(CalcContactGeometry(s.model, pair, *x.H[0], *x.H[1], &G));
+        for (int k = 0; k < 2; ++k)
+          v += G.weight[k] * (x.H[k]->R * (x.eta.segment<3>(6 * k) +
+                                            x.eta.segment<3>(6 * k + 3).cross(G.lever[k])));
+        const Vec3 slip = v - c.normal * c.normal.dot(v);
+        if (mu > 0.0) EXPECT_LT(c.friction_force.dot(slip), 0.0);
+        // f_n = f_e(g) - c_n w(g) dg/dt.
+        const double onset = s.model.contact.onset;
+        const double f_e = CalcNormalLaw(c.gap, onset, s.model.contact.stiffness).force;
+        EXPECT_NEAR(c.normal_force,
+                    f_e - pair.damping * std::min(1.0, (onset - c.gap) / onset) *
+                              c.normal.dot(v),
+                    1e-12 * scale);
+      }
+    }
+  }
+  EXPECT_GE(active, 16);
+}
+
 TEST(ContactKind, StaticForceIsTheGradientOfThePenaltyPotential) {
   Scene s = MakeTouchingScene(0.4, 5);
   KernelOptions o;  // statics: no damping, no friction

@@ -457,6 +457,54 @@ TEST(ShapePairValidation, HeadOnSpheresConserveMomentumAndReboundElasticallyWith
   EXPECT_GT(drift[0] / drift[1], 3.0);  // second order
 }
 
+// What pair_contacts.csv reports (CalcShapePairState) through an oblique impact with friction
+// and damping is the force the kernel puts in the residual: the world force of side A's rows,
+// -sum_k R_k r_k, is f_n n + f_t and side B's is its opposite; f_n is its normal component,
+// f_t is tangential and within the friction cone.
+TEST(ShapePairKind, ReportedForceIsTheForceInTheKernelsResidual) {
+  const double mu = 0.4;
+  TwoSpheres s;
+  MakeTwoSpheres(&s, mu, 1.0, 0.05, 0.8);
+  int active = 0, sliding = 0;
+  for (int i = 0; i < 40; ++i) {
+    ASSERT_TRUE(Step(s.model, s.data, s.integ, 1e-3).ok);
+    for (int p = 0; p < s.data.num_shape_pairs; ++p) {
+      const ShapePair& pair = s.data.shape_pairs[static_cast<std::size_t>(p)];
+      const int nodes[4] = {pair.side[0].node[0], pair.side[0].node[1], pair.side[1].node[0],
+                            pair.side[1].node[1]};
+      NodeMotion<4> x;
+      const Mat6 I = Mat6::Identity();
+      for (int k = 0; k < 4; ++k) {
+        x.H[k] = &NodeFrame(s.data, nodes[k]);
+        x.T[k] = &I;
+      }
+      GatherNodeMotion<4>(s.model, s.data, nodes, &x.eta, &x.eta_dot);
+      KernelOptions o;
+      o.dynamics = true;
+      o.tangent = false;
+      ElementTerms<4> t;
+      ASSERT_TRUE(ShapePairKind::Calc(s.model, s.data, p, x, o, &t));
+      const ShapePairState c = CalcShapePairState(s.model, s.data, p);
+      ASSERT_EQ(c.active, t.active) << "step " << i;
+      if (!t.active) continue;
+      ++active;
+      Vec3 F[2] = {Vec3::Zero(), Vec3::Zero()};
+      for (int k = 0; k < 4; ++k) F[k / 2] -= x.H[k]->R * t.residual.segment<3>(6 * k);
+      const Vec3 reported = c.normal_force * c.normal + c.friction_force;
+      const double scale = F[0].norm();
+      EXPECT_GT(c.normal_force, 0.0);
+      EXPECT_LT((F[0] - reported).norm(), 1e-13 * scale) << "step " << i;
+      EXPECT_LT((F[1] + reported).norm(), 1e-13 * scale) << "step " << i;
+      EXPECT_NEAR(c.normal.dot(F[0]), c.normal_force, 1e-13 * scale);
+      EXPECT_LT(std::abs(c.normal.dot(c.friction_force)), 1e-13 * scale);
+      EXPECT_LE(c.friction_force.norm(), mu * c.normal_force * (1.0 + 1e-14));
+      if (c.friction_force.norm() > 0.5 * mu * c.normal_force) ++sliding;
+    }
+  }
+  EXPECT_GE(active, 3);   // the spheres did touch
+  EXPECT_GE(sliding, 1);  // and slid: friction near its cone
+}
+
 // A 1 kg sphere (r = 0.1) resting on the middle of a fixed box's top face, where no vertex or
 // edge is near (k = 1e5, onset 1e-4: the penetration branch, gap onset/2 - m g / k); and a
 // sphere whose centre is inside the box leaves through the nearest face.

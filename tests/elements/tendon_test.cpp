@@ -323,6 +323,41 @@ TEST(ForceElementKind, ForceIsTheSpringDamperActuatorLawWithExactTangents) {
   EXPECT_LT(RelativeError(r - actuator, dE.transpose()), 1e-8);
 }
 
+// What forces.csv reports (CalcForceElementState) is the tension the kernel puts in the
+// residual: node B's rows carry f e and node A's -f e (world, e the unit vector from a to b);
+// in statics the damper is off and the actuator scales with the load factor.
+TEST(ForceElementKind, ReportedForceIsTheTensionInTheKernelsResidual) {
+  for (unsigned seed : {5u, 6u, 7u}) {
+    std::mt19937 rng(seed);
+    const Chain c = MakeChain(rng, 0.0);
+    const ForceElement& fe = c.model.force_elements[0];
+    const Vec3 pa = BodyPointPosition(c.data, fe.a), pb = BodyPointPosition(c.data, fe.b);
+    const Vec3 e = (pb - pa).normalized();
+    auto tension = [&](const KernelOptions& o, double* opposite) {
+      Eigen::VectorXd r;
+      AssembleKind<ForceElementKind>(c.model, c.data, o, &r, nullptr, nullptr);
+      const SE3& Ha = c.data.H[static_cast<std::size_t>(fe.a.node)];
+      const SE3& Hb = c.data.H[static_cast<std::size_t>(fe.b.node)];
+      *opposite = -e.dot(Ha.R * r.segment<3>(6 * fe.a.node));
+      return e.dot(Hb.R * r.segment<3>(6 * fe.b.node));
+    };
+    const LineForceState s = CalcForceElementState(c.model, c.data, 0);
+    ASSERT_GT(std::abs(s.rate), 0.1);
+    KernelOptions o;
+    o.dynamics = true;
+    double opposite = 0.0;
+    const double f = tension(o, &opposite);
+    EXPECT_NEAR(f, s.force, 1e-13 * std::abs(s.force)) << seed;
+    EXPECT_NEAR(opposite, s.force, 1e-13 * std::abs(s.force)) << seed;
+    EXPECT_NEAR(s.force, fe.stiffness * (s.length - fe.rest_length) + fe.damping * s.rate + 1.5,
+                1e-13 * std::abs(s.force));
+    o.dynamics = false;
+    o.load_factor = 0.5;
+    EXPECT_NEAR(tension(o, &opposite), fe.stiffness * (s.length - fe.rest_length) + 0.75,
+                1e-13 * std::abs(s.force)) << seed;
+  }
+}
+
 TEST(ForceElementKind, ForcesHaveZeroWorldResultantSoMomentumIsConserved) {
   std::mt19937 rng(9);
   for (int c = 0; c < 10; ++c) {

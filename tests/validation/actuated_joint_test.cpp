@@ -21,6 +21,7 @@
 #include <numbers>
 #include <string>
 
+#include "screwfem/elements/joint.h"
 #include "screwfem/model/model.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/build/model_builder.h"
@@ -180,6 +181,54 @@ TEST(ActuatedJointJ2, EffortOscillationAfterAJumpIsUndampedWithRhoInfOne) {
   const double jump = 2.0 * (kJc + kMass * kLc * kLc) * 4.0 * kRevolute.stroke;  // J_O * 2a
   EXPECT_GT(r.final_error, 0.4 * jump);
   EXPECT_LT(r.position_error, 1e-10);  // the motion itself is still exact
+}
+
+// A series-elastic drive (spring K and damper D towards rest + q(t)) swinging the link: its
+// effort is exactly minus the force the kernel puts on the coordinate's residual row
+// (JointCoordinateSpringLaw, shared), it is K (q + rest - alpha) + D (q' - alpha'), and it is the
+// torque that moves the link: (J + m l_c^2) alpha'' + m g l_c cos alpha.
+TEST(ActuatedJointJ2, SeriesElasticEffortIsTheKernelsSpringForceAndMovesTheLink) {
+  const double K = 2.0, D = 0.05, rest = 0.1;
+  ModelBuilder b;
+  const int node = b.AddNode(SE3::Identity(), "link");
+  b.AddRigidBody("link", node, kMass, Vec3(kLc, 0.0, 0.0), kJc * Mat3::Identity());
+  const int joint = b.AddJointAt("q", JointType::kRevolute, kGround, node, Vec3::Zero(),
+                                 Vec3::UnitZ());
+  Joint& j = b.model().joints[static_cast<std::size_t>(joint)];
+  j.stiffness(0) = K;
+  j.damping(0) = D;
+  j.rest(0) = rest;
+  j.drive = DriveKind::kSeriesElastic;
+  j.drive_coord = 0;
+  const Profile profile = Profile::BangBang(0.0, 1.0, kPi / 6);
+  j.drive_profile = profile;
+  b.SetGravity(Vec3(0.0, -kG, 0.0));
+  const Model m = b.Build();
+  Data d = MakeData(m);
+  Integrator integ;
+  DynamicOptions opt;
+  opt.rho_inf = 0.8;
+  std::string message;
+  ASSERT_TRUE(InitializeDynamics(m, d, integ, opt, &message)) << message;
+  const int coord = m.joints[0].coord;
+  double max_effort = 0.0;
+  for (int i = 0; i < 600; ++i) {
+    ASSERT_TRUE(Step(m, d, integ, 1e-3).ok);
+    const double effort = JointDriveEffort(m, d, joint);
+    JointCoordinateTerms terms;
+    CalcJointCoordinateTerms(m, d, joint, d.time, 1.0, true, false, &terms);
+    EXPECT_EQ(effort, 0.0 - terms.force(0)) << "t = " << d.time;
+    EXPECT_EQ(JointCoordinateEffort(m, d, joint, 0), effort);
+    const ProfileValue q = profile.Eval(d.time);
+    const double alpha = d.q_joint(coord - m.nv_nodes), alpha_dot = d.v(coord);
+    const double closed = K * (q.value + rest - alpha) + D * (q.rate - alpha_dot);
+    EXPECT_NEAR(effort, closed, 1e-14 * (K + D));
+    const double torque =
+        (kJc + kMass * kLc * kLc) * d.vdot(coord) + kMass * kG * kLc * std::cos(alpha);
+    EXPECT_NEAR(effort, torque, 1e-6 * kMass * kG * kLc) << "t = " << d.time;
+    max_effort = std::max(max_effort, std::abs(effort));
+  }
+  EXPECT_GT(max_effort, 0.5 * kMass * kG * kLc);  // the spring carried the link
 }
 
 }  // namespace

@@ -31,6 +31,48 @@ NormalLaw CalcNormalLaw(double gap, double onset, double stiffness);
 // Its potential Psi(g) = integral from g to delta of f_e [J].
 double ContactPotential(double gap, double onset, double stiffness);
 
+// The parameters of the contact law at one pair: the scene's ContactSettings with the pair's
+// damping c_n [N s/m]; ContactLawFor gives no damping and no friction in statics.
+struct ContactLawParameters {
+  double stiffness = 0.0;      // k_n [N/m]
+  double onset = 0.0;          // delta [m]
+  double damping = 0.0;        // c_n [N s/m]
+  double friction = 0.0;       // mu
+  double slip_velocity = 0.0;  // eps_v [m/s]
+};
+ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping,
+                                   bool dynamics);
+
+// The normal force of the law (method-next.md §N6.3) at gap g closing at rate dg/dt:
+// f_n = f_e(g) - c_n w(g) dg/dt with w(g) = min(1, (delta - g) / delta) (the damping grows in
+// over the onset), and its derivatives. The pair pushes only while g < delta and f_n > 0.
+struct ContactNormal {
+  double force = 0.0;         // f_n [N]
+  double dforce_dgap = 0.0;   // df_n/dg at fixed dg/dt [N/m]
+  double dforce_drate = 0.0;  // df_n/d(dg/dt) = -c_n w(g) [N s/m]
+};
+ContactNormal ContactNormalLaw(double gap, double gap_rate, const ContactLawParameters& law);
+
+// The whole law at a surface point with normal n (from the obstacle, or side B, to the shape)
+// moving at v_c relative to it: the normal force at dg/dt = n . v_c and regularised Coulomb
+// friction on the tangential velocity v_t = (I - n n^T) v_c,
+//   F = f_n (n - mu u),  u = v_t / sqrt(|v_t|^2 + eps_v^2),
+// the force on the shape (on side A). The one definition behind the kernels (ContactKind,
+// ShapePairKind) and what the outputs report (CalcContactState, CalcShapePairState).
+struct ContactForce {
+  bool active = false;      // g < delta and f_n > 0
+  ContactNormal normal;
+  Vec3 force = Vec3::Zero();     // F [N], world
+  Vec3 friction = Vec3::Zero();  // f_t = -mu f_n v_t / sqrt(|v_t|^2 + eps_v^2) [N], world
+  // With the tangent: dF = direction df_n - slip_tangent dv_c, direction = n - mu u and
+  // slip_tangent = mu f_n (I / s - v_t v_t^T / s^3) (I - n n^T), s = sqrt(|v_t|^2 + eps_v^2)
+  // (zero without friction).
+  Vec3 direction = Vec3::Zero();
+  Mat3 slip_tangent = Mat3::Zero();
+};
+ContactForce ContactForceLaw(double gap, const Vec3& normal, const Vec3& velocity,
+                             const ContactLawParameters& law, bool tangent);
+
 // The geometry of a pair at frames H[0], H[1] of its item nodes.
 struct ContactGeometry {
   double gap = 0.0;          // signed distance between the surfaces [m]

@@ -136,6 +136,23 @@ void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient&
                                         const Eigen::Ref<const Eigen::VectorXd>& v_j,
                                         const Mat6X& basis, JointVelocityTangent* out);
 
+// The spring-damper law of global coordinate c of a joint (method.md §4.5, spring law
+// kCoordinates): the generalised force on the coordinate's residual row
+//   f = K_c (alpha - rest) + D_c (alpha_dot - rest_rate)   (D_c in dynamics only),
+// with rest = rest_c and rest_rate = 0, except on the coordinate of a series-elastic drive,
+// whose rest moves to rest_c + lambda q(t) at rate lambda dq/dt (`drive`: q(t) and dq/dt, the
+// drive profile's value; lambda the load factor). The series-elastic drive's law: one
+// definition behind the kernel (CalcJointCoordinateTerms) and its effort -f
+// (JointDriveEffort, load factor 1, with damping).
+struct JointCoordinateSpring {
+  double force = 0.0;      // f
+  double rest = 0.0;       // the rest it pulls towards
+  double rest_rate = 0.0;  // and its rate
+};
+JointCoordinateSpring JointCoordinateSpringLaw(const Joint& joint, int c, double alpha,
+                                               double alpha_dot, const ProfileValue& drive,
+                                               double load_factor, bool dynamics);
+
 // Springs, dampers and the drive on a joint's coordinates (method.md §4.4, §4.5): the
 // generalised force f (k) that enters the coordinate rows of the residual, and its derivatives
 // K_q = df/dalpha and D_q = df/d(alpha_dot) (top-left k x k). `dynamics` adds the dampers;

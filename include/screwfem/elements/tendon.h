@@ -126,7 +126,18 @@ struct TendonSpanSegmentKind {
   static void AddEnergy(const Model&, const Data&, const Item&, Energy*) {}
 };
 
-// A spring-damper-actuator between two body points: force
+// The force element's law: the tension f = k (l - l_0) + c dl/dt + lambda F(t) [N] at length l
+// and rate dl/dt (positive: pulling the points together), with the actuator's value
+// lambda F(t) at load factor lambda. The one definition behind the kernel (ForceElementKind)
+// and what the outputs report (CalcForceElementState, load factor 1).
+struct ForceElementForce {
+  double force = 0.0;     // f [N]
+  double actuator = 0.0;  // lambda F(t) [N]
+};
+ForceElementForce ForceElementLaw(const ForceElement& element, const Data& data, double length,
+                                  double rate, double time, double load_factor);
+
+// A spring-damper-actuator between two body points: force (ForceElementLaw)
 //   f = k (l - l_0) + c dl/dt + F(t)   (positive: tension, pulling the points together),
 // residual rows f dl/d[dh_A; dh_B], with dl/dt = gradient^T [eta_A; eta_B]; exact tangents:
 //   stiffness k g g^T + f d2l + c g (d2l^T eta)^T   (the last: dl/dt varies with q at fixed eta),
