@@ -195,7 +195,9 @@ TEST(ContactKind, ReportedForceIsTheForceInTheKernelsResidual) {
           v += G.weight[k] * (x.H[k]->R * (x.eta.segment<3>(6 * k) +
                                             x.eta.segment<3>(6 * k + 3).cross(G.lever[k])));
         const Vec3 slip = v - c.normal * c.normal.dot(v);
-        if (mu > 0.0) EXPECT_LT(c.friction_force.dot(slip), 0.0);
+        if (mu > 0.0) {
+          EXPECT_LT(c.friction_force.dot(slip), 0.0);
+        }
         // f_n = f_e(g) - c_n w(g) dg/dt.
         const double onset = s.model.contact.onset;
         const double f_e = CalcNormalLaw(c.gap, onset, s.model.contact.stiffness).force;
