@@ -162,6 +162,7 @@ struct ForceElementKind {
   static void ForEach(const Model& model, F&& f) {
     for (std::size_t i = 0; i < model.force_elements.size(); ++i) {
       const ForceElement& e = model.force_elements[i];
+      if (e.a.element >= 0 || e.b.element >= 0) continue;  // ForceElementSpanKind's
       const int nodes[2] = {e.a.node, e.b.node};
       f(static_cast<int>(i), nodes);
     }
