@@ -91,13 +91,14 @@ void BindValues(py::module_& m) {
             return p;
           },
           py::arg("rod"), py::arg("arc_length"), py::arg("offset") = Vec3::Zero(),
-          "A tendon eyelet at reference arc length [m] of a rod: build places it on the node "
+          "A tendon eyelet or force-element end at reference arc length [m] of a rod: build "
+          "places it on the node "
           "there or, between nodes, on the section of the element holding it (offset in that "
           "section's frame).")
-      .def_readwrite("rod", &BodyPoint::rod, "The rod of an eyelet at an arc length (-1: none).")
+      .def_readwrite("rod", &BodyPoint::rod, "The rod of a point at an arc length (-1: none).")
       .def_readwrite("arc_length", &BodyPoint::arc_length, "Its reference arc length [m].")
       .def_readonly("element", &BodyPoint::element,
-                    "Set by build for an eyelet between nodes: its element (-1: on a node).")
+                    "Set by build for a point between nodes: its element (-1: on a node).")
       .def_readonly("xi", &BodyPoint::xi, "Set by build: its place in the element, in (0, 1).");
 
   py::class_<ForceElement>(m, "ForceElement",

@@ -346,7 +346,8 @@ void BuildActuators(Model& m) {
   ListElementActuators(m);
 }
 
-// Force elements: ends, values, rest length (the reference distance when negative), names.
+// Force elements: ends (at an arc length: PlaceOnRod, as eyelets), values, rest length (the
+// reference distance when negative), names.
 void BuildForceElements(Model& m) {
   std::set<std::string> names;
   for (std::size_t i = 0; i < m.force_elements.size(); ++i) {
@@ -354,15 +355,14 @@ void BuildForceElements(Model& m) {
     const std::string label = "force element '" + f.name + "'";
     const int index = static_cast<int>(i);
     const EntityRef entity{EntityKind::kForceElement, index, {}};
-    for (const auto& [p, part] : {std::pair<const BodyPoint*, const char*>{&f.a, "a"}, {&f.b, "b"}}) {
-      const std::string problem =
-          p->rod >= 0 ? "ends sit on nodes (an arc length between nodes is for tendon eyelets)"
-                      : BodyPointProblem(m, *p);
+    for (const auto& [p, part] : {std::pair<BodyPoint*, const char*>{&f.a, "a"}, {&f.b, "b"}}) {
+      std::string problem = PlaceOnRod(m, *p);  // an end at an arc length, as an eyelet
+      if (problem.empty()) problem = BodyPointProblem(m, *p);
       if (!problem.empty())
         throw InputError(label + ": end " + part + ": " + problem,
                          {EntityKind::kForceElement, index, part}, problem);
     }
-    if (f.a.node == f.b.node)
+    if (f.a.node == f.b.node && f.a.element < 0 && f.b.element < 0)
       throw InputError(label + ": both ends are on " + NodeLabel(m, f.a.node), entity);
     if (!(f.stiffness >= 0.0) || !std::isfinite(f.stiffness) || !(f.damping >= 0.0) ||
         !std::isfinite(f.damping))

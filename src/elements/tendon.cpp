@@ -257,6 +257,47 @@ bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& g
   return true;
 }
 
+bool CalcSpanDistance(const Data& data, const BodyPoint& a, const BodyPoint& b,
+                      const SE3* const (&H_nodes)[4], double scale, double* length,
+                      Eigen::Matrix<double, 24, 1>* gradient,
+                      Eigen::Matrix<double, 24, 24>* hessian) {
+  const BodyPoint* ends[2] = {&a, &b};
+  SpanEnd span[2];
+  SE3 H[2];
+  for (int k = 0; k < 2; ++k) {
+    if (ends[k]->element < 0) {
+      H[k] = *H_nodes[2 * k];
+    } else {
+      CalcSpanEnd(data, *ends[k], *H_nodes[2 * k], *H_nodes[2 * k + 1], &span[k]);
+      H[k] = span[k].H;
+    }
+  }
+  PointDistance g;
+  if (!CalcPointDistance(H[0], a.offset, H[1], b.offset, hessian != nullptr, &g)) return false;
+  *length = g.length;
+  // dh_E = N_k [dh of the end's two nodes]; an end on a node: [I 0].
+  Eigen::Matrix<double, 12, 24> N = Eigen::Matrix<double, 12, 24>::Zero();
+  for (int k = 0; k < 2; ++k) {
+    if (ends[k]->element < 0)
+      N.block<6, 6>(6 * k, 12 * k).setIdentity();
+    else
+      N.block<6, 12>(6 * k, 12 * k) = CalcRodN(ends[k]->xi, span[k].d);
+  }
+  gradient->noalias() = scale * (N.transpose() * g.gradient);
+  if (hessian == nullptr) return true;
+  // scale (N^T H_l N + blockdiag(G_E P(d))): the eyelet frames' hessian carried to the nodes and
+  // the variation of the interpolation at fixed g_E.
+  const Eigen::Matrix<double, 12, 24> HN = g.hessian * N;
+  hessian->noalias() = scale * (N.transpose() * HN);
+  for (int k = 0; k < 2; ++k) {
+    if (ends[k]->element < 0) continue;
+    const Vec6 g_E = g.gradient.segment<6>(6 * k);
+    hessian->block<12, 12>(12 * k, 12 * k).noalias() +=
+        scale * (CalcRodNTransposeDerivative(ends[k]->xi, span[k].d, g_E) * CalcRodP(span[k].d));
+  }
+  return true;
+}
+
 bool TendonSpanSegmentKind::Calc(const Model& model, const Data& data, const Item& segment,
                                  const NodeMotion<4>& x, const KernelOptions& o,
                                  ElementTerms<4>* t) {
@@ -268,46 +309,16 @@ bool TendonSpanSegmentKind::Calc(const Model& model, const Data& data, const Ite
     t->active = false;
     return true;
   }
-  const BodyPoint* ends[2] = {&s.a, &s.b};
-  SpanEnd span[2];
-  SE3 H[2];
-  for (int k = 0; k < 2; ++k) {
-    if (ends[k]->element < 0) {
-      H[k] = *x.H[2 * k];
-    } else {
-      CalcSpanEnd(data, *ends[k], *x.H[2 * k], *x.H[2 * k + 1], &span[k]);
-      H[k] = span[k].H;
-    }
-  }
-  PointDistance g;
-  if (!CalcPointDistance(H[0], s.a.offset, H[1], s.b.offset, o.tangent, &g)) {
+  double length;
+  if (!CalcSpanDistance(data, s.a, s.b, x.H, tau, &length, &t->residual,
+                        o.tangent ? &t->stiffness : nullptr)) {
     t->active = false;  // coinciding eyelets: no direction, no force
     return true;
   }
-  // dh_E = N_k [dh of the end's two nodes]; an end on a node: [I 0].
-  Eigen::Matrix<double, 12, 24> N = Eigen::Matrix<double, 12, 24>::Zero();
-  for (int k = 0; k < 2; ++k) {
-    if (ends[k]->element < 0)
-      N.block<6, 6>(6 * k, 12 * k).setIdentity();
-    else
-      N.block<6, 12>(6 * k, 12 * k) = CalcRodN(ends[k]->xi, span[k].d);
-  }
-  t->residual.noalias() = tau * (N.transpose() * g.gradient);
   const double arm = std::max({1.0, s.a.offset.norm(), s.b.offset.norm()});
   t->force_scale = tau * arm;
   t->term_scale = tau * arm;
-  if (!o.tangent) return true;
-  // tau (N^T H_l N + blockdiag(G_E P(d))): the eyelet frames' hessian carried to the nodes and
-  // the variation of the interpolation at fixed g_E.
-  const Eigen::Matrix<double, 12, 24> HN = g.hessian * N;
-  t->stiffness.noalias() = tau * (N.transpose() * HN);
-  for (int k = 0; k < 2; ++k) {
-    if (ends[k]->element < 0) continue;
-    const Vec6 g_E = g.gradient.segment<6>(6 * k);
-    t->stiffness.block<12, 12>(12 * k, 12 * k).noalias() +=
-        tau * (CalcRodNTransposeDerivative(ends[k]->xi, span[k].d, g_E) * CalcRodP(span[k].d));
-  }
-  t->has_stiffness = true;
+  t->has_stiffness = o.tangent;
   return true;
 }
 

@@ -57,7 +57,7 @@ class SceneCompiler {
   void AddTendonsAndForces();
   void AddActuators();
   void AddContacts();
-  // The builder's body point for a spec's (an error at `at` when it is not on a node).
+  // The builder's body point for a spec's (an error at `at` when it is off its body).
   BodyPoint ResolveBodyPoint(const BodyPointSpec& p, const FieldSource& at,
                              const std::string& what) const;
   void CheckConnections() const;
@@ -291,12 +291,12 @@ BodyPoint SceneCompiler::ResolveBodyPoint(const BodyPointSpec& p, const FieldSou
       builder_.FindRodNodeAtArcLength(body_index_[static_cast<std::size_t>(p.body)], p.arc_length);
   const int rod = body_index_[static_cast<std::size_t>(p.body)];
   const double length = builder_.RodLength(rod);
-  if (match.node < 0 && what == "eyelet") {
-    // An eyelet between nodes: on the section of the element there (Build places it).
+  if (match.node < 0) {
+    // A point between nodes: on the section of the element there (Build places it).
     if (!(p.arc_length >= 0.0 && p.arc_length <= length * (1.0 + 1e-12))) {
       std::ostringstream s;
       s.precision(9);
-      s << "eyelet: arc length " << p.arc_length << " m is off soft body '" << body.name
+      s << what << ": arc length " << p.arc_length << " m is off soft body '" << body.name
         << "' (length " << length << " m)";
       Fail(at, s.str());
     }
@@ -304,15 +304,6 @@ BodyPoint SceneCompiler::ResolveBodyPoint(const BodyPointSpec& p, const FieldSou
     point.rod = rod;
     point.arc_length = p.arc_length;
     return point;
-  }
-  if (match.node < 0) {
-    std::ostringstream s;
-    s.precision(6);
-    s << what << ": soft body '" << body.name << "' has no node at arc length " << p.arc_length
-      << " m (nearest node " << match.distance << " m away); " << what
-      << "s sit on rod nodes (ends, path points or subdivision points), offset from them by "
-         "'offset'";
-    Fail(at, s.str());
   }
   return {match.node, p.offset};
 }

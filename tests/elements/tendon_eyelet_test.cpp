@@ -12,6 +12,7 @@
 #include <cmath>
 #include <random>
 
+#include "kind_assembly.h"
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/build/model_builder.h"
 #include "screwfem/elements/rod.h"
@@ -31,54 +32,8 @@ double RelativeError(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   return (a - b).norm() / b.norm();
 }
 
-// The node rows (6 per node) of one kind's items and their stiffness (T = identity).
-template <class Kind>
-void AssembleKind(const Model& m, const Data& d, const KernelOptions& o, Eigen::VectorXd* r,
-                  Eigen::MatrixXd* K) {
-  constexpr int N = Kind::kNodes;
-  const int n = static_cast<int>(m.nodes.size());
-  r->setZero(6 * n);
-  if (K) K->setZero(6 * n, 6 * n);
-  Kind::ForEach(m, [&](const typename Kind::Item& item, const int (&nodes)[N]) {
-    NodeMotion<N> x;
-    const Mat6 I = Mat6::Identity();
-    for (int i = 0; i < N; ++i) {
-      x.H[i] = &NodeFrame(d, nodes[i]);
-      x.T[i] = &I;
-    }
-    GatherNodeMotion<N>(m, d, nodes, &x.eta, &x.eta_dot);
-    ElementTerms<N> t;
-    ASSERT_TRUE(Kind::Calc(m, d, item, x, o, &t));
-    if (!t.active) return;
-    for (int a = 0; a < N; ++a) {
-      if (nodes[a] == kGround) continue;
-      r->template segment<6>(6 * nodes[a]) += t.residual.template segment<6>(6 * a);
-      if (!K) continue;
-      for (int b = 0; b < N; ++b) {
-        if (nodes[b] == kGround) continue;
-        ASSERT_TRUE(t.has_stiffness || t.combined);
-        K->block<6, 6>(6 * nodes[a], 6 * nodes[b]) +=
-            (t.combined ? t.matrix : t.stiffness).template block<6, 6>(6 * a, 6 * b);
-      }
-    }
-  });
-}
-
-template <class F>
-Eigen::MatrixXd FiniteDifference(const Model& model, const Data& data, F&& f, double eps) {
-  const int n = static_cast<int>(model.nodes.size());
-  Eigen::MatrixXd J;
-  for (int j = 0; j < 6 * n; ++j) {
-    Data p = data, m = data;
-    const Vec6 dh = eps * Vec6::Unit(j % 6);
-    p.H[static_cast<std::size_t>(j / 6)] = p.H[static_cast<std::size_t>(j / 6)] * ExpSE3(dh);
-    m.H[static_cast<std::size_t>(j / 6)] = m.H[static_cast<std::size_t>(j / 6)] * ExpSE3(-dh);
-    const Eigen::VectorXd col = (f(p) - f(m)) / (2 * eps);
-    if (J.size() == 0) J.setZero(col.size(), 6 * n);
-    J.col(j) = col;
-  }
-  return J;
-}
+using kind_assembly::AssembleKind;
+using kind_assembly::FiniteDifference;
 
 // A curved rod (a helix-like path through 5 nodes, 4 elements) with a tendon from the ground
 // through eyelets at element interiors (two in one element, consecutive), on a node, and the
@@ -108,11 +63,7 @@ Scene MakeScene(std::mt19937& rng, double tension) {
   b.AddTendon("t", eyelets, Profile::Constant(tension));
   Scene c{b.Build(), {}};
   c.data = MakeData(c.model);
-  for (std::size_t i = 0; i < c.data.H.size(); ++i) {
-    Vec6 dh;
-    for (int k = 0; k < 6; ++k) dh(k) = (k < 3 ? 0.05 : 0.4) * u(rng);
-    c.data.H[i] = c.data.H[i] * ExpSE3(dh);
-  }
+  kind_assembly::PerturbFrames(rng, 0.05, 0.4, &c.data);
   return c;
 }
 

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <random>
 
+#include "kind_assembly.h"
 #include "screwfem/build/model_builder.h"
 #include "screwfem/solve/dynamics.h"
 
@@ -139,18 +140,7 @@ void AssembleKind(const Model& m, const Data& d, const KernelOptions& o, Eigen::
 // Central differences of f(data) over the right-trivialised increments of every node.
 template <class F>
 Eigen::MatrixXd FiniteDifference(const Chain& c, F&& f, double eps) {
-  const int n = static_cast<int>(c.model.nodes.size());
-  Eigen::MatrixXd J;
-  for (int j = 0; j < 6 * n; ++j) {
-    Data p = c.data, m = c.data;
-    const Vec6 dh = eps * Vec6::Unit(j % 6);
-    p.H[static_cast<std::size_t>(j / 6)] = p.H[static_cast<std::size_t>(j / 6)] * ExpSE3(dh);
-    m.H[static_cast<std::size_t>(j / 6)] = m.H[static_cast<std::size_t>(j / 6)] * ExpSE3(-dh);
-    const Eigen::VectorXd col = (f(p) - f(m)) / (2 * eps);
-    if (J.size() == 0) J.setZero(col.size(), 6 * n);
-    J.col(j) = col;
-  }
-  return J;
+  return kind_assembly::FiniteDifference(c.model, c.data, f, eps);
 }
 
 TEST(TendonSegmentKind, SegmentsSumToTensionTimesTheLengthGradientWithTheExactTangent) {

@@ -680,6 +680,32 @@ class ModelBuilderTest(unittest.TestCase):
                                  sf.BodyPoint.on_rod(r, 1.5)], sf.Profile.constant(1.0))
             bad.build()
 
+    def test_force_element_between_rod_points_from_python(self):
+        # A spring between two points of a cantilever between nodes (BodyPoint.on_rod, as the
+        # eyelets): build places both ends on element sections (ForceElementSpanKind) and the
+        # actuator's 5 N curls the rod towards its ends' side against the spring
+        # (tests/io/force_span_scene_test.cpp: tip y 0.0809 m, length 0.6930 m).
+        b = sf.ModelBuilder()
+        section = sf.Section(np.array([1e5, 1e5, 1e5, 1.0, 1.0, 1.0]), np.ones(6))
+        rod = b.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 4, section)
+        b.fix_node(b.find_node_at([0, 0, 0]).node)
+        spring = sf.ForceElement()
+        spring.name = "brace"
+        spring.a = sf.BodyPoint.on_rod(rod, 0.1, [0, 0.05, 0])
+        spring.b = sf.BodyPoint.on_rod(rod, 0.8, [0, 0.05, 0])
+        spring.stiffness = 200.0
+        spring.actuator = sf.Profile.constant(5.0)
+        b.add_force_element(spring)
+        sim = sf.Simulation(sf.Scene(b.build(), "brace"))
+        options = sf.StaticOptions()
+        options.load_steps = 10
+        sim.solve_static(options)
+        length, rate, force = sim.force_element_state("brace")
+        self.assertLess(length, 0.7)
+        self.assertAlmostEqual(force, 5.0 + 200.0 * (length - 0.7), delta=1e-12)
+        tip = sim.node_frame(sim.model.rods[0].nodes[-1])[:3, 3]
+        self.assertAlmostEqual(tip[1], 0.0809311, delta=1e-6)
+
     def test_actuators_from_python_curl_the_rod_and_take_inputs(self):
         # A cantilever (EA = 1e5 N, EI = 1 N m^2) with a pressure chamber driven by the input
         # "p": one element bends by kappa3 = -p A r2 / EI exactly (method-next.md T5.2).

@@ -115,8 +115,10 @@ class ModelBuilder {
   int AddLengthDrivenTendon(std::string name, std::vector<BodyPoint> eyelets,
                             const Profile& length);
   // A spring-damper-actuator between two body points (model.h, ForceElement); a negative
-  // rest_length means the reference distance. Build checks: valid, distinct nodes (or the
-  // ground), finite values, non-negative stiffness and damping, ends apart in the reference
+  // rest_length means the reference distance. An end may give a rod and an arc length: Build
+  // places it as a tendon eyelet (on the node there or between nodes: ForceElementSpanKind,
+  // elements/force_span.h). Build checks: valid ends, not both on one node (or the ground),
+  // finite values, non-negative stiffness and damping, ends apart in the reference
   // configuration. Errors carry EntityKind::kForceElement, part "a" or "b" for an end.
   int AddForceElement(const ForceElement& element);
   // The node of rod `rod` at reference arc length s [m] (from its first node), within

@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/force_span.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/joint_constraint.h"
 #include "screwfem/elements/loads.h"
@@ -23,7 +24,7 @@ namespace screwfem {
 
 using ElementKinds = std::tuple<RodElementKind, RigidBodyKind, PointLoadKind, RodLoadKind,
                                 JointSpringKind, TendonSegmentKind, TendonSpanSegmentKind,
-                                ForceElementKind, ContactKind, ShapePairKind>;
+                                ForceElementKind, ForceElementSpanKind, ContactKind, ShapePairKind>;
 
 using ConstraintKinds = std::tuple<JointConstraintKind, DriveConstraintKind, TendonLengthKind>;
 

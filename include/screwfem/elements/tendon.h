@@ -97,6 +97,18 @@ struct TendonSegmentKind {
   static void AddEnergy(const Model&, const Data&, const Item&, Energy*) {}
 };
 
+// The distance between two body points either of which may lie between nodes, on the four
+// nodes of a TendonSpanSegmentKind item (H: their frames, in its node order: each end's element
+// nodes A and B, or its node and the ground): the length l, `scale` times its gradient N^T g_E
+// and (hessian != nullptr) `scale` times the derivative of that gradient, the exact hessian
+// N^T H_l N + blockdiag(G_E P(d)) of TendonSpanSegmentKind below. One geometry for every item
+// on such a line (TendonSpanSegmentKind: scale tau; ForceElementSpanKind, force_span.h: 1).
+// False when the points coincide (no direction).
+bool CalcSpanDistance(const Data& data, const BodyPoint& a, const BodyPoint& b,
+                      const SE3* const (&H)[4], double scale, double* length,
+                      Eigen::Matrix<double, 24, 1>* gradient,
+                      Eigen::Matrix<double, 24, 24>* hessian);
+
 // A tendon segment with an eyelet between nodes at one end or both (docs/numerics.md, "Eyelets
 // between nodes"): the eyelet's section frame is H_E = H_A exp(xi d), d = log(H_A^-1 H_B) of
 // its element, and its increment dh_E = N(xi, d) [dh_A; dh_B] (rod.h, CalcRodN). The items
@@ -160,6 +172,7 @@ struct ForceElementKind {
   static void ForEach(const Model& model, F&& f) {
     for (std::size_t i = 0; i < model.force_elements.size(); ++i) {
       const ForceElement& e = model.force_elements[i];
+      if (e.a.element >= 0 || e.b.element >= 0) continue;  // ForceElementSpanKind's
       const int nodes[2] = {e.a.node, e.b.node};
       f(static_cast<int>(i), nodes);
     }

@@ -104,15 +104,15 @@ struct RodLoad {
 };
 
 // A point fixed in a node frame (a rod node's section frame or a rigid body's frame), or in
-// the world (node kGround): the eyelet of a tendon, the end of a force element. A tendon's
-// eyelet may also sit at an arc length of a rod (rod >= 0): Build places it on the node there
+// the world (node kGround): the eyelet of a tendon, the end of a force element. An eyelet or
+// an end may also sit at an arc length of a rod (rod >= 0): Build places it on the node there
 // or, between nodes, on the section of the element holding it, the helical interpolation
 // H_A exp(xi d) of the element's frames (docs/numerics.md, "Eyelets between nodes"); the
 // offset is then in that section's frame.
 struct BodyPoint {
   int node = kGround;
   Vec3 offset = Vec3::Zero();  // node-frame components [m] (world point for kGround)
-  int rod = -1;                // >= 0: the point is on this rod at arc_length (tendons only)
+  int rod = -1;                // >= 0: the point is on this rod at arc_length
   double arc_length = 0.0;     // reference arc length along the rod [m]
   // Set by Build for a point between nodes: the element (node is its node A) and xi in (0, 1).
   int element = -1;
