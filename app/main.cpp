@@ -79,15 +79,15 @@ int Run(const std::string& scene_path, const std::string& outdir,
     options.replace_results = force;
     if (!inputs.empty()) options.inputs = screwfem::ReadInputTable(inputs, scene.model);
     const screwfem::RunResult r = screwfem::RunScene(scene, outdir, options);
-    const char* status = r.ok            ? "completed"
-                         : !r.interrupted ? "failed"
+    const char* status = r.ok                                        ? "completed"
+                         : !r.interrupted                            ? "failed"
                          : r.signal == SIGTERM || r.signal == SIGHUP ? "terminated"
                                                                      : "interrupted";
-    std::printf("%s: t = %.6g s, %ld steps, %ld Newton iterations (at most %d per step), %ld halvings, "
-                "%.3g s wall, max |phi| %.2g, max element rotation %.3g rad -> %s\n",
-                status, r.end_time, r.steps, r.newton_iterations, r.max_iterations_per_step,
-                r.halvings, r.wall_seconds, r.max_constraint_residual, r.max_element_rotation,
-                outdir.c_str());
+    std::printf(
+        "%s: t = %.6g s, %ld steps, %ld Newton iterations (at most %d per step), %ld halvings, "
+        "%.3g s wall, max |phi| %.2g, max element rotation %.3g rad -> %s\n",
+        status, r.end_time, r.steps, r.newton_iterations, r.max_iterations_per_step, r.halvings,
+        r.wall_seconds, r.max_constraint_residual, r.max_element_rotation, outdir.c_str());
     if (!r.ok) std::fprintf(stderr, "%s\n", r.message.c_str());
     if (r.ok) return 0;
     if (r.interrupted) return r.signal > 0 ? 128 + r.signal : kExitInterrupted;
@@ -108,12 +108,13 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
       std::printf("  analysis: static at t = %g s\n", a.statics.time);
     else
       std::printf("  analysis: dynamic from %g to %g s, step %g s, rho_inf %g%s\n", a.start_time,
-                  a.end_time, a.step, a.dynamic.rho_inf, a.static_preload ? ", static preload" : "");
+                  a.end_time, a.step, a.dynamic.rho_inf,
+                  a.static_preload ? ", static preload" : "");
     std::printf("  %zu nodes, %zu rods (%zu elements), %zu rigid bodies, %zu joints, %zu loads\n",
                 m.nodes.size(), m.rods.size(), m.elements.size(), m.bodies.size(), m.joints.size(),
                 m.point_loads.size());
-    std::printf("  unknowns: nv = %d, nc = %d (%zu redundant constraint rows), bandwidth %d\n", m.nv,
-                m.nc, m.redundant_rows.size(), m.bandwidth);
+    std::printf("  unknowns: nv = %d, nc = %d (%zu redundant constraint rows), bandwidth %d\n",
+                m.nv, m.nc, m.redundant_rows.size(), m.bandwidth);
     std::printf("  recorded: %zu points, %zu joints\n", scene.outputs.points.size(),
                 scene.outputs.joints.size());
     for (const std::string& w : m.warnings) std::printf("  warning: %s\n", w.c_str());
@@ -252,7 +253,8 @@ int Main(int argc, char** argv) {
   std::vector<std::string> overrides, outdirs;
   bool quiet = false, force = false, animate = false;
   const auto add_overrides = [&](CLI::App* cmd) {
-    cmd->add_option("--set", overrides, "override a scene value, e.g. analysis.step=5e-4 (repeatable)")
+    cmd->add_option("--set", overrides,
+                    "override a scene value, e.g. analysis.step=5e-4 (repeatable)")
         ->type_name("KEY=VALUE")
         ->allow_extra_args(false);
   };
@@ -277,11 +279,13 @@ int Main(int argc, char** argv) {
   plot->add_option("outdirs", outdirs, "run output directories")->required();
   plot->add_option("-o,--output", figdir, "figure directory (created if needed)")->required();
   plot->add_option("--points", points, "comma-separated point names (default: all)");
-  plot->add_option("--times", times, "comma-separated snapshot times [s] (default: 5 evenly spaced)");
+  plot->add_option("--times", times,
+                   "comma-separated snapshot times [s] (default: 5 evenly spaced)");
   plot->add_flag("--animate", animate,
                  "also write animation_RUN.gif per run (and .mp4 when ffmpeg is installed)");
 
-  CLI::App* view = app.add_subcommand("view", "write a self-contained HTML viewer of a run (three.js)");
+  CLI::App* view =
+      app.add_subcommand("view", "write a self-contained HTML viewer of a run (three.js)");
   view->add_option("outdir", outdir, "run output directory")->required();
   view->add_option("-o,--output", html, "HTML file to write (default: OUTDIR/view.html)");
 

@@ -56,8 +56,8 @@ Model RodOnPlane(int variant) {
   builder.SetGravity(Vec3(0, 0, -9.81));
   if (variant > 0) {
     builder.AddContactRod(rod, kRadius);
-    builder.AddObstacle({"ground", ObstacleType::kPlane, Vec3::Zero(), Vec3::UnitZ(),
-                         Vec3::Zero(), 0.0});
+    builder.AddObstacle(
+        {"ground", ObstacleType::kPlane, Vec3::Zero(), Vec3::UnitZ(), Vec3::Zero(), 0.0});
     ContactSettings law;
     law.friction = 0.3;
     law.slip_velocity = 1e-3;
@@ -78,8 +78,7 @@ void BM_RodContactStep(benchmark::State& state) {
   options.rho_inf = 0.8;
   Data data;
   TimedStepCounts counts;
-  if (!RunTimedSteps(state, model, options, true, kWarmupSteps, kTimedSteps, kStep, data,
-                     &counts))
+  if (!RunTimedSteps(state, model, options, true, kWarmupSteps, kTimedSteps, kStep, data, &counts))
     return;
   int active = 0, self_active = 0;
   for (int i = 0; i < static_cast<int>(model.contact_pairs.size()); ++i)
@@ -100,7 +99,13 @@ void BM_RodContactStep(benchmark::State& state) {
   state.counters["mid_z"] = data.H[mid].x.z();
   state.counters["mid_vx"] = (data.H[mid].R * data.v.segment<3>(6 * mid)).x();
 }
-BENCHMARK(BM_RodContactStep)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Repetitions(7)->MinTime(0.2)
+BENCHMARK(BM_RodContactStep)
+    ->Arg(0)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(3)
+    ->Repetitions(7)
+    ->MinTime(0.2)
     ->Unit(benchmark::kMillisecond);
 
 // One benchmark iteration: the whole gripper run (0 to 3 s, h = 2e-3 s), solver only.
@@ -130,8 +135,10 @@ void BM_GripperSolver(benchmark::State& state) {
       const double t_next = schedule.Next(data.time);
       const StepResult step = Step(model, data, integ, t_next - data.time);
       ok = step.ok;
-      if (ok) data.time = t_next;
-      else message = step.message;
+      if (ok)
+        data.time = t_next;
+      else
+        message = step.message;
     }
     benchmark::DoNotOptimize(data.v.data());
     benchmark::ClobberMemory();
@@ -157,8 +164,8 @@ void BM_GripperSolver(benchmark::State& state) {
   state.counters["halvings"] = static_cast<double>(halvings) / n;
   state.counters["elements"] = static_cast<double>(model.elements.size());
   state.counters["unknowns"] = model.num_unknowns();
-  state.counters["pairs"] = static_cast<double>(AllShapePairs(model).size() +
-                                                model.contact_pairs.size());
+  state.counters["pairs"] =
+      static_cast<double>(AllShapePairs(model).size() + model.contact_pairs.size());
   state.counters["bandwidth"] = model.bandwidth;
 }
 // The smallest time over the repetitions (the run least disturbed by other load).
@@ -169,8 +176,11 @@ double SmallestGripperTime(const std::vector<double>& v) {
 // one iteration is a whole run, seven repetitions with the median and the smallest time.
 const bool kGripperRegistered = [] {
   benchmark::RegisterBenchmark("BM_GripperSolver/gripper", BM_GripperSolver)
-      ->Iterations(1)->Repetitions(7)->ComputeStatistics("min", SmallestGripperTime)
-      ->UseManualTime()->Unit(benchmark::kMillisecond);
+      ->Iterations(1)
+      ->Repetitions(7)
+      ->ComputeStatistics("min", SmallestGripperTime)
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond);
   return true;
 }();
 

@@ -347,12 +347,18 @@ const bool kGrmRegistered = [] {
     benchmark::RegisterBenchmark(
         (std::string("BM_GrmSolver/") + (i == kGrmAuto ? "grm_rigid_auto" : kGrmCases[i])).c_str(),
         BM_GrmSolver, i)
-        ->Iterations(1)->Repetitions(9)->ComputeStatistics("min", Smallest)
-        ->UseManualTime()->Unit(benchmark::kMillisecond);
+        ->Iterations(1)
+        ->Repetitions(9)
+        ->ComputeStatistics("min", Smallest)
+        ->UseManualTime()
+        ->Unit(benchmark::kMillisecond);
   for (int i = 0; i < 3; ++i)
     benchmark::RegisterBenchmark((std::string("BM_GrmRun/") + kGrmCases[i]).c_str(), BM_GrmRun, i)
-        ->Iterations(1)->Repetitions(5)->ComputeStatistics("min", Smallest)
-        ->UseManualTime()->Unit(benchmark::kMillisecond);
+        ->Iterations(1)
+        ->Repetitions(5)
+        ->ComputeStatistics("min", Smallest)
+        ->UseManualTime()
+        ->Unit(benchmark::kMillisecond);
   return true;
 }();
 
@@ -367,8 +373,8 @@ Model CantileverModel(int num_elements) {
   stiffness << 1e6, 1e6, 1e6, 1.0, 1.0, 1.0;  // EA, GA2, GA3, GJ, EI2, EI3
   inertia << 0.1, 0.1, 0.1, 0.5, 0.5, 0.5;    // rho A (x3) [kg/m], rotational [kg m]
   ModelBuilder builder;
-  const int rod = builder.AddStraightRod("rod", Vec3::Zero(), Vec3(kRodLength, 0, 0),
-                                         num_elements, Section::FromDiagonals(stiffness, inertia));
+  const int rod = builder.AddStraightRod("rod", Vec3::Zero(), Vec3(kRodLength, 0, 0), num_elements,
+                                         Section::FromDiagonals(stiffness, inertia));
   builder.FixNode(builder.model().rods[static_cast<std::size_t>(rod)].nodes.front());
   builder.SetGravity(Vec3(0, 0, -9.81));
   builder.model().rod_inertia = RodInertia::kExact;
@@ -422,12 +428,11 @@ void BM_RodStep(benchmark::State& state) {
   state.counters["max_newton_per_step"] = max_iterations;
   state.counters["halvings"] = static_cast<double>(integ.halvings - halvings_before);
   state.counters["timed_steps"] = steps;
-  state.counters["time_per_element"] = benchmark::Counter(
-      static_cast<double>(n),
-      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["time_per_element"] =
+      benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsIterationInvariantRate |
+                                                     benchmark::Counter::kInvert);
   // Tip deflection at the end of the timed steps (a sanity check of the motion) [m].
-  state.counters["tip_z"] =
-      data.H[static_cast<std::size_t>(model.rods.front().nodes.back())].x.z();
+  state.counters["tip_z"] = data.H[static_cast<std::size_t>(model.rods.front().nodes.back())].x.z();
 }
 
 // Fewer repetitions for the slow sizes (10000 elements: about 0.5 s per step at the time of

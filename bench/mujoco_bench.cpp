@@ -283,20 +283,28 @@ int Main(int argc, char** argv) {
   double profile_step = 1.6e-3;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--horizon") horizon = std::atof(argv[i + 1]);
-    else if (a == "--rounds") rounds = std::atoi(argv[i + 1]);
-    else if (a == "--block-ms") block = 1e-3 * std::atof(argv[i + 1]);
-    else if (a == "--profile") profile = argv[i + 1];
-    else if (a == "--profile-step") profile_step = std::atof(argv[i + 1]);
-    else if (a == "--base" && std::string(argv[i + 1]) == "revolute") g_revolute_base = true;
+    if (a == "--horizon")
+      horizon = std::atof(argv[i + 1]);
+    else if (a == "--rounds")
+      rounds = std::atoi(argv[i + 1]);
+    else if (a == "--block-ms")
+      block = 1e-3 * std::atof(argv[i + 1]);
+    else if (a == "--profile")
+      profile = argv[i + 1];
+    else if (a == "--profile-step")
+      profile_step = std::atof(argv[i + 1]);
+    else if (a == "--base" && std::string(argv[i + 1]) == "revolute")
+      g_revolute_base = true;
     else if (a == "--base" && std::string(argv[i + 1]) == "spherical-nospring")
       g_no_base_spring = true;
-    else if (a == "--base" && std::string(argv[i + 1]) == "spherical") g_revolute_base = false;
+    else if (a == "--base" && std::string(argv[i + 1]) == "spherical")
+      g_revolute_base = false;
     else {
       std::fprintf(stderr,
                    "usage: %s [--horizon T] [--rounds N] [--block-ms B]\n"
                    "       [--base spherical|revolute|spherical-nospring]\n"
-                   "       [--profile mujoco|screwfem] [--profile-step H]\n", argv[0]);
+                   "       [--profile mujoco|screwfem] [--profile-step H]\n",
+                   argv[0]);
       return 2;
     }
   }
@@ -316,19 +324,20 @@ int Main(int argc, char** argv) {
   if (!profile.empty()) {
     const Setting s{false, profile_step, 0, ConstraintFormulation::kIndex3, 0.9};
     for (int k = 0; k < 20; ++k) {
-      if (profile == "mujoco") mj.Run(kSample, horizon, &traj);
-      else sf.Run(s, horizon, &traj);
+      if (profile == "mujoco")
+        mj.Run(kSample, horizon, &traj);
+      else
+        sf.Run(s, horizon, &traj);
     }
-    std::printf("%s: 20 runs of %g s\n", profile == "mujoco" ? "MuJoCo RK4, h = 8 ms" :
-                Format(s).c_str(), horizon);
+    std::printf("%s: 20 runs of %g s\n",
+                profile == "mujoco" ? "MuJoCo RK4, h = 8 ms" : Format(s).c_str(), horizon);
     return 0;
   }
   // 1. Reference and agreement.
   mj.Run(kSample / 256, horizon, &ref);
   mj.Run(kSample / 128, horizon, &ref2);
   std::printf("\n## Reference: MuJoCo RK4 at h = 8 ms / 256 = %.4g ms\n", kSample / 256 * 1e3);
-  std::printf("MuJoCo RK4 8 ms/128 vs 8 ms/256: %.3g m (its own error)\n",
-              MaxDistance(ref2, ref));
+  std::printf("MuJoCo RK4 8 ms/128 vs 8 ms/256: %.3g m (its own error)\n", MaxDistance(ref2, ref));
   mj.Run(kSample, horizon, &traj);
   const double mj_error = MaxDistance(traj, ref);
   double mj_e0 = 0.0;
@@ -354,12 +363,13 @@ int Main(int argc, char** argv) {
       }
     }
   }
-  std::printf("screwfem energy at 0: %.9f J (MuJoCo %.9f J)\n",
-              [&] {
-                Data d = MakeData(model);
-                return CalcEnergy(model, d).total();
-              }(),
-              mj_e0);
+  std::printf(
+      "screwfem energy at 0: %.9f J (MuJoCo %.9f J)\n",
+      [&] {
+        Data d = MakeData(model);
+        return CalcEnergy(model, d).total();
+      }(),
+      mj_e0);
 
   // 2. MuJoCo's error at 8 ms (and at other steps, for the order).
   std::printf("\n## MuJoCo RK4 error (max link-end distance to the reference)\n");
@@ -383,8 +393,8 @@ int Main(int argc, char** argv) {
       {"auto, index 3, rho_inf 0.9", true, ConstraintFormulation::kIndex3, 0.9},
       {"auto, GGL, rho_inf 1", true, ConstraintFormulation::kGgl, 1.0},
   };
-  const int divisors[] = {1, 2, 3, 4, 5, 6, 8, 10, 12, 16, 20, 24, 32, 40, 48, 64, 80, 96, 128,
-                          160, 192, 256, 320, 384, 512};
+  const int divisors[] = {1,  2,  3,  4,  5,  6,   8,   10,  12,  16,  20,  24, 32,
+                          40, 48, 64, 80, 96, 128, 160, 192, 256, 320, 384, 512};
   std::vector<double> tolerances;
   for (double t = 1e-2; t > 1e-12; t /= std::sqrt(10.0)) tolerances.push_back(t);
   std::vector<Setting> chosen;
@@ -414,8 +424,10 @@ int Main(int argc, char** argv) {
               horizon, rounds);
   const std::size_t nv = chosen.size() + 1;  // 0: MuJoCo
   auto run_variant = [&](std::size_t i) {
-    if (i == 0) mj.Run(kSample, horizon, &traj);
-    else sf.Run(chosen[i - 1], horizon, &traj);
+    if (i == 0)
+      mj.Run(kSample, horizon, &traj);
+    else
+      sf.Run(chosen[i - 1], horizon, &traj);
   };
   // Repetitions per block from one calibration run each.
   std::vector<int> reps(nv);
@@ -437,8 +449,9 @@ int Main(int argc, char** argv) {
     for (std::size_t i = 0; i < nv; ++i) ratios[i].push_back(per_run[i] / per_run[0]);
   }
   const double mj_median = Median(times[0]);
-  std::printf("| variant | setting | error [m] | steps | Newton it. | median wall per run | "
-              "per step | ratio to MuJoCo (median of rounds) |\n");
+  std::printf(
+      "| variant | setting | error [m] | steps | Newton it. | median wall per run | "
+      "per step | ratio to MuJoCo (median of rounds) |\n");
   mj.Run(kSample, horizon, &traj);
   std::printf("| MuJoCo RK4 | h = 8 ms | %.3g | %d | – | %.4g ms | %.3g us | 1 |\n",
               MaxDistance(traj, ref), static_cast<int>(std::lround(horizon / kSample)),
@@ -447,9 +460,8 @@ int Main(int argc, char** argv) {
     sf.Run(chosen[i - 1], horizon, &traj);
     const double med = Median(times[i]);
     std::printf("| screwfem %s | %s | %.3g | %ld | %ld | %.4g ms | %.3g us | %.1f |\n",
-                chosen_names[i - 1].c_str(), Format(chosen[i - 1]).c_str(),
-                MaxDistance(traj, ref), sf.steps, sf.iterations, med * 1e3,
-                med / sf.steps * 1e6, Median(ratios[i]));
+                chosen_names[i - 1].c_str(), Format(chosen[i - 1]).c_str(), MaxDistance(traj, ref),
+                sf.steps, sf.iterations, med * 1e3, med / sf.steps * 1e6, Median(ratios[i]));
   }
   return 0;
 }

@@ -182,13 +182,17 @@ void BM_GrmOutputCost(benchmark::State& state, const char* name) {
   state.counters["written_bytes"] = static_cast<double>(written);
   state.counters["final_bytes"] = static_cast<double>(final_bytes);
   state.counters["bytes_ratio"] =
-      final_bytes > 0 && written >= 0 ? static_cast<double>(written) / static_cast<double>(final_bytes) : 0.0;
+      final_bytes > 0 && written >= 0
+          ? static_cast<double>(written) / static_cast<double>(final_bytes)
+          : 0.0;
   state.counters["frames"] = static_cast<double>(frames);
 }
 
 const bool kRegistered = [] {
   benchmark::RegisterBenchmark("BM_GrmOutputCost/grm_rigid", BM_GrmOutputCost, "grm_rigid")
-      ->Iterations(1)->UseManualTime()->Unit(benchmark::kMillisecond);
+      ->Iterations(1)
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond);
   return true;
 }();
 

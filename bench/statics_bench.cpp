@@ -18,9 +18,9 @@
 namespace screwfem {
 namespace {
 
-constexpr double kLength = 1.0;        // [m]
-constexpr double kCurvature = 1.5;     // bending of the evaluated configuration [rad/m]
-constexpr double kTwist = 0.5;         // twist of the evaluated configuration [rad/m]
+constexpr double kLength = 1.0;     // [m]
+constexpr double kCurvature = 1.5;  // bending of the evaluated configuration [rad/m]
+constexpr double kTwist = 0.5;      // twist of the evaluated configuration [rad/m]
 
 Model CantileverModel(int num_elements) {
   Vec6 stiffness;
@@ -45,8 +45,8 @@ void BendAndTwist(const Model& model, Data& data) {
     if (node.dof < 0) continue;
     const double s = kLength * static_cast<double>(i) / rod.num_elements;
     const SE3 H_target = H_root * ExpSE3(s * xi);
-    dx.segment<6>(node.dof) = LogSE3(data.H[static_cast<std::size_t>(rod.nodes[i])].Inverse() *
-                                     H_target);
+    dx.segment<6>(node.dof) =
+        LogSE3(data.H[static_cast<std::size_t>(rod.nodes[i])].Inverse() * H_target);
   }
   Retract(model, data, dx);
   UpdateBranchReferences(model, data);
@@ -106,9 +106,15 @@ void BM_Solve(benchmark::State& state) {
   SetElementCounters(state, model);
 }
 
-BENCHMARK(BM_Assemble)->RangeMultiplier(10)->Range(10, 10000)->Unit(benchmark::kMicrosecond)
+BENCHMARK(BM_Assemble)
+    ->RangeMultiplier(10)
+    ->Range(10, 10000)
+    ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
-BENCHMARK(BM_Solve)->RangeMultiplier(10)->Range(10, 10000)->Unit(benchmark::kMicrosecond)
+BENCHMARK(BM_Solve)
+    ->RangeMultiplier(10)
+    ->Range(10, 10000)
+    ->Unit(benchmark::kMicrosecond)
     ->UseManualTime();
 
 }  // namespace

@@ -16,7 +16,7 @@
 namespace screwfem {
 namespace {
 
-constexpr double kStep = 1e-3;    // [s]
+constexpr double kStep = 1e-3;  // [s]
 constexpr int kWarmupSteps = 5;
 constexpr int kTimedSteps = 50;
 
@@ -37,7 +37,8 @@ Model CantileverWithTendons(int tendons) {
   const double tensions[2] = {5.0, 3.0};
   for (int t = 0; t < tendons; ++t) {
     std::vector<BodyPoint> eyelets;
-    for (int k = 0; k < 10; ++k) eyelets.push_back({nodes[static_cast<std::size_t>(k)], offsets[t]});
+    for (int k = 0; k < 10; ++k)
+      eyelets.push_back({nodes[static_cast<std::size_t>(k)], offsets[t]});
     builder.AddTendon("tendon" + std::to_string(t), eyelets, Profile::Ramp(0.0, 0.1, tensions[t]));
   }
   return builder.Build();
@@ -50,8 +51,7 @@ void BM_RodTendonStep(benchmark::State& state) {
   options.rho_inf = 0.8;
   Data data;
   TimedStepCounts counts;
-  if (!RunTimedSteps(state, model, options, false, kWarmupSteps, kTimedSteps, kStep, data,
-                     &counts))
+  if (!RunTimedSteps(state, model, options, false, kWarmupSteps, kTimedSteps, kStep, data, &counts))
     return;
   state.counters["tendons"] = static_cast<double>(state.range(0));
   state.counters["unknowns"] = model.num_unknowns();
@@ -60,7 +60,11 @@ void BM_RodTendonStep(benchmark::State& state) {
   state.counters["timed_steps"] = kTimedSteps;
   state.counters["tip_y"] = data.H[static_cast<std::size_t>(model.rods.front().nodes.back())].x.y();
 }
-BENCHMARK(BM_RodTendonStep)->Arg(0)->Arg(2)->Repetitions(9)->MinTime(0.3)
+BENCHMARK(BM_RodTendonStep)
+    ->Arg(0)
+    ->Arg(2)
+    ->Repetitions(9)
+    ->MinTime(0.3)
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -78,7 +78,9 @@ void BindValues(py::module_& m) {
   py::class_<BodyPoint>(m, "BodyPoint",
                         "A point fixed in a node frame (node-frame offset [m]) or, on GROUND, a "
                         "world point: a tendon eyelet or a force element's end (model.h).")
-      .def(py::init([](int node, const Vec3& offset) { return BodyPoint{node, offset}; }),
+      .def(py::init([](int node, const Vec3& offset) {
+             return BodyPoint{node, offset};
+           }),
            py::arg("node"), py::arg("offset") = Vec3::Zero())
       .def_readwrite("node", &BodyPoint::node)
       .def_readwrite("offset", &BodyPoint::offset)
@@ -140,7 +142,9 @@ void BindValues(py::module_& m) {
                            "centre, radius), capsule (from, to, radius), box (from = centre, to = "
                            "half sizes along the body axes). Node-frame components [m].")
       .def(py::init([](int body, ContactShapeType type, const Vec3& from, const Vec3& to,
-                       double radius) { return ContactShape{body, type, from, to, radius}; }),
+                       double radius) {
+             return ContactShape{body, type, from, to, radius};
+           }),
            py::arg("body"), py::arg("type"), py::arg("from_"), py::arg("to") = Vec3::Zero(),
            py::arg("radius") = 0.0)
       .def_readwrite("body", &ContactShape::body)
@@ -228,8 +232,8 @@ void BindBuild(py::module_& m) {
            "slack instead of pushing; returns its index.")
       .def("add_force_element", &B::AddForceElement, py::arg("element"),
            "A ForceElement (spring-damper-actuator between two body points); returns its index.")
-      .def("find_rod_node_at_arc_length", &B::FindRodNodeAtArcLength, py::arg("rod"),
-           py::arg("s"), py::arg("tolerance") = -1.0,
+      .def("find_rod_node_at_arc_length", &B::FindRodNodeAtArcLength, py::arg("rod"), py::arg("s"),
+           py::arg("tolerance") = -1.0,
            "The node of a rod at reference arc length s [m] -> NodeMatch (distance in arc length).")
       .def("set_gravity", &B::SetGravity, py::arg("g"), "[m/s^2], world frame.")
       .def("set_initial_velocity", &B::SetInitialVelocity, py::arg("node"), py::arg("velocity"),

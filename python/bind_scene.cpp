@@ -308,8 +308,9 @@ void BindScenesAndRuns(py::module_& m) {
           "next",
           [](const StepSchedule& s, double t) {
             if (!s.Accepts(t))
-              throw InputError("StepSchedule.next: t must be finite, not before start and not "
-                               "done(t)");
+              throw InputError(
+                  "StepSchedule.next: t must be finite, not before start and not "
+                  "done(t)");
             return s.Next(t);
           },
           py::arg("t"),

@@ -149,7 +149,8 @@ class Simulation {
     const int i = model().FindInput(name);
     if (i < 0) {
       std::string known;
-      for (const ModelInput& in : model().inputs) known += (known.empty() ? "'" : ", '") + in.name + "'";
+      for (const ModelInput& in : model().inputs)
+        known += (known.empty() ? "'" : ", '") + in.name + "'";
       throw py::key_error("no input named '" + name + "' (the scene's inputs: " +
                           (known.empty() ? std::string("none") : known) + ")");
     }
@@ -222,8 +223,8 @@ py::array_t<double> NodeFrames(const Data& data, const std::vector<int>& nodes, 
     }
     const int rows = part == FramePart::kMatrix ? 4 : 3;
     for (int r = 0; r < rows; ++r)
-      for (int c = 0; c < rows; ++c) *p++ = part == FramePart::kMatrix ? H.Matrix()(r, c)
-                                                                     : H.R(r, c);
+      for (int c = 0; c < rows; ++c)
+        *p++ = part == FramePart::kMatrix ? H.Matrix()(r, c) : H.R(r, c);
   }
   return out;
 }
@@ -395,8 +396,8 @@ and indices out of range IndexError.)doc")
           "vdot", [](S& s) -> Vector& { return s.data().vdot; },
           [](S& s, const Eigen::Ref<const Vector>& v) {
             if (v.size() != s.data().vdot.size())
-              throw InputError("Simulation.vdot: expected " +
-                               std::to_string(s.data().vdot.size()) + " values");
+              throw InputError("Simulation.vdot: expected " + std::to_string(s.data().vdot.size()) +
+                               " values");
             s.data().vdot = v;
           },
           "Accelerations (nv; writable view): time derivatives of v [m/s^2, rad/s^2], same "
@@ -440,8 +441,7 @@ and indices out of range IndexError.)doc")
           "restarts", [](const S& s) { return s.integrator().restarts; },
           "Re-initialisations at profile breakpoints (DynamicOptions.restart_at_breakpoints).")
       .def_property_readonly(
-          "perturbed_start_skips",
-          [](const S& s) { return s.integrator().perturbed_start_skips; },
+          "perturbed_start_skips", [](const S& s) { return s.integrator().perturbed_start_skips; },
           "Starts and restarts left unperturbed by DynamicOptions.perturbed_start because the "
           "step does not resolve the change of the acceleration.")
       .def_property_readonly(
@@ -597,8 +597,7 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
       .def(
           "tendon_state",
           [](S& s, const std::string& name) {
-            const LineForceState t = CalcTendonState(
-                s.model(), s.data(), s.TendonIndex(name));
+            const LineForceState t = CalcTendonState(s.model(), s.data(), s.TendonIndex(name));
             return py::make_tuple(t.length, t.rate, t.force);
           },
           py::arg("tendon"),
@@ -635,8 +634,8 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
       .def(
           "force_element_state",
           [](S& s, const std::string& name) {
-            const LineForceState f = CalcForceElementState(
-                s.model(), s.data(), s.ForceElementIndex(name));
+            const LineForceState f =
+                CalcForceElementState(s.model(), s.data(), s.ForceElementIndex(name));
             return py::make_tuple(f.length, f.rate, f.force);
           },
           py::arg("element"),
@@ -649,11 +648,10 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
             for (int i = 0; i < static_cast<int>(s.model().contact_pairs.size()); ++i) {
               const ContactState c = CalcContactState(s.model(), s.data(), i);
               if (!c.active) continue;
-              out.append(py::dict(py::arg("pair") = i, py::arg("point") = c.point,
-                                  py::arg("normal") = c.normal,
-                                  py::arg("normal_force") = c.normal_force,
-                                  py::arg("friction_force") = c.friction_force,
-                                  py::arg("gap") = c.gap));
+              out.append(
+                  py::dict(py::arg("pair") = i, py::arg("point") = c.point,
+                           py::arg("normal") = c.normal, py::arg("normal_force") = c.normal_force,
+                           py::arg("friction_force") = c.friction_force, py::arg("gap") = c.gap));
             }
             return out;
           },
@@ -668,15 +666,14 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
               const ShapePairState c = CalcShapePairState(s.model(), s.data(), i);
               if (!c.active) continue;
               const ShapePair& p = s.data().shape_pairs[static_cast<std::size_t>(i)];
-              out.append(py::dict(
-                  py::arg("pair") = static_cast<long>(ShapePairKey(s.model(), p)),
-                  py::arg("rod_a") = p.side[0].rod,
-                  py::arg("owner_a") = p.side[0].owner, py::arg("rod_b") = p.side[1].rod,
-                  py::arg("owner_b") = p.side[1].owner, py::arg("point_a") = c.point[0],
-                  py::arg("point_b") = c.point[1], py::arg("normal") = c.normal,
-                  py::arg("normal_force") = c.normal_force,
-                  py::arg("friction_force") = c.friction_force, py::arg("gap") = c.gap,
-                  py::arg("part") = p.part));
+              out.append(
+                  py::dict(py::arg("pair") = static_cast<long>(ShapePairKey(s.model(), p)),
+                           py::arg("rod_a") = p.side[0].rod, py::arg("owner_a") = p.side[0].owner,
+                           py::arg("rod_b") = p.side[1].rod, py::arg("owner_b") = p.side[1].owner,
+                           py::arg("point_a") = c.point[0], py::arg("point_b") = c.point[1],
+                           py::arg("normal") = c.normal, py::arg("normal_force") = c.normal_force,
+                           py::arg("friction_force") = c.friction_force, py::arg("gap") = c.gap,
+                           py::arg("part") = p.part));
             }
             return out;
           },
@@ -801,7 +798,8 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "set_state(state)\n\nRestores a state from get_state() of a simulation of the same "
           "scene (InputError if the sizes differ). The integrator stays initialised.")
       .def(
-          "node_frames", [](S& s) {
+          "node_frames",
+          [](S& s) {
             std::vector<int> all(s.model().nodes.size());
             for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
             return NodeFrames(s.data(), all, FramePart::kMatrix);
@@ -884,7 +882,9 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
             const int i = s.model().FindBody(b);
             if (i < 0) throw py::key_error("no rigid body named '" + b + "'");
             const Eigen::Quaterniond q(
-                s.data().H[static_cast<std::size_t>(s.model().bodies[static_cast<std::size_t>(i)].node)].R);
+                s.data()
+                    .H[static_cast<std::size_t>(s.model().bodies[static_cast<std::size_t>(i)].node)]
+                    .R);
             Eigen::Vector4d out(q.w(), q.x(), q.y(), q.z());
             if (out(0) < 0.0) out = -out;
             return out;
@@ -900,9 +900,11 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
             const Node& n = s.model().nodes[static_cast<std::size_t>(
                 s.model().bodies[static_cast<std::size_t>(i)].node)];
             if (n.dof < 0) return Vec3::Zero().eval();
-            return Vec3(s.data().H[static_cast<std::size_t>(
-                            s.model().bodies[static_cast<std::size_t>(i)].node)].R *
-                        s.data().v.segment<3>(n.dof + 3));
+            return Vec3(
+                s.data()
+                    .H[static_cast<std::size_t>(s.model().bodies[static_cast<std::size_t>(i)].node)]
+                    .R *
+                s.data().v.segment<3>(n.dof + 3));
           },
           py::arg("body"),
           "body_angular_velocity(body) -> array(3)\n\nAngular velocity of a rigid body [rad/s], "

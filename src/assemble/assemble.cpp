@@ -35,9 +35,7 @@ class Scatter {
   }
   // Records the size of a generalised force term that entered the residual (the scale of the
   // relative convergence test).
-  void Force(double magnitude) {
-    d_.force_scale = std::max(d_.force_scale, o_.s_rows * magnitude);
-  }
+  void Force(double magnitude) { d_.force_scale = std::max(d_.force_scale, o_.s_rows * magnitude); }
   // matrix(rows at global index gi, cols at global index gj) += scale * B. The rows (and the
   // columns) of a block are consecutive in the permuted order (model.h), so each column of
   // the block is a contiguous piece of a band column.
@@ -49,11 +47,11 @@ class Scatter {
     // The factorisation relies on the model's sparsity pattern (pattern_last is constant over
     // a block of unknowns, so the first row and column stand for all).
     const std::vector<int>& pattern = o_.pattern_last ? *o_.pattern_last : m_.pattern_last;
-    const bool inside =
-        pattern.empty() ? d_.matrix.InBand(pi, pj + static_cast<int>(block.cols()) - 1) &&
-                              d_.matrix.InBand(pi + static_cast<int>(block.rows()) - 1, pj)
-                        : pj + block.cols() - 1 <= pattern[static_cast<std::size_t>(pi)] &&
-                              pi + block.rows() - 1 <= pattern[static_cast<std::size_t>(pj)];
+    const bool inside = pattern.empty()
+                            ? d_.matrix.InBand(pi, pj + static_cast<int>(block.cols()) - 1) &&
+                                  d_.matrix.InBand(pi + static_cast<int>(block.rows()) - 1, pj)
+                            : pj + block.cols() - 1 <= pattern[static_cast<std::size_t>(pi)] &&
+                                  pi + block.rows() - 1 <= pattern[static_cast<std::size_t>(pj)];
     if (!inside) {
       // Only the node blocks of pairs of moving shapes may lie outside (Data::coupling); a
       // block that does not fit the coupling's room is left out of this matrix.
@@ -163,8 +161,8 @@ class Scatter {
 // The node state of one item, as its kernel reads it (elements/element.h, NodeMotion), and
 // the first unknown of each node (-1: fixed or the ground), looked up once per item.
 template <int N>
-void GatherItem(const Scatter& s, const Data& d, const AssemblyOptions& o,
-                const int (&nodes)[N], int (&dofs)[N], NodeMotion<N>* x) {
+void GatherItem(const Scatter& s, const Data& d, const AssemblyOptions& o, const int (&nodes)[N],
+                int (&dofs)[N], NodeMotion<N>* x) {
   const bool node_tangent = o.use_node_tangent && o.assemble_matrix;
   for (int i = 0; i < N; ++i) {
     dofs[i] = s.NodeDof(nodes[i]);
@@ -196,7 +194,7 @@ bool AddKind(const Model& m, Data& d, const AssemblyOptions& o, const KernelOpti
   bool ok = true;
   // A kind whose items couple nodes the band pattern may not hold (kOffBandBlocks).
   s.AllowOffBand(requires { Kind::kOffBandBlocks; });
-  ForEachItem<Kind>(m, d, [&](const typename Kind::Item& item, const int (&nodes)[N]) {
+  ForEachItem<Kind>(m, d, [&](const typename Kind::Item& item, const int(&nodes)[N]) {
     if (!ok) return;
     int dofs[N];
     NodeMotion<N> x;
@@ -223,9 +221,10 @@ bool AddKinds(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s,
 
 template <class... Kinds>
 void AddKindEnergies(const Model& m, const Data& d, Energy* E, std::tuple<Kinds...>*) {
-  (ForEachItem<Kinds>(m, d, [&](const typename Kinds::Item& item, const int(&)[Kinds::kNodes]) {
-     Kinds::AddEnergy(m, d, item, E);
-   }),
+  (ForEachItem<Kinds>(m, d,
+                      [&](const typename Kinds::Item& item, const int(&)[Kinds::kNodes]) {
+                        Kinds::AddEnergy(m, d, item, E);
+                      }),
    ...);
 }
 
@@ -276,9 +275,8 @@ Energy CalcEnergy(const Model& model, const Data& data) {
   // The constraint kinds that store energy (a joint's springs on its coordinates).
   ForEachKind<ConstraintKinds>([&]<class Kind>() {
     if constexpr (requires { &Kind::AddEnergy; })
-      Kind::ForEach(model, [&](const typename Kind::Item& item) {
-        Kind::AddEnergy(model, data, item, &E);
-      });
+      Kind::ForEach(
+          model, [&](const typename Kind::Item& item) { Kind::AddEnergy(model, data, item, &E); });
   });
   return E;
 }

@@ -66,8 +66,9 @@ void CalcRodStresses(const Model& model, const Data& data, int rod_index, std::v
   for (int k = 0; k < rod.num_elements; ++k) {
     const std::size_t e = static_cast<std::size_t>(rod.first_element + k);
     const RodElement& el = model.elements[e];
-    const Vec6 d = CalcRodRelativeMotion(data.H[static_cast<std::size_t>(el.node_a)],
-                                         data.H[static_cast<std::size_t>(el.node_b)], data.w_ref[e]);
+    const Vec6 d =
+        CalcRodRelativeMotion(data.H[static_cast<std::size_t>(el.node_a)],
+                              data.H[static_cast<std::size_t>(el.node_b)], data.w_ref[e]);
     RodActuation act;
     CalcRodActuation(model, data, static_cast<int>(e), data.time, 1.0, &act);
     const Vec6 el_stress =

@@ -18,9 +18,7 @@ namespace {
 bool IsPositiveSize(double x) { return std::isfinite(x) && x > 0.0; }
 
 // The weight per unit mass for the law's defaults: |g|, or standard gravity without gravity.
-double ContactGravity(const Model& m) {
-  return m.gravity.norm() > 0.0 ? m.gravity.norm() : 9.81;
-}
+double ContactGravity(const Model& m) { return m.gravity.norm() > 0.0 ? m.gravity.norm() : 9.81; }
 
 // The group bitmasks of a rod or body (model.h, ContactGroup): the first set, else 1 and 1.
 ContactGroup ContactGroupOf(const Model& m, bool rod, int index) {
@@ -34,15 +32,15 @@ ContactGroup ContactGroupOf(const Model& m, bool rod, int index) {
 // Entities: rods (contact_rods) and bodies with shapes (spheres, capsules, boxes).
 struct ContactEntity {
   bool rod;
-  int index;      // rod or body index
-  int contact;    // contact_rods index (rods)
+  int index;    // rod or body index
+  int contact;  // contact_rods index (rods)
   std::vector<int> nodes;
 };
 
 // The segments of an entity: sides with their masses.
 struct EntitySegment {
   ShapePairSide side;
-  double mass;  // INFINITY when every node of the side is fixed
+  double mass;      // INFINITY when every node of the side is fixed
   int first, last;  // rod: the element's position along the rod and its arc-length span
   double s0, s1;
 };
@@ -58,12 +56,14 @@ std::vector<ContactEntity> ListContactEntities(const Model& m) {
   std::vector<ContactEntity> entities;
   for (std::size_t i = 0; i < m.contact_rods.size(); ++i) {
     const ContactRod& c = m.contact_rods[i];
-    entities.push_back({true, c.rod, static_cast<int>(i), m.rods[static_cast<std::size_t>(c.rod)].nodes});
+    entities.push_back(
+        {true, c.rod, static_cast<int>(i), m.rods[static_cast<std::size_t>(c.rod)].nodes});
   }
   for (const ContactShape& c : m.contact_shapes) {
     bool seen = false;
     for (const ContactEntity& e : entities) seen = seen || (!e.rod && e.index == c.body);
-    if (!seen) entities.push_back({false, c.body, -1, {m.bodies[static_cast<std::size_t>(c.body)].node}});
+    if (!seen)
+      entities.push_back({false, c.body, -1, {m.bodies[static_cast<std::size_t>(c.body)].node}});
   }
   return entities;
 }
@@ -179,9 +179,8 @@ EntitySizes AddContactSegments(Model& m, const std::vector<ContactEntity>& entit
         sizes.has_fixed[k] = 1;
       else
         sizes.heaviest[k] = std::max(sizes.heaviest[k], g.mass);
-      sizes.smallest[k] = std::min(sizes.smallest[k], g.side.half.x() > 0.0
-                                                          ? g.side.half.minCoeff()
-                                                          : g.side.radius);
+      sizes.smallest[k] = std::min(sizes.smallest[k],
+                                   g.side.half.x() > 0.0 ? g.side.half.minCoeff() : g.side.radius);
     }
   }
   return sizes;
@@ -219,8 +218,9 @@ void PairContactEntities(Model& m, const std::vector<ContactEntity>& entities,
       WeighEntityPair(sizes, i, k, gravity, r_min, w_max);
     }
     if (a.rod && law.self) {
-      const double skip = law.self_skip > 0.0 ? law.self_skip
-                                              : 4.0 * m.contact_rods[static_cast<std::size_t>(a.contact)].radius;
+      const double skip = law.self_skip > 0.0
+                              ? law.self_skip
+                              : 4.0 * m.contact_rods[static_cast<std::size_t>(a.contact)].radius;
       m.contact_entity_self_skip[static_cast<std::size_t>(i)] = skip;
       const Rod& rod = m.rods[static_cast<std::size_t>(a.index)];
       double length = 0.0;
@@ -269,7 +269,8 @@ void ValidateContactRods(const Model& m) {
                        entity);
     if (!IsPositiveSize(c.radius))
       throw InputError("contact of rod '" + m.rods[static_cast<std::size_t>(c.rod)].name +
-                           "': the contact radius must be positive, got " + std::to_string(c.radius),
+                           "': the contact radius must be positive, got " +
+                           std::to_string(c.radius),
                        entity);
   }
 }
@@ -281,15 +282,15 @@ void ValidateContactShapes(const Model& m) {
     if (c.body < 0 || c.body >= static_cast<int>(m.bodies.size()))
       throw InputError("contact shape " + std::to_string(i) + ": no body " + std::to_string(c.body),
                        entity);
-    const std::string label = "contact shape of body '" +
-                              m.bodies[static_cast<std::size_t>(c.body)].name + "'";
+    const std::string label =
+        "contact shape of body '" + m.bodies[static_cast<std::size_t>(c.body)].name + "'";
     if (!c.from.allFinite() || !c.to.allFinite())
       throw InputError(label + ": points and sizes must be finite", entity);
     if (c.type == ContactShapeType::kBox ? !(c.to.minCoeff() > 0.0) : !IsPositiveSize(c.radius))
-      throw InputError(label + (c.type == ContactShapeType::kBox
-                                    ? ": the half sizes must be positive"
-                                    : ": the radius must be positive"),
-                       entity);
+      throw InputError(
+          label + (c.type == ContactShapeType::kBox ? ": the half sizes must be positive"
+                                                    : ": the radius must be positive"),
+          entity);
   }
 }
 
@@ -327,8 +328,9 @@ void ValidateContactLaw(const Model& m) {
     throw InputError("contact: the damping ratio must be finite and >= 0");
   for (double v : {law.stiffness, law.onset, law.slip_velocity})
     if (!std::isfinite(v) || v == 0.0)
-      throw InputError("contact: stiffness, onset and slip velocity must be positive (or left "
-                       "to their defaults)");
+      throw InputError(
+          "contact: stiffness, onset and slip velocity must be positive (or left "
+          "to their defaults)");
 }
 
 // ---- Pairs of a moving shape and an obstacle ------------------------------------------------
@@ -361,8 +363,14 @@ void AddRodObstaclePairs(Model& m, const ContactRod& c, int oi, double* r_min,
       const int node = rod.nodes[k];
       if (m.nodes[static_cast<std::size_t>(node)].fixed) continue;
       double length = 0.0;
-      if (k > 0) length += 0.5 * m.elements[static_cast<std::size_t>(rod.first_element + static_cast<int>(k) - 1)].length;
-      if (k + 1 < rod.nodes.size()) length += 0.5 * m.elements[static_cast<std::size_t>(rod.first_element + static_cast<int>(k))].length;
+      if (k > 0)
+        length +=
+            0.5 * m.elements[static_cast<std::size_t>(rod.first_element + static_cast<int>(k) - 1)]
+                      .length;
+      if (k + 1 < rod.nodes.size())
+        length +=
+            0.5 *
+            m.elements[static_cast<std::size_t>(rod.first_element + static_cast<int>(k))].length;
       ContactPair p;
       p.node[0] = node;
       p.radius = c.radius;
@@ -438,8 +446,7 @@ void AddShapeObstaclePairs(Model& m, const ContactShape& c, int oi, double* r_mi
 }
 
 // Defaults (method-next.md §N6.4) and the damping of each pair.
-void ResolveContactLaw(Model& m, const std::vector<double>& masses, double r_min,
-                       double w_max) {
+void ResolveContactLaw(Model& m, const std::vector<double>& masses, double r_min, double w_max) {
   ContactSettings& law = m.contact;
   const double gravity = ContactGravity(m);
   for (double mass : masses) w_max = std::max(w_max, mass * gravity);
@@ -468,8 +475,7 @@ void BuildContacts(Model& m) {
     for (const ContactRod& c : m.contact_rods)
       if (MayTouchObstacle(m, oi, true, c.rod)) AddRodObstaclePairs(m, c, oi, &r_min, &masses);
     for (const ContactShape& c : m.contact_shapes)
-      if (MayTouchObstacle(m, oi, false, c.body))
-        AddShapeObstaclePairs(m, c, oi, &r_min, &masses);
+      if (MayTouchObstacle(m, oi, false, c.body)) AddShapeObstaclePairs(m, c, oi, &r_min, &masses);
   }
   BuildContactSegments(m, &r_min, &w_max);
   ResolveContactLaw(m, masses, r_min, w_max);

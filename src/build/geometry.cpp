@@ -29,8 +29,8 @@ std::vector<SE3> PathNodeFrames(const std::string& name, const EntityRef& rod,
                                 const std::vector<Vec3>& pts, int n, const Vec3& up) {
   auto fail = [&](std::size_t i, const std::string& detail) {
     const std::string part = "path[" + std::to_string(i) + "]";
-    throw InputError("rod '" + name + "': " + part + ": " + detail,
-                     {rod.kind, rod.index, part}, detail);
+    throw InputError("rod '" + name + "': " + part + ": " + detail, {rod.kind, rod.index, part},
+                     detail);
   };
   for (std::size_t i = 0; i < pts.size(); ++i)
     if (!pts[i].allFinite()) fail(i, "the point is not finite");
@@ -56,8 +56,8 @@ std::vector<SE3> PathNodeFrames(const std::string& name, const EntityRef& rod,
     for (int e = 1; e <= n; ++e) {
       const bool vertex = e == n;
       H.R = vertex ? vertex_frame(s + 1) : FrameAlong(dir[s], up);
-      H.x = vertex ? pts[s + 1]
-                   : Vec3(pts[s] + (pts[s + 1] - pts[s]) * (static_cast<double>(e) / n));
+      H.x =
+          vertex ? pts[s + 1] : Vec3(pts[s] + (pts[s + 1] - pts[s]) * (static_cast<double>(e) / n));
       frames.push_back(H);
     }
   }
@@ -66,9 +66,9 @@ std::vector<SE3> PathNodeFrames(const std::string& name, const EntityRef& rod,
 
 }  // namespace
 
-int ModelBuilder::AddStraightRod(std::string name, const Vec3& p0, const Vec3& p1,
-                                 int num_elements, const Section& section, const Vec3& up,
-                                 int start_node, int end_node) {
+int ModelBuilder::AddStraightRod(std::string name, const Vec3& p0, const Vec3& p1, int num_elements,
+                                 const Section& section, const Vec3& up, int start_node,
+                                 int end_node) {
   const double length = (p1 - p0).norm();
   if (!(length > 0.0) || !std::isfinite(length))
     throw InputError("rod '" + name + "': zero length (its end points coincide)", NextRod());
@@ -80,12 +80,12 @@ int ModelBuilder::AddStraightRod(std::string name, const Vec3& p0, const Vec3& p
 }
 
 int ModelBuilder::AddStraightRodFromFrame(std::string name, const SE3& root, double length,
-                                          int num_elements, const Section& section,
-                                          int start_node, int end_node) {
+                                          int num_elements, const Section& section, int start_node,
+                                          int end_node) {
   if (num_elements < 1)
-    throw InputError("rod '" + name + "': needs at least one element, got " +
-                         std::to_string(num_elements),
-                     NextRod());
+    throw InputError(
+        "rod '" + name + "': needs at least one element, got " + std::to_string(num_elements),
+        NextRod());
   if (!(length > 0.0) || !std::isfinite(length))
     throw InputError("rod '" + name + "': length must be positive", NextRod());
   std::vector<int> nodes;
@@ -115,12 +115,11 @@ int ModelBuilder::AddRodThroughNodes(std::string name, const std::vector<int>& n
 }
 
 int ModelBuilder::AddRodAlongPath(std::string name, const std::vector<Vec3>& path,
-                                  int elements_per_segment, const Section& section,
-                                  const Vec3& up, int start_node, int end_node) {
+                                  int elements_per_segment, const Section& section, const Vec3& up,
+                                  int start_node, int end_node) {
   const EntityRef rod = NextRod();
   const std::string label = "rod '" + name + "'";
-  if (path.size() < 2)
-    throw InputError(label + ": a path needs at least two points", rod);
+  if (path.size() < 2) throw InputError(label + ": a path needs at least two points", rod);
   if (elements_per_segment < 1)
     throw InputError(label + ": needs at least one element per segment, got " +
                          std::to_string(elements_per_segment),
@@ -207,7 +206,8 @@ double ModelBuilder::RodLength(int rod) const {
   const Rod& r = m.rods[static_cast<std::size_t>(rod)];
   const int num_nodes = static_cast<int>(m.nodes.size());
   for (int n : r.nodes)
-    if (n < 0 || n >= num_nodes) throw InputError("RodLength: rod " + std::to_string(rod) + " has an invalid node");
+    if (n < 0 || n >= num_nodes)
+      throw InputError("RodLength: rod " + std::to_string(rod) + " has an invalid node");
   double length = 0.0;
   for (std::size_t i = 0; i + 1 < r.nodes.size(); ++i)
     length += LogSE3(m.nodes[static_cast<std::size_t>(r.nodes[i])].reference.Inverse() *

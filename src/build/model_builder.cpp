@@ -47,8 +47,7 @@ int ModelBuilder::AddJoint(const Joint& joint) {
 }
 
 int ModelBuilder::AddJointAt(std::string name, JointType type, int node_a, int node_b,
-                             const Vec3& point, const Vec3& axis, const Vec3& axis2,
-                             double pitch) {
+                             const Vec3& point, const Vec3& axis, const Vec3& axis2, double pitch) {
   const int n = static_cast<int>(model_.nodes.size());
   const int index = static_cast<int>(model_.joints.size());
   const std::string label = "joint '" + name + "'";
@@ -99,7 +98,7 @@ int ModelBuilder::AddJoint(const JointSpec& spec) {
 }
 
 int ModelBuilder::AddTendon(std::string name, std::vector<BodyPoint> eyelets,
-                           const Profile& tension) {
+                            const Profile& tension) {
   Tendon t;
   t.name = std::move(name);
   t.eyelets = std::move(eyelets);

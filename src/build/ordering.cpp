@@ -199,7 +199,8 @@ void AddConstraintBlocks(const Model& m, BlockGraph& g) {
   // Unknowns no row acts on (none today: every joint with coordinates has rows) still need a
   // place in the ordering.
   for (int i = 0; i < m.nv; ++i)
-    if (block_of[static_cast<std::size_t>(i)] < 0) block_of[static_cast<std::size_t>(i)] = g.Add(i, 1);
+    if (block_of[static_cast<std::size_t>(i)] < 0)
+      block_of[static_cast<std::size_t>(i)] = g.Add(i, 1);
 }
 
 // The neighbours of every block, sorted and without repeats.
@@ -230,7 +231,8 @@ std::vector<int> PermuteBlocks(Model& m, const BlockGraph& g,
   for (int b : order) {
     block_pos[static_cast<std::size_t>(b)] = pos;
     const BlockGraph::Block& blk = g.blocks[static_cast<std::size_t>(b)];
-    for (int i = 0; i < blk.size; ++i) m.permutation[static_cast<std::size_t>(blk.start + i)] = pos++;
+    for (int i = 0; i < blk.size; ++i)
+      m.permutation[static_cast<std::size_t>(blk.start + i)] = pos++;
   }
   SCREWFEM_CHECK(pos == m.num_unknowns());
   return block_pos;
@@ -248,9 +250,9 @@ void SetBandPattern(Model& m, const BlockGraph& g, const std::vector<std::vector
     int last = block_pos[b] + blocks[b].size - 1;
     for (int c : adj[b]) {
       const int lo = std::min(block_pos[b], block_pos[static_cast<std::size_t>(c)]);
-      const int hi = std::max(block_pos[b] + blocks[b].size,
-                              block_pos[static_cast<std::size_t>(c)] +
-                                  blocks[static_cast<std::size_t>(c)].size);
+      const int hi =
+          std::max(block_pos[b] + blocks[b].size, block_pos[static_cast<std::size_t>(c)] +
+                                                      blocks[static_cast<std::size_t>(c)].size);
       m.bandwidth = std::max(m.bandwidth, hi - 1 - lo);
       last = std::max(last, block_pos[static_cast<std::size_t>(c)] +
                                 blocks[static_cast<std::size_t>(c)].size - 1);

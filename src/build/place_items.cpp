@@ -65,11 +65,17 @@ double ProfileLowerBound(const Profile& profile) {
   double bound = 0.0;
   for (const ProfileTerm& t : profile.terms()) {
     switch (t.kind) {
-      case ProfileTerm::Kind::kConstant: bound += t.scale; break;
+      case ProfileTerm::Kind::kConstant:
+        bound += t.scale;
+        break;
       case ProfileTerm::Kind::kRamp:
       case ProfileTerm::Kind::kBangBang:
-      case ProfileTerm::Kind::kSmoothStep: bound += std::min(0.0, t.scale); break;
-      case ProfileTerm::Kind::kSine: bound -= std::abs(t.scale); break;
+      case ProfileTerm::Kind::kSmoothStep:
+        bound += std::min(0.0, t.scale);
+        break;
+      case ProfileTerm::Kind::kSine:
+        bound -= std::abs(t.scale);
+        break;
       case ProfileTerm::Kind::kTable: {
         double lo = 0.0;
         for (std::size_t i = 0; i < t.values.size(); ++i) {
@@ -81,7 +87,8 @@ double ProfileLowerBound(const Profile& profile) {
       }
       // A run-time input can take any value; the tension is clamped at 0 when it arrives
       // (TendonTension), so it adds nothing to the bound checked here.
-      case ProfileTerm::Kind::kInput: break;
+      case ProfileTerm::Kind::kInput:
+        break;
     }
   }
   return bound;
@@ -151,7 +158,8 @@ void PlaceTendonEyelets(const Model& m, Tendon& t, int index, const std::string&
       throw InputError(label + ": eyelet " + std::to_string(k) + ": " + problem,
                        {EntityKind::kTendon, index, part}, problem);
     if (k == 0) continue;
-    const double l = (ReferencePosition(m, t.eyelets[k]) - ReferencePosition(m, t.eyelets[k - 1])).norm();
+    const double l =
+        (ReferencePosition(m, t.eyelets[k]) - ReferencePosition(m, t.eyelets[k - 1])).norm();
     if (!(l > 1e-9 * std::max(1.0, m.length_scale))) {
       const std::string what = "coincides with eyelet " + std::to_string(k - 1) +
                                " in the reference configuration (no direction between them)";
@@ -169,15 +177,19 @@ void CheckTendonProfiles(const Model& m, const Tendon& t, const std::string& lab
     ValidateProfile(m, t.length, label + " length", entity);
     const double lower = ProfileLowerBound(t.length);
     if (!(lower > 0.0))
-      throw InputError(label + ": the length profile can become zero or negative (its terms' "
-                               "lower bound is " + std::to_string(lower) + " m)",
+      throw InputError(label +
+                           ": the length profile can become zero or negative (its terms' "
+                           "lower bound is " +
+                           std::to_string(lower) + " m)",
                        entity);
   }
   ValidateProfile(m, t.tension, label + " tension", entity);
   const double lower = ProfileLowerBound(t.tension);
   if (lower < 0.0)
-    throw InputError(label + ": the tension profile can become negative (its terms' lower "
-                             "bound is " + std::to_string(lower) + " N); a tendon can only pull",
+    throw InputError(label +
+                         ": the tension profile can become negative (its terms' lower "
+                         "bound is " +
+                         std::to_string(lower) + " N); a tendon can only pull",
                      entity);
 }
 
@@ -257,8 +269,8 @@ void PlaceActuatorRange(const Model& m, Actuator& a, const ActuatorError& fail) 
     fail("to", "must not exceed the rod's length " + std::to_string(rod.length) + " m, got " +
                    std::to_string(to));
   if (!(to > a.from + tol))
-    fail("to", "must be greater than from (" + std::to_string(a.from) + " m), got " +
-                   std::to_string(to));
+    fail("to",
+         "must be greater than from (" + std::to_string(a.from) + " m), got " + std::to_string(to));
   // The range's ends at nodes: the first element starting at `from`, the last ending at `to`.
   int first = -1, last = -1;
   double s = 0.0, near_from = INFINITY, near_to = INFINITY;
@@ -296,8 +308,8 @@ void SetActuatorUnits(Actuator& a, const ActuatorError& fail) {
     unit *= a.area;
     if (a.type == ActuatorType::kMuscle) {
       if (!(a.max_stress >= 0.0) || !std::isfinite(a.max_stress))
-        fail("max_stress", "must be finite and non-negative [Pa], got " +
-                               std::to_string(a.max_stress));
+        fail("max_stress",
+             "must be finite and non-negative [Pa], got " + std::to_string(a.max_stress));
       unit *= -a.max_stress;
     }
     a.active_stress_unit = unit;
@@ -371,8 +383,9 @@ void BuildForceElements(Model& m) {
       throw InputError(label + ": the rest length must be finite", entity);
     const double l = (ReferencePosition(m, f.b) - ReferencePosition(m, f.a)).norm();
     if (!(l > 1e-9 * std::max(1.0, m.length_scale)))
-      throw InputError(label + ": its ends coincide in the reference configuration (no direction "
-                               "between them)",
+      throw InputError(label +
+                           ": its ends coincide in the reference configuration (no direction "
+                           "between them)",
                        {EntityKind::kForceElement, index, "b"},
                        "coincides with end a in the reference configuration");
     if (f.rest_length < 0.0) f.rest_length = l;

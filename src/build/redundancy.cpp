@@ -46,7 +46,8 @@ struct GraphJoint {
 // Union-find over reduced rows.
 int Root(std::vector<int>& parent, int i) {
   while (parent[static_cast<std::size_t>(i)] != i) {
-    parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+    parent[static_cast<std::size_t>(i)] =
+        parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
     i = parent[static_cast<std::size_t>(i)];
   }
   return i;
@@ -115,9 +116,11 @@ JointForest BuildJointForest(const Model& m) {
   {
     std::vector<int> fill(adj_start.begin(), adj_start.end() - 1);
     for (std::size_t e = 0; e < edges.size(); ++e) {
-      adj[static_cast<std::size_t>(fill[static_cast<std::size_t>(edges[e].va)]++)] = static_cast<int>(e);
+      adj[static_cast<std::size_t>(fill[static_cast<std::size_t>(edges[e].va)]++)] =
+          static_cast<int>(e);
       if (edges[e].vb != edges[e].va)
-        adj[static_cast<std::size_t>(fill[static_cast<std::size_t>(edges[e].vb)]++)] = static_cast<int>(e);
+        adj[static_cast<std::size_t>(fill[static_cast<std::size_t>(edges[e].vb)]++)] =
+            static_cast<int>(e);
     }
   }
   f.parent_edge.assign(nvert, -1);
@@ -133,10 +136,12 @@ JointForest BuildJointForest(const Model& m) {
     queue.push_back(root);
     for (std::size_t q = 0; q < queue.size(); ++q) {
       const int u = queue[q];
-      for (int i = adj_start[static_cast<std::size_t>(u)]; i < adj_start[static_cast<std::size_t>(u) + 1]; ++i) {
+      for (int i = adj_start[static_cast<std::size_t>(u)];
+           i < adj_start[static_cast<std::size_t>(u) + 1]; ++i) {
         const int e = adj[static_cast<std::size_t>(i)];
-        const int w = edges[static_cast<std::size_t>(e)].va == u ? edges[static_cast<std::size_t>(e)].vb
-                                                                 : edges[static_cast<std::size_t>(e)].va;
+        const int w = edges[static_cast<std::size_t>(e)].va == u
+                          ? edges[static_cast<std::size_t>(e)].vb
+                          : edges[static_cast<std::size_t>(e)].va;
         if (depth[static_cast<std::size_t>(w)] >= 0) continue;
         depth[static_cast<std::size_t>(w)] = depth[static_cast<std::size_t>(u)] + 1;
         parent_edge[static_cast<std::size_t>(w)] = e;
@@ -147,7 +152,8 @@ JointForest BuildJointForest(const Model& m) {
   };
   bfs(G);
   for (int v = 0; v < num_nodes; ++v)
-    if (depth[static_cast<std::size_t>(v)] < 0 && adj_start[static_cast<std::size_t>(v)] < adj_start[static_cast<std::size_t>(v) + 1])
+    if (depth[static_cast<std::size_t>(v)] < 0 &&
+        adj_start[static_cast<std::size_t>(v)] < adj_start[static_cast<std::size_t>(v) + 1])
       bfs(v);
   return f;
 }
@@ -156,8 +162,8 @@ JointForest BuildJointForest(const Model& m) {
 // way calls f(u, e, Y_u): Y_u maps dh_u to the chord rows (6 x 6), u the child of tree edge e.
 // Stops when the work passes the bound.
 template <class F>
-void WalkChord(const Model& m, const JointForest& forest, const GraphJoint& chord,
-               const Blocks& cg, Work* work, F&& f) {
+void WalkChord(const Model& m, const JointForest& forest, const GraphJoint& chord, const Blocks& cg,
+               Work* work, F&& f) {
   int u[2] = {chord.va, chord.vb};
   Mat6 Y[2] = {cg.a, cg.b};
   auto step = [&](int s) {
@@ -175,10 +181,10 @@ void WalkChord(const Model& m, const JointForest& forest, const GraphJoint& chor
     work->spent += 1.0;
   };
   while (u[0] != u[1] && !work->too_large) {
-    const int side = forest.depth[static_cast<std::size_t>(u[0])] >=
-                             forest.depth[static_cast<std::size_t>(u[1])]
-                         ? 0
-                         : 1;
+    const int side =
+        forest.depth[static_cast<std::size_t>(u[0])] >= forest.depth[static_cast<std::size_t>(u[1])]
+            ? 0
+            : 1;
     step(side);
     if (work->spent > kMaxRedundancyWork) work->too_large = true;
   }
@@ -193,8 +199,7 @@ struct Entry {
 
 // The chord rows reduced onto the coordinates of the tree joints on their paths, and the
 // drive rows. Stops early when the work passes the bound.
-std::vector<Entry> ReduceChordAndDriveRows(const Model& m, const JointForest& forest,
-                                           Work* work) {
+std::vector<Entry> ReduceChordAndDriveRows(const Model& m, const JointForest& forest, Work* work) {
   std::vector<Entry> entries;
   for (const GraphJoint& chord : forest.edges) {
     if (!forest.IsChord(chord) || work->too_large) continue;
@@ -254,7 +259,9 @@ RowGroups GroupReducedRows(const Model& m, const JointForest& forest,
     if (a != b) uf[static_cast<std::size_t>(a)] = b;
   };
   for (const GraphJoint& e : forest.edges)  // a joint's rows are reported together
-    for (int r = 1; r < 6; ++r) unite(m.joints[static_cast<std::size_t>(e.joint)].row, m.joints[static_cast<std::size_t>(e.joint)].row + r);
+    for (int r = 1; r < 6; ++r)
+      unite(m.joints[static_cast<std::size_t>(e.joint)].row,
+            m.joints[static_cast<std::size_t>(e.joint)].row + r);
   {
     std::map<int, int> first_row_of_col;
     for (const Entry& en : entries) {
@@ -285,13 +292,15 @@ int RankGroups(Model& m, RowGroups& groups, Work* work, std::vector<double>* z) 
     std::map<int, int> row_index;
     for (int i = 0; i < nrows; ++i) row_index[rows[static_cast<std::size_t>(i)]] = i;
     Eigen::MatrixXd Mt = Eigen::MatrixXd::Zero(std::max(ncols, 1), nrows);  // reduced rows^T
-    for (const Entry* en : groups.entries[root]) Mt(col_index[en->col], row_index[en->row]) += en->value;
+    for (const Entry* en : groups.entries[root])
+      Mt(col_index[en->col], row_index[en->row]) += en->value;
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Mt);
     qr.setThreshold(1e-10);
     const int rank = static_cast<int>(qr.rank());
     if (rank == nrows) continue;
     const auto& perm = qr.colsPermutation().indices();
-    for (int c = rank; c < nrows; ++c) m.redundant_rows.push_back(rows[static_cast<std::size_t>(perm(c))]);
+    for (int c = rank; c < nrows; ++c)
+      m.redundant_rows.push_back(rows[static_cast<std::size_t>(perm(c))]);
     num_redundant += nrows - rank;
     // Kernel of Mt: P [-R11^-1 R12; I]; their sum with fixed weights has the union of the
     // basis vectors' supports (cancellation would need the weights to be special).
@@ -300,9 +309,12 @@ int RankGroups(Model& m, RowGroups& groups, Work* work, std::vector<double>* z) 
     Eigen::VectorXd y = Eigen::VectorXd::Zero(nrows);
     y.tail(nrows - rank) = t;
     if (rank > 0)
-      y.head(rank) = -qr.matrixR().topLeftCorner(rank, rank).template triangularView<Eigen::Upper>().solve(
-          qr.matrixR().topRightCorner(rank, nrows - rank) * t);
-    for (int i = 0; i < nrows; ++i) (*z)[static_cast<std::size_t>(rows[static_cast<std::size_t>(perm(i))])] = y(i);
+      y.head(rank) = -qr.matrixR()
+                          .topLeftCorner(rank, rank)
+                          .template triangularView<Eigen::Upper>()
+                          .solve(qr.matrixR().topRightCorner(rank, nrows - rank) * t);
+    for (int i = 0; i < nrows; ++i)
+      (*z)[static_cast<std::size_t>(rows[static_cast<std::size_t>(perm(i))])] = y(i);
   }
   return num_redundant;
 }
@@ -331,8 +343,10 @@ std::string InvolvedJointNames(const Model& m, const JointForest& forest,
     const Vec6 zc = Eigen::Map<const Vec6>(&z[static_cast<std::size_t>(j.row)]);
     if (zc.cwiseAbs().maxCoeff() == 0.0) continue;
     const Blocks cg = ReferenceGradient(m, chord.joint);
-    if (chord.va != G) force.try_emplace(chord.va, Vec6::Zero()).first->second += cg.a.transpose() * zc;
-    if (chord.vb != G) force.try_emplace(chord.vb, Vec6::Zero()).first->second += cg.b.transpose() * zc;
+    if (chord.va != G)
+      force.try_emplace(chord.va, Vec6::Zero()).first->second += cg.a.transpose() * zc;
+    if (chord.vb != G)
+      force.try_emplace(chord.vb, Vec6::Zero()).first->second += cg.b.transpose() * zc;
     WalkChord(m, forest, chord, cg, work, [&](int u, int, const Mat6&) {
       path.emplace(-forest.depth[static_cast<std::size_t>(u)], u);
     });
@@ -346,7 +360,9 @@ std::string InvolvedJointNames(const Model& m, const JointForest& forest,
     const Vec6 fu = force.count(u) ? force[u] : Vec6::Zero();
     const Vec6 w = -(child_is_a ? tg.a : tg.b).transpose().partialPivLu().solve(fu);
     const int p = forest.ParentOf(u);
-    if (p != G) force.try_emplace(p, Vec6::Zero()).first->second += (child_is_a ? tg.b : tg.a).transpose() * w;
+    if (p != G)
+      force.try_emplace(p, Vec6::Zero()).first->second +=
+          (child_is_a ? tg.b : tg.a).transpose() * w;
     double& jw = joint_weight[static_cast<std::size_t>(te.joint)];
     jw = std::max(jw, w.cwiseAbs().maxCoeff());
     wmax = std::max(wmax, jw);

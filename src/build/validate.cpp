@@ -90,7 +90,8 @@ void BuildRodElements(Model& m, std::vector<char>& used) {
     }
     if (!(rod.section.rayleigh_mass >= 0.0) || !std::isfinite(rod.section.rayleigh_mass) ||
         !(rod.section.rayleigh_stiffness >= 0.0) || !std::isfinite(rod.section.rayleigh_stiffness))
-      throw InputError(label + ": Rayleigh damping coefficients must be finite and non-negative", entity);
+      throw InputError(label + ": Rayleigh damping coefficients must be finite and non-negative",
+                       entity);
     rod.first_element = static_cast<int>(m.elements.size());
     rod.length = 0.0;
     for (int e = 0; e < rod.num_elements; ++e) {
@@ -105,11 +106,12 @@ void BuildRodElements(Model& m, std::vector<char>& used) {
       el.d0 = LogSE3(rel);
       el.length = el.d0.head<3>().norm();
       if (!(el.length > 1e-12 * std::max(1.0, rel.x.norm())))
-        throw InputError(label + ": element " + std::to_string(e) +
-                         " has zero length (its nodes coincide)", entity);
+        throw InputError(
+            label + ": element " + std::to_string(e) + " has zero length (its nodes coincide)",
+            entity);
       if (el.d0.tail<3>().norm() > 3.14159265358979323846 - 1e-3)
         throw InputError(label + ": element " + std::to_string(e) +
-                         " is curved by more than pi in its reference state; use more elements",
+                             " is curved by more than pi in its reference state; use more elements",
                          entity);
       rod.length += el.length;
       used[static_cast<std::size_t>(el.node_a)] = used[static_cast<std::size_t>(el.node_b)] = 1;
@@ -180,22 +182,26 @@ void ValidateJoints(const Model& m, std::vector<char>& used) {
         if (!(j.stiffness(c) >= 0.0) || !(j.damping(c) >= 0.0) || !std::isfinite(j.stiffness(c)) ||
             !std::isfinite(j.damping(c)))
           throw InputError(label + ": stiffness and damping must be finite and non-negative",
-                         entity);
+                           entity);
       }
       if (j.drive != DriveKind::kNone) {
         if (j.drive_coord < 0 || j.drive_coord >= j.k())
           throw InputError(label + ": drive coordinate out of range", entity);
         if (!JointHasGlobalCoordinates(j.type))
           throw InputError(label + ": drives need a joint with global coordinates (not " +
-                           JointTypeName(j.type) + ")", entity);
+                               JointTypeName(j.type) + ")",
+                           entity);
         ValidateProfile(m, j.drive_profile, label, entity);
       }
       if ((j.has_initial_coordinate && !j.initial_coordinate.allFinite()) ||
           (j.has_initial_rate && !j.initial_rate.allFinite()))
         throw InputError(label + ": initial coordinates and rates must be finite", entity);
       if (j.has_initial_coordinate && !JointHasGlobalCoordinates(j.type))
-        throw InputError(label + ": initial coordinates need a joint with global coordinates "
-                         "(not " + JointTypeName(j.type) + ")", entity);
+        throw InputError(label +
+                             ": initial coordinates need a joint with global coordinates "
+                             "(not " +
+                             JointTypeName(j.type) + ")",
+                         entity);
       if (!j.name.empty() && !names.insert(j.name).second)
         throw InputError("duplicate joint name '" + j.name + "'", entity);
       if (j.node_a != kGround) used[static_cast<std::size_t>(j.node_a)] = 1;
@@ -222,8 +228,8 @@ void CheckJointFramesCoincide(const Model& m) {
     const Vec6 phi0 = LogSE3(j.offset_a.Inverse() * HA.Inverse() * HB * j.offset_b);
     if (j.row >= 0 && phi0.norm() > 1e-9 * std::max(1.0, HA.x.norm() + HB.x.norm()))
       throw InputError("joint '" + j.name +
-                       "': its frames on the two sides do not coincide in the reference "
-                       "configuration (check the joint point and the attached bodies)",
+                           "': its frames on the two sides do not coincide in the reference "
+                           "configuration (check the joint point and the attached bodies)",
                        {EntityKind::kJoint, static_cast<int>(i), {}});
   }
 }

@@ -30,8 +30,7 @@ double ContactPotential(double g, double delta, double k) {
   return k * delta * delta / 6.0 - 0.5 * k * delta * g + 0.5 * k * g * g;
 }
 
-ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping,
-                                   bool dynamics) {
+ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping, bool dynamics) {
   ContactLawParameters p;
   p.stiffness = settings.stiffness;
   p.onset = settings.onset;
@@ -150,8 +149,8 @@ void CalcSurfaceVelocityMap(const ContactGeometry& G, const NodeMotion<2>& x,
 
 }  // namespace
 
-bool ContactKind::Calc(const Model& model, const Data&, const Item& item,
-                       const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
+bool ContactKind::Calc(const Model& model, const Data&, const Item& item, const NodeMotion<2>& x,
+                       const KernelOptions& o, ElementTerms<2>* t) {
   const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
   ContactGeometry G;
   if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G) || G.gap >= model.contact.onset) {
@@ -256,8 +255,8 @@ ContactState CalcContactState(const Model& model, const Data& data, int item) {
   Vec3 m[2];
   CalcSurfaceVelocityMap(G, x, &J, m);
   const Vec3 v_c = J * x.eta;
-  const ContactForce c = ContactForceLaw(
-      G.gap, G.normal, v_c, ContactLawFor(model.contact, pair.damping, true), false);
+  const ContactForce c = ContactForceLaw(G.gap, G.normal, v_c,
+                                         ContactLawFor(model.contact, pair.damping, true), false);
   if (!c.active) return out;
   out.active = true;
   out.normal_force = c.normal.force;

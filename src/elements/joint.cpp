@@ -56,7 +56,8 @@ Mat6X SphericalBasis(const Vec3&, const Vec3&, double) {
 }
 // Normal e: the in-plane axes are the y and z axes of the frame whose x axis is e.
 Mat6X PlanarBasis(const Vec3& e, const Vec3&, double) {
-  const Mat3 R = FrameAlong(e, Vec3::UnitZ().cross(e).norm() > 1e-6 ? Vec3::UnitZ() : Vec3::UnitX());
+  const Mat3 R =
+      FrameAlong(e, Vec3::UnitZ().cross(e).norm() > 1e-6 ? Vec3::UnitZ() : Vec3::UnitX());
   Mat6X A(6, 3);
   A.col(0) = Translation(R.col(1));
   A.col(1) = Translation(R.col(2));
@@ -138,13 +139,10 @@ Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2, double pitch) {
   return GetJointTypeInfo(type).basis(e, e2, pitch);
 }
 
-bool JointHasGlobalCoordinates(JointType type) {
-  return GetJointTypeInfo(type).global_coordinates;
-}
+bool JointHasGlobalCoordinates(JointType type) { return GetJointTypeInfo(type).global_coordinates; }
 
 int JointSpringCount(const Joint& joint) {
-  return GetJointTypeInfo(joint.type).spring_law == JointSpringLaw::kRelativeMotion ? 6
-                                                                                    : joint.k();
+  return GetJointTypeInfo(joint.type).spring_law == JointSpringLaw::kRelativeMotion ? 6 : joint.k();
 }
 
 // ---- the kernel --------------------------------------------------------------------------------
@@ -209,16 +207,16 @@ Vec6 JointGradientTimes(const JointGradient& g, const Vec6* x_a, const Vec6* x_b
   return g.Tinv * rel;
 }
 
-void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g,
-                                     const Vec6& lambda, const Mat6X& basis,
-                                     JointForceTangent* out) {
+void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g, const Vec6& lambda,
+                                     const Mat6X& basis, JointForceTangent* out) {
   const int k = static_cast<int>(basis.cols());
   const int n = 12 + k;
   // dphi / d[x_A, x_B, x_J].
   Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 18> dphi(6, n);
   dphi.leftCols<6>() = JointGradientA(g);
   dphi.middleCols<6>(6) = JointGradientB(g);
-  if (k > 0) dphi.rightCols(k) = JointGradientCoordinates(g, basis, Mat6::Identity().topLeftCorner(k, k));
+  if (k > 0)
+    dphi.rightCols(k) = JointGradientCoordinates(g, basis, Mat6::Identity().topLeftCorner(k, k));
   const Mat6 D = DTSE3InvT(g.phi, lambda);
   const Mat6 ad_ga_t = Ad(g.G_A).transpose();
   out->resize(n, n);
@@ -237,8 +235,8 @@ void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g,
   }
 }
 
-void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient& g,
-                                        const Vec6* v_a, const Vec6* v_b,
+void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient& g, const Vec6* v_a,
+                                        const Vec6* v_b,
                                         const Eigen::Ref<const Eigen::VectorXd>& v_j,
                                         const Mat6X& basis, JointVelocityTangent* out) {
   const int k = static_cast<int>(basis.cols());
@@ -246,7 +244,8 @@ void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient&
   Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 18> dphi(6, n);
   dphi.leftCols<6>() = JointGradientA(g);
   dphi.middleCols<6>(6) = JointGradientB(g);
-  if (k > 0) dphi.rightCols(k) = JointGradientCoordinates(g, basis, Mat6::Identity().topLeftCorner(k, k));
+  if (k > 0)
+    dphi.rightCols(k) = JointGradientCoordinates(g, basis, Mat6::Identity().topLeftCorner(k, k));
   // u = Ad(C_B^-1) v_B - Ad(G_A) v_A - A_J v_J.
   const Vec6 av_j = k > 0 ? Vec6(basis * v_j.head(k)) : Vec6::Zero();
   Vec6 u = -av_j;
@@ -254,8 +253,7 @@ void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient&
   if (v_a != nullptr) u -= Ad(g.G_A) * *v_a;
   // [dT^-1(phi)/dphi . e_i] u for the six directions e_i, then through dphi.
   Mat6 dtinv_u;
-  for (int i = 0; i < 6; ++i)
-    dtinv_u.col(i) = TSE3InvDirectionalTimes(g.phi, Vec6::Unit(i), u);
+  for (int i = 0; i < 6; ++i) dtinv_u.col(i) = TSE3InvDirectionalTimes(g.phi, Vec6::Unit(i), u);
   out->resize(6, n);
   out->noalias() = (dtinv_u - ad(av_j)) * dphi;
   // The variation of Ad(G_A) v_A: G_A <- G_A exp(x_A - Ad(G_A^-1 C_B^-1) x_B).
@@ -305,8 +303,8 @@ void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, d
     for (int c = 0; c < k; ++c) {
       const JointCoordinateSpring spring =
           JointCoordinateSpringLaw(j, c, alpha(c), alpha_dot(c), drive, load_factor, dynamics);
-      out->term_scale = std::max(
-          out->term_scale, j.stiffness(c) * (std::abs(alpha(c)) + std::abs(spring.rest)));
+      out->term_scale =
+          std::max(out->term_scale, j.stiffness(c) * (std::abs(alpha(c)) + std::abs(spring.rest)));
       f(c) = spring.force;
       out->stiffness(c, c) = j.stiffness(c);
       if (dynamics) out->damping(c, c) = j.damping(c);
@@ -379,8 +377,8 @@ Vec6 CalcFreeJointDeflection(const Model& model, const Data& data, int joint) {
                 NodeFrame(data, j.node_b) * j.offset_b);
 }
 
-bool JointSpringKind::Calc(const Model& m, const Data& d, const Item& joint,
-                           const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
+bool JointSpringKind::Calc(const Model& m, const Data& d, const Item& joint, const NodeMotion<2>& x,
+                           const KernelOptions& o, ElementTerms<2>* t) {
   const Joint& j = m.joints[static_cast<std::size_t>(joint)];
   const bool has_damping = o.dynamics && j.damping.squaredNorm() > 0.0;
   if (j.stiffness.squaredNorm() == 0.0 && !has_damping) {
@@ -433,9 +431,9 @@ double JointDriveEffort(const Model& model, const Data& data, int joint) {
     case DriveKind::kSeriesElastic: {
       // Minus the kernel's spring-damper force (0.0 - f: a spring at rest reports +0, not -0).
       const int c = j.coord + j.drive_coord;
-      const JointCoordinateSpring spring = JointCoordinateSpringLaw(
-          j, j.drive_coord, data.q_joint(c - model.nv_nodes), data.v(c),
-          EvalProfile(j.drive_profile, data.time, data), 1.0, true);
+      const JointCoordinateSpring spring =
+          JointCoordinateSpringLaw(j, j.drive_coord, data.q_joint(c - model.nv_nodes), data.v(c),
+                                   EvalProfile(j.drive_profile, data.time, data), 1.0, true);
       return 0.0 - spring.force;
     }
   }
@@ -444,7 +442,8 @@ double JointDriveEffort(const Model& model, const Data& data, int joint) {
 
 double JointCoordinateEffort(const Model& model, const Data& data, int joint, int c) {
   const Joint& j = model.joints[static_cast<std::size_t>(joint)];
-  if (j.drive != DriveKind::kNone && c == j.drive_coord) return JointDriveEffort(model, data, joint);
+  if (j.drive != DriveKind::kNone && c == j.drive_coord)
+    return JointDriveEffort(model, data, joint);
   if (j.stiffness(c) == 0.0 && j.damping(c) == 0.0 &&
       GetJointTypeInfo(j.type).spring_law == JointSpringLaw::kCoordinates)
     return 0.0;

@@ -13,8 +13,7 @@ void AddDeadForce(const Vec3& f, const Vec3& p, Vec6* g, Mat6* K) {
 }
 
 bool PointLoadKind::Calc(const Model& model, const Data& data, const Item& load,
-                         const NodeMotion<1>& motion, const KernelOptions& o,
-                         ElementTerms<1>* t) {
+                         const NodeMotion<1>& motion, const KernelOptions& o, ElementTerms<1>* t) {
   const PointLoad& l = model.point_loads[static_cast<std::size_t>(load)];
   const double scale = model.nodes[static_cast<std::size_t>(l.node)].dof < 0
                            ? 0.0
@@ -42,8 +41,7 @@ bool PointLoadKind::Calc(const Model& model, const Data& data, const Item& load,
 }
 
 bool RodLoadKind::Calc(const Model& model, const Data& data, const Item& item,
-                       const NodeMotion<2>& motion, const KernelOptions& o,
-                       ElementTerms<2>* t) {
+                       const NodeMotion<2>& motion, const KernelOptions& o, ElementTerms<2>* t) {
   const RodLoad& l = model.rod_loads[static_cast<std::size_t>(item.load)];
   const double scale = o.load_factor * EvalProfile(l.profile, o.time, data).value;
   if (scale == 0.0) {
@@ -52,8 +50,8 @@ bool RodLoadKind::Calc(const Model& model, const Data& data, const Item& item,
   }
   const RodElement& el = model.elements[static_cast<std::size_t>(item.element)];
   const SE3& HA = *motion.H[0];
-  const Vec6 dd = CalcRodRelativeMotion(HA, *motion.H[1],
-                                        data.w_ref[static_cast<std::size_t>(item.element)]);
+  const Vec6 dd =
+      CalcRodRelativeMotion(HA, *motion.H[1], data.w_ref[static_cast<std::size_t>(item.element)]);
   Vec12 g = Vec12::Zero();
   Mat12& K = t->stiffness;
   K.setZero();

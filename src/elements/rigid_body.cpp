@@ -17,8 +17,7 @@ Mat6 RigidBodyMass(const RigidBody& b) {
 }
 
 bool RigidBodyKind::Calc(const Model& model, const Data&, const Item& body,
-                         const NodeMotion<1>& motion, const KernelOptions& o,
-                         ElementTerms<1>* t) {
+                         const NodeMotion<1>& motion, const KernelOptions& o, ElementTerms<1>* t) {
   const RigidBody& b = model.bodies[static_cast<std::size_t>(body)];
   if (model.nodes[static_cast<std::size_t>(b.node)].dof < 0) {
     t->active = false;
@@ -40,8 +39,8 @@ bool RigidBodyKind::Calc(const Model& model, const Data&, const Item& body,
   t->residual += M_vdot - gyroscopic;
   // The scale of the convergence test is the size of the terms, not of their sum: for a body
   // without joints or loads the sum is the residual itself and tends to zero.
-  t->force_scale = std::max({M_vdot.cwiseAbs().maxCoeff(), gyroscopic.cwiseAbs().maxCoeff(),
-                             g.cwiseAbs().maxCoeff()});
+  t->force_scale = std::max(
+      {M_vdot.cwiseAbs().maxCoeff(), gyroscopic.cwiseAbs().maxCoeff(), g.cwiseAbs().maxCoeff()});
   if (o.tangent) {
     t->mass = M;
     t->damping = -(ad(eta).transpose() * M + Star(Meta));
@@ -50,15 +49,15 @@ bool RigidBodyKind::Calc(const Model& model, const Data&, const Item& body,
   return true;
 }
 
-void RigidBodyKind::AddEnergy(const Model& model, const Data& data, const Item& body,
-                              Energy* E) {
+void RigidBodyKind::AddEnergy(const Model& model, const Data& data, const Item& body, Energy* E) {
   const RigidBody& b = model.bodies[static_cast<std::size_t>(body)];
   const SE3& H = data.H[static_cast<std::size_t>(b.node)];
   const int dof = model.nodes[static_cast<std::size_t>(b.node)].dof;
   if (dof >= 0) {
     const Vec6 eta = data.v.segment<6>(dof);
     const Vec3 vc = eta.head<3>() + eta.tail<3>().cross(b.com);
-    E->kinetic += 0.5 * b.mass * vc.squaredNorm() + 0.5 * eta.tail<3>().dot(b.inertia * eta.tail<3>());
+    E->kinetic +=
+        0.5 * b.mass * vc.squaredNorm() + 0.5 * eta.tail<3>().dot(b.inertia * eta.tail<3>());
     E->AddMomentum(H, RigidBodyMass(b) * eta);
   }
   E->gravity -= b.mass * model.gravity.dot(H.Act(b.com));

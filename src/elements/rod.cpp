@@ -39,8 +39,7 @@ void CalcRodGaussVelocities(const Vec6& d, const Vec12& eta_ab, Vec6 (&eta)[kRod
     const double xi = kRodGaussXi[i];
     const SE3 g = ExpSE3(xi * d);
     // Ad(g^-1) eta_A = [R^T (u - x x w); R^T w] (translation first).
-    eta[i].head<3>().noalias() =
-        g.R.transpose() * (eta_a.head<3>() - g.x.cross(eta_a.tail<3>()));
+    eta[i].head<3>().noalias() = g.R.transpose() * (eta_a.head<3>() - g.x.cross(eta_a.tail<3>()));
     eta[i].tail<3>().noalias() = g.R.transpose() * eta_a.tail<3>();
     eta[i].noalias() += xi * (T[i] * d_dot);
     if (G) (*G)[i] = g;
@@ -149,8 +148,8 @@ Mat6x12 CalcRodNDirectional(double xi, const Vec6& d, const Vec6& dd) {
 void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, LoadFrame frame,
                        const Vec3& force, const Vec3& moment, Vec12* g, Mat12* tangent) {
   const Vec6 xd = xi * d;
-  const Mat6 T_p = TSE3(xd);                 // T(xi d)
-  const Mat6 Ad_m = Ad(ExpSE3(-xd));         // Ad(exp(-xi d))
+  const Mat6 T_p = TSE3(xd);          // T(xi d)
+  const Mat6 Ad_m = Ad(ExpSE3(-xd));  // Ad(exp(-xi d))
   const Mat6 Ti_m = TSE3Inv(-d), Ti_p = TSE3Inv(d);
   Vec6 F;
   Mat6 S = Mat6::Zero();  // dF/d theta(xi)
@@ -173,8 +172,8 @@ void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, 
   //   d(Ad(exp(-xi d))^T F)/dd = -xi Star(Ad_m^T F) T(-xi d)
   const Mat6 dz = -(xi * xi) * (T_p.transpose() * DTSE3InvT(xd, tF));
   Eigen::Matrix<double, 12, 6> G;
-  G.topRows<6>() = -xi * (Star(Ad_m.transpose() * F) * TSE3(-xd)) + DTSE3InvT(-d, z) -
-                   Ti_m.transpose() * dz;
+  G.topRows<6>() =
+      -xi * (Star(Ad_m.transpose() * F) * TSE3(-xd)) + DTSE3InvT(-d, z) - Ti_m.transpose() * dz;
   G.bottomRows<6>() = DTSE3InvT(d, z) + Ti_p.transpose() * dz;
   Mat6x12 N;
   N.leftCols<6>() = Ad_m - xi * T_p * Ti_m;
@@ -183,8 +182,7 @@ void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, 
   if (frame == LoadFrame::kWorld) tangent->noalias() -= weight * (N.transpose() * S * N);
 }
 
-Eigen::Matrix<double, 12, 6> CalcRodNTransposeDerivative(double xi, const Vec6& d,
-                                                         const Vec6& F) {
+Eigen::Matrix<double, 12, 6> CalcRodNTransposeDerivative(double xi, const Vec6& d, const Vec6& F) {
   // As in AddRodSectionLoad: N^T F = [Ad_m^T F - T^-T(-d) z;  T^-T(d) z],  z = xi T(xi d)^T F.
   const Vec6 xd = xi * d;
   const Mat6 T_p = TSE3(xd);
@@ -258,12 +256,11 @@ JCoeffs JCoefficients(double phi, bool second) {
 // The dead-force potential of one element and its derivatives (see AddRodDistributedDeadForce).
 struct DeadForcePieces {
   Vec3 f, pbar;
-  Vec6 s;                   // [Jbar^T f; Pw^T f]
-  Mat3 Jbar, Pw, Qw, Hww;   // with `tangent` only
+  Vec6 s;                  // [Jbar^T f; Pw^T f]
+  Mat3 Jbar, Pw, Qw, Hww;  // with `tangent` only
 };
 
-DeadForcePieces CalcDeadForcePieces(const Vec6& d, const SE3& H_A, const Vec3& f_w,
-                                    bool tangent) {
+DeadForcePieces CalcDeadForcePieces(const Vec6& d, const SE3& H_A, const Vec3& f_w, bool tangent) {
   // At the Gauss points v = xi w, so every sum over them is a few scalar sums of
   // coefficient functions of xi_i |w| times fixed vectors and matrices of u, w, f. With
   // wx_i = w_i xi_i and S0 = sum wx_i (= 1/2):
@@ -341,8 +338,7 @@ Mat6 DeadForceHessian(const DeadForcePieces& p) {
 
 // -L times the tangent columns of node A's rotation (12 x 3, see AddRodDistributedDeadForce):
 // P^T S_f Skew(f) + E_A [Skew(f); Skew(pbar) Skew(f)].
-Eigen::Matrix<double, 12, 3> DeadForceRotationColumns(const DeadForcePieces& p,
-                                                      const Mat6x12& P) {
+Eigen::Matrix<double, 12, 3> DeadForceRotationColumns(const DeadForcePieces& p, const Mat6x12& P) {
   const Mat3 Sf = Skew(p.f);
   Eigen::Matrix<double, 6, 3> SfSk;
   SfSk.topRows<3>().noalias() = p.Jbar.transpose() * Sf;

@@ -110,8 +110,8 @@ double ActuatorValue(const Actuator& a, double time, const Data& data) {
   return a.type == ActuatorType::kMuscle ? std::clamp(v, 0.0, 1.0) : v;
 }
 
-bool CalcRodActuation(const Model& m, const Data& d, int element, double time,
-                      double load_factor, RodActuation* out) {
+bool CalcRodActuation(const Model& m, const Data& d, int element, double time, double load_factor,
+                      RodActuation* out) {
   out->rest_strain.setZero();
   out->active_stress.setZero();
   const RodElement& el = m.elements[static_cast<std::size_t>(element)];

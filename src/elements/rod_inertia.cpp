@@ -118,8 +118,8 @@ void InertiaExact(const RodElement& element, const Section& section, const RodGe
 }  // namespace
 
 void CalcRodInertiaExact(const RodElement& element, const Section& section,
-                         const RodGeometry& geometry, const Vec12& eta_ab,
-                         const Vec12& eta_dot_ab, bool tangent, RodInertiaTerms* out) {
+                         const RodGeometry& geometry, const Vec12& eta_ab, const Vec12& eta_dot_ab,
+                         bool tangent, RodInertiaTerms* out) {
   if (tangent)
     InertiaExact<InertiaTangent::kSeparate>(element, section, geometry, eta_ab, eta_dot_ab, 0.0,
                                             0.0, &out->force, &out->mass, &out->gyroscopic,
@@ -138,8 +138,8 @@ void CalcRodInertiaExactForce(const RodElement& element, const Section& section,
 
 void CalcRodInertiaExactMatrix(const RodElement& element, const Section& section,
                                const RodGeometry& geometry, const Vec12& eta_ab,
-                               const Vec12& eta_dot_ab, double c_mass, double c_gyro,
-                               Vec12* force, Mat12* matrix) {
+                               const Vec12& eta_dot_ab, double c_mass, double c_gyro, Vec12* force,
+                               Mat12* matrix) {
   InertiaExact<InertiaTangent::kCombined>(element, section, geometry, eta_ab, eta_dot_ab, c_mass,
                                           c_gyro, force, matrix, nullptr, nullptr);
 }
@@ -151,8 +151,8 @@ void CalcRodInertiaExact(const RodElement& element, const Section& section, cons
   CalcRodInertiaExact(element, section, geometry, eta_ab, eta_dot_ab, true, out);
 }
 
-void CalcRodInertiaConstant(const RodElement& element, const Section& section,
-                            const Vec12& eta_ab, const Vec12& eta_dot_ab, RodInertiaTerms* out) {
+void CalcRodInertiaConstant(const RodElement& element, const Section& section, const Vec12& eta_ab,
+                            const Vec12& eta_dot_ab, RodInertiaTerms* out) {
   const double L = element.length;
   const auto M = section.inertia.asDiagonal();
   out->mass.setZero();

@@ -10,8 +10,7 @@ namespace screwfem {
 
 namespace {
 
-void SideEnds(const ShapePairSide& side, const SE3* const (&H)[4], int first, Vec3* P0,
-              Vec3* P1) {
+void SideEnds(const ShapePairSide& side, const SE3* const (&H)[4], int first, Vec3* P0, Vec3* P1) {
   const SE3& Ha = *H[first + side.end_node[0]];
   const SE3& Hb = *H[first + side.end_node[1]];
   *P0 = Ha.x + Ha.R * side.offset[0];
@@ -36,7 +35,8 @@ void SetLevers(const ShapePair& pair, const SE3* const (&H)[4], ShapePairGeometr
     for (int i = 0; i < 2; ++i) {
       const int k = 2 * side + i;
       if (out->weight[k] == 0.0) continue;
-      out->lever[k] = b[i] / out->weight[k] - sign * sd.radius * (H[k]->R.transpose() * out->normal);
+      out->lever[k] =
+          b[i] / out->weight[k] - sign * sd.radius * (H[k]->R.transpose() * out->normal);
     }
   }
 }
@@ -290,9 +290,8 @@ bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePa
       if (G.weight[k] == 0.0) continue;
       const Vec3 v = x.eta.segment<3>(6 * k), om = x.eta.segment<3>(6 * k + 3);
       const Vec3 y = v + om.cross(G.lever[k]);
-      dV.block<3, 3>(0, 6 * k + 3) =
-          sign[k] * G.weight[k] * x.H[k]->R *
-          (-Skew(y) - sign[k] * radius[k] * Skew(om) * Skew(m[k]));
+      dV.block<3, 3>(0, 6 * k + 3) = sign[k] * G.weight[k] * x.H[k]->R *
+                                     (-Skew(y) - sign[k] * radius[k] * Skew(om) * Skew(m[k]));
     }
   }
   const Eigen::Matrix<double, 24, 1> j = J.transpose() * n;  // dg/dh
@@ -368,8 +367,8 @@ class PairWriter {
     const double reduced = std::isinf(a.mass)   ? b.mass
                            : std::isinf(b.mass) ? a.mass
                                                 : a.mass * b.mass / (a.mass + b.mass);
-    damping_ = 2.0 * m_.contact.damping_ratio *
-               std::sqrt(m_.contact.stiffness * std::max(reduced, 0.0));
+    damping_ =
+        2.0 * m_.contact.damping_ratio * std::sqrt(m_.contact.stiffness * std::max(reduced, 0.0));
     const bool box_a = IsBox(a.side), box_b = IsBox(b.side);
     if (box_a && box_b) {
       // Box-box: the 12 edges of each box (segments of radius 0) against the other box.
@@ -532,8 +531,8 @@ void FindShapePairs(const Model& model, Data& data) {
     const int ea = segment(a0).entity, eb = segment(b0).entity;
     if (ea == eb) {
       const double skip = model.contact_entity_self_skip[static_cast<std::size_t>(ea)];
-      const double far = std::max(segment(b1 - 1).s0 - segment(a0).s1,
-                                  segment(a1 - 1).s0 - segment(b0).s1);
+      const double far =
+          std::max(segment(b1 - 1).s0 - segment(a0).s1, segment(a1 - 1).s0 - segment(b0).s1);
       if (skip < 0.0 || far < skip) return;
     } else if (!model.contact_entity_pairs[static_cast<std::size_t>(
                    ea * model.num_contact_entities + eb)]) {
@@ -616,7 +615,8 @@ bool ShapePairKind::Calc(const Model& model, const Data& data, const Item& item,
 void ShapePairKind::AddEnergy(const Model& model, const Data& data, const Item& item, Energy* E) {
   const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(item)];
   const SE3* H[4] = {&NodeFrame(data, pair.side[0].node[0]), &NodeFrame(data, pair.side[0].node[1]),
-                     &NodeFrame(data, pair.side[1].node[0]), &NodeFrame(data, pair.side[1].node[1])};
+                     &NodeFrame(data, pair.side[1].node[0]),
+                     &NodeFrame(data, pair.side[1].node[1])};
   ShapePairGeometry G;
   if (!CalcShapePairGeometry(pair, H, model.contact.onset, &G)) return;
   E->spring += ContactPotential(G.gap, model.contact.onset, model.contact.stiffness);
@@ -646,8 +646,8 @@ ShapePairState CalcShapePairState(const Model& model, const Data& data, int item
   Vec3 m[4];
   CalcRelativeVelocityMap(G, x, &J, m);
   const Vec3 v_c = J * x.eta;
-  const ContactForce c = ContactForceLaw(
-      G.gap, G.normal, v_c, ContactLawFor(model.contact, pair.damping, true), false);
+  const ContactForce c = ContactForceLaw(G.gap, G.normal, v_c,
+                                         ContactLawFor(model.contact, pair.damping, true), false);
   if (!c.active) return out;
   out.active = true;
   out.normal_force = c.normal.force;

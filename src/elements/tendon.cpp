@@ -187,9 +187,8 @@ bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& g
   for (int i = 0; i < grp.count; ++i) {
     const TendonSegment& s = model.tendon_segments[static_cast<std::size_t>(
         model.tendon_group_segments[static_cast<std::size_t>(grp.first + i)])];
-    const double tau =
-        TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], data, o.time,
-                      o.load_factor);
+    const double tau = TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], data,
+                                     o.time, o.load_factor);
     if (tau == 0.0) continue;
     PointDistance g;
     if (!CalcPointDistance(H_A, s.a.offset, H_B, s.b.offset, false, &g))
@@ -303,8 +302,7 @@ bool TendonSpanSegmentKind::Calc(const Model& model, const Data& data, const Ite
                                  ElementTerms<4>* t) {
   const TendonSegment& s = model.tendon_segments[static_cast<std::size_t>(segment)];
   const double tau =
-      TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], data, o.time,
-                    o.load_factor);
+      TendonTension(model.tendons[static_cast<std::size_t>(s.tendon)], data, o.time, o.load_factor);
   if (tau == 0.0) {
     t->active = false;
     return true;
@@ -345,8 +343,7 @@ bool ForceElementKind::Calc(const Model& model, const Data& data, const Item& el
   t->residual = f * g.gradient;
   const double arm = std::max({1.0, fe.a.offset.norm(), fe.b.offset.norm()});
   t->force_scale = std::abs(f) * arm;
-  t->term_scale =
-      (fe.stiffness * std::max(g.length, fe.rest_length) + std::abs(actuator)) * arm;
+  t->term_scale = (fe.stiffness * std::max(g.length, fe.rest_length) + std::abs(actuator)) * arm;
   if (!o.tangent) return true;
   Mat12& K = t->stiffness;
   K.noalias() = fe.stiffness * g.gradient * g.gradient.transpose();

@@ -31,10 +31,11 @@ std::vector<Cell> SplitCells(const std::string& line) {
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = line.find(',', start);
-    const std::string raw = line.substr(start, comma == std::string::npos ? std::string::npos
-                                                                          : comma - start);
+    const std::string raw =
+        line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     const auto lead = raw.find_first_not_of(" \t");
-    cells.push_back({Trim(raw), static_cast<int>(start + (lead == std::string::npos ? 0 : lead)) + 1});
+    cells.push_back(
+        {Trim(raw), static_cast<int>(start + (lead == std::string::npos ? 0 : lead)) + 1});
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -48,8 +49,7 @@ std::vector<Cell> SplitCells(const std::string& line) {
 
 }  // namespace
 
-InputTable ParseInputTable(const std::string& text, const std::string& source,
-                           const Model& model) {
+InputTable ParseInputTable(const std::string& text, const std::string& source, const Model& model) {
   InputTable table;
   std::istringstream in(text);
   std::string line;

@@ -61,18 +61,23 @@ int ExpectedFrames(const Scene& scene) {
   if (a.kind == AnalysisKind::kStatic) return 1;
   const OutputSpec& o = scene.outputs;
   const double interval = std::max(o.vtk_interval > 0.0 ? o.vtk_interval : o.interval, a.step);
-  const double frames = std::ceil((a.end_time - a.start_time) / interval) + 2.0 +
-                        static_cast<double>(a.align_steps ? ProfileBreakpoints(scene.model).size() : 0);
+  const double frames =
+      std::ceil((a.end_time - a.start_time) / interval) + 2.0 +
+      static_cast<double>(a.align_steps ? ProfileBreakpoints(scene.model).size() : 0);
   return static_cast<int>(std::clamp(frames, 1.0, 1e6));
 }
 
 // "SIGINT", ... for the signals a run is stopped by; nullptr for others and 0.
 const char* SignalName(int signal) {
   switch (signal) {
-    case SIGINT: return "SIGINT";
-    case SIGTERM: return "SIGTERM";
-    case SIGHUP: return "SIGHUP";
-    default: return nullptr;
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGHUP:
+      return "SIGHUP";
+    default:
+      return nullptr;
   }
 }
 
@@ -103,7 +108,6 @@ double MaxElementRotation(const Data& data) {
   return m;
 }
 
-
 // Rows collected before the tables are written (writers.h, CsvWriter).
 constexpr std::size_t kRowBatchBytes = 64 * 1024;
 
@@ -133,7 +137,8 @@ class OutputLock {
       ::close(fd_);
       fd_ = -1;
       if (error == EWOULDBLOCK)
-        throw InputError("output directory " + dir + " is in use by another screwfem run (process " +
+        throw InputError("output directory " + dir +
+                         " is in use by another screwfem run (process " +
                          (holder.empty() ? std::string("unknown") : holder) +
                          "); wait for it to end, stop it, or choose another directory");
       throw InputError("cannot lock " + path + ": " + std::strerror(error));
@@ -155,9 +160,8 @@ void PrepareOutputDirectory(const std::string& dir, bool replace) {
   namespace fs = std::filesystem;
   std::vector<fs::path> own;
   std::error_code ec;
-  for (const char* name :
-       {"summary.json", "summary.json.tmp", "points.csv", "joints.csv", "joints.json",
-        "reactions.csv", "energy.csv"})
+  for (const char* name : {"summary.json", "summary.json.tmp", "points.csv", "joints.csv",
+                           "joints.json", "reactions.csv", "energy.csv"})
     if (fs::exists(fs::path(dir) / name, ec)) own.push_back(fs::path(dir) / name);
   const fs::path vtk = fs::path(dir) / "vtk";
   if (fs::is_directory(vtk, ec))
@@ -187,8 +191,12 @@ void PrepareOutputDirectory(const std::string& dir, bool replace) {
 class Run {
  public:
   Run(const Scene& scene, const std::string& outdir, const RunOptions& options)
-      : scene_(scene), model_(scene.model), options_(options), data_(MakeData(scene.model)),
-        wall_start_(Clock::now()), last_summary_(wall_start_) {
+      : scene_(scene),
+        model_(scene.model),
+        options_(options),
+        data_(MakeData(scene.model)),
+        wall_start_(Clock::now()),
+        last_summary_(wall_start_) {
     std::error_code ec;
     std::filesystem::create_directories(outdir, ec);
     if (ec) throw InputError("cannot create the output directory " + outdir + ": " + ec.message());
@@ -278,7 +286,7 @@ class Run {
     message_ = std::move(message);
     if (io_error_ && points_.failed())
       message_ += FormatNumbers("; the tables hold the %g rows up to t = %.9g s",
-                         static_cast<double>(points_.rows()), points_.last_time());
+                                static_cast<double>(points_.rows()), points_.last_time());
     if (progress_) progress_->Finish(data_.time, integ_.steps);
     WriteSummary();
   }
@@ -340,14 +348,16 @@ class Run {
     has_static_ = true;
     if (finished_) return;  // a write error while recording the path
     if (static_.interrupted) {
-      Interrupted(FormatNumbers("static solution interrupted at load factor %.6g", static_.load_factor));
+      Interrupted(
+          FormatNumbers("static solution interrupted at load factor %.6g", static_.load_factor));
       return;
     }
     if (!static_.converged) {
-      Finish("failed", FormatNumbers(static_.limit_point ? "static solution stopped at load factor %.9g: "
-                                                  : "static solution failed at load factor %.9g: ",
-                              static_.load_factor) +
-                           static_.message);
+      Finish("failed",
+             FormatNumbers(static_.limit_point ? "static solution stopped at load factor %.9g: "
+                                               : "static solution failed at load factor %.9g: ",
+                           static_.load_factor) +
+                 static_.message);
       return;
     }
     max_constraint_ = CalcMaxJointConstraint(model_, data_, so.time);
@@ -375,12 +385,12 @@ class Run {
       has_static_ = true;
       if (static_.interrupted) {
         Interrupted(FormatNumbers("static preload at t = %.9g s interrupted at load factor %.6g",
-                           a.start_time, static_.load_factor));
+                                  a.start_time, static_.load_factor));
         return;
       }
       if (!static_.converged) {
         Finish("failed", FormatNumbers("static preload at t = %.9g s failed at load factor %.6g: ",
-                                a.start_time, static_.load_factor) +
+                                       a.start_time, static_.load_factor) +
                              static_.message);
         return;
       }
@@ -388,7 +398,9 @@ class Run {
     }
     std::string why;
     if (!InitializeDynamics(model_, data_, integ_, a.dynamic, &why)) {
-      Finish("failed", FormatNumbers("cannot start the dynamic analysis at t = %.9g s: ", a.start_time) + why);
+      Finish(
+          "failed",
+          FormatNumbers("cannot start the dynamic analysis at t = %.9g s: ", a.start_time) + why);
       return;
     }
     max_constraint_ = CalcMaxJointConstraint(model_, data_, data_.time);
@@ -412,8 +424,8 @@ class Run {
     // from a table are held over each step (Recorder::BeforeStep).
     const StepSchedule schedule(a.start_time, a.end_time, a.step,
                                 a.align_steps ? ProfileBreakpoints(model_) : std::vector<double>{});
-    const StepPolicy policy = a.adaptive_steps ? StepPolicy::ErrorControlled(a.step)
-                                               : StepPolicy::OnSchedule(schedule);
+    const StepPolicy policy =
+        a.adaptive_steps ? StepPolicy::ErrorControlled(a.step) : StepPolicy::OnSchedule(schedule);
     Recorder recorder(*this, rows, frames);
     const AdvanceResult r =
         Advance(model_, data_, integ_, policy, a.end_time, &recorder, options_.stop);
@@ -534,12 +546,11 @@ class Run {
       }
       last_row_time_ = t;
       std::size_t batch = 0;
-      for (std::size_t i = 0; i < num_tables_; ++i) batch = std::max(batch, tables_[i]->batch_bytes());
+      for (std::size_t i = 0; i < num_tables_; ++i)
+        batch = std::max(batch, tables_[i]->batch_bytes());
       batch = std::max(batch, contacts_.batch_bytes());
       batch = std::max(batch, pair_contacts_.batch_bytes());
-      if (batch >= kRowBatchBytes &&
-          !FlushRows(t))
-        return false;
+      if (batch >= kRowBatchBytes && !FlushRows(t)) return false;
     }
     if (frame && vtk_ && !vtk_->WriteFrame(model_, data, t))
       return WriteFailed(vtk_->dir() + "/frame files", t);
@@ -567,7 +578,8 @@ class Run {
 
   bool WriteFailed(const std::string& path, double t) {
     io_error_ = true;
-    Finish("failed", FormatNumbers("cannot write at t = %.9g s: ", t) + path + ": " + std::strerror(errno));
+    Finish("failed",
+           FormatNumbers("cannot write at t = %.9g s: ", t) + path + ": " + std::strerror(errno));
     return false;
   }
 
@@ -583,7 +595,11 @@ class Run {
     JsonWriter j;
     j.BeginObject();
     j.Field("format", "screwfem run summary 1");
-    j.Key("scene").BeginObject().Field("source", scene_.source).Field("name", scene_.name).EndObject();
+    j.Key("scene")
+        .BeginObject()
+        .Field("source", scene_.source)
+        .Field("name", scene_.name)
+        .EndObject();
     j.Field("status", status_).Field("message", message_);
     if (const char* name = SignalName(signal_))
       j.Field("signal", name);
@@ -689,7 +705,8 @@ class Run {
     if (has_static_) {
       j.Key("static_solution").BeginObject();
       j.Field("converged", static_.converged).Field("load_factor", static_.load_factor);
-      j.Field("load_steps", static_.load_steps).Field("newton_iterations", static_.total_iterations);
+      j.Field("load_steps", static_.load_steps)
+          .Field("newton_iterations", static_.total_iterations);
       j.Field("halvings", static_.halvings).Field("limit_point", static_.limit_point);
       j.Key("limit_points").BeginArray();
       for (double lp : static_.limit_points) j.Number(lp);
@@ -717,11 +734,11 @@ class Run {
   StaticResult static_;
   bool has_static_ = false;
   CsvWriter points_, joints_, reactions_, energy_, tendons_, forces_, actuators_;
-  CsvWriter contacts_;  // long format (one row per active pair): not flushed together
+  CsvWriter contacts_;       // long format (one row per active pair): not flushed together
   CsvWriter pair_contacts_;  // the same for pairs of moving shapes (pair_contacts.csv)
   // The open tables, flushed together (points, joints, reactions and energy always).
-  std::array<CsvWriter*, 7> tables_ = {&points_, &joints_, &reactions_, &energy_, nullptr,
-                                       nullptr, nullptr};
+  std::array<CsvWriter*, 7> tables_ = {&points_, &joints_, &reactions_, &energy_,
+                                       nullptr,  nullptr,  nullptr};
   std::size_t num_tables_ = 4;
   std::optional<VtkWriter> vtk_;
   std::optional<ProgressBar> progress_;
@@ -730,10 +747,10 @@ class Run {
   double load_factor_ = 0.0;        // of the state recorded (static analyses)
   Clock::time_point wall_start_, last_summary_;
   double max_constraint_ = 0.0;
-  double max_rotation_ = 0.0;  // largest relative rotation of one rod element so far [rad]
+  double max_rotation_ = 0.0;   // largest relative rotation of one rod element so far [rad]
   double last_row_time_ = NAN;  // of the last row recorded (in the files once flushed)
   std::string status_ = "running", message_;
-  int signal_ = 0;  // the stop request's signal number
+  int signal_ = 0;         // the stop request's signal number
   bool io_error_ = false;  // the run failed writing its files
   OutputLock lock_;
   bool finished_ = false;

@@ -107,22 +107,47 @@ void SceneCompiler::RethrowBuildError(const InputError& e) const {
   };
   const EntitySource* source = nullptr;
   auto pick = [&](const std::vector<EntitySource>& sources, int i) {
-    if (i >= 0 && i < static_cast<int>(sources.size())) source = &sources[static_cast<std::size_t>(i)];
+    if (i >= 0 && i < static_cast<int>(sources.size()))
+      source = &sources[static_cast<std::size_t>(i)];
   };
   switch (entity.kind) {
-    case EntityKind::kNode: pick(src_.bodies, owner(node_body_)); break;
-    case EntityKind::kRod: pick(src_.bodies, owner(rod_body_)); break;
-    case EntityKind::kBody: pick(src_.bodies, owner(rigid_body_)); break;
-    case EntityKind::kJoint: pick(src_.joints, entity.index); break;
-    case EntityKind::kPointLoad: pick(src_.loads, owner(point_load_)); break;
-    case EntityKind::kRodLoad: pick(src_.loads, owner(rod_load_)); break;
-    case EntityKind::kTendon: pick(src_.tendons, entity.index); break;
-    case EntityKind::kForceElement: pick(src_.forces, entity.index); break;
-    case EntityKind::kActuator: pick(src_.actuators, entity.index); break;
-    case EntityKind::kContactRod: pick(src_.bodies, owner(contact_rod_body_)); break;
-    case EntityKind::kContactShape: pick(src_.bodies, owner(contact_shape_body_)); break;
-    case EntityKind::kObstacle: break;
-    case EntityKind::kNone: break;
+    case EntityKind::kNode:
+      pick(src_.bodies, owner(node_body_));
+      break;
+    case EntityKind::kRod:
+      pick(src_.bodies, owner(rod_body_));
+      break;
+    case EntityKind::kBody:
+      pick(src_.bodies, owner(rigid_body_));
+      break;
+    case EntityKind::kJoint:
+      pick(src_.joints, entity.index);
+      break;
+    case EntityKind::kPointLoad:
+      pick(src_.loads, owner(point_load_));
+      break;
+    case EntityKind::kRodLoad:
+      pick(src_.loads, owner(rod_load_));
+      break;
+    case EntityKind::kTendon:
+      pick(src_.tendons, entity.index);
+      break;
+    case EntityKind::kForceElement:
+      pick(src_.forces, entity.index);
+      break;
+    case EntityKind::kActuator:
+      pick(src_.actuators, entity.index);
+      break;
+    case EntityKind::kContactRod:
+      pick(src_.bodies, owner(contact_rod_body_));
+      break;
+    case EntityKind::kContactShape:
+      pick(src_.bodies, owner(contact_shape_body_));
+      break;
+    case EntityKind::kObstacle:
+      break;
+    case EntityKind::kNone:
+      break;
   }
   if (source != nullptr) Fail(*source, e);
   throw InputError(src_.file + ": " + e.what());
@@ -159,7 +184,8 @@ void SceneCompiler::AddBodies() {
     else
       AddSoftBody(static_cast<int>(b));
     node_body_.resize(builder_.model().nodes.size(), -1);
-    for (std::size_t i = first_node; i < node_body_.size(); ++i) node_body_[i] = static_cast<int>(b);
+    for (std::size_t i = first_node; i < node_body_.size(); ++i)
+      node_body_[i] = static_cast<int>(b);
   }
 }
 
@@ -210,10 +236,11 @@ void SceneCompiler::CheckConnections() const {
   for (std::size_t b = 0; b < spec_.bodies.size(); ++b) {
     const BodySpec& s = spec_.bodies[b];
     if (!connected_[b] && !s.fixed && !s.free)
-      Fail(SourceOf(src_.bodies, b).self, "body '" + s.name +
-                                    "' is connected to nothing: add a joint or a weld, or set "
-                                    "'fixed: true' (welded to the ground) or 'free: true' "
-                                    "(floating)");
+      Fail(SourceOf(src_.bodies, b).self,
+           "body '" + s.name +
+               "' is connected to nothing: add a joint or a weld, or set "
+               "'fixed: true' (welded to the ground) or 'free: true' "
+               "(floating)");
   }
 }
 
@@ -228,8 +255,8 @@ void SceneCompiler::AddJoints() {
     const int bodies[2] = {entry.body_a, entry.body_b};
     for (int s = 0; s < 2; ++s) {
       if (bodies[s] < 0) continue;
-      *nodes[s] = NodeAt(bodies[s], j.point, PartOf(source, s == 0 ? "node_a" : "node_b"),
-                         "joint point");
+      *nodes[s] =
+          NodeAt(bodies[s], j.point, PartOf(source, s == 0 ? "node_a" : "node_b"), "joint point");
       connected_[static_cast<std::size_t>(bodies[s])] = 1;
     }
     try {
@@ -466,10 +493,9 @@ void SceneCompiler::AddContacts() {
     builder_.ExcludeContact(!spec_.bodies[static_cast<std::size_t>(b)].rigid,
                             body_index_[static_cast<std::size_t>(b)], obstacle);
   for (const auto& [a, b] : c.exclude_bodies)
-    builder_.ExcludeContactPair(!spec_.bodies[static_cast<std::size_t>(a)].rigid,
-                                body_index_[static_cast<std::size_t>(a)],
-                                !spec_.bodies[static_cast<std::size_t>(b)].rigid,
-                                body_index_[static_cast<std::size_t>(b)]);
+    builder_.ExcludeContactPair(
+        !spec_.bodies[static_cast<std::size_t>(a)].rigid, body_index_[static_cast<std::size_t>(a)],
+        !spec_.bodies[static_cast<std::size_t>(b)].rigid, body_index_[static_cast<std::size_t>(b)]);
 }
 
 Scene SceneCompiler::Compile() {

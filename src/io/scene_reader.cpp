@@ -23,20 +23,37 @@ using scene_yaml::Node;
 using scene_yaml::Reader;
 
 // Maps of named entries: an override may not walk through an entry that does not exist.
-const std::vector<std::string> kCollections = {"points", "materials", "sections", "bodies",
-                                               "joints", "loads",     "tendons",  "forces",
-                                               "outputs.points", "inputs", "actuation"};
+const std::vector<std::string> kCollections = {"points",         "materials", "sections", "bodies",
+                                               "joints",         "loads",     "tendons",  "forces",
+                                               "outputs.points", "inputs",    "actuation"};
 
-constexpr int kMaxElements = 100000;  // per rod (or per path segment)
+constexpr int kMaxElements = 100000;         // per rod (or per path segment)
 constexpr long kMaxTotalElements = 1000000;  // all rods of a scene
-constexpr double kMaxSteps = 1e9;     // time steps of one dynamic analysis
+constexpr double kMaxSteps = 1e9;            // time steps of one dynamic analysis
 
 const char* const kGroundName = "ground";
 
-const std::vector<std::string> kBodyKeys = {
-    "type", "between", "at",   "mass",    "inertia",  "com", "fixed",      "free",
-    "from", "to",      "path", "section", "elements", "up",  "weld_start", "weld_end",
-    "initial_velocity", "contact_radius", "shapes", "contype", "conaffinity"};
+const std::vector<std::string> kBodyKeys = {"type",
+                                            "between",
+                                            "at",
+                                            "mass",
+                                            "inertia",
+                                            "com",
+                                            "fixed",
+                                            "free",
+                                            "from",
+                                            "to",
+                                            "path",
+                                            "section",
+                                            "elements",
+                                            "up",
+                                            "weld_start",
+                                            "weld_end",
+                                            "initial_velocity",
+                                            "contact_radius",
+                                            "shapes",
+                                            "contype",
+                                            "conaffinity"};
 
 std::string Join(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
@@ -69,8 +86,8 @@ class SceneReader {
   void ReadRigidBody(const Node& n, const std::string& path, BodySpec& b);
   void ReadSoftBody(const Node& n, const std::string& path, BodySpec& b, EntitySource& source);
   void ReadPath(const Node& n, const std::string& path, BodySpec& b, EntitySource& source);
-  int ReadWeld(const Node& n, const std::string& path, const char* key, const char* part,
-               int self, EntitySource& source);
+  int ReadWeld(const Node& n, const std::string& path, const char* key, const char* part, int self,
+               EntitySource& source);
   void ReadJoints(const Node* node);
   void ReadJointSides(const Node& value, const std::string& path, JointEntrySpec& j,
                       EntitySource& source);
@@ -214,8 +231,9 @@ Profile SceneReader::ReadProfile(const Node& node, const std::string& path) cons
 }
 
 Profile SceneReader::ReadProfileTerm(const Node& node, const std::string& path) const {
-  r_.CheckKeys(node, path, {"type", "value", "scale", "t0", "t1", "frequency", "phase", "times",
-                            "values", "name"});
+  r_.CheckKeys(
+      node, path,
+      {"type", "value", "scale", "t0", "t1", "frequency", "phase", "times", "values", "name"});
   const std::string type = r_.Choice(
       r_.Require(node, path, "type"), Join(path, "type"),
       {"constant", "ramp", "bang_bang", "s_curve", "smooth_step", "sine", "table", "input"});
@@ -245,7 +263,8 @@ Profile SceneReader::ReadProfileTerm(const Node& node, const std::string& path) 
     r_.Fail(nn.location, Join(path, "name"),
             "unknown input '" + name + "'" +
                 (names.empty() ? std::string(" (the scene declares no inputs: add an inputs: "
-                                             "section, e.g. inputs: {" + name + ": 0.0})")
+                                             "section, e.g. inputs: {" +
+                                             name + ": 0.0})")
                                : scene_yaml::UnknownNameHint(name, names)));
   }
   if (type == "constant") {
@@ -287,7 +306,7 @@ Profile SceneReader::ReadProfileTerm(const Node& node, const std::string& path) 
 }
 
 Vec6 SceneReader::PerCoordinate(const Node& node, const std::string& path, int k,
-                                  bool non_negative) const {
+                                bool non_negative) const {
   Vec6 v = Vec6::Zero();
   if (node.IsScalar()) {
     const double x = non_negative ? r_.NonNegativeNumber(node, path) : r_.Number(node, path);
@@ -305,13 +324,12 @@ Vec6 SceneReader::PerCoordinate(const Node& node, const std::string& path, int k
 }
 
 void SceneReader::NotUsedBy(const Node& map, const std::string& path,
-                              const std::vector<std::string>& keys, const std::string& who) const {
+                            const std::vector<std::string>& keys, const std::string& who) const {
   for (const auto& [entry, value] : map.entries)
     if (std::find(keys.begin(), keys.end(), entry.key) != keys.end())
       r_.Fail(entry.key_location, Join(path, entry.key),
               "'" + entry.key + "' is not used by " + who);
 }
-
 
 // --- sections of the file ----------------------------------------------------------------------
 
@@ -449,8 +467,8 @@ void SceneReader::ReadBodies(const Node* node) {
     if (b.name == kGroundName)
       r_.Fail(entry.key_location, path, "'ground' is reserved for the world frame");
     r_.ExpectMap(value, path);
-    const std::string type = r_.Choice(r_.Require(value, path, "type"), Join(path, "type"),
-                                       {"rigid", "soft", "rod"});
+    const std::string type =
+        r_.Choice(r_.Require(value, path, "type"), Join(path, "type"), {"rigid", "soft", "rod"});
     b.rigid = type == "rigid";
     spec_.bodies.push_back(b);
     src_.bodies.push_back({Field(entry.key_location, path), {}});
@@ -614,8 +632,8 @@ void SceneReader::ReadPath(const Node& n, const std::string& path, BodySpec& b,
 
 // A weld: the end node is shared with an earlier soft body (a rigid clamp without extra
 // unknowns). Returns the body index, -1 without the key.
-int SceneReader::ReadWeld(const Node& n, const std::string& path, const char* key,
-                          const char* part, int self, EntitySource& source) {
+int SceneReader::ReadWeld(const Node& n, const std::string& path, const char* key, const char* part,
+                          int self, EntitySource& source) {
   const Node* w = n.Find(key);
   if (w == nullptr) return -1;
   const std::string wp = Join(path, key);
@@ -707,7 +725,8 @@ void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
                                    const JointTypeInfo& info, JointSpec& j) {
   const std::string who = std::string(info.name) + " joints";
   const int k = info.dof;
-  const int springs = info.spring_law == JointSpringLaw::kRelativeMotion ? 6 : k;  // JointSpringCount
+  const int springs =
+      info.spring_law == JointSpringLaw::kRelativeMotion ? 6 : k;  // JointSpringCount
   if (springs == 0) NotUsedBy(value, path, {"stiffness", "damping", "rest", "drive"}, who);
   if (!info.global_coordinates)
     NotUsedBy(value, path, {"rest", "drive"}, who + " (no global coordinates)");
@@ -715,7 +734,8 @@ void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
     j.stiffness = PerCoordinate(*s, Join(path, "stiffness"), springs, true);
   if (const Node* d = value.Find("damping"))
     j.damping = PerCoordinate(*d, Join(path, "damping"), springs, true);
-  if (const Node* rest = value.Find("rest")) j.rest = PerCoordinate(*rest, Join(path, "rest"), k, false);
+  if (const Node* rest = value.Find("rest"))
+    j.rest = PerCoordinate(*rest, Join(path, "rest"), k, false);
   if (k == 0) NotUsedBy(value, path, {"initial_position", "initial_velocity"}, who);
   if (!info.global_coordinates) NotUsedBy(value, path, {"initial_position"}, who);
   if (const Node* q0 = value.Find("initial_position")) {
@@ -732,8 +752,8 @@ void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
   r_.CheckKeys(*drive, dp, {"type", "coordinate", "profile"});
   std::vector<std::string> kinds = EnumNameList<DriveKind>();
   kinds.erase(kinds.begin());  // "none": a passive joint has no `drive` key
-  j.drive = *EnumFromName<DriveKind>(
-      r_.Choice(r_.Require(*drive, dp, "type"), Join(dp, "type"), kinds));
+  j.drive =
+      *EnumFromName<DriveKind>(r_.Choice(r_.Require(*drive, dp, "type"), Join(dp, "type"), kinds));
   if (const Node* c = drive->Find("coordinate"))
     j.drive_coordinate = r_.Integer(*c, Join(dp, "coordinate"), 0, k - 1);
   j.drive_profile = ReadProfile(r_.Require(*drive, dp, "profile"), Join(dp, "profile"));
@@ -770,10 +790,12 @@ void SceneReader::ReadLoad(const Node& value, const std::string& path, LoadSpec&
   const bool rigid = spec_.bodies[static_cast<std::size_t>(load.body)].rigid;
   const Node* f = value.Find("force");
   const Node* m = value.Find("moment");
-  if (f == nullptr && m == nullptr) r_.Fail(value.location, path, "missing key 'force' (or 'moment')");
+  if (f == nullptr && m == nullptr)
+    r_.Fail(value.location, path, "missing key 'force' (or 'moment')");
   if (f != nullptr) load.force = r_.Vector3(*f, Join(path, "force"));
   if (m != nullptr) load.moment = r_.Vector3(*m, Join(path, "moment"));
-  if (const Node* fr = value.Find("frame")) load.frame = r_.Enum<LoadFrame>(*fr, Join(path, "frame"));
+  if (const Node* fr = value.Find("frame"))
+    load.frame = r_.Enum<LoadFrame>(*fr, Join(path, "frame"));
   if (const Node* p = value.Find("profile")) load.profile = ReadProfile(*p, Join(path, "profile"));
 
   // Where: a point of a rigid body, a rod node, a rod section at arc length s, or the
@@ -821,7 +843,8 @@ BodyPointSpec SceneReader::ReadBodyPoint(const Node& node, const std::string& pa
     p.at = Point(r_.Require(node, path, "at"), Join(path, "at"));
     return p;
   }
-  if (at != nullptr && s != nullptr) r_.Fail(node.location, path, "give either 'at' or 's', not both");
+  if (at != nullptr && s != nullptr)
+    r_.Fail(node.location, path, "give either 'at' or 's', not both");
   if (at == nullptr && s == nullptr)
     r_.Fail(node.location, path, "missing key 's' (or 'at'): the rod node the point is fixed to");
   if (at != nullptr) p.at = Point(*at, Join(path, "at"));
@@ -1044,8 +1067,9 @@ void SceneReader::ReadContact(const Node* node) {
     for (const auto& [entry, v] : on->entries) {
       const std::string p = Join(op, entry.key);
       r_.ExpectMap(v, p);
-      r_.CheckKeys(v, p, {"type", "point", "normal", "center", "from", "to", "radius", "contype",
-                          "conaffinity"});
+      r_.CheckKeys(
+          v, p,
+          {"type", "point", "normal", "center", "from", "to", "radius", "contype", "conaffinity"});
       ContactObstacle o;
       o.name = entry.key;
       o.type = r_.Enum<ObstacleType>(r_.Require(v, p, "type"), Join(p, "type"));
@@ -1112,10 +1136,29 @@ void SceneReader::ReadAnalysis(const Node* node) {
   if (node == nullptr || node->IsNull()) return;
   const std::string path = "analysis";
   r_.CheckKeys(*node, path,
-               {"type", "start_time", "end_time", "step", "rho_inf", "tolerances", "max_iterations",
-                "max_halvings", "align_steps", "static_preload", "load_steps", "rod_inertia",
-                "newton", "predictor", "convergence", "restart_at_breakpoints", "perturbed_start",
-                "constraints", "tolerance", "min_step", "max_step", "initial_step", "statics"});
+               {"type",
+                "start_time",
+                "end_time",
+                "step",
+                "rho_inf",
+                "tolerances",
+                "max_iterations",
+                "max_halvings",
+                "align_steps",
+                "static_preload",
+                "load_steps",
+                "rod_inertia",
+                "newton",
+                "predictor",
+                "convergence",
+                "restart_at_breakpoints",
+                "perturbed_start",
+                "constraints",
+                "tolerance",
+                "min_step",
+                "max_step",
+                "initial_step",
+                "statics"});
   if (const Node* t = node->Find("type")) a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
   ReadTimes(*node, path);
   ReadSolverOptions(*node, path);
@@ -1157,7 +1200,8 @@ void SceneReader::ReadTimes(const Node& node, const std::string& path) {
   if (!a->adaptive_steps)
     for (const char* key : {"tolerance", "min_step", "max_step", "initial_step"})
       if (const Node* t = find(key))
-        r_.Fail(t->location, Join(path, key), "applies only to 'step: auto' (error-controlled steps)");
+        r_.Fail(t->location, Join(path, key),
+                "applies only to 'step: auto' (error-controlled steps)");
   if (a->kind != AnalysisKind::kDynamic) return;
   if ((a->end_time - a->start_time) / a->step > kMaxSteps)
     r_.Fail(find("step") != nullptr ? find("step")->location : node.location, Join(path, "step"),
@@ -1166,7 +1210,9 @@ void SceneReader::ReadTimes(const Node& node, const std::string& path) {
   const std::string problem = TimeGridProblem(a->start_time, a->end_time, a->step);
   if (!problem.empty()) {
     const char* key = std::abs(a->start_time) > std::abs(a->end_time) ? "start_time" : "end_time";
-    const Node* at = find(key) != nullptr ? find(key) : find("step") != nullptr ? find("step") : &node;
+    const Node* at = find(key) != nullptr      ? find(key)
+                     : find("step") != nullptr ? find("step")
+                                               : &node;
     r_.Fail(at->location, Join(path, key), problem);
   }
 }
@@ -1179,9 +1225,10 @@ void SceneReader::ReadStepControl(const Node& node, const std::string& path) {
   a->adaptive_steps = true;
   const Node* tol = node.Find("tolerance");
   if (tol == nullptr)
-    r_.Fail(node.Find("step")->location, Join(path, "step"),
-            "'step: auto' requires analysis.tolerance (a number, or {absolute: .., relative: ..}: "
-            "the local error per step, translations relative to the model's size, rotations in rad)");
+    r_.Fail(
+        node.Find("step")->location, Join(path, "step"),
+        "'step: auto' requires analysis.tolerance (a number, or {absolute: .., relative: ..}: "
+        "the local error per step, translations relative to the model's size, rotations in rad)");
   const std::string tp = Join(path, "tolerance");
   if (tol->IsMap()) {
     r_.CheckKeys(*tol, tp, {"absolute", "relative"});
@@ -1193,7 +1240,8 @@ void SceneReader::ReadStepControl(const Node& node, const std::string& path) {
     d.absolute_tolerance = d.relative_tolerance = r_.PositiveNumber(*tol, tp);
   }
   const double span = a->end_time - a->start_time;
-  if (const Node* t = node.Find("min_step")) d.min_step = r_.PositiveNumber(*t, Join(path, "min_step"));
+  if (const Node* t = node.Find("min_step"))
+    d.min_step = r_.PositiveNumber(*t, Join(path, "min_step"));
   if (const Node* t = node.Find("max_step")) {
     d.max_step = r_.PositiveNumber(*t, Join(path, "max_step"));
     if (!(d.max_step >= d.min_step))
@@ -1250,8 +1298,7 @@ void SceneReader::ReadStatics(const Node& node, const std::string& path) {
   StaticOptions* o = &spec_.analysis.statics;
   r_.CheckKeys(node, path,
                {"method", "end_load_factor", "max_steps", "arc_length", "arc_length_min",
-                "arc_length_max", "desired_iterations", "psi", "rotation_weight",
-                "exact_tangent"});
+                "arc_length_max", "desired_iterations", "psi", "rotation_weight", "exact_tangent"});
   const auto field = [&](const char* key) { return Join(path, key); };
   if (const Node* t = node.Find("method")) o->method = r_.Enum<StaticMethod>(*t, field("method"));
   if (const Node* t = node.Find("end_load_factor"))
@@ -1268,8 +1315,7 @@ void SceneReader::ReadStatics(const Node& node, const std::string& path) {
       r_.Fail(t->location, field("arc_length_max"), "expected arc_length_max >= arc_length_min");
   }
   if (const Node* t = node.Find("desired_iterations"))
-    o->desired_iterations =
-        r_.Integer(*t, field("desired_iterations"), 1, kMaxNewtonIterations);
+    o->desired_iterations = r_.Integer(*t, field("desired_iterations"), 1, kMaxNewtonIterations);
   if (const Node* t = node.Find("psi")) o->psi = r_.NonNegativeNumber(*t, field("psi"));
   if (const Node* t = node.Find("rotation_weight"))
     o->rotation_weight = r_.NonNegativeNumber(*t, field("rotation_weight"));
@@ -1385,8 +1431,8 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
                 scene_yaml::Describe(root));
   r_.CheckKeys(root, "",
                {"name", "description", "units", "gravity", "defaults", "points", "materials",
-                "sections", "bodies", "joints", "loads", "tendons", "forces", "analysis",
-                "outputs", "inputs", "actuation", "contact"});
+                "sections", "bodies", "joints", "loads", "tendons", "forces", "analysis", "outputs",
+                "inputs", "actuation", "contact"});
   spec_.name = default_name;
   if (const Node* n = root.Find("name")) spec_.name = r_.Text(*n, "name");
   if (const Node* d = root.Find("description"))

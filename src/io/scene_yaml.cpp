@@ -106,8 +106,8 @@ class TreeBuilder : public YAML::EventHandler {
   }
   void Open(Node::Kind kind, const YAML::Mark& mark, YAML::anchor_t anchor) {
     if (stack_.size() >= kMaxDepth)
-      SetError(FromMark(mark), "lists and maps nested more than " + std::to_string(kMaxDepth) +
-                                   " levels deep");
+      SetError(FromMark(mark),
+               "lists and maps nested more than " + std::to_string(kMaxDepth) + " levels deep");
     Frame f;
     f.node.kind = kind;
     f.node.location = FromMark(mark);
@@ -130,8 +130,8 @@ class TreeBuilder : public YAML::EventHandler {
     if (anchor != 0) {
       anchor_copies_ += size;
       if (anchor_copies_ > kMaxNodes)
-        SetError(n.location, "the document's anchors hold more than " +
-                                 std::to_string(kMaxNodes) + " nodes");
+        SetError(n.location,
+                 "the document's anchors hold more than " + std::to_string(kMaxNodes) + " nodes");
       anchors_[anchor] = {n, size};
     }
     if (stack_.empty()) {
@@ -505,8 +505,8 @@ std::vector<std::pair<std::size_t, std::size_t>> SplitKeyPath(const std::string&
       throw InputError(where + ": malformed key path '" + path + "'");
     parts.emplace_back(start, end);
     if (parts.size() > kMaxOverrideDepth)
-      throw InputError(where + ": the key path has more than " +
-                       std::to_string(kMaxOverrideDepth) + " components");
+      throw InputError(where + ": the key path has more than " + std::to_string(kMaxOverrideDepth) +
+                       " components");
     if (dot == std::string::npos) return parts;
     start = dot + 1;
   }

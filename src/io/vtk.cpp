@@ -156,8 +156,10 @@ void VtkWriter::LayOut(const Model& model) {
     s.kind = PointSource::Kind::kJoint;
     s.index = joint;
     add_vert(add_point(s, joint), -1, -1, joint);
-    if (j.node_a != kGround) attachments[static_cast<std::size_t>(j.node_a)].push_back(j.offset_a.x);
-    if (j.node_b != kGround) attachments[static_cast<std::size_t>(j.node_b)].push_back(j.offset_b.x);
+    if (j.node_a != kGround)
+      attachments[static_cast<std::size_t>(j.node_a)].push_back(j.offset_a.x);
+    if (j.node_b != kGround)
+      attachments[static_cast<std::size_t>(j.node_b)].push_back(j.offset_b.x);
   }
 
   // Rods: polylines through their nodes.
@@ -320,7 +322,8 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
       for (int k = 0; k < 3; ++k) contact_force_[3 * i + k] = segment_force_[g](k);
     } else if (s.kind == PointSource::Kind::kJoint) {
       const Joint& j = model.joints[static_cast<std::size_t>(s.index)];
-      const SE3 H = NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, s.index);
+      const SE3 H =
+          NodeFrame(data, j.node_a) * j.offset_a * JointRelativeFrame(model, data, s.index);
       x = H.x;
       R = H.R;
       v = j.node_b != kGround ? node_point(j.node_b, j.offset_b.x).velocity
@@ -382,8 +385,7 @@ void VtkWriter::ComposeBinaryImage() {
     array("        ", kFloat64, axis_names[axis], 3, frame_axes_[axis].data(), 3 * n,
           &frame_axes_at_[axis]);
   array("        ", kFloat64, "velocity", 3, velocity_.data(), 3 * n, &velocity_at_);
-  array("        ", kFloat64, "contact_force", 3, contact_force_.data(), 3 * n,
-        &contact_force_at_);
+  array("        ", kFloat64, "contact_force", 3, contact_force_.data(), 3 * n, &contact_force_at_);
   array("        ", kInt32, "joint_id", 1, point_joint_.data(), n, nullptr);
   f += "      </PointData>\n      <CellData Scalars=\"rod_id\">\n";
   array("        ", kInt32, "rod_id", 1, cell_rod_.data(), cell_rod_.size(), nullptr);
@@ -399,7 +401,8 @@ void VtkWriter::ComposeBinaryImage() {
     f += "      <";
     f += tag;
     f += ">\n";
-    array("        ", kInt64, "connectivity", 1, connectivity->data(), connectivity->size(), nullptr);
+    array("        ", kInt64, "connectivity", 1, connectivity->data(), connectivity->size(),
+          nullptr);
     array("        ", kInt64, "offsets", 1, offsets->data(), offsets->size(), nullptr);
     f += "      </";
     f += tag;
@@ -444,7 +447,8 @@ void VtkWriter::ComposeAsciiImage(double time) {
   };
 
   f += "<?xml version=\"1.0\"?>\n"
-       "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+       "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+       "header_type=\"UInt64\">\n"
        "  <PolyData>\n    <FieldData>\n";
   AppendArrayTag(&f, "      ", kFloat64, "TimeValue", 1, 1);
   f += " format=\"ascii\">\n        ";
@@ -514,7 +518,8 @@ bool VtkWriter::WriteCollection() const {
   for (std::size_t i = 0; i < times_.size(); ++i) {
     std::string name;
     AppendFrameName(&name, static_cast<int>(i));
-    std::snprintf(line, sizeof line, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"%s\"/>\n",
+    std::snprintf(line, sizeof line,
+                  "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" file=\"%s\"/>\n",
                   times_[i], name.c_str());
     text += line;
   }

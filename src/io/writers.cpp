@@ -142,7 +142,8 @@ std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJo
       else
         null_field("column");
       w.Field("quantity", angle ? "angle" : "slide").Field("unit", angle ? "rad" : "m");
-      w.Field("rate_unit", angle ? "rad/s" : "m/s").Field("acceleration_unit", angle ? "rad/s²" : "m/s²");
+      w.Field("rate_unit", angle ? "rad/s" : "m/s")
+          .Field("acceleration_unit", angle ? "rad/s²" : "m/s²");
       w.Field("effort_unit", angle ? "N m" : "N");
       w.EndObject();
     }
@@ -215,13 +216,14 @@ std::vector<std::string> ForceColumns(const Model& model) {
 }
 
 void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row) {
-  CalcLineRow(model.tendons.size(),
-              [&](int i) { return CalcTendonState(model, data, i); }, row);
+  CalcLineRow(
+      model.tendons.size(), [&](int i) { return CalcTendonState(model, data, i); }, row);
 }
 
 void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row) {
-  CalcLineRow(model.force_elements.size(),
-              [&](int i) { return CalcForceElementState(model, data, i); }, row);
+  CalcLineRow(
+      model.force_elements.size(), [&](int i) { return CalcForceElementState(model, data, i); },
+      row);
 }
 
 std::vector<std::string> ActuatorColumns(const Model& model) {
@@ -237,8 +239,8 @@ void CalcActuatorRow(const Model& model, const Data& data, double t, std::vector
 }
 
 std::vector<std::string> ContactColumns() {
-  return {"pair", "rod", "owner", "obstacle", "px", "py", "pz", "nx", "ny", "nz",
-          "fn", "ftx", "fty", "ftz", "gap"};
+  return {"pair", "rod", "owner", "obstacle", "px",  "py",  "pz", "nx",
+          "ny",   "nz",  "fn",    "ftx",      "fty", "ftz", "gap"};
 }
 
 bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row) {
@@ -262,8 +264,9 @@ bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<
 }
 
 std::vector<std::string> PairContactColumns() {
-  return {"pair", "rod_a", "owner_a", "element_a", "rod_b", "owner_b", "element_b", "pax", "pay",
-          "paz", "pbx", "pby", "pbz", "nx", "ny", "nz", "fn", "ftx", "fty", "ftz", "gap", "part"};
+  return {"pair", "rod_a", "owner_a", "element_a", "rod_b", "owner_b", "element_b", "pax",
+          "pay",  "paz",   "pbx",     "pby",       "pbz",   "nx",      "ny",        "nz",
+          "fn",   "ftx",   "fty",     "ftz",       "gap",   "part"};
 }
 
 bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row) {
@@ -368,8 +371,8 @@ std::size_t CsvWriter::WriteBatch() {
   const std::size_t written = WriteAll(fd_, batch_.data(), batch_.size());
   if (written == batch_.size()) return row_ends_.size();
   failed_ = true;
-  return static_cast<std::size_t>(
-      std::upper_bound(row_ends_.begin(), row_ends_.end(), written) - row_ends_.begin());
+  return static_cast<std::size_t>(std::upper_bound(row_ends_.begin(), row_ends_.end(), written) -
+                                  row_ends_.begin());
 }
 
 void CsvWriter::KeepBatchRows(std::size_t n) {
@@ -433,13 +436,27 @@ std::string JsonEscape(std::string_view text) {
   for (const char ch : text) {
     const auto c = static_cast<unsigned char>(ch);
     switch (ch) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
-      case '\b': out += "\\b"; break;
-      case '\f': out += "\\f"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      case '\b':
+        out += "\\b";
+        break;
+      case '\f':
+        out += "\\f";
+        break;
       default:
         if (c < 0x20 || c == 0x7f) {
           char buf[8];

@@ -151,16 +151,14 @@ double A1(double phi) {
 }
 double A2(double phi) {
   if (phi < 0.2) {
-    static constexpr double c[] = {1.0 / 6, -1.0 / 120, 1.0 / 5040, -1.0 / 362880,
-                                   1.0 / 39916800};
+    static constexpr double c[] = {1.0 / 6, -1.0 / 120, 1.0 / 5040, -1.0 / 362880, 1.0 / 39916800};
     return Poly(c, phi * phi);
   }
   return (phi - std::sin(phi)) / (phi * phi * phi);
 }
 double C(double phi) {
   if (phi < 0.2) {
-    static constexpr double c[] = {1.0 / 12, 1.0 / 720, 1.0 / 30240, 1.0 / 1209600,
-                                   1.0 / 47900160};
+    static constexpr double c[] = {1.0 / 12, 1.0 / 720, 1.0 / 30240, 1.0 / 1209600, 1.0 / 47900160};
     return Poly(c, phi * phi);
   }
   return (1.0 - 0.5 * phi / std::tan(0.5 * phi)) / (phi * phi);
@@ -472,8 +470,7 @@ Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v, con
   const double wa = w.dot(a), wb = w.dot(b), wu = w.dot(u), ub = u.dot(b);
   // DPhi[b] x
   const Vec3 wx = w.cross(x), bx = b.cross(x);
-  const Vec3 out_x =
-      0.5 * bx + C * (b.cross(wx) + w.cross(bx)) + (C_hat * wb) * w.cross(wx);
+  const Vec3 out_x = 0.5 * bx + C * (b.cross(wx) + w.cross(bx)) + (C_hat * wb) * w.cross(wx);
   // The y terms share w x y, b x y, w x (w x y), b x (w x y), w x (b x y).
   const Vec3 wy = w.cross(y), by = b.cross(y), ay = a.cross(y), uy = u.cross(y);
   const Vec3 wwy = w.cross(wy);

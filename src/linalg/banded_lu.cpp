@@ -215,8 +215,9 @@ void BandedLU::Solve(Eigen::Ref<Eigen::VectorXd> b) const {
 std::vector<int> ReverseCuthillMcKee(const std::vector<std::vector<int>>& adjacency) {
   const int n = static_cast<int>(adjacency.size());
   std::vector<int> degree(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) degree[static_cast<std::size_t>(i)] =
-      static_cast<int>(adjacency[static_cast<std::size_t>(i)].size());
+  for (int i = 0; i < n; ++i)
+    degree[static_cast<std::size_t>(i)] =
+        static_cast<int>(adjacency[static_cast<std::size_t>(i)].size());
   std::vector<int> order;
   order.reserve(static_cast<std::size_t>(n));
   std::vector<char> visited(static_cast<std::size_t>(n), 0);
@@ -227,7 +228,8 @@ std::vector<int> ReverseCuthillMcKee(const std::vector<std::vector<int>>& adjace
     int start = -1;
     for (int i = 0; i < n; ++i) {
       if (visited[static_cast<std::size_t>(i)]) continue;
-      if (start < 0 || degree[static_cast<std::size_t>(i)] < degree[static_cast<std::size_t>(start)])
+      if (start < 0 ||
+          degree[static_cast<std::size_t>(i)] < degree[static_cast<std::size_t>(start)])
         start = i;
     }
     std::queue<int> queue;

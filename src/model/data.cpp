@@ -14,7 +14,8 @@ Data MakeData(const Model& model) {
   d.vdot = Eigen::VectorXd::Zero(model.nv);
   d.lambda = Eigen::VectorXd::Zero(model.nc);
   d.w_ref.resize(model.elements.size());
-  for (std::size_t e = 0; e < model.elements.size(); ++e) d.w_ref[e] = model.elements[e].d0.tail<3>();
+  for (std::size_t e = 0; e < model.elements.size(); ++e)
+    d.w_ref[e] = model.elements[e].d0.tail<3>();
   d.inputs.resize(static_cast<Eigen::Index>(model.inputs.size()));
   for (std::size_t i = 0; i < model.inputs.size(); ++i)
     d.inputs(static_cast<Eigen::Index>(i)) = model.inputs[i].default_value;
@@ -61,8 +62,7 @@ Data MakeData(const Model& model) {
       for (int k : segment.side.node)
         if (k != kGround && model.nodes[static_cast<std::size_t>(k)].dof >= 0) nodes.push_back(k);
     std::sort(nodes.begin(), nodes.end());
-    const int distinct =
-        static_cast<int>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
+    const int distinct = static_cast<int>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
     coupled_nodes = std::min(distinct, 32);
   }
   d.coupling.Resize(model.num_unknowns(), 6, coupled_nodes);

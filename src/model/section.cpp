@@ -75,8 +75,8 @@ Section Section::Rectangle(double width, double height, const Material& material
   const double I3 = height * std::pow(width, 3) / 12.0;
   // Saint-Venant torsion constant of a rectangle (Roark's approximation, error < 0.5 %).
   const double a = std::max(width, height) / 2.0, b = std::min(width, height) / 2.0;
-  const double J = a * std::pow(b, 3) *
-                   (16.0 / 3.0 - 3.36 * (b / a) * (1.0 - std::pow(b / a, 4) / 12.0));
+  const double J =
+      a * std::pow(b, 3) * (16.0 / 3.0 - 3.36 * (b / a) * (1.0 - std::pow(b / a, 4) / 12.0));
   const double kappa = material.shear_coefficient > 0.0
                            ? material.shear_coefficient
                            : 10.0 * (1.0 + r.nu) / (12.0 + 11.0 * r.nu);

@@ -10,8 +10,7 @@
 
 namespace screwfem {
 
-void InterpolateStep(const Model& model, const Data& data, Integrator& integ, double t,
-                     Data& out) {
+void InterpolateStep(const Model& model, const Data& data, Integrator& integ, double t, Data& out) {
   const double h = integ.dense_h;
   const double th = h > 0.0 ? std::clamp((t - integ.dense_t0) / h, 0.0, 1.0) : 1.0;
   const double th2 = th * th, th3 = th2 * th;
@@ -42,10 +41,10 @@ void InterpolateStep(const Model& model, const Data& data, Integrator& integ, do
       CalcJointCoordinateTangent(j, D.segment(j.coord, k), &T);
       w = T.partialPivLu().solve(w);
     }
-    psi.segment(j.coord, k) = h10 * h * v0.segment(j.coord, k) + h01 * D.segment(j.coord, k) +
-                              h11 * h * w.head(k);
-    dpsi.segment(j.coord, k) = d10 * h * v0.segment(j.coord, k) + d01 * D.segment(j.coord, k) +
-                               d11 * h * w.head(k);
+    psi.segment(j.coord, k) =
+        h10 * h * v0.segment(j.coord, k) + h01 * D.segment(j.coord, k) + h11 * h * w.head(k);
+    dpsi.segment(j.coord, k) =
+        d10 * h * v0.segment(j.coord, k) + d01 * D.segment(j.coord, k) + d11 * h * w.head(k);
   }
   RestoreState(integ.dense_q0, out);
   Retract(model, out, psi);

@@ -123,8 +123,8 @@ bool ConsistentStart(const Model& model, Data& data, Integrator& integ, std::str
   data.lambda = data.increment.tail(nc);
   integ.a = data.vdot;
   integ.use_last_acceleration = integ.options.predictor != Predictor::kZero;
-  integ.perturb_pending = integ.options.perturbed_start &&
-                          integ.params.alpha_m != integ.params.alpha_f;
+  integ.perturb_pending =
+      integ.options.perturbed_start && integ.params.alpha_m != integ.params.alpha_f;
   return true;
 }
 
@@ -206,8 +206,8 @@ void SetInitialTendonSlack(const Model& model, Data& data) {
     const Tendon& t = model.tendons[ti];
     if (t.row < 0) continue;
     const double target = TendonTargetLength(t, data, data.time).value;
-    data.tendon_slack[ti] =
-        CalcTendonLength(model, data, static_cast<int>(ti)) < target - 1e-12 * std::max(1.0, target);
+    data.tendon_slack[ti] = CalcTendonLength(model, data, static_cast<int>(ti)) <
+                            target - 1e-12 * std::max(1.0, target);
     if (data.tendon_slack[ti]) data.lambda(t.row) = 0.0;
   }
 }
@@ -220,8 +220,8 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   integ.params = GeneralizedAlpha::FromSpectralRadius(options.rho_inf);
   const int nv = model.nv, nc = model.nc;
   integ.a = Eigen::VectorXd::Zero(nv);
-  integ.v_start = integ.vdot_start = integ.a_start = integ.dq = integ.a_base =
-      integ.v_work = Eigen::VectorXd::Zero(nv);
+  integ.v_start = integ.vdot_start = integ.a_start = integ.dq = integ.a_base = integ.v_work =
+      Eigen::VectorXd::Zero(nv);
   integ.lambda_start = integ.phi_plus = integ.phi_minus = integ.phi_zero = integ.bdot_v =
       Eigen::VectorXd::Zero(nc);
   if (options.constraints == ConstraintFormulation::kGgl) AllocateGglWorkspace(model, integ);
@@ -338,8 +338,9 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
     RestoreStepStart(data, integ, t0);
     if (sub.h * 0.5 < h_min * (1.0 - 1e-12)) {
       char buf[160];
-      std::snprintf(buf, sizeof buf, "step failed at t = %.9g s (step %.3g s, after %d halvings): ",
-                    t0, sub.h, integ.options.max_halvings);
+      std::snprintf(buf, sizeof buf,
+                    "step failed at t = %.9g s (step %.3g s, after %d halvings): ", t0, sub.h,
+                    integ.options.max_halvings);
       result.message = std::string(buf) + why;
       return result;
     }

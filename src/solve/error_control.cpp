@@ -135,8 +135,10 @@ void ControlAfterAcceptedStep(Integrator& integ, double h, double hs, double err
   const DynamicOptions& opt = integ.options;
   const double e = std::max(err, 1e-10);
   double factor = kSafety * std::pow(e, -kGainI);
-  if (integ.err_last > 0.0) factor *= std::pow(integ.err_last / e, kGainP);
-  else factor = kSafety * std::pow(e, -1.0 / kOrder);
+  if (integ.err_last > 0.0)
+    factor *= std::pow(integ.err_last / e, kGainP);
+  else
+    factor = kSafety * std::pow(e, -1.0 / kOrder);
   factor = std::clamp(factor, kMinShrink, integ.allow_growth ? kMaxGrowth : 1.0);
   // A step shortened to land on a target keeps the controller's size (§N2.4 step 5).
   integ.h_control = truncated ? std::max(h, hs * factor) : hs * factor;
@@ -152,8 +154,8 @@ std::string SmallestStepFailure(const Model& model, double t0, double hs, int it
                                 int worst, const std::string& why) {
   char buf[240];
   if (its < 0)
-    std::snprintf(buf, sizeof buf, "step failed at t = %.9g s with the smallest step %.3g s: ",
-                  t0, hs);
+    std::snprintf(buf, sizeof buf, "step failed at t = %.9g s with the smallest step %.3g s: ", t0,
+                  hs);
   else
     std::snprintf(buf, sizeof buf,
                   "step failed at t = %.9g s: with the smallest step %.3g s (min_step) the "
@@ -176,8 +178,7 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
     return result;
   }
   double h = integ.h_control;
-  if (h <= 0.0)
-    h = opt.initial_step > 0.0 ? opt.initial_step : 1e-3 * (t_limit - t0);
+  if (h <= 0.0) h = opt.initial_step > 0.0 ? opt.initial_step : 1e-3 * (t_limit - t0);
   const double c_err = LocalErrorConstant(integ.params);
   integ.a_accepted = integ.a;
   std::string& why = integ.why;  // capacity reserved at set-up: a failed attempt allocates nothing

@@ -21,7 +21,8 @@ void ReadAssembledMatrix(const Model& model, const Data& data, Eigen::MatrixXd* 
                          Eigen::MatrixXd* B) {
   const int n = model.num_unknowns(), nv = model.nv;
   std::vector<int> global(static_cast<std::size_t>(n));
-  for (int g = 0; g < n; ++g) global[static_cast<std::size_t>(model.permutation[static_cast<std::size_t>(g)])] = g;
+  for (int g = 0; g < n; ++g)
+    global[static_cast<std::size_t>(model.permutation[static_cast<std::size_t>(g)])] = g;
   top_left->setZero(nv, nv);
   if (B) B->setZero(model.nc, nv);
   const BandedLU& A = data.matrix;
@@ -188,10 +189,10 @@ ModalResult CalcModes(const Model& model, Data& data, const ModalOptions& option
   }
   result.relative_residual = sys.relative_residual;
   if (sys.relative_residual > 1e-6)
-    result.warnings.push_back(
-        FormatNumbers("the state is not an equilibrium (relative residual %.3g): the modes describe "
-               "the linearisation about a non-equilibrium state",
-               sys.relative_residual));
+    result.warnings.push_back(FormatNumbers(
+        "the state is not an equilibrium (relative residual %.3g): the modes describe "
+        "the linearisation about a non-equilibrium state",
+        sys.relative_residual));
   const Eigen::MatrixXd& Z = sys.null_space;
   const int m = static_cast<int>(Z.cols());
   result.num_dofs = m;

@@ -61,15 +61,20 @@ void ValidateTimeGrid(double start, double end, double step, const std::string& 
     if (!ok) throw InputError(owner + "." + field + ": " + what);
   };
   require(std::isfinite(start), "start_time", "must be finite");
-  require(std::isfinite(end) && end >= start, "end_time", "must be finite and not before start_time");
+  require(std::isfinite(end) && end >= start, "end_time",
+          "must be finite and not before start_time");
   require(std::isfinite(step) && step > 0.0, "step", "must be a finite time > 0 s");
-  require((end - start) / step <= 1e9, "step", "more than 1e9 time steps from start_time to end_time");
+  require((end - start) / step <= 1e9, "step",
+          "more than 1e9 time steps from start_time to end_time");
   const std::string problem = TimeGridProblem(start, end, step);
   require(problem.empty(), std::abs(start) > std::abs(end) ? "start_time" : "end_time", problem);
 }
 
 StepSchedule::StepSchedule(double start, double end, double step, std::vector<double> breakpoints)
-    : start_(start), end_(end), step_(step), tolerance_(1e-9 * step),
+    : start_(start),
+      end_(end),
+      step_(step),
+      tolerance_(1e-9 * step),
       breakpoints_(SortedBreakpoints(std::move(breakpoints), start, end, 1e-9 * step)) {}
 
 double StepSchedule::Next(double t) const {

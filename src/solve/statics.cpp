@@ -39,15 +39,14 @@ void ValidateStaticOptions(const StaticOptions& o, const std::string& owner) {
           "must lie in [1, 1000]");
   require(o.max_steps >= 0 && o.max_steps <= kMaxStaticSteps, "max_steps",
           "must lie in [0, 10000000] (0: automatic)");
-  for (const auto& [value, field] : {std::pair{o.arc_length, "arc_length"},
-                                     std::pair{o.arc_length_min, "arc_length_min"},
-                                     std::pair{o.arc_length_max, "arc_length_max"},
-                                     std::pair{o.psi, "psi"},
-                                     std::pair{o.rotation_weight, "rotation_weight"}})
+  for (const auto& [value, field] :
+       {std::pair{o.arc_length, "arc_length"}, std::pair{o.arc_length_min, "arc_length_min"},
+        std::pair{o.arc_length_max, "arc_length_max"}, std::pair{o.psi, "psi"},
+        std::pair{o.rotation_weight, "rotation_weight"}})
     require(std::isfinite(value) && value >= 0.0, field, "must be finite and >= 0");
-  require(o.arc_length_min == 0.0 || o.arc_length_max == 0.0 ||
-              o.arc_length_min <= o.arc_length_max,
-          "arc_length_min", "must not exceed arc_length_max");
+  require(
+      o.arc_length_min == 0.0 || o.arc_length_max == 0.0 || o.arc_length_min <= o.arc_length_max,
+      "arc_length_min", "must not exceed arc_length_max");
   require(o.desired_iterations >= 1 && o.desired_iterations <= kMaxNewtonIterations,
           "desired_iterations", "must lie in [1, 1000]");
   for (const auto& [value, field] : {std::pair{o.residual_tolerance, "residual_tolerance"},
@@ -95,15 +94,19 @@ struct StaticSolver {
   const StopRequest& stop;
   double k_scale = 1.0;
   AssemblyOptions opt;
-  Eigen::VectorXd weights;           // arc-length metric (nv)
+  Eigen::VectorXd weights;              // arc-length metric (nv)
   Eigen::VectorXd r_s, load, x_r, x_f;  // nv + nc: residual at s, F = -dR/ds, the two solves
-  Eigen::VectorXd step_dx;            // nv: the sum of a load step's Newton corrections
+  Eigen::VectorXd step_dx;              // nv: the sum of a load step's Newton corrections
 
-  std::vector<int> pattern;          // the band pattern with d(B^T lambda)/dq
+  std::vector<int> pattern;  // the band pattern with d(B^T lambda)/dq
   bool resized = false;
 
   StaticSolver(const Model& m, Data& d, const StaticOptions& o, const StopRequest& st)
-      : model(m), data(d), options(o), stop(st), k_scale(ConstraintScale(m)),
+      : model(m),
+        data(d),
+        options(o),
+        stop(st),
+        k_scale(ConstraintScale(m)),
         weights(MetricWeights(m, o.rotation_weight)) {
     opt.time = o.time;
     opt.s_constraints = opt.s_multipliers = k_scale;
@@ -147,9 +150,10 @@ struct StaticSolver {
     if (ok) return true;
     if (data.failed_element >= 0) {
       cause = ElementLabel(model, data.failed_element) +
-              FormatNumbers(" rotates by %.4g rad, beyond what one helical element represents "
-                     "(2 pi); use more elements",
-                     data.failed_rotation);
+              FormatNumbers(
+                  " rotates by %.4g rad, beyond what one helical element represents "
+                  "(2 pi); use more elements",
+                  data.failed_rotation);
     } else {
       cause = "the residual is not finite";
     }
@@ -159,14 +163,14 @@ struct StaticSolver {
   // Convergence test of the state just assembled (data.residual); records |R|_inf in step.
   bool Converged(double last_increment, StaticStep& step, double* res_out) const {
     const double res = model.nv > 0 ? data.residual.head(model.nv).cwiseAbs().maxCoeff() : 0.0;
-    const double con = model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() / k_scale
-                                    : 0.0;
+    const double con =
+        model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() / k_scale : 0.0;
     step.residual_norms.push_back(res);
     *res_out = res;
     const double scale = std::max(data.force_scale, 1e-300);
     // Below this level the residual is round-off (e.g. eps EA |d|/L in a stiff rod).
-    const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
-                         std::max(data.term_scale, data.force_scale);
+    const double floor =
+        32.0 * std::numeric_limits<double>::epsilon() * std::max(data.term_scale, data.force_scale);
     // There the residual no longer measures the error; the last Newton correction does, so
     // it must be small as well (as in the dynamic solver).
     const bool at_floor = res <= floor;
@@ -204,9 +208,7 @@ struct StaticSolver {
   }
 
   // x_f = dx/ds at the current state (an equilibrium at opt.load_factor); false if singular.
-  bool PathTangent(std::string& cause) {
-    return AssembleAt(true, cause) && BorderedSolves(cause);
-  }
+  bool PathTangent(std::string& cause) { return AssembleAt(true, cause) && BorderedSolves(cause); }
 
   void Apply(const Eigen::VectorXd& dx) {
     Retract(model, data, dx.head(model.nv));
@@ -238,8 +240,9 @@ struct StaticSolver {
         return LoadStepEnd::kConverged;
       }
       if (it == options.max_iterations) {
-        cause = FormatNumbers("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
-                       options.max_iterations, res, res / std::max(data.force_scale, 1e-300));
+        cause =
+            FormatNumbers("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
+                          options.max_iterations, res, res / std::max(data.force_scale, 1e-300));
         return LoadStepEnd::kFailed;
       }
       if (!SolveAssembledSystem(model, data)) {
@@ -294,9 +297,10 @@ int MaxSteps(const StaticOptions& o) {
 }
 
 std::string StepCapMessage(int steps, double s) {
-  return FormatNumbers("static solve stopped after %g steps (max_steps) at load factor %.9g, before "
-                "reaching the end load factor; raise analysis.statics.max_steps or the step size",
-                steps, s);
+  return FormatNumbers(
+      "static solve stopped after %g steps (max_steps) at load factor %.9g, before "
+      "reaching the end load factor; raise analysis.statics.max_steps or the step size",
+      steps, s);
 }
 
 // Load stepping (method.md §5.6) with a bounded increment and step count.
@@ -489,8 +493,12 @@ namespace {
 class ArcLengthPath {
  public:
   ArcLengthPath(StaticSolver& s, const StaticStepCallback& on_step)
-      : S_(s), on_step_(on_step), dx_(s.model.nv), prev_dx_(s.model.nv),
-        delta_(s.model.num_unknowns()), lambda_new_(s.model.nc) {}
+      : S_(s),
+        on_step_(on_step),
+        dx_(s.model.nv),
+        prev_dx_(s.model.nv),
+        delta_(s.model.num_unknowns()),
+        lambda_new_(s.model.nc) {}
 
   StaticResult Run() {
     const Model& model = S_.model;
@@ -522,8 +530,8 @@ class ArcLengthPath {
     }
     c2_ = o.psi * o.psi * speed * speed;
     const double dl0 = o.arc_length > 0.0 ? o.arc_length : speed * std::abs(span) / o.load_steps;
-    const double dl_min = o.arc_length_min > 0.0 ? o.arc_length_min
-                                                 : dl0 * std::ldexp(1.0, -o.max_halvings);
+    const double dl_min =
+        o.arc_length_min > 0.0 ? o.arc_length_min : dl0 * std::ldexp(1.0, -o.max_halvings);
     const double dl_max = o.arc_length_max > 0.0 ? o.arc_length_max : 10.0 * dl0;
     double dl = std::clamp(dl0, dl_min, dl_max);
     const int max_steps = MaxSteps(o);
@@ -592,9 +600,10 @@ class ArcLengthPath {
       ++result_.halvings;
       dl *= 0.5;
       if (dl < dl_min * (1.0 - 1e-12)) {
-        result_.message = FormatNumbers("arc-length continuation failed at load factor %.9g: the arc "
-                                 "length fell below its minimum %.3g: ",
-                                 s_, dl_min) +
+        result_.message = FormatNumbers(
+                              "arc-length continuation failed at load factor %.9g: the arc "
+                              "length fell below its minimum %.3g: ",
+                              s_, dl_min) +
                           last_cause;
         return result_;
       }
@@ -622,7 +631,7 @@ class ArcLengthPath {
       }
       if (it == o.max_iterations) {
         cause = FormatNumbers("Newton did not converge in %g iterations (residual %.3g)",
-                       o.max_iterations, res);
+                              o.max_iterations, res);
         return LoadStepEnd::kFailed;
       }
       if (!S_.BorderedSolves(cause)) return LoadStepEnd::kFailed;

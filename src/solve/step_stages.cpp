@@ -140,8 +140,8 @@ AssemblyOptions DynamicAssemblyOptions(const DynamicOptions& opt, const StepCons
 
 // Assemble at the current iterate; the iteration matrix (and the tangent operators T(h dq) of
 // the nodes and of joints whose H_J retracts by the exponential) only `with_matrix`.
-bool AssembleIterate(const Model& model, Data& data, const DynamicOptions& opt,
-                     AssemblyOptions& o, bool with_matrix, std::string* why) {
+bool AssembleIterate(const Model& model, Data& data, const DynamicOptions& opt, AssemblyOptions& o,
+                     bool with_matrix, std::string* why) {
   if (with_matrix && opt.use_tangent_operator) {
     for (std::size_t i = 0; i < model.nodes.size(); ++i)
       if (model.nodes[i].dof >= 0)
@@ -181,8 +181,8 @@ IterateMeasures MeasureIterate(const Model& model, const Data& data, const Dynam
   m.res = data.residual.head(model.nv).cwiseAbs().maxCoeff();
   m.con = model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() : 0.0;
   m.scale = std::max(data.force_scale, 1e-300);
-  m.floor = 32.0 * std::numeric_limits<double>::epsilon() *
-            std::max(data.term_scale, data.force_scale);
+  m.floor =
+      32.0 * std::numeric_limits<double>::epsilon() * std::max(data.term_scale, data.force_scale);
   m.residual_ok = m.con <= opt.constraint_tolerance &&
                   (m.res <= opt.residual_tolerance * m.scale || m.res <= m.floor);
   return m;
@@ -425,8 +425,7 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
   }
   if (why) {
     char buf[200];
-    std::snprintf(buf, sizeof buf, "Newton did not converge in %d iterations",
-                  opt.max_iterations);
+    std::snprintf(buf, sizeof buf, "Newton did not converge in %d iterations", opt.max_iterations);
     *why = buf;
   }
   return -1;
@@ -435,8 +434,8 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
 int TryStepWithRetry(const Model& model, Data& data, Integrator& integ, double h, double t_end,
                      bool left_limit, std::string* why) {
   const DynamicOptions& opt = integ.options;
-  const bool conservative = opt.newton_matrix == NewtonMatrix::kFull &&
-                            opt.predictor == Predictor::kZero;
+  const bool conservative =
+      opt.newton_matrix == NewtonMatrix::kFull && opt.predictor == Predictor::kZero;
   const double t0 = data.time;
   SaveStepStart(data, integ);
   int its = TryStep(model, data, integ, h, t_end, left_limit, false, why);

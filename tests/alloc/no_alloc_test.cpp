@@ -100,12 +100,13 @@ Model MixedModel() {
   M << 0.1, 0.1, 0.1, 0.01, 0.01, 0.01;
   Section sec = Section::FromDiagonals(K, M);
   sec.damping << 0, 0, 0, 0.01, 0.01, 0.01;
-  const int rod = b.AddStraightRod("arm", Vec3(0.4, 0, 0), Vec3(1.0, 0, 0), 4, sec, Vec3::UnitZ(),
-                                   ball);
+  const int rod =
+      b.AddStraightRod("arm", Vec3(0.4, 0, 0), Vec3(1.0, 0, 0), 4, sec, Vec3::UnitZ(), ball);
   const int j0 = b.AddJointAt("J0", JointType::kRevolute, kGround, base, Vec3::Zero());
   b.model().joints[static_cast<std::size_t>(j0)].drive = DriveKind::kPrescribed;
   b.model().joints[static_cast<std::size_t>(j0)].drive_profile = Profile::BangBang(0, 1, 0.5);
-  const int j1 = b.AddJointAt("J1", JointType::kPrismatic, base, link, Vec3(0.2, 0, 0), Vec3::UnitX());
+  const int j1 =
+      b.AddJointAt("J1", JointType::kPrismatic, base, link, Vec3(0.2, 0, 0), Vec3::UnitX());
   b.model().joints[static_cast<std::size_t>(j1)].stiffness(0) = 10;
   b.model().joints[static_cast<std::size_t>(j1)].damping(0) = 5;
   b.model().joints[static_cast<std::size_t>(j1)].drive = DriveKind::kSeriesElastic;
@@ -188,8 +189,8 @@ Model MixedModel() {
   // against a fixed capsule across it and its node spheres against the plane.
   b.AddContactShape({2, ContactShapeType::kSphere, Vec3(0.05, 0, 0), Vec3(0.05, 0, 0), 0.02});
   b.AddContactRod(rod, 0.01);
-  b.AddObstacle({"ground", ObstacleType::kPlane, Vec3(0, 0, -0.0199), Vec3::UnitZ(),
-                 Vec3::Zero(), 0.0});
+  b.AddObstacle(
+      {"ground", ObstacleType::kPlane, Vec3(0, 0, -0.0199), Vec3::UnitZ(), Vec3::Zero(), 0.0});
   b.AddObstacle({"post", ObstacleType::kCapsule, Vec3(0.7, -1, 0.0205), Vec3(0.7, 1, 0.0205),
                  Vec3::Zero(), 0.01});
   // A pair of moving shapes (elements/shape_pair.h): a free puck's sphere resting on the rod's
@@ -214,7 +215,7 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     SCOPED_TRACE(NameOf(constraints));
     const Model model = MixedModel();
     int span_segments = 0;  // the eyelet between rod nodes makes 4-node tendon items
-    TendonSpanSegmentKind::ForEach(model, [&](int, const int (&)[4]) { ++span_segments; });
+    TendonSpanSegmentKind::ForEach(model, [&](int, const int(&)[4]) { ++span_segments; });
     ASSERT_EQ(span_segments, 2);
     Data data = MakeData(model);
     Integrator integ;
@@ -271,9 +272,9 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     g_counting = false;
     EXPECT_TRUE(ok);
     EXPECT_NE(data.inputs(0), 0.0);
-    EXPECT_GT(integ.iterations, 50);  // the steps really iterated
-    EXPECT_GE(integ.tendon_catches, 1);  // the length-driven tendon's catch ran in them
-    EXPECT_GE(integ.restarts, 1);     // and restarted at the ramp's end
+    EXPECT_GT(integ.iterations, 50);            // the steps really iterated
+    EXPECT_GE(integ.tendon_catches, 1);         // the length-driven tendon's catch ran in them
+    EXPECT_GE(integ.restarts, 1);               // and restarted at the ramp's end
     EXPECT_GE(integ.perturbed_start_skips, 2);  // at the start and at the restarts
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
     EXPECT_GT(active_steps, 10);  // with contacts active
@@ -289,7 +290,7 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     CalcActuatorRow(model, data, data.time, &actuators);
     g_counting = false;
     EXPECT_GT(actuators[1], 0.0);  // the muscle is active
-    EXPECT_GT(tendons[2], 0.0);  // the tendon pulls
+    EXPECT_GT(tendons[2], 0.0);    // the tendon pulls
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the tendon and force rows";
   }
 }
@@ -322,9 +323,9 @@ TEST(NoAllocation, AdaptiveStepsAndDenseOutputAllocateNothing) {
     }
     g_counting = false;
     EXPECT_TRUE(ok);
-    EXPECT_GT(integ.steps, 5);      // the steps really ran
-    EXPECT_GE(integ.rejected, 1);   // some were rejected
-    EXPECT_GE(integ.restarts, 1);   // and restarted at the ramp's end
+    EXPECT_GT(integ.steps, 5);     // the steps really ran
+    EXPECT_GE(integ.rejected, 1);  // some were rejected
+    EXPECT_GE(integ.restarts, 1);  // and restarted at the ramp's end
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside adaptive steps";
   }
 }
@@ -365,15 +366,15 @@ TEST(NoAllocation, AdvanceWithAnObserverAllocatesNothing) {
     Data dense = data;
     Outputs outputs(model, data, integ, dense);
     const StepSchedule schedule(0.0, 0.05, 1e-3, ProfileBreakpoints(model));
-    const StepPolicy policy = kind == StepKind::kFixed ? StepPolicy::OnSchedule(schedule)
-                                                       : StepPolicy::ErrorControlled();
+    const StepPolicy policy =
+        kind == StepKind::kFixed ? StepPolicy::OnSchedule(schedule) : StepPolicy::ErrorControlled();
     g_allocations = 0;
     g_counting = true;
     const AdvanceResult r = Advance(model, data, integ, policy, 0.05, &outputs);
     g_counting = false;
     EXPECT_TRUE(r.ok) << r.message;
-    EXPECT_GT(r.steps, 5);            // the steps really ran
-    EXPECT_GE(integ.restarts, 1);     // through the ramp's end
+    EXPECT_GT(r.steps, 5);         // the steps really ran
+    EXPECT_GE(integ.restarts, 1);  // through the ramp's end
     if (kind == StepKind::kErrorControlled) {
       EXPECT_GT(outputs.inside, 0);
     }
@@ -424,8 +425,7 @@ TEST(NoAllocation, ParaViewFramesAllocateNothing) {
 // steps with a retry in halves, and its pair_contacts.csv rows.
 TEST(NoAllocation, TwoPointBoxPairsAllocateNothing) {
   using namespace screwfem;
-  const Model model =
-      tilted_box_drop::MakeTiltedBoxDrop(0.2, 0.002, Vec3(8e-4, 1.1e-3, 1.4e-3));
+  const Model model = tilted_box_drop::MakeTiltedBoxDrop(0.2, 0.002, Vec3(8e-4, 1.1e-3, 1.4e-3));
   Data data = MakeData(model);
   Integrator integ;
   DynamicOptions options;
@@ -447,8 +447,8 @@ TEST(NoAllocation, TwoPointBoxPairsAllocateNothing) {
   }
   g_counting = false;
   EXPECT_TRUE(ok);
-  EXPECT_GT(parts, 100);   // two-point pairs were active
-  EXPECT_GE(halved, 1);    // and a step was retried in halves
+  EXPECT_GT(parts, 100);  // two-point pairs were active
+  EXPECT_GE(halved, 1);   // and a step was retried in halves
   EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the box's steps";
 }
 

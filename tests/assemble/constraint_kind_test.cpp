@@ -118,8 +118,9 @@ TEST(ConstraintKinds, GradientIsTheDerivativeOfTheRowsThroughTheRetraction) {
     Retract(m, q, -eps * Eigen::VectorXd::Unit(m.nv, i));
     fd.col(i) = (ConstraintRows(m, p, kTime) - ConstraintRows(m, q, kTime)) / (2.0 * eps);
   }
-  EXPECT_LT((B - fd).cwiseAbs().maxCoeff(), 1e-7 * B.cwiseAbs().maxCoeff())
-      << "B\n" << B << "\nfd\n" << fd;
+  EXPECT_LT((B - fd).cwiseAbs().maxCoeff(), 1e-7 * B.cwiseAbs().maxCoeff()) << "B\n"
+                                                                            << B << "\nfd\n"
+                                                                            << fd;
   // Each kind's rows are nonzero (the test would pass on an empty gradient otherwise).
   for (int r = 0; r < m.nc; ++r) EXPECT_GT(B.row(r).norm(), 1e-3) << "row " << r;
 }
@@ -145,9 +146,8 @@ TEST(ConstraintKinds, DeclaredColumnsHoldEveryNonzeroOfTheirRows) {
     Kind::ForEach(m, [&](const typename Kind::Item& item) {
       const int row = Kind::FirstRow(m, item), rows = Kind::RowCount(m, item);
       if (rows == 0) return;
-      Kind::ForEachColumn(m, item, [&](int col, int size) {
-        covered.block(row, col, rows, size).setOnes();
-      });
+      Kind::ForEachColumn(
+          m, item, [&](int col, int size) { covered.block(row, col, rows, size).setOnes(); });
     });
   });
   int nonzeros = 0;
@@ -176,10 +176,10 @@ TEST(ConstraintKinds, TargetsAreTheExplicitTimeDerivatives) {
   const double e1 = 1e-5, e2 = 1e-4;
   const Eigen::VectorXd fd_rate =
       (ConstraintRows(m, d, kTime + e1) - ConstraintRows(m, d, kTime - e1)) / (2.0 * e1);
-  const Eigen::VectorXd fd_accel = (ConstraintRows(m, d, kTime + e2) -
-                                    2.0 * ConstraintRows(m, d, kTime) +
-                                    ConstraintRows(m, d, kTime - e2)) /
-                                   (e2 * e2);
+  const Eigen::VectorXd fd_accel =
+      (ConstraintRows(m, d, kTime + e2) - 2.0 * ConstraintRows(m, d, kTime) +
+       ConstraintRows(m, d, kTime - e2)) /
+      (e2 * e2);
   EXPECT_LT((rate - fd_rate).cwiseAbs().maxCoeff(), 1e-7);
   EXPECT_LT((accel - fd_accel).cwiseAbs().maxCoeff(), 1e-4);
   // Rheonomic rows only: the drive's and the tendon's.

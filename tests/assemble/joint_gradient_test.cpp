@@ -157,11 +157,9 @@ AssemblyOptions StaticsOptions() {
   return o;
 }
 
-const JointType kAllTypes[] = {JointType::kRevolute,  JointType::kPrismatic,
-                               JointType::kHelical,   JointType::kCylindrical,
-                               JointType::kSpherical, JointType::kPlanar,
-                               JointType::kUniversal, JointType::kFixed,
-                               JointType::kFree};
+const JointType kAllTypes[] = {JointType::kRevolute,    JointType::kPrismatic, JointType::kHelical,
+                               JointType::kCylindrical, JointType::kSpherical, JointType::kPlanar,
+                               JointType::kUniversal,   JointType::kFixed,     JointType::kFree};
 
 // --- constraint gradient ---------------------------------------------------------------------
 
@@ -206,7 +204,8 @@ TEST(JointGradient, ConstraintRowsEqualFiniteDifferenceOfPhiForEveryJointTypeAwa
 // coordinates of spherical, planar and free joints retract the same way, H_J = H_Jn exp(A_J x),
 // and their columns carry A_J^T T(A_J x) A_J (stored after the node tangents, as the
 // integrator does); abelian and universal coordinates retract additively.
-TEST(JointGradient, ConstraintRowsWithTangentOperatorEqualFiniteDifferenceInExponentialCoordinates) {
+TEST(JointGradient,
+     ConstraintRowsWithTangentOperatorEqualFiniteDifferenceInExponentialCoordinates) {
   for (JointType type : kAllTypes) {
     if (type == JointType::kFree) continue;
     SCOPED_TRACE(JointTypeName(type));
@@ -323,8 +322,7 @@ TEST(EquilibriumTangent, WorldAndFollowerPointLoadsAtBodyPoints) {
     // The generalised force itself: world force F at body point p and world moment.
     const SE3& H = d.H[static_cast<std::size_t>(n)];
     const Vec3 f = frame == LoadFrame::kWorld ? Vec3(H.R.transpose() * load.force) : load.force;
-    const Vec3 mom =
-        frame == LoadFrame::kWorld ? Vec3(H.R.transpose() * load.moment) : load.moment;
+    const Vec3 mom = frame == LoadFrame::kWorld ? Vec3(H.R.transpose() * load.moment) : load.moment;
     Vec6 g;
     g.head<3>() = 0.8 * f;
     g.tail<3>() = 0.8 * (load.point.cross(f) + mom);
@@ -343,7 +341,8 @@ TEST(EquilibriumTangent, SoftJointSpringsOnCoordinatesOfEveryJointType) {
     const int nb = b.AddNode(RandomFrame(rng));
     AddBody(b, na, "A");
     AddBody(b, nb, "B");
-    const int jg = b.AddJointAt("g", type, kGround, na, Vec3(0.3, -0.4, 0.5), kAxis, kAxis2, kPitch);
+    const int jg =
+        b.AddJointAt("g", type, kGround, na, Vec3(0.3, -0.4, 0.5), kAxis, kAxis2, kPitch);
     const int jab = b.AddJointAt("ab", type, na, nb, Vec3(-0.2, 0.6, 0.1), kAxis, kAxis2, kPitch);
     for (int j : {jg, jab}) {
       Joint& jt = b.model().joints[static_cast<std::size_t>(j)];
@@ -479,7 +478,8 @@ Model MakeMovingModel() {
   const int nb = b.AddNode(RandomFrame(rng));
   AddBody(b, na, "A");
   AddBody(b, nb, "B");
-  const int j1 = b.AddJointAt("g", JointType::kCylindrical, kGround, na, Vec3(0.1, 0.2, 0.3), kAxis);
+  const int j1 =
+      b.AddJointAt("g", JointType::kCylindrical, kGround, na, Vec3(0.1, 0.2, 0.3), kAxis);
   const int j2 = b.AddJointAt("ab", JointType::kSpherical, na, nb, Vec3(0.4, -0.2, 0.3));
   const int j3 = b.AddJointAt("bg", JointType::kPlanar, nb, kGround, Vec3(0.0, 0.5, -0.3), kAxis2);
   for (int j : {j1, j2, j3}) {
@@ -513,8 +513,9 @@ TEST(DynamicTangent, MassBlockIsTheDerivativeOfTheResidualWithRespectToAccelerat
   o.c_stiffness = 0.0;
   ASSERT_TRUE(Assemble(m, d, o));
   const Eigen::MatrixXd M = GlobalMatrix(m, d).topLeftCorner(m.nv, m.nv);
-  const Eigen::MatrixXd M_fd = ResidualDerivative(
-      m, d, o, [](Data& data, int i, double e) { data.vdot(i) += e; }).topRows(m.nv);
+  const Eigen::MatrixXd M_fd = ResidualDerivative(m, d, o, [](Data& data, int i, double e) {
+                                 data.vdot(i) += e;
+                               }).topRows(m.nv);
   EXPECT_LT(RelativeError(M, M_fd), 1e-8) << "M =\n" << M << "\nFD =\n" << M_fd;
   // Joint coordinates carry no mass.
   EXPECT_EQ(M.bottomRows(m.nv - m.nv_nodes).cwiseAbs().maxCoeff(), 0.0);
@@ -531,8 +532,9 @@ TEST(DynamicTangent, DampingBlockIsTheDerivativeOfTheResidualWithRespectToVeloci
   o.c_stiffness = 0.0;
   ASSERT_TRUE(Assemble(m, d, o));
   const Eigen::MatrixXd C = GlobalMatrix(m, d).topLeftCorner(m.nv, m.nv);
-  const Eigen::MatrixXd C_fd = ResidualDerivative(
-      m, d, o, [](Data& data, int i, double e) { data.v(i) += e; }).topRows(m.nv);
+  const Eigen::MatrixXd C_fd = ResidualDerivative(m, d, o, [](Data& data, int i, double e) {
+                                 data.v(i) += e;
+                               }).topRows(m.nv);
   // Gyroscopic terms of the bodies and the joint dampers are both present.
   EXPECT_GT(C_fd.topLeftCorner(m.nv_nodes, m.nv_nodes).cwiseAbs().maxCoeff(), 0.1);
   EXPECT_GT(C_fd.bottomRightCorner(m.nv - m.nv_nodes, m.nv - m.nv_nodes).cwiseAbs().maxCoeff(),
@@ -564,8 +566,9 @@ TEST(DynamicTangent, FreeJointDamperBlockIsTheDerivativeOfTheResidualWithRespect
   o.c_stiffness = 0.0;
   ASSERT_TRUE(Assemble(m, d, o));
   const Eigen::MatrixXd C = GlobalMatrix(m, d).topLeftCorner(m.nv, m.nv);
-  const Eigen::MatrixXd C_fd = ResidualDerivative(
-      m, d, o, [](Data& data, int i, double e) { data.v(i) += e; }).topRows(m.nv);
+  const Eigen::MatrixXd C_fd = ResidualDerivative(m, d, o, [](Data& data, int i, double e) {
+                                 data.v(i) += e;
+                               }).topRows(m.nv);
   // The dampers couple the two bodies.
   EXPECT_GT(C_fd.topRightCorner(6, 6).cwiseAbs().maxCoeff(), 0.1);
   EXPECT_LT(RelativeError(C, C_fd), 1e-7) << "C =\n" << C << "\nFD =\n" << C_fd;

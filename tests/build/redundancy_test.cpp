@@ -80,8 +80,7 @@ Model PlanarFourBar(bool with_chain, bool drive) {
     for (int i = 0; i < 3; ++i) {
       const Vec3 p(0.2 + 0.3 * (i + 1), 0.6, 0.5);
       const int node = AddBody(b, SE3::Translation(p), Name("link", i));
-      b.AddJointAt(Name("chain", i), JointType::kRevolute, prev, node, p,
-                   Vec3(0, 1, 0));
+      b.AddJointAt(Name("chain", i), JointType::kRevolute, prev, node, p, Vec3(0, 1, 0));
       prev = node;
     }
   }
@@ -126,7 +125,8 @@ TEST(Redundancy, BricardLinkageHasOneRedundantRowNamingAllSixJoints) {
   for (int i = 0; i < 6; ++i) F.push_back(F.back() * dh(t[i % 2], 1.0, alpha[i % 2]));
   ASSERT_LT((F[6].x).norm() + (F[6].R - Mat3::Identity()).norm(), 1e-12);
   std::vector<int> node(7, kGround);
-  for (int i = 1; i < 6; ++i) node[static_cast<std::size_t>(i)] = AddBody(b, F[static_cast<std::size_t>(i)], Name("link", i));
+  for (int i = 1; i < 6; ++i)
+    node[static_cast<std::size_t>(i)] = AddBody(b, F[static_cast<std::size_t>(i)], Name("link", i));
   for (int i = 1; i <= 6; ++i) {
     const SE3& Fi = F[static_cast<std::size_t>(i - 1)];
     b.AddJointAt(Name("R", i), JointType::kRevolute, node[static_cast<std::size_t>(i - 1)],

@@ -208,7 +208,8 @@ TEST(RodActuationKernel, ActuatorsOfAModelAddOnTheirElementsWithProfilesInputsAn
   ASSERT_EQ(m.elements.size(), 6u);
   // Element lists: the chamber covers elements 1-2, the muscle 0-3, the curl 2-3.
   const int expected_count[6] = {1, 2, 3, 2, 0, 0};
-  for (int e = 0; e < 6; ++e) EXPECT_EQ(m.elements[static_cast<std::size_t>(e)].num_actuators, expected_count[e]);
+  for (int e = 0; e < 6; ++e)
+    EXPECT_EQ(m.elements[static_cast<std::size_t>(e)].num_actuators, expected_count[e]);
   const Vec6 chamber = 2e5 * 1e-4 * V6(1, 0, 0, 0, 0.005, -0.01);
   const Vec6 muscle = -3e5 * 2e-5 * V6(1, 0, 0, 0, 0.0, 0.01);
   RodActuation a;

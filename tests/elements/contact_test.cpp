@@ -34,7 +34,7 @@ void AssembleContacts(const Model& m, const Data& d, const KernelOptions& o, Eig
   r->setZero(6 * n);
   if (K) K->setZero(6 * n, 6 * n);
   if (C) C->setZero(6 * n, 6 * n);
-  ContactKind::ForEach(m, [&](const int& item, const int (&nodes)[2]) {
+  ContactKind::ForEach(m, [&](const int& item, const int(&nodes)[2]) {
     NodeMotion<2> x;
     const Mat6 I = Mat6::Identity();
     for (int i = 0; i < 2; ++i) {
@@ -193,7 +193,7 @@ TEST(ContactKind, ReportedForceIsTheForceInTheKernelsResidual) {
         ASSERT_TRUE(CalcContactGeometry(s.model, pair, *x.H[0], *x.H[1], &G));
         for (int k = 0; k < 2; ++k)
           v += G.weight[k] * (x.H[k]->R * (x.eta.segment<3>(6 * k) +
-                                            x.eta.segment<3>(6 * k + 3).cross(G.lever[k])));
+                                           x.eta.segment<3>(6 * k + 3).cross(G.lever[k])));
         const Vec3 slip = v - c.normal * c.normal.dot(v);
         if (mu > 0.0) {
           EXPECT_LT(c.friction_force.dot(slip), 0.0);
@@ -202,8 +202,7 @@ TEST(ContactKind, ReportedForceIsTheForceInTheKernelsResidual) {
         const double onset = s.model.contact.onset;
         const double f_e = CalcNormalLaw(c.gap, onset, s.model.contact.stiffness).force;
         EXPECT_NEAR(c.normal_force,
-                    f_e - pair.damping * std::min(1.0, (onset - c.gap) / onset) *
-                              c.normal.dot(v),
+                    f_e - pair.damping * std::min(1.0, (onset - c.gap) / onset) * c.normal.dot(v),
                     1e-12 * scale);
       }
     }
@@ -409,8 +408,8 @@ TEST(ContactValidation, BoxOnAnInclineStaysBelowTheFrictionAngleAndSlidesAboveIt
 // T + V + Psi never increases by more than 1e-5 E_0 in a step.
 TEST(ContactValidation, EnergyNeverIncreasesThroughAnImpactWithDamping) {
   Puck p;
-  MakePuck(&p, ContactShapeType::kSphere, 0.3, 1e-2, Vec3::UnitZ(), Vec3(1.0, 0.0, 0.0), 0.2,
-           1.0, 1.0);
+  MakePuck(&p, ContactShapeType::kSphere, 0.3, 1e-2, Vec3::UnitZ(), Vec3(1.0, 0.0, 0.0), 0.2, 1.0,
+           1.0);
   const double E0 = CalcEnergy(p.model, p.data).total() - 0.1 * kG;  // relative to rest height
   double E_prev = CalcEnergy(p.model, p.data).total();
   double max_rise = -INFINITY;

@@ -26,9 +26,9 @@ struct Collision {
   double angular_drift = 0.0;   // max of |L(t) - L(0)| about the origin [kg m^2/s]
   double p0 = 0.0, L0 = 0.0;    // |p(0)|, |L(0)|: the scales
   double energy_before = 0.0, energy_after = 0.0;  // T + strain + penalty [J]
-  double max_force = 0.0;       // the largest contact force in the run [N]
-  bool apart_at_end = false;    // no active pair at the end
-  double spin = 0.0;            // the largest node angular speed at the end [rad/s]
+  double max_force = 0.0;                          // the largest contact force in the run [N]
+  bool apart_at_end = false;                       // no active pair at the end
+  double spin = 0.0;  // the largest node angular speed at the end [rad/s]
   // max over the steps of |L(t) - L(0) - C(t)|, C the impulse of the friction couples (below)
   double angular_residual = 0.0;
   std::vector<Vec3> positions;  // of the nodes at the end
@@ -62,7 +62,8 @@ Collision Collide(double h, double cross_x, double cross_y, double slide, double
   mat.density = 1000.0;
   const Section section = Section::Circle(r, mat);
   ModelBuilder b;
-  const int a = b.AddStraightRod("a", Vec3(-0.5 * L, 0.0, 0.0), Vec3(0.5 * L, 0.0, 0.0), 6, section);
+  const int a =
+      b.AddStraightRod("a", Vec3(-0.5 * L, 0.0, 0.0), Vec3(0.5 * L, 0.0, 0.0), 6, section);
   const double z = 2.0 * r + 1e-3 + clearance;
   const int c = b.AddStraightRod("b", Vec3(cross_x, -0.5 * L - cross_y, z),
                                  Vec3(cross_x, 0.5 * L - cross_y, z), 6, section);
@@ -115,7 +116,8 @@ Collision Collide(double h, double cross_x, double cross_y, double slide, double
     out.angular_residual =
         std::max(out.angular_residual, (hm.tail<3>() - h0.tail<3>() - impulse).norm());
     for (std::size_t k = 0; k < static_cast<std::size_t>(d.num_shape_pairs); ++k)
-      out.max_force = std::max(out.max_force, CalcShapePairState(m, d, static_cast<int>(k)).normal_force);
+      out.max_force =
+          std::max(out.max_force, CalcShapePairState(m, d, static_cast<int>(k)).normal_force);
     out.most_coupled = std::max(out.most_coupled, d.coupling.blocks());
   }
   for (const SE3& H : d.H) out.positions.push_back(H.x);
@@ -152,7 +154,8 @@ TEST(RodCollision, OffCentreImpactConservesMomentumAndEnergyToSecondOrderInH) {
     EXPECT_GT(r[k].momentum_drift / r[k + 1].momentum_drift, 3.5) << k;  // second order
     EXPECT_GT(r[k].angular_drift / r[k + 1].angular_drift, 3.5) << k;
     EXPECT_GT(std::abs(r[k].energy_after - r[k].energy_before),
-              1.5 * std::abs(r[k + 1].energy_after - r[k + 1].energy_before)) << k;
+              1.5 * std::abs(r[k + 1].energy_after - r[k + 1].energy_before))
+        << k;
   }
 }
 
@@ -182,7 +185,7 @@ TEST(RodCollision, FrictionChangesAngularMomentumOnlyByTheCoupleAcrossTheGap) {
     EXPECT_GT(r[k].max_force, 0.1);
     EXPECT_TRUE(r[k].apart_at_end);
     EXPECT_LT(r[k].energy_after, 0.5 * r[k].energy_before);  // damping and friction dissipate
-    EXPECT_GT(r[k].angular_drift, 5e-8);  // the couple: not an O(h^2) error
+    EXPECT_GT(r[k].angular_drift, 5e-8);                     // the couple: not an O(h^2) error
     EXPECT_LT(r[k].angular_drift, 1.2e-7);
   }
   EXPECT_LT(r[0].momentum_drift, 2.5e-7);

@@ -202,8 +202,7 @@ struct ElementMotion {
   Vec12 Eta(double t) const {
     Vec12 e;
     for (int n = 0; n < 2; ++n)
-      e.segment<6>(6 * n) =
-          TSE3(X(n, t)) * (c.eta.segment<6>(6 * n) + t * c.acc.segment<6>(6 * n));
+      e.segment<6>(6 * n) = TSE3(X(n, t)) * (c.eta.segment<6>(6 * n) + t * c.acc.segment<6>(6 * n));
     return e;
   }
   Vec6 D(double t) const { return CalcRodRelativeMotion(H(0, t), H(1, t), c.d.tail<3>()); }
@@ -248,8 +247,8 @@ TEST(RodInertia, OptionAForcesAreTheRateOfMomentumOfTheExactVelocityField) {
       return p;
     };
     const double h = 1e-3;
-    const Vec6 dp = (momentum(-2 * h) - 8 * momentum(-h) + 8 * momentum(h) - momentum(2 * h)) /
-                    (12 * h);
+    const Vec6 dp =
+        (momentum(-2 * h) - 8 * momentum(-h) + 8 * momentum(h) - momentum(2 * h)) / (12 * h);
     const RodInertiaTerms t = Inertia(RodInertia::kExact, c, c.d, c.eta, c.acc);
     const Vec6 resultant = Ad(c.H_A.Inverse()).transpose() * t.force.head<6>() +
                            Ad(c.H_B.Inverse()).transpose() * t.force.tail<6>();
@@ -394,8 +393,7 @@ TEST(RodDamping, TangentIsTheVelocityDerivativeAndRayleighTermsAreProportional) 
   Section only_k = c.section;
   only_k.rayleigh_stiffness = 0.05;
   const Mat6x12 P = CalcRodP(c.d);
-  const Mat12 K_mat =
-      P.transpose() * (c.section.stiffness / c.element.length).asDiagonal() * P;
+  const Mat12 K_mat = P.transpose() * (c.section.stiffness / c.element.length).asDiagonal() * P;
   EXPECT_LT(RelativeError(force(only_k, c.eta).second, 0.05 * K_mat), 1e-14);
 }
 

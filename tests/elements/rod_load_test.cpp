@@ -117,8 +117,17 @@ TEST(RodDistributedDeadForce, AgreesWithTheSectionLoadsOverTheWholeRotationRange
   // The kernel works from the potential of the load (closed forms of J(v) and its derivatives
   // above |v| = 1, Taylor series below): straight, nearly straight, either side of the switch
   // at the Gauss points (xi_i |w| = 1) and large rotations, against the section loads.
-  const double angles[] = {0.0, 1e-7, 1e-3, 0.3, 1.0 / kRodGaussXi[0], 1.0 / kRodGaussXi[1],
-                           0.999 / kRodGaussXi[2], 1.001 / kRodGaussXi[2], 3.0, 5.5, 6.2};
+  const double angles[] = {0.0,
+                           1e-7,
+                           1e-3,
+                           0.3,
+                           1.0 / kRodGaussXi[0],
+                           1.0 / kRodGaussXi[1],
+                           0.999 / kRodGaussXi[2],
+                           1.001 / kRodGaussXi[2],
+                           3.0,
+                           5.5,
+                           6.2};
   const Vec3 axis = Vec3(0.3, -0.8, 0.5).normalized();
   for (double angle : angles) {
     SE3 A;

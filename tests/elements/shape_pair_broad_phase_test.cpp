@@ -41,21 +41,21 @@ Model MakeScene(double self_skip) {
   ModelBuilder b;
   for (int k = 0; k < 4; ++k) {
     const double y = 0.1 * k;
-    const int rod = b.AddStraightRod("rod" + std::to_string(k), Vec3(0.0, y, 0.0),
-                                     Vec3(k < 3 ? 0.36 : 0.2, y, 0.0), k < 3 ? 12 : 40,
-                                     RodSection(r));
+    const int rod =
+        b.AddStraightRod("rod" + std::to_string(k), Vec3(0.0, y, 0.0),
+                         Vec3(k < 3 ? 0.36 : 0.2, y, 0.0), k < 3 ? 12 : 40, RodSection(r));
     b.AddContactRod(rod, r);
   }
   const Mat3 J = 1e-4 * Mat3::Identity();
-  const int sphere = b.AddRigidBody("sphere", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 1)}),
-                                    0.1, Vec3::Zero(), J);
+  const int sphere = b.AddRigidBody("sphere", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 1)}), 0.1,
+                                    Vec3::Zero(), J);
   const int capsule = b.AddRigidBody("capsule", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 2)}),
                                      0.1, Vec3::Zero(), J);
-  const int box = b.AddRigidBody("box", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 3)}), 0.1,
-                                 Vec3::Zero(), J);
+  const int box =
+      b.AddRigidBody("box", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 3)}), 0.1, Vec3::Zero(), J);
   b.AddContactShape({sphere, ContactShapeType::kSphere, Vec3::Zero(), Vec3::Zero(), 0.04});
-  b.AddContactShape({capsule, ContactShapeType::kCapsule, Vec3(-0.05, 0, 0), Vec3(0.05, 0, 0),
-                     0.02});
+  b.AddContactShape(
+      {capsule, ContactShapeType::kCapsule, Vec3(-0.05, 0, 0), Vec3(0.05, 0, 0), 0.02});
   b.AddContactShape({box, ContactShapeType::kBox, Vec3::Zero(), Vec3(0.06, 0.04, 0.03), 0.0});
   ContactSettings law;
   law.stiffness = 1e3;
@@ -116,11 +116,10 @@ TEST_P(ShapePairBroadPhase, FindsEveryPairNearerThanTheOnsetOnce) {
       ShapePairGeometry G;
       if (!CalcShapePairGeometry(p, H, INFINITY, &G) || !(G.gap < m.contact.onset)) continue;
       ++near;
-      EXPECT_TRUE(pool.count(KeyOf(p))) << "missed a pair at gap " << G.gap << ", trial "
-                                        << trial;
+      EXPECT_TRUE(pool.count(KeyOf(p))) << "missed a pair at gap " << G.gap << ", trial " << trial;
     }
   }
-  EXPECT_GT(near, 400);        // the scatterings do bring many shapes together
+  EXPECT_GT(near, 400);         // the scatterings do bring many shapes together
   EXPECT_LT(found, 20 * near);  // and the boxes keep the candidates few
 }
 INSTANTIATE_TEST_SUITE_P(Skips, ShapePairBroadPhase, ::testing::Values(-1.0, 0.008));

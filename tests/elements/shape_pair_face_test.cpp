@@ -33,7 +33,8 @@ Model MakeCapsuleOnBox(const SE3& capsule, double mu, double gravity) {
   b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.15, 0.1, 0.05), 0.0});
   const int bar = b.AddNode(capsule);
   b.AddRigidBody("bar", bar, 1.0, Vec3::Zero(), Vec3(1e-4, 4e-3, 4e-3).asDiagonal());
-  b.AddContactShape({1, ContactShapeType::kCapsule, Vec3(-0.1, 0.0, 0.0), Vec3(0.1, 0.0, 0.0), 0.02});
+  b.AddContactShape(
+      {1, ContactShapeType::kCapsule, Vec3(-0.1, 0.0, 0.0), Vec3(0.1, 0.0, 0.0), 0.02});
   ContactSettings law;
   law.stiffness = 1e5;
   law.onset = 1e-4;
@@ -88,8 +89,7 @@ ElementTerms<4> PairTerms(const Model& m, const ShapePair& pair, const SE3& H, c
 ElementTerms<4> PairTerms(const Model& m, int k, const SE3& H, const Vec6& eta,
                           const KernelOptions& o, const ShapePairGeometry* frozen,
                           ShapePairGeometry* geometry = nullptr) {
-  return PairTerms(m, AllShapePairs(m)[static_cast<std::size_t>(k)], H, eta, o, frozen,
-                   geometry);
+  return PairTerms(m, AllShapePairs(m)[static_cast<std::size_t>(k)], H, eta, o, frozen, geometry);
 }
 
 // The static generalized force on the capsule (its node's 6 rows) from the pairs listed.
@@ -123,7 +123,9 @@ TEST(ShapePairFace, ForceIsContinuousAsTheSegmentTiltsThroughFlat) {
     KernelOptions o;
     Vec6 d = Vec6::Zero();
     for (int k = 0; k < 2; ++k)
-      d += PairTerms(m, k, Tilted(0.03, z, theta), Vec6::Zero(), o, nullptr).stiffness.block<6, 6>(0, 0).col(4);
+      d += PairTerms(m, k, Tilted(0.03, z, theta), Vec6::Zero(), o, nullptr)
+               .stiffness.block<6, 6>(0, 0)
+               .col(4);
     return d.norm();
   };
   // The largest change between neighbouring tilts relative to what the tangents at the two
@@ -168,7 +170,8 @@ TEST(ShapePairFace, TangentOfBothPartsMatchesFiniteDifferences) {
       for (int k = 0; k < 2; ++k) {
         ShapePairGeometry G0;
         const ElementTerms<4> t = PairTerms(m, k, H, eta, o, nullptr, &G0);
-        ASSERT_TRUE(t.active) << "part " << k << " x " << x << " gap " << G0.gap << " s " << G0.s[0];
+        ASSERT_TRUE(t.active) << "part " << k << " x " << x << " gap " << G0.gap << " s "
+                              << G0.s[0];
         const double expected_s = k == 0 ? 0.0 : (x == 0.03 ? 1.0 : 0.75);
         EXPECT_NEAR(G0.s[0], expected_s, 1e-3) << k;
         Eigen::Matrix<double, 6, 6> K_fd, C_fd;
@@ -176,13 +179,17 @@ TEST(ShapePairFace, TangentOfBothPartsMatchesFiniteDifferences) {
         for (int j = 0; j < 6; ++j) {
           const SE3 p = H * ExpSE3(eps * Vec6::Unit(j)), n = H * ExpSE3(-eps * Vec6::Unit(j));
           K_fd.col(j) = (PairTerms(m, k, p, eta, o, &G0).residual.head<6>() -
-                         PairTerms(m, k, n, eta, o, &G0).residual.head<6>()) / (2 * eps);
+                         PairTerms(m, k, n, eta, o, &G0).residual.head<6>()) /
+                        (2 * eps);
           const Vec6 vp = eta + eps * Vec6::Unit(j), vn = eta - eps * Vec6::Unit(j);
           C_fd.col(j) = (PairTerms(m, k, H, vp, o, nullptr).residual.head<6>() -
-                         PairTerms(m, k, H, vn, o, nullptr).residual.head<6>()) / (2 * eps);
+                         PairTerms(m, k, H, vn, o, nullptr).residual.head<6>()) /
+                        (2 * eps);
         }
-        EXPECT_LT((t.stiffness.block<6, 6>(0, 0) - K_fd).norm(), 1e-6 * K_fd.norm()) << k << " " << mu;
-        EXPECT_LT((t.damping.block<6, 6>(0, 0) - C_fd).norm(), 1e-6 * C_fd.norm()) << k << " " << mu;
+        EXPECT_LT((t.stiffness.block<6, 6>(0, 0) - K_fd).norm(), 1e-6 * K_fd.norm())
+            << k << " " << mu;
+        EXPECT_LT((t.damping.block<6, 6>(0, 0) - C_fd).norm(), 1e-6 * C_fd.norm())
+            << k << " " << mu;
         if (x != 0.03) continue;
         // Statics: the force is the gradient of the penalty potential Psi(g(H)).
         KernelOptions so;
@@ -196,9 +203,12 @@ TEST(ShapePairFace, TangentOfBothPartsMatchesFiniteDifferences) {
           };
           // eps = 1e-8: the central difference's error eps^2 / 6 Psi''' is 1.7e-6 relative at 1e-7
           const double e = 1e-8;
-          dpsi(j) = (psi(H * ExpSE3(e * Vec6::Unit(j))) - psi(H * ExpSE3(-e * Vec6::Unit(j)))) / (2 * e);
+          dpsi(j) =
+              (psi(H * ExpSE3(e * Vec6::Unit(j))) - psi(H * ExpSE3(-e * Vec6::Unit(j)))) / (2 * e);
         }
-        EXPECT_LT((r - dpsi).norm(), 1e-6 * r.norm()) << k << "\n" << r.transpose() << "\n" << dpsi.transpose();
+        EXPECT_LT((r - dpsi).norm(), 1e-6 * r.norm()) << k << "\n"
+                                                      << r.transpose() << "\n"
+                                                      << dpsi.transpose();
       }
     }
   }
@@ -264,9 +274,10 @@ TEST(ShapePairFace, CapsuleOverhangingAnEdgeRestsOnTwoPointsByTheLeverRule) {
 TEST(ShapePairFace, BoxDroppedTiltedOntoABoxTipsFlatAndRestsAtALargeStep) {
   const double m_box = tilted_box_drop::kMass, theta = 0.2, drop = 0.002, h = 1e-3;
   const Vec3& half = tilted_box_drop::kHalf;
-  const Vec3 J = m_box / 3.0 * Vec3(half.y() * half.y() + half.z() * half.z(),
-                                     half.x() * half.x() + half.z() * half.z(),
-                                     half.x() * half.x() + half.y() * half.y());
+  const Vec3 J =
+      m_box / 3.0 *
+      Vec3(half.y() * half.y() + half.z() * half.z(), half.x() * half.x() + half.z() * half.z(),
+           half.x() * half.x() + half.y() * half.y());
   const Model m = tilted_box_drop::MakeTiltedBoxDrop(theta, drop, J);
   ASSERT_EQ(AllShapePairs(m).size(), 48u);
   Data d = MakeData(m);
@@ -293,7 +304,7 @@ TEST(ShapePairFace, BoxDroppedTiltedOntoABoxTipsFlatAndRestsAtALargeStep) {
   EXPECT_GT(largest_tilt, 0.19);  // it did start tilted (and rocked)
   const Vec3 z_body = d.H[1].R.col(2);
   EXPECT_LT(std::atan2(z_body.head<2>().norm(), z_body.z()), 1e-5);  // flat
-  EXPECT_LT(d.v.segment<6>(m.nodes[1].dof).norm(), 1e-6);           // at rest
+  EXPECT_LT(d.v.segment<6>(m.nodes[1].dof).norm(), 1e-6);            // at rest
   EXPECT_LT(rise, 1e-12);  // rho_inf = 0.8: the energy never rises (to round-off)
   EXPECT_LE(halved, 2);    // 1 measured
   int active = 0;

@@ -125,8 +125,12 @@ Case MakeCase(Kind kind, double mu, unsigned seed) {
       b.half = Vec3(0.04, 0.06, 0.03);
       b.node[0] = 2;
       // Segment ends in the box frame (from the box's centre) -> world.
-      auto world = [&](const Vec3& local) { return Vec3(c.H[2].x + c.H[2].R * (b.offset[0] + local)); };
-      auto body = [&](const Vec3& local) { return Vec3(c.H[0].R.transpose() * (world(local) - c.H[0].x)); };
+      auto world = [&](const Vec3& local) {
+        return Vec3(c.H[2].x + c.H[2].R * (b.offset[0] + local));
+      };
+      auto body = [&](const Vec3& local) {
+        return Vec3(c.H[0].R.transpose() * (world(local) - c.H[0].x));
+      };
       if (kind == Kind::kRodBoxFace) {
         rod_side(a, 0, world(Vec3(-0.02, 0.01, 0.042)), world(Vec3(0.03, -0.02, 0.06)));
       } else if (kind == Kind::kRodBoxEdge) {
@@ -155,8 +159,9 @@ Case MakeCase(Kind kind, double mu, unsigned seed) {
 }
 
 // The pair's terms at frames H (frozen geometry when `frozen` is given).
-ElementTerms<4> Terms(const Case& c, const SE3 (&frames)[4], const Eigen::Matrix<double, 24, 1>& eta,
-                      const KernelOptions& o, const ShapePairGeometry* frozen) {
+ElementTerms<4> Terms(const Case& c, const SE3 (&frames)[4],
+                      const Eigen::Matrix<double, 24, 1>& eta, const KernelOptions& o,
+                      const ShapePairGeometry* frozen) {
   const SE3* H[4] = {&frames[0], &frames[1], &frames[2], &frames[3]};
   ShapePairGeometry G;
   if (frozen)
@@ -188,45 +193,49 @@ TEST(ShapePairKind, TangentsMatchFiniteDifferencesAtTheFrozenClosestPointsAndInT
                     Kind::kRodBoxPenetrating, Kind::kBoxEdgeBox}) {
     for (const double mu : {0.0, 0.4}) {
       for (unsigned seed : {1u, 2u, 3u}) {
-       // A segment against a box also as the two clipped ends (ShapePair::part), where active.
-       for (const int part : {-1, 0, 1}) {
-        const bool segment_box = std::find(std::begin(kSegmentBoxKinds), std::end(kSegmentBoxKinds),
-                                           kind) != std::end(kSegmentBoxKinds);
-        if (part >= 0 && !segment_box) continue;
-        Case c = MakeCase(kind, mu, seed);
-        c.pair.part = part;
-        KernelOptions o;
-        o.dynamics = true;
-        const SE3* H[4] = {&c.H[0], &c.H[1], &c.H[2], &c.H[3]};
-        ShapePairGeometry G0;
-        if (part >= 0 && !CalcShapePairGeometry(c.pair, H, 1.0, &G0)) continue;  // no prism
-        const ElementTerms<4> t = Terms(c, c.H, c.eta, o, nullptr);
-        if (part >= 0 && !t.active) continue;  // the other end, away from the box
-        if (part >= 0) ++active_parts;
-        ASSERT_TRUE(t.active) << int(kind);
-        ASSERT_TRUE(CalcShapePairGeometry(c.pair, H, 1.0, &G0));
-        // Equal and opposite forces: the world sum of the forces on the two sides is zero.
-        Vec3 sum = Vec3::Zero();
-        for (int k = 0; k < 4; ++k) sum += c.H[k].R * t.residual.segment<3>(6 * k);
-        EXPECT_LT(sum.norm(), 1e-12 * t.residual.norm());
-        Eigen::MatrixXd K_fd(24, 24), C_fd(24, 24);
-        const double eps = 1e-7;
-        for (int j = 0; j < 24; ++j) {
-          SE3 p[4] = {c.H[0], c.H[1], c.H[2], c.H[3]}, m[4] = {c.H[0], c.H[1], c.H[2], c.H[3]};
-          p[j / 6] = p[j / 6] * ExpSE3(eps * Vec6::Unit(j % 6));
-          m[j / 6] = m[j / 6] * ExpSE3(-eps * Vec6::Unit(j % 6));
-          K_fd.col(j) = (Terms(c, p, c.eta, o, &G0).residual - Terms(c, m, c.eta, o, &G0).residual) /
-                        (2 * eps);
-          Eigen::Matrix<double, 24, 1> vp = c.eta, vm = c.eta;
-          vp(j) += eps;
-          vm(j) -= eps;
-          C_fd.col(j) =
-              (Terms(c, c.H, vp, o, nullptr).residual - Terms(c, c.H, vm, o, nullptr).residual) /
-              (2 * eps);
+        // A segment against a box also as the two clipped ends (ShapePair::part), where active.
+        for (const int part : {-1, 0, 1}) {
+          const bool segment_box =
+              std::find(std::begin(kSegmentBoxKinds), std::end(kSegmentBoxKinds), kind) !=
+              std::end(kSegmentBoxKinds);
+          if (part >= 0 && !segment_box) continue;
+          Case c = MakeCase(kind, mu, seed);
+          c.pair.part = part;
+          KernelOptions o;
+          o.dynamics = true;
+          const SE3* H[4] = {&c.H[0], &c.H[1], &c.H[2], &c.H[3]};
+          ShapePairGeometry G0;
+          if (part >= 0 && !CalcShapePairGeometry(c.pair, H, 1.0, &G0)) continue;  // no prism
+          const ElementTerms<4> t = Terms(c, c.H, c.eta, o, nullptr);
+          if (part >= 0 && !t.active) continue;  // the other end, away from the box
+          if (part >= 0) ++active_parts;
+          ASSERT_TRUE(t.active) << int(kind);
+          ASSERT_TRUE(CalcShapePairGeometry(c.pair, H, 1.0, &G0));
+          // Equal and opposite forces: the world sum of the forces on the two sides is zero.
+          Vec3 sum = Vec3::Zero();
+          for (int k = 0; k < 4; ++k) sum += c.H[k].R * t.residual.segment<3>(6 * k);
+          EXPECT_LT(sum.norm(), 1e-12 * t.residual.norm());
+          Eigen::MatrixXd K_fd(24, 24), C_fd(24, 24);
+          const double eps = 1e-7;
+          for (int j = 0; j < 24; ++j) {
+            SE3 p[4] = {c.H[0], c.H[1], c.H[2], c.H[3]}, m[4] = {c.H[0], c.H[1], c.H[2], c.H[3]};
+            p[j / 6] = p[j / 6] * ExpSE3(eps * Vec6::Unit(j % 6));
+            m[j / 6] = m[j / 6] * ExpSE3(-eps * Vec6::Unit(j % 6));
+            K_fd.col(j) =
+                (Terms(c, p, c.eta, o, &G0).residual - Terms(c, m, c.eta, o, &G0).residual) /
+                (2 * eps);
+            Eigen::Matrix<double, 24, 1> vp = c.eta, vm = c.eta;
+            vp(j) += eps;
+            vm(j) -= eps;
+            C_fd.col(j) =
+                (Terms(c, c.H, vp, o, nullptr).residual - Terms(c, c.H, vm, o, nullptr).residual) /
+                (2 * eps);
+          }
+          EXPECT_LT(RelativeError(t.stiffness, K_fd), 1e-6)
+              << int(kind) << " mu " << mu << " part " << part;
+          EXPECT_LT(RelativeError(t.damping, C_fd), 1e-6)
+              << int(kind) << " mu " << mu << " part " << part;
         }
-        EXPECT_LT(RelativeError(t.stiffness, K_fd), 1e-6) << int(kind) << " mu " << mu << " part " << part;
-        EXPECT_LT(RelativeError(t.damping, C_fd), 1e-6) << int(kind) << " mu " << mu << " part " << part;
-       }
       }
     }
   }
@@ -234,13 +243,13 @@ TEST(ShapePairKind, TangentsMatchFiniteDifferencesAtTheFrozenClosestPointsAndInT
 }
 
 TEST(ShapePairKind, StaticForceIsTheGradientOfThePenaltyPotential) {
-  for (Kind kind : {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule, Kind::kSphereBox,
-                    Kind::kRodBoxFace, Kind::kRodBoxEdge, Kind::kCapsuleBoxCorner,
-                    Kind::kRodBoxPenetrating, Kind::kBoxEdgeBox}) {
+  for (Kind kind :
+       {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule, Kind::kSphereBox, Kind::kRodBoxFace,
+        Kind::kRodBoxEdge, Kind::kCapsuleBoxCorner, Kind::kRodBoxPenetrating, Kind::kBoxEdgeBox}) {
     const Case c = MakeCase(kind, 0.4, 7);
     KernelOptions o;  // statics: no damping, no friction
     const Eigen::Matrix<double, 24, 1> r = Terms(c, c.H, c.eta, o, nullptr).residual;
-    auto potential = [&](const SE3 (&frames)[4]) {
+    auto potential = [&](const SE3(&frames)[4]) {
       const SE3* H[4] = {&frames[0], &frames[1], &frames[2], &frames[3]};
       ShapePairGeometry G;
       EXPECT_TRUE(CalcShapePairGeometry(c.pair, H, 1.0, &G));
@@ -284,8 +293,8 @@ TEST(ShapePairGeometry, GapIsTheSampledMinimumDistanceAlsoForParallelSegments) {
     const int ns = 300;
     for (int i = 0; i <= ns; ++i)
       for (int k = 0; k <= ns; ++k)
-        best = std::min(best, (F[0].x + (F[1].x - F[0].x) * (double(i) / ns) -
-                               F[2].x - (F[3].x - F[2].x) * (double(k) / ns))
+        best = std::min(best, (F[0].x + (F[1].x - F[0].x) * (double(i) / ns) - F[2].x -
+                               (F[3].x - F[2].x) * (double(k) / ns))
                                   .norm());
     const double sampled = best - 0.03;
     EXPECT_LE(G.gap, sampled + 1e-12) << trial;
@@ -453,7 +462,7 @@ TEST(ShapePairValidation, HeadOnSpheresConserveMomentumAndReboundElasticallyWith
     }
     EXPECT_GT(spin, 0.1);  // friction at the surface points spun the spheres
   }
-  EXPECT_LT(drift[0], 1e-3);  // measured 4.6e-4 and 1.2e-4 (kg m/s + kg m^2/s)
+  EXPECT_LT(drift[0], 1e-3);            // measured 4.6e-4 and 1.2e-4 (kg m/s + kg m^2/s)
   EXPECT_GT(drift[0] / drift[1], 3.0);  // second order
 }
 
@@ -661,14 +670,14 @@ TEST(ShapePairValidation, CantileverRestsOnABoxEdge) {
     ++active;
     EXPECT_EQ(d.shape_pairs[static_cast<std::size_t>(i)].side[0].element, ne - 1);
     EXPECT_EQ(d.shape_pairs[static_cast<std::size_t>(i)].part, 1);  // the clipped end at the edge
-    EXPECT_NEAR(c.point[1].x(), x_e, 1e-12);  // on the edge
+    EXPECT_NEAR(c.point[1].x(), x_e, 1e-12);                        // on the edge
     EXPECT_NEAR(c.point[1].z(), top, 1e-12);
     R += c.normal_force * c.normal.z();
     gap = c.gap;
   }
   EXPECT_EQ(active, 1);
-  const double c_edge = 0.5 * (CantileverFlexibility(section, L - h, L) +
-                               CantileverFlexibility(section, L, L));
+  const double c_edge =
+      0.5 * (CantileverFlexibility(section, L - h, L) + CantileverFlexibility(section, L, L));
   const double c_low = LastElementMidpointFlexibility(section, L, h);
   ASSERT_GT(c_edge * P, clearance);  // without the box the rod would pass through its edge
   EXPECT_NEAR(R, (c_edge * P - clearance + gap) / c_low, 2e-3 * R);
@@ -696,9 +705,10 @@ TEST(ShapePairValidation, BoxDroppedOnABoxComesToRestOnItsEdgesAndCorners) {
         {0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.3, 0.3, 0.05), 0.0});
     const Vec3 half(0.05, 0.04, 0.03);
     const int node = b.AddNode(SE3{Mat3::Identity(), Vec3(0.02, -0.01, half.z() + drop)});
-    const Vec3 J = m_box / 3.0 * Vec3(half.y() * half.y() + half.z() * half.z(),
-                                       half.x() * half.x() + half.z() * half.z(),
-                                       half.x() * half.x() + half.y() * half.y());
+    const Vec3 J =
+        m_box / 3.0 *
+        Vec3(half.y() * half.y() + half.z() * half.z(), half.x() * half.x() + half.z() * half.z(),
+             half.x() * half.x() + half.y() * half.y());
     b.AddRigidBody("block", node, m_box, Vec3::Zero(), J.asDiagonal());
     b.AddContactShape({1, ContactShapeType::kBox, Vec3::Zero(), half, 0.0});
     ContactSettings law;
@@ -807,8 +817,9 @@ TEST(ShapePairValidation, RodFoldedOntoItselfCarriesTheTipLoadByItsFlexibility) 
   const Section section = CantileverSection(radius);
   ModelBuilder b;
   const int rod = b.AddRodAlongPath(
-      "fold", {Vec3::Zero(), Vec3(a, 0, 0), Vec3(a, 0, H), Vec3(a - e, 0, H), Vec3(a - e - L, 0, H)},
-      ne, section, Vec3::UnitY());
+      "fold",
+      {Vec3::Zero(), Vec3(a, 0, 0), Vec3(a, 0, H), Vec3(a - e, 0, H), Vec3(a - e - L, 0, H)}, ne,
+      section, Vec3::UnitY());
   const std::vector<int> nodes = b.model().rods[0].nodes;
   ASSERT_EQ(nodes.size(), static_cast<std::size_t>(4 * ne + 1));
   for (int k = 0; k <= 3 * ne; ++k) b.FixNode(nodes[static_cast<std::size_t>(k)]);
@@ -830,7 +841,7 @@ TEST(ShapePairValidation, RodFoldedOntoItselfCarriesTheTipLoadByItsFlexibility) 
   for (int i = 0; i < d.num_shape_pairs; ++i) {
     const ShapePair& p = d.shape_pairs[static_cast<std::size_t>(i)];
     const SE3* frames[4] = {&NodeFrame(d, p.side[0].node[0]), &NodeFrame(d, p.side[0].node[1]),
-                           &NodeFrame(d, p.side[1].node[0]), &NodeFrame(d, p.side[1].node[1])};
+                            &NodeFrame(d, p.side[1].node[0]), &NodeFrame(d, p.side[1].node[1])};
     ShapePairGeometry G;
     if (CalcShapePairGeometry(p, frames, 1.0, &G)) least_gap = std::min(least_gap, G.gap);
     const ShapePairState c = CalcShapePairState(m, d, i);

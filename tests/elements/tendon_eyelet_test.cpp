@@ -46,8 +46,7 @@ struct Scene {
 Scene MakeScene(std::mt19937& rng, double tension) {
   ModelBuilder b;
   std::vector<Vec3> path;
-  for (int i = 0; i <= 4; ++i)
-    path.emplace_back(0.3 * i, 0.1 * std::sin(1.1 * i), 0.05 * i * i);
+  for (int i = 0; i <= 4; ++i) path.emplace_back(0.3 * i, 0.1 * std::sin(1.1 * i), 0.05 * i * i);
   const int rod = b.AddRodAlongPath("rod", path, 1, RodSection());
   const double length = b.RodLength(rod);
   std::vector<BodyPoint> eyelets;
@@ -110,7 +109,7 @@ TEST(TendonEyelets, RowsAreTensionTimesTheLengthGradientWithTheExactTangent) {
   const double tau = 8.5;
   const Scene c = MakeScene(rng, tau);
   int span = 0;
-  TendonSpanSegmentKind::ForEach(c.model, [&](int, const int (&)[4]) { ++span; });
+  TendonSpanSegmentKind::ForEach(c.model, [&](int, const int(&)[4]) { ++span; });
   ASSERT_EQ(span, 5);  // all segments but the one between the end nodes (TendonSegmentKind)
   KernelOptions o;
   Eigen::VectorXd r, r2;
@@ -229,8 +228,8 @@ TEST(TendonEyelets, StrainEnergyChangesByMinusTensionTimesTendonLength) {
   const Cantilever lo = SolveCantilever(6, tau - dt), hi = SolveCantilever(6, tau + dt);
   ASSERT_TRUE(lo.result.converged && hi.result.converged);
   const double dU = CalcEnergy(hi.model, hi.data).strain - CalcEnergy(lo.model, lo.data).strain;
-  const double dL = CalcTendonState(hi.model, hi.data, 0).length -
-                    CalcTendonState(lo.model, lo.data, 0).length;
+  const double dL =
+      CalcTendonState(hi.model, hi.data, 0).length - CalcTendonState(lo.model, lo.data, 0).length;
   EXPECT_LT(dL, 0.0);
   EXPECT_NEAR(-dU / dL, tau, 1e-4 * tau);
 }

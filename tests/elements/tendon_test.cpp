@@ -59,8 +59,8 @@ TEST(PointDistance, GradientAndHessianMatchFiniteDifferencesThroughTheRetraction
   }
   // Coinciding points: no direction.
   PointDistance g;
-  EXPECT_FALSE(CalcPointDistance(SE3::Identity(), Vec3::Zero(), SE3::Identity(), Vec3::Zero(),
-                                 true, &g));
+  EXPECT_FALSE(
+      CalcPointDistance(SE3::Identity(), Vec3::Zero(), SE3::Identity(), Vec3::Zero(), true, &g));
 }
 
 // A chain of four free nodes (rigid bodies) and the ground, with a tendon through eyelets on
@@ -83,7 +83,8 @@ Chain MakeChain(std::mt19937& rng, double tension, double second_tension = 0.0) 
   }
   b.AddTendon("t", eyelets, Profile::Constant(tension));
   if (second_tension > 0.0)
-    b.AddTendon("t2", {{1, RandomVec3(rng, 0.1)}, {2, RandomVec3(rng, 0.1)}, {3, RandomVec3(rng, 0.1)}},
+    b.AddTendon("t2",
+                {{1, RandomVec3(rng, 0.1)}, {2, RandomVec3(rng, 0.1)}, {3, RandomVec3(rng, 0.1)}},
                 Profile::Constant(second_tension));
   ForceElement fe;
   fe.name = "spring";
@@ -97,8 +98,10 @@ Chain MakeChain(std::mt19937& rng, double tension, double second_tension = 0.0) 
   Chain c{b.Build(), {}};
   c.data = MakeData(c.model);
   for (std::size_t i = 0; i < c.data.H.size(); ++i)
-    c.data.H[i] = c.data.H[i] * ExpSE3((Vec6() << RandomVec3(rng, 0.1), RandomVec3(rng, 0.5)).finished());
-  for (int i = 0; i < c.model.nv; ++i) c.data.v(i) = std::uniform_real_distribution<double>(-1, 1)(rng);
+    c.data.H[i] =
+        c.data.H[i] * ExpSE3((Vec6() << RandomVec3(rng, 0.1), RandomVec3(rng, 0.5)).finished());
+  for (int i = 0; i < c.model.nv; ++i)
+    c.data.v(i) = std::uniform_real_distribution<double>(-1, 1)(rng);
   return c;
 }
 
@@ -110,7 +113,7 @@ void AssembleKind(const Model& m, const Data& d, const KernelOptions& o, Eigen::
   r->setZero(6 * n);
   if (K) K->setZero(6 * n, 6 * n);
   if (C) C->setZero(6 * n, 6 * n);
-  Kind::ForEach(m, [&](const typename Kind::Item& item, const int (&nodes)[2]) {
+  Kind::ForEach(m, [&](const typename Kind::Item& item, const int(&nodes)[2]) {
     NodeMotion<2> x;
     const Mat6 I = Mat6::Identity();
     for (int i = 0; i < 2; ++i) {
@@ -131,7 +134,8 @@ void AssembleKind(const Model& m, const Data& d, const KernelOptions& o, Eigen::
           K->block<6, 6>(6 * nodes[a], 6 * nodes[b]) +=
               (t.combined ? t.matrix : t.stiffness).template block<6, 6>(6 * a, 6 * b);
         if (C && t.has_damping)
-          C->block<6, 6>(6 * nodes[a], 6 * nodes[b]) += t.damping.template block<6, 6>(6 * a, 6 * b);
+          C->block<6, 6>(6 * nodes[a], 6 * nodes[b]) +=
+              t.damping.template block<6, 6>(6 * a, 6 * b);
       }
     }
   });
@@ -158,17 +162,21 @@ TEST(TendonSegmentKind, SegmentsSumToTensionTimesTheLengthGradientWithTheExactTa
   AssembleKind<TendonSegmentKind>(c.model, c.data, o, &r, &K, nullptr);
   // Force = gradient of the potential tau L + tau2 L2 (constant tensions).
   const Eigen::MatrixXd dV = FiniteDifference(
-      c, [&](const Data& d) {
+      c,
+      [&](const Data& d) {
         return Eigen::VectorXd::Constant(1, tau * CalcTendonState(c.model, d, 0).length +
                                                 tau2 * CalcTendonState(c.model, d, 1).length);
-      }, 1e-6);
+      },
+      1e-6);
   EXPECT_LT(RelativeError(r, dV.transpose()), 1e-8);
   const Eigen::MatrixXd dr = FiniteDifference(
-      c, [&](const Data& d) {
+      c,
+      [&](const Data& d) {
         Eigen::VectorXd rr;
         AssembleKind<TendonSegmentKind>(c.model, d, o, &rr, nullptr, nullptr);
         return rr;
-      }, 1e-6);
+      },
+      1e-6);
   EXPECT_LT(RelativeError(K, dr), 1e-7);
   // The tangent is not symmetric (the rotation terms, method-next.md §N4.2).
   EXPECT_GT((K - K.transpose()).norm(), 1e-3 * K.norm());
@@ -274,7 +282,10 @@ TEST(ForceElementKind, ForceIsTheSpringDamperActuatorLawWithExactTangents) {
   // The closed form: f = k (l - l0) + c dl/dt + F along the gradient of l.
   const LineForceState s = CalcForceElementState(c.model, c.data, 0);
   const Eigen::MatrixXd dl = FiniteDifference(
-      c, [&](const Data& d) { return Eigen::VectorXd::Constant(1, CalcForceElementState(c.model, d, 0).length); },
+      c,
+      [&](const Data& d) {
+        return Eigen::VectorXd::Constant(1, CalcForceElementState(c.model, d, 0).length);
+      },
       1e-6);
   const double f = fe.stiffness * (s.length - fe.rest_length) + fe.damping * s.rate + 1.5;
   EXPECT_NEAR(s.force, f, 1e-12);
@@ -282,11 +293,13 @@ TEST(ForceElementKind, ForceIsTheSpringDamperActuatorLawWithExactTangents) {
   EXPECT_LT(RelativeError(r, f * dl.row(0).transpose()), 1e-8);
   // Stiffness: d r / dq at fixed velocities (incl. the damper's dl/dt = g(q)^T eta).
   const Eigen::MatrixXd dr = FiniteDifference(
-      c, [&](const Data& d) {
+      c,
+      [&](const Data& d) {
         Eigen::VectorXd rr;
         AssembleKind<ForceElementKind>(c.model, d, o, &rr, nullptr, nullptr);
         return rr;
-      }, 1e-6);
+      },
+      1e-6);
   EXPECT_LT(RelativeError(K, dr), 1e-7);
   // Damping: d r / d eta.
   Eigen::MatrixXd dv(r.size(), r.size());
@@ -304,11 +317,13 @@ TEST(ForceElementKind, ForceIsTheSpringDamperActuatorLawWithExactTangents) {
   o.dynamics = false;
   AssembleKind<ForceElementKind>(c.model, c.data, o, &r, nullptr, nullptr);
   const Eigen::MatrixXd dE = FiniteDifference(
-      c, [&](const Data& d) {
+      c,
+      [&](const Data& d) {
         Energy e;
         ForceElementKind::AddEnergy(c.model, d, 0, &e);
         return Eigen::VectorXd::Constant(1, e.spring);
-      }, 1e-6);
+      },
+      1e-6);
   const Eigen::VectorXd actuator = 1.5 * dl.row(0).transpose();
   EXPECT_LT(RelativeError(r - actuator, dE.transpose()), 1e-8);
 }
@@ -344,7 +359,8 @@ TEST(ForceElementKind, ReportedForceIsTheTensionInTheKernelsResidual) {
     o.dynamics = false;
     o.load_factor = 0.5;
     EXPECT_NEAR(tension(o, &opposite), fe.stiffness * (s.length - fe.rest_length) + 0.75,
-                1e-13 * std::abs(s.force)) << seed;
+                1e-13 * std::abs(s.force))
+        << seed;
   }
 }
 
@@ -358,7 +374,8 @@ TEST(ForceElementKind, ForcesHaveZeroWorldResultantSoMomentumIsConserved) {
     // Node-frame wrench [f; m] at node X -> world force R f and moment about the origin
     // x x R f + R m.
     Vec6 total = Vec6::Zero();
-    for (const auto& [H, w] : {std::pair<SE3, Vec6>{HA, g.gradient.head<6>()}, {HB, g.gradient.tail<6>()}}) {
+    for (const auto& [H, w] :
+         {std::pair<SE3, Vec6>{HA, g.gradient.head<6>()}, {HB, g.gradient.tail<6>()}}) {
       const Vec3 f = H.R * w.head<3>();
       total.head<3>() += f;
       total.tail<3>() += H.x.cross(f) + H.R * w.tail<3>();

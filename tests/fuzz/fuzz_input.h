@@ -20,7 +20,8 @@ inline Input SplitInput(const std::uint8_t* data, std::size_t size) {
   std::size_t start = 0;
   for (bool first = true;; first = false) {
     const std::size_t nul = all.find('\0', start);
-    std::string part = all.substr(start, nul == std::string::npos ? std::string::npos : nul - start);
+    std::string part =
+        all.substr(start, nul == std::string::npos ? std::string::npos : nul - start);
     if (first)
       in.scene = std::move(part);
     else

@@ -12,7 +12,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const screwfem::fuzz::Input in = screwfem::fuzz::SplitInput(data, size);
   try {
-    const screwfem::Scene scene = screwfem::ParseScene(in.scene, screwfem::fuzz::kSource, in.overrides);
+    const screwfem::Scene scene =
+        screwfem::ParseScene(in.scene, screwfem::fuzz::kSource, in.overrides);
   } catch (const screwfem::InputError& e) {
     if (std::string(e.what()).rfind(screwfem::fuzz::kSource, 0) != 0) std::abort();
   }

@@ -62,8 +62,8 @@ StaticFinger SolveFinger(const std::vector<std::string>& overrides) {
 
 TEST(ActuationScene, ChamberBendsTheFingerWithoutLoadingTheWristUnlikeATipMoment) {
   const StaticFinger chamber = SolveFinger({});
-  const StaticFinger moment = SolveFinger(
-      {"actuation.chamber.pressure.value=0", "loads.tip_moment.profile.value=1"});
+  const StaticFinger moment =
+      SolveFinger({"actuation.chamber.pressure.value=0", "loads.tip_moment.profile.value=1"});
   // The chamber: an arc of curvature k = p A |r2| / EI = 12.5 1/m stretched by
   // eps = p A / EA (the helical element is exact for constant strain), turned by the wrist's
   // pi/4 about z.
@@ -95,8 +95,8 @@ test::Table RunFinger(const std::string& dir, const std::vector<std::string>& ov
 TEST(ActuationScene, DrivenWristCarriesOnlyWhatMovingTheFingerNeeds) {
   test::ScopedDir chamber_dir("actuation_scene_chamber"), moment_dir("actuation_scene_moment");
   const test::Table chamber = RunFinger(chamber_dir.path(), {});
-  const test::Table moment = RunFinger(
-      moment_dir.path(), {"actuation.chamber.pressure.value=0", "loads.tip_moment.profile.value=1"});
+  const test::Table moment = RunFinger(moment_dir.path(), {"actuation.chamber.pressure.value=0",
+                                                           "loads.tip_moment.profile.value=1"});
   ASSERT_EQ(chamber.rows.size(), moment.rows.size());
   ASSERT_GT(chamber.rows.size(), 200u);
   // The rigid finger's need: I_wrist max|q''| with I_wrist = rhoA L^3 / 3 + rhoI3 L about the

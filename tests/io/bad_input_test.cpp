@@ -317,8 +317,9 @@ TEST(BadInput, AdaptiveStepKeys) {
               "analysis.max_step: applies only to 'step: auto'");
   // Valid: a number for both tolerances, or both given, with limits.
   EXPECT_EQ(Error(body + "  step: auto\n  tolerance: 1e-6\n"), "(no error)");
-  const Scene s = ParseScene(body + "  step: auto\n  tolerance: {absolute: 1e-5, relative: 1e-3}\n"
-                                    "  min_step: 1e-6\n  max_step: 1e-2\n  initial_step: 2e-3\n",
+  const Scene s = ParseScene(body +
+                                 "  step: auto\n  tolerance: {absolute: 1e-5, relative: 1e-3}\n"
+                                 "  min_step: 1e-6\n  max_step: 1e-2\n  initial_step: 2e-3\n",
                              "ok.yaml", {});
   EXPECT_TRUE(s.analysis.adaptive_steps);
   EXPECT_EQ(s.analysis.dynamic.absolute_tolerance, 1e-5);
@@ -344,13 +345,13 @@ TEST(BadInput, TimesTooLargeForTheStepAreRefusedNamingTheField) {
   ExpectError(kHead +
                   "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
                   "analysis:\n  start_time: 1e7\n  end_time: 1.00001e7\n",
-              "bad.yaml:7:13", "analysis.end_time: doubles near t = 1.00001e+07 s are 1.86e-09 s "
+              "bad.yaml:7:13",
+              "analysis.end_time: doubles near t = 1.00001e+07 s are 1.86e-09 s "
               "apart, so steps of 0.001 s cannot be taken to a relative accuracy of 1e-06 (the "
               "step would silently change); use a step of at least 0.00186 s");
   // At the limit: a 1 ms step is representable to 1e-6 up to t = 4.5e6 s (spacing 9.3e-10 s).
-  EXPECT_EQ(Error(kHead +
-                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
-                  "analysis:\n  start_time: 4e6\n  end_time: 4.000001e6\n"),
+  EXPECT_EQ(Error(kHead + "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
+                          "analysis:\n  start_time: 4e6\n  end_time: 4.000001e6\n"),
             "(no error)");
 }
 
@@ -365,11 +366,13 @@ TEST(BadInput, UnknownNewtonVariantOrPredictor) {
   ExpectError(kHead +
                   "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
                   "analysis:\n  newton: modified\n",
-              "bad.yaml:6:11", "analysis.newton: expected one of simplified or full, got 'modified'");
+              "bad.yaml:6:11",
+              "analysis.newton: expected one of simplified or full, got 'modified'");
   ExpectError(kHead +
                   "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
                   "analysis:\n  predictor: [last]\n",
-              "bad.yaml:6:14", "analysis.predictor: expected one of adaptive, last or zero, got a list");
+              "bad.yaml:6:14",
+              "analysis.predictor: expected one of adaptive, last or zero, got a list");
   ExpectError(kHead +
                   "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
                   "analysis:\n  convergence: 1e-8\n",
@@ -378,8 +381,7 @@ TEST(BadInput, UnknownNewtonVariantOrPredictor) {
   ExpectError(kHead +
                   "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
                   "analysis:\n  constraints: index2\n",
-              "bad.yaml:6:16",
-              "analysis.constraints: expected one of index3 or ggl, got 'index2'");
+              "bad.yaml:6:16", "analysis.constraints: expected one of index3 or ggl, got 'index2'");
 }
 
 // analysis.statics (statics.h, StaticOptions): each bad value at its line and column.
@@ -390,7 +392,8 @@ TEST(BadInput, StaticPathSettings) {
   ExpectError(head + "analysis:\n  statics: {metod: load}\n", "bad.yaml:6:13",
               "analysis.statics.metod: unknown key 'metod' (did you mean 'method'?)");
   ExpectError(head + "analysis:\n  statics:\n    arc_length_min: 2\n    arc_length_max: 1\n",
-              "bad.yaml:8:21", "analysis.statics.arc_length_max: expected arc_length_max >= arc_length_min");
+              "bad.yaml:8:21",
+              "analysis.statics.arc_length_max: expected arc_length_max >= arc_length_min");
   ExpectError(head + "analysis:\n  statics: {max_steps: 0}\n", "bad.yaml:6:24",
               "analysis.statics.max_steps: expected an integer from 1 to 10000000, got '0'");
   ExpectError(head + "analysis:\n  statics: {arc_length: -1}\n", "bad.yaml:6:25",
@@ -548,12 +551,14 @@ const std::string kRod =
 TEST(BadInput, EyeletOffTheRodOrAtAPointBetweenNodes) {
   // An arc length between nodes is an eyelet on the element's section; beyond the rod's end it
   // is an error.
-  ExpectError(kRod + "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 0}\n"
-                     "      - {body: r, s: 2.5, offset: [0, 0.01, 0]}\n    tension: 1\n",
+  ExpectError(kRod +
+                  "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 0}\n"
+                  "      - {body: r, s: 2.5, offset: [0, 0.01, 0]}\n    tension: 1\n",
               "bad.yaml:9:9",
               "tendons.t.eyelets[1]: eyelet: arc length 2.5 m is off soft body 'r' (length 2 m)");
-  ExpectError(kRod + "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 0}\n"
-                     "      - {body: r, at: [0.5, 0, 0]}\n    tension: 1\n",
+  ExpectError(kRod +
+                  "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 0}\n"
+                  "      - {body: r, at: [0.5, 0, 0]}\n    tension: 1\n",
               "bad.yaml:9:9", "eyelet: soft body 'r' has no node at [0.5, 0, 0]");
 }
 
@@ -563,8 +568,9 @@ TEST(BadInput, TendonThroughOnePoint) {
 }
 
 TEST(BadInput, TendonTensionThatCanBecomeNegative) {
-  ExpectError(kRod + "tendons:\n  t:\n    eyelets: [{body: r, s: 0}, {body: r, s: 2}]\n"
-                     "    tension: {type: sine, value: 2, frequency: 1}\n",
+  ExpectError(kRod +
+                  "tendons:\n  t:\n    eyelets: [{body: r, s: 0}, {body: r, s: 2}]\n"
+                  "    tension: {type: sine, value: 2, frequency: 1}\n",
               "bad.yaml:6:3",
               "tendon 't': the tension profile can become negative (its terms' lower bound is "
               "-2.000000 N)");
@@ -573,33 +579,37 @@ TEST(BadInput, TendonTensionThatCanBecomeNegative) {
 }
 
 TEST(BadInput, TendonDrawnByTensionAndByLength) {
-  ExpectError(kRod + "tendons:\n  t:\n    eyelets: [{body: r, s: 0}, {body: r, s: 2}]\n"
-                     "    tension: 1\n    length: 1.9\n",
+  ExpectError(kRod +
+                  "tendons:\n  t:\n    eyelets: [{body: r, s: 0}, {body: r, s: 2}]\n"
+                  "    tension: 1\n    length: 1.9\n",
               "bad.yaml:9:13",
               "tendons.t.length: give either 'tension' or 'length' (the tendon is drawn by one of "
               "them), not both");
 }
 
 TEST(BadInput, TendonLengthThatCanReachZero) {
-  ExpectError(kRod + "tendons:\n  t:\n    eyelets: [{body: r, s: 0}, {body: r, s: 2}]\n"
-                     "    length: {type: ramp, value: -3, t1: 1}\n",
+  ExpectError(kRod +
+                  "tendons:\n  t:\n    eyelets: [{body: r, s: 0}, {body: r, s: 2}]\n"
+                  "    length: {type: ramp, value: -3, t1: 1}\n",
               "bad.yaml:6:3",
               "tendon 't': the length profile can become zero or negative (its terms' lower bound "
               "is -3.000000 m)");
 }
 
 TEST(BadInput, CoincidingEyeletsPointAtTheSecond) {
-  ExpectError(kRod + "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 1}\n"
-                     "      - {body: r, at: B}\n    tension: 1\n",
+  ExpectError(kRod +
+                  "tendons:\n  t:\n    eyelets:\n      - {body: r, s: 1}\n"
+                  "      - {body: r, at: B}\n    tension: 1\n",
               "bad.yaml:9:9",
               "tendons.t.eyelets[1]: coincides with eyelet 0 in the reference configuration");
 }
 
 TEST(BadInput, OffsetOnARigidBodyOrTheGround) {
-  ExpectError(kRod + "forces:\n  f: {a: {at: A, offset: [0, 1, 0]}, b: {body: r, s: 2}, stiffness: 1}\n",
-              "bad.yaml:6:18",
-              "forces.f.a.offset: 'offset' is not used by the ground (give the point itself as "
-              "'at')");
+  ExpectError(
+      kRod + "forces:\n  f: {a: {at: A, offset: [0, 1, 0]}, b: {body: r, s: 2}, stiffness: 1}\n",
+      "bad.yaml:6:18",
+      "forces.f.a.offset: 'offset' is not used by the ground (give the point itself as "
+      "'at')");
 }
 
 TEST(BadInput, ForceElementWithBothEndsOnTheGround) {
@@ -610,9 +620,10 @@ TEST(BadInput, ForceElementWithBothEndsOnTheGround) {
 }
 
 TEST(BadInput, UnknownRunTimeInputName) {
-  ExpectError(kHead + "inputs: {u: 0}\nbodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], "
-                      "free: true}\nloads:\n  f: {body: b, at: A, force: [1, 0, 0], profile: "
-                      "{type: input, name: uu}}\n",
+  ExpectError(kHead +
+                  "inputs: {u: 0}\nbodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], "
+                  "free: true}\nloads:\n  f: {body: b, at: A, force: [1, 0, 0], profile: "
+                  "{type: input, name: uu}}\n",
               "bad.yaml:7:70", "loads.f.profile.name: unknown input 'uu' (did you mean 'u'?)");
 }
 
@@ -623,16 +634,19 @@ std::string Actuator(const std::string& entry) { return kRod + "actuation:\n  a:
 TEST(BadInput, ActuatorOnAnUnknownOrRigidBody) {
   ExpectError(Actuator("{type: pressure, rod: q, area: 1e-4, offset: [0, 0.01], pressure: 1}"),
               "bad.yaml:6:28", "actuation.a.rod: undefined body 'q'");
-  ExpectError(kHead + "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], free: "
-                      "true}\nactuation:\n  a: {type: rest_strain, rod: b, vector: [0, 0, 0, 0, "
-                      "0, 1]}\n",
-              "bad.yaml:6:31", "actuation.a.rod: 'b' is a rigid body; actuation acts on soft bodies (rods)");
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], free: "
+                  "true}\nactuation:\n  a: {type: rest_strain, rod: b, vector: [0, 0, 0, 0, "
+                  "0, 1]}\n",
+              "bad.yaml:6:31",
+              "actuation.a.rod: 'b' is a rigid body; actuation acts on soft bodies (rods)");
 }
 
 TEST(BadInput, ActuatorTypeAreaAndOffsetAreChecked) {
-  ExpectError(Actuator("{type: balloon, rod: r}"), "bad.yaml:6:13",
-              "actuation.a.type: expected one of pressure, muscle, rest_strain or active_stress, got "
-              "'balloon'");
+  ExpectError(
+      Actuator("{type: balloon, rod: r}"), "bad.yaml:6:13",
+      "actuation.a.type: expected one of pressure, muscle, rest_strain or active_stress, got "
+      "'balloon'");
   ExpectError(Actuator("{type: pressure, rod: r, area: -1e-4, offset: [0, 0.01], pressure: 1}"),
               "bad.yaml:6:37", "actuation.a.area: expected a positive number, got '-1e-4'");
   ExpectError(Actuator("{type: pressure, rod: r, area: 1e-4, offset: [0.01], pressure: 1}"),

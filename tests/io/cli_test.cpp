@@ -83,8 +83,8 @@ Outcome RunCli(const std::vector<std::string>& args, const std::string& dir,
   return Wait(Spawn(kCli, args, dir, env), dir);
 }
 
-#define REQUIRE_CLI()                                                                      \
-  do {                                                                                     \
+#define REQUIRE_CLI()                                                                           \
+  do {                                                                                          \
     if (kCli == nullptr) GTEST_SKIP() << "the build did not say where the screwfem program is"; \
   } while (0)
 
@@ -113,7 +113,10 @@ TEST(Cli, RunDescribesTheJointCoordinatesInJointsJson) {
   REQUIRE_CLI();
   const ScopedDir tmp("cli_joints_json");
   const std::string out = tmp.path() + "/out";
-  ASSERT_EQ(RunCli({"run", kPendulum, "-o", out, "-q", "--set", "analysis.end_time=0.01"}, tmp.path()).code, 0);
+  ASSERT_EQ(
+      RunCli({"run", kPendulum, "-o", out, "-q", "--set", "analysis.end_time=0.01"}, tmp.path())
+          .code,
+      0);
   const auto joints = ParseJsonFile(out + "/joints.json");
   ASSERT_TRUE(joints);
   EXPECT_EQ(joints->Find("format")->string, "screwfem joints 1");
@@ -136,8 +139,8 @@ TEST(Cli, OverridesApplyInOrder) {
   REQUIRE_CLI();
   const ScopedDir tmp("cli_set");
   const std::string out = tmp.path() + "/out";
-  const Outcome o = RunCli({"run", kPendulum, "--set", "analysis.end_time=0.1", "-o", out,
-                            "--set", "analysis.step=2e-3", "--set", "outputs.interval=0.05"},
+  const Outcome o = RunCli({"run", kPendulum, "--set", "analysis.end_time=0.1", "-o", out, "--set",
+                            "analysis.step=2e-3", "--set", "outputs.interval=0.05"},
                            tmp.path());
   ASSERT_EQ(o.code, 0) << o.err;
   EXPECT_NE(o.out.find("50 steps"), std::string::npos) << o.out;
@@ -191,7 +194,8 @@ TEST(Cli, SigintStopsCleanlyWithExitCode130) {
   ASSERT_GT(pid, 0);
   // Wait until the run is under way (a few rows written), then interrupt.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (ReadCsv(out + "/points.csv").rows.size() < 3 && std::chrono::steady_clock::now() < deadline)
+  while (ReadCsv(out + "/points.csv").rows.size() < 3 &&
+         std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   kill(pid, SIGINT);
   const Outcome o = Wait(pid, tmp.path());
@@ -214,11 +218,11 @@ TEST(Cli, SigtermAndSighupEndTheRunWithConsistentFilesAndSayWhichSignal) {
   for (const int signal : {SIGTERM, SIGHUP}) {
     const ScopedDir tmp("cli_sigterm");
     const std::string out = tmp.path() + "/out";
-    const pid_t pid = Spawn(kCli,
-                            {"run", kPendulum, "-o", out, "--set", "analysis.step=1e-5", "--set",
-                             "analysis.end_time=1000", "--set", "outputs.vtk=false", "--set",
-                             "outputs.interval=1e-4"},
-                            tmp.path());
+    const pid_t pid = Spawn(
+        kCli,
+        {"run", kPendulum, "-o", out, "--set", "analysis.step=1e-5", "--set",
+         "analysis.end_time=1000", "--set", "outputs.vtk=false", "--set", "outputs.interval=1e-4"},
+        tmp.path());
     ASSERT_GT(pid, 0);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     while (ReadCsv(out + "/points.csv").rows.size() < 3 &&
@@ -334,9 +338,9 @@ TEST(Cli, WriteErrorLeavesCompleteRowsAndASummaryThatSaysSo) {
   REQUIRE_CLI();
   const ScopedDir tmp("cli_full");
   const std::string out = tmp.path() + "/out";
-  const Outcome o = RunCliWithLimit({"run", kPendulum, "-o", out, "--set", "outputs.interval=0",
-                                     "--set", "outputs.vtk=false"},
-                                    tmp.path(), RLIMIT_FSIZE, 30000);
+  const Outcome o = RunCliWithLimit(
+      {"run", kPendulum, "-o", out, "--set", "outputs.interval=0", "--set", "outputs.vtk=false"},
+      tmp.path(), RLIMIT_FSIZE, 30000);
   EXPECT_EQ(o.code, 2) << o.err;
   EXPECT_EQ(o.out.rfind("failed: ", 0), 0u) << o.out;
   EXPECT_NE(o.err.find("points.csv: File too large"), std::string::npos) << o.err;
@@ -373,7 +377,8 @@ TEST(Cli, WriteErrorBeforeTheFirstSummaryLeavesNoTables) {
 // Waits until the run writing `out` has recorded a few rows.
 void WaitForRows(const std::string& out) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (ReadCsv(out + "/points.csv").rows.size() < 3 && std::chrono::steady_clock::now() < deadline)
+  while (ReadCsv(out + "/points.csv").rows.size() < 3 &&
+         std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
 }
 
@@ -390,8 +395,8 @@ TEST(Cli, OutputDirectoryInUseByARunningRunIsRefusedNamingItsProcess) {
                           tmp.path() + "/first");
   ASSERT_GT(pid, 0);
   WaitForRows(out);
-  const std::vector<std::string> second = {"run", kPendulum, "-o", out, "--force", "--set",
-                                           "analysis.end_time=0.01"};
+  const std::vector<std::string> second = {
+      "run", kPendulum, "-o", out, "--force", "--set", "analysis.end_time=0.01"};
   Outcome o = RunCli(second, tmp.path() + "/second");
   EXPECT_EQ(o.code, 2) << o.err;
   EXPECT_NE(o.err.find("is in use by another screwfem run (process " + std::to_string(pid) + ")"),
@@ -410,7 +415,8 @@ TEST(Cli, EarlierResultsAreReplacedOnlyWithForce) {
   REQUIRE_CLI();
   const ScopedDir tmp("cli_force");
   const std::string out = tmp.path() + "/out";
-  Outcome o = RunCli({"run", kPendulum, "-o", out, "--set", "outputs.vtk_interval=0.01"}, tmp.path());
+  Outcome o =
+      RunCli({"run", kPendulum, "-o", out, "--set", "outputs.vtk_interval=0.01"}, tmp.path());
   ASSERT_EQ(o.code, 0) << o.err;
   ASSERT_TRUE(std::filesystem::exists(out + "/vtk/frame_00050.vtp"));
   std::ofstream(out + "/notes.txt") << "mine\n";
@@ -421,7 +427,8 @@ TEST(Cli, EarlierResultsAreReplacedOnlyWithForce) {
   EXPECT_NE(o.err.find("--force"), std::string::npos) << o.err;
   EXPECT_EQ(ReadCsv(out + "/points.csv").rows.size(), 51u);  // untouched
   // --force: the new run's 2 frames only (t = 0, 0.1), listed and on disk.
-  o = RunCli({"run", kPendulum, "-o", out, "--force", "--set", "analysis.end_time=0.1"}, tmp.path());
+  o = RunCli({"run", kPendulum, "-o", out, "--force", "--set", "analysis.end_time=0.1"},
+             tmp.path());
   ASSERT_EQ(o.code, 0) << o.err;
   int frames = 0;
   for (const auto& e : std::filesystem::directory_iterator(out + "/vtk"))
@@ -457,12 +464,15 @@ TEST(Cli, PlotDrawsPointsJointsAndSnapshots) {
   if (!PythonHasMatplotlib(tmp.path())) GTEST_SKIP() << "no /usr/bin/python3 with matplotlib";
   const std::string run_a = tmp.path() + "/fine", run_b = tmp.path() + "/coarse";
   ASSERT_EQ(RunCli({"run", kPendulum, "-o", run_a, "-q"}, tmp.path()).code, 0);
-  ASSERT_EQ(RunCli({"run", kPendulum, "-o", run_b, "-q", "--set", "analysis.step=5e-3"}, tmp.path()).code, 0);
+  ASSERT_EQ(
+      RunCli({"run", kPendulum, "-o", run_b, "-q", "--set", "analysis.step=5e-3"}, tmp.path()).code,
+      0);
   const std::string figs = tmp.path() + "/figs";
-  const Outcome o = RunCli({"plot", run_a, run_b, "-o", figs, "--points", "tip", "--times", "0,0.25,0.5"},
-                           tmp.path());
+  const Outcome o = RunCli(
+      {"plot", run_a, run_b, "-o", figs, "--points", "tip", "--times", "0,0.25,0.5"}, tmp.path());
   ASSERT_EQ(o.code, 0) << o.err;
-  for (const char* f : {"point_tip.png", "joint_hinge.png", "snapshots_fine.png", "snapshots_coarse.png"}) {
+  for (const char* f :
+       {"point_tip.png", "joint_hinge.png", "snapshots_fine.png", "snapshots_coarse.png"}) {
     const std::string path = figs + "/" + f;
     ASSERT_TRUE(std::filesystem::is_regular_file(path)) << path;
     EXPECT_EQ(ReadFile(path).substr(1, 3), "PNG") << path;
@@ -493,7 +503,8 @@ TEST(Cli, PlotAnimateWritesOneGifPicturePerFrame) {
   ASSERT_EQ(gif.substr(0, 4), "GIF8");
   // One image descriptor (0x2C after a graphic control extension) per ParaView frame.
   std::size_t images = 0;
-  for (std::size_t i = gif.find("\x21\xF9\x04"); i != std::string::npos; i = gif.find("\x21\xF9\x04", i + 1))
+  for (std::size_t i = gif.find("\x21\xF9\x04"); i != std::string::npos;
+       i = gif.find("\x21\xF9\x04", i + 1))
     images += gif.size() > i + 8 && gif[i + 8] == '\x2C' ? 1 : 0;
   EXPECT_EQ(images, 6u);
 }
@@ -517,11 +528,13 @@ TEST(Cli, ViewWritesOneSelfContainedPage) {
   const std::string html = ReadFile(out + "/view.html");
   EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
   EXPECT_NE(html.find("\"name\":\"pendulum\""), std::string::npos);  // the case name
-  EXPECT_NE(html.find("var REVISION=\"111\""), std::string::npos);      // three.js inlined
-  EXPECT_EQ(html.find("<script src"), std::string::npos);                // nothing fetched
+  EXPECT_NE(html.find("var REVISION=\"111\""), std::string::npos);   // three.js inlined
+  EXPECT_EQ(html.find("<script src"), std::string::npos);            // nothing fetched
   // A run without ParaView frames: a clear error, exit status 2.
   const std::string novtk = tmp.path() + "/novtk";
-  ASSERT_EQ(RunCli({"run", kPendulum, "-o", novtk, "-q", "--set", "outputs.vtk=false"}, tmp.path()).code, 0);
+  ASSERT_EQ(
+      RunCli({"run", kPendulum, "-o", novtk, "-q", "--set", "outputs.vtk=false"}, tmp.path()).code,
+      0);
   const Outcome bad = RunCli({"view", novtk, "-o", tmp.path() + "/x.html"}, tmp.path());
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.err.find("has no ParaView frames"), std::string::npos) << bad.err;
@@ -542,9 +555,9 @@ TEST(Cli, PlotScriptCanBeOverriddenByTheEnvironment) {
 TEST(Cli, SweepPackageDirectoryCanBeOverriddenByTheEnvironment) {
   REQUIRE_CLI();
   const ScopedDir tmp("cli_sweep_env");
-  const Outcome o = RunCli({"sweep", kPendulum, "--grid", "analysis.rho_inf=0.8,1", "-o",
-                            tmp.path() + "/sweep"},
-                           tmp.path(), {"SCREWFEM_PYTHONPATH=" + tmp.path() + "/no_such_dir"});
+  const Outcome o =
+      RunCli({"sweep", kPendulum, "--grid", "analysis.rho_inf=0.8,1", "-o", tmp.path() + "/sweep"},
+             tmp.path(), {"SCREWFEM_PYTHONPATH=" + tmp.path() + "/no_such_dir"});
   EXPECT_EQ(o.code, 2);
   EXPECT_NE(o.err.find("Python package screwfem not found in " + tmp.path() + "/no_such_dir"),
             std::string::npos)

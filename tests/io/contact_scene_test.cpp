@@ -40,9 +40,9 @@ TEST(ContactScene, RunWritesContactsTableTheBoxStopsAndTheRodRestsAtItsRadius) {
   ASSERT_TRUE(r.ok) << r.message;
   const test::Table c = test::ReadCsv(dir.path() + "/contacts.csv");
   ASSERT_TRUE(c.well_formed) << c.problem;
-  EXPECT_EQ(c.columns, (std::vector<std::string>{"t", "pair", "rod", "owner", "obstacle", "px",
-                                                 "py", "pz", "nx", "ny", "nz", "fn", "ftx", "fty",
-                                                 "ftz", "gap"}));
+  EXPECT_EQ(c.columns,
+            (std::vector<std::string>{"t", "pair", "rod", "owner", "obstacle", "px", "py", "pz",
+                                      "nx", "ny", "nz", "fn", "ftx", "fty", "ftz", "gap"}));
   // At the last time (0.8 s, after the stop at 0.68 s): the box's 4 bottom vertices carry its
   // weight with no friction, and every rod node touches the ground and the rod's normal forces
   // sum to its weight (rho A L g).
@@ -52,7 +52,7 @@ TEST(ContactScene, RunWritesContactsTableTheBoxStopsAndTheRodRestsAtItsRadius) {
   int box_rows = 0, rod_rows = 0;
   for (const std::vector<double>& row : c.rows) {
     if (row[0] != t_end) continue;
-    EXPECT_EQ(row[10], 1.0);  // the plane's normal
+    EXPECT_EQ(row[10], 1.0);    // the plane's normal
     EXPECT_GT(row[15], -1e-4);  // no penetration beyond the onset
     if (row[2] == 0.0) {
       box_fn += row[11];
@@ -107,13 +107,16 @@ TEST(ContactScene, BadInputIsReportedAtFileLineColumnNamingTheField) {
   ExpectError(R"(bodies:
   ball: {type: rigid, at: [0, 0, 1], mass: 1, inertia: [1, 1, 1], free: true,
          shapes: [{type: sphere, center: [0, 0, 1], radius: 0}]}
-)", "bad.yaml:3:61: bodies.ball.shapes[0].radius", "");
+)",
+              "bad.yaml:3:61: bodies.ball.shapes[0].radius", "");
   ExpectError(R"(bodies:
   ball: {type: rigid, at: [0, 0, 1], mass: 1, inertia: [1, 1, 1], free: true,
          shapes: [{type: box, center: [0, 0, 1], half_sizes: [1, 0, 1]}]}
-)", "bad.yaml:3:62: bodies.ball.shapes[0].half_sizes", "positive");
-  ExpectError(kHead + "contact:\n  obstacles:\n    post: {type: capsule, from: [0, 0, 0], "
-                      "to: [0, 0, 1], radius: -1}\n",
+)",
+              "bad.yaml:3:62: bodies.ball.shapes[0].half_sizes", "positive");
+  ExpectError(kHead +
+                  "contact:\n  obstacles:\n    post: {type: capsule, from: [0, 0, 0], "
+                  "to: [0, 0, 1], radius: -1}\n",
               "bad.yaml:7:67: contact.obstacles.post.radius", "");
   ExpectError(kHead + "contact:\n  obstacles:\n" + ground + "  exclude: [[bal, ground]]\n",
               "bad.yaml:8:14: contact.exclude[0][0]", "undefined body 'bal'");

@@ -92,8 +92,8 @@ std::vector<Grip> ReadGrip(const std::string& dir, double mu) {
     g.force += ball_a ? on_a : Vec3(-on_a);
     g.min_fn = std::min(g.min_fn, r[fn]);
     g.max_nz = std::max(g.max_nz, std::abs(n.z()));
-    g.share = (g.share * g.contacts + (mu > 0.0 ? ft.norm() / (mu * r[fn]) : 0.0)) /
-              (g.contacts + 1);
+    g.share =
+        (g.share * g.contacts + (mu > 0.0 ? ft.norm() / (mu * r[fn]) : 0.0)) / (g.contacts + 1);
     g.contacts += 1;
   }
   return out;
@@ -115,7 +115,9 @@ bool BallOnGround(const std::string& dir, double t) {
 double CreepOfTheLaw(const std::vector<Grip>& grip, double t0, double t1, double eps_v) {
   double slip = 0.0;
   const Grip* last = nullptr;
-  auto speed = [eps_v](const Grip& g) { return eps_v * g.share / std::sqrt(1.0 - g.share * g.share); };
+  auto speed = [eps_v](const Grip& g) {
+    return eps_v * g.share / std::sqrt(1.0 - g.share * g.share);
+  };
   for (const Grip& g : grip) {
     if (g.t < t0 - 1e-9 || g.t > t1 + 1e-9) continue;
     if (last) slip += 0.5 * (g.t - last->t) * (speed(g) + speed(*last));
@@ -195,8 +197,8 @@ TEST(GripperScene, FingersLiftTheBallWithTheWristAndHoldItByFriction) {
 // is 12 % short); the law at the shares the contacts report gives the slip to 2.3 %.
 TEST(GripperScene, TheBallCreepsAtTheRegularisedFrictionLaw) {
   test::ScopedDir dir("gripper_scene_creep");
-  const Scene scene = LoadScene(kGripper, {"contact.slip_velocity=1e-3",
-                                           "analysis.end_time=" + std::to_string(kHoldEnd)});
+  const Scene scene = LoadScene(
+      kGripper, {"contact.slip_velocity=1e-3", "analysis.end_time=" + std::to_string(kHoldEnd)});
   const RunResult r = RunScene(scene, dir.path());
   ASSERT_TRUE(r.ok) << r.message;
   const Track k = ReadTrack(dir.path());
@@ -215,8 +217,8 @@ TEST(GripperScene, TheBallCreepsAtTheRegularisedFrictionLaw) {
 // slide up over it (the grasp's geometry alone does not hold it).
 TEST(GripperScene, WithoutFrictionTheBallStaysOnTheGround) {
   test::ScopedDir dir("gripper_scene_mu0");
-  const Scene scene = LoadScene(
-      kGripper, {"contact.friction=0", "analysis.end_time=" + std::to_string(kLiftEnd)});
+  const Scene scene =
+      LoadScene(kGripper, {"contact.friction=0", "analysis.end_time=" + std::to_string(kLiftEnd)});
   const RunResult r = RunScene(scene, dir.path());
   ASSERT_TRUE(r.ok) << r.message;
   const Track k = ReadTrack(dir.path());

@@ -428,9 +428,9 @@ std::vector<double> SuccessiveRatios(const std::vector<Vec3>& values, std::vecto
 // P4 (a point of link34) stays on the chain of the interpolated coordinates.
 TEST(GrmAdaptive, ReachesTheFixedStepTrajectoryInAThirdOfTheSteps) {
   const GrmRun fixed = RunGrm("grm_rigid", {"defaults.elements=8", "analysis.step=1e-3"}, "fixed");
-  const GrmRun adaptive = RunGrm(
-      "grm_rigid", {"defaults.elements=8", "analysis.step=auto", "analysis.tolerance=3e-6"},
-      "adaptive");
+  const GrmRun adaptive =
+      RunGrm("grm_rigid", {"defaults.elements=8", "analysis.step=auto", "analysis.tolerance=3e-6"},
+             "adaptive");
   ASSERT_TRUE(fixed.result.ok) << fixed.result.message;
   ASSERT_TRUE(adaptive.result.ok) << adaptive.result.message;
   EXPECT_LE(adaptive.result.steps * 3, fixed.result.steps);
@@ -462,7 +462,8 @@ TEST(GrmAdaptive, ReachesTheFixedStepTrajectoryInAThirdOfTheSteps) {
   for (const char* n : {"J0", "J2", "J3", "J5"})
     q[n] = Series(adaptive.joints, std::string(n) + ".q");
   double q_error = 0.0, chain_error = 0.0;
-  const std::vector<double> px = Series(adaptive.points, "P4.x"), py = Series(adaptive.points, "P4.y"),
+  const std::vector<double> px = Series(adaptive.points, "P4.x"),
+                            py = Series(adaptive.points, "P4.y"),
                             pz = Series(adaptive.points, "P4.z");
   for (std::size_t i = 0; i < t.size(); ++i) {
     for (const Actuated& j : kActuated)

@@ -169,8 +169,7 @@ TEST(Inputs, RestoredStateRepeatsItsStepsBitForBit) {
 
 TEST(InputTable, InterpolatesLinearlyAndHoldsOutside) {
   const Scene scene = ParseScene(Cantilever("{type: input, name: u}"), "i.yaml");
-  const InputTable t =
-      ParseInputTable("# comment\nt, w\n0.1, 2\n\n0.3, 6\n", "u.csv", scene.model);
+  const InputTable t = ParseInputTable("# comment\nt, w\n0.1, 2\n\n0.3, 6\n", "u.csv", scene.model);
   ASSERT_EQ(t.inputs.size(), 1u);
   EXPECT_EQ(t.inputs[0], 1);
   Data data = MakeData(scene.model);
@@ -215,8 +214,8 @@ TEST(InputTable, ErrorsNameFileLineAndColumn) {
 // integrator restarts; an input's change is no breakpoint: docs/numerics.md).
 TEST(InputTable, RunWithAnInputTableWritesTheSameRowsAsATableProfile) {
   test::ScopedDir by_profile("inputs_profile"), by_table("inputs_table");
-  const Scene profile = ParseScene(
-      Cantilever("{type: table, times: [0, 0.2], values: [0, 3]}"), "p.yaml");
+  const Scene profile =
+      ParseScene(Cantilever("{type: table, times: [0, 0.2], values: [0, 3]}"), "p.yaml");
   const Scene input = ParseScene(Cantilever("{type: input, name: u}"), "i.yaml");
   ASSERT_TRUE(RunScene(profile, by_profile.path()).ok);
   RunOptions options;

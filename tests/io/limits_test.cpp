@@ -47,11 +47,11 @@ constexpr int kGuardSeconds = kSanitized ? 120 : 30;
 constexpr long kMemoryLimitKb = 1024L * 1024L;  // 1 GiB
 
 struct ChildResult {
-  int code = -1;       // exit status, or 128 + signal (SIGKILL: the guard fired)
+  int code = -1;  // exit status, or 128 + signal (SIGKILL: the guard fired)
   long max_rss_kb = 0;
   double seconds = 0.0;      // wall
   double cpu_seconds = 0.0;  // user + system
-  std::string err;     // what the child wrote to stderr
+  std::string err;           // what the child wrote to stderr
 };
 
 // Runs `body` in a forked child (stderr to a file), killed after kGuardSeconds.
@@ -64,7 +64,8 @@ ChildResult RunChild(const std::string& dir, const std::function<int()>& body) {
     const int fd = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     dup2(fd, 2);
     if (!kSanitized) {
-      rlimit as{static_cast<rlim_t>(kMemoryLimitKb) * 1024, static_cast<rlim_t>(kMemoryLimitKb) * 1024};
+      rlimit as{static_cast<rlim_t>(kMemoryLimitKb) * 1024,
+                static_cast<rlim_t>(kMemoryLimitKb) * 1024};
       setrlimit(RLIMIT_AS, &as);
     }
     _exit(body());
@@ -147,8 +148,8 @@ std::string Cat(std::initializer_list<std::string_view> pieces) {
 
 std::string Pendulum() { return ReadFile(std::string(SCREWFEM_TEST_DATA_DIR) + "/pendulum.yaml"); }
 
-#define REQUIRE_CLI()                                                                      \
-  do {                                                                                     \
+#define REQUIRE_CLI()                                                                           \
+  do {                                                                                          \
     if (kCli == nullptr) GTEST_SKIP() << "the build did not say where the screwfem program is"; \
   } while (0)
 
@@ -219,8 +220,9 @@ TEST(Limits, NestingDeeperThanOneHundredLevelsIsAnError) {
   const std::string ok = Cat({"a: ", std::string(99, '['), std::string(99, ']'), "\n"});
   EXPECT_EQ(ParseError(ok).find("nested"), std::string::npos);
   const std::string deep = Cat({"a: ", std::string(100, '['), std::string(100, ']'), "\n"});
-  EXPECT_NE(ParseError(deep).find("scene.yaml:1:103: lists and maps nested more than 100 levels deep"),
-            std::string::npos)
+  EXPECT_NE(
+      ParseError(deep).find("scene.yaml:1:103: lists and maps nested more than 100 levels deep"),
+      std::string::npos)
       << ParseError(deep);
 }
 
@@ -245,7 +247,8 @@ TEST(Limits, OneMegabyteOverridePathEndsQuicklyWithAClearMessage) {
   EXPECT_NE(r.err.find("unknown key 'kkkk"), std::string::npos) << r.err.substr(0, 300);
   // Sixteen components of 60 KB each: created keys share the override text.
   std::string sixteen = "outputs";
-  for (int i = 0; i < 15; ++i) sixteen += Cat({".", std::string(60000, static_cast<char>('a' + i))});
+  for (int i = 0; i < 15; ++i)
+    sixteen += Cat({".", std::string(60000, static_cast<char>('a' + i))});
   r = ParseInChild(tmp.path(), Pendulum(), {sixteen + "=1"});
   ExpectBounded(r);
   EXPECT_EQ(r.code, 2) << r.err.substr(0, 300);
@@ -326,17 +329,19 @@ TEST(Limits, FiveHundredWeldsAndAHundredThousandElementRodCheckQuickly) {
   std::string bodies, joints;
   for (int i = 0; i < 499; ++i) {
     const std::string x = std::to_string(0.2 * i + 0.1), n = std::to_string(i);
-    for (const std::string& piece : {std::string("  b"), n, std::string(": {type: rigid, at: ["), x,
-                                     std::string(", 0.5, 0], mass: 0.1, inertia: [1e-4, 1e-4, 1e-4]}\n")})
+    for (const std::string& piece :
+         {std::string("  b"), n, std::string(": {type: rigid, at: ["), x,
+          std::string(", 0.5, 0], mass: 0.1, inertia: [1e-4, 1e-4, 1e-4]}\n")})
       bodies += piece;
-    for (const std::string& piece : {std::string("  w"), n, std::string(": {type: fixed, at: ["), x,
-                                     std::string(", 0, 0], between: [b"), n, std::string(", arm]}\n")})
+    for (const std::string& piece :
+         {std::string("  w"), n, std::string(": {type: fixed, at: ["), x,
+          std::string(", 0, 0], between: [b"), n, std::string(", arm]}\n")})
       joints += piece;
   }
   std::string scene = RodScene();
   scene.replace(scene.find("E: [1, 0, 0]"), 12, "E: [100, 0, 0]");
   scene.replace(scene.find("section: s}"), 11, "section: s, elements: 100000}");
-  scene.insert(scene.find("joints:\n") , bodies);
+  scene.insert(scene.find("joints:\n"), bodies);
   scene.insert(scene.find("analysis:"), joints);
   const std::string file = tmp.path() + "/welds.yaml";
   std::ofstream(file) << scene;

@@ -61,7 +61,8 @@ Scene Cantilever(double step = 1e-3, double end = 0.3) {
   Vec6 K, M;
   K << 1e4, 1e4, 1e4, 2, 2, 2;
   M << 0.1, 0.1, 0.1, 1e-3, 1e-3, 1e-3;
-  const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), 8, Section::FromDiagonals(K, M));
+  const int rod =
+      b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), 8, Section::FromDiagonals(K, M));
   const std::vector<int> nodes = b.model().rods[0].nodes;
   b.FixNode(nodes.front());
   PointLoad tip;
@@ -88,7 +89,8 @@ Scene DrivenLink(double step) {
   ModelBuilder b;
   const int link = b.AddNode(SE3::Identity(), "link");
   b.AddRigidBody("link", link, 0.3, Vec3(0.25, 0, 0), Vec3(1e-4, 2e-3, 2e-3).asDiagonal());
-  const int j = b.AddJointAt("motor", JointType::kRevolute, kGround, link, Vec3::Zero(), Vec3::UnitZ());
+  const int j =
+      b.AddJointAt("motor", JointType::kRevolute, kGround, link, Vec3::Zero(), Vec3::UnitZ());
   Joint& motor = b.model().joints[static_cast<std::size_t>(j)];
   motor.drive = DriveKind::kPrescribed;
   motor.drive_profile = Profile::BangBang(0.0, 1.0, std::numbers::pi / 3);
@@ -122,7 +124,8 @@ double DerivativeMismatch(const Table& t, const std::string& value, const std::s
     const double dt = r[i + 1][0] - r[i - 1][0];
     scale = std::max(scale, std::abs(r[i][static_cast<std::size_t>(cr)]));
     if (r[i][0] < skip_until) continue;
-    const double fd = (r[i + 1][static_cast<std::size_t>(cv)] - r[i - 1][static_cast<std::size_t>(cv)]) / dt;
+    const double fd =
+        (r[i + 1][static_cast<std::size_t>(cv)] - r[i - 1][static_cast<std::size_t>(cv)]) / dt;
     err = std::max(err, std::abs(fd - r[i][static_cast<std::size_t>(cr)]));
   }
   return err / scale;
@@ -210,7 +213,7 @@ TEST(RunScene, RecordedVelocitiesAndAccelerationsAreTimeDerivativesOfThePendulum
   double previous[2] = {0.0, 0.0};
   for (const double h : {2e-3, 1e-3}) {
     const ScopedDir scoped_dir("pendulum_fd");
-  const std::string& dir = scoped_dir.path();
+    const std::string& dir = scoped_dir.path();
     const RunResult r = RunScene(Pendulum(h, 0.5), dir);
     ASSERT_TRUE(r.ok) << r.message;
     const Table t = ReadCsv(dir + "/points.csv");
@@ -235,7 +238,7 @@ TEST(RunScene, RecordedRodPointMotionIsConsistentOnACantilever) {
   double previous[2] = {0.0, 0.0};
   for (const double h : {2e-3, 1e-3}) {
     const ScopedDir scoped_dir("cantilever_fd");
-  const std::string& dir = scoped_dir.path();
+    const std::string& dir = scoped_dir.path();
     const RunResult r = RunScene(Cantilever(h), dir);
     ASSERT_TRUE(r.ok) << r.message;
     const Table t = ReadCsv(dir + "/points.csv");
@@ -321,7 +324,8 @@ TEST(RunScene, PrescribedJointFollowsItsProfileWithStepsAlignedToTheAcceleration
   const std::string& dir2 = scoped_dir2.path();
   ASSERT_TRUE(RunScene(s, dir2).ok);
   const Table u = ReadCsv(dir2 + "/joints.csv");
-  EXPECT_TRUE(std::none_of(u.rows.begin(), u.rows.end(), [](const auto& row) { return row[0] == 0.5; }));
+  EXPECT_TRUE(
+      std::none_of(u.rows.begin(), u.rows.end(), [](const auto& row) { return row[0] == 0.5; }));
 }
 
 TEST(JointCoordinateEffort, SpringsAndDampersPushTowardsRest) {
@@ -496,14 +500,17 @@ TEST(RunScene, CollectionReferencesEveryFrameFileAndFramesHoldTheMechanism) {
   ASSERT_NE(pvd.find("<VTKFile type=\"Collection\""), std::string::npos);
   ASSERT_NE(pvd.find("</VTKFile>"), std::string::npos);
   int frames = 0;
-  for (std::size_t at = pvd.find("file=\""); at != std::string::npos; at = pvd.find("file=\"", at + 1)) {
+  for (std::size_t at = pvd.find("file=\""); at != std::string::npos;
+       at = pvd.find("file=\"", at + 1)) {
     const std::size_t start = at + 6, end = pvd.find('"', start);
     const std::string file = dir + "/vtk/" + pvd.substr(start, end - start);
     ASSERT_TRUE(std::filesystem::is_regular_file(file)) << file;
     const std::string vtp = ReadFile(file);
-    EXPECT_NE(vtp.find("NumberOfPoints=\"3\" NumberOfVerts=\"1\" NumberOfLines=\"1\""), std::string::npos)
+    EXPECT_NE(vtp.find("NumberOfPoints=\"3\" NumberOfVerts=\"1\" NumberOfLines=\"1\""),
+              std::string::npos)
         << "one joint vertex, one body segment (node origin to centre of mass)";
-    for (const char* name : {"frame_x", "frame_y", "frame_z", "velocity", "joint_id", "rod_id", "body_id"})
+    for (const char* name :
+         {"frame_x", "frame_y", "frame_z", "velocity", "joint_id", "rod_id", "body_id"})
       EXPECT_NE(vtp.find(std::string("Name=\"") + name + "\""), std::string::npos) << name;
     EXPECT_EQ(vtp.substr(vtp.size() - 11), "</VTKFile>\n");
     ++frames;
@@ -515,7 +522,8 @@ TEST(RunScene, CollectionReferencesEveryFrameFileAndFramesHoldTheMechanism) {
 // Frame files named in motion.pvd, in order.
 std::vector<std::string> CollectionFiles(const std::string& pvd) {
   std::vector<std::string> files;
-  for (std::size_t at = pvd.find("file=\""); at != std::string::npos; at = pvd.find("file=\"", at + 1)) {
+  for (std::size_t at = pvd.find("file=\""); at != std::string::npos;
+       at = pvd.find("file=\"", at + 1)) {
     const std::size_t start = at + 6, end = pvd.find('"', start);
     files.push_back(pvd.substr(start, end - start));
   }

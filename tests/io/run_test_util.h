@@ -98,8 +98,8 @@ inline Table ReadCsv(const std::string& path) {
       continue;
     }
     if (fields.size() != t.columns.size()) {
-      t.problem = "row " + std::to_string(t.rows.size()) + " has " +
-                  std::to_string(fields.size()) + " fields";
+      t.problem = "row " + std::to_string(t.rows.size()) + " has " + std::to_string(fields.size()) +
+                  " fields";
       return t;
     }
     std::vector<double> row;
@@ -176,14 +176,30 @@ class JsonParser {
       if (i_ >= s_.size()) return false;
       const char e = s_[i_++];
       switch (e) {
-        case '"': *out += '"'; break;
-        case '\\': *out += '\\'; break;
-        case '/': *out += '/'; break;
-        case 'n': *out += '\n'; break;
-        case 'r': *out += '\r'; break;
-        case 't': *out += '\t'; break;
-        case 'b': *out += '\b'; break;
-        case 'f': *out += '\f'; break;
+        case '"':
+          *out += '"';
+          break;
+        case '\\':
+          *out += '\\';
+          break;
+        case '/':
+          *out += '/';
+          break;
+        case 'n':
+          *out += '\n';
+          break;
+        case 'r':
+          *out += '\r';
+          break;
+        case 't':
+          *out += '\t';
+          break;
+        case 'b':
+          *out += '\b';
+          break;
+        case 'f':
+          *out += '\f';
+          break;
         case 'u': {
           if (i_ + 4 > s_.size()) return false;
           const long code = std::strtol(s_.substr(i_, 4).c_str(), nullptr, 16);
@@ -192,7 +208,8 @@ class JsonParser {
           *out += static_cast<char>(code);
           break;
         }
-        default: return false;
+        default:
+          return false;
       }
     }
     return false;

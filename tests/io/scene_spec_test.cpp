@@ -80,8 +80,7 @@ TEST_F(SceneSpecTest, BuildErrorOfADrivePointsAtItsJoint) {
   spec_.joints[0].joint.drive = DriveKind::kForce;
   spec_.joints[0].joint.drive_coordinate = 3;
   const std::string e = CompileError(spec_, sources_);
-  EXPECT_EQ(e.rfind("spec.yaml:7:3: joints.pin: joint 'pin': drive coordinate out of range", 0),
-            0u)
+  EXPECT_EQ(e.rfind("spec.yaml:7:3: joints.pin: joint 'pin': drive coordinate out of range", 0), 0u)
       << e;
 }
 

@@ -60,8 +60,9 @@ TEST(ShapePairScene, BodiesPairUnlessExcludedAndARodWithItselfWhenAsked) {
   // Self-contact: element pairs whose nearest ends are at least self_skip apart along the rod
   // (elements 0.1 m long, nearest ends 0, 0.1, 0.2 m apart for index differences 1, 2, 3: 0.25 m
   // keeps the differences from 4).
-  const Model s = ParseScene(kScene + "contact: {self: true, self_skip: 0.25, exclude: [[a, b], "
-                                      "[rod, b], [rod, a]]}\n",
+  const Model s = ParseScene(kScene +
+                                 "contact: {self: true, self_skip: 0.25, exclude: [[a, b], "
+                                 "[rod, b], [rod, a]]}\n",
                              "s.yaml")
                       .model;
   int count = 0;
@@ -82,9 +83,11 @@ TEST(ShapePairScene, RunWritesPairContactsWithTheRestingSpheresWeight) {
 bodies:
   low: {type: rigid, at: [0, 0, 1], mass: 1, inertia: [1, 1, 1], fixed: true,
         shapes: [{type: sphere, center: [0, 0, 1], radius: 0.1}]}
-  top: {type: rigid, at: [0, 0, )" + std::to_string(1.2 + gap) + R"(], mass: 1,
+  top: {type: rigid, at: [0, 0, )" +
+                           std::to_string(1.2 + gap) + R"(], mass: 1,
         inertia: [0.004, 0.004, 0.004], free: true,
-        shapes: [{type: sphere, center: [0, 0, )" + std::to_string(1.2 + gap) + R"(], radius: 0.1}]}
+        shapes: [{type: sphere, center: [0, 0, )" +
+                           std::to_string(1.2 + gap) + R"(], radius: 0.1}]}
 contact: {stiffness: 1e5, onset: 1e-4}
 analysis: {type: dynamic, end_time: 0.05, step: 1e-3}
 outputs: {interval: 0.01}
@@ -122,11 +125,14 @@ sections:
 bodies:
   table: {type: rigid, at: [0, 0, 0], mass: 1, inertia: [1, 1, 1], fixed: true,
           shapes: [{type: box, center: [0, 0, -0.05], half_sizes: [0.5, 0.4, 0.05]}]}
-  bar: {type: rigid, at: [0.1, -0.05, )" + z + R"(], mass: 1, inertia: [1e-4, 4e-3, 4e-3], free: true,
-        shapes: [{type: capsule, from: [0, -0.05, )" + z + R"(], to: [0.2, -0.05, )" + z +
+  bar: {type: rigid, at: [0.1, -0.05, )" +
+                             z + R"(], mass: 1, inertia: [1e-4, 4e-3, 4e-3], free: true,
+        shapes: [{type: capsule, from: [0, -0.05, )" +
+                             z + R"(], to: [0.2, -0.05, )" + z +
                              R"(], radius: 0.02}]}
 )";
-  const std::string more = R"(  block: {type: rigid, at: [0, 0.3, 1], mass: 1, inertia: [1, 1, 1], free: true,
+  const std::string more =
+      R"(  block: {type: rigid, at: [0, 0.3, 1], mass: 1, inertia: [1, 1, 1], free: true,
           shapes: [{type: box, center: [0, 0.3, 1], half_sizes: [0.05, 0.04, 0.03]}]}
   rod: {type: soft, from: [0, 0, 2], to: [1, 0, 2], section: rubber, elements: 5, free: true}
 contact: {exclude: [[bar, block], [bar, rod], [block, rod]]}
@@ -146,12 +152,12 @@ outputs: {interval: 0.01}
   ASSERT_GE(c.rows.size(), 5u);
   for (int k = 0; k < 2; ++k) {  // the last output's two rows: parts 0 and 1
     const std::vector<double>& last = c.rows[c.rows.size() - 2 + static_cast<std::size_t>(k)];
-    EXPECT_NEAR(last[16], 1.0, 1e-12);  // nz: from the box (B) up to the capsule (A)
+    EXPECT_NEAR(last[16], 1.0, 1e-12);        // nz: from the box (B) up to the capsule (A)
     EXPECT_NEAR(last[17], 0.5 * 9.81, 1e-6);  // fn
     EXPECT_NEAR(last[21], gap, 1e-9);
     EXPECT_NEAR(last[8], 0.2 * k, 1e-9);  // pax: the segment's ends
     EXPECT_EQ(last[22], k);               // part
-    EXPECT_NEAR(last[13], 0.0, 1e-12);  // pbz: the box's top face
+    EXPECT_NEAR(last[13], 0.0, 1e-12);    // pbz: the box's top face
   }
 }
 

@@ -108,9 +108,10 @@ TEST(SwitchEfforts, SmoothTenStepsAfterASwitchWithRestartsAndFullNumericalDampin
     const double before_coarse = MaxSecondDifference(coarse, j, 0.1, kSwitch - 1.5 * h);
     const double after_coarse = MaxSecondDifference(coarse, j, after, kEnd);
     const double after_fine = MaxSecondDifference(fine, j, after, kEnd);
-    std::printf("%s: max |d2| / range before the switch %.2e, from 10 steps after it %.2e (h) "
-                "and %.2e (h / 2)\n",
-                kActuated[j], before_coarse, after_coarse, after_fine);
+    std::printf(
+        "%s: max |d2| / range before the switch %.2e, from 10 steps after it %.2e (h) "
+        "and %.2e (h / 2)\n",
+        kActuated[j], before_coarse, after_coarse, after_fine);
     // Before the switch every effort is smooth: |d2| = h^2 |e''| (measured 2e-5 to 7e-5).
     EXPECT_LT(before_coarse, 1e-4);
     if (std::string(kActuated[j]) == "J0") {

@@ -43,8 +43,8 @@ TEST(TendonScene, FingerExampleCompilesEyeletsOnNodesWithTheirOffsets) {
 }
 
 TEST(TendonScene, StaticFingerWithoutTheSpringCurlsIntoTheEyeletModelsArc) {
-  const Scene s = LoadScene(kFinger, {"analysis.type=static", "analysis.load_steps=40",
-                                      "forces.tip_spring.stiffness=0"});
+  const Scene s = LoadScene(
+      kFinger, {"analysis.type=static", "analysis.load_steps=40", "forces.tip_spring.stiffness=0"});
   Data d = MakeData(s.model);
   StaticOptions o = s.analysis.statics;
   const StaticResult r = SolveStatic(s.model, d, o);
@@ -132,7 +132,7 @@ outputs: {interval: 0.05}
   // iteration (the position row holds, the velocity oscillates about it by a few per cent).
   EXPECT_NEAR(tendons.rows[1][2], -0.1, 0.01);
   EXPECT_NEAR(tendons.rows[2][2], -0.1, 0.01);
-  EXPECT_GT(tendons.rows.back()[3], 0.0);       // taut, holding the curl
+  EXPECT_GT(tendons.rows.back()[3], 0.0);  // taut, holding the curl
 }
 
 TEST(TendonScene, EyeletsAtArcLengthsBetweenNodesSitOnTheElementSections) {
@@ -141,20 +141,21 @@ TEST(TendonScene, EyeletsAtArcLengthsBetweenNodesSitOnTheElementSections) {
   // same model built in code (ModelBuilder with BodyPoint rod/arc_length).
   test::ScopedDir dir("tendon_eyelet_scene");
   const std::string path = dir.path() + "/midpoints.yaml";
-  std::ofstream(path) << "units: SI\ngravity: [0, 0, 0]\npoints: {base: [0, 0, 0], tip: [1, 0, 0]}\n"
-                         "sections:\n  s: {stiffness: [1e5, 1e5, 1e5, 1, 1, 1], "
-                         "inertia: [0.1, 0.1, 0.1, 1e-3, 1e-3, 1e-3]}\n"
-                         "bodies:\n  r: {type: soft, from: base, to: tip, section: s, elements: 4}\n"
-                         "joints:\n  clamp: {type: fixed, at: base, between: [ground, r]}\n"
-                         "tendons:\n  t:\n    eyelets:\n"
-                         "      - {body: r, s: 0, offset: [0, 0.02, 0]}\n"
-                         "      - {body: r, s: 0.125, offset: [0, 0.02, 0]}\n"
-                         "      - {body: r, s: 0.375, offset: [0, 0.02, 0]}\n"
-                         "      - {body: r, s: 0.625, offset: [0, 0.02, 0]}\n"
-                         "      - {body: r, s: 0.875, offset: [0, 0.02, 0]}\n"
-                         "      - {body: r, s: 1, offset: [0, 0.02, 0]}\n"
-                         "    tension: 50\n"
-                         "analysis: {type: static, load_steps: 20}\n";
+  std::ofstream(path)
+      << "units: SI\ngravity: [0, 0, 0]\npoints: {base: [0, 0, 0], tip: [1, 0, 0]}\n"
+         "sections:\n  s: {stiffness: [1e5, 1e5, 1e5, 1, 1, 1], "
+         "inertia: [0.1, 0.1, 0.1, 1e-3, 1e-3, 1e-3]}\n"
+         "bodies:\n  r: {type: soft, from: base, to: tip, section: s, elements: 4}\n"
+         "joints:\n  clamp: {type: fixed, at: base, between: [ground, r]}\n"
+         "tendons:\n  t:\n    eyelets:\n"
+         "      - {body: r, s: 0, offset: [0, 0.02, 0]}\n"
+         "      - {body: r, s: 0.125, offset: [0, 0.02, 0]}\n"
+         "      - {body: r, s: 0.375, offset: [0, 0.02, 0]}\n"
+         "      - {body: r, s: 0.625, offset: [0, 0.02, 0]}\n"
+         "      - {body: r, s: 0.875, offset: [0, 0.02, 0]}\n"
+         "      - {body: r, s: 1, offset: [0, 0.02, 0]}\n"
+         "    tension: 50\n"
+         "analysis: {type: static, load_steps: 20}\n";
   const Scene s = LoadScene(path);
   const Tendon& t = s.model.tendons[0];
   ASSERT_EQ(t.eyelets.size(), 6u);
@@ -170,9 +171,9 @@ TEST(TendonScene, EyeletsAtArcLengthsBetweenNodesSitOnTheElementSections) {
   ASSERT_TRUE(r.converged) << r.message;
 
   ModelBuilder b;
-  const int rod = b.AddStraightRod(
-      "r", Vec3::Zero(), Vec3::UnitX(), 4,
-      Section::FromDiagonals((Vec6() << 1e5, 1e5, 1e5, 1, 1, 1).finished()));
+  const int rod =
+      b.AddStraightRod("r", Vec3::Zero(), Vec3::UnitX(), 4,
+                       Section::FromDiagonals((Vec6() << 1e5, 1e5, 1e5, 1, 1, 1).finished()));
   b.FixNode(b.model().rods[0].nodes.front());
   std::vector<BodyPoint> eyelets;
   for (double a : {0.0, 0.125, 0.375, 0.625, 0.875, 1.0}) {

@@ -84,7 +84,8 @@ std::map<std::string, Array> ReadArrays(const std::string& file) {
         a.integers.assign(v.begin(), v.end());
       }
     } else {
-      const std::string text = file.substr(tag_end + 1, file.find("</DataArray>", tag_end) - tag_end - 1);
+      const std::string text =
+          file.substr(tag_end + 1, file.find("</DataArray>", tag_end) - tag_end - 1);
       const char* p = text.c_str();
       for (char* end = nullptr;; p = end) {
         const double v = std::strtod(p, &end);
@@ -106,8 +107,8 @@ void ExpectSameBits(const Array& a, long long i, const Vec3& x, const std::strin
   ASSERT_LE(3 * (i + 1), static_cast<long long>(a.doubles.size())) << what;
   for (int k = 0; k < 3; ++k) {
     const double v = a.doubles[static_cast<std::size_t>(3 * i + k)];
-    EXPECT_EQ(std::memcmp(&v, &x(k), sizeof v), 0) << what << " component " << k << ": " << v
-                                                    << " vs " << x(k);
+    EXPECT_EQ(std::memcmp(&v, &x(k), sizeof v), 0)
+        << what << " component " << k << ": " << v << " vs " << x(k);
   }
 }
 
@@ -124,7 +125,8 @@ MovedGrm MoveGrm() {
   m.data = MakeData(m.scene.model);
   Integrator integ;
   std::string why;
-  EXPECT_TRUE(InitializeDynamics(m.scene.model, m.data, integ, m.scene.analysis.dynamic, &why)) << why;
+  EXPECT_TRUE(InitializeDynamics(m.scene.model, m.data, integ, m.scene.analysis.dynamic, &why))
+      << why;
   for (int i = 0; i < 20; ++i) {
     EXPECT_TRUE(Step(m.scene.model, m.data, integ, 1e-3).ok);
     m.data.time += 1e-3;
@@ -137,11 +139,11 @@ MovedGrm MoveGrm() {
 void ExpectFrameHoldsTheState(const std::string& file, const Model& model, const Data& data,
                               const std::string& format) {
   std::map<std::string, Array> a = ReadArrays(file);
-  for (const char* name : {"FieldData/TimeValue", "Points/position", "PointData/frame_x",
-                           "PointData/frame_y", "PointData/frame_z", "PointData/velocity",
-                           "PointData/joint_id", "CellData/rod_id", "CellData/body_id",
-                           "CellData/joint_id", "Verts/connectivity", "Verts/offsets",
-                           "Lines/connectivity", "Lines/offsets"}) {
+  for (const char* name :
+       {"FieldData/TimeValue", "Points/position", "PointData/frame_x", "PointData/frame_y",
+        "PointData/frame_z", "PointData/velocity", "PointData/joint_id", "CellData/rod_id",
+        "CellData/body_id", "CellData/joint_id", "Verts/connectivity", "Verts/offsets",
+        "Lines/connectivity", "Lines/offsets"}) {
     ASSERT_TRUE(a.count(name)) << name;
     EXPECT_EQ(a[name].format, format) << name;
   }
@@ -162,7 +164,8 @@ void ExpectFrameHoldsTheState(const std::string& file, const Model& model, const
     const SE3 H = NodeFrame(data, joint.node_a) * joint.offset_a *
                   JointRelativeFrame(model, data, static_cast<int>(j));
     ExpectSameBits(a["Points/position"], verts[j], H.x, "joint " + joint.name);
-    EXPECT_EQ(a["PointData/joint_id"].integers[static_cast<std::size_t>(verts[j])], static_cast<long long>(j));
+    EXPECT_EQ(a["PointData/joint_id"].integers[static_cast<std::size_t>(verts[j])],
+              static_cast<long long>(j));
   }
   long long start = 0;
   int rods_seen = 0, bodies_seen = 0;
@@ -182,7 +185,8 @@ void ExpectFrameHoldsTheState(const std::string& file, const Model& model, const
         ExpectSameBits(a["PointData/frame_y"], p, H.R.col(1), what + " frame_y");
         ExpectSameBits(a["PointData/frame_z"], p, H.R.col(2), what + " frame_z");
         ExpectSameBits(a["PointData/velocity"], p,
-                       CalcNodePointMotion(model, data, node, Vec3::Zero()).velocity, what + " velocity");
+                       CalcNodePointMotion(model, data, node, Vec3::Zero()).velocity,
+                       what + " velocity");
       }
       ++rods_seen;
     } else {
@@ -245,7 +249,9 @@ TEST(VtkWriter, BinaryFramesOfOneModelDifferOnlyInTheirValues) {
   ExpectFrameHoldsTheState(second, m.scene.model, m.data, "appended");
   ASSERT_TRUE(w.WriteCollection());
   const std::string pvd = ReadFile(dir.path() + "/motion.pvd");
-  EXPECT_NE(pvd.find("timestep=\"0\" group=\"\" part=\"0\" file=\"frame_00000.vtp\""), std::string::npos) << pvd;
+  EXPECT_NE(pvd.find("timestep=\"0\" group=\"\" part=\"0\" file=\"frame_00000.vtp\""),
+            std::string::npos)
+      << pvd;
   EXPECT_NE(pvd.find("file=\"frame_00001.vtp\""), std::string::npos) << pvd;
 }
 
@@ -258,8 +264,10 @@ TEST(VtkWriter, SceneKeySelectsTheEncoding) {
   EXPECT_EQ(ascii.outputs.vtk_format, VtkFormat::kAscii);
   const ScopedDir dir("vtk_scene_key");
   ASSERT_TRUE(RunScene(ascii, dir.path()).ok);
-  EXPECT_NE(ReadFile(dir.path() + "/vtk/frame_00000.vtp").find("format=\"ascii\""), std::string::npos);
-  EXPECT_NE(ReadFile(dir.path() + "/summary.json").find("\"vtk_format\": \"ascii\""), std::string::npos);
+  EXPECT_NE(ReadFile(dir.path() + "/vtk/frame_00000.vtp").find("format=\"ascii\""),
+            std::string::npos);
+  EXPECT_NE(ReadFile(dir.path() + "/summary.json").find("\"vtk_format\": \"ascii\""),
+            std::string::npos);
 
   std::string text = ReadFile(scene_path);
   text.replace(text.find("  vtk: true\n"), 12, "  vtk: true\n  vtk_format: binry\n");

@@ -84,8 +84,7 @@ std::vector<Entry> RandomEntries(std::mt19937& rng, const std::vector<std::pair<
 }
 
 // (A + P E P^T)^-1 b by BandedLU::Solve and BandCoupling::Correct.
-Eigen::VectorXd CoupledSolve(const BandedLU& lu, BandCoupling& coupling,
-                             const Eigen::VectorXd& b) {
+Eigen::VectorXd CoupledSolve(const BandedLU& lu, BandCoupling& coupling, const Eigen::VectorXd& b) {
   Eigen::VectorXd x = b;
   lu.Solve(x);
   coupling.Correct(lu, x);
@@ -222,7 +221,7 @@ TEST(BandCoupling, OverflowAddsNothingUntilClearThenSlotsAreReused) {
   EXPECT_EQ(coupling.blocks(), 2);
   ASSERT_TRUE(coupling.Add(2, 2, B, 0.5));  // existing blocks still take entries
   full.block(2, 2, kBlock, kBlock) += 0.5 * B;
-  EXPECT_TRUE(coupling.overflowed());       // and the flag stays
+  EXPECT_TRUE(coupling.overflowed());  // and the flag stays
   ASSERT_TRUE(coupling.Factorize(lu));
   Eigen::VectorXd b = RandomVector(rng, n);
   EXPECT_LT(RelativeError(CoupledSolve(lu, coupling, b), full.partialPivLu().solve(b)), 1e-12);

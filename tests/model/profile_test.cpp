@@ -60,7 +60,7 @@ TEST(Profile, ClosedFormsOfRampSmoothStepSineAndTable) {
   const double u = 0.3, t = 2.0 * u;
   EXPECT_NEAR(smooth(t), 5.0 * (10 * std::pow(u, 3) - 15 * std::pow(u, 4) + 6 * std::pow(u, 5)),
               1e-14);
-  EXPECT_DOUBLE_EQ(smooth(1.0), 2.5);     // symmetric about the middle
+  EXPECT_DOUBLE_EQ(smooth(1.0), 2.5);  // symmetric about the middle
   EXPECT_NEAR(smooth.Eval(1.0).accel, 0.0, 1e-14);
   EXPECT_DOUBLE_EQ(smooth.Eval(1.0).rate, 5.0 * 30.0 / 16.0 / 2.0);  // 30 u^2 (1-u)^2 / T
   // C2 at both ends: rate and accel vanish.

@@ -196,8 +196,7 @@ Model TwoBodiesOnRevoluteJoints() {
   b.AddRigidBody("b1", n1, 0.7, Vec3(0.05, 0.0, 0.0), 2e-3 * Mat3::Identity());
   b.AddRigidBody("b2", n2, 0.4, Vec3(0.0, 0.02, 0.0), 1e-3 * Mat3::Identity());
   b.AddJointAt("j1", JointType::kRevolute, kGround, n1, Vec3(0.0, 0.0, 0.0), Vec3::UnitY());
-  b.AddJointAt("j2", JointType::kRevolute, n1, n2, Vec3(0.55, 0.0, 0.02),
-               Vec3(0.0, 0.6, 0.8));
+  b.AddJointAt("j2", JointType::kRevolute, n1, n2, Vec3(0.55, 0.0, 0.02), Vec3(0.0, 0.6, 0.8));
   b.SetGravity(Vec3(0.0, 0.0, -9.81));
   return b.Build();
 }
@@ -259,13 +258,12 @@ TEST(GeneralizedAlpha, SimplifiedNewtonAndPredictorsReachTheSameSolutions) {
     EXPECT_EQ(ref.integ.factorizations, ref.integ.iterations);
     long iterations[2][3];
     for (NewtonMatrix newton : {NewtonMatrix::kFull, NewtonMatrix::kSimplified}) {
-      for (Predictor predictor :
-           {Predictor::kZero, Predictor::kLast, Predictor::kAdaptive}) {
+      for (Predictor predictor : {Predictor::kZero, Predictor::kLast, Predictor::kAdaptive}) {
         // Table rows: full, simplified; columns: zero, last, adaptive.
         const int in = newton == NewtonMatrix::kFull ? 0 : 1;
         const int ip = predictor == Predictor::kZero ? 0 : predictor == Predictor::kLast ? 1 : 2;
-        SCOPED_TRACE(::testing::Message() << (moving ? "moving" : "from rest") << ", newton "
-                                          << in << ", predictor " << ip);
+        SCOPED_TRACE(::testing::Message() << (moving ? "moving" : "from rest") << ", newton " << in
+                                          << ", predictor " << ip);
         Run r;
         simulate(moving, newton, predictor, &r);
         iterations[in][ip] = r.integ.iterations;
@@ -282,10 +280,11 @@ TEST(GeneralizedAlpha, SimplifiedNewtonAndPredictorsReachTheSameSolutions) {
       }
     }
     for (int in = 0; in < 2; ++in) {
-      std::printf("[ Newton ] %s, %s Newton: iterations per step %.2f (zero start), %.2f (last), "
-                  "%.2f (adaptive)\n",
-                  moving ? "moving" : "from rest", in == 0 ? "full" : "simplified",
-                  iterations[in][0] / 200.0, iterations[in][1] / 200.0, iterations[in][2] / 200.0);
+      std::printf(
+          "[ Newton ] %s, %s Newton: iterations per step %.2f (zero start), %.2f (last), "
+          "%.2f (adaptive)\n",
+          moving ? "moving" : "from rest", in == 0 ? "full" : "simplified",
+          iterations[in][0] / 200.0, iterations[in][1] / 200.0, iterations[in][2] / 200.0);
       const long best = std::min(iterations[in][0], iterations[in][1]);
       EXPECT_LE(iterations[in][2], best + best / 20);
       if (!moving) {
@@ -309,8 +308,8 @@ ResidualTests MeasureResidualTests(const Model& model, Data& data) {
   EXPECT_TRUE(Assemble(model, data, o));
   ResidualTests r;
   const double res = data.residual.head(model.nv).cwiseAbs().maxCoeff();
-  const double floor = 32.0 * std::numeric_limits<double>::epsilon() *
-                       std::max(data.term_scale, data.force_scale);
+  const double floor =
+      32.0 * std::numeric_limits<double>::epsilon() * std::max(data.term_scale, data.force_scale);
   r.relative_residual = res <= floor ? 0.0 : res / data.force_scale;
   r.constraint = model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() : 0.0;
   return r;

@@ -33,7 +33,8 @@ int AddPendulum(ModelBuilder& b, double com_sign) {
 // Root of K a = m g l cos a by Newton (unique for K > 0 on (0, pi/2)).
 double EquilibriumAngle(double K) {
   double a = 0.5;
-  for (int i = 0; i < 50; ++i) a -= (K * a - kMass * kG * kL * std::cos(a)) / (K + kMass * kG * kL * std::sin(a));
+  for (int i = 0; i < 50; ++i)
+    a -= (K * a - kMass * kG * kL * std::cos(a)) / (K + kMass * kG * kL * std::sin(a));
   return a;
 }
 

@@ -42,8 +42,8 @@ double TrussLimitLoad() {
 
 struct Truss {
   Model model;
-  int apex = -1;     // node of the apex (end node of the left bar)
-  int drive = -1;    // joint index of the prismatic drive (displacement control)
+  int apex = -1;   // node of the apex (end node of the left bar)
+  int drive = -1;  // joint index of the prismatic drive (displacement control)
 };
 
 // The truss under a dead apex load P_ref (s = 1), or, with `displacement_control`, with the

@@ -67,11 +67,13 @@ TEST(LengthDrivenTendon, StaticSlackRuleOnASpringSupportedMass) {
     ModelBuilder b;
     const int n = b.AddNode(SE3::Identity(), "mass");
     b.AddRigidBody("mass", n, kMass, Vec3::Zero(), 0.01 * Mat3::Identity());
-    const int j = b.AddJointAt("slide", JointType::kPrismatic, kGround, n, Vec3::Zero(), Vec3::UnitZ());
+    const int j =
+        b.AddJointAt("slide", JointType::kPrismatic, kGround, n, Vec3::Zero(), Vec3::UnitZ());
     b.model().joints[static_cast<std::size_t>(j)].stiffness(0) = k;
     b.SetGravity(Vec3(0.0, 0.0, -kG));
     b.AddLengthDrivenTendon(
-        "cable", {{kGround, Vec3(-1.0, 0.0, 1.0)}, {kGround, Vec3(0.0, 0.0, 1.0)}, {n, Vec3::Zero()}},
+        "cable",
+        {{kGround, Vec3(-1.0, 0.0, 1.0)}, {kGround, Vec3(0.0, 0.0, 1.0)}, {n, Vec3::Zero()}},
         Profile::Constant(2.3));
     const Model m = b.Build();
     Data d = MakeData(m);
@@ -89,7 +91,8 @@ TEST(LengthDrivenTendon, GradientRowIsTheLengthGradient) {
   // row of B(q) against central differences of L(q) through the retraction.
   ModelBuilder b;
   std::vector<BodyPoint> eyelets = {{kGround, Vec3(-0.4, 0.2, 0.1)}};
-  const Vec3 offsets[3] = {Vec3(0.03, -0.05, 0.02), Vec3(-0.04, 0.06, 0.01), Vec3(0.02, 0.0, -0.07)};
+  const Vec3 offsets[3] = {Vec3(0.03, -0.05, 0.02), Vec3(-0.04, 0.06, 0.01),
+                           Vec3(0.02, 0.0, -0.07)};
   for (int i = 0; i < 3; ++i) {
     const int n = b.AddNode(SE3::Translation(Vec3(0.5 * i, 0.1 * i, 0.0)));
     b.AddRigidBody("b" + std::to_string(i), n, 1.0, Vec3::Zero(), Mat3::Identity());
@@ -177,7 +180,8 @@ TEST(LengthDrivenTendon, DynamicTensionIsMassTimesGravityPlusAcceleration) {
     const double t = d.time;
     max_z_error = std::max(max_z_error, std::abs(Height(d) + A * (1.0 - std::cos(w * t))));
     max_tension_error = std::max(
-        max_tension_error, std::abs(CalcTendonState(m, d, 0).force - kMass * (kG - A * w * w * std::cos(w * t))));
+        max_tension_error,
+        std::abs(CalcTendonState(m, d, 0).force - kMass * (kG - A * w * w * std::cos(w * t))));
   }
   EXPECT_LT(max_z_error, 1e-9);  // the constraint holds at every step
   // The multiplier of generalized-alpha is second-order accurate: |error| ~ h^2 A w^4 m.

@@ -117,7 +117,8 @@ Tracking Track(const Drive& drive, double rho_inf, double h, double settle = 0.1
     if (!s.ok) break;
     const double t = n * h;
     r.position_error = std::max(r.position_error, std::abs(l.data.q_joint(0) - l.q(t)));
-    const double err = std::abs(JointDriveEffort(l.model, l.data, l.joint) - ExactEffort(drive, l.q, t));
+    const double err =
+        std::abs(JointDriveEffort(l.model, l.data, l.joint) - ExactEffort(drive, l.q, t));
     r.final_error = err;
     bool transient = false;
     for (double tj : {0.5, 1.0}) {
@@ -192,8 +193,8 @@ TEST(ActuatedJointJ2, SeriesElasticEffortIsTheKernelsSpringForceAndMovesTheLink)
   ModelBuilder b;
   const int node = b.AddNode(SE3::Identity(), "link");
   b.AddRigidBody("link", node, kMass, Vec3(kLc, 0.0, 0.0), kJc * Mat3::Identity());
-  const int joint = b.AddJointAt("q", JointType::kRevolute, kGround, node, Vec3::Zero(),
-                                 Vec3::UnitZ());
+  const int joint =
+      b.AddJointAt("q", JointType::kRevolute, kGround, node, Vec3::Zero(), Vec3::UnitZ());
   Joint& j = b.model().joints[static_cast<std::size_t>(joint)];
   j.stiffness(0) = K;
   j.damping(0) = D;

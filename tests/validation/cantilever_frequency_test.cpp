@@ -76,7 +76,8 @@ std::vector<double> BendingFrequencies(const ModalResult& r) {
   return w;
 }
 
-TEST(CantileverFrequency, LinearisationIsWithinHalfAPercentWithFortyElementsAndConvergesAtSecondOrder) {
+TEST(CantileverFrequency,
+     LinearisationIsWithinHalfAPercentWithFortyElementsAndConvergesAtSecondOrder) {
   std::vector<double> err[2];
   const int counts[2] = {20, 40};
   for (int k = 0; k < 2; ++k) {
@@ -91,8 +92,7 @@ TEST(CantileverFrequency, LinearisationIsWithinHalfAPercentWithFortyElementsAndC
       err[k].push_back(w[static_cast<std::size_t>(n)] / EulerBernoulli(n) - 1.0);
       std::printf("[ D1 ] %d elements, mode %d: omega %.7f rad/s (%.7f Hz), EB %.7f, error %+.3e\n",
                   counts[k], n + 1, w[static_cast<std::size_t>(n)],
-                  w[static_cast<std::size_t>(n)] / (2 * kPi), EulerBernoulli(n),
-                  err[k].back());
+                  w[static_cast<std::size_t>(n)] / (2 * kPi), EulerBernoulli(n), err[k].back());
     }
   }
   for (int n = 0; n < 3; ++n) {
@@ -141,8 +141,8 @@ TEST(CantileverFrequency, ConstraintsRestrictTheModesToTheNullSpaceOfB) {
   ASSERT_TRUE(reference.ok);
   for (const JointType type : {JointType::kFixed, JointType::kRevolute}) {
     ModelBuilder b;
-    const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(kL, 0.0, 0.0), kElements,
-                                     SlenderSection());
+    const int rod =
+        b.AddStraightRod("rod", Vec3::Zero(), Vec3(kL, 0.0, 0.0), kElements, SlenderSection());
     b.AddJointAt("root", type, kGround, b.model().rods[static_cast<std::size_t>(rod)].nodes[0],
                  Vec3::Zero(), Vec3::UnitY());
     const Model model = b.Build();
@@ -230,14 +230,15 @@ TEST(CantileverFrequency, FreeVibrationPeriodsAfterReleasingATipLoadMatchTheLine
       t_prev = data.time;
     }
     ASSERT_GE(crossings.size(), 4u);
-    const double period = 2.0 * (crossings.back() - crossings.front()) /
-                          static_cast<double>(crossings.size() - 1);
+    const double period =
+        2.0 * (crossings.back() - crossings.front()) / static_cast<double>(crossings.size() - 1);
     const double trapezoidal = 2.0 * kPi * h / (2.0 * std::atan(0.5 * omega * h));
     const double eb = 2.0 * kPi / EulerBernoulli(n);
-    std::printf("[ D1 ] time history, mode %d: h = T/100, period %.7f s, trapezoidal prediction "
-                "%.7f (diff %+.2e), Euler-Bernoulli %.7f (error %+.3e), %.2f Newton it/step\n",
-                n + 1, period, trapezoidal, period / trapezoidal - 1.0, eb, period / eb - 1.0,
-                static_cast<double>(integ.iterations) / steps);
+    std::printf(
+        "[ D1 ] time history, mode %d: h = T/100, period %.7f s, trapezoidal prediction "
+        "%.7f (diff %+.2e), Euler-Bernoulli %.7f (error %+.3e), %.2f Newton it/step\n",
+        n + 1, period, trapezoidal, period / trapezoidal - 1.0, eb, period / eb - 1.0,
+        static_cast<double>(integ.iterations) / steps);
     EXPECT_LT(std::abs(period / eb - 1.0), 5e-3) << "mode " << n + 1;
     EXPECT_LT(std::abs(period / trapezoidal - 1.0), 2e-6) << "mode " << n + 1;
     EXPECT_EQ(integ.halvings, 0) << "mode " << n + 1;  // every step at h: the trapezoidal rule

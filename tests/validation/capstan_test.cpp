@@ -44,8 +44,8 @@ struct Capstan {
   Model model;
   Data data;
   Integrator integ;
-  int end2 = -1;   // the node pulled by T2
-  Vec3 pull2;      // its direction
+  int end2 = -1;     // the node pulled by T2
+  Vec3 pull2;        // its direction
   int contacts = 0;  // wrapped elements
   int pull = -1;     // the joint pulling end 2, if any
 };
@@ -76,8 +76,8 @@ void MakeCapstan(double theta, double ratio, Capstan* c, double pull_speed = 0.0
   stiffness << 1e4, 1e4, 1e4, EI, EI, EI;
   inertia << 0.1, 0.1, 0.1, 1e-5, 1e-5, 1e-5;
   ModelBuilder b;
-  const int rod = b.AddRodAlongPath("cord", path, 1, Section::FromDiagonals(stiffness, inertia),
-                                    Vec3::UnitY());
+  const int rod =
+      b.AddRodAlongPath("cord", path, 1, Section::FromDiagonals(stiffness, inertia), Vec3::UnitY());
   const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
   PointLoad load1;
   load1.node = nodes.front();
@@ -129,9 +129,9 @@ void MakeCapstan(double theta, double ratio, Capstan* c, double pull_speed = 0.0
 
 struct CapstanRun {
   double v_early = 0.0, v_late = 0.0;  // mean speed of end 2 along its pull [m/s]
-  int active = 0;                       // active pairs at the end
+  int active = 0;                      // active pairs at the end
   double iterations_per_step = 0.0;
-  double effort_late = 0.0;             // mean drive effort over the last quarter [N]
+  double effort_late = 0.0;  // mean drive effort over the last quarter [N]
 };
 
 // `steps` steps of h = 1e-3 s; mean speeds over the third and the last quarter of the run.

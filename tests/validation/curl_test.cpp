@@ -31,8 +31,8 @@ Model MakeCurl() {
   Vec6 k, m;
   k << 1e3, 1e3, 1e3, 1.0, 1.0, 1.0;
   m << 1.0, 1.0, 1.0, 1e-2, 1e-2, 1e-2;
-  const int rod = b.AddStraightRod("soft", Vec3::Zero(), Vec3(1.0, 0.0, 0.0), 3,
-                                   Section::FromDiagonals(k, m));
+  const int rod =
+      b.AddStraightRod("soft", Vec3::Zero(), Vec3(1.0, 0.0, 0.0), 3, Section::FromDiagonals(k, m));
   const std::vector<int>& nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
   b.FixNode(nodes.front());
   PointLoad load;
@@ -94,12 +94,13 @@ TEST(Curl, ElementsRotatePastPiContinuouslyAndTheEnergyBalanceConvergesAtSecondO
   for (int k = 0; k < 3; ++k) {
     r[k] = Simulate(steps[k]);
     ASSERT_TRUE(r[k].completed) << "h " << steps[k];
-    std::printf("[ curl ] h = %.4g: max element rotation %.4f rad, max tip rotation %.4f rad, "
-                "largest step change of an element's w %.3f, work at end %.5f J, max |work - "
-                "(K + U)| %.3e J, %.2f Newton it/step\n",
-                steps[k], r[k].max_element_rotation, r[k].max_tip_rotation,
-                r[k].max_branch_jump, r[k].work_at_end, r[k].max_energy_error,
-                static_cast<double>(r[k].iterations) * steps[k] / kEnd);
+    std::printf(
+        "[ curl ] h = %.4g: max element rotation %.4f rad, max tip rotation %.4f rad, "
+        "largest step change of an element's w %.3f, work at end %.5f J, max |work - "
+        "(K + U)| %.3e J, %.2f Newton it/step\n",
+        steps[k], r[k].max_element_rotation, r[k].max_tip_rotation, r[k].max_branch_jump,
+        r[k].work_at_end, r[k].max_energy_error,
+        static_cast<double>(r[k].iterations) * steps[k] / kEnd);
     // Past pi (the principal logarithm would have jumped by 2 pi), below 2 pi, continuous.
     EXPECT_GT(r[k].max_element_rotation, kPi + 0.1);
     EXPECT_LT(r[k].max_element_rotation, 2.0 * kPi - 0.5);

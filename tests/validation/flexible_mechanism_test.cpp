@@ -78,13 +78,13 @@ Mechanism MakeMechanism(RodInertia inertia, int num_elements, Gravity gravity) {
   const int rod = b.AddStraightRod("arm", Vec3(0.7, 0.0, 0.0), Vec3(1.3, 0.0, 0.0), num_elements,
                                    Section::FromDiagonals(k, m));
   const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
-  const int drive = b.AddJointAt("actuated", JointType::kRevolute, kGround, link1, Vec3::Zero(),
-                                 Vec3::UnitZ());
+  const int drive =
+      b.AddJointAt("actuated", JointType::kRevolute, kGround, link1, Vec3::Zero(), Vec3::UnitZ());
   Joint& j0 = b.model().joints[static_cast<std::size_t>(drive)];
   j0.drive = DriveKind::kPrescribed;
   j0.drive_profile = Profile::BangBang(0.0, 1.0, kPi / 6.0);
-  const int soft = b.AddJointAt("soft", JointType::kRevolute, link1, link2, Vec3(0.5, 0.0, 0.0),
-                                Vec3::UnitZ());
+  const int soft =
+      b.AddJointAt("soft", JointType::kRevolute, link1, link2, Vec3(0.5, 0.0, 0.0), Vec3::UnitZ());
   b.model().joints[static_cast<std::size_t>(soft)].stiffness(0) = 10.0;
   b.model().joints[static_cast<std::size_t>(soft)].damping(0) = 5.0;
   b.AddJointAt("weld", JointType::kFixed, link2, nodes.front(), Vec3(0.7, 0.0, 0.0));
@@ -114,7 +114,7 @@ Mechanism MakeMechanism(RodInertia inertia, int num_elements, Gravity gravity) {
 struct MechanismRun {
   Vec3 tip = Vec3::Zero();
   double initial_drive_acceleration = 0.0;  // alpha_ddot of the actuated joint at t = 0
-  double max_constraint = 0.0;               // max |phi| over the steps
+  double max_constraint = 0.0;              // max |phi| over the steps
   long iterations = 0;
 };
 
@@ -140,8 +140,8 @@ MechanismRun Simulate(RodInertia inertia, int num_elements, double h,
       ADD_FAILURE() << st.message;
       return r;
     }
-    r.max_constraint = std::max(r.max_constraint,
-                                MaxConstraintViolation(mech.model, data, data.time, 1.0));
+    r.max_constraint =
+        std::max(r.max_constraint, MaxConstraintViolation(mech.model, data, data.time, 1.0));
   }
   r.tip = data.H[static_cast<std::size_t>(mech.tip)].x;
   r.iterations = integ.iterations;
@@ -176,12 +176,12 @@ TEST(FlexibleMechanism, OptionAMatchesThePrototypeAndConvergesAtSecondOrderInH) 
 TEST(FlexibleMechanism, PrototypeOptionBValuesComeFromLumpedGravityNotFromTheInertia) {
   for (int k = 0; k < 4; ++k) {
     const MechanismRun ours = Simulate(RodInertia::kConstant, 3, kStepSizes[k]);
-    const MechanismRun lumped =
-        Simulate(RodInertia::kConstant, 3, kStepSizes[k], Gravity::kLumped);
-    std::printf("[ test 7 ] option B, 3 elements, h = %.4g: tip z %.7f m (prototype %.7f, diff "
-                "%+.2e); with lumped rod gravity %.7f (diff %+.1e)\n",
-                kStepSizes[k], ours.tip.z(), kPrototypeB[k], ours.tip.z() - kPrototypeB[k],
-                lumped.tip.z(), lumped.tip.z() - kPrototypeB[k]);
+    const MechanismRun lumped = Simulate(RodInertia::kConstant, 3, kStepSizes[k], Gravity::kLumped);
+    std::printf(
+        "[ test 7 ] option B, 3 elements, h = %.4g: tip z %.7f m (prototype %.7f, diff "
+        "%+.2e); with lumped rod gravity %.7f (diff %+.1e)\n",
+        kStepSizes[k], ours.tip.z(), kPrototypeB[k], ours.tip.z() - kPrototypeB[k], lumped.tip.z(),
+        lumped.tip.z() - kPrototypeB[k]);
     EXPECT_NEAR(lumped.tip.z(), kPrototypeB[k], 1e-5) << "h " << kStepSizes[k];
     // Option B as defined (exact-field gravity) is ~1e-3 m above the prototype's B values.
     EXPECT_GT(ours.tip.z() - kPrototypeB[k], 9e-4) << "h " << kStepSizes[k];
@@ -195,10 +195,11 @@ TEST(FlexibleMechanism, MeshRefinementAndTheGapBetweenInertiaOptionsFallsLikeEle
     const MechanismRun b = Simulate(RodInertia::kConstant, kMeshes[i], 1e-2);
     const MechanismRun lumped = Simulate(RodInertia::kConstant, kMeshes[i], 1e-2, Gravity::kLumped);
     gap[i] = (a.tip - b.tip).norm();
-    std::printf("[ test 7 ] %2d elements, h = 1e-2: tip z A %.6f (prototype %.6f), B %.6f, B with "
-                "lumped gravity %.6f (prototype B %.6f); |tip A - tip B| %.3e m (z: %+.1e)\n",
-                kMeshes[i], a.tip.z(), kPrototypeMeshA[i], b.tip.z(), lumped.tip.z(),
-                kPrototypeMeshB[i], gap[i], b.tip.z() - a.tip.z());
+    std::printf(
+        "[ test 7 ] %2d elements, h = 1e-2: tip z A %.6f (prototype %.6f), B %.6f, B with "
+        "lumped gravity %.6f (prototype B %.6f); |tip A - tip B| %.3e m (z: %+.1e)\n",
+        kMeshes[i], a.tip.z(), kPrototypeMeshA[i], b.tip.z(), lumped.tip.z(), kPrototypeMeshB[i],
+        gap[i], b.tip.z() - a.tip.z());
     EXPECT_NEAR(a.tip.z(), kPrototypeMeshA[i], 1e-5) << kMeshes[i] << " elements";
     EXPECT_NEAR(lumped.tip.z(), kPrototypeMeshB[i], 1e-5) << kMeshes[i] << " elements";
     EXPECT_NEAR(b.tip.z(), a.tip.z(), 1e-5) << kMeshes[i] << " elements";

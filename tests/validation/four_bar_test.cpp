@@ -143,8 +143,10 @@ void RunPrescribedCrank(Variant variant) {
     const double theta2 = theta2_0 + fb.data.q_joint(0);
     EXPECT_NEAR(fb.data.q_joint(0), crank(t), 1e-10);
     const LoopAngles exact = SolveLoop(theta2);
-    max_angle = std::max(max_angle, std::abs(Wrap(ref.coupler + NodeAngle(fb, fb.coupler) - exact.coupler)));
-    max_angle = std::max(max_angle, std::abs(Wrap(ref.rocker + NodeAngle(fb, fb.rocker) - exact.rocker)));
+    max_angle = std::max(max_angle,
+                         std::abs(Wrap(ref.coupler + NodeAngle(fb, fb.coupler) - exact.coupler)));
+    max_angle =
+        std::max(max_angle, std::abs(Wrap(ref.rocker + NodeAngle(fb, fb.rocker) - exact.rocker)));
     max_angle = std::max(max_angle, std::abs(Wrap(theta2_0 + NodeAngle(fb, fb.crank) - theta2)));
     max_phi = std::max(max_phi, ConstraintResidual(fb));
     max_viol = std::max(max_viol, MaxConstraintViolation(fb.model, fb.data, t, 1.0));
@@ -199,9 +201,9 @@ double CrankTorque(double th2, double w2, double a2) {
 }
 
 struct EffortErrors {
-  double max_effort = 0.0;       // |tau - closed form| over all steps [N m]
-  double after_switch = 0.0;     // the same, on the first step after each switch
-  double max_accel = 0.0;        // |qdd - profile acceleration| [rad/s^2]
+  double max_effort = 0.0;    // |tau - closed form| over all steps [N m]
+  double after_switch = 0.0;  // the same, on the first step after each switch
+  double max_accel = 0.0;     // |qdd - profile acceleration| [rad/s^2]
   double min_effort = INFINITY, max_effort_value = -INFINITY;
   double max_velocity_constraint = 0.0;  // |B v + dphi/dt| over all steps [m/s, rad/s]
   double iterations_per_step = 0.0;
@@ -210,8 +212,8 @@ struct EffortErrors {
 // The crank turns by pi/6 in 1 s with the bang-bang law ([G]'s link profile, method-next.md
 // §N1.6 T1.2) starting at 0.1 s: switches at 0.1, 0.6 and 1.1 s.
 EffortErrors BangBangCrank(Variant variant, bool restart, double rho_inf, double h,
-                          ConstraintFormulation constraints = ConstraintFormulation::kIndex3,
-                          bool perturbed_start = false) {
+                           ConstraintFormulation constraints = ConstraintFormulation::kIndex3,
+                           bool perturbed_start = false) {
   const Profile crank = Profile::BangBang(0.1, 1.1, kPi / 6.0);
   FourBar fb;
   fb.model = BuildFourBar(variant, &crank, true, &fb);
@@ -265,11 +267,12 @@ TEST(FourBar, BangBangCrankEffortFollowsClosedFormInverseDynamicsWithoutRingingA
     const EffortErrors coarse = BangBangCrank(v, true, 0.9, 2e-3);
     const EffortErrors with = BangBangCrank(v, true, 0.9, 1e-3);
     const EffortErrors without = BangBangCrank(v, false, 0.9, 1e-3);
-    std::printf("four-bar bang-bang crank, effort %.3f..%.3f N m, h = 1e-3: max error %.3g N m "
-                "(after a switch %.3g), qdd error %.3g rad/s^2; without restarts %.3g N m (after "
-                "a switch %.3g), qdd error %.3g rad/s^2\n",
-                with.min_effort, with.max_effort_value, with.max_effort, with.after_switch,
-                with.max_accel, without.max_effort, without.after_switch, without.max_accel);
+    std::printf(
+        "four-bar bang-bang crank, effort %.3f..%.3f N m, h = 1e-3: max error %.3g N m "
+        "(after a switch %.3g), qdd error %.3g rad/s^2; without restarts %.3g N m (after "
+        "a switch %.3g), qdd error %.3g rad/s^2\n",
+        with.min_effort, with.max_effort_value, with.max_effort, with.after_switch, with.max_accel,
+        without.max_effort, without.after_switch, without.max_accel);
     EXPECT_LT(with.max_accel, 1e-6);
     EXPECT_LT(with.after_switch, 2e-4);
     EXPECT_LT(with.max_effort, 1e-3);
@@ -292,12 +295,12 @@ TEST(FourBar, BangBangCrankEffortWithStabilisedIndexTwoIsExactAtEveryStep) {
     for (double rho : {0.9, 1.0}) {
       const EffortErrors coarse = BangBangCrank(v, true, rho, 2e-3, ConstraintFormulation::kGgl);
       const EffortErrors fine = BangBangCrank(v, true, rho, 1e-3, ConstraintFormulation::kGgl);
-      std::printf("four-bar bang-bang crank, GGL, rho_inf %.1f: max effort error %.3g / %.3g N m "
-                  "(after a switch %.3g / %.3g) at h = 2e-3 / 1e-3, qdd error %.3g rad/s^2, "
-                  "|B v + dphi/dt| %.3g, %.2f iterations per step\n",
-                  rho, coarse.max_effort, fine.max_effort, coarse.after_switch,
-                  fine.after_switch, fine.max_accel, fine.max_velocity_constraint,
-                  fine.iterations_per_step);
+      std::printf(
+          "four-bar bang-bang crank, GGL, rho_inf %.1f: max effort error %.3g / %.3g N m "
+          "(after a switch %.3g / %.3g) at h = 2e-3 / 1e-3, qdd error %.3g rad/s^2, "
+          "|B v + dphi/dt| %.3g, %.2f iterations per step\n",
+          rho, coarse.max_effort, fine.max_effort, coarse.after_switch, fine.after_switch,
+          fine.max_accel, fine.max_velocity_constraint, fine.iterations_per_step);
       // Measured at h = 1e-3: rho_inf = 1: 3.15e-7 N m everywhere (1.26e-6 at h = 2e-3, second
       // order); rho_inf = 0.9: 3.72e-6 N m (7.57e-6 at h = 2e-3), 1.0e-6 on the first step after
       // a switch: first order, from the plain restart a = vdot+ (the perturbed start of
@@ -327,11 +330,12 @@ TEST(FourBar, PerturbedStartMakesTheEffortSecondOrderWithNumericalDamping) {
         BangBangCrank(v, true, 0.9, 2e-3, ConstraintFormulation::kGgl, true);
     const EffortErrors fine = BangBangCrank(v, true, 0.9, 1e-3, ConstraintFormulation::kGgl, true);
     const EffortErrors plain = BangBangCrank(v, true, 0.9, 1e-3, ConstraintFormulation::kGgl);
-    std::printf("four-bar bang-bang crank, GGL, rho_inf 0.9, perturbed start: max effort error "
-                "%.3g / %.3g N m (after a switch %.3g / %.3g) at h = 2e-3 / 1e-3 (plain start "
-                "%.3g), %.2f iterations per step\n",
-                coarse.max_effort, fine.max_effort, coarse.after_switch, fine.after_switch,
-                plain.max_effort, fine.iterations_per_step);
+    std::printf(
+        "four-bar bang-bang crank, GGL, rho_inf 0.9, perturbed start: max effort error "
+        "%.3g / %.3g N m (after a switch %.3g / %.3g) at h = 2e-3 / 1e-3 (plain start "
+        "%.3g), %.2f iterations per step\n",
+        coarse.max_effort, fine.max_effort, coarse.after_switch, fine.after_switch,
+        plain.max_effort, fine.iterations_per_step);
     // Measured: 1.25e-6 / 3.14e-7 N m at h = 2e-3 / 1e-3 (ratio 3.98; also on the first step
     // after a switch), against 7.57e-6 / 3.72e-6 with the plain start; 1.69 iterations per step.
     EXPECT_NEAR(coarse.max_effort / fine.max_effort, 4.0, 0.6);

@@ -77,7 +77,8 @@ TEST(FreeJoint, TwoBodiesOscillateAtTheClosedFormAxialAndTorsionalFrequencies) {
     const Vec6 rel = Relative(p);
     err_u = std::max(err_u, std::abs(rel(0) - u0 * std::sin(w_axial * n * h)) / u0);
     err_t = std::max(err_t, std::abs(rel(3) - t0 * std::sin(w_twist * n * h)) / t0);
-    other = std::max({other, std::abs(rel(1)), std::abs(rel(2)), std::abs(rel(4)), std::abs(rel(5))});
+    other =
+        std::max({other, std::abs(rel(1)), std::abs(rel(2)), std::abs(rel(4)), std::abs(rel(5))});
   }
   // Phase error of the trapezoidal rule (w h)^2 w t / 12 at most ~3e-3 here; the
   // geometric nonlinearity is O(amplitude) ~ 1e-4.

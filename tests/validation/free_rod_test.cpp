@@ -107,9 +107,9 @@ RunResult Simulate(int num_elements, double h, double t_end) {
     const StepResult st = Step(model, data, integ, h);
     EXPECT_TRUE(st.ok) << st.message;
     if (!st.ok) break;
-    r.momentum_drift = std::max(r.momentum_drift, (WorldMomentum(model, data) - h0).norm() / h0.norm());
-    r.energy_drift =
-        std::max(r.energy_drift, std::abs(CalcEnergy(model, data).total() - e0) / e0);
+    r.momentum_drift =
+        std::max(r.momentum_drift, (WorldMomentum(model, data) - h0).norm() / h0.norm());
+    r.energy_drift = std::max(r.energy_drift, std::abs(CalcEnergy(model, data).total() - e0) / e0);
   }
   r.iterations = integ.iterations;
   // Instantaneous momentum balance at the final state: the world resultant of the nodal
@@ -121,12 +121,11 @@ RunResult Simulate(int num_elements, double h, double t_end) {
   Assemble(model, data, o);
   Vec6 resultant = Vec6::Zero();
   for (std::size_t i = 0; i < model.nodes.size(); ++i)
-    resultant += Ad(data.H[i].Inverse()).transpose() *
-                 data.residual.segment<6>(model.nodes[i].dof);
+    resultant += Ad(data.H[i].Inverse()).transpose() * data.residual.segment<6>(model.nodes[i].dof);
   // Relative to the round-off floor of the residual, eps times its largest cancelling term
   // (here eps EA |x| / L_e of the internal forces, data.term_scale).
-  r.momentum_rate = resultant.norm() /
-                    (std::numeric_limits<double>::epsilon() * std::max(data.term_scale, data.force_scale));
+  r.momentum_rate = resultant.norm() / (std::numeric_limits<double>::epsilon() *
+                                        std::max(data.term_scale, data.force_scale));
   return r;
 }
 
@@ -136,10 +135,11 @@ TEST(FreeRod, MomentumAndEnergyAreConservedToSecondOrderAndTheMomentumRateToRoun
   RunResult r[4];
   for (int k = 0; k < 4; ++k) {
     r[k] = Simulate(8, steps[k], t_end);
-    std::printf("[ free rod ] h = %.4g: momentum drift %.3e, energy drift %.3e, momentum rate "
-                "%.1f eps x term scale, %.2f Newton it/step\n",
-                steps[k], r[k].momentum_drift, r[k].energy_drift, r[k].momentum_rate,
-                static_cast<double>(r[k].iterations) * steps[k] / t_end);
+    std::printf(
+        "[ free rod ] h = %.4g: momentum drift %.3e, energy drift %.3e, momentum rate "
+        "%.1f eps x term scale, %.2f Newton it/step\n",
+        steps[k], r[k].momentum_drift, r[k].energy_drift, r[k].momentum_rate,
+        static_cast<double>(r[k].iterations) * steps[k] / t_end);
   }
   // Newton stops at the round-off floor (32 eps x term_scale per entry, DynamicOptions).
   for (int k = 0; k < 4; ++k) EXPECT_LT(r[k].momentum_rate, 100.0);
@@ -177,8 +177,10 @@ TEST(FreeRod, FreeFreeBendingFrequenciesAndSixRigidModes) {
   for (int n = 0; n < 2; ++n)
     for (int j = 0; j < 2; ++j) {
       const double w = r.omega(6 + 2 * n + j), expected = beta[n] * beta[n] * scale;
-      std::printf("[ free rod ] free-free bending %d: omega %.6f rad/s, Euler-Bernoulli %.6f, "
-                  "error %+.2e\n", n + 1, w, expected, w / expected - 1.0);
+      std::printf(
+          "[ free rod ] free-free bending %d: omega %.6f rad/s, Euler-Bernoulli %.6f, "
+          "error %+.2e\n",
+          n + 1, w, expected, w / expected - 1.0);
       EXPECT_NEAR(w / expected, 1.0, 5e-3);
     }
 }

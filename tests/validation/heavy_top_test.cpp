@@ -51,9 +51,9 @@ void MakeTop(Top* t, double rho_inf = 1.0) {
   t->model = b.Build();
   t->data = MakeData(t->model);
   const int dof = t->model.nodes[0].dof, coord = t->model.joints[0].coord;
-  t->data.v.segment<3>(dof).setZero();        // the node point is the fixed point
-  t->data.v.segment<3>(dof + 3) = kOmega0;    // body angular velocity
-  t->data.v.segment<3>(coord) = kOmega0;      // spherical joint rates (B v = 0)
+  t->data.v.segment<3>(dof).setZero();      // the node point is the fixed point
+  t->data.v.segment<3>(dof + 3) = kOmega0;  // body angular velocity
+  t->data.v.segment<3>(coord) = kOmega0;    // spherical joint rates (B v = 0)
   DynamicOptions opt;
   opt.rho_inf = rho_inf;
   std::string message;
@@ -63,9 +63,7 @@ void MakeTop(Top* t, double rho_inf = 1.0) {
 Vec3 Omega(const Top& t) { return t.data.v.segment<3>(t.model.nodes[0].dof + 3); }
 double Energy(const Top& t) { return CalcEnergy(t.model, t.data).total(); }
 // Spatial angular momentum about the fixed point (the node origin stays at the world origin).
-Vec3 AngularMomentum(const Top& t) {
-  return t.data.H[0].R * (InertiaAboutFixedPoint() * Omega(t));
-}
+Vec3 AngularMomentum(const Top& t) { return t.data.H[0].R * (InertiaAboutFixedPoint() * Omega(t)); }
 
 TEST(HeavyTopM2, InitialInvariantsMatchTheQuotedValues) {
   Top t;

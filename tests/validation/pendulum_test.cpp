@@ -62,9 +62,10 @@ Vec3 BobPosition(const Pendulum& p) { return p.data.H[0].Act(Vec3(-1.0, 0.0, 0.0
 TEST(PendulumM1, ExactReferenceReproducesTheQuotedPeriodAndTable) {
   const double k2 = 0.5;
   EXPECT_NEAR(4.0 * test::EllipticK(k2) / std::sqrt(kG), kPeriod, 1e-11);
-  const double table[][3] = {{0.25, -0.953664612, -0.300871746}, {0.5, -0.391048792, -0.920369949},
-                             {1.0, 0.986291751, -0.165010853},   {2.0, -0.793566195, -0.608483930},
-                             {5.0, -0.942305435, -0.334754338},  {10.0, -0.275087463, -0.961419205}};
+  const double table[][3] = {
+      {0.25, -0.953664612, -0.300871746}, {0.5, -0.391048792, -0.920369949},
+      {1.0, 0.986291751, -0.165010853},   {2.0, -0.793566195, -0.608483930},
+      {5.0, -0.942305435, -0.334754338},  {10.0, -0.275087463, -0.961419205}};
   for (const auto& row : table) {
     const Vec3 x = ExactPosition(row[0]);
     EXPECT_NEAR(x.x(), row[1], 1e-9) << "t = " << row[0];

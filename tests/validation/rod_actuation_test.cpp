@@ -177,7 +177,8 @@ struct FreeCurl {
 };
 FreeCurl CurlFreeRod(double ramp, double t_end, double h) {
   ModelBuilder b;
-  Section s = Section::FromDiagonals(V6(1e4, 1e4, 1e4, 1.0, 1.0, 1.0), V6(1, 1, 1, 1e-3, 1e-3, 1e-3));
+  Section s =
+      Section::FromDiagonals(V6(1e4, 1e4, 1e4, 1.0, 1.0, 1.0), V6(1, 1, 1, 1e-3, 1e-3, 1e-3));
   s.damping = V6(10, 10, 10, 0.05, 0.05, 0.05);
   b.AddStraightRod("free", Vec3::Zero(), Vec3::UnitX(), 4, s);
   Actuator a = RestCurvature(2.0 * kPi);
@@ -254,7 +255,8 @@ TEST(ActuationValidation, DampedDynamicCurlEndsAtTheStaticShape) {
   // T5.5: the rest curvature of T5.1 applied with a smooth step over 1 s to a damped
   // one-element cantilever with mass settles on the static (closed-form) shape.
   ModelBuilder b;
-  Section s = Section::FromDiagonals(V6(kEA, kEA, kEA, kEI, kEI, kEI), V6(1, 1, 1, 1e-3, 1e-3, 1e-3));
+  Section s =
+      Section::FromDiagonals(V6(kEA, kEA, kEA, kEI, kEI, kEI), V6(1, 1, 1, 1e-3, 1e-3, 1e-3));
   s.damping = V6(10, 10, 10, 0.5, 0.5, 0.5);
   b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 1, s);
   b.FixNode(0);

@@ -50,7 +50,9 @@ void MakeOscillator(Oscillator* o, JointType type, double damping, double rho_in
   ASSERT_TRUE(InitializeDynamics(o->model, o->data, o->integ, opt));
 }
 
-double Inertia(JointType type) { return type == JointType::kRevolute ? kJc + kMass * kLc * kLc : kMass; }
+double Inertia(JointType type) {
+  return type == JointType::kRevolute ? kJc + kMass * kLc * kLc : kMass;
+}
 
 // Free response delta(t) of J d'' + D d' + K d = 0 from delta(0) = a0, delta'(0) = 0.
 double ExactDelta(JointType type, double D, double t) {
@@ -154,7 +156,9 @@ TEST(SoftJointJ1, UndampedAmplitudeIsPreservedWithRhoInfOne) {
 struct ScalarGeneralizedAlpha {
   double am, af, gamma, beta;
   explicit ScalarGeneralizedAlpha(double rho)
-      : am((2 * rho - 1) / (rho + 1)), af(rho / (rho + 1)), gamma(0.5 + af - am),
+      : am((2 * rho - 1) / (rho + 1)),
+        af(rho / (rho + 1)),
+        gamma(0.5 + af - am),
         beta(0.25 * (gamma + 0.5) * (gamma + 0.5)) {}
 };
 

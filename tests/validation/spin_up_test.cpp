@@ -38,8 +38,8 @@ SpinUp MakeSpinUp() {
   const int rod = b.AddStraightRod("arm", Vec3(0.1, 0.0, 0.0), Vec3(1.1, 0.0, 0.0), 6,
                                    Section::FromDiagonals(k, m));
   const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
-  const int drive = b.AddJointAt("motor", JointType::kRevolute, kGround, hub, Vec3::Zero(),
-                                 Vec3::UnitZ());
+  const int drive =
+      b.AddJointAt("motor", JointType::kRevolute, kGround, hub, Vec3::Zero(), Vec3::UnitZ());
   b.model().joints[static_cast<std::size_t>(drive)].drive = DriveKind::kPrescribed;
   b.model().joints[static_cast<std::size_t>(drive)].drive_profile =
       Profile::SmoothStep(0.0, 1.0, 0.5 * kPi);
@@ -73,8 +73,7 @@ SpinUpRun Simulate(double h) {
     const double alpha = data.q_joint(motor.coord - s.model.nv_nodes);
     const Mat3& R = data.H[static_cast<std::size_t>(s.hub)].R;
     const double hub_angle = std::atan2(R(1, 0), R(0, 0));
-    r.max_angle_error = std::max({r.max_angle_error, std::abs(alpha - q),
-                                  std::abs(hub_angle - q)});
+    r.max_angle_error = std::max({r.max_angle_error, std::abs(alpha - q), std::abs(hub_angle - q)});
   }
   r.tip = data.H[static_cast<std::size_t>(s.tip)].x;
   r.iterations = integ.iterations;
@@ -86,10 +85,11 @@ TEST(SpinUp, HubFollowsThePrescribedLawAndTheTipConvergesAtSecondOrder) {
   SpinUpRun r[4];
   for (int k = 0; k < 4; ++k) {
     r[k] = Simulate(steps[k]);
-    std::printf("[ spin-up ] h = %.4g: tip (%.8f, %.8f, %.2e) m, max hub angle error %.2e rad, "
-                "%.2f Newton it/step\n",
-                steps[k], r[k].tip.x(), r[k].tip.y(), r[k].tip.z(), r[k].max_angle_error,
-                static_cast<double>(r[k].iterations) * steps[k] / kEnd);
+    std::printf(
+        "[ spin-up ] h = %.4g: tip (%.8f, %.8f, %.2e) m, max hub angle error %.2e rad, "
+        "%.2f Newton it/step\n",
+        steps[k], r[k].tip.x(), r[k].tip.y(), r[k].tip.z(), r[k].max_angle_error,
+        static_cast<double>(r[k].iterations) * steps[k] / kEnd);
     EXPECT_LT(r[k].max_angle_error, 1e-10) << "h " << steps[k];
   }
   // The flexible arm lags the hub (pi/2) by ~0.42 rad at t = 1.5 s and vibrates in the plane.

@@ -25,11 +25,11 @@ namespace screwfem::spring_chain_test {
 namespace {
 
 struct ChainRun {
-  double energy_error = 0.0;        // max |E - E0| [J]
+  double energy_error = 0.0;  // max |E - E0| [J]
   double max_velocity_constraint = 0.0;
   double max_constraint = 0.0;
   double iterations_per_step = 0.0;
-  double swing = 0.0;               // max |kinetic energy| reached [J]
+  double swing = 0.0;  // max |kinetic energy| reached [J]
 };
 
 Model BuildChain() {
@@ -90,14 +90,15 @@ TEST(SpringChain, StabilisedIndexTwoAtRhoInfOneConvergesFastAndConservesEnergyTo
   const ChainRun coarse = RunChain(2e-3, ConstraintFormulation::kGgl);
   const ChainRun fine = RunChain(1e-3, ConstraintFormulation::kGgl);
   const ChainRun index3 = RunChain(1e-3, ConstraintFormulation::kIndex3);
-  std::printf("spring chain, rho_inf = 1, GGL: energy error %.3g / %.3g J at h = 2e-3 / 1e-3 "
-              "(ratio %.2f; kinetic up to %.3g J), %.2f / %.2f iterations per step, |B v + "
-              "dphi/dt| %.3g, |phi| %.3g; index 3 at h = 1e-3: energy error %.3g J, %.2f "
-              "iterations per step, |B v| %.3g\n",
-              coarse.energy_error, fine.energy_error, coarse.energy_error / fine.energy_error,
-              fine.swing, coarse.iterations_per_step, fine.iterations_per_step,
-              fine.max_velocity_constraint, fine.max_constraint, index3.energy_error,
-              index3.iterations_per_step, index3.max_velocity_constraint);
+  std::printf(
+      "spring chain, rho_inf = 1, GGL: energy error %.3g / %.3g J at h = 2e-3 / 1e-3 "
+      "(ratio %.2f; kinetic up to %.3g J), %.2f / %.2f iterations per step, |B v + "
+      "dphi/dt| %.3g, |phi| %.3g; index 3 at h = 1e-3: energy error %.3g J, %.2f "
+      "iterations per step, |B v| %.3g\n",
+      coarse.energy_error, fine.energy_error, coarse.energy_error / fine.energy_error, fine.swing,
+      coarse.iterations_per_step, fine.iterations_per_step, fine.max_velocity_constraint,
+      fine.max_constraint, index3.energy_error, index3.iterations_per_step,
+      index3.max_velocity_constraint);
   // Measured: energy error 1.09e-3 / 2.7e-4 J (ratio 4.04; 1.21e-3 / 3.0e-4 before the spherical
   // joint's constraint force lost its tangent operator, AddJoints; kinetic energy up to 2 J),
   // 3.58 / 2.92 iterations per step (index 3: 3.90 at h = 1e-3, energy error 1.2e-2 J, |B v|
@@ -151,10 +152,11 @@ TEST(SpringChain, PositionsConvergeAtSecondOrderWithASpringOnTheSphericalJoint) 
     const Eigen::VectorXd e2 = LinkEnds(1e-3, constraints, rho_inf);
     const Eigen::VectorXd e3 = LinkEnds(5e-4, constraints, rho_inf);
     const double d12 = (e1 - e2).cwiseAbs().maxCoeff(), d23 = (e2 - e3).cwiseAbs().maxCoeff();
-    std::printf("spring chain link ends at 0.5 s, %s, rho_inf %.1f: differences %.3g / %.3g m "
-                "(h = 2e-3 vs 1e-3, 1e-3 vs 5e-4), ratio %.2f\n",
-                constraints == ConstraintFormulation::kGgl ? "GGL" : "index 3", rho_inf, d12, d23,
-                d12 / d23);
+    std::printf(
+        "spring chain link ends at 0.5 s, %s, rho_inf %.1f: differences %.3g / %.3g m "
+        "(h = 2e-3 vs 1e-3, 1e-3 vs 5e-4), ratio %.2f\n",
+        constraints == ConstraintFormulation::kGgl ? "GGL" : "index 3", rho_inf, d12, d23,
+        d12 / d23);
     EXPECT_GT(d23, 1e-6);  // it moves, and the steps differ
     EXPECT_NEAR(d12 / d23, 4.0, 0.6);
   }

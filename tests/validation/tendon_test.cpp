@@ -33,8 +33,9 @@ struct Cantilever {
 
 Cantilever SolveCantilever(int elements, double tension) {
   ModelBuilder b;
-  const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements,
-                                   Section::FromDiagonals((Vec6() << kEA, kEA, kEA, kEI, kEI, kEI).finished()));
+  const int rod =
+      b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements,
+                       Section::FromDiagonals((Vec6() << kEA, kEA, kEA, kEI, kEI, kEI).finished()));
   const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
   b.FixNode(nodes.front());
   std::vector<BodyPoint> eyelets;
@@ -118,8 +119,8 @@ TEST(TendonValidation, StrainEnergyChangesByMinusTensionTimesTendonLength) {
   const Cantilever lo = SolveCantilever(8, tau - dt), hi = SolveCantilever(8, tau + dt);
   ASSERT_TRUE(lo.result.converged && hi.result.converged);
   const double dU = CalcEnergy(hi.model, hi.data).strain - CalcEnergy(lo.model, lo.data).strain;
-  const double dL = CalcTendonState(hi.model, hi.data, 0).length -
-                    CalcTendonState(lo.model, lo.data, 0).length;
+  const double dL =
+      CalcTendonState(hi.model, hi.data, 0).length - CalcTendonState(lo.model, lo.data, 0).length;
   EXPECT_LT(dL, 0.0);
   EXPECT_NEAR(-dU / dL, tau, 1e-4 * tau);  // central difference: O(dt^2)
 }
@@ -156,7 +157,7 @@ double OscillatorError(double h, double duration) {
     EXPECT_TRUE(r.ok) << r.message;
     const double t = i * h;
     const double z = -0.1 + 0.1 * std::exp(-zeta * w * t) *
-                                 (std::cos(wd * t) + zeta * w / wd * std::sin(wd * t));
+                                (std::cos(wd * t) + zeta * w / wd * std::sin(wd * t));
     err = std::max(err, std::abs(data.H[0].x.z() - z));
     err = std::max(err, data.H[0].x.head<2>().norm());
   }

@@ -95,8 +95,8 @@ TEST(TorqueFreeM3, EllipticReferenceSatisfiesTheInitialConditionAndEulersEquatio
 
 struct RunResult {
   double energy_drift = 0.0, momentum_drift = 0.0;  // largest relative deviations
-  double omega_error = 0.0;                          // largest |w - w_exact| / |w0|
-  std::vector<double> flips;                         // zero crossings of w2
+  double omega_error = 0.0;                         // largest |w - w_exact| / |w0|
+  std::vector<double> flips;                        // zero crossings of w2
 };
 
 RunResult Simulate(double h, double duration) {
@@ -113,7 +113,8 @@ RunResult Simulate(double h, double duration) {
     EXPECT_TRUE(r.ok) << r.message;
     if (!r.ok) break;
     const double t = n * h;
-    run.energy_drift = std::max(run.energy_drift, std::abs(CalcEnergy(b.model, b.data).total() - E0) / E0);
+    run.energy_drift =
+        std::max(run.energy_drift, std::abs(CalcEnergy(b.model, b.data).total() - E0) / E0);
     run.momentum_drift = std::max(run.momentum_drift, (SpatialMomentum(b) - L0).norm() / L0.norm());
     run.omega_error = std::max(run.omega_error, (Omega(b) - x.Omega(t)).norm() / kOmega0.norm());
     const double w2 = Omega(b)(1);

@@ -23,7 +23,6 @@ namespace screwfem {
 
 // AssemblyOptions (what an assembly computes and how it scales): elements/constraint.h.
 
-
 // model.pattern_last widened by the blocks of d(B^T lambda)/dq (each constrained joint couples
 // its nodes and coordinates with each other), and the half-bandwidth it needs.
 std::vector<int> ConstraintForceTangentPattern(const Model& model, int* bandwidth);

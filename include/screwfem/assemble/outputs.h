@@ -26,8 +26,8 @@ PointMotion CalcNodePointMotion(const Model& model, const Data& data, int node, 
 struct RodPoint {
   SE3 frame;
   PointMotion motion;
-  int element = -1;   // global element index
-  double xi = 0.0;    // in [0, 1]
+  int element = -1;  // global element index
+  double xi = 0.0;   // in [0, 1]
 };
 RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod, double s);
 

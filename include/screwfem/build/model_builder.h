@@ -48,8 +48,8 @@ struct JointSpec {
 // the nearest one is farther than the tolerance (or there is none).
 struct NodeMatch {
   int node = -1;
-  int nearest = -1;      // the nearest node, even when out of tolerance
-  double distance = 0.0; // [m] to the nearest node (infinity when there is none)
+  int nearest = -1;       // the nearest node, even when out of tolerance
+  double distance = 0.0;  // [m] to the nearest node (infinity when there is none)
 };
 
 // Builds a Model through a small C++ API; Build() validates everything and computes the layout.
@@ -166,7 +166,6 @@ class ModelBuilder {
   EntityRef NextRod() const { return {EntityKind::kRod, static_cast<int>(model_.rods.size()), {}}; }
   Model model_;
 };
-
 
 // Redundant constraint rows at the reference configuration (called by ModelBuilder::Build on
 // a model whose layout is set; build/redundancy.cpp): fills model.redundant_rows and adds a

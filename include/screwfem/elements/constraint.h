@@ -65,9 +65,9 @@ namespace screwfem {
 // What an assembly computes and how it scales (assemble/assemble.h): element kernels read the
 // part of it they need (KernelOptions), constraint kinds all of it.
 struct AssemblyOptions {
-  double time = 0.0;          // profiles are evaluated at this time
-  double load_factor = 1.0;   // multiplies every load and prescribed motion (statics)
-  bool dynamics = false;      // include inertia and damping forces
+  double time = 0.0;         // profiles are evaluated at this time
+  double load_factor = 1.0;  // multiplies every load and prescribed motion (statics)
+  bool dynamics = false;     // include inertia and damping forces
   double c_mass = 0.0, c_damping = 0.0, c_stiffness = 1.0;
   double s_rows = 1.0, s_constraints = 1.0, s_multipliers = 1.0;
   bool use_node_tangent = false;

@@ -40,8 +40,7 @@ struct ContactLawParameters {
   double friction = 0.0;       // mu
   double slip_velocity = 0.0;  // eps_v [m/s]
 };
-ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping,
-                                   bool dynamics);
+ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping, bool dynamics);
 
 // The normal force of the law (method-next.md §N6.3) at gap g closing at rate dg/dt:
 // f_n = f_e(g) - c_n w(g) dg/dt with w(g) = min(1, (delta - g) / delta) (the damping grows in
@@ -60,7 +59,7 @@ ContactNormal ContactNormalLaw(double gap, double gap_rate, const ContactLawPara
 // the force on the shape (on side A). The one definition behind the kernels (ContactKind,
 // ShapePairKind) and what the outputs report (CalcContactState, CalcShapePairState).
 struct ContactForce {
-  bool active = false;      // g < delta and f_n > 0
+  bool active = false;  // g < delta and f_n > 0
   ContactNormal normal;
   Vec3 force = Vec3::Zero();     // F [N], world
   Vec3 friction = Vec3::Zero();  // f_t = -mu f_n v_t / sqrt(|v_t|^2 + eps_v^2) [N], world
@@ -75,11 +74,11 @@ ContactForce ContactForceLaw(double gap, const Vec3& normal, const Vec3& velocit
 
 // The geometry of a pair at frames H[0], H[1] of its item nodes.
 struct ContactGeometry {
-  double gap = 0.0;          // signed distance between the surfaces [m]
-  double s = 0.0;            // closest parameter on the shape's segment
-  Vec3 normal = Vec3::UnitZ();  // world, from the obstacle to the shape
-  Vec3 point = Vec3::Zero();    // the surface point p_s of the shape [m], world
-  double weight[2] = {0.0, 0.0};   // W_k
+  double gap = 0.0;                              // signed distance between the surfaces [m]
+  double s = 0.0;                                // closest parameter on the shape's segment
+  Vec3 normal = Vec3::UnitZ();                   // world, from the obstacle to the shape
+  Vec3 point = Vec3::Zero();                     // the surface point p_s of the shape [m], world
+  double weight[2] = {0.0, 0.0};                 // W_k
   Vec3 lever[2] = {Vec3::Zero(), Vec3::Zero()};  // l_k, node-frame components
 };
 // Returns false when the normal is undefined (the shape's axis touches a sphere's centre or a
@@ -109,11 +108,11 @@ struct ContactKind {
 
 // A pair's state for the outputs (contacts.csv, VTK) in the current state of data.
 struct ContactState {
-  bool active = false;            // gap < onset and f_n > 0
-  double gap = 0.0;               // [m]
-  Vec3 point = Vec3::Zero();      // surface point of the shape, world [m]
-  Vec3 normal = Vec3::UnitZ();    // world, from the obstacle to the shape
-  double normal_force = 0.0;      // f_n [N]
+  bool active = false;                 // gap < onset and f_n > 0
+  double gap = 0.0;                    // [m]
+  Vec3 point = Vec3::Zero();           // surface point of the shape, world [m]
+  Vec3 normal = Vec3::UnitZ();         // world, from the obstacle to the shape
+  double normal_force = 0.0;           // f_n [N]
   Vec3 friction_force = Vec3::Zero();  // f_t on the shape, world [N]
 };
 ContactState CalcContactState(const Model& model, const Data& data, int pair);

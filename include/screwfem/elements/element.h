@@ -86,10 +86,10 @@ struct ElementTerms {
 
 // Energies of a state [J].
 struct Energy {
-  double kinetic = 0.0;   // rigid bodies and rods (consistent with the model's rod inertia)
-  double strain = 0.0;    // rods
-  double spring = 0.0;    // joint springs (towards their rest, incl. series-elastic drives)
-  double gravity = 0.0;   // potential of gravity, zero at the world origin
+  double kinetic = 0.0;  // rigid bodies and rods (consistent with the model's rod inertia)
+  double strain = 0.0;   // rods
+  double spring = 0.0;   // joint springs (towards their rest, incl. series-elastic drives)
+  double gravity = 0.0;  // potential of gravity, zero at the world origin
   double total() const { return kinetic + strain + spring + gravity; }
   // Not an energy, summed in the same pass over the items (the kinetic energy's velocities
   // serve both): linear momentum [kg m/s] and angular momentum about the world origin

@@ -34,14 +34,14 @@ enum class JointSpringLaw { kCoordinates, kLogarithm, kRelativeMotion };
 
 struct JointTypeInfo {
   JointType type;
-  const char* name;   // in scene files, outputs and messages
-  int dof;            // k, the number of coordinates
+  const char* name;  // in scene files, outputs and messages
+  int dof;           // k, the number of coordinates
   // Global coordinates: H_J is a function of the coordinates alpha (the abelian subgroups, and
   // the universal joint as a product of two one-parameter subgroups); they retract additively
   // and may be driven. Otherwise H_J is stored and retracts by the exponential,
   // H_J <- H_J exp(A_J dx) (method.md §5.2).
   bool global_coordinates;
-  bool constrained;   // 6 relative-frame constraint rows (a free joint has none)
+  bool constrained;  // 6 relative-frame constraint rows (a free joint has none)
   // Scene keys the type uses: `axis` (the plane normal of a planar joint), `axis2` (orthogonal
   // to `axis`), `pitch` [m/rad].
   bool uses_axis, uses_axis2, uses_pitch;
@@ -118,9 +118,8 @@ Vec6 JointGradientTimes(const JointGradient& g, const Vec6* x_a, const Vec6* x_b
 // plus, for the universal joint, the variation of its moving first axis A_1(alpha_2). `basis`
 // is the current basis (JointCurrentBasis).
 using JointForceTangent = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 18, 18>;
-void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g,
-                                     const Vec6& lambda, const Mat6X& basis,
-                                     JointForceTangent* out);
+void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g, const Vec6& lambda,
+                                     const Mat6X& basis, JointForceTangent* out);
 
 // The derivative Z = d(B v)/dq of one joint's velocity constraint rows at fixed velocities
 // (method-next.md §N1.3, the (3,1) block of the stabilised index-2 iteration matrix): columns
@@ -131,8 +130,8 @@ void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g,
 // plus, for the universal joint, the variation of its moving first axis A_1(alpha_2). A null
 // v_a (v_b) is a node at rest (the ground); v_j holds the k coordinate rates.
 using JointVelocityTangent = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 18>;
-void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient& g,
-                                        const Vec6* v_a, const Vec6* v_b,
+void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient& g, const Vec6* v_a,
+                                        const Vec6* v_b,
                                         const Eigen::Ref<const Eigen::VectorXd>& v_j,
                                         const Mat6X& basis, JointVelocityTangent* out);
 

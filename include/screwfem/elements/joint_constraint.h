@@ -95,8 +95,7 @@ struct JointConstraintKind {
     Vec6 bx = JointGradientTimes(g, da >= 0 ? &xa : nullptr, db >= 0 ? &xb : nullptr);
     if (j.k() > 0) {
       const JointMatrix I = Mat6::Identity().topLeftCorner(j.k(), j.k());
-      bx += JointGradientCoordinates(g, JointCurrentBasis(m, d, ji), I) *
-            x.segment(j.coord, j.k());
+      bx += JointGradientCoordinates(g, JointCurrentBasis(m, d, ji), I) * x.segment(j.coord, j.k());
     }
     out.segment<6>(j.row) = bx;
   }
@@ -120,9 +119,7 @@ struct JointConstraintKind {
   }
 
  private:
-  static const Joint& Get(const Model& m, int ji) {
-    return m.joints[static_cast<std::size_t>(ji)];
-  }
+  static const Joint& Get(const Model& m, int ji) { return m.joints[static_cast<std::size_t>(ji)]; }
   static void Gradient(const Model& m, const Data& d, int ji, JointGradient* g) {
     const Joint& j = Get(m, ji);
     CalcJointGradient(j, NodeFrame(d, j.node_a), NodeFrame(d, j.node_b),
@@ -179,8 +176,7 @@ struct JointConstraintKind {
       s.Residual().segment(j.coord, k).noalias() += o.s_rows * (BJ.transpose() * lam);
       if (o.assemble_matrix) {
         s.Block(j.coord, m.nv + j.row, BJ.transpose(), o.s_rows * o.s_multipliers);
-        s.Block(m.nv + j.row, j.coord, JointGradientCoordinates(g, basis, TJ),
-                o.s_constraints);
+        s.Block(m.nv + j.row, j.coord, JointGradientCoordinates(g, basis, TJ), o.s_constraints);
       }
     }
     if (o.constraint_force_tangent && o.assemble_matrix && !o.use_node_tangent)
@@ -193,8 +189,7 @@ struct JointConstraintKind {
   // coordinates (dofs -1: absent).
   template <class Sink>
   static void AddForceTangent(const Model& m, const Data& d, int ji, const AssemblyOptions& o,
-                              const JointGradient& g, const Vec6& lambda, int da, int db,
-                              Sink& s) {
+                              const JointGradient& g, const Vec6& lambda, int da, int db, Sink& s) {
     const Joint& j = Get(m, ji);
     JointForceTangent K;
     CalcJointConstraintForceTangent(j, g, lambda, JointCurrentBasis(m, d, ji), &K);
@@ -226,8 +221,8 @@ struct JointConstraintKind {
     const int row = m.nv + j.row;
     const bool tangent = o.use_node_tangent;
     if (da >= 0)
-      s.Block(row, da,
-              tangent ? Mat6(Z.leftCols<6>() * s.NodeT(j.node_a)) : Mat6(Z.leftCols<6>()), scale);
+      s.Block(row, da, tangent ? Mat6(Z.leftCols<6>() * s.NodeT(j.node_a)) : Mat6(Z.leftCols<6>()),
+              scale);
     if (db >= 0)
       s.Block(row, db,
               tangent ? Mat6(Z.middleCols<6>(6) * s.NodeT(j.node_b)) : Mat6(Z.middleCols<6>(6)),
@@ -273,8 +268,7 @@ struct DriveConstraintKind {
     const Joint& j = Get(m, ji);
     const int c = Column(m, ji);
     s.Residual()(m.nv + j.drive_row) += o.s_constraints * Value(m, d, ji, o.time, o.load_factor);
-    s.Block(c, m.nv + j.drive_row, Eigen::Matrix<double, 1, 1>::Ones(),
-            o.s_rows * o.s_multipliers);
+    s.Block(c, m.nv + j.drive_row, Eigen::Matrix<double, 1, 1>::Ones(), o.s_rows * o.s_multipliers);
     s.Block(m.nv + j.drive_row, c, Eigen::Matrix<double, 1, 1>::Ones(), o.s_constraints);
   }
   template <class F>
@@ -305,9 +299,7 @@ struct DriveConstraintKind {
   }
 
  private:
-  static const Joint& Get(const Model& m, int ji) {
-    return m.joints[static_cast<std::size_t>(ji)];
-  }
+  static const Joint& Get(const Model& m, int ji) { return m.joints[static_cast<std::size_t>(ji)]; }
   static int Column(const Model& m, int ji) {
     const Joint& j = Get(m, ji);
     return j.coord + j.drive_coord;

@@ -31,8 +31,9 @@ using ConstraintKinds = std::tuple<JointConstraintKind, DriveConstraintKind, Ten
 // f.template operator()<Kind>() for each kind of a registry list, in order.
 template <class Kinds, class F>
 void ForEachKind(F&& f) {
-  [&]<class... K>(std::tuple<K...>*) { (f.template operator()<K>(), ...); }(
-      static_cast<Kinds*>(nullptr));
+  [&]<class... K>(std::tuple<K...>*) {
+    (f.template operator()<K>(), ...);
+  }(static_cast<Kinds*>(nullptr));
 }
 
 // The items of an element kind: from the Model, or from the Data for a kind whose items are

@@ -31,8 +31,8 @@ Mat6x12 CalcRodN(double xi, const Vec6& d);
 //   eta(xi) = Ad(exp(-xi d)) eta_A + xi T(xi d) d_dot,
 // which is N(xi, d) eta_AB since T^-1(d) eta_B - T^-1(-d) eta_A = P eta_AB. eta[i] at xi_i;
 // G (optional) receives the section frames relative to node A, exp(xi_i d).
-void CalcRodGaussVelocities(const Vec6& d, const Vec12& eta_ab,
-                            Vec6 (&eta)[kRodGaussPoints], SE3 (*G)[kRodGaussPoints] = nullptr);
+void CalcRodGaussVelocities(const Vec6& d, const Vec12& eta_ab, Vec6 (&eta)[kRodGaussPoints],
+                            SE3 (*G)[kRodGaussPoints] = nullptr);
 
 // What the kernels of one element share, computed once per element and assembly (the
 // kernels below that take it are the ones the assembly calls; the overloads taking H or d
@@ -45,14 +45,14 @@ void CalcRodGaussVelocities(const Vec6& d, const Vec12& eta_ab,
 //    T(X) ad(X) = I - exp(-ad(X)) for the right tangent), so eta(xi) = eta_A + N_B (eta_B - eta_A).
 struct RodGeometry {
   Vec6 d;
-  TSeries series;             // series coefficients at |w| of d
-  Mat6 Ti;                    // T^-1(d)
+  TSeries series;  // series coefficients at |w| of d
+  Mat6 Ti;         // T^-1(d)
   Mat6x12 P;
-  bool gauss_points = false;  // T below is set
-  bool tangents = false;      // NB below is set
+  bool gauss_points = false;           // T below is set
+  bool tangents = false;               // NB below is set
   TSeries series_gp[kRodGaussPoints];  // at xi_i |w|
-  Mat6 T[kRodGaussPoints];    // T(xi_i d)
-  Mat6 NB[kRodGaussPoints];   // N_B(xi_i)
+  Mat6 T[kRodGaussPoints];             // T(xi_i d)
+  Mat6 NB[kRodGaussPoints];            // N_B(xi_i)
 };
 // From d; `gauss_points` adds T(xi_i d), `tangents` also N_B(xi_i).
 void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometry* out);
@@ -77,13 +77,13 @@ bool CalcRodActuation(const Model& model, const Data& data, int element, double 
 double ActuatorValue(const Actuator& actuator, double time, const Data& data);
 
 struct RodInternal {
-  Vec6 d;            // relative motion on the current branch
-  Vec6 strain;       // d / L - f0
-  Vec6 stress;       // sigma = K (strain - eps0) - sigma_a (section frame: N, V2, V3, T, M2, M3)
+  Vec6 d;               // relative motion on the current branch
+  Vec6 strain;          // d / L - f0
+  Vec6 stress;          // sigma = K (strain - eps0) - sigma_a (section frame: N, V2, V3, T, M2, M3)
   Vec6 elastic_stress;  // K (strain - eps0)
-  double energy;     // L/2 (strain - eps0)^T K (strain - eps0) - L strain^T sigma_a
-  Vec12 force;       // g_int = P^T sigma  (node A then node B, node-frame components)
-  Mat12 stiffness;   // d g_int / d[dh_A; dh_B], with the geometric term (§2.4)
+  double energy;        // L/2 (strain - eps0)^T K (strain - eps0) - L strain^T sigma_a
+  Vec12 force;          // g_int = P^T sigma  (node A then node B, node-frame components)
+  Mat12 stiffness;      // d g_int / d[dh_A; dh_B], with the geometric term (§2.4)
 };
 
 // Internal forces and consistent tangent of one element (§2.4), with actuation when given
@@ -104,10 +104,10 @@ Mat6x12 CalcRodNDirectional(double xi, const Vec6& d, const Vec6& dd);
 // node body velocities eta_AB = [eta_A; eta_B] and accelerations eta_dot_AB (zero for a fixed
 // node). Every kernel is fixed-size and allocation-free.
 struct RodInertiaTerms {
-  Vec12 force = Vec12::Zero();  // g_ine (node A then node B, node-frame components) [N, N m]
-  Mat12 mass = Mat12::Zero();   // M_e = d g_ine / d eta_dot_AB (exact for both options)
+  Vec12 force = Vec12::Zero();       // g_ine (node A then node B, node-frame components) [N, N m]
+  Mat12 mass = Mat12::Zero();        // M_e = d g_ine / d eta_dot_AB (exact for both options)
   Mat12 gyroscopic = Mat12::Zero();  // C_t, the eta_AB block of the iteration matrix (see below)
-  double kinetic_energy = 0.0;  // 1/2 eta_AB^T M_e eta_AB [J]
+  double kinetic_energy = 0.0;       // 1/2 eta_AB^T M_e eta_AB [J]
 };
 
 // Option A (RodInertia::kExact): the exact velocity field of the helical interpolation,
@@ -129,8 +129,8 @@ void CalcRodInertiaExact(const RodElement& element, const Section& section, cons
 // The same from the element's geometry (with Gauss points; with N_B when `tangent`). Without
 // `tangent`, mass and gyroscopic are left unset.
 void CalcRodInertiaExact(const RodElement& element, const Section& section,
-                         const RodGeometry& geometry, const Vec12& eta_ab,
-                         const Vec12& eta_dot_ab, bool tangent, RodInertiaTerms* out);
+                         const RodGeometry& geometry, const Vec12& eta_ab, const Vec12& eta_dot_ab,
+                         bool tangent, RodInertiaTerms* out);
 
 // The force alone (what a residual-only assembly needs).
 void CalcRodInertiaExactForce(const RodElement& element, const Section& section,
@@ -140,15 +140,15 @@ void CalcRodInertiaExactForce(const RodElement& element, const Section& section,
 // matrices (what the assembly scatters): one set of Gauss-point products instead of two.
 void CalcRodInertiaExactMatrix(const RodElement& element, const Section& section,
                                const RodGeometry& geometry, const Vec12& eta_ab,
-                               const Vec12& eta_dot_ab, double c_mass, double c_gyro,
-                               Vec12* force, Mat12* matrix);
+                               const Vec12& eta_dot_ab, double c_mass, double c_gyro, Vec12* force,
+                               Mat12* matrix);
 
 // Option B (RodInertia::kConstant): velocities and virtual displacements interpolated linearly
 // in the inertia term only, N = [(1 - xi) I, xi I]: M_e = L [M/3 M/6; M/6 M/3] constant,
 // g_ine = M_e eta_dot_AB - L int N^T ad(eta)^T M eta dxi (2-point Gauss, exact), and the
 // tangents are exact: `gyroscopic` = d g_ine / d eta_AB, d g_ine / dq = 0.
-void CalcRodInertiaConstant(const RodElement& element, const Section& section,
-                            const Vec12& eta_ab, const Vec12& eta_dot_ab, RodInertiaTerms* out);
+void CalcRodInertiaConstant(const RodElement& element, const Section& section, const Vec12& eta_ab,
+                            const Vec12& eta_dot_ab, RodInertiaTerms* out);
 
 // The model's choice of the two.
 void CalcRodInertia(RodInertia option, const RodElement& element, const Section& section,
@@ -249,8 +249,7 @@ struct RodElementKind {
   // Strain energy (with the actuation at data.time: L/2 (eps - eps0)^T K (eps - eps0) -
   // L eps^T sigma_a), kinetic energy of the model's inertia option and the gravity potential
   // of the element (3-point Gauss over the exact centreline).
-  static void AddEnergy(const Model& model, const Data& data, const Item& element,
-                        Energy* energy);
+  static void AddEnergy(const Model& model, const Data& data, const Item& element, Energy* energy);
 };
 
 }  // namespace screwfem

@@ -30,9 +30,9 @@ namespace screwfem {
 
 // The geometry of a pair at the frames H[0..3] of its item nodes.
 struct ShapePairGeometry {
-  double gap = 0.0;             // signed distance between the surfaces [m]
-  double s[2] = {0.0, 0.0};     // closest parameters on the two segments
-  Vec3 normal = Vec3::UnitZ();  // world, from B to A
+  double gap = 0.0;                              // signed distance between the surfaces [m]
+  double s[2] = {0.0, 0.0};                      // closest parameters on the two segments
+  Vec3 normal = Vec3::UnitZ();                   // world, from B to A
   Vec3 point[2] = {Vec3::Zero(), Vec3::Zero()};  // surface points of A and B [m], world
   double weight[4] = {0.0, 0.0, 0.0, 0.0};       // W_k of item node k (on its side)
   Vec3 lever[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};  // node frame
@@ -81,8 +81,7 @@ std::vector<ShapePair> AllShapePairs(const Model& model);
 // A pair's name that stays the same while the broad phase reorders the pairs: its two contact
 // segments a (side A) and b as a x num_segments + b (two boxes' edges: the boxes).
 inline double ShapePairKey(const Model& model, const ShapePair& pair) {
-  return static_cast<double>(pair.segment[0]) *
-             static_cast<double>(model.contact_segments.size()) +
+  return static_cast<double>(pair.segment[0]) * static_cast<double>(model.contact_segments.size()) +
          static_cast<double>(pair.segment[1]);
 }
 

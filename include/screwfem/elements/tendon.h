@@ -23,10 +23,10 @@ namespace screwfem {
 // (the first part symmetric, the second from the rotation of e into each node frame). The
 // hessian is the derivative of the gradient: d(gradient)/d[dh_A; dh_B], column j for dh_j.
 struct PointDistance {
-  double length = 0.0;     // l [m]
-  Vec3 direction;          // e, world, from A to B
-  Vec12 gradient;          // node-frame components, node A then node B
-  Mat12 hessian;           // set when asked for
+  double length = 0.0;  // l [m]
+  Vec3 direction;       // e, world, from A to B
+  Vec12 gradient;       // node-frame components, node A then node B
+  Mat12 hessian;        // set when asked for
 };
 // Returns false when the points coincide (l = 0: no direction).
 bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Vec3& r_B,
@@ -35,8 +35,7 @@ bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Ve
 // The tension of a tendon at `time` [N]: drawn by tension, max(0, load_factor tau(t)) (a
 // tendon cannot push); drawn by length, its multiplier data.lambda(row) (the current Newton
 // iterate, not clipped; zero while slack, where its row holds it at zero).
-double TendonTension(const Tendon& tendon, const Data& data, double time,
-                     double load_factor = 1.0);
+double TendonTension(const Tendon& tendon, const Data& data, double time, double load_factor = 1.0);
 
 // A length-driven tendon's prescribed length and its first two time derivatives at `time`
 // (method-next.md §N4.3): L_p(t), in statics moved from the reference length by the load
@@ -135,8 +134,8 @@ struct TendonSpanSegmentKind {
   // The two nodes of an end: its element's nodes, or its node and the ground.
   static void SpanNodes(const Model& model, const BodyPoint& p, int* nodes) {
     nodes[0] = p.node;
-    nodes[1] = p.element >= 0 ? model.elements[static_cast<std::size_t>(p.element)].node_b
-                              : kGround;
+    nodes[1] =
+        p.element >= 0 ? model.elements[static_cast<std::size_t>(p.element)].node_b : kGround;
   }
   static bool Calc(const Model& model, const Data& data, const Item& segment,
                    const NodeMotion<4>& motion, const KernelOptions& options,
@@ -180,8 +179,7 @@ struct ForceElementKind {
   static bool Calc(const Model& model, const Data& data, const Item& element,
                    const NodeMotion<2>& motion, const KernelOptions& options,
                    ElementTerms<2>* terms);
-  static void AddEnergy(const Model& model, const Data& data, const Item& element,
-                        Energy* energy);
+  static void AddEnergy(const Model& model, const Data& data, const Item& element, Energy* energy);
 };
 
 // What the outputs report (io/writers.cpp, tendons.csv and forces.csv), in the current state of

@@ -35,7 +35,7 @@ namespace screwfem {
 inline constexpr const char* kOutputLockFile = ".screwfem.lock";
 
 struct RunOptions {
-  bool progress = false;                    // progress bar on stderr
+  bool progress = false;  // progress bar on stderr
   // Polled before every time step, (sub)step attempt and static Newton iteration: a request
   // ends the run cleanly (status "interrupted", or "terminated" when the flag holds SIGTERM
   // or SIGHUP; RunResult::signal is the flag's value).
@@ -56,20 +56,20 @@ struct RunOptions {
 
 struct RunResult {
   bool ok = false;
-  bool interrupted = false;     // ended by RunOptions::stop
-  int signal = 0;               // then the value of its flag (the signal number), else 0
-  double end_time = 0.0;        // simulated time reached [s]
-  long steps = 0;               // time steps (static analyses: accepted load steps)
-  long newton_iterations = 0;   // dynamic steps and static solves (incl. a preload)
+  bool interrupted = false;    // ended by RunOptions::stop
+  int signal = 0;              // then the value of its flag (the signal number), else 0
+  double end_time = 0.0;       // simulated time reached [s]
+  long steps = 0;              // time steps (static analyses: accepted load steps)
+  long newton_iterations = 0;  // dynamic steps and static solves (incl. a preload)
   int max_iterations_per_step = 0;
-  long halvings = 0;            // halved time steps, or halved load increments in statics
+  long halvings = 0;  // halved time steps, or halved load increments in statics
   double wall_seconds = 0.0;
   double max_constraint_residual = 0.0;
   // Largest relative rotation of one rod element over the run [rad], on its continued branch;
   // one helical element is valid below 2 pi (method.md §2.7).
   double max_element_rotation = 0.0;
-  std::string message;          // why it stopped early, with the time
-  bool io_error = false;        // it failed writing its files (message: which and why)
+  std::string message;    // why it stopped early, with the time
+  bool io_error = false;  // it failed writing its files (message: which and why)
 };
 
 // Runs the scene's analysis and writes the outputs into outdir (created if needed).

@@ -23,13 +23,13 @@ struct EnumNames<AnalysisKind> {
 
 struct AnalysisSettings {
   AnalysisKind kind = AnalysisKind::kDynamic;
-  double start_time = 0.0;   // [s]
-  double end_time = 1.0;     // [s]
-  double step = 1e-3;        // [s], dynamic analyses (with adaptive_steps: the first step)
+  double start_time = 0.0;  // [s]
+  double end_time = 1.0;    // [s]
+  double step = 1e-3;       // [s], dynamic analyses (with adaptive_steps: the first step)
   // step: auto: error-controlled steps (AdaptiveStep; dynamic.absolute_tolerance, ...,
   // min_step, max_step); output rows at times inside a step are interpolated (InterpolateStep).
   bool adaptive_steps = false;
-  bool align_steps = true;   // shorten steps so that profile breakpoints fall on step ends
+  bool align_steps = true;  // shorten steps so that profile breakpoints fall on step ends
   DynamicOptions dynamic;
   StaticOptions statics;
   // Dynamic analyses may start from a static equilibrium of the loads at start_time.
@@ -39,15 +39,15 @@ struct AnalysisSettings {
 // A recorded point: a point fixed in a node frame (rigid body, joint side or rod node), or a
 // point along a rod at arc length s from its first node.
 struct OutputPoint {
-  std::string name;      // column prefix, e.g. "P8"
-  int node = -1;         // node whose frame carries the point (node points)
+  std::string name;            // column prefix, e.g. "P8"
+  int node = -1;               // node whose frame carries the point (node points)
   Vec3 offset = Vec3::Zero();  // in that node frame [m]
-  int rod = -1;          // rod points: rod index and arc length
+  int rod = -1;                // rod points: rod index and arc length
   double arc_length = 0.0;
 };
 
 struct OutputJoint {
-  std::string name;      // column prefix, e.g. "J3"
+  std::string name;  // column prefix, e.g. "J3"
   int joint = -1;
 };
 
@@ -65,7 +65,8 @@ template <>
 struct EnumNames<VtkFormat> {
   static constexpr std::array<EnumName<VtkFormat>, 2> kValues = {{
       {VtkFormat::kBinary, "binary", "raw binary arrays appended to the XML, doubles exact"},
-      {VtkFormat::kAscii, "ascii", "arrays as text, each double the shortest text that reads back exactly"},
+      {VtkFormat::kAscii, "ascii",
+       "arrays as text, each double the shortest text that reads back exactly"},
   }};
 };
 
@@ -79,8 +80,8 @@ struct OutputSpec {
 };
 
 struct Scene {
-  std::string source;          // file name (for messages and the summary)
-  std::string name;            // scene title
+  std::string source;  // file name (for messages and the summary)
+  std::string name;    // scene title
   Model model;
   AnalysisSettings analysis;
   OutputSpec outputs;

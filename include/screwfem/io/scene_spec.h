@@ -20,19 +20,19 @@ namespace screwfem {
 struct BodySpec {
   std::string name;
   bool rigid = true;
-  bool free = false;   // floating: connected to nothing on purpose
+  bool free = false;  // floating: connected to nothing on purpose
   // Rigid bodies. The body frame is world-aligned at `origin` in the reference configuration.
-  bool fixed = false;             // welded to the ground
-  Vec3 origin = Vec3::Zero();     // [m], world
-  Vec3 com = Vec3::Zero();        // centre of mass [m], world
-  double mass = 0.0;              // [kg]
+  bool fixed = false;               // welded to the ground
+  Vec3 origin = Vec3::Zero();       // [m], world
+  Vec3 com = Vec3::Zero();          // centre of mass [m], world
+  double mass = 0.0;                // [kg]
   Mat3 inertia = Mat3::Identity();  // about the centre of mass, body frame [kg m^2]
   // Initial velocity of the centre of mass [m/s] and angular velocity [rad/s], world.
   bool has_initial_velocity = false;
   Vec3 initial_linear = Vec3::Zero(), initial_angular = Vec3::Zero();
   // Soft bodies: ModelBuilder::AddRodAlongPath(name, path, elements, section, up, ...).
-  std::vector<Vec3> path;         // at least two points [m], world
-  int elements = 8;               // per path segment
+  std::vector<Vec3> path;  // at least two points [m], world
+  int elements = 8;        // per path segment
   Section section;
   Vec3 up = Vec3::UnitZ();
   // Welds: the first (last) node is shared with the node of an earlier soft body at that point.
@@ -62,8 +62,8 @@ struct LoadSpec {
   enum class Where { kAt, kArcLength, kDistributed };
   int body = -1;
   Where where = Where::kAt;
-  Vec3 at = Vec3::Zero();      // [m], world (kAt)
-  double arc_length = 0.0;     // [m] (kArcLength)
+  Vec3 at = Vec3::Zero();   // [m], world (kAt)
+  double arc_length = 0.0;  // [m] (kArcLength)
   LoadFrame frame = LoadFrame::kWorld;
   Vec3 force = Vec3::Zero();   // [N] (or N/m)
   Vec3 moment = Vec3::Zero();  // [N m] (or N m/m)
@@ -95,9 +95,9 @@ struct TendonSpec {
 struct ForceSpec {
   std::string name;
   BodyPointSpec a, b;
-  double stiffness = 0.0;      // [N/m]
-  double damping = 0.0;        // [N s/m]
-  double rest_length = -1.0;   // [m]; negative: the reference distance
+  double stiffness = 0.0;                  // [N/m]
+  double damping = 0.0;                    // [N s/m]
+  double rest_length = -1.0;               // [m]; negative: the reference distance
   Profile force = Profile::Constant(0.0);  // actuator [N], positive pulls the ends together
 };
 
@@ -131,24 +131,24 @@ struct ContactSpec {
   bool present = false;
   ContactSettings settings;
   std::vector<ContactObstacle> obstacles;
-  std::vector<std::pair<int, int>> exclude;  // (body index, obstacle index)
+  std::vector<std::pair<int, int>> exclude;         // (body index, obstacle index)
   std::vector<std::pair<int, int>> exclude_bodies;  // (body index, body index): moving pairs
 };
 
 struct OutputsSpec {
   std::vector<OutputPointSpec> points;
-  std::vector<int> joints;     // joint indices, in the order recorded
-  double interval = 0.0;       // [s]; see OutputSpec
+  std::vector<int> joints;  // joint indices, in the order recorded
+  double interval = 0.0;    // [s]; see OutputSpec
   bool vtk = true;
   VtkFormat vtk_format = VtkFormat::kBinary;
-  double vtk_interval = 0.0;   // [s]
+  double vtk_interval = 0.0;  // [s]
 };
 
 struct SceneSpec {
   std::string name;
   Vec3 gravity = Vec3::Zero();  // [m/s^2]
   RodInertia rod_inertia = RodInertia::kExact;
-  std::vector<std::pair<std::string, Vec3>> points;  // named points [m], world
+  std::vector<std::pair<std::string, Vec3>> points;    // named points [m], world
   std::vector<std::pair<std::string, double>> inputs;  // run-time inputs and their defaults
   std::vector<BodySpec> bodies;
   std::vector<JointEntrySpec> joints;

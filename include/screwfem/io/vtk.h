@@ -67,11 +67,11 @@ class VtkWriter {
     // kSection: a tendon eyelet between rod nodes, on the section at xi of element `index`.
     // kPairContact: a contact segment (Model::contact_segments) of the moving shapes
     enum class Kind { kJoint, kNode, kWorld, kContact, kSection, kPairContact } kind = Kind::kNode;
-    int index = -1;  // joint index (kJoint), node index (kNode), contact pair index (kContact,
-                     // kPairContact: a contact segment), element (kSection)
+    int index = -1;   // joint index (kJoint), node index (kNode), contact pair index (kContact,
+                      // kPairContact: a contact segment), element (kSection)
     double xi = 0.0;  // kSection
-    Vec3 offset = Vec3::Zero();   // kNode: point in the node frame [m]; kWorld: world point
-    bool origin = true;           // kNode: the node frame's origin itself
+    Vec3 offset = Vec3::Zero();  // kNode: point in the node frame [m]; kWorld: world point
+    bool origin = true;          // kNode: the node frame's origin itself
   };
   void LayOut(const Model& model);
   void CalcPoints(const Model& model, const Data& data);

@@ -146,10 +146,10 @@ class CsvWriter {
 
   int fd_ = -1;
   std::string path_;
-  std::string batch_;                   // complete rows not yet written
-  std::vector<std::size_t> row_ends_;   // end offset of each batch row in batch_
-  std::vector<double> row_times_;       // t of each batch row
-  long long file_bytes_ = 0;            // bytes in the file before the batch
+  std::string batch_;                  // complete rows not yet written
+  std::vector<std::size_t> row_ends_;  // end offset of each batch row in batch_
+  std::vector<double> row_times_;      // t of each batch row
+  long long file_bytes_ = 0;           // bytes in the file before the batch
   long rows_ = 0;
   double last_time_ = std::numeric_limits<double>::quiet_NaN();
   bool failed_ = false;

@@ -48,10 +48,10 @@ inline Mat3 Skew(const Vec3& a) {  // Skew(a) b = a x b
   S << 0.0, -a(2), a(1), a(2), 0.0, -a(0), -a(1), a(0), 0.0;
   return S;
 }
-Vec3 Unskew(const Mat3& A);        // inverse of Skew (uses the skew-symmetric part)
-Mat4 Wedge(const Vec6& xi);        // 4x4 algebra matrix [Skew(w) u; 0 0]
-Vec6 Vee(const Mat4& X);           // inverse of Wedge
-Mat6 Ad(const SE3& H);             // H wedge(z) H^-1 = wedge(Ad(H) z)
+Vec3 Unskew(const Mat3& A);  // inverse of Skew (uses the skew-symmetric part)
+Mat4 Wedge(const Vec6& xi);  // 4x4 algebra matrix [Skew(w) u; 0 0]
+Vec6 Vee(const Mat4& X);     // inverse of Wedge
+Mat6 Ad(const SE3& H);       // H wedge(z) H^-1 = wedge(Ad(H) z)
 // Ad(H)^T f = [R^T a; R^T (b - x x a)] for f = [a; b], without forming Ad(H).
 inline Vec6 AdTransposeTimes(const SE3& H, const Vec6& f) {
   Vec6 r;
@@ -59,7 +59,7 @@ inline Vec6 AdTransposeTimes(const SE3& H, const Vec6& f) {
   r.tail<3>().noalias() = H.R.transpose() * (f.tail<3>() - H.x.cross(f.head<3>()));
   return r;
 }
-inline Mat6 ad(const Vec6& xi) {   // wedge(ad(xi) z) = [wedge(xi), wedge(z)]
+inline Mat6 ad(const Vec6& xi) {  // wedge(ad(xi) z) = [wedge(xi), wedge(z)]
   Mat6 A;
   const Mat3 W = Skew(xi.tail<3>());
   A.topLeftCorner<3, 3>() = W;
@@ -84,8 +84,8 @@ inline Vec6 Bracket(const Vec6& xi, const Vec6& y) {
     return Vec3(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0);
   };
   Vec6 r;
-  r.head<3>() = cross(xi(3), xi(4), xi(5), y(0), y(1), y(2)) +
-                cross(xi(0), xi(1), xi(2), y(3), y(4), y(5));
+  r.head<3>() =
+      cross(xi(3), xi(4), xi(5), y(0), y(1), y(2)) + cross(xi(0), xi(1), xi(2), y(3), y(4), y(5));
   r.tail<3>() = cross(xi(3), xi(4), xi(5), y(3), y(4), y(5));
   return r;
 }
@@ -96,8 +96,8 @@ inline Vec6 CoBracket(const Vec6& xi, const Vec6& y) {
   };
   Vec6 r;
   r.head<3>() = cross(y(0), y(1), y(2), xi(3), xi(4), xi(5));
-  r.tail<3>() = cross(y(0), y(1), y(2), xi(0), xi(1), xi(2)) +
-                cross(y(3), y(4), y(5), xi(3), xi(4), xi(5));
+  r.tail<3>() =
+      cross(y(0), y(1), y(2), xi(0), xi(1), xi(2)) + cross(y(3), y(4), y(5), xi(3), xi(4), xi(5));
   return r;
 }
 
@@ -105,14 +105,14 @@ inline Vec6 CoBracket(const Vec6& xi, const Vec6& y) {
 Mat3 ExpSO3(const Vec3& w);
 // Principal logarithm, |w| <= pi. Robust at 0 and near/at pi (uses atan2, never acos).
 Vec3 LogSO3(const Mat3& R);
-Mat3 TSO3(const Vec3& w);          // R(w)^T dR = Skew(TSO3(w) dw)
+Mat3 TSO3(const Vec3& w);  // R(w)^T dR = Skew(TSO3(w) dw)
 Mat3 TSO3Inv(const Vec3& w);
 
 // --- SE(3) -----------------------------------------------------------------------------------
 SE3 ExpSE3(const Vec6& xi);
-Vec6 LogSE3(const SE3& H);         // principal branch (rotation angle <= pi)
-Mat6 TSE3(const Vec6& xi);         // right tangent operator, method.md §1.3 form B
-Mat6 TSE3Inv(const Vec6& xi);      // singular at |w| = 2 pi k, k != 0
+Vec6 LogSE3(const SE3& H);     // principal branch (rotation angle <= pi)
+Mat6 TSE3(const Vec6& xi);     // right tangent operator, method.md §1.3 form B
+Mat6 TSE3Inv(const Vec6& xi);  // singular at |w| = 2 pi k, k != 0
 // D(xi, sigma) = d/dxi [ TSE3Inv(xi)^T sigma ]  (method.md §1.4).
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma);
 

@@ -54,7 +54,7 @@ class BandCoupling {
 
   int size() const { return n_; }
   int block_size() const { return block_size_; }
-  int blocks() const { return blocks_; }    // blocks in use
+  int blocks() const { return blocks_; }      // blocks in use
   bool empty() const { return pairs_ == 0; }  // no entries
   bool overflowed() const { return overflowed_; }
   int max_blocks() const { return max_blocks_; }
@@ -103,9 +103,9 @@ class BandCoupling {
   std::vector<int> pair_of_slots_;  // max_blocks^2: (slot_i, slot_j) -> pair index, or -1
   std::vector<int> pair_slots_;     // 2 max_blocks^2: pair -> (slot_i, slot_j)
   std::vector<int> pivot_;          // k_max: row interchanges of the LU of G
-  Eigen::MatrixXd e_;   // k_max x k_max: E (slot-major rows and columns)
-  Eigen::MatrixXd w_;   // k_max x k_max: W = P^T A^-1 P
-  Eigen::MatrixXd lu_;  // k_max x k_max: G = I + E W, then its LU factors (L unit lower)
+  Eigen::MatrixXd e_;               // k_max x k_max: E (slot-major rows and columns)
+  Eigen::MatrixXd w_;               // k_max x k_max: W = P^T A^-1 P
+  Eigen::MatrixXd lu_;            // k_max x k_max: G = I + E W, then its LU factors (L unit lower)
   Eigen::VectorXd work_n_;        // n: banded solves
   Eigen::VectorXd work_k_, t_k_;  // k_max: P^T y, then E P^T y and c
 };

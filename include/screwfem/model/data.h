@@ -16,14 +16,14 @@ namespace screwfem {
 // 16), or one body shape, so that a rod of elements shorter than its radius does not pair
 // each element with the tens of neighbours its box overlaps, all within the self skip.
 struct ShapePairGrid {
-  std::vector<int> chunk_first;         // chunk c: segments [chunk_first[c], chunk_first[c + 1])
+  std::vector<int> chunk_first;  // chunk c: segments [chunk_first[c], chunk_first[c + 1])
   std::vector<Vec3> segment_lo, segment_hi;  // per contact segment: its box, inflated [m]
-  std::vector<Vec3> lo, hi;             // per chunk: the union of its segments' boxes
-  std::vector<char> large;              // per chunk: larger than a cell (tested against all)
-  std::vector<int> bucket_start;        // per bucket (a power of two, + 1): first entry
-  std::vector<int> entry_chunk;         // entries (a chunk in a cell), bucket by bucket
-  std::vector<Eigen::Vector3i> entry_cell;  // the entry's cell
-  std::vector<int> large_chunks;        // the chunks larger than a cell
+  std::vector<Vec3> lo, hi;                  // per chunk: the union of its segments' boxes
+  std::vector<char> large;                   // per chunk: larger than a cell (tested against all)
+  std::vector<int> bucket_start;             // per bucket (a power of two, + 1): first entry
+  std::vector<int> entry_chunk;              // entries (a chunk in a cell), bucket by bucket
+  std::vector<Eigen::Vector3i> entry_cell;   // the entry's cell
+  std::vector<int> large_chunks;             // the chunks larger than a cell
   long box_tests = 0;  // box-overlap tests of the last search (its cost, for tests)
 };
 
@@ -66,9 +66,9 @@ struct Data {
   BandCoupling coupling;
 
   // Diagnostics of the last assembly.
-  double force_scale = 0.0;        // largest generalised-force term that entered the residual
-  double term_scale = 0.0;         // largest term cancelling inside one (e.g. K d/L in sigma)
-  int failed_element = -1;         // element whose rotation left the admissible range
+  double force_scale = 0.0;  // largest generalised-force term that entered the residual
+  double term_scale = 0.0;   // largest term cancelling inside one (e.g. K d/L in sigma)
+  int failed_element = -1;   // element whose rotation left the admissible range
   double failed_rotation = 0.0;
 };
 

@@ -14,7 +14,13 @@ namespace screwfem {
 // node); for joints "node_a" or "node_b". A scene compiler maps it to the place in the file
 // that defined the entity (io/scene_spec.h) without reading the message.
 enum class EntityKind {
-  kNone, kNode, kRod, kBody, kJoint, kPointLoad, kRodLoad,
+  kNone,
+  kNode,
+  kRod,
+  kBody,
+  kJoint,
+  kPointLoad,
+  kRodLoad,
   kTendon,        // part "eyelets[i]" for one eyelet
   kForceElement,  // part "a" or "b" for one end
   kActuator,

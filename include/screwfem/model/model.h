@@ -41,8 +41,8 @@ struct Node {
 struct RodElement {
   int rod = -1;
   int node_a = -1, node_b = -1;
-  double length = 0.0;   // reference arc length L = |u(d0)|
-  Vec6 d0 = Vec6::Zero();// reference relative motion log(H_A0^-1 H_B0)
+  double length = 0.0;     // reference arc length L = |u(d0)|
+  Vec6 d0 = Vec6::Zero();  // reference relative motion log(H_A0^-1 H_B0)
   // Its actuators (method-next.md §N5): Model::element_actuators[first_actuator + i],
   // i < num_actuators (set by Build).
   int first_actuator = 0;
@@ -55,15 +55,15 @@ struct Rod {
   std::vector<int> nodes;  // num_elements + 1 node indices, in order along the rod
   int first_element = 0;
   int num_elements = 0;
-  double length = 0.0;     // sum of the element lengths
+  double length = 0.0;  // sum of the element lengths
 };
 
 struct RigidBody {
   std::string name;
-  int node = -1;                   // the body's frame is this node's frame
-  double mass = 0.0;               // [kg]
-  Vec3 com = Vec3::Zero();         // centre of mass in the node frame [m]
-  Mat3 inertia = Mat3::Zero();     // inertia about the centre of mass, node-frame axes [kg m^2]
+  int node = -1;                // the body's frame is this node's frame
+  double mass = 0.0;            // [kg]
+  Vec3 com = Vec3::Zero();      // centre of mass in the node frame [m]
+  Mat3 inertia = Mat3::Zero();  // inertia about the centre of mass, node-frame axes [kg m^2]
 };
 
 enum class LoadFrame {
@@ -81,7 +81,7 @@ struct EnumNames<LoadFrame> {
 // A force and a moment applied at a point of a node frame, scaled by a profile.
 struct PointLoad {
   int node = -1;
-  Vec3 point = Vec3::Zero();   // application point in the node frame [m]
+  Vec3 point = Vec3::Zero();  // application point in the node frame [m]
   LoadFrame frame = LoadFrame::kWorld;
   Vec3 force = Vec3::Zero();   // [N]
   Vec3 moment = Vec3::Zero();  // [N m]
@@ -93,7 +93,7 @@ struct PointLoad {
 struct RodLoad {
   int rod = -1;
   bool distributed = true;
-  double arc_length = 0.0;     // concentrated loads [m]
+  double arc_length = 0.0;  // concentrated loads [m]
   LoadFrame frame = LoadFrame::kWorld;
   Vec3 force = Vec3::Zero();   // [N/m] distributed, [N] concentrated
   Vec3 moment = Vec3::Zero();  // [N m/m] distributed, [N m] concentrated
@@ -135,13 +135,13 @@ enum class TendonDrive {
 
 struct Tendon {
   std::string name;
-  std::vector<BodyPoint> eyelets;             // at least two
-  Profile tension = Profile::Constant(0.0);   // [N], scaled by the load factor in statics
+  std::vector<BodyPoint> eyelets;            // at least two
+  Profile tension = Profile::Constant(0.0);  // [N], scaled by the load factor in statics
   TendonDrive drive = TendonDrive::kTension;
   // kLength: the prescribed length L_p(t) [m]; in statics the load factor f moves it from the
   // reference length: L_ref + f (L_p - L_ref).
   Profile length = Profile::Constant(0.0);
-  int first_segment = -1;  // set by Build: its segments are first_segment + 0 .. eyelets - 2
+  int first_segment = -1;         // set by Build: its segments are first_segment + 0 .. eyelets - 2
   int row = -1;                   // set by Build: kLength's multiplier row (else -1)
   double reference_length = 0.0;  // set by Build: L in the reference configuration [m]
 };
@@ -187,7 +187,8 @@ struct EnumNames<ActuatorType> {
       {ActuatorType::kPressure, "pressure", "a pressurised chamber: area, offset, pressure"},
       {ActuatorType::kMuscle, "muscle", "contractile fibres: area, offset, max_stress, activation"},
       {ActuatorType::kRestStrain, "rest_strain", "a rest-strain change: vector times a profile"},
-      {ActuatorType::kActiveStress, "active_stress", "an active section stress: vector times a profile"},
+      {ActuatorType::kActiveStress, "active_stress",
+       "an active section stress: vector times a profile"},
   }};
 };
 
@@ -212,7 +213,14 @@ struct Actuator {
 };
 
 enum class JointType {
-  kRevolute, kPrismatic, kHelical, kCylindrical, kSpherical, kPlanar, kUniversal, kFixed,
+  kRevolute,
+  kPrismatic,
+  kHelical,
+  kCylindrical,
+  kSpherical,
+  kPlanar,
+  kUniversal,
+  kFixed,
   kFree,
 };
 
@@ -249,9 +257,9 @@ struct Joint {
   Vec6 rest = Vec6::Zero();
   // Drive on one coordinate.
   DriveKind drive = DriveKind::kNone;
-  int drive_coord = 0;     // which coordinate (0..k-1)
-  int drive_row = -1;      // multiplier row of a prescribed drive
-  Profile drive_profile;   // q(t) [m or rad], or the force/torque f(t)
+  int drive_coord = 0;    // which coordinate (0..k-1)
+  int drive_row = -1;     // multiplier row of a prescribed drive
+  Profile drive_profile;  // q(t) [m or rad], or the force/torque f(t)
   // Initial coordinates and rates (k values each), held by AssembleInitialState when given.
   bool has_initial_coordinate = false, has_initial_rate = false;
   Vec6 initial_coordinate = Vec6::Zero(), initial_rate = Vec6::Zero();
@@ -318,10 +326,10 @@ struct EnumNames<ObstacleType> {
 struct ContactObstacle {
   std::string name;
   ObstacleType type = ObstacleType::kPlane;
-  Vec3 point = Vec3::Zero();          // plane: a point of it; sphere: centre; capsule: one end
-  Vec3 normal = Vec3::UnitZ();        // plane: unit normal out of the obstacle (Build normalises)
-  Vec3 to = Vec3::Zero();             // capsule: the other end
-  double radius = 0.0;                // sphere and capsule
+  Vec3 point = Vec3::Zero();    // plane: a point of it; sphere: centre; capsule: one end
+  Vec3 normal = Vec3::UnitZ();  // plane: unit normal out of the obstacle (Build normalises)
+  Vec3 to = Vec3::Zero();       // capsule: the other end
+  double radius = 0.0;          // sphere and capsule
   unsigned contype = 1, conaffinity = 1;
 };
 // Group bitmasks of a rod or body (MuJoCo's contype/conaffinity): a moving entity and an
@@ -360,7 +368,7 @@ struct ContactSettings {
 // node 1 is kGround; a sphere has p_0 = p_1), inflated by `radius`.
 struct ContactPair {
   int node[2] = {kGround, kGround};
-  int end_node[2] = {0, 0};          // which item node carries p_0 and p_1
+  int end_node[2] = {0, 0};  // which item node carries p_0 and p_1
   Vec3 offset[2] = {Vec3::Zero(), Vec3::Zero()};
   double radius = 0.0;
   int obstacle = -1;
@@ -390,7 +398,7 @@ struct ShapePairSide {
 struct ShapePair {
   ShapePairSide side[2];
   int segment[2] = {-1, -1};  // the two Model::contact_segments (side A's shape first)
-  double damping = 0.0;  // c_n [N s/m] (from the two segments' reduced mass)
+  double damping = 0.0;       // c_n [N s/m] (from the two segments' reduced mass)
   // A segment of positive length against a box is two pairs, part 0 and part 1: the lower and
   // the upper end of the segment clipped to the prism over the box face it is nearest to (the
   // two points that carry a segment lying on a face; docs/numerics.md, "Box-box"). -1: one
@@ -448,23 +456,23 @@ struct Model {
   int num_contact_entities = 0;
   std::vector<char> contact_entity_pairs;
   std::vector<double> contact_entity_self_skip;
-  Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
+  Vec3 gravity = Vec3::Zero();                  // [m/s^2], world frame
   RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
 
   // Sizes and the solver's ordering (computed by ModelBuilder::Build).
-  int nv = 0;            // velocity unknowns
-  int nv_nodes = 0;      // the first nv_nodes of them belong to nodes
-  int nc = 0;            // multipliers
+  int nv = 0;        // velocity unknowns
+  int nv_nodes = 0;  // the first nv_nodes of them belong to nodes
+  int nc = 0;        // multipliers
   int num_unknowns() const { return nv + nc; }
   // Global unknown index -> position in the banded system. The unknowns of one node, of one
   // joint's coordinates and of one joint's constraint rows stay consecutive (in order), so a
   // block of the iteration matrix maps to a contiguous block of the band.
   std::vector<int> permutation;
-  int bandwidth = 0;             // half-bandwidth of the permuted system
+  int bandwidth = 0;  // half-bandwidth of the permuted system
   // Sparsity pattern of the permuted iteration matrix (symmetric): position i couples with
   // positions up to pattern_last[i] (the last unknown of any block adjacent to its own).
   std::vector<int> pattern_last;
-  double length_scale = 1.0;     // characteristic length (bounding box diagonal) [m]
+  double length_scale = 1.0;  // characteristic length (bounding box diagonal) [m]
 
   // Constraint rows found linearly dependent at build time (redundant constraints, e.g. a
   // planar loop closed with spatial revolute joints). Their multipliers are held at zero,

@@ -9,9 +9,9 @@
 namespace screwfem {
 
 struct ProfileValue {
-  double value = 0.0;   // f(t)
-  double rate = 0.0;    // df/dt
-  double accel = 0.0;   // d2f/dt2 (right limit at jumps)
+  double value = 0.0;  // f(t)
+  double rate = 0.0;   // df/dt
+  double accel = 0.0;  // d2f/dt2 (right limit at jumps)
 };
 
 struct ProfileTerm {

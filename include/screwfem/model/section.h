@@ -10,11 +10,11 @@
 namespace screwfem {
 
 struct Material {
-  double youngs_modulus = 0.0;    // E [Pa], > 0
-  double shear_modulus = 0.0;     // G [Pa]; if 0, computed from poisson_ratio
-  double poisson_ratio = -1.0;    // nu; used when shear_modulus is 0 (must be in (-1, 0.5])
-  double density = 0.0;           // rho [kg/m^3], >= 0
-  double shear_coefficient = 0.0; // kappa; 0 selects Cowper's value for the shape
+  double youngs_modulus = 0.0;     // E [Pa], > 0
+  double shear_modulus = 0.0;      // G [Pa]; if 0, computed from poisson_ratio
+  double poisson_ratio = -1.0;     // nu; used when shear_modulus is 0 (must be in (-1, 0.5])
+  double density = 0.0;            // rho [kg/m^3], >= 0
+  double shear_coefficient = 0.0;  // kappa; 0 selects Cowper's value for the shape
 };
 
 struct Section {

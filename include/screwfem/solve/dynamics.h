@@ -77,9 +77,9 @@ struct EnumNames<ConstraintFormulation> {
 inline constexpr double kPerturbedStartMaxChange = 0.5;
 
 struct DynamicOptions {
-  double rho_inf = 0.9;          // spectral radius at infinity (1: no numerical damping)
-  int max_iterations = 20;       // Newton iterations per step
-  int max_halvings = 8;          // a failed step is retried as 2, 4, ... 2^max substeps
+  double rho_inf = 0.9;     // spectral radius at infinity (1: no numerical damping)
+  int max_iterations = 20;  // Newton iterations per step
+  int max_halvings = 8;     // a failed step is retried as 2, 4, ... 2^max substeps
   // Converged when the last Newton correction of the positions is below increment_tolerance
   // (translations relative to the model's length scale, rotations and joint coordinates as
   // they are), every constraint |phi| is below constraint_tolerance, and the residual is
@@ -174,7 +174,7 @@ inline constexpr double kEstimateSafety = 0.1;
 struct Integrator {
   DynamicOptions options;
   GeneralizedAlpha params{};
-  Eigen::VectorXd a;             // auxiliary acceleration (nv)
+  Eigen::VectorXd a;  // auxiliary acceleration (nv)
   // Step workspace.
   State q_start;
   Eigen::VectorXd v_start, vdot_start, a_start, lambda_start, dq, a_base;
@@ -205,20 +205,20 @@ struct Integrator {
   Eigen::VectorXd ggl_rhs;
   // The column blocks (first unknown, size) where B has entries: the dofs of the nodes joints
   // attach to and the joints' coordinates.
-  std::string why;  // why the last attempt failed (reserved at set-up; Step, AdvanceTo)
+  std::string why;              // why the last attempt failed (reserved at set-up; Step, AdvanceTo)
   std::vector<char> ggl_slack;  // Data::tendon_slack while B_n is computed (PrepareGglStep)
   std::vector<std::pair<int, int>> ggl_blocks;
   double max_nu = 0.0;
   bool use_last_acceleration = true;  // predictor of the next step (DynamicOptions::predictor)
   // Statistics.
   long steps = 0, iterations = 0, halvings = 0;
-  long factorizations = 0;       // of the iteration matrix (including failed attempts)
-  long retries = 0;              // steps redone with full Newton from the zero start
+  long factorizations = 0;          // of the iteration matrix (including failed attempts)
+  long retries = 0;                 // steps redone with full Newton from the zero start
   long estimated_convergences = 0;  // steps accepted by ConvergenceTest::kEstimated
-  long restarts = 0;             // re-initialisations at profile breakpoints
-  long perturbed_start_skips = 0;  // starts and restarts left unperturbed (perturbed_start)
-  long tendon_switches = 0;      // steps in which a length-driven tendon went slack or taut
-  long tendon_catches = 0;       // inelastic catches of length-driven tendons (CatchTendons)
+  long restarts = 0;                // re-initialisations at profile breakpoints
+  long perturbed_start_skips = 0;   // starts and restarts left unperturbed (perturbed_start)
+  long tendon_switches = 0;         // steps in which a length-driven tendon went slack or taut
+  long tendon_catches = 0;          // inelastic catches of length-driven tendons (CatchTendons)
   int max_iterations_in_step = 0;
   // Step history (every accepted step or substep, fixed or adaptive): the smallest, largest
   // and summed step sizes, and the steps AdaptiveStep rejected (error estimate above the
@@ -248,9 +248,9 @@ struct Integrator {
 struct StepResult {
   bool ok = false;
   bool interrupted = false;  // ended by a StopRequest (then not ok)
-  int iterations = 0;      // Newton iterations of this step (all substeps)
-  int substeps = 1;        // 1 unless the step was halved
-  std::string message;     // on failure: when and why (allocated only on failure)
+  int iterations = 0;        // Newton iterations of this step (all substeps)
+  int substeps = 1;          // 1 unless the step was halved
+  std::string message;       // on failure: when and why (allocated only on failure)
 };
 
 // Computes consistent initial accelerations and multipliers (method.md §5.4) at data.time
@@ -315,6 +315,5 @@ struct SimulationState {
 void SaveSimulationState(const Data& data, const Integrator& integrator, SimulationState* state);
 // The state must come from Data of the same model (same sizes; InputError otherwise).
 void RestoreSimulationState(const SimulationState& state, Data& data, Integrator& integrator);
-
 
 }  // namespace screwfem

@@ -56,20 +56,20 @@ bool CalcLinearizedSystem(const Model& model, Data& data, const ModalOptions& op
 
 struct ModalResult {
   bool ok = false;
-  std::string message;            // why it failed
-  Eigen::VectorXd eigenvalues;    // omega^2 [rad^2/s^2], ascending; < 0: unstable equilibrium
-  Eigen::VectorXd omega;          // natural angular frequencies sqrt(max(omega^2, 0)) [rad/s]
-  Eigen::VectorXd frequency;      // omega / (2 pi) [Hz]
+  std::string message;          // why it failed
+  Eigen::VectorXd eigenvalues;  // omega^2 [rad^2/s^2], ascending; < 0: unstable equilibrium
+  Eigen::VectorXd omega;        // natural angular frequencies sqrt(max(omega^2, 0)) [rad/s]
+  Eigen::VectorXd frequency;    // omega / (2 pi) [Hz]
   // Modal damping ratio phi^T C phi / (2 omega) (exact for proportional damping, e.g.
   // Rayleigh); 0 where omega^2 <= 0, meaningless for rigid-body modes (omega ~ round-off).
   Eigen::VectorXd damping_ratio;
   // Mode shapes, one per column, in the velocity layout (nv rows), mass-normalised
   // (phi^T M phi = 1) and admissible (B phi = 0). A small motion is dx = a phi (retraction).
   Eigen::MatrixXd modes;
-  int num_dofs = 0;               // dimension of the admissible space (nv - rank B)
-  int num_massless = 0;           // admissible directions without mass, condensed out
-  double stiffness_asymmetry = 0.0;  // |Z^T (K - K^T) Z| / |Z^T K Z| (Frobenius)
-  double relative_residual = 0.0;    // as in LinearizedSystem
+  int num_dofs = 0;                   // dimension of the admissible space (nv - rank B)
+  int num_massless = 0;               // admissible directions without mass, condensed out
+  double stiffness_asymmetry = 0.0;   // |Z^T (K - K^T) Z| / |Z^T K Z| (Frobenius)
+  double relative_residual = 0.0;     // as in LinearizedSystem
   std::vector<std::string> warnings;  // not at equilibrium, unstable, non-symmetric K
 };
 

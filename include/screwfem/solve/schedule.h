@@ -75,9 +75,7 @@ class StepSchedule {
   // !Done(t) (Accepts(t)).
   double Next(double t) const;
   // True when t is finite, not before start and not Done: a valid argument of Next.
-  bool Accepts(double t) const {
-    return std::isfinite(t) && t >= start_ - tolerance_ && !Done(t);
-  }
+  bool Accepts(double t) const { return std::isfinite(t) && t >= start_ - tolerance_ && !Done(t); }
   double step() const { return step_; }
   double end() const { return end_; }
 

@@ -30,30 +30,30 @@ struct EnumNames<StaticMethod> {
 };
 
 struct StaticOptions {
-  double time = 0.0;                  // profiles of loads and drives are evaluated at this time
+  double time = 0.0;  // profiles of loads and drives are evaluated at this time
   StaticMethod method = StaticMethod::kLoad;
   // Continuation: data holds an equilibrium at start_load_factor (0: the unloaded reference
   // state, or any state a previous solve ended in); the solve traces the path from there to
   // end_load_factor (which may be below start_load_factor: unloading).
   double start_load_factor = 0.0;
   double end_load_factor = 1.0;
-  int load_steps = 10;                // initial number of equal load increments
+  int load_steps = 10;  // initial number of equal load increments
   // Load stepping: a failed step is retried with half the increment, down to the initial
   // increment / 2^max_halvings (the smallest increment; below it the solve stops).
   int max_halvings = 12;
-  int max_iterations = 30;            // Newton iterations per load step
+  int max_iterations = 30;  // Newton iterations per load step
   // Accepted steps at most (either method); 0: automatic, 2 load_steps + 1000. The solve
   // stops with a message when it is reached.
   int max_steps = 0;
   // Arc length (method kArcLength; method-next.md §N3.3-§N3.4). Lengths are in the metric
   // |dx|^2 = sum (translations / length_scale)^2 + rotation_weight sum rotations^2 over the
   // node and joint unknowns (joint coordinates by the kind of their axis).
-  double arc_length = 0.0;            // first arc length; 0: |dx/ds| (end - start) / load_steps
-  double arc_length_min = 0.0;        // 0: the first / 2^max_halvings
-  double arc_length_max = 0.0;        // 0: 10 x the first
-  int desired_iterations = 5;         // Newton solves per step the step-length controller aims
-                                      // at (at most max_iterations)
-  double psi = 0.0;                   // 0: cylindrical constraint, 1: spherical
+  double arc_length = 0.0;      // first arc length; 0: |dx/ds| (end - start) / load_steps
+  double arc_length_min = 0.0;  // 0: the first / 2^max_halvings
+  double arc_length_max = 0.0;  // 0: 10 x the first
+  int desired_iterations = 5;   // Newton solves per step the step-length controller aims
+                                // at (at most max_iterations)
+  double psi = 0.0;             // 0: cylindrical constraint, 1: spherical
   double rotation_weight = 0.0;
   // The exact tangent: the derivative of the joints' constraint forces d(B^T lambda)/dq in the
   // matrix (quadratic convergence with loaded joints, e.g. under displacement control);
@@ -92,18 +92,18 @@ struct StaticStep {
 
 struct StaticResult {
   bool converged = false;
-  bool interrupted = false;     // ended by a StopRequest (then not converged)
+  bool interrupted = false;  // ended by a StopRequest (then not converged)
   // Stopped at a limit point of the path (load stepping cannot pass it): see message.
   bool limit_point = false;
-  double load_factor = 0.0;     // last converged load factor (end_load_factor when converged)
-  int load_steps = 0;           // accepted load steps
+  double load_factor = 0.0;  // last converged load factor (end_load_factor when converged)
+  int load_steps = 0;        // accepted load steps
   int total_iterations = 0;
-  int halvings = 0;             // failed load steps retried with half the increment
+  int halvings = 0;  // failed load steps retried with half the increment
   std::vector<StaticStep> steps;
   // Limit points passed (arc length: the load factor's increment changed sign), each the
   // extremum of a parabola through the three converged points around it.
   std::vector<double> limit_points;
-  std::string message;          // why it failed (empty on success)
+  std::string message;  // why it failed (empty on success)
 };
 
 // Called after every converged step with data in that equilibrium.

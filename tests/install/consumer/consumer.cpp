@@ -21,8 +21,8 @@ int main(int argc, char** argv) {
   Integrator integ;
   if (!InitializeDynamics(model, data, integ, DynamicOptions{})) return 1;
   // Period of a pendulum of amplitude pi/2: 4 sqrt(I_O / (m g L)) K(sin(pi/4)).
-  const double period = 4.0 * std::sqrt((kJ + kMass * kL * kL) / (kMass * kG * kL)) *
-                        1.8540746773013719;
+  const double period =
+      4.0 * std::sqrt((kJ + kMass * kL * kL) / (kMass * kG * kL)) * 1.8540746773013719;
   const double h = 1e-4;
   const int steps = static_cast<int>(std::lround(0.5 * period / h));
   for (int i = 0; i < steps; ++i)
