@@ -100,13 +100,7 @@ bool ConsistentStart(const Model& model, Data& data, Integrator& integ, std::str
   // [M B^T; B 0] [vdot; lambda] = -[r(q, v, 0, t); Bdot v + phi_tt].
   data.vdot.setZero();
   data.lambda.setZero();
-  AssemblyOptions o;
-  o.time = data.time;
-  o.dynamics = true;
-  o.c_mass = 1.0;
-  o.c_damping = 0.0;
-  o.c_stiffness = 0.0;
-  if (!Assemble(model, data, o)) {
+  if (!Assemble(model, data, generalized_alpha::MassMatrixOptions(data.time))) {
     if (message) *message = "the state is invalid (an element is bent past its limit)";
     return false;
   }

@@ -358,13 +358,7 @@ bool CatchTendons(const Model& model, Data& data, Integrator& integ) {
       any = any || std::abs(integ.tendon_rate_error(t.row)) > scale;
   }
   if (!any) return true;
-  AssemblyOptions o;
-  o.time = data.time;
-  o.dynamics = true;
-  o.c_mass = 1.0;
-  o.c_damping = 0.0;
-  o.c_stiffness = 0.0;
-  if (!Assemble(model, data, o)) return false;
+  if (!Assemble(model, data, MassMatrixOptions(data.time))) return false;
   data.residual.setZero();
   for (std::size_t i = 0; i < model.tendons.size(); ++i) {
     const Tendon& t = model.tendons[i];

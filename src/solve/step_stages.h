@@ -10,6 +10,19 @@
 
 namespace screwfem::generalized_alpha {
 
+// The dynamic assembly at `time` whose matrix is the mass matrix alone (c_M = 1, c_C = c_K = 0):
+// the saddle-point solves for accelerations and multipliers at a fixed state (the consistent
+// start, ConsistentStart; a tendon caught taut, CatchTendons).
+inline AssemblyOptions MassMatrixOptions(double time) {
+  AssemblyOptions o;
+  o.time = time;
+  o.dynamics = true;
+  o.c_mass = 1.0;
+  o.c_damping = 0.0;
+  o.c_stiffness = 0.0;
+  return o;
+}
+
 // One generalized-alpha step of size h from the current state (method.md §5.2): predict, then
 // Newton iterations of update configuration -> assemble -> check convergence -> correct, then
 // accept. Returns the number of Newton corrections, or -1 on failure (state then undefined:
