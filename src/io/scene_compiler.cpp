@@ -358,7 +358,7 @@ void SceneCompiler::AddTendonsAndForces() {
     fe.stiffness = f.stiffness;
     fe.damping = f.damping;
     fe.rest_length = f.rest_length;
-    fe.actuator = f.force;
+    fe.actuator = f.actuator;
     builder_.AddForceElement(fe);
   }
 }

@@ -917,7 +917,7 @@ void SceneReader::ReadForces(const Node* node) {
       f.damping = r_.NonNegativeNumber(*c, Join(path, "damping"));
     if (const Node* l = value.Find("rest_length"))
       f.rest_length = r_.NonNegativeNumber(*l, Join(path, "rest_length"));
-    if (const Node* p = value.Find("force")) f.force = ReadProfile(*p, Join(path, "force"));
+    if (const Node* p = value.Find("force")) f.actuator = ReadProfile(*p, Join(path, "force"));
     if (value.Find("stiffness") == nullptr && value.Find("damping") == nullptr &&
         value.Find("force") == nullptr)
       r_.Fail(value.location, path, "missing key 'stiffness' (or 'damping', or 'force')");

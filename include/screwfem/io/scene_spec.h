@@ -95,10 +95,12 @@ struct TendonSpec {
 struct ForceSpec {
   std::string name;
   BodyPointSpec a, b;
-  double stiffness = 0.0;                  // [N/m]
-  double damping = 0.0;                    // [N s/m]
-  double rest_length = -1.0;               // [m]; negative: the reference distance
-  Profile force = Profile::Constant(0.0);  // actuator [N], positive pulls the ends together
+  double stiffness = 0.0;     // [N/m]
+  double damping = 0.0;       // [N s/m]
+  double rest_length = -1.0;  // [m]; negative: the reference distance
+  // The actuator [N], positive pulls the ends together (ForceElement::actuator; the scene key
+  // is `force`).
+  Profile actuator = Profile::Constant(0.0);
 };
 
 // Internal actuation of a soft body's rod over [from, to] of its arc length
