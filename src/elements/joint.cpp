@@ -22,7 +22,7 @@ Vec6 Translation(const Vec3& a) {
   return c;
 }
 
-// ---- per-type functions of the table (method.md §4.2) ------------------------------------------
+// ---- per-type functions of the table (docs/architecture.md) ------------------------------
 
 Mat6X RevoluteBasis(const Vec3& e, const Vec3&, double) {
   Mat6X A(6, 1);
@@ -273,7 +273,7 @@ JointCoordinateSpring JointCoordinateSpringLaw(const Joint& j, int c, double alp
                                                double load_factor, bool dynamics) {
   JointCoordinateSpring out;
   out.rest = j.rest(c);
-  // A series-elastic drive moves the rest of its coordinate to q(t) (method.md §4.5).
+  // A series-elastic drive moves the rest of its coordinate to q(t).
   if (j.drive == DriveKind::kSeriesElastic && c == j.drive_coord) {
     out.rest += load_factor * drive.value;
     out.rest_rate = load_factor * drive.rate;
@@ -310,7 +310,7 @@ void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, d
       if (dynamics) out->damping(c, c) = j.damping(c);
     }
   } else if (j.stiffness.head(k).squaredNorm() > 0.0 || j.damping.head(k).squaredNorm() > 0.0) {
-    // Energy 1/2 delta^T K delta, delta = A^T log(H_J) (method.md §4.5): f = A^T T^-T(xi) A K
+    // Energy 1/2 delta^T K delta, delta = A^T log(H_J) (spring law kLogarithm): f = A^T T^-T(xi) A K
     // delta, and its derivative along the retraction H_J exp(A dx).
     const Mat6X& A = j.basis;
     const Vec6 xi = LogSE3(data.HJ[static_cast<std::size_t>(joint)]);
@@ -333,7 +333,7 @@ void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, d
   }
   if (j.drive == DriveKind::kForce) f(j.drive_coord) -= load_factor * drive.value;
   if (j.drive == DriveKind::kPrescribed) {
-    f(j.drive_coord) += data.lambda(j.drive_row);  // B_act^T lambda_act (method.md §4.4)
+    f(j.drive_coord) += data.lambda(j.drive_row);  // B_act^T lambda_act
     out->drive_constraint = alpha(j.drive_coord) - load_factor * drive.value;
   }
 }
