@@ -27,6 +27,8 @@
 
 #include "screwfem/io/input_table.h"
 #include "screwfem/io/scene.h"
+#include "screwfem/model/data.h"
+#include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/stop.h"
 
 namespace screwfem {
@@ -86,5 +88,12 @@ struct RunResult {
 // files cannot be created, when another run holds outdir (naming its process id) and when
 // outdir holds an earlier run's results without replace_results.
 RunResult RunScene(const Scene& scene, const std::string& outdir, const RunOptions& options = {});
+
+// The same with the caller's state: `data` (MakeData(scene.model)) and `integrator` are the
+// ones stepped, and hold the run's end state afterwards. An on_step callback may read data and
+// set its run-time inputs (Data::inputs), which the next step holds (Python's run_scene
+// callback); options.inputs, when not empty, sets them before every step instead.
+RunResult RunScene(const Scene& scene, Data& data, Integrator& integrator,
+                   const std::string& outdir, const RunOptions& options = {});
 
 }  // namespace screwfem

@@ -1,0 +1,713 @@
+// Recording (recording.h): the files of a run, written as a simulation advances.
+#include "screwfem/io/recording.h"
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include "screwfem/assemble/assemble.h"
+#include "screwfem/elements/joint.h"
+#include "screwfem/elements/shape_pair.h"
+#include "screwfem/io/progress.h"
+#include "screwfem/solve/initial_state.h"
+#include "screwfem/solve/schedule.h"
+#include "screwfem/io/vtk.h"
+#include "screwfem/io/writers.h"
+#include "screwfem/model/errors.h"
+
+namespace screwfem {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The outputs to record (throws InputError naming the field).
+void ValidateRecordedOutputs(const Model& model, const OutputSpec& o) {
+  const auto require = [](bool ok, const char* field, const std::string& what) {
+    if (!ok) throw InputError(std::string(field) + ": " + what);
+  };
+  require(std::isfinite(o.interval) && o.interval >= 0.0, "outputs.interval",
+          "must be a finite time >= 0 s");
+  require(std::isfinite(o.vtk_interval) && o.vtk_interval >= 0.0, "outputs.vtk_interval",
+          "must be a finite time >= 0 s");
+  require(IsEnumValue(o.vtk_format), "outputs.vtk_format",
+          "must be " + EnumNameAlternatives<VtkFormat>());
+  ValidateOutputs(model, o);
+}
+
+// About how many ParaView frames a run writes (a reservation, so that writing them allocates
+// nothing): one per frame interval (or step), the first and the last, and one per profile
+// breakpoint for steps shortened to land on them; capped, since it is only a hint.
+int ExpectedFrames(const Scene& scene, const OutputSpec& o) {
+  const AnalysisSettings& a = scene.analysis;
+  if (a.kind == AnalysisKind::kStatic) return 1;
+  const double interval = std::max(o.vtk_interval > 0.0 ? o.vtk_interval : o.interval, a.step);
+  const double frames =
+      std::ceil((a.end_time - a.start_time) / interval) + 2.0 +
+      static_cast<double>(a.align_steps ? ProfileBreakpoints(scene.model).size() : 0);
+  return static_cast<int>(std::clamp(frames, 1.0, 1e6));
+}
+
+// "SIGINT", ... for the signals a run is stopped by; nullptr for others and 0.
+const char* SignalName(int signal) {
+  switch (signal) {
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGHUP:
+      return "SIGHUP";
+    default:
+      return nullptr;
+  }
+}
+
+// Largest relative rotation |w| of one rod element [rad], on its continued branch (method.md
+// §2.7): the branch references are the accepted state's rotations.
+double MaxElementRotation(const Data& data) {
+  double m = 0.0;
+  for (const Vec3& w : data.w_ref) m = std::max(m, w.norm());
+  return m;
+}
+
+// Rows collected before the tables are written (writers.h, CsvWriter).
+constexpr std::size_t kRowBatchBytes = 64 * 1024;
+
+// Refuses a directory that holds the files of an earlier run, unless `replace`: then removes
+// them (screwfem's own files only: the tables, joints.json, the summary, the ParaView frames and
+// collection, and vtk/ when that leaves it empty), so no stale frame or table survives.
+void PrepareOutputDirectory(const std::string& dir, bool replace) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> own;
+  std::error_code ec;
+  for (const char* name : {"summary.json", "summary.json.tmp", "points.csv", "joints.csv",
+                           "joints.json", "reactions.csv", "energy.csv"})
+    if (fs::exists(fs::path(dir) / name, ec)) own.push_back(fs::path(dir) / name);
+  const fs::path vtk = fs::path(dir) / "vtk";
+  if (fs::is_directory(vtk, ec))
+    for (const fs::directory_entry& e : fs::directory_iterator(vtk, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name == "motion.pvd" || name == "motion.pvd.tmp" ||
+          (name.rfind("frame_", 0) == 0 && e.path().extension() == ".vtp"))
+        own.push_back(e.path());
+    }
+  if (own.empty()) return;
+  if (!replace) {
+    std::string list;
+    for (std::size_t i = 0; i < own.size() && i < 4; ++i)
+      list += (i > 0 ? ", " : "") + fs::relative(own[i], dir, ec).string();
+    if (own.size() > 4) list += ", ...";
+    throw InputError("output directory " + dir + " holds the results of an earlier run (" + list +
+                     "); choose another directory, or replace them with --force (Python: "
+                     "run_scene(..., force=True)), which removes screwfem's files only");
+  }
+  for (const fs::path& p : own)
+    if (!fs::remove(p, ec) && ec)
+      throw InputError("cannot remove " + p.string() + ": " + ec.message());
+  if (fs::is_directory(vtk, ec) && fs::is_empty(vtk, ec)) fs::remove(vtk, ec);
+}
+
+}  // namespace
+
+// Types of Recording::Impl's members (a named namespace: Impl has external linkage).
+namespace recording_internal {
+
+// Times of rows (or frames) every `interval` from `start`; every step when interval is 0.
+class OutputClock {
+ public:
+  OutputClock(double start, double interval, double step)
+      : start_(start), interval_(interval), tolerance_(1e-6 * step), next_(start) {}
+  bool Due(double t) const { return interval_ <= 0.0 || t >= next_ - tolerance_; }
+  // The next due time (infinity when rows follow the steps): adaptive runs interpolate the
+  // state there when it falls inside a step.
+  double Next() const { return interval_ > 0.0 ? next_ : INFINITY; }
+  // After recording at t: the next multiple of the interval after t.
+  void Recorded(double t) {
+    if (interval_ > 0.0)
+      next_ = start_ + (std::floor((t - start_ + tolerance_) / interval_) + 1.0) * interval_;
+  }
+
+ private:
+  double start_, interval_, tolerance_, next_;
+};
+
+// OUTDIR/.screwfem.lock: an exclusive flock(2) held by the running run, with its process id
+// as the file's text. The kernel releases it when the file is closed, also when the process
+// dies (a crash, SIGKILL), so a stale lock file never blocks a run.
+class OutputLock {
+ public:
+  OutputLock() = default;
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+  ~OutputLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+
+  // Throws InputError naming the other process when another run holds the directory.
+  void Acquire(const std::string& dir) {
+    const std::string path = dir + "/" + kOutputLockFile;
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw InputError("cannot create " + path + ": " + std::strerror(errno));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      const int error = errno;
+      char pid[32] = {};
+      const ssize_t n = ::pread(fd_, pid, sizeof pid - 1, 0);
+      std::string holder = n > 0 ? std::string(pid, static_cast<std::size_t>(n)) : "";
+      while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+      ::close(fd_);
+      fd_ = -1;
+      if (error == EWOULDBLOCK)
+        throw InputError("output directory " + dir +
+                         " is in use by another screwfem run (process " +
+                         (holder.empty() ? std::string("unknown") : holder) +
+                         "); wait for it to end, stop it, or choose another directory");
+      throw InputError("cannot lock " + path + ": " + std::strerror(error));
+    }
+    const std::string pid = std::to_string(::getpid()) + "\n";
+    if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
+      // The lock holds without the process id; only the message of a second run loses it.
+    }
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+}  // namespace recording_internal
+
+using recording_internal::OutputClock;
+using recording_internal::OutputLock;
+
+// One recording: the files, the output clocks, the counters and the summary.
+class Recording::Impl {
+ public:
+  Impl(const Scene& scene, const OutputSpec& outputs, const Model& model, Data& data,
+       Integrator& integrator, const std::string& outdir, const RunOptions& options)
+      : scene_(scene),
+        outputs_(outputs),
+        model_(model),
+        options_(options),
+        data_(data),
+        integ_(integrator),
+        start_time_(scene.analysis.start_time),
+        wall_start_(Clock::now()),
+        last_summary_(wall_start_) {
+    ValidateRecordedOutputs(model, outputs_);
+    std::error_code ec;
+    std::filesystem::create_directories(outdir, ec);
+    if (ec) throw InputError("cannot create the output directory " + outdir + ": " + ec.message());
+    lock_.Acquire(outdir);
+    PrepareOutputDirectory(outdir, options.replace_results);
+    summary_path_ = outdir + "/summary.json";
+    try {
+      points_.Open(outdir + "/points.csv", StaticColumns(PointColumns(outputs_.points)));
+      joints_.Open(outdir + "/joints.csv", StaticColumns(JointColumns(model_, outputs_.joints)));
+      reactions_.Open(outdir + "/reactions.csv", StaticColumns(ReactionColumns(model_)));
+      energy_.Open(outdir + "/energy.csv", StaticColumns(EnergyColumns()));
+      // Tendons and force elements: their tables only when the model has them.
+      if (!model_.tendons.empty()) {
+        tendons_.Open(outdir + "/tendons.csv", StaticColumns(TendonColumns(model_)));
+        tables_[num_tables_++] = &tendons_;
+      }
+      if (!model_.force_elements.empty()) {
+        forces_.Open(outdir + "/forces.csv", StaticColumns(ForceColumns(model_)));
+        tables_[num_tables_++] = &forces_;
+      }
+      if (!model_.actuators.empty()) {
+        actuators_.Open(outdir + "/actuators.csv", StaticColumns(ActuatorColumns(model_)));
+        tables_[num_tables_++] = &actuators_;
+      }
+      // Contacts: one row per active pair (long format), flushed with the other tables.
+      if (!model_.contact_pairs.empty())
+        contacts_.Open(outdir + "/contacts.csv", StaticColumns(ContactColumns()));
+      if (MayHaveShapePairs(model_))
+        pair_contacts_.Open(outdir + "/pair_contacts.csv", StaticColumns(PairContactColumns()));
+      if (outputs_.vtk) {
+        vtk_.emplace();
+        vtk_->Open(outdir + "/vtk", model_, outputs_.vtk_format, ExpectedFrames(scene, outputs_));
+      }
+      if (!WriteSummary())
+        throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
+      if (!WriteFileAtomically(outdir + "/joints.json",
+                               JointsDescriptionJson(model_, outputs_.joints)))
+        throw InputError("cannot write " + outdir + "/joints.json: " + std::strerror(errno));
+    } catch (const InputError&) {
+      // No header-only tables without a summary that explains them.
+      for (std::size_t i = 0; i < num_tables_; ++i) tables_[i]->Close();
+      if (contacts_.path().size() > 0) contacts_.Close();
+      if (pair_contacts_.path().size() > 0) pair_contacts_.Close();
+      PrepareOutputDirectory(outdir, true);
+      throw;
+    }
+  }
+  // Ends the run (if it has not ended yet): the rows still collected go to disk, then the
+  // ParaView collection (listing the frames on disk) and the summary that counts them.
+  void Finish(const char* status, std::string message) {
+    if (finished_) return;
+    finished_ = true;
+    const bool failed_before = io_error_ || std::string(status) == "failed";
+    const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_);
+    if (!w && contacts_.path().size() > 0 && !contacts_.Flush()) w = &contacts_;
+    if (!w && pair_contacts_.path().size() > 0 && !pair_contacts_.Flush()) w = &pair_contacts_;
+    if (w && !failed_before) {
+      status = "failed";
+      message = FormatNumbers("cannot write at t = %.9g s: ", data_.time) + w->path() + ": " +
+                std::strerror(errno);
+      io_error_ = true;
+    }
+    bool closed = true;
+    for (std::size_t i = 0; i < num_tables_; ++i) closed = tables_[i]->Close() && closed;
+    if (contacts_.path().size() > 0) closed = contacts_.Close() && closed;
+    if (pair_contacts_.path().size() > 0) closed = pair_contacts_.Close() && closed;
+    if (!closed && !failed_before && !io_error_) {
+      status = "failed";
+      message = "cannot close the tables: " + std::string(std::strerror(errno));
+      io_error_ = true;
+    }
+    if (vtk_ && !vtk_->WriteCollection() && std::string(status) != "failed") {
+      status = "failed";
+      message = "cannot write " + vtk_->dir() + "/motion.pvd: " + std::strerror(errno);
+      io_error_ = true;
+    }
+    status_ = status;
+    message_ = std::move(message);
+    if (io_error_ && points_.failed())
+      message_ += FormatNumbers("; the tables hold the %g rows up to t = %.9g s",
+                                static_cast<double>(points_.rows()), points_.last_time());
+    if (progress_) progress_->Finish(data_.time, integ_.steps);
+    WriteSummary();
+  }
+
+  RunResult Result() const {
+    RunResult r;
+    r.ok = status_ == std::string("completed");
+    r.interrupted = status_ == std::string("interrupted") || status_ == std::string("terminated");
+    r.signal = signal_;
+    r.end_time = data_.time;
+    const bool statics = scene_.analysis.kind == AnalysisKind::kStatic;
+    r.steps = statics ? static_.load_steps : integ_.steps;
+    r.newton_iterations = integ_.iterations + static_.total_iterations;
+    r.max_iterations_per_step = integ_.max_iterations_in_step;
+    for (const StaticStep& s : static_.steps)
+      r.max_iterations_per_step = std::max(r.max_iterations_per_step, s.iterations);
+    r.halvings = integ_.halvings + static_.halvings;
+    r.wall_seconds = WallSeconds();
+    r.max_constraint_residual = max_constraint_;
+    r.max_element_rotation = max_rotation_;
+    r.message = message_;
+    r.io_error = io_error_;
+    return r;
+  }
+  // Dynamic analyses: the first row and frame, the output clocks from there.
+  bool Start() {
+    start_time_ = data_.time;
+    max_constraint_ = CalcMaxJointConstraint(model_, data_, data_.time);
+    max_rotation_ = MaxElementRotation(data_);
+    const AnalysisSettings& a = scene_.analysis;
+    if (a.adaptive_steps) dense_ = data_;  // the interpolated state's storage, before stepping
+    rows_.emplace(start_time_, outputs_.interval, a.step);
+    frames_.emplace(start_time_,
+                    outputs_.vtk_interval > 0.0 ? outputs_.vtk_interval : outputs_.interval,
+                    a.step);
+    if (!Record(data_.time, true, true)) return false;
+    rows_->Recorded(data_.time);
+    frames_->Recorded(data_.time);
+    if (options_.progress) {
+      progress_.emplace(stderr, a.start_time, a.end_time);
+      progress_->Update(data_.time, 0);
+    }
+    return true;
+  }
+  bool started() const { return rows_.has_value(); }
+
+  // The stepping loop's side (recording.h): the inputs held over a step, the rows and frames
+  // due at its end or (error-controlled steps) interpolated inside it, and after each step the
+  // largest constraint residual and rotation, the on_step callback, the progress bar and the
+  // summary every 2 s.
+  void BeforeStep(double t_inputs) { SetInputsAt(options_.inputs, t_inputs, data_); }
+  double NextOutputTime() const {
+    return rows_ ? std::min(rows_->Next(), frames_->Next()) : INFINITY;
+  }
+  // The rows and frames due strictly inside the last AdaptiveStep, from the state
+  // interpolated on the Lie group (InterpolateStep, docs/numerics.md); false if writing failed.
+  bool OutputInsideStep(double t) {
+    InterpolateStep(model_, data_, integ_, t, dense_);
+    const bool row = rows_->Next() <= t, frame = frames_->Next() <= t;
+    if (!Record(t, row, frame, dense_)) return false;
+    if (row) rows_->Recorded(t);
+    if (frame) frames_->Recorded(t);
+    return true;
+  }
+  bool AfterStep(bool last) {
+    const double t = data_.time;
+    max_constraint_ = std::max(max_constraint_, CalcMaxJointConstraint(model_, data_, t));
+    max_rotation_ = std::max(max_rotation_, MaxElementRotation(data_));
+    const bool row = last || rows_->Due(t), frame = last || frames_->Due(t);
+    if (row || frame) {
+      if (!Record(t, row, frame)) return false;
+      if (row) rows_->Recorded(t);
+      if (frame) frames_->Recorded(t);
+    }
+    if (options_.on_step) {
+      if (!FlushRows(t)) return false;
+      options_.on_step(t);
+    }
+    if (progress_) progress_->Update(t, integ_.steps);
+    if (Clock::now() - last_summary_ > std::chrono::seconds(2)) {
+      if (!FlushRows(t)) return false;
+      WriteSummary();
+    }
+    return true;
+  }
+
+  // Static analyses (recording.h).
+  bool RecordStaticStep(double t, double load_factor) {
+    load_factor_ = load_factor;
+    return finished_ || Record(t, true, false);
+  }
+  void SetStaticResult(const StaticResult& result) {
+    static_ = result;
+    has_static_ = true;
+  }
+  bool RecordStaticSolution(double t, bool row) {
+    max_constraint_ = CalcMaxJointConstraint(model_, data_, t);
+    max_rotation_ = MaxElementRotation(data_);
+    load_factor_ = static_.load_factor;
+    if (!Record(t, row, true)) return false;
+    if (options_.on_step) {
+      if (!FlushRows(t)) return false;
+      options_.on_step(t);
+    }
+    return true;
+  }
+
+  // The current state's row and frame unless it was the last recorded (recording.h).
+  bool RecordFinalState() {
+    if (finished_ || !rows_ || last_row_time_ == data_.time) return true;
+    const double t = data_.time;
+    if (!Record(t, true, true)) return false;
+    rows_->Recorded(t);
+    frames_->Recorded(t);
+    return true;
+  }
+
+  bool finished() const { return finished_; }
+  double last_row_time() const { return last_row_time_; }
+
+  // Ends the run after a stop request: "interrupted" (SIGINT, a Python KeyboardInterrupt or a
+  // flag without a signal number) or "terminated" (SIGTERM, SIGHUP), naming the signal.
+  void Interrupted(int signal, const std::string& when) {
+    signal_ = signal;
+    const char* name = SignalName(signal_);
+    const bool terminated = signal_ == SIGTERM || signal_ == SIGHUP;
+    std::string message = terminated ? "terminated" : "interrupted";
+    if (name != nullptr) message += std::string(" by ") + name;
+    Finish(terminated ? "terminated" : "interrupted", message + " " + when);
+  }
+
+ private:
+  double WallSeconds() const {
+    return std::chrono::duration<double>(Clock::now() - wall_start_).count();
+  }
+
+  // Static analyses: a load_factor column after t in points.csv and joints.csv.
+  std::vector<std::string> StaticColumns(std::vector<std::string> columns) const {
+    if (scene_.analysis.kind == AnalysisKind::kStatic)
+      columns.insert(columns.begin(), "load_factor");
+    return columns;
+  }
+
+  // Writes the rows (and the ParaView frame) of the current state; on a write error ends the
+  // run as failed and returns false.
+  bool Record(double t, bool row, bool frame) { return Record(t, row, frame, data_); }
+  bool Record(double t, bool row, bool frame, const Data& data) {
+    if (row) {
+      CalcPointRow(model_, data, outputs_.points, &row_);
+      points_.WriteRow(t, WithLoadFactor(row_));
+      CalcJointRow(model_, data, outputs_.joints, &row_);
+      joints_.WriteRow(t, WithLoadFactor(row_));
+      CalcReactionRow(model_, data, &row_);
+      reactions_.WriteRow(t, WithLoadFactor(row_));
+      CalcEnergyRow(model_, data, &row_);
+      energy_.WriteRow(t, WithLoadFactor(row_));
+      if (tendons_.path().size() > 0) {
+        CalcTendonRow(model_, data, &row_);
+        tendons_.WriteRow(t, WithLoadFactor(row_));
+      }
+      if (forces_.path().size() > 0) {
+        CalcForceRow(model_, data, &row_);
+        forces_.WriteRow(t, WithLoadFactor(row_));
+      }
+      if (actuators_.path().size() > 0) {
+        CalcActuatorRow(model_, data, t, &row_);
+        actuators_.WriteRow(t, WithLoadFactor(row_));
+      }
+      if (contacts_.path().size() > 0) {
+        for (int i = 0; i < static_cast<int>(model_.contact_pairs.size()); ++i)
+          if (CalcContactRow(model_, data, i, &row_)) contacts_.WriteRow(t, WithLoadFactor(row_));
+      }
+      if (pair_contacts_.path().size() > 0) {
+        for (int i = 0; i < data.num_shape_pairs; ++i)
+          if (CalcPairContactRow(model_, data, i, &row_))
+            pair_contacts_.WriteRow(t, WithLoadFactor(row_));
+      }
+      last_row_time_ = t;
+      std::size_t batch = 0;
+      for (std::size_t i = 0; i < num_tables_; ++i)
+        batch = std::max(batch, tables_[i]->batch_bytes());
+      batch = std::max(batch, contacts_.batch_bytes());
+      batch = std::max(batch, pair_contacts_.batch_bytes());
+      if (batch >= kRowBatchBytes && !FlushRows(t)) return false;
+    }
+    if (frame && vtk_ && !vtk_->WriteFrame(model_, data, t))
+      return WriteFailed(vtk_->dir() + "/frame files", t);
+    return true;
+  }
+
+  // A row of a static analysis starts with the load factor (StaticColumns).
+  const std::vector<double>& WithLoadFactor(const std::vector<double>& row) {
+    if (scene_.analysis.kind != AnalysisKind::kStatic) return row;
+    static_row_.assign(1, load_factor_);
+    static_row_.insert(static_row_.end(), row.begin(), row.end());
+    return static_row_;
+  }
+
+  // Writes the rows collected so far to the files, keeping the tables at the same row; on a
+  // write error ends the run as failed.
+  bool FlushRows(double t) {
+    if (const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_))
+      return WriteFailed(w->path(), t);
+    if (contacts_.path().size() > 0 && !contacts_.Flush()) return WriteFailed(contacts_.path(), t);
+    if (pair_contacts_.path().size() > 0 && !pair_contacts_.Flush())
+      return WriteFailed(pair_contacts_.path(), t);
+    return true;
+  }
+
+  bool WriteFailed(const std::string& path, double t) {
+    io_error_ = true;
+    Finish("failed",
+           FormatNumbers("cannot write at t = %.9g s: ", t) + path + ": " + std::strerror(errno));
+    return false;
+  }
+
+  // The summary of the run so far (run.h); false if it could not be written.
+  bool WriteSummary() {
+    last_summary_ = Clock::now();
+    const AnalysisSettings& a = scene_.analysis;
+    const DynamicOptions& d = a.dynamic;
+    const StaticOptions& s = a.statics;
+    const bool statics = a.kind == AnalysisKind::kStatic;
+    const double wall = WallSeconds();
+    const double simulated = statics ? 0.0 : data_.time - start_time_;
+    JsonWriter j;
+    j.BeginObject();
+    j.Field("format", "screwfem run summary 1");
+    j.Key("scene")
+        .BeginObject()
+        .Field("source", scene_.source)
+        .Field("name", scene_.name)
+        .EndObject();
+    j.Field("status", status_).Field("message", message_);
+    if (const char* name = SignalName(signal_))
+      j.Field("signal", name);
+    else
+      j.Key("signal").Null();
+
+    j.Key("settings").BeginObject();
+    j.Field("analysis", NameOf(a.kind));
+    if (!statics) {
+      j.Field("start_time", start_time_).Field("end_time", a.end_time).Field("step", a.step);
+      j.Field("align_steps", a.align_steps).Field("static_preload", a.static_preload);
+      j.Field("rho_inf", d.rho_inf).Field("max_iterations", d.max_iterations);
+      j.Field("max_halvings", d.max_halvings);
+      j.Field("increment_tolerance", d.increment_tolerance);
+      j.Field("constraint_tolerance", d.constraint_tolerance);
+      j.Field("residual_tolerance", d.residual_tolerance);
+      j.Field("use_tangent_operator", d.use_tangent_operator);
+      j.Field("newton", NameOf(d.newton_matrix));
+      j.Field("refresh_ratio", d.refresh_ratio);
+      j.Field("predictor", NameOf(d.predictor));
+      j.Field("convergence", NameOf(d.convergence));
+      j.Field("restart_at_breakpoints", d.restart_at_breakpoints);
+      j.Field("perturbed_start", d.perturbed_start);
+      j.Field("constraints", NameOf(d.constraints));
+      j.Field("adaptive_steps", a.adaptive_steps);
+      if (a.adaptive_steps) {
+        j.Field("absolute_tolerance", d.absolute_tolerance);
+        j.Field("relative_tolerance", d.relative_tolerance);
+        j.Field("min_step", d.min_step).Field("initial_step", d.initial_step);
+        if (std::isfinite(d.max_step))
+          j.Field("max_step", d.max_step);
+        else
+          j.Key("max_step").Null();
+      }
+    }
+    if (statics || a.static_preload) {
+      j.Key("statics").BeginObject();
+      j.Field("time", statics ? s.time : a.start_time).Field("load_steps", s.load_steps);
+      j.Field("method", NameOf(s.method)).Field("max_steps", s.max_steps);
+      j.Field("start_load_factor", s.start_load_factor).Field("end_load_factor", s.end_load_factor);
+      j.Field("max_halvings", s.max_halvings).Field("max_iterations", s.max_iterations);
+      j.Field("residual_tolerance", s.residual_tolerance);
+      j.Field("increment_tolerance", s.increment_tolerance);
+      j.Field("constraint_tolerance", s.constraint_tolerance);
+      j.EndObject();
+    }
+    j.Field("rod_inertia", NameOf(model_.rod_inertia));
+    j.Key("gravity").BeginArray();
+    for (int i = 0; i < 3; ++i) j.Number(model_.gravity(i));
+    j.EndArray();
+    j.Field("output_interval", outputs_.interval);
+    j.Field("vtk", outputs_.vtk).Field("vtk_interval", outputs_.vtk_interval);
+    j.Field("vtk_format", NameOf(outputs_.vtk_format));
+    j.EndObject();
+
+    long free_nodes = 0;
+    for (const Node& n : model_.nodes) free_nodes += n.dof >= 0 ? 1 : 0;
+    j.Key("counts").BeginObject();
+    j.Field("nodes", static_cast<long>(model_.nodes.size())).Field("free_nodes", free_nodes);
+    j.Field("rods", static_cast<long>(model_.rods.size()));
+    j.Field("elements", static_cast<long>(model_.elements.size()));
+    j.Field("rigid_bodies", static_cast<long>(model_.bodies.size()));
+    j.Field("joints", static_cast<long>(model_.joints.size()));
+    j.Field("point_loads", static_cast<long>(model_.point_loads.size()));
+    j.Field("nv", model_.nv).Field("nc", model_.nc);
+    j.Field("redundant_constraints", static_cast<long>(model_.redundant_rows.size()));
+    j.Field("bandwidth", model_.bandwidth);
+    j.EndObject();
+
+    j.Key("outputs").BeginObject();
+    j.Key("points").BeginArray();
+    for (const OutputPoint& p : outputs_.points) j.String(p.name);
+    j.EndArray();
+    j.Key("joints").BeginArray();
+    for (const OutputJoint& oj : outputs_.joints) j.String(oj.name);
+    j.EndArray();
+    // The rows on disk (the summary is written after the tables are flushed).
+    j.Field("rows", points_.rows()).Field("last_row_time", points_.last_time());
+    j.Field("vtk_frames", vtk_ ? vtk_->frames() : 0);
+    j.EndObject();
+
+    j.Field("time", data_.time);
+    j.Field("steps", integ_.steps);
+    j.Field("newton_iterations", integ_.iterations);
+    j.Field("max_iterations_per_step", integ_.max_iterations_in_step);
+    j.Field("step_halvings", integ_.halvings);
+    j.Field("matrix_factorizations", integ_.factorizations);
+    j.Field("step_retries", integ_.retries);
+    j.Field("estimated_convergences", integ_.estimated_convergences);
+    j.Field("restarts", integ_.restarts);
+    j.Field("perturbed_start_skips", integ_.perturbed_start_skips);
+    // The step history: every accepted step (or substep of a halved one), and the attempts
+    // the error control rejected.
+    j.Key("step_history").BeginObject();
+    j.Field("accepted", integ_.accepted_substeps).Field("rejected", integ_.rejected);
+    if (integ_.accepted_substeps > 0) {
+      j.Field("min_step", integ_.min_h).Field("max_step", integ_.max_h);
+      j.Field("mean_step", integ_.sum_h / static_cast<double>(integ_.accepted_substeps));
+    } else {
+      j.Key("min_step").Null().Key("max_step").Null().Key("mean_step").Null();
+    }
+    j.EndObject();
+    if (has_static_) {
+      j.Key("static_solution").BeginObject();
+      j.Field("converged", static_.converged).Field("load_factor", static_.load_factor);
+      j.Field("load_steps", static_.load_steps)
+          .Field("newton_iterations", static_.total_iterations);
+      j.Field("halvings", static_.halvings).Field("limit_point", static_.limit_point);
+      j.Key("limit_points").BeginArray();
+      for (double lp : static_.limit_points) j.Number(lp);
+      j.EndArray();
+      j.EndObject();
+    }
+    j.Field("wall_seconds", wall);
+    j.Field("real_time_factor", wall > 0.0 && !statics ? simulated / wall : 0.0);
+    j.Field("max_constraint_residual", max_constraint_);
+    j.Field("max_element_rotation", max_rotation_);
+    j.Key("warnings").BeginArray();
+    for (const std::string& w : model_.warnings) j.String(w);
+    j.EndArray();
+    j.EndObject();
+    return WriteFileAtomically(summary_path_, j.str());
+  }
+
+  const Scene& scene_;
+  const OutputSpec outputs_;
+  const Model& model_;
+  const RunOptions& options_;
+  std::string summary_path_;
+  Data& data_;
+  Data dense_;  // step: auto: the state interpolated at output times inside a step
+  Integrator& integ_;
+  StaticResult static_;
+  bool has_static_ = false;
+  CsvWriter points_, joints_, reactions_, energy_, tendons_, forces_, actuators_;
+  CsvWriter contacts_;       // long format (one row per active pair): not flushed together
+  CsvWriter pair_contacts_;  // the same for pairs of moving shapes (pair_contacts.csv)
+  // The open tables, flushed together (points, joints, reactions and energy always).
+  std::array<CsvWriter*, 7> tables_ = {&points_, &joints_, &reactions_, &energy_,
+                                       nullptr,  nullptr,  nullptr};
+  std::size_t num_tables_ = 4;
+  std::optional<VtkWriter> vtk_;
+  std::optional<ProgressBar> progress_;
+  std::vector<double> row_;
+  std::vector<double> static_row_;            // load factor and row_ (static analyses)
+  double load_factor_ = 0.0;                  // of the state recorded (static analyses)
+  std::optional<OutputClock> rows_, frames_;  // dynamic analyses, from Start
+  double start_time_;                         // of the recorded run [s]
+  Clock::time_point wall_start_, last_summary_;
+  double max_constraint_ = 0.0;
+  double max_rotation_ = 0.0;   // largest relative rotation of one rod element so far [rad]
+  double last_row_time_ = NAN;  // of the last row recorded (in the files once flushed)
+  std::string status_ = "running", message_;
+  int signal_ = 0;         // the stop request's signal number
+  bool io_error_ = false;  // the run failed writing its files
+  OutputLock lock_;
+  bool finished_ = false;
+};
+
+Recording::Recording(const Scene& scene, const OutputSpec& outputs, const Model& model, Data& data,
+                     Integrator& integrator, const std::string& outdir, const RunOptions& options)
+    : impl_(std::make_unique<Impl>(scene, outputs, model, data, integrator, outdir, options)) {}
+
+Recording::~Recording() {
+  if (!impl_->finished()) impl_->Finish("failed", "the recording was not finished");
+}
+
+bool Recording::Start() { return impl_->Start(); }
+bool Recording::started() const { return impl_->started(); }
+void Recording::BeforeStep(double t_inputs) { impl_->BeforeStep(t_inputs); }
+double Recording::NextOutputTime() const { return impl_->NextOutputTime(); }
+bool Recording::OutputInsideStep(double t) { return impl_->OutputInsideStep(t); }
+bool Recording::AfterStep(bool last) { return impl_->AfterStep(last); }
+bool Recording::RecordStaticStep(double t, double load_factor) {
+  return impl_->RecordStaticStep(t, load_factor);
+}
+void Recording::SetStaticResult(const StaticResult& result) { impl_->SetStaticResult(result); }
+bool Recording::RecordStaticSolution(double t, bool row) {
+  return impl_->RecordStaticSolution(t, row);
+}
+bool Recording::RecordFinalState() { return impl_->RecordFinalState(); }
+void Recording::Finish(const char* status, std::string message) {
+  impl_->Finish(status, std::move(message));
+}
+void Recording::Interrupted(int signal, const std::string& when) {
+  impl_->Interrupted(signal, when);
+}
+bool Recording::finished() const { return impl_->finished(); }
+double Recording::last_row_time() const { return impl_->last_row_time(); }
+RunResult Recording::Result() const { return impl_->Result(); }
+
+}  // namespace screwfem
