@@ -7,11 +7,14 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "bind.h"
+#include "simulation.h"
+#include "screwfem/io/input_table.h"
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/solve/schedule.h"
@@ -23,6 +26,62 @@ namespace py = pybind11;
 namespace screwfem::python {
 
 namespace {
+
+bool OnMainThread() {
+  const py::module_ threading = py::module_::import("threading");
+  return threading.attr("current_thread")().is(threading.attr("main_thread")());
+}
+
+// run_scene with a callback: RunScene on the state of a Simulation that the callback receives.
+// The run stops (as interrupted) once the callback has raised, and the exception is raised
+// again after the files are complete.
+RunResult RunWithCallback(const Scene& scene, const std::string& outdir, RunOptions options,
+                          const py::object& callback, long every) {
+  if (every < 1) throw InputError("run_scene: every must be a number of steps >= 1");
+  if (!PyCallable_Check(callback.ptr())) throw InputError("run_scene: callback must be callable");
+  py::object sim_object = py::module_::import("screwfem._screwfem").attr("Simulation")(scene);
+  Simulation& sim = sim_object.cast<Simulation&>();
+  struct State {
+    PythonSignals signals;
+    StopRequest signal_request;
+    std::optional<py::error_already_set> error;
+    static bool Poll(void* self) {
+      auto* s = static_cast<State*>(self);
+      return s->error.has_value() || s->signal_request.Requested();
+    }
+  } state;
+  if (OnMainThread()) state.signal_request = state.signals.request();
+  const auto call = [&] {
+    try {
+      callback(sim_object);
+    } catch (py::error_already_set& e) {
+      state.error.emplace(std::move(e));
+    }
+  };
+  sim.SetInRun(true);
+  call();
+  if (state.error) {
+    sim.SetInRun(false);
+    throw std::move(*state.error);
+  }
+  long steps = 0;
+  options.on_step = [&](double) {
+    if (++steps % every == 0 && !state.error) call();
+  };
+  options.stop = StopRequest{nullptr, &State::Poll, &state};
+  RunResult r;
+  try {
+    r = RunScene(sim.scene(), sim.data(), sim.integrator(), outdir, options);
+  } catch (...) {
+    sim.SetInRun(false);
+    throw;
+  }
+  sim.SetInRun(false);
+  if (r.ok && scene.analysis.kind == AnalysisKind::kDynamic) sim.SetInitialized();
+  if (state.error) throw std::move(*state.error);
+  state.signals.ThrowIfRaised();
+  return r;
+}
 
 void BindSettings(py::module_& m) {
   py::class_<GeneralizedAlpha>(m, "GeneralizedAlpha",
@@ -258,15 +317,17 @@ void BindScenesAndRuns(py::module_& m) {
 
   m.def(
       "run_scene",
-      [](const Scene& scene, const std::string& outdir, bool progress, bool force) {
+      [](const Scene& scene, const std::string& outdir, bool progress, bool force,
+         const py::object& callback, long every, const std::optional<std::string>& inputs) {
         RunOptions options;
         options.progress = progress;
         options.replace_results = force;
+        if (inputs) options.inputs = ReadInputTable(*inputs, scene.model);
+        if (!callback.is_none()) return RunWithCallback(scene, outdir, options, callback, every);
         // On Python's main thread the run polls for signals (Ctrl-C), which needs the GIL. On
         // another thread (a Dask worker's) no signal is ever delivered: the run releases the
         // GIL, so other Python threads (the worker's event loop and heartbeats) go on.
-        const py::module_ threading = py::module_::import("threading");
-        if (threading.attr("current_thread")().is(threading.attr("main_thread")())) {
+        if (OnMainThread()) {
           PythonSignals signals;
           options.stop = signals.request();
           RunResult r = RunScene(scene, outdir, options);
@@ -277,18 +338,31 @@ void BindScenesAndRuns(py::module_& m) {
         return RunScene(scene, outdir, options);
       },
       py::arg("scene"), py::arg("outdir"), py::arg("progress") = false, py::arg("force") = false,
-      "run_scene(scene, outdir, progress=False, force=False) -> RunResult\n\n"
-      "Runs the scene's analysis and writes its outputs into `outdir` (created if needed):\n"
-      "points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az; world frame,\n"
-      "SI), joints.csv, summary.json and vtk/ (run.h). `progress` draws a progress bar on\n"
-      "stderr. A numerical failure ends the run and is reported in the result (ok False,\n"
-      "message), not raised; raises InputError for invalid settings or outputs and when\n"
-      "outdir or its files cannot be created, when another run holds outdir, and when it\n"
-      "holds an earlier run's results unless `force` (then screwfem's files, and only\n"
-      "those, are removed first). On the main thread a signal (Ctrl-C) ends the run cleanly,\n"
-      "with summary.json status 'interrupted' and complete files, then raises\n"
-      "KeyboardInterrupt; on other threads the run releases the GIL (do not modify `scene`\n"
-      "from another thread meanwhile).");
+      py::arg("callback") = py::none(), py::arg("every") = 1, py::arg("inputs") = py::none(),
+      R"doc(run_scene(scene, outdir, progress=False, force=False, callback=None, every=1, inputs=None) -> RunResult
+
+Runs the scene's analysis as `screwfem run` does and writes its outputs into `outdir` (created
+if needed): points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az; world
+frame, SI), joints.csv, summary.json, vtk/ and the other tables the model has (run.h).
+`progress` draws a progress bar on stderr. `inputs`: a CSV file of run-time input values over
+time (the CLI's --inputs).
+
+`callback(sim)` is called with a Simulation holding the run's state once at the start (before
+the first step: the inputs it sets are held over that step) and then after every `every`
+completed steps (after the static solution in a static analysis), once that step's rows are on
+disk. It may read the state (sim.time, sim.point_motion(...), ...) and set run-time inputs
+(sim.inputs[name] = value), which the following steps hold: a controller in closed loop. It must
+not step the simulation itself. An exception in the callback ends the run (summary.json status
+"interrupted", files complete) and is raised again. Inputs set from a callback and the same
+values from an `inputs` table give the same tables bit for bit.
+
+A numerical failure ends the run and is reported in the result (ok False, message), not raised;
+raises InputError for invalid settings or outputs and when outdir or its files cannot be
+created, when another run holds outdir, and when it holds an earlier run's results unless
+`force` (then screwfem's files, and only those, are removed first). On the main thread a signal
+(Ctrl-C) ends the run cleanly, with summary.json status 'interrupted' and complete files, then
+raises KeyboardInterrupt; on other threads, without a callback, the run releases the GIL (do
+not modify `scene` from another thread meanwhile).)doc");
 
   py::class_<StepSchedule>(
       m, "StepSchedule",

@@ -9,7 +9,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <csignal>
 #include <cmath>
+#include <memory>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -24,6 +26,8 @@
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/elements/joint.h"
+#include "screwfem/io/recording.h"
+#include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
@@ -73,6 +77,62 @@ py::array_t<double> NodeFrames(const Data& data, const std::vector<int>& nodes, 
 Vector ToVector(const std::vector<double>& row) {
   return Eigen::Map<const Vector>(row.data(), static_cast<Eigen::Index>(row.size()));
 }
+
+// Simulation.record: a Recording of the simulation's steps, opened on entering the block and
+// finished on leaving it (recording.h).
+class RecordingHandle {
+ public:
+  RecordingHandle(Simulation& sim, std::string outdir, std::optional<double> interval, bool force)
+      : sim_(sim), outdir_(std::move(outdir)), outputs_(sim.scene().outputs) {
+    if (interval) {
+      if (!(std::isfinite(*interval) && *interval >= 0.0))
+        throw InputError("Simulation.record: interval must be a finite time >= 0 s");
+      outputs_.interval = *interval;
+    }
+    options_.replace_results = force;
+  }
+
+  RecordingHandle& Enter() {
+    if (recording_) throw std::logic_error("Simulation.record: this recording was entered before");
+    if (sim_.recording() != nullptr)
+      throw std::logic_error("Simulation.record: the simulation is being recorded already");
+    recording_ = std::make_unique<Recording>(sim_.scene(), outputs_, sim_.model(), sim_.data(),
+                                             sim_.integrator(), outdir_, options_);
+    sim_.Attach(recording_.get());
+    return *this;
+  }
+
+  // Finishes the recording: "completed" (the current state recorded unless it was), "failed"
+  // or "interrupted" for an exception. Never suppresses it.
+  bool Exit(const py::object& type, const py::object& value, const py::object&) {
+    if (!recording_) return false;
+    sim_.Attach(nullptr);
+    if (type.is_none()) {
+      if (recording_->RecordFinalState()) recording_->Finish("completed", {});
+    } else if (PyErr_GivenExceptionMatches(type.ptr(), PyExc_KeyboardInterrupt)) {
+      recording_->Interrupted(SIGINT, FormatNumbers("at t = %.9g s; the last recorded row is at "
+                                                    "t = %.9g s",
+                                                    sim_.data().time, recording_->last_row_time()));
+    } else {
+      const std::string name = py::str(type.attr("__name__"));
+      recording_->Finish("failed", name + ": " + std::string(py::str(value)));
+    }
+    result_ = recording_->Result();
+    recording_.reset();
+    return false;
+  }
+
+  const std::string& outdir() const { return outdir_; }
+  const std::optional<RunResult>& result() const { return result_; }
+
+ private:
+  Simulation& sim_;
+  std::string outdir_;
+  OutputSpec outputs_;
+  RunOptions options_;
+  std::unique_ptr<Recording> recording_;
+  std::optional<RunResult> result_;
+};
 
 void BindResults(py::module_& m) {
   py::class_<StepResult>(m, "StepResult", "Outcome of one Simulation.step (dynamics.h).")
@@ -314,15 +374,26 @@ InitializeDynamics: consistent initial accelerations and multipliers (method.md 
 current time from the current configuration and velocities; allocates the integrator.
 `options` (DynamicOptions) defaults to scene.analysis.dynamic. Raises SolverError if the
 saddle-point system is singular, InputError for invalid options.)doc")
-      .def("step", &S::Advance, py::arg("h"),
-           R"doc(step(h) -> StepResult
+      .def("step", &S::Advance, py::arg("h") = py::none(),
+           R"doc(step(h=None) -> StepResult
 
-Advances the state by one step of h [s] (Advance with fixed steps of h: generalized-alpha,
-possibly in halved substeps, a substep ending on each profile breakpoint inside). Returns the
-StepResult on success. On failure the state is left at the start of the step and SolverError
-is raised, with the StepResult (ok False, message) as its `result`. Requires initialize().
-A signal (Ctrl-C) between substeps ends the call with the signal's exception
-(KeyboardInterrupt), the state at the end of the last completed substep.)doc")
+Advances the state by one step: of h [s] (Advance with fixed steps of h: generalized-alpha,
+possibly in halved substeps, a substep ending on each profile breakpoint inside), or with h
+None the next step of the scene's analysis as `screwfem run` takes it (steps of analysis.step on
+its schedule: the profile breakpoints inserted with align_steps, the time set to each step end
+so that round-off does not accumulate). Returns the StepResult on success. On failure the state
+is left at the start of the step and SolverError is raised, with the StepResult (ok False,
+message) as its `result`. Requires initialize(). A signal (Ctrl-C) between substeps ends the
+call with the signal's exception (KeyboardInterrupt), the state at the end of the last completed
+substep. Inside a `record` block the rows and frames due are written.)doc")
+      .def("simulate", &S::Simulate, py::arg("until") = py::none(),
+           R"doc(simulate(until=None) -> StepResult
+
+Advances under the scene's step policy, exactly as `screwfem run` does, to `until` [s]
+(default: analysis.end_time): fixed steps on the analysis schedule, or error-controlled steps
+when analysis.step is auto (adaptive_steps). Inside a `record` block it writes what the CLI
+writes: `with sim.record(out): sim.simulate()` after initialize() leaves the files of
+`screwfem run` bit for bit. Raises like step().)doc")
       .def("advance_to", &S::AdvanceToTime, py::arg("t_end"),
            R"doc(advance_to(t_end) -> StepResult
 
@@ -333,6 +404,36 @@ profile breakpoints. The tolerances are the options'
 absolute_tolerance and relative_tolerance (DynamicOptions). Returns the StepResult (substeps:
 the accepted steps of this call). Call it with successive output times: the controller keeps
 its step between calls. On failure SolverError, the state at the last accepted step.)doc")
+      .def(
+          "record",
+          [](S& s, const std::string& outdir, std::optional<double> interval, bool force) {
+            return std::make_unique<RecordingHandle>(s, outdir, interval, force);
+          },
+          py::arg("outdir"), py::arg("interval") = py::none(), py::arg("force") = false,
+          py::keep_alive<0, 1>(),
+          R"doc(record(outdir, interval=None, force=False) -> Recording
+
+A context manager that writes, as the simulation steps, exactly what `screwfem run` writes for
+the scene: every table its outputs enable (points.csv, joints.csv, reactions.csv, energy.csv,
+tendons, forces, actuators and contacts when the model has them), joints.json, summary.json and
+the ParaView frames with their collection (vtk/motion.pvd), through the same writers. Rows are
+due every `interval` [s] (default: the scene's outputs.interval; 0: every step), and the state
+when the block ends is recorded too. `plot` and `view` read the folder like a CLI run's.
+
+    sim.initialize()
+    with sim.record("out/arm"):
+        while sim.time < 2.0:
+            sim.inputs["u"] = controller(sim)
+            sim.step()
+
+A dynamic scene records from its first step (the state then, after initialize(), is the first
+row); step, simulate and advance_to write the rows and frames due (advance_to and
+error-controlled steps interpolate the state at output times inside a step). A static scene
+records solve_static: a row per load step and the solution's frame. The folder is refused when
+another run holds it or it holds an earlier run's results, unless `force` (then screwfem's
+files only are removed). On leaving the block summary.json says "completed"; an exception
+inside the block leaves complete files and a summary saying "failed" (SolverError, with its
+message) or "interrupted" (KeyboardInterrupt), and propagates. One recording at a time.)doc")
       .def("solve_static", &S::Statics, py::arg("options") = py::none(),
            R"doc(solve_static(options=None) -> StaticResult
 
@@ -763,10 +864,23 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
 
 }  // namespace
 
+void BindRecording(py::module_& m) {
+  py::class_<RecordingHandle>(m, "Recording",
+                              "Simulation.record(outdir): a context manager writing the run's "
+                              "files as the simulation steps (recording.h).")
+      .def("__enter__", &RecordingHandle::Enter, py::return_value_policy::reference_internal)
+      .def("__exit__", &RecordingHandle::Exit)
+      .def_property_readonly("outdir", &RecordingHandle::outdir, "The output folder.")
+      .def_property_readonly(
+          "result", &RecordingHandle::result,
+          "The RunResult once the block has ended (status in summary.json), else None.");
+}
+
 void BindSimulation(py::module_& m) {
   BindResults(m);
   BindInputs(m);
   BindSimulationClass(m);
+  BindRecording(m);
 }
 
 }  // namespace screwfem::python

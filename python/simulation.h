@@ -5,6 +5,7 @@
 
 #include <pybind11/pybind11.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -13,11 +14,13 @@
 
 #include "bind.h"
 #include "screwfem/elements/joint.h"
+#include "screwfem/io/recording.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/advance.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
+#include "screwfem/solve/schedule.h"
 #include "screwfem/solve/statics.h"
 
 namespace screwfem::python {
@@ -58,36 +61,54 @@ class Simulation {
     initialized_ = true;
   }
 
-  StepResult Advance(double h) {
-    if (!initialized_)
-      throw std::logic_error("Simulation.step: call initialize() first (again after solve_static)");
-    if (!(std::isfinite(h) && h > 0.0)) throw InputError("Simulation.step: h must be a time > 0 s");
-    PythonSignals signals;
-    // One step of exactly h (Advance to t + h with fixed steps of h).
-    StepResult r = screwfem::Advance(model(), data_, integrator_, StepPolicy::Fixed(h),
-                                     data_.time + h, nullptr, signals.request());
-    signals.ThrowIfRaised();
-    if (!r.ok) RaiseSolverError(r.message, py::cast(r));
-    return r;
+  // One step: of exactly h (Advance to t + h with fixed steps of h), or with h unset the
+  // next step of the scene's analysis (its StepSchedule: steps of analysis.step ending on the
+  // profile breakpoints, the time set to each step end, as `screwfem run` steps).
+  StepResult Advance(std::optional<double> h) {
+    CheckStepping("step");
+    if (h && !(std::isfinite(*h) && *h > 0.0))
+      throw InputError("Simulation.step: h must be a time > 0 s");
+    if (h) return Run(StepPolicy::Fixed(*h), data_.time + *h);
+    const StepSchedule& schedule = Schedule("step");
+    if (!schedule.Accepts(data_.time))
+      throw InputError(FormatNumbers(
+          "Simulation.step: t = %.9g s is not within the scene's analysis (start_time to "
+          "end_time %.9g s); pass a step h",
+          data_.time, schedule.end()));
+    return Run(StepPolicy::OnSchedule(schedule), schedule.Next(data_.time));
   }
 
   // Error-controlled steps to t_end exactly (Advance, as AdvanceTo); the controller's state
   // carries over.
   StepResult AdvanceToTime(double t_end) {
-    if (!initialized_)
-      throw std::logic_error(
-          "Simulation.advance_to: call initialize() first (again after solve_static)");
+    CheckStepping("advance_to");
     if (!(std::isfinite(t_end) && t_end >= data_.time))
       throw InputError("Simulation.advance_to: t_end must be a finite time >= the current time");
-    PythonSignals signals;
-    StepResult r = screwfem::Advance(model(), data_, integrator_, StepPolicy::ErrorControlled(),
-                                     t_end, nullptr, signals.request());
-    signals.ThrowIfRaised();
-    if (!r.ok) RaiseSolverError(r.message, py::cast(r));
-    return r;
+    return Run(StepPolicy::ErrorControlled(), t_end);
+  }
+
+  // The scene's step policy (`screwfem run`'s) up to `until` (default: analysis.end_time).
+  StepResult Simulate(std::optional<double> until) {
+    CheckStepping("simulate");
+    const AnalysisSettings& a = scene_.analysis;
+    const double t_end = until ? *until : a.end_time;
+    if (!(std::isfinite(t_end) && t_end >= data_.time))
+      throw InputError("Simulation.simulate: until must be a finite time >= the current time");
+    if (a.adaptive_steps) return Run(StepPolicy::ErrorControlled(a.step), t_end);
+    const StepSchedule& schedule = Schedule("simulate");
+    if (t_end > schedule.end())
+      throw InputError(FormatNumbers(
+          "Simulation.simulate: until = %.9g s is after the scene's analysis.end_time %.9g s "
+          "(its steps end there); raise end_time or step on with step(h)",
+          t_end, schedule.end()));
+    return Run(StepPolicy::OnSchedule(schedule), t_end);
   }
 
   StaticResult Statics(const std::optional<StaticOptions>& options) {
+    if (in_run_)
+      throw std::logic_error(
+          "Simulation.solve_static: not inside a run_scene callback (the run "
+          "steps the simulation)");
     StaticOptions o = scene_.analysis.statics;
     o.time = data_.time;
     if (options) o = *options;
@@ -95,7 +116,18 @@ class Simulation {
     data_.time = o.time;
     initialized_ = false;
     PythonSignals signals;
-    StaticResult r = SolveStatic(model(), data_, o, signals.request());
+    // A static analysis being recorded: a row per load step, the solution's frame.
+    Recording* path = recording_ != nullptr && scene_.analysis.kind == AnalysisKind::kStatic
+                          ? recording_
+                          : nullptr;
+    const double t = o.time;
+    StaticResult r = SolveStatic(model(), data_, o, signals.request(), [&](const StaticStep& step) {
+      if (path != nullptr) path->RecordStaticStep(t, step.load_factor);
+    });
+    if (recording_ != nullptr) recording_->SetStaticResult(r);
+    if (path != nullptr && r.converged && !path->finished())
+      path->RecordStaticSolution(t, r.load_steps == 0);
+    if (path != nullptr && path->finished()) ThrowRecordingFailed();
     signals.ThrowIfRaised();
     if (!r.converged) {
       char head[96];
@@ -173,7 +205,78 @@ class Simulation {
     throw py::key_error("no output point named '" + name + "' in the scene's outputs.points");
   }
 
+  // Simulation.record: the recording the steps write to (nullptr: none). A static scene's
+  // recording takes solve_static's path; a dynamic one's starts at the first step.
+  void Attach(Recording* recording) { recording_ = recording; }
+  Recording* recording() const { return recording_; }
+  // run_scene with a callback steps this simulation: its own stepping is refused meanwhile.
+  void SetInRun(bool in_run) { in_run_ = in_run; }
+  void SetInitialized() { initialized_ = true; }
+
  private:
+  void CheckStepping(const char* method) const {
+    if (in_run_)
+      throw std::logic_error(std::string("Simulation.") + method +
+                             ": not inside a run_scene callback (the run steps the simulation)");
+    if (!initialized_)
+      throw std::logic_error(std::string("Simulation.") + method +
+                             ": call initialize() first (again after solve_static)");
+    if (recording_ != nullptr && scene_.analysis.kind == AnalysisKind::kStatic)
+      throw InputError(std::string("Simulation.") + method +
+                       ": the recording is of a static analysis (scene.analysis.kind STATIC), "
+                       "which records solve_static; set the kind to DYNAMIC before record()");
+  }
+
+  // Advance under `policy` to t_until, with the recording (if any) observing; raises on
+  // failure, a signal or a write error.
+  StepResult Run(const StepPolicy& policy, double t_until) {
+    PythonSignals signals;
+    RecordingSteps observer(recording_);
+    if (recording_ != nullptr && !recording_->started() && !recording_->finished())
+      recording_->Start();
+    if (recording_ != nullptr && recording_->finished()) ThrowRecordingFailed();
+    AdvanceResult r =
+        screwfem::Advance(model(), data_, integrator_, policy, t_until,
+                          recording_ != nullptr ? &observer : nullptr, signals.request());
+    signals.ThrowIfRaised();
+    if (r.stopped) ThrowRecordingFailed();
+    if (!r.ok) RaiseSolverError(r.message, py::cast(static_cast<StepResult>(r)));
+    return r;
+  }
+
+  // The recording's observer for steps driven from Python: the rows and frames due by its
+  // clocks only (the end of the run is where the recording is closed, which records it).
+  class RecordingSteps : public AdvanceObserver {
+   public:
+    explicit RecordingSteps(Recording* r) : r_(r) {}
+    void BeforeStep(double t) override { r_->BeforeStep(t); }
+    double NextOutputTime() const override { return r_->NextOutputTime(); }
+    bool OutputInsideStep(double t) override { return r_->OutputInsideStep(t); }
+    bool AfterStep(bool /*last*/) override { return r_->AfterStep(false); }
+
+   private:
+    Recording* r_;
+  };
+
+  [[noreturn]] void ThrowRecordingFailed() const {
+    throw std::runtime_error("Simulation.record: writing the files failed: " +
+                             recording_->Result().message);
+  }
+
+  // The scene's StepSchedule, rebuilt when its analysis times change.
+  const StepSchedule& Schedule(const char* method) {
+    const AnalysisSettings& a = scene_.analysis;
+    const std::array<double, 4> key = {a.start_time, a.end_time, a.step, a.align_steps ? 1.0 : 0.0};
+    if (!schedule_ || key != schedule_key_) {
+      ValidateTimeGrid(a.start_time, a.end_time, a.step,
+                       (std::string("Simulation.") + method + ": scene.analysis").c_str());
+      schedule_.emplace(a.start_time, a.end_time, a.step,
+                        a.align_steps ? ProfileBreakpoints(model()) : std::vector<double>{});
+      schedule_key_ = key;
+    }
+    return *schedule_;
+  }
+
   static int Named(int index, const char* what, const std::string& name) {
     if (index < 0) throw py::key_error(std::string("no ") + what + " named '" + name + "'");
     return index;
@@ -183,6 +286,10 @@ class Simulation {
   Data data_;
   Integrator integrator_;
   bool initialized_ = false;
+  Recording* recording_ = nullptr;
+  bool in_run_ = false;
+  std::optional<StepSchedule> schedule_;
+  std::array<double, 4> schedule_key_{};
 };
 
 }  // namespace screwfem::python
