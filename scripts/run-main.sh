@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # The main job (README.md, "Quick start", first command): installs missing Debian packages,
-# builds what it runs (the screwfem program and the statics example) in Release into
-# build/main, runs the statics example and the GRM cases, plots the GRM results and writes a
-# browser viewer per case, everything into out/. Run as root (installing packages needs it).
+# builds what it runs (the screwfem program, the statics example and the Python module) in
+# Release into build/main, runs the statics example and the GRM cases, plots the GRM results,
+# writes a browser viewer per case, and runs the closed-loop soft arm from Python, recorded,
+# everything into out/. Run as root (installing packages needs it).
 #
 # build/main, not the test job's build/release: the main job configures without the test
-# suite, the benchmarks and the Python module, and CMake keeps such options in its cache, so a
-# shared directory would leave the test job's next configure without its tests.
+# suite and the benchmarks, and CMake keeps such options in its cache, so a shared directory
+# would leave the test job's next configure without its tests.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -21,11 +22,11 @@ end "dependencies"
 
 begin "configure (Release)"
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DSCREWFEM_BUILD_TESTS=OFF \
-  -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_BUILD_PYTHON=OFF
+  -DSCREWFEM_BUILD_BENCH=OFF -DSCREWFEM_BUILD_PYTHON=ON
 end "configure (Release)"
 
 begin "build (Release, -j$jobs)"
-cmake --build "$build_dir" -j"$jobs" --target screwfem_cli screwfem_statics_example
+cmake --build "$build_dir" -j"$jobs" --target screwfem_cli screwfem_statics_example _screwfem
 end "build (Release, -j$jobs)"
 
 mkdir -p out
@@ -77,7 +78,21 @@ for c in "${cases[@]}"; do
 done
 end "GRM viewers"
 
+# Python: the closed-loop soft arm (examples/python/soft_arm_control.py), a PID controller on
+# the tip height setting a tendon's tension between steps, recorded with Simulation.record into
+# out/soft_arm_control/ (the files `screwfem run` writes) and shown in a viewer page.
+begin "Python: soft arm in closed loop"
+PYTHONPATH=$build_dir/python /usr/bin/python3 examples/python/soft_arm_control.py \
+  --out out/soft_arm_control --force
+"$screwfem" view out/soft_arm_control -o out/viewer/soft_arm_control.html
+end "Python: soft arm in closed loop"
+
 echo
 echo "Phase timings:"
 printf '  %s\n' "${timings[@]}"
-echo "Output written to out/statics.txt, out/grm_*/, out/figures/ and out/viewer/"
+echo "Output written to out/statics.txt, out/grm_*/, out/soft_arm_control/, out/figures/ and"
+echo "out/viewer/"
+echo
+echo "The program:  $build_dir/app/screwfem   (screwfem run SCENE.yaml -o DIR; plot DIR; view DIR)"
+echo "The package:  PYTHONPATH=$build_dir/python /usr/bin/python3   (import screwfem)"
+echo "Tutorials:    docs/tutorials/ (Jupyter notebooks); the Python API: docs/python.md"
