@@ -70,11 +70,11 @@ void CalcRodStresses(const Model& model, const Data& data, int rod_index, std::v
         CalcRodRelativeMotion(data.H[static_cast<std::size_t>(el.node_a)],
                               data.H[static_cast<std::size_t>(el.node_b)], data.w_ref[e]);
     RodActuation act;
-    CalcRodActuation(model, data, static_cast<int>(e), data.time, 1.0, &act);
-    const Vec6 el_stress =
-        rod.section.stiffness.cwiseProduct((d - el.d0) / el.length - act.rest_strain);
-    (*out)[static_cast<std::size_t>(k)] = el_stress - act.active_stress;
-    if (elastic) (*elastic)[static_cast<std::size_t>(k)] = el_stress;
+    const bool actuated = CalcRodActuation(model, data, static_cast<int>(e), data.time, 1.0, &act);
+    RodLaw law;  // the kernel's law (rod.h)
+    CalcRodLaw(el, rod.section, d, actuated ? &act : nullptr, false, &law);
+    (*out)[static_cast<std::size_t>(k)] = law.stress;
+    if (elastic) (*elastic)[static_cast<std::size_t>(k)] = law.elastic_stress;
   }
 }
 

@@ -94,22 +94,35 @@ void CalcRodGeometry(const SE3& H_A, const SE3& H_B, const Vec3& w_ref, bool gau
   CompleteRodGeometry(gauss_points, tangents, out);
 }
 
+void CalcRodLaw(const RodElement& element, const Section& section, const Vec6& d,
+                const RodActuation* actuation, bool energy, RodLaw* out) {
+  const double L = element.length;
+  out->strain = (d - element.d0) / L;
+  out->stress = section.stiffness.cwiseProduct(out->strain);
+  if (actuation == nullptr) {
+    out->elastic_stress = out->stress;
+    if (energy) out->energy = 0.5 * L * out->strain.dot(out->stress);
+    return;
+  }
+  const Vec6 elastic = out->strain - actuation->rest_strain;
+  out->elastic_stress = section.stiffness.cwiseProduct(elastic);
+  out->stress -= section.stiffness.cwiseProduct(actuation->rest_strain) + actuation->active_stress;
+  if (energy)
+    out->energy =
+        0.5 * L * elastic.dot(out->elastic_stress) - L * out->strain.dot(actuation->active_stress);
+}
+
 void CalcRodInternal(const RodElement& element, const Section& section, const RodGeometry& geometry,
                      bool tangent, RodInternal* out, const RodActuation* actuation) {
   const double L = element.length;
   const Mat6x12& P = geometry.P;
   out->d = geometry.d;
-  out->strain = (out->d - element.d0) / L;
-  // sigma = K (eps - eps0) - sigma_a, V = L/2 (eps - eps0)^T K (eps - eps0) - L eps^T sigma_a
-  // (method-next.md §N5.1).
-  const Vec6 elastic = actuation ? Vec6(out->strain - actuation->rest_strain) : out->strain;
-  out->elastic_stress = section.stiffness.cwiseProduct(elastic);
-  out->stress = out->elastic_stress;
-  out->energy = 0.5 * L * elastic.dot(out->elastic_stress);
-  if (actuation) {
-    out->stress -= actuation->active_stress;
-    out->energy -= L * out->strain.dot(actuation->active_stress);
-  }
+  RodLaw law;
+  CalcRodLaw(element, section, out->d, actuation, true, &law);
+  out->strain = law.strain;
+  out->elastic_stress = law.elastic_stress;
+  out->stress = law.stress;
+  out->energy = law.energy;
   out->force.noalias() = P.transpose() * out->stress;
   if (!tangent) return;
   // K_t = (1/L) P^T K P + [D(-d, sigma); D(d, sigma)] P   (method.md §2.4), with
@@ -407,10 +420,9 @@ void CalcRodConservative(const RodElement& element, const Section& section,
   const double L = element.length;
   const Vec6& d = geometry.d;
   const Mat6x12& P = geometry.P;
-  const Vec6 strain = (d - element.d0) / L;
-  Vec6 stress = section.stiffness.cwiseProduct(strain);
-  if (actuation)  // method-next.md §N5.1
-    stress -= section.stiffness.cwiseProduct(actuation->rest_strain) + actuation->active_stress;
+  RodLaw law;
+  CalcRodLaw(element, section, d, actuation, false, &law);
+  Vec6& stress = law.stress;
   const bool weight = f_w.squaredNorm() > 0.0;
   DeadForcePieces p;
   if (weight) {

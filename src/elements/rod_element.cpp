@@ -132,14 +132,12 @@ void RodElementKind::AddEnergy(const Model& m, const Data& d, const Item& e, Ene
   const SE3& HA = d.H[static_cast<std::size_t>(el.node_a)];
   const SE3& HB = d.H[static_cast<std::size_t>(el.node_b)];
   const Vec6 rel = CalcRodRelativeMotion(HA, HB, d.w_ref[static_cast<std::size_t>(e)]);
-  const Vec6 strain = (rel - el.d0) / el.length;
-  // L/2 (eps - eps0)^T K (eps - eps0) - L eps^T sigma_a (method-next.md §N5.1), the actuation
-  // at data.time.
+  // The law's energy (CalcRodLaw), the actuation at data.time.
   RodActuation act;
   CalcRodActuation(m, d, e, d.time, 1.0, &act);
-  const Vec6 elastic = strain - act.rest_strain;
-  E->strain += 0.5 * el.length * elastic.dot(sec.stiffness.cwiseProduct(elastic)) -
-               el.length * strain.dot(act.active_stress);
+  RodLaw law;
+  CalcRodLaw(el, sec, rel, &act, true, &law);
+  E->strain += law.energy;
   const int nodes[2] = {el.node_a, el.node_b};
   Vec12 eta_ab;
   GatherNodeMotion<2>(m, d, nodes, &eta_ab, nullptr);

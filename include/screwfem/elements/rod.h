@@ -76,6 +76,20 @@ bool CalcRodActuation(const Model& model, const Data& data, int element, double 
 // activation clamped to [0, 1]).
 double ActuatorValue(const Actuator& actuator, double time, const Data& data);
 
+// The rod's constitutive law, its one definition (docs/numerics.md, "Active stress and rest
+// strain"): an element whose relative motion is d has the strain eps = (d - d0) / L, the stress
+// sigma = K eps - (K eps0 + sigma_a) and the energy L/2 (eps - eps0)^T K (eps - eps0) -
+// L eps^T sigma_a, with the rest-strain change eps0 and active stress sigma_a of `actuation`
+// (zero without). The kernels, the energy and the stress outputs all evaluate it here.
+struct RodLaw {
+  Vec6 strain;          // eps
+  Vec6 stress;          // sigma (section frame: N, V2, V3, T, M2, M3)
+  Vec6 elastic_stress;  // K (eps - eps0): the part the elastic strain carries
+  double energy = 0.0;  // with `energy` only
+};
+void CalcRodLaw(const RodElement& element, const Section& section, const Vec6& d,
+                const RodActuation* actuation, bool energy, RodLaw* out);
+
 struct RodInternal {
   Vec6 d;               // relative motion on the current branch
   Vec6 strain;          // d / L - f0
