@@ -28,6 +28,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
 #include "screwfem/build/model_builder.h"
+#include "screwfem/elements/force_span.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/linalg/band_coupling.h"
 #include "elements/tilted_box_drop.h"
@@ -155,6 +156,16 @@ Model MixedModel() {
   spring.damping = 0.5;
   spring.actuator = Profile::Sine(0.2, 3.0);
   b.AddForceElement(spring);
+  // And one from a rod point between nodes 2 and 3 to the ground (ForceElementSpanKind).
+  ForceElement span;
+  span.name = "span";
+  span.a.rod = rod;
+  span.a.arc_length = 2.5 * b.RodLength(rod) / static_cast<double>(rod_nodes - 1);
+  span.a.offset = Vec3(0, 0, 0.01);
+  span.b = {kGround, Vec3(0.2, 0.1, -0.2)};
+  span.stiffness = 15;
+  span.damping = 0.2;
+  b.AddForceElement(span);
   // A load that takes a run-time input (changed between the counted steps).
   PointLoad driven = dead;
   driven.node = b.model().rods[0].nodes[3];
@@ -217,6 +228,9 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     int span_segments = 0;  // the eyelet between rod nodes makes 4-node tendon items
     TendonSpanSegmentKind::ForEach(model, [&](int, const int(&)[4]) { ++span_segments; });
     ASSERT_EQ(span_segments, 2);
+    int span_forces = 0;  // the force element with an end between rod nodes
+    ForceElementSpanKind::ForEach(model, [&](int, const int(&)[4]) { ++span_forces; });
+    ASSERT_EQ(span_forces, 1);
     Data data = MakeData(model);
     Integrator integ;
     DynamicOptions options;
