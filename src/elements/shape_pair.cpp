@@ -431,155 +431,201 @@ std::uint32_t CellHash(const Eigen::Vector3i& c) {
          static_cast<std::uint32_t>(c.z()) * 83492791u;
 }
 
-// The broad phase once (UpdateShapePairs).
-void FindShapePairs(const Model& model, Data& data) {
-  data.num_shape_pairs = 0;
-  data.shape_pair_overflow = false;
-  const int n = static_cast<int>(model.contact_segments.size());
-  if (n == 0 || !MayHaveShapePairs(model)) return;
-  ShapePairGrid& g = data.shape_pair_grid;
-  g.box_tests = 0;
-  const int chunks = static_cast<int>(g.chunk_first.size()) - 1;
-  auto first_of = [&](int c) { return g.chunk_first[static_cast<std::size_t>(c)]; };
-  auto segment = [&](int i) -> const ContactSegment& {
-    return model.contact_segments[static_cast<std::size_t>(i)];
-  };
-  // Boxes inflated by the radii and half the onset: surfaces nearer than the onset have
-  // overlapping boxes. A chunk's box holds its segments'. The cell: the largest box of a rod's
-  // chunk (or of any chunk when there is no rod); a larger box is tested against all.
-  const double pad = 0.5 * model.contact.onset;
-  double cell = 0.0, cell_any = 0.0;
-  for (int c = 0; c < chunks; ++c) {
-    const std::size_t k = static_cast<std::size_t>(c);
-    g.lo[k] = Vec3::Constant(INFINITY);
-    g.hi[k] = Vec3::Constant(-INFINITY);
-    for (int i = first_of(c); i < first_of(c + 1); ++i) {
-      const std::size_t q = static_cast<std::size_t>(i);
-      SegmentBox(segment(i), data, pad, &g.segment_lo[q], &g.segment_hi[q]);
-      g.lo[k] = g.lo[k].cwiseMin(g.segment_lo[q]);
-      g.hi[k] = g.hi[k].cwiseMax(g.segment_hi[q]);
-    }
-    const double extent = (g.hi[k] - g.lo[k]).maxCoeff();
-    if (!std::isfinite(extent)) return;  // a state that is not finite: no pair (the step fails)
-    cell_any = std::max(cell_any, extent);
-    if (segment(first_of(c)).side.rod) cell = std::max(cell, extent);
+// The broad phase once (UpdateShapePairs): bound the chunks of segments, sort them into the
+// cells of a hashed grid, then pair the chunks that share a cell (and the large ones with
+// all), segment by segment. Each phase is a method; the grid's arrays are Data's (sized by
+// MakeData), so a search allocates nothing.
+class BroadPhase {
+ public:
+  BroadPhase(const Model& model, Data& data)
+      : m_(model),
+        data_(data),
+        g_(data.shape_pair_grid),
+        chunks_(static_cast<int>(g_.chunk_first.size()) - 1) {}
+
+  void Run() {
+    data_.num_shape_pairs = 0;
+    data_.shape_pair_overflow = false;
+    if (m_.contact_segments.empty() || !MayHaveShapePairs(m_)) return;
+    g_.box_tests = 0;
+    if (!BoundChunks()) return;
+    SortChunksIntoCells();
+    auto sink = [this](const ShapePair& p) {
+      if (data_.num_shape_pairs >= static_cast<int>(data_.shape_pairs.size())) {
+        data_.shape_pair_overflow = true;
+        return;
+      }
+      data_.shape_pairs[static_cast<std::size_t>(data_.num_shape_pairs++)] = p;
+    };
+    PairWriter<decltype(sink)> writer(m_, sink);
+    PairChunks(writer);
   }
-  if (cell == 0.0) cell = cell_any;
-  if (!(cell > 0.0)) return;
-  const double inv = 1.0 / cell;
-  auto cell_of = [&](const Vec3& p) {
-    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() * inv)),
-                           static_cast<int>(std::floor(p.y() * inv)),
-                           static_cast<int>(std::floor(p.z() * inv)));
-  };
-  // Cells beyond the int range: every chunk is large (tested against all).
-  const double limit = 1e9 * cell;
-  const int buckets = static_cast<int>(g.bucket_start.size()) - 1;
-  const std::uint32_t mask = static_cast<std::uint32_t>(buckets - 1);
-  std::fill(g.bucket_start.begin(), g.bucket_start.end(), 0);
-  int num_large = 0;
-  // Counting sort of the entries (chunk, cell) into the buckets: count, prefix, fill.
-  auto for_cells = [&](int c, auto&& f) {
+
+ private:
+  int First(int c) const { return g_.chunk_first[static_cast<std::size_t>(c)]; }
+  const ContactSegment& Segment(int i) const {
+    return m_.contact_segments[static_cast<std::size_t>(i)];
+  }
+  Eigen::Vector3i CellOf(const Vec3& p) const {
+    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() * inv_cell_)),
+                           static_cast<int>(std::floor(p.y() * inv_cell_)),
+                           static_cast<int>(std::floor(p.z() * inv_cell_)));
+  }
+  std::size_t Bucket(const Eigen::Vector3i& v) const {
+    return CellHash(v) & static_cast<std::uint32_t>(buckets_ - 1);
+  }
+  // f(cell) for every cell chunk c's box touches.
+  template <class F>
+  void ForCells(int c, F&& f) const {
     const std::size_t k = static_cast<std::size_t>(c);
-    const Eigen::Vector3i a = cell_of(g.lo[k]), b = cell_of(g.hi[k]);
+    const Eigen::Vector3i a = CellOf(g_.lo[k]), b = CellOf(g_.hi[k]);
     for (int x = a.x(); x <= b.x(); ++x)
       for (int y = a.y(); y <= b.y(); ++y)
         for (int z = a.z(); z <= b.z(); ++z) f(Eigen::Vector3i(x, y, z));
-  };
-  for (int c = 0; c < chunks; ++c) {
-    const std::size_t k = static_cast<std::size_t>(c);
-    const bool large = (g.hi[k] - g.lo[k]).maxCoeff() > cell ||
-                       g.lo[k].cwiseAbs().maxCoeff() > limit ||
-                       g.hi[k].cwiseAbs().maxCoeff() > limit;
-    g.large[k] = large;
-    if (large) {
-      g.large_chunks[static_cast<std::size_t>(num_large++)] = c;
-      continue;
-    }
-    for_cells(c, [&](const Eigen::Vector3i& v) { ++g.bucket_start[(CellHash(v) & mask) + 1]; });
   }
-  for (int b = 0; b < buckets; ++b)
-    g.bucket_start[static_cast<std::size_t>(b + 1)] += g.bucket_start[static_cast<std::size_t>(b)];
-  // Fill: bucket_start[b] advances to the end of bucket b, then is restored from b - 1's end.
-  for (int c = 0; c < chunks; ++c) {
-    if (g.large[static_cast<std::size_t>(c)]) continue;
-    for_cells(c, [&](const Eigen::Vector3i& v) {
-      const std::size_t e = static_cast<std::size_t>(g.bucket_start[CellHash(v) & mask]++);
-      g.entry_chunk[e] = c;
-      g.entry_cell[e] = v;
-    });
-  }
-  for (int b = buckets; b > 0; --b)
-    g.bucket_start[static_cast<std::size_t>(b)] = g.bucket_start[static_cast<std::size_t>(b - 1)];
-  g.bucket_start[0] = 0;
-  auto sink = [&data](const ShapePair& p) {
-    if (data.num_shape_pairs >= static_cast<int>(data.shape_pairs.size())) {
-      data.shape_pair_overflow = true;
-      return;
+
+  // Boxes inflated by the radii and half the onset: surfaces nearer than the onset have
+  // overlapping boxes. A chunk's box holds its segments'. The cell: the largest box of a rod's
+  // chunk (or of any chunk when there is no rod); a larger box is tested against all. False
+  // when no pair is possible (no extent, or a state that is not finite: the step fails).
+  bool BoundChunks() {
+    const double pad = 0.5 * m_.contact.onset;
+    double cell = 0.0, cell_any = 0.0;
+    for (int c = 0; c < chunks_; ++c) {
+      const std::size_t k = static_cast<std::size_t>(c);
+      g_.lo[k] = Vec3::Constant(INFINITY);
+      g_.hi[k] = Vec3::Constant(-INFINITY);
+      for (int i = First(c); i < First(c + 1); ++i) {
+        const std::size_t q = static_cast<std::size_t>(i);
+        SegmentBox(Segment(i), data_, pad, &g_.segment_lo[q], &g_.segment_hi[q]);
+        g_.lo[k] = g_.lo[k].cwiseMin(g_.segment_lo[q]);
+        g_.hi[k] = g_.hi[k].cwiseMax(g_.segment_hi[q]);
+      }
+      const double extent = (g_.hi[k] - g_.lo[k]).maxCoeff();
+      if (!std::isfinite(extent)) return false;
+      cell_any = std::max(cell_any, extent);
+      if (Segment(First(c)).side.rod) cell = std::max(cell, extent);
     }
-    data.shape_pairs[static_cast<std::size_t>(data.num_shape_pairs++)] = p;
-  };
-  PairWriter<decltype(sink)> writer(model, sink);
-  auto segments_overlap = [&](int i, int j) {
-    ++g.box_tests;
-    return BoxesOverlap(g.segment_lo, g.segment_hi, i, j);
-  };
+    if (cell == 0.0) cell = cell_any;
+    if (!(cell > 0.0)) return false;
+    cell_ = cell;
+    inv_cell_ = 1.0 / cell;
+    return true;
+  }
+
+  // Counting sort of the entries (chunk, cell) into the buckets: count, prefix, fill. Chunks
+  // larger than a cell, or with cells beyond the int range, are listed apart (large_chunks).
+  void SortChunksIntoCells() {
+    const double limit = 1e9 * cell_;
+    buckets_ = static_cast<int>(g_.bucket_start.size()) - 1;
+    std::fill(g_.bucket_start.begin(), g_.bucket_start.end(), 0);
+    num_large_ = 0;
+    for (int c = 0; c < chunks_; ++c) {
+      const std::size_t k = static_cast<std::size_t>(c);
+      const bool large = (g_.hi[k] - g_.lo[k]).maxCoeff() > cell_ ||
+                         g_.lo[k].cwiseAbs().maxCoeff() > limit ||
+                         g_.hi[k].cwiseAbs().maxCoeff() > limit;
+      g_.large[k] = large;
+      if (large) {
+        g_.large_chunks[static_cast<std::size_t>(num_large_++)] = c;
+        continue;
+      }
+      ForCells(c, [&](const Eigen::Vector3i& v) { ++g_.bucket_start[Bucket(v) + 1]; });
+    }
+    for (int b = 0; b < buckets_; ++b)
+      g_.bucket_start[static_cast<std::size_t>(b + 1)] +=
+          g_.bucket_start[static_cast<std::size_t>(b)];
+    // Fill: bucket_start[b] advances to the end of bucket b, then is restored from b - 1's end.
+    for (int c = 0; c < chunks_; ++c) {
+      if (g_.large[static_cast<std::size_t>(c)]) continue;
+      ForCells(c, [&](const Eigen::Vector3i& v) {
+        const std::size_t e = static_cast<std::size_t>(g_.bucket_start[Bucket(v)]++);
+        g_.entry_chunk[e] = c;
+        g_.entry_cell[e] = v;
+      });
+    }
+    for (int b = buckets_; b > 0; --b)
+      g_.bucket_start[static_cast<std::size_t>(b)] =
+          g_.bucket_start[static_cast<std::size_t>(b - 1)];
+    g_.bucket_start[0] = 0;
+  }
+
+  bool SegmentsOverlap(int i, int j) {
+    ++g_.box_tests;
+    return BoxesOverlap(g_.segment_lo, g_.segment_hi, i, j);
+  }
+
   // Two chunks whose boxes overlap: their segments' pairs, unless no two of their segments may
   // touch (other entities that may not; the same rod with every two elements within the skip).
-  auto chunk_pair = [&](int a, int b) {
-    const int a0 = first_of(a), a1 = first_of(a + 1), b0 = first_of(b), b1 = first_of(b + 1);
-    const int ea = segment(a0).entity, eb = segment(b0).entity;
+  template <class Writer>
+  void ChunkPair(int a, int b, Writer& writer) {
+    const int a0 = First(a), a1 = First(a + 1), b0 = First(b), b1 = First(b + 1);
+    const int ea = Segment(a0).entity, eb = Segment(b0).entity;
     if (ea == eb) {
-      const double skip = model.contact_entity_self_skip[static_cast<std::size_t>(ea)];
+      const double skip = m_.contact_entity_self_skip[static_cast<std::size_t>(ea)];
       const double far =
-          std::max(segment(b1 - 1).s0 - segment(a0).s1, segment(a1 - 1).s0 - segment(b0).s1);
+          std::max(Segment(b1 - 1).s0 - Segment(a0).s1, Segment(a1 - 1).s0 - Segment(b0).s1);
       if (skip < 0.0 || far < skip) return;
-    } else if (!model.contact_entity_pairs[static_cast<std::size_t>(
-                   ea * model.num_contact_entities + eb)]) {
+    } else if (!m_.contact_entity_pairs[static_cast<std::size_t>(ea * m_.num_contact_entities +
+                                                                 eb)]) {
       return;
     }
     for (int i = a0; i < a1; ++i)
       for (int j = b0; j < b1; ++j)
-        if (segments_overlap(i, j)) writer.Consider(std::min(i, j), std::max(i, j));
-  };
-  // Two chunks sharing a cell; each pair once, in the cell of the corner max(lo_a, lo_b).
-  for (int b = 0; b < buckets; ++b) {
-    const int first = g.bucket_start[static_cast<std::size_t>(b)];
-    const int end = g.bucket_start[static_cast<std::size_t>(b + 1)];
-    for (int x = first; x < end; ++x)
-      for (int y = x + 1; y < end; ++y) {
-        const Eigen::Vector3i& v = g.entry_cell[static_cast<std::size_t>(x)];
-        if (v != g.entry_cell[static_cast<std::size_t>(y)]) continue;  // a hash collision
-        const int i = g.entry_chunk[static_cast<std::size_t>(x)];
-        const int j = g.entry_chunk[static_cast<std::size_t>(y)];
-        ++g.box_tests;
-        if (!BoxesOverlap(g.lo, g.hi, i, j)) continue;
-        const std::size_t ki = static_cast<std::size_t>(i), kj = static_cast<std::size_t>(j);
-        if (cell_of(g.lo[ki].cwiseMax(g.lo[kj])) != v) continue;
-        chunk_pair(std::min(i, j), std::max(i, j));
-      }
+        if (SegmentsOverlap(i, j)) writer.Consider(std::min(i, j), std::max(i, j));
   }
-  // Large chunks against every other (two large ones once).
-  for (int q = 0; q < num_large; ++q) {
-    const int i = g.large_chunks[static_cast<std::size_t>(q)];
-    for (int j = 0; j < chunks; ++j) {
-      if (j == i || (g.large[static_cast<std::size_t>(j)] && j < i)) continue;
-      ++g.box_tests;
-      if (BoxesOverlap(g.lo, g.hi, i, j)) chunk_pair(std::min(i, j), std::max(i, j));
+
+  // The candidate pairs: chunks sharing a cell, the large chunks with every other, and the
+  // segments inside a chunk of a rod touching itself.
+  template <class Writer>
+  void PairChunks(Writer& writer) {
+    // Two chunks sharing a cell; each pair once, in the cell of the corner max(lo_a, lo_b).
+    for (int b = 0; b < buckets_; ++b) {
+      const int first = g_.bucket_start[static_cast<std::size_t>(b)];
+      const int end = g_.bucket_start[static_cast<std::size_t>(b + 1)];
+      for (int x = first; x < end; ++x)
+        for (int y = x + 1; y < end; ++y) {
+          const Eigen::Vector3i& v = g_.entry_cell[static_cast<std::size_t>(x)];
+          if (v != g_.entry_cell[static_cast<std::size_t>(y)]) continue;  // a hash collision
+          const int i = g_.entry_chunk[static_cast<std::size_t>(x)];
+          const int j = g_.entry_chunk[static_cast<std::size_t>(y)];
+          ++g_.box_tests;
+          if (!BoxesOverlap(g_.lo, g_.hi, i, j)) continue;
+          const std::size_t ki = static_cast<std::size_t>(i), kj = static_cast<std::size_t>(j);
+          if (CellOf(g_.lo[ki].cwiseMax(g_.lo[kj])) != v) continue;
+          ChunkPair(std::min(i, j), std::max(i, j), writer);
+        }
+    }
+    // Large chunks against every other (two large ones once).
+    for (int q = 0; q < num_large_; ++q) {
+      const int i = g_.large_chunks[static_cast<std::size_t>(q)];
+      for (int j = 0; j < chunks_; ++j) {
+        if (j == i || (g_.large[static_cast<std::size_t>(j)] && j < i)) continue;
+        ++g_.box_tests;
+        if (BoxesOverlap(g_.lo, g_.hi, i, j)) ChunkPair(std::min(i, j), std::max(i, j), writer);
+      }
+    }
+    // Inside a chunk of a rod touching itself: only when its span exceeds the skip (a skip set
+    // below a diameter).
+    for (int c = 0; c < chunks_; ++c) {
+      const int c0 = First(c), c1 = First(c + 1);
+      const double skip = m_.contact_entity_self_skip[static_cast<std::size_t>(Segment(c0).entity)];
+      if (c1 - c0 < 3 || skip < 0.0 || Segment(c1 - 1).s0 - Segment(c0).s1 < skip) continue;
+      for (int i = c0; i < c1; ++i)
+        for (int j = i + 2; j < c1; ++j)
+          if (SegmentsOverlap(i, j)) writer.Consider(i, j);
     }
   }
-  // Inside a chunk of a rod touching itself: only when its span exceeds the skip (a skip set
-  // below a diameter).
-  for (int c = 0; c < chunks; ++c) {
-    const int c0 = first_of(c), c1 = first_of(c + 1);
-    const double skip =
-        model.contact_entity_self_skip[static_cast<std::size_t>(segment(c0).entity)];
-    if (c1 - c0 < 3 || skip < 0.0 || segment(c1 - 1).s0 - segment(c0).s1 < skip) continue;
-    for (int i = c0; i < c1; ++i)
-      for (int j = i + 2; j < c1; ++j)
-        if (segments_overlap(i, j)) writer.Consider(i, j);
-  }
-}
+
+  const Model& m_;
+  Data& data_;
+  ShapePairGrid& g_;
+  const int chunks_;
+  double cell_ = 0.0, inv_cell_ = 0.0;
+  int buckets_ = 0, num_large_ = 0;
+};
+
+void FindShapePairs(const Model& model, Data& data) { BroadPhase(model, data).Run(); }
 
 }  // namespace
 
