@@ -510,30 +510,8 @@ class ArcLengthPath {
     const double span = o.end_load_factor - s_;
     direction_ = span < 0.0 ? -1.0 : 1.0;
     if (span == 0.0) return Finish();
-    // The first arc length and the spherical constraint's scale from dx/ds at the start.
-    std::string cause;
-    S_.opt.load_factor = s_;
-    if (!S_.PathTangent(cause)) {
-      saved_.Restore(model, data);
-      result_.message = "arc-length continuation cannot start at load factor " +
-                        FormatNumbers("%.9g: ", s_) + cause;
-      return result_;
-    }
-    saved_.Restore(model, data);
-    const double speed = std::sqrt(S_.Dot(S_.x_f, S_.x_f));
-    if (!(speed > 0.0) || !std::isfinite(speed)) {
-      result_.message =
-          "arc-length continuation: the load moves nothing the arc-length metric measures "
-          "(|dx/ds| = 0 in translations); set analysis.statics.rotation_weight, or use load "
-          "stepping";
-      return result_;
-    }
-    c2_ = o.psi * o.psi * speed * speed;
-    const double dl0 = o.arc_length > 0.0 ? o.arc_length : speed * std::abs(span) / o.load_steps;
-    const double dl_min =
-        o.arc_length_min > 0.0 ? o.arc_length_min : dl0 * std::ldexp(1.0, -o.max_halvings);
-    const double dl_max = o.arc_length_max > 0.0 ? o.arc_length_max : 10.0 * dl0;
-    double dl = std::clamp(dl0, dl_min, dl_max);
+    if (!Start(span)) return result_;
+    double dl = std::clamp(dl0_, dl_min_, dl_max_);
     const int max_steps = MaxSteps(o);
     std::string last_cause;
     while (true) {
@@ -544,12 +522,7 @@ class ArcLengthPath {
       StaticStep step;
       double ds = 0.0;
       const LoadStepEnd end = Step(dl, step, &ds, last_cause);
-      if (end == LoadStepEnd::kStopped) {
-        saved_.Restore(model, data);
-        result_.interrupted = true;
-        result_.message = FormatNumbers("static solve interrupted at load factor %.9g", s_);
-        return result_;
-      }
+      if (end == LoadStepEnd::kStopped) return Interrupted();
       result_.total_iterations += step.iterations;
       bool accepted = end == LoadStepEnd::kConverged;
       // A step that turned back along the path (the root choice jumped to the reverse
@@ -559,31 +532,9 @@ class ArcLengthPath {
         last_cause = "the step turned back along the path";
       }
       if (accepted && (s_ + ds - o.end_load_factor) * direction_ >= 0.0) {
-        // The step crossed the end load factor: Newton at exactly that load factor from the
-        // state interpolated between the two converged ones.
-        lambda_new_ = data.lambda;
-        saved_.Restore(model, data);
-        const double t = (o.end_load_factor - s_) / ds;
-        delta_.head(model.nv) = t * dx_;
-        Retract(model, data, delta_.head(model.nv));
-        data.lambda = (1.0 - t) * data.lambda + t * lambda_new_;
-        StaticStep last;
-        last.load_factor = o.end_load_factor;
-        S_.opt.load_factor = o.end_load_factor;
-        const LoadStepEnd e2 = S_.IterateLoadStep(last, last_cause);
-        result_.total_iterations += last.iterations;
-        if (e2 == LoadStepEnd::kConverged) {
-          UpdateBranchReferences(model, data);
-          dx_ *= t;
-          Accept(std::move(last), o.end_load_factor - s_);
-          return Finish();
-        }
-        saved_.Restore(model, data);
-        if (e2 == LoadStepEnd::kStopped) {
-          result_.interrupted = true;
-          result_.message = FormatNumbers("static solve interrupted at load factor %.9g", s_);
-          return result_;
-        }
+        const LoadStepEnd landed = LandOnEnd(ds, last_cause);
+        if (landed == LoadStepEnd::kConverged) return Finish();
+        if (landed == LoadStepEnd::kStopped) return Interrupted();
         // Retry with a shorter arc: the crossing moves closer to the converged state.
         accepted = false;
       }
@@ -593,17 +544,17 @@ class ArcLengthPath {
         Accept(std::move(step), ds);
         const int desired = std::min(o.desired_iterations, o.max_iterations);
         dl *= std::clamp(std::sqrt(static_cast<double>(desired) / iterations), 0.5, 2.0);
-        dl = std::clamp(dl, dl_min, dl_max);
+        dl = std::clamp(dl, dl_min_, dl_max_);
         continue;
       }
       saved_.Restore(model, data);
       ++result_.halvings;
       dl *= 0.5;
-      if (dl < dl_min * (1.0 - 1e-12)) {
+      if (dl < dl_min_ * (1.0 - 1e-12)) {
         result_.message = FormatNumbers(
                               "arc-length continuation failed at load factor %.9g: the arc "
                               "length fell below its minimum %.3g: ",
-                              s_, dl_min) +
+                              s_, dl_min_) +
                           last_cause;
         return result_;
       }
@@ -611,6 +562,71 @@ class ArcLengthPath {
   }
 
  private:
+  // The first arc length, its limits and the spherical constraint's scale c2 from dx/ds at the
+  // start; false (with the message) when the path has no tangent or the metric sees no motion.
+  bool Start(double span) {
+    const Model& model = S_.model;
+    const StaticOptions& o = S_.options;
+    std::string cause;
+    S_.opt.load_factor = s_;
+    if (!S_.PathTangent(cause)) {
+      saved_.Restore(model, S_.data);
+      result_.message = "arc-length continuation cannot start at load factor " +
+                        FormatNumbers("%.9g: ", s_) + cause;
+      return false;
+    }
+    saved_.Restore(model, S_.data);
+    const double speed = std::sqrt(S_.Dot(S_.x_f, S_.x_f));
+    if (!(speed > 0.0) || !std::isfinite(speed)) {
+      result_.message =
+          "arc-length continuation: the load moves nothing the arc-length metric measures "
+          "(|dx/ds| = 0 in translations); set analysis.statics.rotation_weight, or use load "
+          "stepping";
+      return false;
+    }
+    c2_ = o.psi * o.psi * speed * speed;
+    dl0_ = o.arc_length > 0.0 ? o.arc_length : speed * std::abs(span) / o.load_steps;
+    dl_min_ = o.arc_length_min > 0.0 ? o.arc_length_min : dl0_ * std::ldexp(1.0, -o.max_halvings);
+    dl_max_ = o.arc_length_max > 0.0 ? o.arc_length_max : 10.0 * dl0_;
+    return true;
+  }
+
+  // The step of ds crossed the end load factor: Newton at exactly that load factor from the
+  // state interpolated between the two converged ones. Converged: accepted as the last step.
+  // Otherwise the converged state is restored.
+  LoadStepEnd LandOnEnd(double ds, std::string& cause) {
+    const Model& model = S_.model;
+    Data& data = S_.data;
+    const StaticOptions& o = S_.options;
+    lambda_new_ = data.lambda;
+    saved_.Restore(model, data);
+    const double t = (o.end_load_factor - s_) / ds;
+    delta_.head(model.nv) = t * dx_;
+    Retract(model, data, delta_.head(model.nv));
+    data.lambda = (1.0 - t) * data.lambda + t * lambda_new_;
+    StaticStep last;
+    last.load_factor = o.end_load_factor;
+    S_.opt.load_factor = o.end_load_factor;
+    const LoadStepEnd end = S_.IterateLoadStep(last, cause);
+    result_.total_iterations += last.iterations;
+    if (end == LoadStepEnd::kConverged) {
+      UpdateBranchReferences(model, data);
+      dx_ *= t;
+      Accept(std::move(last), o.end_load_factor - s_);
+      return end;
+    }
+    saved_.Restore(model, data);
+    return end;
+  }
+
+  // A stop request: the last converged state, the result marked interrupted.
+  StaticResult Interrupted() {
+    saved_.Restore(S_.model, S_.data);
+    result_.interrupted = true;
+    result_.message = FormatNumbers("static solve interrupted at load factor %.9g", s_);
+    return result_;
+  }
+
   // One arc-length step of length dl from the converged state: predictor and corrector
   // (method-next.md §N3.3). On convergence dx_ and *ds hold the step's increments.
   LoadStepEnd Step(double dl, StaticStep& step, double* ds, std::string& cause) {
@@ -710,6 +726,7 @@ class ArcLengthPath {
   StaticResult result_;
   Checkpoint saved_;
   double s_ = 0.0, direction_ = 1.0, c2_ = 0.0;
+  double dl0_ = 0.0, dl_min_ = 0.0, dl_max_ = 0.0;  // the first arc length and its limits
   Eigen::VectorXd dx_, prev_dx_, delta_, lambda_new_;
   double prev_ds_ = 0.0, prev_dl_ = 0.0;
   bool have_prev_ = false;
