@@ -5,11 +5,15 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "bind.h"
 #include "screwfem/build/model_builder.h"
+#include "screwfem/model/errors.h"
 
 namespace py = pybind11;
 
@@ -24,12 +28,114 @@ SE3 FrameFromMatrix(const Mat4& T) {
   return H;
 }
 
+// A section from a shape (Section::Circle, Rectangle, Tube) with the damping keys of the scene's
+// `sections:`, as a Python object whose attribute `radius` is the contact radius the shape
+// implies (docs/scene-format.md, "contact").
+py::object ShapedSection(Section s, double radius, const std::optional<Vec6>& damping,
+                         double rayleigh_mass, double rayleigh_stiffness) {
+  if (damping) s.damping = *damping;
+  s.rayleigh_mass = rayleigh_mass;
+  s.rayleigh_stiffness = rayleigh_stiffness;
+  py::object out = py::cast(std::move(s));
+  out.attr("radius") = radius;
+  return out;
+}
+
+double PositiveSize(double x, const char* what) {
+  if (!(x > 0.0) || !std::isfinite(x))
+    throw InputError(std::string("Section: ") + what + " must be a positive number, got " +
+                     std::to_string(x));
+  return x;
+}
+
 void BindValues(py::module_& m) {
-  py::class_<Section>(m, "Section",
+  py::class_<Material>(m, "Material",
+                       "A material for Section.circle, .rectangle and .tube (section.h; the "
+                       "scene's `materials:`). Give E and one of nu and G.")
+      .def(py::init([](double E, std::optional<double> nu, double density, std::optional<double> G,
+                       std::optional<double> shear_coefficient) {
+             Material mat;
+             if (!(E > 0.0) || !std::isfinite(E))
+               throw InputError("Material: E must be a positive number");
+             if (nu.has_value() == G.has_value())
+               throw InputError("Material: give either nu or G (one of them)");
+             if (G && (!(*G > 0.0) || !std::isfinite(*G)))
+               throw InputError("Material: G must be a positive number");
+             if (nu && !(*nu > -1.0 && *nu <= 0.5))
+               throw InputError("Material: nu must be a Poisson ratio in (-1, 0.5]");
+             if (!(density >= 0.0) || !std::isfinite(density))
+               throw InputError("Material: density must be a number >= 0");
+             if (shear_coefficient &&
+                 (!(*shear_coefficient > 0.0) || !std::isfinite(*shear_coefficient)))
+               throw InputError("Material: shear_coefficient must be a positive number");
+             mat.youngs_modulus = E;
+             if (nu) mat.poisson_ratio = *nu;
+             if (G) mat.shear_modulus = *G;
+             mat.density = density;
+             if (shear_coefficient) mat.shear_coefficient = *shear_coefficient;
+             return mat;
+           }),
+           py::arg("E"), py::arg("nu") = py::none(), py::arg("density") = 0.0,
+           py::arg("G") = py::none(), py::arg("shear_coefficient") = py::none(),
+           "Material(E, nu=None, density=0, G=None, shear_coefficient=None): Young's modulus E "
+           "[Pa] > 0; Poisson's ratio nu in (-1, 0.5] or shear modulus G [Pa] > 0; density "
+           "[kg/m^3] >= 0; shear correction kappa > 0 (default: Cowper's value for the shape).")
+      .def_readwrite("youngs_modulus", &Material::youngs_modulus, "E [Pa] (scene key E).")
+      .def_readwrite("shear_modulus", &Material::shear_modulus,
+                     "G [Pa] (scene key G); 0: from poisson_ratio.")
+      .def_readwrite("poisson_ratio", &Material::poisson_ratio, "nu (scene key nu).")
+      .def_readwrite("density", &Material::density, "rho [kg/m^3].")
+      .def_readwrite("shear_coefficient", &Material::shear_coefficient,
+                     "kappa; 0: Cowper's value for the shape.");
+
+  py::class_<Section>(m, "Section", py::dynamic_attr(),
                       "Rod cross-section (section.h): diagonals of the sectional stiffness K "
-                      "[N, N, N, N m^2, N m^2, N m^2] and mass M per length [kg/m x3, kg m x3].")
+                      "[N, N, N, N m^2, N m^2, N m^2] and mass M per length [kg/m x3, kg m x3]. "
+                      "Section(stiffness, inertia) is the scene's section by `stiffness` and "
+                      "`inertia`; Section.circle, .rectangle and .tube its sections by `shape` "
+                      "and `material`.")
       .def(py::init(&Section::FromDiagonals), py::arg("stiffness"),
            py::arg("inertia") = Vec6::Zero())
+      .def(py::init<>(), "Section(): zeros, to be filled (a rigid body's unused section).")
+      .def_static(
+          "circle",
+          [](double radius, const Material& material, const std::optional<Vec6>& damping,
+             double rayleigh_mass, double rayleigh_stiffness) {
+            return ShapedSection(Section::Circle(PositiveSize(radius, "radius"), material), radius,
+                                 damping, rayleigh_mass, rayleigh_stiffness);
+          },
+          py::arg("radius"), py::arg("material"), py::arg("damping") = py::none(),
+          py::arg("rayleigh_mass") = 0.0, py::arg("rayleigh_stiffness") = 0.0,
+          "A solid circle of radius [m] (scene: shape: circle). damping: 6 values per mode "
+          "[stiffness units x s]; rayleigh_mass a_M [1/s], rayleigh_stiffness a_K [s]. "
+          "`radius` of the result: the contact radius (the circle's).")
+      .def_static(
+          "rectangle",
+          [](double width, double height, const Material& material,
+             const std::optional<Vec6>& damping, double rayleigh_mass, double rayleigh_stiffness) {
+            return ShapedSection(Section::Rectangle(PositiveSize(width, "width"),
+                                                    PositiveSize(height, "height"), material),
+                                 0.5 * std::min(width, height), damping, rayleigh_mass,
+                                 rayleigh_stiffness);
+          },
+          py::arg("width"), py::arg("height"), py::arg("material"), py::arg("damping") = py::none(),
+          py::arg("rayleigh_mass") = 0.0, py::arg("rayleigh_stiffness") = 0.0,
+          "A solid rectangle, width [m] along section axis 2 (y), height [m] along axis 3 (z) "
+          "(scene: shape: rectangle); `radius`: half the smaller side.")
+      .def_static(
+          "tube",
+          [](double outer_radius, double inner_radius, const Material& material,
+             const std::optional<Vec6>& damping, double rayleigh_mass, double rayleigh_stiffness) {
+            if (!(inner_radius >= 0.0 && inner_radius < outer_radius))
+              throw InputError("Section: expected 0 <= inner_radius < outer_radius");
+            return ShapedSection(
+                Section::Tube(PositiveSize(outer_radius, "outer_radius"), inner_radius, material),
+                outer_radius, damping, rayleigh_mass, rayleigh_stiffness);
+          },
+          py::arg("outer_radius"), py::arg("inner_radius"), py::arg("material"),
+          py::arg("damping") = py::none(), py::arg("rayleigh_mass") = 0.0,
+          py::arg("rayleigh_stiffness") = 0.0,
+          "A circular tube [m] (scene: shape: tube); `radius`: the outer radius.")
       .def_readwrite("stiffness", &Section::stiffness)
       .def_readwrite("inertia", &Section::inertia)
       .def_readwrite("damping", &Section::damping, "Viscous damping on strain rates (per mode).")
@@ -42,6 +148,40 @@ void BindValues(py::module_& m) {
                   "0 before t0, linear to `scale` at t1.")
       .def_static("smooth_step", &Profile::SmoothStep, py::arg("t0"), py::arg("t1"),
                   py::arg("scale") = 1.0)
+      .def_static("bang_bang", &Profile::BangBang, py::arg("t0"), py::arg("t1"),
+                  py::arg("scale") = 1.0,
+                  "0 before t0, from 0 to `scale` on [t0, t1] with a bang-bang acceleration "
+                  "(the scene's bang_bang and s_curve), held after.")
+      .def_static("s_curve", &Profile::BangBang, py::arg("t0"), py::arg("t1"),
+                  py::arg("scale") = 1.0, "The same law as bang_bang (the scene's s_curve).")
+      .def_static("table", &Profile::Table, py::arg("times"), py::arg("values"),
+                  py::arg("scale") = 1.0,
+                  "Piecewise linear through (times[i], values[i]) times `scale`, held outside "
+                  "(times [s] strictly increasing).")
+      .def(
+          "__add__",
+          [](const Profile& a, const Profile& b) {
+            Profile sum = a;
+            sum.Add(b);
+            return sum;
+          },
+          py::is_operator(), "The sum of the terms (the scene's {sum: [...]}).")
+      .def(
+          "__add__",
+          [](const Profile& a, double b) {
+            Profile sum = a;
+            sum.Add(Profile::Constant(b));
+            return sum;
+          },
+          py::is_operator())
+      .def(
+          "__radd__",
+          [](const Profile& a, double b) {
+            Profile sum = Profile::Constant(b);
+            sum.Add(a);
+            return sum;
+          },
+          py::is_operator())
       .def_static("sine", &Profile::Sine, py::arg("amplitude"), py::arg("frequency"),
                   py::arg("phase") = 0.0, py::arg("t0") = 0.0, "frequency in Hz")
       .def_static("input", &Profile::Input, py::arg("input"), py::arg("scale") = 1.0,

@@ -11,6 +11,10 @@ world frame; node velocities in ``Simulation.v`` are body velocities [v; w] in t
 Invalid input raises ``InputError`` (a ValueError), numerical failure ``SolverError`` (a
 RuntimeError).
 
+``SceneSpec`` is the scene as data (python/screwfem/_spec.py): built in code with its adders
+(``add_soft_body``, ``add_joint``, ...) or read from a file with ``read_scene_spec``, then
+``compile()``d into a Scene; docs/python.md, "Building a scene in code".
+
 ``sweep`` runs many variants of a scene (a grid, a list or random samples of overrides) as Dask
 tasks and returns a pandas DataFrame (screwfem/_sweep.py); ``python3 -m screwfem sweep`` is its
 command line.
@@ -19,10 +23,17 @@ command line.
 from . import _screwfem
 from ._screwfem import *  # noqa: F401,F403  (the package re-exports the module)
 from ._screwfem import __version__
+from ._spec import (  # noqa: F401  (the scene spec: python/screwfem/_spec.py)
+    ActuatorSpec, BodyPointSpec, BodySpec, ContactSpec, ForceSpec, JointEntrySpec, LoadSpec,
+    OutputPointSpec, OutputsSpec, SceneSpec, TendonSpec, read_scene_spec, route_helical,
+    route_offset)
 from ._sweep import (  # noqa: F401  (sweeps: python/screwfem/_sweep.py)
     DEFAULT_METRICS, Counters, MaxConstraintResidual, PeakJointEffort, PointPosition, Run,
     WallTime, format_overrides, run_variant, sweep, variant_id, variants)
 
 __all__ = [name for name in dir(_screwfem) if not name.startswith("_")] + [
     "sweep", "variants", "format_overrides", "variant_id", "run_variant", "Run", "PointPosition",
-    "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort", "DEFAULT_METRICS"]
+    "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort", "DEFAULT_METRICS"] + [
+    "SceneSpec", "BodySpec", "JointEntrySpec", "LoadSpec", "BodyPointSpec", "TendonSpec",
+    "ForceSpec", "ActuatorSpec", "OutputPointSpec", "ContactSpec", "OutputsSpec",
+    "read_scene_spec", "route_offset", "route_helical"]

@@ -17,7 +17,10 @@ Scene ParseScene(const std::string& yaml_text, const std::string& source_name,
   return CompileScene(spec, sources);
 }
 
-Scene LoadScene(const std::string& path, const std::vector<std::string>& overrides) {
+namespace {
+
+// The text of a scene file, read with the size limit.
+std::string ReadSceneFile(const std::string& path) {
   if (path.find('\0') != std::string::npos)
     throw InputError("scene path '" + std::string(path.c_str()) +
                      "...': contains a NUL character (not a file name)");
@@ -37,7 +40,20 @@ Scene LoadScene(const std::string& path, const std::vector<std::string>& overrid
                        std::to_string(kMaxSceneBytes >> 20) + " MiB (the limit)");
   }
   if (in.bad()) throw InputError(path + ": cannot read the scene file");
-  return ParseScene(text, path, overrides);
+  return text;
+}
+
+}  // namespace
+
+SceneSpec LoadSceneSpec(const std::string& path, const std::vector<std::string>& overrides,
+                        SceneSources* sources) {
+  return ReadSceneSpec(ReadSceneFile(path), path, overrides, sources);
+}
+
+Scene LoadScene(const std::string& path, const std::vector<std::string>& overrides) {
+  SceneSources sources;
+  const SceneSpec spec = LoadSceneSpec(path, overrides, &sources);
+  return CompileScene(spec, sources);
 }
 
 }  // namespace screwfem

@@ -3,9 +3,12 @@
 // (ModelBuilder::FindNodeAt), checks that every body is connected, and maps every error,
 // including the builder's (InputError::entity()), to the place in the file that defined the
 // entity (SceneSources).
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "scene_yaml.h"
+#include "screwfem/elements/joint.h"
 #include "screwfem/io/scene_spec.h"
 #include "screwfem/model/errors.h"
 
@@ -30,6 +33,14 @@ const EntitySource& SourceOf(const std::vector<EntitySource>& sources, std::size
 const FieldSource& PartOf(const EntitySource& source, const std::string& part) {
   const FieldSource* field = source.Part(part);
   return field != nullptr ? *field : source.self;
+}
+
+// The default output interval: a whole number of steps, about (end - start) / count long (one
+// step at least; 0, every step, in statics).
+double DefaultOutputInterval(const AnalysisSettings& a, int count) {
+  if (a.kind == AnalysisKind::kStatic) return 0.0;
+  const double steps = (a.end_time - a.start_time) / a.step;
+  return a.step * std::max(1.0, std::round(steps / count));
 }
 
 // The values a point load and a rod load share.
@@ -407,11 +418,22 @@ void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
     }
     out->points.push_back(op);
   }
-  for (int j : o.joints) out->joints.push_back({model.joints[static_cast<std::size_t>(j)].name, j});
-  out->interval = o.interval;
+  // By default every joint with coordinates, in joint order.
+  std::vector<int> joints = o.joints;
+  if (o.all_joints) {
+    joints.clear();
+    for (std::size_t j = 0; j < spec_.joints.size(); ++j)
+      if (GetJointTypeInfo(spec_.joints[j].joint.type).dof > 0)
+        joints.push_back(static_cast<int>(j));
+  }
+  for (int j : joints) out->joints.push_back({model.joints[static_cast<std::size_t>(j)].name, j});
+  const AnalysisSettings& a = spec_.analysis;
+  out->interval = o.interval >= 0.0 ? o.interval : DefaultOutputInterval(a, kDefaultOutputRows);
   out->vtk = o.vtk;
   out->vtk_format = o.vtk_format;
-  out->vtk_interval = o.vtk_interval;
+  out->vtk_interval = o.vtk_interval >= 0.0 ? o.vtk_interval
+                      : o.interval >= 0.0   ? 0.0  // the same as the given interval
+                                            : DefaultOutputInterval(a, kDefaultVtkFrames);
 }
 
 void SceneCompiler::CheckReferences() const {
@@ -422,6 +444,9 @@ void SceneCompiler::CheckReferences() const {
   };
   for (std::size_t i = 0; i < spec_.bodies.size(); ++i) {
     const BodySpec& b = spec_.bodies[i];
+    if (!b.rigid && b.path.size() < 2)
+      Fail(BodySource(static_cast<int>(i)).self,
+           "soft body '" + b.name + "': a path needs at least two points");
     check(b.weld_start, true, BodySource(static_cast<int>(i)), "weld_start");
     check(b.weld_end, true, BodySource(static_cast<int>(i)), "weld_end");
     if (b.weld_start >= static_cast<int>(i) || b.weld_end >= static_cast<int>(i) ||
@@ -458,9 +483,15 @@ void SceneCompiler::CheckReferences() const {
     check(spec_.forces[i].a.body, true, SourceOf(src_.forces, i), "end a");
     check(spec_.forces[i].b.body, true, SourceOf(src_.forces, i), "end b");
   }
-  for (int j : spec_.outputs.joints)
-    if (j < 0 || j >= static_cast<int>(spec_.joints.size()))
-      Fail(src_.root, "outputs: no joint " + std::to_string(j));
+  if (!spec_.outputs.all_joints)
+    for (int j : spec_.outputs.joints) {
+      if (j < 0 || j >= static_cast<int>(spec_.joints.size()))
+        Fail(src_.root, "outputs: no joint " + std::to_string(j));
+      const JointSpec& joint = spec_.joints[static_cast<std::size_t>(j)].joint;
+      if (GetJointTypeInfo(joint.type).dof == 0)
+        Fail(SourceOf(src_.joints, static_cast<std::size_t>(j)).self,
+             "outputs: joint '" + joint.name + "' is fixed: it has no coordinates to record");
+    }
 }
 
 // The contact: section, the rods' capsule chains and the rigid bodies' shapes (in body order).
@@ -514,6 +545,11 @@ Scene SceneCompiler::Compile() {
   AddContacts();
   CheckConnections();
   scene.analysis = spec_.analysis;
+  // Statics evaluates the profiles at the end time (static analyses) or at the start time
+  // (the preload of a dynamic analysis).
+  scene.analysis.statics.time = spec_.analysis.kind == AnalysisKind::kStatic
+                                    ? spec_.analysis.end_time
+                                    : spec_.analysis.start_time;
   try {
     scene.model = builder_.Build();
   } catch (const InputError& e) {
@@ -528,6 +564,67 @@ Scene SceneCompiler::Compile() {
 
 Scene CompileScene(const SceneSpec& spec, const SceneSources& sources) {
   return SceneCompiler(spec, sources).Compile();
+}
+
+namespace {
+
+// "collection.name", or "collection[i]" for an entity without a name.
+std::string EntityField(const char* collection, const std::string& name, std::size_t i) {
+  return name.empty() ? std::string(collection) + "[" + std::to_string(i) + "]"
+                      : std::string(collection) + "." + name;
+}
+
+// An entity's source and its parts (part name, the key under the entity's field).
+template <typename T, typename Name>
+std::vector<EntitySource> NamedEntities(
+    const std::vector<T>& items, const char* collection, Name name,
+    const std::vector<std::pair<std::string, std::string>>& parts) {
+  std::vector<EntitySource> out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    EntitySource e;
+    e.self.field = EntityField(collection, name(items[i]), i);
+    for (const auto& [part, key] : parts)
+      e.parts.emplace_back(part, FieldSource{{}, e.self.field + "." + key});
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+}  // namespace
+
+SceneSources NamedSources(const SceneSpec& spec, const std::string& source_name) {
+  SceneSources s;
+  s.file = source_name;
+  const auto named = [](const auto& x) { return x.name; };
+  s.bodies = NamedEntities(spec.bodies, "bodies", named,
+                           {{"start_node", "weld_start"}, {"end_node", "weld_end"}});
+  for (std::size_t b = 0; b < spec.bodies.size(); ++b)
+    for (std::size_t k = 0; k < spec.bodies[b].path.size(); ++k) {
+      const std::string part = "path[" + std::to_string(k) + "]";
+      s.bodies[b].parts.emplace_back(part, FieldSource{{}, s.bodies[b].self.field + "." + part});
+    }
+  s.joints =
+      NamedEntities(spec.joints, "joints", [](const JointEntrySpec& j) { return j.joint.name; },
+                    {{"node_a", "between[0]"}, {"node_b", "between[1]"}});
+  s.loads = NamedEntities(spec.loads, "loads", named, {{"at", "at"}, {"s", "s"}});
+  s.output_points =
+      NamedEntities(spec.outputs.points, "outputs.points", named, {{"at", "at"}, {"s", "s"}});
+  s.tendons =
+      NamedEntities(spec.tendons, "tendons", named, {{"tension", "tension"}, {"length", "length"}});
+  for (std::size_t t = 0; t < spec.tendons.size(); ++t)
+    for (std::size_t k = 0; k < spec.tendons[t].eyelets.size(); ++k) {
+      const std::string part = "eyelets[" + std::to_string(k) + "]";
+      s.tendons[t].parts.emplace_back(part, FieldSource{{}, s.tendons[t].self.field + "." + part});
+    }
+  s.forces = NamedEntities(spec.forces, "forces", named, {{"a", "a"}, {"b", "b"}});
+  s.actuators = NamedEntities(
+      spec.actuators, "actuation", named,
+      {{"rod", "rod"}, {"from", "from"}, {"to", "to"}, {"area", "area"}, {"offset", "offset"}});
+  return s;
+}
+
+Scene CompileScene(const SceneSpec& spec, const std::string& source_name) {
+  return CompileScene(spec, NamedSources(spec, source_name));
 }
 
 }  // namespace screwfem

@@ -778,6 +778,7 @@ void SceneReader::ReadLoads(const Node* node) {
     const std::string path = Join("loads", entry.key);
     src_.loads.push_back({Field(entry.key_location, path), {}});
     spec_.loads.emplace_back();
+    spec_.loads.back().name = entry.key;
     ReadLoad(value, path, spec_.loads.back(), src_.loads.back());
   }
 }
@@ -1132,7 +1133,6 @@ void SceneReader::ReadContact(const Node* node) {
 
 void SceneReader::ReadAnalysis(const Node* node) {
   AnalysisSettings* a = &spec_.analysis;
-  a->statics.time = a->start_time;
   if (node == nullptr || node->IsNull()) return;
   const std::string path = "analysis";
   r_.CheckKeys(*node, path,
@@ -1175,9 +1175,7 @@ void SceneReader::ReadAnalysis(const Node* node) {
     a->static_preload = r_.Bool(*t, Join(path, "static_preload"));
   if (const Node* t = node->Find("rod_inertia"))
     spec_.rod_inertia = r_.Enum<RodInertia>(*t, Join(path, "rod_inertia"));
-  // Statics evaluates the profiles at the end time (static analyses) or at the start time
-  // (the preload of a dynamic analysis).
-  a->statics.time = a->kind == AnalysisKind::kStatic ? a->end_time : a->start_time;
+  // analysis.statics.time follows from the kind; the compiler sets it (SceneSpec::analysis).
 }
 
 // start_time, end_time, step: a time grid that a dynamic analysis can step through.
@@ -1323,21 +1321,10 @@ void SceneReader::ReadStatics(const Node& node, const std::string& path) {
     o->constraint_force_tangent = r_.Bool(*t, field("exact_tangent"));
 }
 
-// A whole number of steps, about (end - start) / count long (one step at least).
-double DefaultOutputInterval(const AnalysisSettings& a, int count) {
-  if (a.kind == AnalysisKind::kStatic) return 0.0;
-  const double steps = (a.end_time - a.start_time) / a.step;
-  return a.step * std::max(1.0, std::round(steps / count));
-}
-
+// The defaults (every joint with coordinates, the intervals of about kDefaultOutputRows rows
+// and kDefaultVtkFrames frames) are OutputsSpec's, resolved by the compiler.
 void SceneReader::ReadOutputs(const Node* node) {
   OutputsSpec* out = &spec_.outputs;
-  out->interval = DefaultOutputInterval(spec_.analysis, kDefaultOutputRows);
-  out->vtk_interval = DefaultOutputInterval(spec_.analysis, kDefaultVtkFrames);
-  // By default, every joint with coordinates.
-  for (std::size_t j = 0; j < spec_.joints.size(); ++j)
-    if (GetJointTypeInfo(spec_.joints[j].joint.type).dof > 0)
-      out->joints.push_back(static_cast<int>(j));
   if (node == nullptr || node->IsNull()) return;
   const std::string path = "outputs";
   r_.CheckKeys(*node, path, {"points", "joints", "interval", "vtk", "vtk_format", "vtk_interval"});
@@ -1360,8 +1347,6 @@ void SceneReader::ReadOutputs(const Node* node) {
     out->vtk_format = r_.Enum<VtkFormat>(*v, Join(path, "vtk_format"));
   if (const Node* v = node->Find("vtk_interval"))
     out->vtk_interval = r_.NonNegativeNumber(*v, Join(path, "vtk_interval"));
-  else if (node->Find("interval") != nullptr)
-    out->vtk_interval = 0.0;  // the same as the given interval
 }
 
 void SceneReader::ReadOutputPoint(const Node& value, const std::string& p, OutputPointSpec& op,
@@ -1396,14 +1381,15 @@ void SceneReader::ReadOutputPoint(const Node& value, const std::string& p, Outpu
 // 'all', 'none' or a list of joint names (with coordinates, each once).
 void SceneReader::ReadOutputJoints(const Node& jn, const std::string& jp) {
   std::vector<int>& out = spec_.outputs.joints;
+  out.clear();
   if (jn.IsScalar() && (jn.scalar == "all" || jn.scalar == "none")) {
-    if (jn.scalar == "none") out.clear();
+    spec_.outputs.all_joints = jn.scalar == "all";
     return;
   }
   if (!jn.IsSequence())
     r_.Fail(jn.location, jp,
             "expected 'all', 'none' or a list of joint names, got " + scene_yaml::Describe(jn));
-  out.clear();
+  spec_.outputs.all_joints = false;
   std::vector<std::string> names;
   for (const JointEntrySpec& j : spec_.joints) names.push_back(j.joint.name);
   for (std::size_t i = 0; i < jn.items.size(); ++i) {

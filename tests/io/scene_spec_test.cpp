@@ -121,6 +121,124 @@ TEST_F(SceneSpecTest, SpecMadeInCodeWithoutSourcesNamesTheFile) {
   EXPECT_EQ(CompileError(spec_, none), "code: load: no body 5");
 }
 
+// The spec of kScene written in code, as a C++ program (or screwfem.SceneSpec) builds it.
+SceneSpec CodeSpec() {
+  SceneSpec spec;
+  spec.name = "spec";  // ReadSceneSpec's default: the file name without its extension
+  const Section s = Section::FromDiagonals(Vec6::Constant(1.0), Vec6::Constant(1.0));
+  BodySpec arm;
+  arm.name = "arm";
+  arm.origin = Vec3(0, 0, 0);
+  arm.com = Vec3(0.5, 0, 0);
+  arm.mass = 1.0;
+  arm.inertia = Mat3::Identity();
+  BodySpec rod;
+  rod.name = "rod";
+  rod.rigid = false;
+  rod.path = {Vec3(1, 0, 0), Vec3(2, 0, 0), Vec3(2, 1, 0)};
+  rod.elements = 2;
+  rod.section = s;
+  spec.bodies = {arm, rod};
+  JointEntrySpec pin;
+  pin.body_b = 0;
+  pin.joint.name = "pin";
+  pin.joint.type = JointType::kRevolute;
+  JointEntrySpec weld;
+  weld.body_a = 0;
+  weld.body_b = 1;
+  weld.joint.name = "weld";
+  weld.joint.type = JointType::kFixed;
+  weld.joint.point = Vec3(1, 0, 0);
+  spec.joints = {pin, weld};
+  LoadSpec push;
+  push.name = "push";
+  push.body = 0;
+  push.at = Vec3(1, 0, 0);
+  push.force = Vec3(0, 1, 0);
+  LoadSpec tip;
+  tip.name = "tip";
+  tip.body = 1;
+  tip.where = LoadSpec::Where::kArcLength;
+  tip.arc_length = 2.0;
+  tip.force = Vec3(0, 0, 1);
+  spec.loads = {push, tip};
+  spec.points = {{"A", Vec3(0, 0, 0)}, {"B", Vec3(1, 0, 0)}, {"C", Vec3(2, 0, 0)}};
+  return spec;
+}
+
+TEST_F(SceneSpecTest, SpecBuiltInCodeCompilesAsTheFile) {
+  const Scene file = CompileScene(spec_, sources_);
+  const Scene code = CompileScene(CodeSpec(), "code");
+  EXPECT_EQ(code.source, "code");
+  EXPECT_EQ(code.name, file.name);
+  ASSERT_EQ(code.model.nodes.size(), file.model.nodes.size());
+  for (std::size_t n = 0; n < code.model.nodes.size(); ++n) {
+    EXPECT_EQ(code.model.nodes[n].reference.R, file.model.nodes[n].reference.R) << n;
+    EXPECT_EQ(code.model.nodes[n].reference.x, file.model.nodes[n].reference.x) << n;
+  }
+  ASSERT_EQ(code.model.joints.size(), 2u);
+  EXPECT_EQ(code.model.joints[1].node_b, file.model.joints[1].node_b);
+  EXPECT_EQ(code.model.rod_loads.size(), 1u);
+  // The defaults a scene file leaves out are resolved by the compiler in both: every joint
+  // with coordinates, about 1000 rows and 100 frames, statics at the start time.
+  ASSERT_EQ(code.outputs.joints.size(), 1u);
+  EXPECT_EQ(code.outputs.joints[0].name, "pin");
+  EXPECT_EQ(code.outputs.interval, file.outputs.interval);
+  EXPECT_EQ(code.outputs.interval, 1e-3);
+  EXPECT_EQ(code.outputs.vtk_interval, 1e-2);
+  EXPECT_EQ(code.named_points, file.named_points);
+}
+
+TEST_F(SceneSpecTest, EditedSpecResolvesItsDefaultsAsAnOverrideDoes) {
+  spec_.analysis.end_time = 20.0;
+  spec_.analysis.kind = AnalysisKind::kStatic;
+  JointEntrySpec slide;
+  slide.body_a = 1;
+  slide.joint.name = "slide";
+  slide.joint.type = JointType::kPrismatic;
+  slide.joint.point = Vec3(2, 1, 0);
+  slide.joint.axis = Vec3::UnitX();
+  spec_.joints.push_back(slide);
+  const Scene edited = CompileScene(spec_, "edited");
+  const Scene overridden = ParseScene(
+      kScene, "spec.yaml",
+      {"analysis.end_time=20", "analysis.type=static",
+       "joints.slide={type: prismatic, at: [2, 1, 0], between: [rod, ground], axis: [1, 0, 0]}"});
+  EXPECT_EQ(edited.analysis.statics.time, 20.0);
+  EXPECT_EQ(edited.analysis.statics.time, overridden.analysis.statics.time);
+  EXPECT_EQ(edited.outputs.interval, overridden.outputs.interval);
+  ASSERT_EQ(edited.outputs.joints.size(), 2u);  // the joint added after reading is recorded
+  EXPECT_EQ(edited.outputs.joints[1].name, "slide");
+  EXPECT_EQ(overridden.outputs.joints.size(), 2u);
+}
+
+TEST_F(SceneSpecTest, ErrorsOfASpecBuiltInCodeNameItsEntitiesAndFields) {
+  SceneSpec spec = CodeSpec();
+  spec.joints[1].joint.point = Vec3(1.5, 0.1, 0);  // no node of the rod there
+  std::string e = CompileError(spec, NamedSources(spec, "code"));
+  EXPECT_EQ(e.rfind("code: joints.weld.between[1]: joint point: soft body 'rod' has no node", 0),
+            0u)
+      << e;
+  spec = CodeSpec();
+  spec.bodies[0].mass = -1.0;
+  e = CompileError(spec, NamedSources(spec, "code"));
+  EXPECT_EQ(e, "code: bodies.arm: body 'arm': mass must be positive") << e;
+  spec = CodeSpec();
+  spec.loads[1].arc_length = 9.0;
+  e = CompileError(spec, NamedSources(spec, "code"));
+  EXPECT_EQ(e.rfind("code: loads.tip.s: arc length beyond the end of the rod", 0), 0u) << e;
+  spec = CodeSpec();
+  spec.bodies[1].path.resize(1);
+  e = CompileError(spec, NamedSources(spec, "code"));
+  EXPECT_EQ(e, "code: bodies.rod: soft body 'rod': a path needs at least two points") << e;
+  spec = CodeSpec();
+  spec.outputs.all_joints = false;
+  spec.outputs.joints = {1};
+  e = CompileError(spec, NamedSources(spec, "code"));
+  EXPECT_EQ(e, "code: joints.weld: outputs: joint 'weld' is fixed: it has no coordinates to record")
+      << e;
+}
+
 // A build error that a scene file can reach: elements shorter than the builder's length
 // tolerance on a short segment.
 TEST(SceneBuildErrors, ZeroLengthElementPointsAtTheSoftBody) {

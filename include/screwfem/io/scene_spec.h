@@ -60,6 +60,7 @@ struct JointEntrySpec {
 // along a soft body (per unit length).
 struct LoadSpec {
   enum class Where { kAt, kArcLength, kDistributed };
+  std::string name;  // the scene's key (messages only: the model's loads have no names)
   int body = -1;
   Where where = Where::kAt;
   Vec3 at = Vec3::Zero();   // [m], world (kAt)
@@ -137,13 +138,21 @@ struct ContactSpec {
   std::vector<std::pair<int, int>> exclude_bodies;  // (body index, body index): moving pairs
 };
 
+// What to record. The defaults depend on the rest of the spec and are resolved by the
+// compiler, so that a spec edited after reading (a longer end_time, another joint) records as
+// the same scene file would: negative intervals are the scene's defaults (OutputSpec,
+// kDefaultOutputRows), and all_joints records every joint with coordinates.
 struct OutputsSpec {
   std::vector<OutputPointSpec> points;
-  std::vector<int> joints;  // joint indices, in the order recorded
-  double interval = 0.0;    // [s]; see OutputSpec
+  bool all_joints = true;   // the scene's `joints: all` (the default); else `joints`
+  std::vector<int> joints;  // joint indices, in the order recorded (when !all_joints)
+  // [s]; 0: every step; negative: about kDefaultOutputRows rows over the run.
+  double interval = -1.0;
   bool vtk = true;
   VtkFormat vtk_format = VtkFormat::kBinary;
-  double vtk_interval = 0.0;  // [s]
+  // [s]; 0: the same as interval; negative: `interval` when that is given (>= 0), else about
+  // kDefaultVtkFrames frames over the run.
+  double vtk_interval = -1.0;
 };
 
 struct SceneSpec {
@@ -159,6 +168,8 @@ struct SceneSpec {
   std::vector<ForceSpec> forces;
   std::vector<ActuatorSpec> actuators;  // the `actuation:` section
   ContactSpec contact;
+  // The compiler sets analysis.statics.time from the kind: end_time for static analyses,
+  // start_time (the preload) for dynamic ones (docs/scene-format.md, "analysis").
   AnalysisSettings analysis;
   OutputsSpec outputs;
 };
@@ -203,9 +214,24 @@ struct SceneSources {
 SceneSpec ReadSceneSpec(const std::string& yaml_text, const std::string& source_name,
                         const std::vector<std::string>& overrides, SceneSources* sources);
 
+// ReadSceneSpec of a scene file (read as LoadScene reads it, with its size limit); messages
+// name `path`.
+SceneSpec LoadSceneSpec(const std::string& path, const std::vector<std::string>& overrides,
+                        SceneSources* sources);
+
 // Compiles a spec into a Scene through ModelBuilder: finds the nodes of joints, welds, loads
 // and output points, checks that every body is connected, builds the Model. Errors, including
 // the builder's (InputError::entity()), name the entity's place in `sources`.
 Scene CompileScene(const SceneSpec& spec, const SceneSources& sources);
+
+// Sources for a spec made in code (or edited after reading): no locations, and as fields the
+// places a scene file would give, from the entities' names ("bodies.arm", parts
+// "bodies.arm.path[1]", "joints.J1.between[0]", "tendons.t.eyelets[2]", ...; "loads[3]" for an
+// entity without a name). Messages then read "SOURCE_NAME: FIELD: what".
+SceneSources NamedSources(const SceneSpec& spec, const std::string& source_name);
+
+// CompileScene(spec, NamedSources(spec, source_name)): the construction API for specs built
+// in code, in C++ as in Python (screwfem.SceneSpec.compile).
+Scene CompileScene(const SceneSpec& spec, const std::string& source_name);
 
 }  // namespace screwfem
