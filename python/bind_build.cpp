@@ -136,18 +136,23 @@ void BindValues(py::module_& m) {
           py::arg("damping") = py::none(), py::arg("rayleigh_mass") = 0.0,
           py::arg("rayleigh_stiffness") = 0.0,
           "A circular tube [m] (scene: shape: tube); `radius`: the outer radius.")
-      .def_readwrite("stiffness", &Section::stiffness)
-      .def_readwrite("inertia", &Section::inertia)
+      .def_readwrite("stiffness", &Section::stiffness,
+                     "Diagonal stiffness (EA, GA2, GA3, GJ, EI2, EI3) [N, N, N, N m^2, N m^2, N "
+                     "m^2] (a copy; assign a whole vector).")
+      .def_readwrite("inertia", &Section::inertia,
+                     "Diagonal inertia per length (rhoA, rhoA, rhoA, rhoJ, rhoI2, rhoI3) [kg/m, kg "
+                     "m] (a copy; assign a whole vector).")
       .def_readwrite("damping", &Section::damping, "Viscous damping on strain rates (per mode).")
       .def_readwrite("rayleigh_mass", &Section::rayleigh_mass, "a_M [1/s].")
       .def_readwrite("rayleigh_stiffness", &Section::rayleigh_stiffness, "a_K [s].");
 
   py::class_<Profile>(m, "Profile", "A time profile f(t) (profile.h).")
-      .def_static("constant", &Profile::Constant, py::arg("value") = 1.0)
+      .def_static("constant", &Profile::Constant, py::arg("value") = 1.0, "f(t) = value.")
       .def_static("ramp", &Profile::Ramp, py::arg("t0"), py::arg("t1"), py::arg("scale") = 1.0,
                   "0 before t0, linear to `scale` at t1.")
-      .def_static("smooth_step", &Profile::SmoothStep, py::arg("t0"), py::arg("t1"),
-                  py::arg("scale") = 1.0)
+      .def_static(
+          "smooth_step", &Profile::SmoothStep, py::arg("t0"), py::arg("t1"), py::arg("scale") = 1.0,
+          "0 before t0, `scale` after t1, the quintic C2 step 10u^3 - 15u^4 + 6u^5 between.")
       .def_static("bang_bang", &Profile::BangBang, py::arg("t0"), py::arg("t1"),
                   py::arg("scale") = 1.0,
                   "0 before t0, from 0 to `scale` on [t0, t1] with a bang-bang acceleration "
@@ -194,24 +199,35 @@ void BindValues(py::module_& m) {
                         "(node indices or GROUND = -1), world point [m] and axes, springs, "
                         "dampers, rest values and a drive.")
       .def(py::init<>())
-      .def_readwrite("name", &JointSpec::name)
-      .def_readwrite("type", &JointSpec::type)
-      .def_readwrite("node_a", &JointSpec::node_a)
-      .def_readwrite("node_b", &JointSpec::node_b)
-      .def_readwrite("point", &JointSpec::point)
-      .def_readwrite("axis", &JointSpec::axis)
-      .def_readwrite("axis2", &JointSpec::axis2)
-      .def_readwrite("pitch", &JointSpec::pitch)
-      .def_readwrite("stiffness", &JointSpec::stiffness)
-      .def_readwrite("damping", &JointSpec::damping)
-      .def_readwrite("rest", &JointSpec::rest)
-      .def_readwrite("drive", &JointSpec::drive)
-      .def_readwrite("drive_coordinate", &JointSpec::drive_coordinate)
-      .def_readwrite("drive_profile", &JointSpec::drive_profile)
-      .def_readwrite("has_initial_coordinate", &JointSpec::has_initial_coordinate)
+      .def_readwrite("name", &JointSpec::name, "Unique name.")
+      .def_readwrite("type", &JointSpec::type, "JointType: the Lie subgroup of the relative frame.")
+      .def_readwrite("node_a", &JointSpec::node_a, "Node of side A, or -1 for the ground.")
+      .def_readwrite("node_b", &JointSpec::node_b, "Node of side B, or -1 for the ground.")
+      .def_readwrite("point", &JointSpec::point,
+                     "The joint's point [m], world, in the reference configuration.")
+      .def_readwrite("axis", &JointSpec::axis,
+                     "The joint's axis (revolute, prismatic, helical, cylindrical; universal: the "
+                     "first) [-], world, normalised by the builder.")
+      .def_readwrite("axis2", &JointSpec::axis2, "Universal joints: the second axis [-], world.")
+      .def_readwrite("pitch", &JointSpec::pitch, "Helical joints: translation per radian [m/rad].")
+      .def_readwrite(
+          "stiffness", &JointSpec::stiffness,
+          "Spring stiffness per coordinate (JointSpringCount entries used) [N/m or N m/rad].")
+      .def_readwrite("damping", &JointSpec::damping, "Damping per coordinate [N s/m or N m s/rad].")
+      .def_readwrite("rest", &JointSpec::rest, "Spring rest value per coordinate [m or rad].")
+      .def_readwrite("drive", &JointSpec::drive,
+                     "DriveKind: NONE, PRESCRIBED (a constraint row), SERIES_ELASTIC, ...")
+      .def_readwrite("drive_coordinate", &JointSpec::drive_coordinate,
+                     "The driven coordinate (0 .. dof - 1).")
+      .def_readwrite("drive_profile", &JointSpec::drive_profile,
+                     "Profile of the drive: the coordinate q(t) [m or rad] (prescribed, "
+                     "series-elastic) or the force or torque f(t) [N or N m].")
+      .def_readwrite("has_initial_coordinate", &JointSpec::has_initial_coordinate,
+                     "True: the joint starts at its initial coordinates (not the reference).")
       .def_readwrite("initial_coordinate", &JointSpec::initial_coordinate,
                      "Initial coordinates (first k entries), used when has_initial_coordinate.")
-      .def_readwrite("has_initial_rate", &JointSpec::has_initial_rate)
+      .def_readwrite("has_initial_rate", &JointSpec::has_initial_rate,
+                     "True: the joint starts with its initial rates.")
       .def_readwrite("initial_rate", &JointSpec::initial_rate,
                      "Initial rates (first k entries), used when has_initial_rate.");
 
@@ -222,8 +238,11 @@ void BindValues(py::module_& m) {
              return BodyPoint{node, offset};
            }),
            py::arg("node"), py::arg("offset") = Vec3::Zero())
-      .def_readwrite("node", &BodyPoint::node)
-      .def_readwrite("offset", &BodyPoint::offset)
+      .def_readwrite(
+          "node", &BodyPoint::node,
+          "The node the point is fixed to, or -1 (the ground: offset is then a world point).")
+      .def_readwrite("offset", &BodyPoint::offset,
+                     "Node-frame components of the point [m] (world coordinates for the ground).")
       .def_static(
           "on_rod",
           [](int rod, double arc_length, const Vec3& offset) {
@@ -248,9 +267,9 @@ void BindValues(py::module_& m) {
                            "k (l - rest_length) + c dl/dt + actuator(t) [N], positive pulling "
                            "the ends together; rest_length < 0 means the reference distance.")
       .def(py::init<>())
-      .def_readwrite("name", &ForceElement::name)
-      .def_readwrite("a", &ForceElement::a)
-      .def_readwrite("b", &ForceElement::b)
+      .def_readwrite("name", &ForceElement::name, "Unique name (the scene's forces: key).")
+      .def_readwrite("a", &ForceElement::a, "BodyPoint of end A.")
+      .def_readwrite("b", &ForceElement::b, "BodyPoint of end B.")
       .def_readwrite("stiffness", &ForceElement::stiffness, "[N/m]")
       .def_readwrite("rest_length", &ForceElement::rest_length, "[m]")
       .def_readwrite("damping", &ForceElement::damping, "[N s/m]")
@@ -264,8 +283,9 @@ void BindValues(py::module_& m) {
                        "eps0 = v vector; ACTIVE_STRESS: sigma_a = v vector; the value from "
                        "`profile`.")
       .def(py::init<>())
-      .def_readwrite("name", &Actuator::name)
-      .def_readwrite("type", &Actuator::type)
+      .def_readwrite("name", &Actuator::name, "Unique name (the scene's actuation: key).")
+      .def_readwrite("type", &Actuator::type,
+                     "ActuatorType: PRESSURE, MUSCLE, REST_STRAIN or ACTIVE_STRESS.")
       .def_readwrite("rod", &Actuator::rod, "Rod index.")
       .def_readwrite("from_", &Actuator::from, "Start of the range, arc length [m] (at a node).")
       .def_readwrite("to", &Actuator::to, "End of the range [m] (at a node); < 0: the rod's end.")
@@ -287,24 +307,35 @@ void BindValues(py::module_& m) {
            }),
            py::arg("body"), py::arg("type"), py::arg("from_"), py::arg("to") = Vec3::Zero(),
            py::arg("radius") = 0.0)
-      .def_readwrite("body", &ContactShape::body)
-      .def_readwrite("type", &ContactShape::type)
-      .def_readwrite("from_", &ContactShape::from)
-      .def_readwrite("to", &ContactShape::to)
-      .def_readwrite("radius", &ContactShape::radius);
+      .def_readwrite("body", &ContactShape::body,
+                     "The rigid body the shape moves with (index into Model.bodies).")
+      .def_readwrite("type", &ContactShape::type, "ContactShapeType: SPHERE, CAPSULE or BOX.")
+      .def_readwrite("from_", &ContactShape::from,
+                     "Sphere and box: the centre; capsule: one end of the axis [m] (world, "
+                     "reference configuration).")
+      .def_readwrite(
+          "to", &ContactShape::to,
+          "Capsule: the other end of the axis [m]; box: the half sizes along the body axes (> 0).")
+      .def_readwrite("radius", &ContactShape::radius,
+                     "Sphere and capsule: the radius [m] (> 0); box: 0.");
 
   py::class_<ContactObstacle>(m, "ContactObstacle",
                               "An obstacle fixed in the world (model.h): plane (point, normal), "
                               "sphere (point = centre, radius), capsule (point, to, radius).")
       .def(py::init<>())
-      .def_readwrite("name", &ContactObstacle::name)
-      .def_readwrite("type", &ContactObstacle::type)
+      .def_readwrite("name", &ContactObstacle::name,
+                     "Unique name (the scene's contact.obstacles key).")
+      .def_readwrite("type", &ContactObstacle::type,
+                     "ObstacleType: PLANE, SPHERE or CAPSULE, fixed in the world.")
       .def_readwrite("point", &ContactObstacle::point, "[m]")
       .def_readwrite("normal", &ContactObstacle::normal, "Plane: out of the obstacle.")
       .def_readwrite("to", &ContactObstacle::to, "[m]")
       .def_readwrite("radius", &ContactObstacle::radius, "[m]")
-      .def_readwrite("contype", &ContactObstacle::contype)
-      .def_readwrite("conaffinity", &ContactObstacle::conaffinity);
+      .def_readwrite("contype", &ContactObstacle::contype,
+                     "Contact group bitmask: a pair touches when contype & conaffinity of the "
+                     "other is non-zero (either way).")
+      .def_readwrite("conaffinity", &ContactObstacle::conaffinity,
+                     "Contact affinity bitmask (see contype).");
 
   py::class_<ContactSettings>(m, "ContactSettings",
                               "The contact law (method-next.md §N6.3); negative values are the "
@@ -312,7 +343,8 @@ void BindValues(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("stiffness", &ContactSettings::stiffness, "k_n [N/m]")
       .def_readwrite("onset", &ContactSettings::onset, "delta [m]")
-      .def_readwrite("damping_ratio", &ContactSettings::damping_ratio)
+      .def_readwrite("damping_ratio", &ContactSettings::damping_ratio,
+                     "zeta [-]: the normal damping c_n = 2 zeta sqrt(k_n m_eff).")
       .def_readwrite("friction", &ContactSettings::friction, "mu")
       .def_readwrite("slip_velocity", &ContactSettings::slip_velocity, "eps_v [m/s]")
       .def_readwrite("self", &ContactSettings::self, "Rod self-contact.")
@@ -342,10 +374,14 @@ void BindBuild(py::module_& m) {
           },
           py::arg("frame"), py::arg("name") = std::string{},
           "A node with the 4x4 reference frame [R x; 0 1]; returns its index.")
-      .def("fix_node", &B::FixNode, py::arg("node"))
+      .def("fix_node", &B::FixNode, py::arg("node"),
+           "Clamps a node to the world (the node is eliminated from the unknowns).")
       .def("add_straight_rod", &B::AddStraightRod, py::arg("name"), py::arg("p0"), py::arg("p1"),
            py::arg("num_elements"), py::arg("section"), py::arg("up") = Vec3::UnitZ(),
-           py::arg("start_node") = -1, py::arg("end_node") = -1)
+           py::arg("start_node") = -1, py::arg("end_node") = -1,
+           "A rod of num_elements helical elements from p0 to p1 [m], its section frame x along "
+           "the rod and z towards `up`; start_node / end_node >= 0 share an existing node at that "
+           "end. Returns the rod index.")
       .def("add_rod_along_path", &B::AddRodAlongPath, py::arg("name"), py::arg("path"),
            py::arg("elements_per_segment"), py::arg("section"), py::arg("up") = Vec3::UnitZ(),
            py::arg("start_node") = -1, py::arg("end_node") = -1,
@@ -394,7 +430,8 @@ void BindBuild(py::module_& m) {
       .def("exclude_contact_pair", &B::ExcludeContactPair, py::arg("rod_a"), py::arg("index_a"),
            py::arg("rod_b"), py::arg("index_b"),
            "No contact between two moving entities (each a rod or a rigid body, by index).")
-      .def("set_contact_settings", &B::SetContactSettings, py::arg("settings"))
+      .def("set_contact_settings", &B::SetContactSettings, py::arg("settings"),
+           "The contact law's settings (ContactSettings) for every pair.")
       .def("build", &B::Build, "The validated Model.");
 }
 

@@ -51,7 +51,8 @@ void BindModel(py::module_& m) {
         "Name of a joint type as written in scene files, e.g. 'revolute'.");
 
   py::class_<Node>(m, "Node", "A node: a frame on SE(3) (model.h). Read-only.")
-      .def_readonly("name", &Node::name)
+      .def_readonly("name", &Node::name,
+                    "The node's name (made by the builder from its rod or body).")
       .def_property_readonly(
           "reference", [](const Node& n) { return n.reference.Matrix(); },
           "Initial frame H_0 as a 4x4 homogeneous matrix [R x; 0 1]: orientation and position "
@@ -63,26 +64,27 @@ void BindModel(py::module_& m) {
       .def("__repr__", [](const Node& n) { return "<screwfem.Node '" + n.name + "'>"; });
 
   py::class_<RodElement>(m, "RodElement", "A two-node helical element (method.md §2.2). Read-only.")
-      .def_readonly("rod", &RodElement::rod)
-      .def_readonly("node_a", &RodElement::node_a)
-      .def_readonly("node_b", &RodElement::node_b)
+      .def_readonly("rod", &RodElement::rod, "Index of the rod the element belongs to.")
+      .def_readonly("node_a", &RodElement::node_a, "First node of the element.")
+      .def_readonly("node_b", &RodElement::node_b, "Second node of the element.")
       .def_readonly("length", &RodElement::length, "Reference arc length L = |u(d0)| [m].")
       .def_readonly("d0", &RodElement::d0,
                     "Reference relative motion log(H_A0^-1 H_B0): [u (m); w (rad)] (view).");
 
   py::class_<Rod>(m, "Rod", "A Cosserat rod: a chain of helical elements (model.h). Read-only.")
-      .def_readonly("name", &Rod::name)
+      .def_readonly("name", &Rod::name, "Unique name (the scene's bodies: key of the soft body).")
       .def_readonly("nodes", &Rod::nodes,
                     "Node indices in order along the rod (num_elements + 1; a copy).")
-      .def_readonly("first_element", &Rod::first_element)
-      .def_readonly("num_elements", &Rod::num_elements)
+      .def_readonly("first_element", &Rod::first_element,
+                    "Index of its first element in Model.elements.")
+      .def_readonly("num_elements", &Rod::num_elements, "Number of its elements.")
       .def_readonly("length", &Rod::length, "Reference length: sum of the element lengths [m].")
       .def("__repr__", [](const Rod& r) { return "<screwfem.Rod '" + r.name + "'>"; });
 
   py::class_<RigidBody>(m, "RigidBody",
                         "A rigid body carried by one node's frame (model.h). "
                         "Read-only.")
-      .def_readonly("name", &RigidBody::name)
+      .def_readonly("name", &RigidBody::name, "Unique name (the scene's bodies: key).")
       .def_readonly("node", &RigidBody::node, "The body's frame is this node's frame.")
       .def_readonly("mass", &RigidBody::mass, "[kg]")
       .def_readonly("com", &RigidBody::com, "Centre of mass in the node frame [m] (view).")
@@ -94,8 +96,9 @@ void BindModel(py::module_& m) {
                     "A joint: relative frame H_J in a subgroup between frame A (node_a, or the "
                     "ground, -1) and frame B (node_b), placed by the offsets C_A, C_B: "
                     "H_B C_B = H_A C_A H_J (method.md §4.1). Read-only.")
-      .def_readonly("name", &Joint::name)
-      .def_readonly("type", &Joint::type)
+      .def_readonly("name", &Joint::name, "Unique name (the scene's joints: key).")
+      .def_readonly("type", &Joint::type,
+                    "JointType: the Lie subgroup of the relative frame (REVOLUTE, PRISMATIC, ...).")
       .def_readonly("node_a", &Joint::node_a, "Node of side A, or -1 (kGround) for the world.")
       .def_readonly("node_b", &Joint::node_b, "Node of side B, or -1 (kGround) for the world.")
       .def_property_readonly(
@@ -117,7 +120,8 @@ void BindModel(py::module_& m) {
       .def_readonly("damping", &Joint::damping,
                     "Soft joint damping D per coordinate [N s/m or N m s/rad] (view).")
       .def_readonly("rest", &Joint::rest, "Spring rest coordinates [m or rad] (view).")
-      .def_readonly("drive", &Joint::drive)
+      .def_readonly("drive", &Joint::drive,
+                    "DriveKind of the joint's drive (NONE, PRESCRIBED, SERIES_ELASTIC, ...).")
       .def_readonly("drive_coord", &Joint::drive_coord, "Driven coordinate (0..k-1).")
       .def_readonly("drive_row", &Joint::drive_row, "Multiplier row of a prescribed drive, or -1.")
       .def("k", &Joint::k, "Number of joint coordinates.")
@@ -149,35 +153,54 @@ void BindModel(py::module_& m) {
             return names;
           },
           "Names of the run-time inputs, in Simulation.input_values order.")
-      .def_readonly("rod_inertia", &Model::rod_inertia)
+      .def_readonly("rod_inertia", &Model::rod_inertia,
+                    "RodInertia of the rods: EXACT (the exact helical velocity field) or CONSTANT "
+                    "(linear velocity field, constant mass matrix).")
       .def_readonly("redundant_rows", &Model::redundant_rows,
                     "Constraint rows found linearly dependent at build time (their multipliers "
                     "are held at zero).")
       .def_readonly("warnings", &Model::warnings, "Non-fatal findings of the build.")
-      .def_property_readonly("num_nodes", [](const Model& mo) { return mo.nodes.size(); })
-      .def_property_readonly("num_elements", [](const Model& mo) { return mo.elements.size(); })
-      .def_property_readonly("num_rods", [](const Model& mo) { return mo.rods.size(); })
-      .def_property_readonly("num_bodies", [](const Model& mo) { return mo.bodies.size(); })
-      .def_property_readonly("num_joints", [](const Model& mo) { return mo.joints.size(); })
-      .def_property_readonly("num_tendons", [](const Model& mo) { return mo.tendons.size(); })
-      .def_property_readonly("num_actuators", [](const Model& mo) { return mo.actuators.size(); })
-      .def_property_readonly("num_force_elements",
-                             [](const Model& mo) { return mo.force_elements.size(); })
+      .def_property_readonly(
+          "num_nodes", [](const Model& mo) { return mo.nodes.size(); },
+          "Number of nodes (frames on SE(3)).")
+      .def_property_readonly(
+          "num_elements", [](const Model& mo) { return mo.elements.size(); },
+          "Number of rod elements of all rods.")
+      .def_property_readonly(
+          "num_rods", [](const Model& mo) { return mo.rods.size(); },
+          "Number of rods (soft bodies).")
+      .def_property_readonly(
+          "num_bodies", [](const Model& mo) { return mo.bodies.size(); }, "Number of rigid bodies.")
+      .def_property_readonly(
+          "num_joints", [](const Model& mo) { return mo.joints.size(); }, "Number of joints.")
+      .def_property_readonly(
+          "num_tendons", [](const Model& mo) { return mo.tendons.size(); }, "Number of tendons.")
+      .def_property_readonly(
+          "num_actuators", [](const Model& mo) { return mo.actuators.size(); },
+          "Number of rod actuators (chambers, muscles, rest strains, active stresses).")
+      .def_property_readonly(
+          "num_force_elements", [](const Model& mo) { return mo.force_elements.size(); },
+          "Number of force elements.")
       .def_property_readonly(
           "nodes",
-          [](py::object self) { return ReferenceList(self.cast<const Model&>().nodes, self); })
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().nodes, self); },
+          "List of Node (copies).")
       .def_property_readonly(
           "elements",
-          [](py::object self) { return ReferenceList(self.cast<const Model&>().elements, self); })
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().elements, self); },
+          "List of RodElement (copies).")
       .def_property_readonly(
           "rods",
-          [](py::object self) { return ReferenceList(self.cast<const Model&>().rods, self); })
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().rods, self); },
+          "List of Rod (copies).")
       .def_property_readonly(
           "bodies",
-          [](py::object self) { return ReferenceList(self.cast<const Model&>().bodies, self); })
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().bodies, self); },
+          "List of RigidBody (copies).")
       .def_property_readonly(
           "joints",
-          [](py::object self) { return ReferenceList(self.cast<const Model&>().joints, self); })
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().joints, self); },
+          "List of Joint (copies).")
       .def("find_node", &Model::FindNode, py::arg("name"), "Index of the named node, -1 if absent.")
       .def("find_rod", &Model::FindRod, py::arg("name"), "Index of the named rod, -1 if absent.")
       .def("find_body", &Model::FindBody, py::arg("name"),

@@ -86,10 +86,12 @@ RunResult RunWithCallback(const Scene& scene, const std::string& outdir, RunOpti
 void BindSettings(py::module_& m) {
   py::class_<GeneralizedAlpha>(m, "GeneralizedAlpha",
                                "Generalized-alpha parameters (Chung-Hulbert), dimensionless.")
-      .def_readonly("alpha_m", &GeneralizedAlpha::alpha_m)
-      .def_readonly("alpha_f", &GeneralizedAlpha::alpha_f)
-      .def_readonly("gamma", &GeneralizedAlpha::gamma)
-      .def_readonly("beta", &GeneralizedAlpha::beta)
+      .def_readonly("alpha_m", &GeneralizedAlpha::alpha_m,
+                    "alpha_m of the generalized-alpha scheme (Chung and Hulbert), from rho_inf.")
+      .def_readonly("alpha_f", &GeneralizedAlpha::alpha_f,
+                    "alpha_f of the generalized-alpha scheme, from rho_inf.")
+      .def_readonly("gamma", &GeneralizedAlpha::gamma, "gamma = 1/2 + alpha_f - alpha_m.")
+      .def_readonly("beta", &GeneralizedAlpha::beta, "beta = (gamma + 1/2)^2 / 4.")
       .def_static("from_spectral_radius", &GeneralizedAlpha::FromSpectralRadius, py::arg("rho_inf"),
                   "Chung-Hulbert parameters from the spectral radius at infinity rho in [0, 1].");
 
@@ -210,7 +212,8 @@ void BindSettings(py::module_& m) {
 
   py::class_<AnalysisSettings>(m, "AnalysisSettings", "What a scene does (scene.h).")
       .def(py::init<>())
-      .def_readwrite("kind", &AnalysisSettings::kind)
+      .def_readwrite("kind", &AnalysisSettings::kind,
+                     "AnalysisKind.STATIC or DYNAMIC (the scene's analysis.type).")
       .def_readwrite("start_time", &AnalysisSettings::start_time, "[s]")
       .def_readwrite("end_time", &AnalysisSettings::end_time, "[s]")
       .def_readwrite("step", &AnalysisSettings::step, "Time step of dynamic analyses [s].")
@@ -236,14 +239,18 @@ void BindScenesAndRuns(py::module_& m) {
                           "that frame [m]) or on a rod's centre line at arc length s (rod >= 0, "
                           "arc_length [m] from its first node).")
       .def_readonly("name", &OutputPoint::name, "Column prefix, e.g. 'P8'.")
-      .def_readonly("node", &OutputPoint::node)
-      .def_readonly("offset", &OutputPoint::offset)
-      .def_readonly("rod", &OutputPoint::rod)
-      .def_readonly("arc_length", &OutputPoint::arc_length);
+      .def_readonly("node", &OutputPoint::node,
+                    "Node the point is fixed to (a point of a rigid body or a rod node), or -1 for "
+                    "a point along a rod.")
+      .def_readonly("offset", &OutputPoint::offset, "Node-frame components of the point [m].")
+      .def_readonly("rod", &OutputPoint::rod, "A point along a rod: its rod index (else -1).")
+      .def_readonly("arc_length", &OutputPoint::arc_length,
+                    "A point along a rod: its reference arc length from the rod's first node [m].");
 
   py::class_<OutputJoint>(m, "OutputJoint", "A recorded joint (scene.h).")
-      .def_readonly("name", &OutputJoint::name)
-      .def_readonly("joint", &OutputJoint::joint);
+      .def_readonly("name", &OutputJoint::name,
+                    "The joint's name (the column prefix in joints.csv).")
+      .def_readonly("joint", &OutputJoint::joint, "Index into Model.joints.");
 
   BindEnum<VtkFormat>(m, "VtkFormat", "Encoding of the ParaView frames (vtk.h).");
 
@@ -294,13 +301,15 @@ void BindScenesAndRuns(py::module_& m) {
 
   py::class_<RunResult>(m, "RunResult", "Outcome of run_scene (run.h).")
       .def_readonly("ok", &RunResult::ok, "The analysis completed.")
-      .def_readonly("interrupted", &RunResult::interrupted)
+      .def_readonly("interrupted", &RunResult::interrupted,
+                    "Ended by a stop request (Ctrl-C, a signal, an exception in a callback).")
       .def_readonly("end_time", &RunResult::end_time, "Simulated time reached [s].")
       .def_readonly("steps", &RunResult::steps,
                     "Time steps (static analyses: accepted load steps).")
       .def_readonly("newton_iterations", &RunResult::newton_iterations,
                     "Dynamic steps and static solves (incl. a preload).")
-      .def_readonly("max_iterations_per_step", &RunResult::max_iterations_per_step)
+      .def_readonly("max_iterations_per_step", &RunResult::max_iterations_per_step,
+                    "Most Newton iterations one step (or load step) took.")
       .def_readonly("halvings", &RunResult::halvings,
                     "Halved time steps, or halved load increments in statics.")
       .def_readonly("wall_seconds", &RunResult::wall_seconds, "[s]")

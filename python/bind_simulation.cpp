@@ -136,7 +136,7 @@ class RecordingHandle {
 
 void BindResults(py::module_& m) {
   py::class_<StepResult>(m, "StepResult", "Outcome of one Simulation.step (dynamics.h).")
-      .def_readonly("ok", &StepResult::ok)
+      .def_readonly("ok", &StepResult::ok, "The step (or advance) completed.")
       .def_readonly("iterations", &StepResult::iterations,
                     "Newton iterations of this step (all substeps).")
       .def_readonly("substeps", &StepResult::substeps, "1 unless the step was halved.")
@@ -147,13 +147,13 @@ void BindResults(py::module_& m) {
       });
 
   py::class_<StaticStep>(m, "StaticStep", "One accepted load step of solve_static.")
-      .def_readonly("load_factor", &StaticStep::load_factor)
-      .def_readonly("iterations", &StaticStep::iterations)
+      .def_readonly("load_factor", &StaticStep::load_factor, "Load factor of this converged step.")
+      .def_readonly("iterations", &StaticStep::iterations, "Newton iterations of this step.")
       .def_readonly("residual_norms", &StaticStep::residual_norms,
                     "|R|_inf before each Newton solve, then at convergence [N, N m].");
 
   py::class_<StaticResult>(m, "StaticResult", "Outcome of Simulation.solve_static (statics.h).")
-      .def_readonly("converged", &StaticResult::converged)
+      .def_readonly("converged", &StaticResult::converged, "The solve reached end_load_factor.")
       .def_readonly("load_factor", &StaticResult::load_factor,
                     "Last converged load factor (end_load_factor when converged): the "
                     "start_load_factor to continue from.")
@@ -162,7 +162,8 @@ void BindResults(py::module_& m) {
       .def_readonly("limit_points", &StaticResult::limit_points,
                     "Load factors of the limit points an arc-length solve passed.")
       .def_readonly("load_steps", &StaticResult::load_steps, "Accepted load steps.")
-      .def_readonly("total_iterations", &StaticResult::total_iterations)
+      .def_readonly("total_iterations", &StaticResult::total_iterations,
+                    "Newton iterations of all load steps.")
       .def_readonly("halvings", &StaticResult::halvings,
                     "Failed load steps retried with half the increment.")
       .def_readonly("steps", &StaticResult::steps, "List of StaticStep (copies).")
@@ -180,9 +181,9 @@ void BindResults(py::module_& m) {
   py::class_<PointMotion>(m, "PointMotion",
                           "World position [m], velocity [m/s] and acceleration [m/s^2] of a point "
                           "(outputs.h); read-only views into this object.")
-      .def_readonly("position", &PointMotion::position)
-      .def_readonly("velocity", &PointMotion::velocity)
-      .def_readonly("acceleration", &PointMotion::acceleration);
+      .def_readonly("position", &PointMotion::position, "World position [m].")
+      .def_readonly("velocity", &PointMotion::velocity, "World velocity [m/s].")
+      .def_readonly("acceleration", &PointMotion::acceleration, "World acceleration [m/s^2].");
 
   py::class_<RodPoint>(m, "RodPoint", "Section frame and motion of a point on a rod (outputs.h).")
       .def_property_readonly(
@@ -196,7 +197,7 @@ void BindResults(py::module_& m) {
 void BindInputs(py::module_& m) {
   py::class_<SimulationState>(m, "SimulationState",
                               "A saved simulation state (Simulation.get_state; dynamics.h).")
-      .def_readonly("time", &SimulationState::time)
+      .def_readonly("time", &SimulationState::time, "Simulated time of the saved state [s].")
       .def("__copy__", [](const SimulationState& s) { return s; })
       .def("__deepcopy__", [](const SimulationState& s, py::dict) { return s; });
   py::class_<InputsView>(m, "Inputs", "Simulation.inputs: run-time input values by name.")
@@ -216,23 +217,27 @@ void BindInputs(py::module_& m) {
            [](const InputsView& v, const std::string& name) {
              return v.sim->model().FindInput(name) >= 0;
            })
-      .def("keys",
-           [](const InputsView& v) {
-             std::vector<std::string> k;
-             for (const ModelInput& in : v.sim->model().inputs) k.push_back(in.name);
-             return k;
-           })
+      .def(
+          "keys",
+          [](const InputsView& v) {
+            std::vector<std::string> k;
+            for (const ModelInput& in : v.sim->model().inputs) k.push_back(in.name);
+            return k;
+          },
+          "The input names, in model order.")
       .def("__iter__",
            [](const InputsView& v) {
              std::vector<std::string> k;
              for (const ModelInput& in : v.sim->model().inputs) k.push_back(in.name);
              return py::iter(py::cast(k));
            })
-      .def("values",
-           [](const InputsView& v) {
-             const Vector& u = v.sim->data().inputs;
-             return std::vector<double>(u.data(), u.data() + u.size());
-           })
+      .def(
+          "values",
+          [](const InputsView& v) {
+            const Vector& u = v.sim->data().inputs;
+            return std::vector<double>(u.data(), u.data() + u.size());
+          },
+          "The current input values, in model order.")
       .def("__repr__", [](const InputsView& v) {
         std::string s = "{";
         for (std::size_t i = 0; i < v.sim->model().inputs.size(); ++i) {
@@ -364,8 +369,10 @@ and indices out of range IndexError.)doc")
       .def_property_readonly(
           "error_norm", [](const S& s) { return s.integrator().error_norm; },
           "Weighted local error estimate of the last error-controlled step (accepted if <= 1).")
-      .def_property_readonly("max_iterations_in_step",
-                             [](const S& s) { return s.integrator().max_iterations_in_step; })
+      .def_property_readonly(
+          "max_iterations_in_step",
+          [](const S& s) { return s.integrator().max_iterations_in_step; },
+          "Most Newton iterations one step took.")
 
       .def("initialize", &S::Initialize, py::arg("options") = py::none(),
            R"doc(initialize(options=None)

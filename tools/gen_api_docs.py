@@ -12,6 +12,7 @@ pages cannot fall behind the code.
 """
 
 import argparse
+import dataclasses
 import inspect
 import pathlib
 import re
@@ -46,6 +47,8 @@ def signature_of(name, obj, doc):
             sig = name + str(inspect.signature(obj))
         except (TypeError, ValueError):
             sig = None
+        if sig:  # default values shown by their class, without the object's address
+            sig = re.sub(r"<(?:[\w.]+\.)?(\w+) object at 0x[0-9a-f]+>", r"\1()", sig)
     return sig, rest
 
 
@@ -54,10 +57,12 @@ def is_enum(cls):
 
 
 def class_members(cls):
-    """(name, kind, signature, doc) of a class's own public members, in definition order."""
+    """(name, kind, signature, doc) of a class's own public members, in definition order. The
+    fields of a dataclass are documented in its class docstring (an Attributes section)."""
     out = []
+    fields = {f.name for f in dataclasses.fields(cls)} if dataclasses.is_dataclass(cls) else set()
     for member, value in vars(cls).items():
-        if member.startswith("_") or member in INHERITED:
+        if member.startswith("_") or member in fields or (is_enum(cls) and member in INHERITED):
             continue
         if is_enum(cls) and member in cls.__members__:
             continue  # values are listed with the enum
