@@ -285,7 +285,8 @@ int Main(int argc, char** argv) {
   plot->add_option("-o,--output", figdir, "figure directory (created if needed)")->required();
   plot->add_option("--points", points, "comma-separated point names (default: all)");
   plot->add_option("--times", times,
-                   "comma-separated snapshot times [s] (default: 5 evenly spaced)");
+                   "comma-separated times [s] of the snapshots and rod fields (default: 5 "
+                   "evenly spaced)");
   plot->add_flag("--animate", animate,
                  "also write animation_RUN.gif per run (and .mp4 when ffmpeg is installed)");
   plot->add_option("--fps", fps, "frames per second of the animation (default 25, at most 50)")
