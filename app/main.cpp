@@ -2,7 +2,8 @@
 //
 //   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet] [--force]
 //   screwfem check SCENE.yaml [--set key=value]...
-//   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1] [--animate]
+//   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1]
+//                 [--animate [--fps 25] [--speed 1]]
 //   screwfem view OUTDIR [-o FILE.html]
 //   screwfem sweep SCENE.yaml --grid key=v1,v2 [--grid ...] -o DIR [--resume] [...]
 //   screwfem --version
@@ -212,13 +213,17 @@ int RunPythonTool(const char* env_var, const char* name, const char* what,
   return RunPython(args, "");
 }
 
+// fps and speed go to the script as given (it checks them).
 int Plot(const std::vector<std::string>& outdirs, const std::string& figdir,
-         const std::string& points, const std::string& times, bool animate) {
+         const std::string& points, const std::string& times, bool animate, const std::string& fps,
+         const std::string& speed) {
   std::vector<std::string> args = outdirs;
   args.insert(args.end(), {"-o", figdir});
   if (!points.empty()) args.insert(args.end(), {"--points", points});
   if (!times.empty()) args.insert(args.end(), {"--times", times});
   if (animate) args.emplace_back("--animate");
+  if (!fps.empty()) args.insert(args.end(), {"--fps", fps});
+  if (!speed.empty()) args.insert(args.end(), {"--speed", speed});
   return RunPythonTool("SCREWFEM_PLOT_SCRIPT", "screwfem_plot.py", "plotting", args);
 }
 
@@ -249,7 +254,7 @@ int Main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("screwfem ") + SCREWFEM_VERSION);
 
-  std::string scene_path, outdir, figdir, points, times, html, inputs;
+  std::string scene_path, outdir, figdir, points, times, html, inputs, fps, speed;
   std::vector<std::string> overrides, outdirs;
   bool quiet = false, force = false, animate = false;
   const auto add_overrides = [&](CLI::App* cmd) {
@@ -280,9 +285,15 @@ int Main(int argc, char** argv) {
   plot->add_option("-o,--output", figdir, "figure directory (created if needed)")->required();
   plot->add_option("--points", points, "comma-separated point names (default: all)");
   plot->add_option("--times", times,
-                   "comma-separated snapshot times [s] (default: 5 evenly spaced)");
+                   "comma-separated times [s] of the snapshots and rod fields (default: 5 "
+                   "evenly spaced)");
   plot->add_flag("--animate", animate,
                  "also write animation_RUN.gif per run (and .mp4 when ffmpeg is installed)");
+  plot->add_option("--fps", fps, "frames per second of the animation (default 25, at most 50)")
+      ->type_name("N");
+  plot->add_option("--speed", speed,
+                   "simulated seconds per second of the animation (default 1: real time)")
+      ->type_name("X");
 
   CLI::App* view =
       app.add_subcommand("view", "write a self-contained HTML viewer of a run (three.js)");
@@ -308,7 +319,7 @@ int Main(int argc, char** argv) {
   if (check->parsed()) return Check(scene_path, overrides);
   if (sweep->parsed()) return Sweep(sweep->remaining());
   if (view->parsed()) return View(outdir, html);
-  return Plot(outdirs, figdir, points, times, animate);
+  return Plot(outdirs, figdir, points, times, animate, fps, speed);
 }
 
 }  // namespace
