@@ -54,4 +54,5 @@ PYBIND11_MODULE(_screwfem, m) {
   screwfem::python::BindBuild(m);
   screwfem::python::BindScene(m);
   screwfem::python::BindSimulation(m);
+  screwfem::python::BindEnv(m);
 }
