@@ -14,15 +14,21 @@ RuntimeError).
 ``sweep`` runs many variants of a scene (a grid, a list or random samples of overrides) as Dask
 tasks and returns a pandas DataFrame (screwfem/_sweep.py); ``python3 -m screwfem sweep`` is its
 command line.
+
+``Env`` and ``VectorEnv`` are Gymnasium-style reinforcement-learning environments over a scene
+(actions into its run-time inputs, ``reset``/``step``, ``Box`` spaces); VectorEnv steps its
+copies on C++ threads (screwfem/_env.py, docs/python.md).
 """
 
 from . import _screwfem
 from ._screwfem import *  # noqa: F401,F403  (the package re-exports the module)
 from ._screwfem import __version__
+from ._env import Box, Env, VectorEnv  # noqa: F401  (environments: python/screwfem/_env.py)
 from ._sweep import (  # noqa: F401  (sweeps: python/screwfem/_sweep.py)
     DEFAULT_METRICS, Counters, MaxConstraintResidual, PeakJointEffort, PointPosition, Run,
     WallTime, format_overrides, run_variant, sweep, variant_id, variants)
 
 __all__ = [name for name in dir(_screwfem) if not name.startswith("_")] + [
     "sweep", "variants", "format_overrides", "variant_id", "run_variant", "Run", "PointPosition",
-    "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort", "DEFAULT_METRICS"]
+    "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort", "DEFAULT_METRICS", "Box",
+    "Env", "VectorEnv"]
