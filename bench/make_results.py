@@ -19,9 +19,10 @@ Each JSON's revision comes from its context (the script passes --benchmark_conte
 else from REVISION. Uses the median over repetitions when the JSON holds aggregates, else the
 single run. Times are real time (wall clock; manual time where the benchmark times itself).
 The sections "Spring chain against MuJoCo" (written by hand from the output of
-screwfem_bench_mujoco, which is not a Google Benchmark program) and "Parameter sweeps on Dask"
-(written by bench/sweep_bench.py, a history of its runs) of an existing OUTPUT_MD are kept, at
-the end, in that order.
+screwfem_bench_mujoco, which is not a Google Benchmark program), "Parameter sweeps on Dask"
+(written by bench/sweep_bench.py, a history of its runs) and "Vector environments (Python)"
+(written by bench/python_vector_env.py, its latest run) of an existing OUTPUT_MD are kept, at
+the end, in the order they have there.
 A failed benchmark is listed as failed and makes the exit status 1 (after writing the file).
 Standard library only.
 """
@@ -629,7 +630,8 @@ def rod_statics_section(entries):
 
 MUJOCO_SECTION = "## Spring chain against MuJoCo"
 SWEEP_SECTION = "## Parameter sweeps on Dask"
-KEPT_SECTIONS = (MUJOCO_SECTION, SWEEP_SECTION)
+VECTOR_ENV_SECTION = "## Vector environments (Python)"
+KEPT_SECTIONS = (MUJOCO_SECTION, SWEEP_SECTION, VECTOR_ENV_SECTION)
 
 
 def main():
@@ -678,7 +680,8 @@ def main():
         "",
     ]
     # The sections written elsewhere (by hand from screwfem_bench_mujoco's output; the history
-    # bench/sweep_bench.py appends to) are kept as they are, from the first of them to the end.
+    # bench/sweep_bench.py appends to; bench/python_vector_env.py's latest run) are kept as
+    # they are, from the first of them to the end.
     kept = ""
     if os.path.exists(out_path):
         with open(out_path, encoding="utf-8") as f:
