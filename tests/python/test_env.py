@@ -12,8 +12,10 @@ tests/data/pendulum.yaml, a rigid pendulum on a revolute joint released from the
 (no inputs: an empty action), end_time 0.5 s.
 """
 
+import multiprocessing
 import os
 import pathlib
+import threading
 import unittest
 
 import numpy as np
@@ -328,6 +330,42 @@ class EnvPhysicsTest(unittest.TestCase):
         # Different tensions, different tips: the copies are independent.
         self.assertLess(trajectory[-1][0, 2], trajectory[-1][1, 2])
         self.assertLess(trajectory[-1][1, 2], trajectory[-1][2, 2])
+
+
+def vector_rollout(tensions, steps=20):
+    """Observations of a VectorEnv of len(tensions) copies of the arm, each holding its
+    tension, on as many threads as the machine has (module level: a forked child runs it)."""
+    venv = sf.VectorEnv(len(tensions), ARM, substeps=2)
+    venv.reset(seed=0)
+    actions = np.array(tensions, dtype=float).reshape(-1, 1)
+    return np.array([venv.step(actions)[0] for _ in range(steps)])
+
+
+class ThreadPoolTest(unittest.TestCase):
+    """_step_many keeps its worker threads between calls: they must serve calls from several
+    Python threads and from a forked child, which has none of its parent's threads."""
+
+    def test_calls_from_two_python_threads(self):
+        expected = vector_rollout([0.5, 1.0, 1.5])
+        results = [None, None]
+
+        def run(k):
+            results[k] = vector_rollout([0.5, 1.0, 1.5])
+
+        threads = [threading.Thread(target=run, args=(k,)) for k in range(2)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(timeout=120)
+        for r in results:
+            self.assertTrue(same_bits(r, expected))
+
+    def test_forked_child_steps_on_its_own_pool(self):
+        expected = vector_rollout([0.5, 1.0])  # the parent's pool is running now
+        context = multiprocessing.get_context("fork")
+        with context.Pool(1) as pool:
+            got = pool.apply_async(vector_rollout, ([0.5, 1.0],)).get(timeout=120)
+        self.assertTrue(same_bits(got, expected))
 
 
 class EnvErrorTest(unittest.TestCase):
