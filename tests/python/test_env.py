@@ -308,6 +308,21 @@ class EnvPhysicsTest(unittest.TestCase):
         self.assertLess(dz.max(), 2.0 * dz_static)
         self.assertGreater(dz.max(), 1.2 * dz_static)  # it overshoots: dynamics, not statics
 
+    def test_static_preload_starts_at_equilibrium(self):
+        # analysis.static_preload: reset() solves the sagging equilibrium before initialize(),
+        # as run_scene does; the unactuated arm then stays there.
+        scene = sf.load_scene(ARM, ["analysis.static_preload=true"])
+        env = sf.Env(scene)
+        obs, _ = env.reset()
+        static = sf.Simulation(scene)
+        static.solve_static()
+        np.testing.assert_array_equal(obs[:3], static.point_motion("tip").position)
+        self.assertLess(obs[2], -0.04)  # sagged about 4.3 cm
+        for _ in range(10):
+            obs = env.step([0.0])[0]
+        np.testing.assert_allclose(obs[:3], static.point_motion("tip").position, atol=1e-9)
+        np.testing.assert_allclose(obs[3:], 0.0, atol=1e-9)
+
     def test_vector_env_copies_equal_single_envs(self):
         # Three copies with different tensions, on 1 and on 3 threads, against three Envs.
         tensions = np.array([[0.0], [0.3], [0.6]])
