@@ -20,9 +20,10 @@ else from REVISION. Uses the median over repetitions when the JSON holds aggrega
 single run. Times are real time (wall clock; manual time where the benchmark times itself).
 The sections "Spring chain against MuJoCo" (written by hand from the output of
 screwfem_bench_mujoco, which is not a Google Benchmark program), "Animation of `screwfem plot`"
-(written by bench/plot_animate_bench.py) and "Parameter sweeps on Dask" (written by
-bench/sweep_bench.py, a history of its runs) of an existing OUTPUT_MD are kept, at the end, in
-that order.
+(written by bench/plot_animate_bench.py), "Parameter sweeps on Dask" (written by
+bench/sweep_bench.py, a history of its runs) and "Vector environments (Python)" (written by
+bench/python_vector_env.py, its latest run) of an existing OUTPUT_MD are kept, at the end, in
+the order they have there.
 A failed benchmark is listed as failed and makes the exit status 1 (after writing the file).
 Standard library only.
 """
@@ -631,7 +632,8 @@ def rod_statics_section(entries):
 MUJOCO_SECTION = "## Spring chain against MuJoCo"
 SWEEP_SECTION = "## Parameter sweeps on Dask"
 PLOT_SECTION = "## Animation of `screwfem plot`"
-KEPT_SECTIONS = (MUJOCO_SECTION, PLOT_SECTION, SWEEP_SECTION)
+VECTOR_ENV_SECTION = "## Vector environments (Python)"
+KEPT_SECTIONS = (MUJOCO_SECTION, PLOT_SECTION, SWEEP_SECTION, VECTOR_ENV_SECTION)
 
 
 def main():
@@ -680,8 +682,8 @@ def main():
         "",
     ]
     # The sections written elsewhere (by hand from screwfem_bench_mujoco's output; the histories
-    # bench/plot_animate_bench.py and bench/sweep_bench.py add to) are kept as they are, from the
-    # first of them to the end.
+    # bench/plot_animate_bench.py and bench/sweep_bench.py add to; bench/python_vector_env.py's
+    # latest run) are kept as they are, from the first of them to the end.
     kept = ""
     if os.path.exists(out_path):
         with open(out_path, encoding="utf-8") as f:

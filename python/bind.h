@@ -23,6 +23,8 @@ void BindScene(pybind11::module_& m);
 void BindSimulation(pybind11::module_& m);
 // bind_spec.cpp: the scene spec (scene_spec.h) <-> screwfem.SceneSpec, ReadSceneSpec, CompileScene.
 void BindSpec(pybind11::module_& m);
+// bind_env.cpp: _step_many, the threaded stepping behind screwfem.Env and VectorEnv.
+void BindEnv(pybind11::module_& m);
 
 // An enum with a vocabulary (model/enum_names.h) as a Python enum whose members are its
 // names in capitals (NewtonMatrix.SIMPLIFIED for the scene's `newton: simplified`).

@@ -55,4 +55,5 @@ PYBIND11_MODULE(_screwfem, m) {
   screwfem::python::BindScene(m);
   screwfem::python::BindSimulation(m);
   screwfem::python::BindSpec(m);
+  screwfem::python::BindEnv(m);
 }

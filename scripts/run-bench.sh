@@ -6,9 +6,13 @@
 #   screwfem_bench_outputs   -> bench/results_outputs.json   (cost of a run's outputs)
 #   screwfem_bench_tendons   -> bench/results_tendons.json   (cost of tendons on a rod)
 #   screwfem_bench_contact   -> bench/results_contact.json   (cost of contact along a rod)
-# SCREWFEM_BENCH selects the programs (default "statics dynamics outputs"); the results file of a
-# program not run (or whose benchmarks a filter left out entirely) is kept and reported with
-# its own date and revision. Extra arguments go to every program run, e.g.
+#   vector_env               -> its own section of bench/RESULTS.md (bench/python_vector_env.py:
+#                               screwfem.VectorEnv's steps per second at 1, 2, 4 copies; builds
+#                               the Python module; not in the default set)
+# SCREWFEM_BENCH selects the programs (default "statics dynamics outputs tendons contact"); the
+# results file of a program not run (or whose benchmarks a filter left out entirely) is kept
+# and reported with its own date and revision. Extra arguments go to every Google Benchmark
+# program run, e.g.
 # SCREWFEM_BENCH=dynamics bash scripts/run-bench.sh --benchmark_filter=Rod.
 # Run as root if dependencies may be missing.
 # Takes about 1 minute on 2 cores (plus the build).
@@ -20,7 +24,7 @@ jobs=$(nproc 2> /dev/null || echo 2)
 programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons contact}
 for p in $programs; do
   case $p in
-    statics | dynamics | outputs | tendons | contact) ;;
+    statics | dynamics | outputs | tendons | contact | vector_env) ;;
     *) echo "run-bench.sh: unknown benchmark program '$p' in SCREWFEM_BENCH" >&2; exit 2 ;;
   esac
 done
@@ -28,7 +32,15 @@ done
 bash scripts/setup-deps.sh bench
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DSCREWFEM_BUILD_BENCH=ON
 targets=()
-for p in $programs; do targets+=("screwfem_bench_$p"); done
+benchmarks=()
+for p in $programs; do
+  if [[ $p == vector_env ]]; then
+    targets+=(_screwfem)
+  else
+    targets+=("screwfem_bench_$p")
+    benchmarks+=("$p")
+  fi
+done
 cmake --build "$build_dir" -j"$jobs" --target "${targets[@]}"
 
 revision=$(git describe --always --dirty 2> /dev/null || echo unknown)
@@ -44,7 +56,7 @@ elif grep -q '^SCREWFEM_HAS_MARCH_NATIVE:INTERNAL=1' "$cache"; then
 else
   isa=portable
 fi
-for p in $programs; do
+for p in "${benchmarks[@]}"; do
   out=bench/results_$p.json
   tmp=bench/results_$p.json.tmp
   rm -f "$tmp"
@@ -70,3 +82,9 @@ done
   bench/results_statics.json bench/results_dynamics.json bench/results_outputs.json \
   bench/results_tendons.json bench/results_contact.json
 echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact}.json"
+# After make_results.py, which keeps the section the Python benchmark replaces. It exits 1 when
+# its target is missed (on a loaded machine); the table is written either way.
+if [[ " $programs " == *" vector_env "* ]]; then
+  PYTHONPATH=$build_dir/python /usr/bin/python3 bench/python_vector_env.py ||
+    echo "run-bench.sh: python_vector_env.py: target not met (see bench/RESULTS.md)" >&2
+fi

@@ -18,6 +18,10 @@ RuntimeError).
 ``sweep`` runs many variants of a scene (a grid, a list or random samples of overrides) as Dask
 tasks and returns a pandas DataFrame (screwfem/_sweep.py); ``python3 -m screwfem sweep`` is its
 command line.
+
+``Env`` and ``VectorEnv`` are Gymnasium-style reinforcement-learning environments over a scene
+(actions into its run-time inputs, ``reset``/``step``, ``Box`` spaces); VectorEnv steps its
+copies on C++ threads (screwfem/_env.py, docs/python.md).
 """
 
 from . import _screwfem
@@ -27,6 +31,7 @@ from ._spec import (  # noqa: F401  (the scene spec: python/screwfem/_spec.py)
     ActuatorSpec, BodyPointSpec, BodySpec, ContactSpec, ForceSpec, JointEntrySpec, LoadSpec,
     OutputPointSpec, OutputsSpec, SceneSpec, TendonSpec, read_scene_spec, route_helical,
     route_offset)
+from ._env import Box, Env, VectorEnv  # noqa: F401  (environments: python/screwfem/_env.py)
 from ._sweep import (  # noqa: F401  (sweeps: python/screwfem/_sweep.py)
     DEFAULT_METRICS, Counters, MaxConstraintResidual, PeakJointEffort, PointPosition, Run,
     WallTime, format_overrides, run_variant, sweep, variant_id, variants)
@@ -36,4 +41,4 @@ __all__ = [name for name in dir(_screwfem) if not name.startswith("_")] + [
     "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort", "DEFAULT_METRICS"] + [
     "SceneSpec", "BodySpec", "JointEntrySpec", "LoadSpec", "BodyPointSpec", "TendonSpec",
     "ForceSpec", "ActuatorSpec", "OutputPointSpec", "ContactSpec", "OutputsSpec",
-    "read_scene_spec", "route_offset", "route_helical"]
+    "read_scene_spec", "route_offset", "route_helical", "Box", "Env", "VectorEnv"]
