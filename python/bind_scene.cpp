@@ -342,8 +342,9 @@ void BindScenesAndRuns(py::module_& m) {
       R"doc(run_scene(scene, outdir, progress=False, force=False, callback=None, every=1, inputs=None) -> RunResult
 
 Runs the scene's analysis as `screwfem run` does and writes its outputs into `outdir` (created
-if needed): points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az; world
-frame, SI), joints.csv, summary.json, vtk/ and the other tables the model has (run.h).
+if needed): points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az and
+P.qw P.qx P.qy P.qz; world frame, SI), joints.csv, summary.json, vtk/ and the other tables
+the model has (run.h).
 `progress` draws a progress bar on stderr. `inputs`: a CSV file of run-time input values over
 time (the CLI's --inputs).
 

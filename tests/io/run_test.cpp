@@ -165,7 +165,8 @@ TEST(RunScene, WritesTheDocumentedColumnsAndOneRowPerInterval) {
   const Table points = ReadCsv(dir + "/points.csv");
   ASSERT_TRUE(points.well_formed) << points.problem;
   const std::vector<std::string> expected = {"t",      "tip.x",  "tip.y",  "tip.z",  "tip.vx",
-                                             "tip.vy", "tip.vz", "tip.ax", "tip.ay", "tip.az"};
+                                             "tip.vy", "tip.vz", "tip.ax", "tip.ay", "tip.az",
+                                             "tip.qw", "tip.qx", "tip.qy", "tip.qz"};
   EXPECT_EQ(points.columns, expected);
   ASSERT_EQ(points.rows.size(), 51u);  // t = 0, 0.01, ..., 0.5
   for (std::size_t i = 0; i < points.rows.size(); ++i)

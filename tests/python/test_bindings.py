@@ -270,8 +270,8 @@ class NumpyArraysTest(unittest.TestCase):
             self.assertEqual(array.dtype, np.float64, name)
         self.assertEqual(sim.node_frame(0).shape, (4, 4))
         self.assertEqual(sim.joint_relative_frame("hinge").shape, (4, 4))
-        self.assertEqual(sim.calc_point_row().shape, (9,))
-        self.assertEqual(len(sim.point_columns()), 9)
+        self.assertEqual(sim.calc_point_row().shape, (13,))  # x, v, a, orientation quaternion
+        self.assertEqual(len(sim.point_columns()), 13)
         self.assertEqual(sim.calc_joint_row().shape, (4,))
         self.assertEqual(sim.joint_columns(), ["hinge.q", "hinge.qd", "hinge.qdd", "hinge.effort"])
         motion = sim.point_motion("tip")

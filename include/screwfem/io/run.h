@@ -1,6 +1,9 @@
 // Running a scene and writing its results (issue: the main job).
 //
 // OUTDIR/points.csv   t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az (world, SI)
+//                     and P.qw P.qx P.qy P.qz: the unit quaternion, world from the point's
+//                     frame (the section frame along a rod, else the node frame), qw >= 0
+//                     (FrameQuaternion, writers.h)
 // OUTDIR/joints.csv   t, then per joint J (per coordinate i for multi-DOF joints: J.i.q ...):
 //                     J.q J.qd J.qdd J.effort
 // OUTDIR/reactions.csv t, then per joint with constraint rows: J.Fx J.Fy J.Fz J.Mx J.My J.Mz

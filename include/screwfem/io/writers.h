@@ -21,7 +21,9 @@ namespace screwfem {
 // output entry.
 void ValidateOutputs(const Model& model, const OutputSpec& outputs);
 
-// Column names after "t": per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az.
+// Column names after "t": per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az, then
+// P.qw P.qx P.qy P.qz (kPointColumns per point).
+inline constexpr std::size_t kPointColumns = 13;
 std::vector<std::string> PointColumns(const std::vector<OutputPoint>& points);
 // Per joint J with one coordinate: J.q J.qd J.qdd J.effort; with k > 1 coordinates the same
 // four per coordinate i as J.i.q ...; joints without coordinates (fixed) have no columns.
@@ -39,8 +41,10 @@ std::vector<std::string> JointColumns(const Model& model, const std::vector<Outp
 std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJoint>& joints);
 
 // Values of one row (without t), in column order, at data's current state: world position
-// [m], velocity [m/s] and acceleration [m/s^2] (method.md §6); joint coordinates [m or rad]
-// and their first and second time derivatives, and the effort [N or N m].
+// [m], velocity [m/s] and acceleration [m/s^2] (method.md §6) and the orientation of the
+// point's frame (FrameQuaternion: the section frame of a point along a rod, the node frame of
+// a node point, whatever its offset); joint coordinates [m or rad] and their first and
+// second time derivatives, and the effort [N or N m].
 // `row` is resized to the number of columns (no allocation once it has that size).
 void CalcPointRow(const Model& model, const Data& data, const std::vector<OutputPoint>& points,
                   std::vector<double>* row);
@@ -48,6 +52,11 @@ void CalcJointRow(const Model& model, const Data& data, const std::vector<Output
                   std::vector<double>* row);
 
 // (The effort column is JointCoordinateEffort, elements/joint.h.)
+
+// The unit quaternion (w, x, y, z) of a rotation R (world from frame), with the sign fixed so
+// that equal frames give equal columns: w >= 0, and when w = 0 the first non-zero of x, y, z
+// is positive.
+Eigen::Vector4d FrameQuaternion(const Mat3& R);
 
 // tendons.csv: per tendon T of the model, T.length [m], T.rate [m/s], T.tension [N];
 // forces.csv: per force element F, F.length [m], F.rate [m/s], F.force [N] (positive: tension)
