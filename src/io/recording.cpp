@@ -49,10 +49,11 @@ void ValidateRecordedOutputs(const Model& model, const OutputSpec& o) {
 
 // About how many ParaView frames a run writes (a reservation, so that writing them allocates
 // nothing): one per frame interval (or step), the first and the last, and one per profile
-// breakpoint for steps shortened to land on them; capped, since it is only a hint.
+// breakpoint for steps shortened to land on them (static analyses: one per load step);
+// capped, since it is only a hint.
 int ExpectedFrames(const Scene& scene, const OutputSpec& o) {
   const AnalysisSettings& a = scene.analysis;
-  if (a.kind == AnalysisKind::kStatic) return 1;
+  if (a.kind == AnalysisKind::kStatic) return std::clamp(a.statics.load_steps + 1, 1, 1000000);
   const double interval = std::max(o.vtk_interval > 0.0 ? o.vtk_interval : o.interval, a.step);
   const double frames =
       std::ceil((a.end_time - a.start_time) / interval) + 2.0 +
@@ -372,10 +373,11 @@ class Recording::Impl {
     return true;
   }
 
-  // Static analyses (recording.h).
+  // Static analyses (recording.h): each converged load step's rows and frame (the frame's
+  // time is the load factor, Record).
   bool RecordStaticStep(double t, double load_factor) {
     load_factor_ = load_factor;
-    return finished_ || Record(t, true, false);
+    return finished_ || Record(t, true, true);
   }
   void SetStaticResult(const StaticResult& result) {
     static_ = result;
@@ -385,7 +387,7 @@ class Recording::Impl {
     max_constraint_ = CalcMaxJointConstraint(model_, data_, t);
     max_rotation_ = MaxElementRotation(data_);
     load_factor_ = static_.load_factor;
-    if (!Record(t, row, true)) return false;
+    if (row && !Record(t, true, true)) return false;  // else the last step's row and frame
     if (options_.on_step) {
       if (!FlushRows(t)) return false;
       options_.on_step(t);
@@ -430,9 +432,12 @@ class Recording::Impl {
   }
 
   // Writes the rows (and the ParaView frame) of the current state; on a write error ends the
-  // run as failed and returns false.
+  // run as failed and returns false. Static analyses give each frame the load factor as its
+  // time (motion.pvd's timestep and the frame's TimeValue), since every state of the path has
+  // the same time.
   bool Record(double t, bool row, bool frame) { return Record(t, row, frame, data_); }
   bool Record(double t, bool row, bool frame, const Data& data) {
+    const bool statics = scene_.analysis.kind == AnalysisKind::kStatic;
     if (row) {
       CalcPointRow(model_, data, outputs_.points, &row_);
       points_.WriteRow(t, WithLoadFactor(row_));
@@ -471,7 +476,7 @@ class Recording::Impl {
       batch = std::max(batch, pair_contacts_.batch_bytes());
       if (batch >= kRowBatchBytes && !FlushRows(t)) return false;
     }
-    if (frame && vtk_ && !vtk_->WriteFrame(model_, data, t))
+    if (frame && vtk_ && !vtk_->WriteFrame(model_, data, statics ? load_factor_ : t))
       return WriteFailed(vtk_->dir() + "/frame files", t);
     return true;
   }

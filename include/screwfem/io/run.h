@@ -13,7 +13,8 @@
 //                     largest element rotation,
 //                     largest constraint residual, status and message
 // OUTDIR/vtk/frame_NNNNN.vtp and OUTDIR/vtk/motion.pvd (ParaView; the collection is written
-//                     once, when the run ends, also when it is interrupted or fails)
+//                     once, when the run ends, also when it is interrupted or fails; static
+//                     analyses: a frame per load step, its time the load factor)
 // OUTDIR/.screwfem.lock  held (flock) by the running run, with its process id
 // Files are written as the run goes, in whole rows: the CSV rows are collected and written
 // when 64 KiB have accumulated, at least every 2 s of wall time (with the summary), before
@@ -84,7 +85,9 @@ struct RunResult {
 // (Profile::Breakpoints) in (start_time, end_time) falls on a step end (a grid step end within
 // a tenth of a step of a breakpoint moves onto it). Rows are recorded at start_time, at the
 // first step end at or after each multiple of outputs.interval (every step when 0) and at the
-// last step end. Static analyses: SolveStatic at statics.time, one row.
+// last step end. Static analyses: SolveStatic at statics.time; every converged load step is a
+// row of every table (t = statics.time, then its load factor) and a ParaView frame (the load
+// factor as its time).
 // Numerical failure, a stop request and write errors end the run with a result (and
 // summary.json status "failed" or "interrupted"), never an exception.
 // Throws InputError for invalid settings or outputs (naming the field), when outdir or its
