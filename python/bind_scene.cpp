@@ -256,7 +256,12 @@ void BindScenesAndRuns(py::module_& m) {
       .def_readwrite("vtk_interval", &OutputSpec::vtk_interval,
                      "Time between ParaView frames [s]; 0: same as interval.")
       .def_readwrite("vtk_format", &OutputSpec::vtk_format,
-                     "Encoding of the ParaView frames (VtkFormat.BINARY or ASCII; vtk.h).");
+                     "Encoding of the ParaView frames (VtkFormat.BINARY or ASCII; vtk.h).")
+      .def_readwrite("rod_fields", &OutputSpec::rod_fields,
+                     "Write rod_fields.csv: section strain and stress of every rod element.")
+      .def_readwrite("rod_fields_interval", &OutputSpec::rod_fields_interval,
+                     "Time between rod_fields.csv rows [s]; 0: every step; < 0: at the rows "
+                     "of points.csv.");
 
   py::class_<Scene>(m, "Scene",
                     "A compiled scene (scene.h): the model plus what to do with it (analysis) and "

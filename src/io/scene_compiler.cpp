@@ -412,6 +412,8 @@ void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
   out->vtk = o.vtk;
   out->vtk_format = o.vtk_format;
   out->vtk_interval = o.vtk_interval;
+  out->rod_fields = o.rod_fields;
+  out->rod_fields_interval = o.rod_fields_interval;
 }
 
 void SceneCompiler::CheckReferences() const {

@@ -98,6 +98,11 @@ void CalcReactionRow(const Model& model, const Data& data, std::vector<double>* 
   }
 }
 
+std::vector<std::string> RodFieldColumns() {
+  return {"rod",    "s",  "gamma1", "gamma2", "gamma3", "kappa1", "kappa2",
+          "kappa3", "n1", "n2",     "n3",     "m1",     "m2",     "m3"};
+}
+
 std::vector<std::string> EnergyColumns() {
   return {"kinetic", "strain", "spring", "gravity", "total", "px", "py", "pz", "Lx", "Ly", "Lz"};
 }
@@ -386,6 +391,28 @@ bool CsvWriter::WriteRow(double t, const std::vector<double>& values) {
   row_times_.push_back(t);
   return true;
 }
+
+bool CsvWriter::WriteRows(double t, const std::vector<double>& lead,
+                          const std::vector<double>& values, std::size_t width) {
+  if (fd_ < 0 || failed_) return false;
+  for (std::size_t i = 0; i + width <= values.size() && width > 0; i += width) {
+    AppendShortest(&batch_, t);
+    for (double v : lead) {
+      batch_ += ',';
+      AppendShortest(&batch_, v);
+    }
+    for (std::size_t k = i; k < i + width; ++k) {
+      batch_ += ',';
+      AppendShortest(&batch_, values[k]);
+    }
+    batch_ += '\n';
+  }
+  row_ends_.push_back(batch_.size());
+  row_times_.push_back(t);
+  return true;
+}
+
+void CsvWriter::Reserve(std::size_t bytes) { batch_.reserve(bytes); }
 
 std::size_t CsvWriter::WriteBatch() {
   if (fd_ < 0 || failed_) return 0;

@@ -20,6 +20,7 @@
 
 #include <unistd.h>
 
+#include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/input_table.h"
 #include "screwfem/io/vtk.h"
@@ -293,16 +294,25 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
     EXPECT_GT(active_steps, 10);  // with contacts active
     EXPECT_GT(pair_steps, 10);    // and the pair of moving shapes
-    // The rows of tendons.csv and forces.csv, once sized.
-    std::vector<double> tendons, forces, actuators;
+    // The rows of tendons.csv, forces.csv, actuators.csv, points.csv (a node point and a rod
+    // point, with their orientations) and rod_fields.csv (with the actuators), once sized.
+    std::vector<double> tendons, forces, actuators, points, fields;
+    const std::vector<OutputPoint> recorded = {
+        {.name = "ball", .node = model.rods[0].nodes.front(), .offset = Vec3(0.1, 0, 0)},
+        {.name = "arm", .rod = 0, .arc_length = 0.33}};
     CalcTendonRow(model, data, &tendons);
     CalcForceRow(model, data, &forces);
     CalcActuatorRow(model, data, data.time, &actuators);
+    CalcPointRow(model, data, recorded, &points);
+    CalcRodFieldRows(model, data, -1, 1.0, &fields);
     g_counting = true;
     CalcTendonRow(model, data, &tendons);
     CalcForceRow(model, data, &forces);
     CalcActuatorRow(model, data, data.time, &actuators);
+    CalcPointRow(model, data, recorded, &points);
+    CalcRodFieldRows(model, data, -1, 1.0, &fields);
     g_counting = false;
+    EXPECT_EQ(fields.size(), kRodFieldValues * model.elements.size());
     EXPECT_GT(actuators[1], 0.0);  // the muscle is active
     EXPECT_GT(tendons[2], 0.0);    // the tendon pulls
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the tendon and force rows";

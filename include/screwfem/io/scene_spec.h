@@ -143,7 +143,9 @@ struct OutputsSpec {
   double interval = 0.0;    // [s]; see OutputSpec
   bool vtk = true;
   VtkFormat vtk_format = VtkFormat::kBinary;
-  double vtk_interval = 0.0;  // [s]
+  double vtk_interval = 0.0;          // [s]
+  bool rod_fields = false;            // see OutputSpec
+  double rod_fields_interval = -1.0;  // [s]; < 0: at the rows of points.csv
 };
 
 struct SceneSpec {

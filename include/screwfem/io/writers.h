@@ -101,6 +101,11 @@ void CalcReactionRow(const Model& model, const Data& data, std::vector<double>* 
 // Lx Ly Lz [kg m^2/s] (CalcMomentum: world, angular momentum about the world origin).
 std::vector<std::string> EnergyColumns();
 void CalcEnergyRow(const Model& model, const Data& data, std::vector<double>* row);
+// rod_fields.csv (long format, outputs.rod_fields): at each output time one row per station
+// (one per rod element, at its mid arc length): rod s gamma1 gamma2 gamma3 kappa1 kappa2 kappa3
+// n1 n2 n3 m1 m2 m3, the values of CalcRodFieldRows (assemble/outputs.h: units, section axes
+// and signs).
+std::vector<std::string> RodFieldColumns();
 
 // ---- files -----------------------------------------------------------------------------------
 
@@ -127,6 +132,13 @@ class CsvWriter {
   void Open(const std::string& path, const std::vector<std::string>& columns);
   // Appends "t,values..." to the batch (no file access). Returns false once a write has failed.
   bool WriteRow(double t, const std::vector<double>& values);
+  // Appends values.size() / width lines "t,lead...,values[i width .. (i + 1) width)" (long
+  // format: several lines at one time) as one row of the batch: a flush keeps or cuts them
+  // together, and rows() counts them as one.
+  bool WriteRows(double t, const std::vector<double>& lead, const std::vector<double>& values,
+                 std::size_t width);
+  // Reserves batch room for `bytes` (rows longer than the default reservation of 68 KiB).
+  void Reserve(std::size_t bytes);
   // Writes the batch. Returns false on a write error (errno kept): the rows that reached the
   // file whole stay, a torn row is cut off, the rest of the batch is dropped.
   bool Flush();
