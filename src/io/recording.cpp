@@ -252,7 +252,8 @@ class Recording::Impl {
         pair_contacts_.Open(outdir + "/pair_contacts.csv", StaticColumns(PairContactColumns()));
       if (outputs_.vtk) {
         vtk_.emplace();
-        vtk_->Open(outdir + "/vtk", model_, outputs_.vtk_format, ExpectedFrames(scene, outputs_));
+        vtk_->Open(outdir + "/vtk", model_, outputs_.vtk_format, ExpectedFrames(scene, outputs_),
+                   outputs_.rod_fields);
       }
       if (!WriteSummary())
         throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
@@ -519,7 +520,8 @@ class Recording::Impl {
       if (batch >= kRowBatchBytes && !FlushRows(t)) return false;
     }
     if (fields && rod_fields_.batch_bytes() >= kRowBatchBytes && !FlushRows(t)) return false;
-    if (frame && vtk_ && !vtk_->WriteFrame(model_, data, statics ? load_factor_ : t))
+    if (frame && vtk_ &&
+        !vtk_->WriteFrame(model_, data, statics ? load_factor_ : t, statics ? load_factor_ : 1.0))
       return WriteFailed(vtk_->dir() + "/frame files", t);
     return true;
   }

@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <new>
 #include <string>
+#include <utility>
 
 #include <unistd.h>
 
@@ -406,11 +407,14 @@ TEST(NoAllocation, AdvanceWithAnObserverAllocatesNothing) {
   }
 }
 
-// Writing a ParaView frame (both encodings) between time steps allocates nothing once the
-// writer is open with room for the frames (the ascii text buffer is reserved for a frame too).
+// Writing a ParaView frame (both encodings, with and without the rod fields) between time
+// steps allocates nothing once the writer is open with room for the frames (the ascii text
+// buffer is reserved for a frame too).
 TEST(NoAllocation, ParaViewFramesAllocateNothing) {
   const Model model = MixedModel();
-  for (const VtkFormat format : {VtkFormat::kBinary, VtkFormat::kAscii}) {
+  for (const auto& [format, rod_fields] :
+       {std::pair{VtkFormat::kBinary, false}, std::pair{VtkFormat::kAscii, false},
+        std::pair{VtkFormat::kBinary, true}, std::pair{VtkFormat::kAscii, true}}) {
     const std::filesystem::path dir = std::filesystem::temp_directory_path() /
                                       ("screwfem_alloc_vtk_" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
@@ -421,7 +425,7 @@ TEST(NoAllocation, ParaViewFramesAllocateNothing) {
     std::string message;
     ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
     VtkWriter writer;
-    writer.Open(dir.string(), model, format, 20);
+    writer.Open(dir.string(), model, format, 20, rod_fields);
     g_allocations = 0;
     bool ok = true;
     for (int i = 0; i < 20; ++i) {
@@ -438,7 +442,8 @@ TEST(NoAllocation, ParaViewFramesAllocateNothing) {
     }
     EXPECT_TRUE(ok);
     EXPECT_EQ(writer.frames(), 20);
-    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations writing 20 frames, " << NameOf(format);
+    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations writing 20 frames, " << NameOf(format)
+                                       << ", rod fields " << rod_fields;
     std::filesystem::remove_all(dir);
   }
 }

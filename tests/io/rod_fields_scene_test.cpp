@@ -2,12 +2,14 @@
 //  * rod_fields.csv (outputs.rod_fields) of a static cantilever bent by an end moment: every
 //    load step, every element at its midpoint, kappa3 = s M / EI and m3 = s M at load factor s;
 //    and at the rows of points.csv (true) or at an interval of its own (a number) in dynamics;
-//  * a bad outputs.rod_fields value is reported at its file:line:col.
+//  * a bad outputs.rod_fields value is reported at its file:line:col;
+//  * the ParaView frames carry the fields at the rod nodes (point data strain and stress).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -105,6 +107,49 @@ TEST(RodFieldsScene, DynamicRunRecordsAtTheRowsOrAtItsOwnInterval) {
     EXPECT_EQ(t.rows[0][14], 0.0);
     EXPECT_GT(t.rows.back()[8], 0.0);
   }
+}
+
+// The 6 values per point of a point data array of an ascii frame.
+std::vector<double> AsciiArray(const std::string& frame, const std::string& name) {
+  const std::string tag = "Name=\"" + name + "\" NumberOfComponents=\"6\" format=\"ascii\">";
+  const std::size_t at = frame.find(tag);
+  if (at == std::string::npos) return {};
+  std::vector<double> values;
+  const char* p = frame.c_str() + at + tag.size();
+  char* end = nullptr;
+  for (double v = std::strtod(p, &end); end != p; v = std::strtod(p, &end)) {
+    values.push_back(v);
+    p = end;
+  }
+  return values;
+}
+
+TEST(RodFieldsScene, FramesCarryTheFieldsAtTheRodNodes) {
+  // Points: the clamp's vertex, then the 6 rod nodes. At the last load step (s = 1) every
+  // element has kappa3 = M / EI3 = 0.5 and m3 = M = 1, and so has every node.
+  const Scene scene =
+      ParseScene(kBentBeam, "bent.yaml", {"outputs.vtk=true", "outputs.vtk_format=ascii"});
+  const ScopedDir dir("rod_fields_frames");
+  ASSERT_TRUE(RunScene(scene, dir.path()).ok);
+  const std::string frame = test::ReadFile(dir.path() + "/vtk/frame_00003.vtp");
+  const std::vector<double> strain = AsciiArray(frame, "strain"),
+                            stress = AsciiArray(frame, "stress");
+  ASSERT_EQ(strain.size(), 6u * 7u);
+  ASSERT_EQ(stress.size(), 6u * 7u);
+  for (std::size_t c = 0; c < 6; ++c) EXPECT_EQ(stress[c], 0.0);  // the joint's point
+  for (std::size_t point = 1; point < 7; ++point) {
+    EXPECT_NEAR(strain[6 * point + 5], 0.5, 1e-12) << point;
+    EXPECT_NEAR(stress[6 * point + 5], 1.0, 1e-12) << point;
+    for (const std::size_t c : {0, 1, 2, 3, 4}) EXPECT_LT(std::abs(stress[6 * point + c]), 1e-9);
+  }
+  // Without rod_fields the frames have no such arrays.
+  const Scene plain =
+      ParseScene(kBentBeam, "bent.yaml",
+                 {"outputs.vtk=true", "outputs.vtk_format=ascii", "outputs.rod_fields=false"});
+  const ScopedDir plain_dir("rod_fields_plain_frames");
+  ASSERT_TRUE(RunScene(plain, plain_dir.path()).ok);
+  EXPECT_EQ(test::ReadFile(plain_dir.path() + "/vtk/frame_00003.vtp").find("strain"),
+            std::string::npos);
 }
 
 TEST(RodFieldsScene, BadValueIsReportedAtItsLine) {
