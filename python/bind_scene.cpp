@@ -263,7 +263,12 @@ void BindScenesAndRuns(py::module_& m) {
       .def_readwrite("vtk_interval", &OutputSpec::vtk_interval,
                      "Time between ParaView frames [s]; 0: same as interval.")
       .def_readwrite("vtk_format", &OutputSpec::vtk_format,
-                     "Encoding of the ParaView frames (VtkFormat.BINARY or ASCII; vtk.h).");
+                     "Encoding of the ParaView frames (VtkFormat.BINARY or ASCII; vtk.h).")
+      .def_readwrite("rod_fields", &OutputSpec::rod_fields,
+                     "Write rod_fields.csv: section strain and stress of every rod element.")
+      .def_readwrite("rod_fields_interval", &OutputSpec::rod_fields_interval,
+                     "Time between rod_fields.csv rows [s]; 0: every step; < 0: at the rows "
+                     "of points.csv.");
 
   py::class_<Scene>(m, "Scene",
                     "A compiled scene (scene.h): the model plus what to do with it (analysis) and "
@@ -351,8 +356,9 @@ void BindScenesAndRuns(py::module_& m) {
       R"doc(run_scene(scene, outdir, progress=False, force=False, callback=None, every=1, inputs=None) -> RunResult
 
 Runs the scene's analysis as `screwfem run` does and writes its outputs into `outdir` (created
-if needed): points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az; world
-frame, SI), joints.csv, summary.json, vtk/ and the other tables the model has (run.h).
+if needed): points.csv (t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az and
+P.qw P.qx P.qy P.qz; world frame, SI), joints.csv, summary.json, vtk/ and the other tables
+the model has (run.h).
 `progress` draws a progress bar on stderr. `inputs`: a CSV file of run-time input values over
 time (the CLI's --inputs).
 

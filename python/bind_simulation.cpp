@@ -580,6 +580,27 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "stress resultants [N, N m] (N, V2, V3, T, M2, M3): what each element transmits, "
           "K (eps - eps0) - sigma_a, and its elastic part K (eps - eps0).")
       .def(
+          "rod_fields",
+          [](S& s, const std::string& r) {
+            std::vector<double> rows;  // CalcRodFieldRows, as rod_fields.csv without its t
+            CalcRodFieldRows(s.model(), s.data(), s.Rod(r), 1.0, &rows);
+            const auto n = static_cast<py::ssize_t>(rows.size() / kRodFieldValues);
+            py::array_t<double> out({n, py::ssize_t{kRodFieldValues + 1}});
+            auto w = out.mutable_unchecked<2>();
+            for (py::ssize_t i = 0; i < n; ++i) {
+              w(i, 0) = s.data().time;
+              for (py::ssize_t k = 0; k < kRodFieldValues; ++k)
+                w(i, k + 1) = rows[static_cast<std::size_t>(i * kRodFieldValues + k)];
+            }
+            return out;
+          },
+          py::arg("rod"),
+          "rod_fields(rod) -> (num_elements, 15) array, the rows of rod_fields.csv for one rod "
+          "(name) now: t, rod (index), s (the element's mid arc length [m]), gamma1 gamma2 "
+          "gamma3 (extension, shears), kappa1 kappa2 kappa3 (twist, curvatures [1/m]), n1 n2 n3 "
+          "[N], m1 m2 m3 [N m]; section components, axis 1 along the rod (CalcRodFieldRows, "
+          "assemble/outputs.h; actuation at full value, as in dynamics).")
+      .def(
           "force_element_state",
           [](S& s, const std::string& name) {
             const LineForceState f =

@@ -545,6 +545,8 @@ OutputsSpec SpecReader::ReadOutputs(py::handle obj, const std::string& path) con
   o.vtk = Bool(get("vtk"), f("vtk"));
   o.vtk_format = Enum<VtkFormat>(get("vtk_format"), f("vtk_format"));
   o.vtk_interval = Number(get("vtk_interval"), f("vtk_interval"));
+  o.rod_fields = Bool(get("rod_fields"), f("rod_fields"));
+  o.rod_fields_interval = Number(get("rod_fields_interval"), f("rod_fields_interval"));
   return o;
 }
 
@@ -767,7 +769,8 @@ py::object ToPython(const SceneSpec& s) {
       py::arg("points") = ListOf(o.points), py::arg("all_joints") = o.all_joints,
       py::arg("joints") = py::cast(o.joints), py::arg("interval") = o.interval,
       py::arg("vtk") = o.vtk, py::arg("vtk_format") = o.vtk_format,
-      py::arg("vtk_interval") = o.vtk_interval);
+      py::arg("vtk_interval") = o.vtk_interval, py::arg("rod_fields") = o.rod_fields,
+      py::arg("rod_fields_interval") = o.rod_fields_interval);
   return SpecClass("SceneSpec")(
       py::arg("name") = s.name, py::arg("gravity") = Tuple(s.gravity),
       py::arg("rod_inertia") = s.rod_inertia, py::arg("points") = points,

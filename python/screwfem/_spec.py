@@ -265,6 +265,10 @@ class OutputsSpec:
     vtk_format: Any = _f(_m.VtkFormat.BINARY, doc="VtkFormat (or its name).")
     vtk_interval: float = _f(-1.0, doc="[s] between frames; 0: as interval; negative: the "
                              "default (interval when that is given, else about 100 frames).")
+    rod_fields: bool = _f(False, doc="Write rod_fields.csv (strain and stress per element).")
+    rod_fields_interval: float = _f(-1.0, doc="[s] between rod_fields rows; 0: every step; "
+                                    "negative: at the rows of points.csv.",
+                                    scene="rod_fields: true or the interval")
 
 
 # ---- value checks of the adders ----------------------------------------------------------------
@@ -1025,10 +1029,10 @@ class SceneSpec:
         return self._add("outputs.points", p, self.outputs.points)
 
     def set_outputs(self, *, joints=None, interval=None, vtk=None, vtk_interval=None,
-                    vtk_format=None):
+                    vtk_format=None, rod_fields=None):
         """The scene's ``outputs:`` keys: joints ('all', 'none' or a list of joint names),
         interval [s] (0: every step), vtk (bool), vtk_interval [s], vtk_format ('binary' or
-        'ascii')."""
+        'ascii'), rod_fields (True, False or the interval between its rows [s])."""
         o = self.outputs
         if joints is not None:
             if joints in ("all", "none"):
@@ -1048,6 +1052,15 @@ class SceneSpec:
             o.vtk_interval = _number(vtk_interval, "outputs.vtk_interval")
         if vtk_format is not None:
             o.vtk_format = _enum(_m.VtkFormat, vtk_format, "outputs.vtk_format")
+        if rod_fields is not None:
+            if isinstance(rod_fields, bool):
+                o.rod_fields, o.rod_fields_interval = rod_fields, -1.0
+            else:
+                interval = _number(rod_fields, "outputs.rod_fields")
+                if interval < 0.0:
+                    raise _error("outputs.rod_fields", "expected true, false or an interval "
+                                 f">= 0 s, got {rod_fields!r}")
+                o.rod_fields, o.rod_fields_interval = True, interval
         return o
 
 

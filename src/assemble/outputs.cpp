@@ -58,23 +58,59 @@ RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod_index,
   return p;
 }
 
+namespace {
+
+// The law of element e (of `rod`) at data's state: the kernel's law (rod.h), with the
+// actuation at data.time times load_factor.
+RodLaw ElementLaw(const Model& model, const Data& data, const Rod& rod, int element,
+                  double load_factor) {
+  const std::size_t e = static_cast<std::size_t>(element);
+  const RodElement& el = model.elements[e];
+  const Vec6 d = CalcRodRelativeMotion(data.H[static_cast<std::size_t>(el.node_a)],
+                                       data.H[static_cast<std::size_t>(el.node_b)], data.w_ref[e]);
+  RodActuation act;
+  const bool actuated = CalcRodActuation(model, data, element, data.time, load_factor, &act);
+  RodLaw law;
+  CalcRodLaw(el, rod.section, d, actuated ? &act : nullptr, false, &law);
+  return law;
+}
+
+}  // namespace
+
 void CalcRodStresses(const Model& model, const Data& data, int rod_index, std::vector<Vec6>* out,
                      std::vector<Vec6>* elastic) {
   const Rod& rod = model.rods[static_cast<std::size_t>(rod_index)];
   out->resize(static_cast<std::size_t>(rod.num_elements));
   if (elastic) elastic->resize(static_cast<std::size_t>(rod.num_elements));
   for (int k = 0; k < rod.num_elements; ++k) {
-    const std::size_t e = static_cast<std::size_t>(rod.first_element + k);
-    const RodElement& el = model.elements[e];
-    const Vec6 d =
-        CalcRodRelativeMotion(data.H[static_cast<std::size_t>(el.node_a)],
-                              data.H[static_cast<std::size_t>(el.node_b)], data.w_ref[e]);
-    RodActuation act;
-    const bool actuated = CalcRodActuation(model, data, static_cast<int>(e), data.time, 1.0, &act);
-    RodLaw law;  // the kernel's law (rod.h)
-    CalcRodLaw(el, rod.section, d, actuated ? &act : nullptr, false, &law);
+    const RodLaw law = ElementLaw(model, data, rod, rod.first_element + k, 1.0);
     (*out)[static_cast<std::size_t>(k)] = law.stress;
     if (elastic) (*elastic)[static_cast<std::size_t>(k)] = law.elastic_stress;
+  }
+}
+
+void CalcRodFieldRows(const Model& model, const Data& data, int rod_index, double load_factor,
+                      std::vector<double>* rows) {
+  const std::size_t first = rod_index < 0 ? 0 : static_cast<std::size_t>(rod_index);
+  const std::size_t last = rod_index < 0 ? model.rods.size() : first + 1;
+  std::size_t stations = 0;
+  for (std::size_t r = first; r < last; ++r)
+    stations += static_cast<std::size_t>(model.rods[r].num_elements);
+  rows->resize(kRodFieldValues * stations);
+  double* out = rows->data();
+  for (std::size_t r = first; r < last; ++r) {
+    const Rod& rod = model.rods[r];
+    double s0 = 0.0;  // reference arc length at the element's first node
+    for (int k = 0; k < rod.num_elements; ++k) {
+      const int e = rod.first_element + k;
+      const double length = model.elements[static_cast<std::size_t>(e)].length;
+      const RodLaw law = ElementLaw(model, data, rod, e, load_factor);
+      *out++ = static_cast<double>(r);
+      *out++ = s0 + 0.5 * length;
+      for (int i = 0; i < 6; ++i) *out++ = law.strain(i);
+      for (int i = 0; i < 6; ++i) *out++ = law.stress(i);
+      s0 += length;
+    }
   }
 }
 

@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "screwfem/assemble/assemble.h"
+#include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/progress.h"
@@ -44,15 +45,19 @@ void ValidateRecordedOutputs(const Model& model, const OutputSpec& o) {
           "must be a finite time >= 0 s");
   require(IsEnumValue(o.vtk_format), "outputs.vtk_format",
           "must be " + EnumNameAlternatives<VtkFormat>());
+  require(!o.rod_fields || o.rod_fields_interval < 0.0 || std::isfinite(o.rod_fields_interval),
+          "outputs.rod_fields",
+          "the interval must be a finite time >= 0 s (or < 0: at the rows of points.csv)");
   ValidateOutputs(model, o);
 }
 
 // About how many ParaView frames a run writes (a reservation, so that writing them allocates
 // nothing): one per frame interval (or step), the first and the last, and one per profile
-// breakpoint for steps shortened to land on them; capped, since it is only a hint.
+// breakpoint for steps shortened to land on them (static analyses: one per load step);
+// capped, since it is only a hint.
 int ExpectedFrames(const Scene& scene, const OutputSpec& o) {
   const AnalysisSettings& a = scene.analysis;
-  if (a.kind == AnalysisKind::kStatic) return 1;
+  if (a.kind == AnalysisKind::kStatic) return std::clamp(a.statics.load_steps + 1, 1, 1000000);
   const double interval = std::max(o.vtk_interval > 0.0 ? o.vtk_interval : o.interval, a.step);
   const double frames =
       std::ceil((a.end_time - a.start_time) / interval) + 2.0 +
@@ -93,7 +98,7 @@ void PrepareOutputDirectory(const std::string& dir, bool replace) {
   std::vector<fs::path> own;
   std::error_code ec;
   for (const char* name : {"summary.json", "summary.json.tmp", "points.csv", "joints.csv",
-                           "joints.json", "reactions.csv", "energy.csv"})
+                           "joints.json", "reactions.csv", "energy.csv", "rod_fields.csv"})
     if (fs::exists(fs::path(dir) / name, ec)) own.push_back(fs::path(dir) / name);
   const fs::path vtk = fs::path(dir) / "vtk";
   if (fs::is_directory(vtk, ec))
@@ -229,6 +234,17 @@ class Recording::Impl {
         actuators_.Open(outdir + "/actuators.csv", StaticColumns(ActuatorColumns(model_)));
         tables_[num_tables_++] = &actuators_;
       }
+      // Rod fields (long format, one row per element at each output time, written as one
+      // block): with the rows of points.csv it is flushed together with those tables and cut
+      // at the same output time; at an interval of its own it is flushed with them, alone.
+      if (outputs_.rod_fields) {
+        rod_fields_.Open(outdir + "/rod_fields.csv", StaticColumns(RodFieldColumns()));
+        // Room for a batch and two more blocks of up to 24 characters a value.
+        rod_fields_.Reserve(kRowBatchBytes +
+                            2 * model_.elements.size() * (kRodFieldValues + 2) * 24);
+        lead_.reserve(1);
+        if (!FieldsApart()) tables_[num_tables_++] = &rod_fields_;
+      }
       // Contacts: one row per active pair (long format), flushed with the other tables.
       if (!model_.contact_pairs.empty())
         contacts_.Open(outdir + "/contacts.csv", StaticColumns(ContactColumns()));
@@ -236,7 +252,8 @@ class Recording::Impl {
         pair_contacts_.Open(outdir + "/pair_contacts.csv", StaticColumns(PairContactColumns()));
       if (outputs_.vtk) {
         vtk_.emplace();
-        vtk_->Open(outdir + "/vtk", model_, outputs_.vtk_format, ExpectedFrames(scene, outputs_));
+        vtk_->Open(outdir + "/vtk", model_, outputs_.vtk_format, ExpectedFrames(scene, outputs_),
+                   outputs_.rod_fields);
       }
       if (!WriteSummary())
         throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
@@ -246,6 +263,7 @@ class Recording::Impl {
     } catch (const InputError&) {
       // No header-only tables without a summary that explains them.
       for (std::size_t i = 0; i < num_tables_; ++i) tables_[i]->Close();
+      if (rod_fields_.path().size() > 0) rod_fields_.Close();
       if (contacts_.path().size() > 0) contacts_.Close();
       if (pair_contacts_.path().size() > 0) pair_contacts_.Close();
       PrepareOutputDirectory(outdir, true);
@@ -259,6 +277,7 @@ class Recording::Impl {
     finished_ = true;
     const bool failed_before = io_error_ || std::string(status) == "failed";
     const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_);
+    if (!w && FieldsApart() && !rod_fields_.Flush()) w = &rod_fields_;
     if (!w && contacts_.path().size() > 0 && !contacts_.Flush()) w = &contacts_;
     if (!w && pair_contacts_.path().size() > 0 && !pair_contacts_.Flush()) w = &pair_contacts_;
     if (w && !failed_before) {
@@ -269,6 +288,7 @@ class Recording::Impl {
     }
     bool closed = true;
     for (std::size_t i = 0; i < num_tables_; ++i) closed = tables_[i]->Close() && closed;
+    if (FieldsApart()) closed = rod_fields_.Close() && closed;
     if (contacts_.path().size() > 0) closed = contacts_.Close() && closed;
     if (pair_contacts_.path().size() > 0) closed = pair_contacts_.Close() && closed;
     if (!closed && !failed_before && !io_error_) {
@@ -321,9 +341,11 @@ class Recording::Impl {
     frames_.emplace(start_time_,
                     outputs_.vtk_interval > 0.0 ? outputs_.vtk_interval : outputs_.interval,
                     a.step);
-    if (!Record(data_.time, true, true)) return false;
+    if (FieldsApart()) fields_.emplace(start_time_, outputs_.rod_fields_interval, a.step);
+    if (!Record(data_.time, true, true, FieldsApart())) return false;
     rows_->Recorded(data_.time);
     frames_->Recorded(data_.time);
+    if (fields_) fields_->Recorded(data_.time);
     if (options_.progress) {
       progress_.emplace(stderr, a.start_time, a.end_time);
       progress_->Update(data_.time, 0);
@@ -338,16 +360,20 @@ class Recording::Impl {
   // summary every 2 s.
   void BeforeStep(double t_inputs) { SetInputsAt(options_.inputs, t_inputs, data_); }
   double NextOutputTime() const {
-    return rows_ ? std::min(rows_->Next(), frames_->Next()) : INFINITY;
+    if (!rows_) return INFINITY;
+    const double next = std::min(rows_->Next(), frames_->Next());
+    return fields_ ? std::min(next, fields_->Next()) : next;
   }
   // The rows and frames due strictly inside the last AdaptiveStep, from the state
   // interpolated on the Lie group (InterpolateStep, docs/numerics.md); false if writing failed.
   bool OutputInsideStep(double t) {
     InterpolateStep(model_, data_, integ_, t, dense_);
     const bool row = rows_->Next() <= t, frame = frames_->Next() <= t;
-    if (!Record(t, row, frame, dense_)) return false;
+    const bool fields = fields_ && fields_->Next() <= t;
+    if (!Record(t, row, frame, fields, dense_)) return false;
     if (row) rows_->Recorded(t);
     if (frame) frames_->Recorded(t);
+    if (fields) fields_->Recorded(t);
     return true;
   }
   bool AfterStep(bool last) {
@@ -355,10 +381,12 @@ class Recording::Impl {
     max_constraint_ = std::max(max_constraint_, CalcMaxJointConstraint(model_, data_, t));
     max_rotation_ = std::max(max_rotation_, MaxElementRotation(data_));
     const bool row = last || rows_->Due(t), frame = last || frames_->Due(t);
-    if (row || frame) {
-      if (!Record(t, row, frame)) return false;
+    const bool fields = fields_ && (last || fields_->Due(t));
+    if (row || frame || fields) {
+      if (!Record(t, row, frame, fields)) return false;
       if (row) rows_->Recorded(t);
       if (frame) frames_->Recorded(t);
+      if (fields) fields_->Recorded(t);
     }
     if (options_.on_step) {
       if (!FlushRows(t)) return false;
@@ -372,10 +400,11 @@ class Recording::Impl {
     return true;
   }
 
-  // Static analyses (recording.h).
+  // Static analyses (recording.h): each converged load step's rows and frame (the frame's
+  // time is the load factor, Record).
   bool RecordStaticStep(double t, double load_factor) {
     load_factor_ = load_factor;
-    return finished_ || Record(t, true, false);
+    return finished_ || Record(t, true, true);
   }
   void SetStaticResult(const StaticResult& result) {
     static_ = result;
@@ -385,7 +414,7 @@ class Recording::Impl {
     max_constraint_ = CalcMaxJointConstraint(model_, data_, t);
     max_rotation_ = MaxElementRotation(data_);
     load_factor_ = static_.load_factor;
-    if (!Record(t, row, true)) return false;
+    if (row && !Record(t, true, true)) return false;  // else the last step's row and frame
     if (options_.on_step) {
       if (!FlushRows(t)) return false;
       options_.on_step(t);
@@ -397,9 +426,10 @@ class Recording::Impl {
   bool RecordFinalState() {
     if (finished_ || !rows_ || last_row_time_ == data_.time) return true;
     const double t = data_.time;
-    if (!Record(t, true, true)) return false;
+    if (!Record(t, true, true, fields_.has_value())) return false;
     rows_->Recorded(t);
     frames_->Recorded(t);
+    if (fields_) fields_->Recorded(t);
     return true;
   }
 
@@ -429,10 +459,28 @@ class Recording::Impl {
     return columns;
   }
 
-  // Writes the rows (and the ParaView frame) of the current state; on a write error ends the
-  // run as failed and returns false.
-  bool Record(double t, bool row, bool frame) { return Record(t, row, frame, data_); }
-  bool Record(double t, bool row, bool frame, const Data& data) {
+  // rod_fields.csv at an interval of its own (dynamic analyses), rather than with the rows
+  // of points.csv.
+  bool FieldsApart() const {
+    return outputs_.rod_fields && outputs_.rod_fields_interval >= 0.0 &&
+           scene_.analysis.kind != AnalysisKind::kStatic;
+  }
+
+  // Writes the rows (and the ParaView frame) of the current state, and with `fields` the rows
+  // of rod_fields.csv at its own interval (FieldsApart; else they come with the rows); on a
+  // write error ends the run as failed and returns false. Static analyses give each frame the
+  // load factor as its time (motion.pvd's timestep and the frame's TimeValue), since every
+  // state of the path has the same time.
+  bool Record(double t, bool row, bool frame, bool fields = false) {
+    return Record(t, row, frame, fields, data_);
+  }
+  bool Record(double t, bool row, bool frame, bool fields, const Data& data) {
+    const bool statics = scene_.analysis.kind == AnalysisKind::kStatic;
+    if ((row && outputs_.rod_fields && !FieldsApart()) || fields) {
+      CalcRodFieldRows(model_, data, -1, statics ? load_factor_ : 1.0, &row_);
+      if (statics) lead_.assign(1, load_factor_);
+      rod_fields_.WriteRows(t, lead_, row_, kRodFieldValues);
+    }
     if (row) {
       CalcPointRow(model_, data, outputs_.points, &row_);
       points_.WriteRow(t, WithLoadFactor(row_));
@@ -471,7 +519,9 @@ class Recording::Impl {
       batch = std::max(batch, pair_contacts_.batch_bytes());
       if (batch >= kRowBatchBytes && !FlushRows(t)) return false;
     }
-    if (frame && vtk_ && !vtk_->WriteFrame(model_, data, t))
+    if (fields && rod_fields_.batch_bytes() >= kRowBatchBytes && !FlushRows(t)) return false;
+    if (frame && vtk_ &&
+        !vtk_->WriteFrame(model_, data, statics ? load_factor_ : t, statics ? load_factor_ : 1.0))
       return WriteFailed(vtk_->dir() + "/frame files", t);
     return true;
   }
@@ -489,6 +539,7 @@ class Recording::Impl {
   bool FlushRows(double t) {
     if (const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_))
       return WriteFailed(w->path(), t);
+    if (FieldsApart() && !rod_fields_.Flush()) return WriteFailed(rod_fields_.path(), t);
     if (contacts_.path().size() > 0 && !contacts_.Flush()) return WriteFailed(contacts_.path(), t);
     if (pair_contacts_.path().size() > 0 && !pair_contacts_.Flush())
       return WriteFailed(pair_contacts_.path(), t);
@@ -572,6 +623,13 @@ class Recording::Impl {
     j.Field("output_interval", outputs_.interval);
     j.Field("vtk", outputs_.vtk).Field("vtk_interval", outputs_.vtk_interval);
     j.Field("vtk_format", NameOf(outputs_.vtk_format));
+    if (outputs_.rod_fields) {  // (only then, so that other runs' summaries keep their text)
+      j.Field("rod_fields", true);
+      if (FieldsApart())
+        j.Field("rod_fields_interval", outputs_.rod_fields_interval);
+      else
+        j.Key("rod_fields_interval").Null();  // at the rows of points.csv
+    }
     j.EndObject();
 
     long free_nodes = 0;
@@ -595,6 +653,11 @@ class Recording::Impl {
     j.Key("joints").BeginArray();
     for (const OutputJoint& oj : outputs_.joints) j.String(oj.name);
     j.EndArray();
+    if (outputs_.rod_fields) {  // the names of rod_fields.csv's rod indices
+      j.Key("rods").BeginArray();
+      for (const Rod& rod : model_.rods) j.String(rod.name);
+      j.EndArray();
+    }
     // The rows on disk (the summary is written after the tables are flushed).
     j.Field("rows", points_.rows()).Field("last_row_time", points_.last_time());
     j.Field("vtk_frames", vtk_ ? vtk_->frames() : 0);
@@ -654,11 +717,16 @@ class Recording::Impl {
   StaticResult static_;
   bool has_static_ = false;
   CsvWriter points_, joints_, reactions_, energy_, tendons_, forces_, actuators_;
-  CsvWriter contacts_;       // long format (one row per active pair): not flushed together
-  CsvWriter pair_contacts_;  // the same for pairs of moving shapes (pair_contacts.csv)
+  // Long format, a block of rows per output time (WriteRows); flushed with the tables when it
+  // has their rows, else (FieldsApart) alone.
+  CsvWriter rod_fields_;
+  std::vector<double> lead_;  // values after t on every rod_fields.csv row: the load factor
+                              // in static analyses, none otherwise
+  CsvWriter contacts_;        // long format (one row per active pair): not flushed together
+  CsvWriter pair_contacts_;   // the same for pairs of moving shapes (pair_contacts.csv)
   // The open tables, flushed together (points, joints, reactions and energy always).
-  std::array<CsvWriter*, 7> tables_ = {&points_, &joints_, &reactions_, &energy_,
-                                       nullptr,  nullptr,  nullptr};
+  std::array<CsvWriter*, 8> tables_ = {&points_, &joints_, &reactions_, &energy_,
+                                       nullptr,  nullptr,  nullptr,     nullptr};
   std::size_t num_tables_ = 4;
   std::optional<VtkWriter> vtk_;
   std::optional<ProgressBar> progress_;
@@ -666,6 +734,7 @@ class Recording::Impl {
   std::vector<double> static_row_;            // load factor and row_ (static analyses)
   double load_factor_ = 0.0;                  // of the state recorded (static analyses)
   std::optional<OutputClock> rows_, frames_;  // dynamic analyses, from Start
+  std::optional<OutputClock> fields_;         // ... with FieldsApart
   double start_time_;                         // of the recorded run [s]
   Clock::time_point wall_start_, last_summary_;
   double max_constraint_ = 0.0;

@@ -434,6 +434,8 @@ void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
   out->vtk_interval = o.vtk_interval >= 0.0 ? o.vtk_interval
                       : o.interval >= 0.0   ? 0.0  // the same as the given interval
                                             : DefaultOutputInterval(a, kDefaultVtkFrames);
+  out->rod_fields = o.rod_fields;
+  out->rod_fields_interval = o.rod_fields_interval;
 }
 
 void SceneCompiler::CheckReferences() const {

@@ -4,6 +4,7 @@
 // needs the model's geometry. Every message names the file, line, column and field.
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -114,6 +115,7 @@ class SceneReader {
   void ReadOutputPoint(const Node& value, const std::string& path, OutputPointSpec& op,
                        EntitySource& source);
   void ReadOutputJoints(const Node& jn, const std::string& path);
+  void ReadRodFields(const Node& v, const std::string& path);
 
   // Values.
   Vec3 Point(const Node& node, const std::string& path) const;
@@ -1327,7 +1329,8 @@ void SceneReader::ReadOutputs(const Node* node) {
   OutputsSpec* out = &spec_.outputs;
   if (node == nullptr || node->IsNull()) return;
   const std::string path = "outputs";
-  r_.CheckKeys(*node, path, {"points", "joints", "interval", "vtk", "vtk_format", "vtk_interval"});
+  r_.CheckKeys(*node, path,
+               {"points", "joints", "interval", "vtk", "vtk_format", "vtk_interval", "rod_fields"});
   if (const Node* pts = node->Find("points")) {
     const std::string pp = Join(path, "points");
     r_.CheckNames(*pts, pp, "output point");
@@ -1347,6 +1350,28 @@ void SceneReader::ReadOutputs(const Node* node) {
     out->vtk_format = r_.Enum<VtkFormat>(*v, Join(path, "vtk_format"));
   if (const Node* v = node->Find("vtk_interval"))
     out->vtk_interval = r_.NonNegativeNumber(*v, Join(path, "vtk_interval"));
+  if (const Node* v = node->Find("rod_fields")) ReadRodFields(*v, Join(path, "rod_fields"));
+}
+
+// true (at the rows of points.csv), false, or the interval between rows [s] (>= 0).
+void SceneReader::ReadRodFields(const Node& v, const std::string& path) {
+  OutputsSpec* out = &spec_.outputs;
+  std::string word = v.IsScalar() ? v.scalar : std::string();
+  for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (word == "true" || word == "false") {
+    out->rod_fields = r_.Bool(v, path);
+    out->rod_fields_interval = -1.0;
+    return;
+  }
+  double interval = 0.0;
+  std::string error;
+  if (!v.IsScalar() || !scene_yaml::EvaluateExpression(v.scalar, &interval, &error) ||
+      !std::isfinite(interval) || interval < 0.0)
+    r_.Fail(v.location, path,
+            "expected true, false or the interval between rows in s (a number >= 0), got " +
+                (v.IsScalar() ? "'" + v.scalar + "'" : scene_yaml::Describe(v)));
+  out->rod_fields = true;
+  out->rod_fields_interval = interval;
 }
 
 void SceneReader::ReadOutputPoint(const Node& value, const std::string& p, OutputPointSpec& op,

@@ -94,7 +94,7 @@ bool WriteWholeFile(const std::string& path, const char* data, std::size_t size)
 }  // namespace
 
 void VtkWriter::Open(const std::string& dir, const Model& model, VtkFormat format,
-                     int expected_frames) {
+                     int expected_frames, bool rod_fields) {
   if (!IsEnumValue(format)) throw InputError("VtkWriter::Open: unknown VtkFormat value");
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
@@ -105,12 +105,14 @@ void VtkWriter::Open(const std::string& dir, const Model& model, VtkFormat forma
   times_.reserve(static_cast<std::size_t>(std::max(expected_frames, 1)));
   path_.reserve(dir_.size() + 32);
   LayOut(model);
+  rod_fields_ = rod_fields;
+  LayOutRodFields(model);
   if (format_ == VtkFormat::kBinary) {
     ComposeBinaryImage();
   } else {
     // Room for a frame of shortest doubles (at most 24 characters each) and the cells.
     image_.clear();
-    image_.reserve(4096 + 480 * sources_.size() +
+    image_.reserve(4096 + (rod_fields_ ? 780 : 480) * sources_.size() +
                    24 * (vert_connectivity_.size() + line_connectivity_.size()) +
                    64 * cell_rod_.size());
   }
@@ -255,6 +257,43 @@ void VtkWriter::LayOut(const Model& model) {
   contact_force_.assign(n, 0.0);
 }
 
+// The rods' polylines are the first lines (LayOut): point k of rod r is its node k, between
+// its elements k - 1 and k.
+void VtkWriter::LayOutRodFields(const Model& model) {
+  rod_points_.clear();
+  const std::size_t n = rod_fields_ ? 6 * sources_.size() : 0;
+  strain_.assign(n, 0.0);
+  stress_.assign(n, 0.0);
+  if (!rod_fields_) return;
+  long long first_station = 0;
+  for (std::size_t r = 0; r < model.rods.size(); ++r) {
+    const long long elements = model.rods[r].num_elements;
+    const std::size_t begin = r == 0 ? 0 : static_cast<std::size_t>(line_offsets_[r - 1]);
+    for (long long k = 0; k <= elements; ++k)
+      rod_points_.push_back({line_connectivity_[begin + static_cast<std::size_t>(k)],
+                             first_station + std::max(k - 1, 0LL),
+                             first_station + std::min(k, elements - 1)});
+    first_station += elements;
+  }
+  field_rows_.assign(static_cast<std::size_t>(kRodFieldValues * first_station), 0.0);
+}
+
+void VtkWriter::CalcRodFields(const Model& model, const Data& data, double load_factor) {
+  CalcRodFieldRows(model, data, -1, load_factor, &field_rows_);
+  const auto row = [&](long long station) {
+    return &field_rows_[static_cast<std::size_t>(station * kRodFieldValues)];
+  };
+  for (const auto& [point, a, b] : rod_points_) {
+    const double *ra = row(a), *rb = row(b);  // rod, s, then the strain and the stress
+    double* strain = &strain_[static_cast<std::size_t>(6 * point)];
+    double* stress = &stress_[static_cast<std::size_t>(6 * point)];
+    for (int c = 0; c < 6; ++c) {
+      strain[c] = 0.5 * (ra[2 + c] + rb[2 + c]);
+      stress[c] = 0.5 * (ra[8 + c] + rb[8 + c]);
+    }
+  }
+}
+
 // Positions, frame axes and velocities of the points at data's state (method.md §6).
 void VtkWriter::CalcPoints(const Model& model, const Data& data) {
   // The contact forces on each contact segment, and their points weighted by |F|.
@@ -387,6 +426,10 @@ void VtkWriter::ComposeBinaryImage() {
   array("        ", kFloat64, "velocity", 3, velocity_.data(), 3 * n, &velocity_at_);
   array("        ", kFloat64, "contact_force", 3, contact_force_.data(), 3 * n, &contact_force_at_);
   array("        ", kInt32, "joint_id", 1, point_joint_.data(), n, nullptr);
+  if (rod_fields_) {
+    array("        ", kFloat64, "strain", 6, strain_.data(), 6 * n, &strain_at_);
+    array("        ", kFloat64, "stress", 6, stress_.data(), 6 * n, &stress_at_);
+  }
   f += "      </PointData>\n      <CellData Scalars=\"rod_id\">\n";
   array("        ", kInt32, "rod_id", 1, cell_rod_.data(), cell_rod_.size(), nullptr);
   array("        ", kInt32, "body_id", 1, cell_body_.data(), cell_body_.size(), nullptr);
@@ -423,12 +466,13 @@ void VtkWriter::ComposeBinaryImage() {
 void VtkWriter::ComposeAsciiImage(double time) {
   std::string& f = image_;
   f.clear();
-  const auto doubles = [&](const char* name, const std::vector<double>& values) {
-    AppendArrayTag(&f, "        ", kFloat64, name, 3);
+  const auto doubles = [&](const char* name, const std::vector<double>& values,
+                           std::size_t components = 3) {
+    AppendArrayTag(&f, "        ", kFloat64, name, static_cast<int>(components));
     f += " format=\"ascii\">\n";
-    for (std::size_t i = 0; i < values.size(); i += 3) {
+    for (std::size_t i = 0; i < values.size(); i += components) {
       f += "         ";
-      for (std::size_t k = i; k < i + 3; ++k) {
+      for (std::size_t k = i; k < i + components; ++k) {
         f += ' ';
         AppendShortest(&f, values[k]);
       }
@@ -466,6 +510,10 @@ void VtkWriter::ComposeAsciiImage(double time) {
   doubles("velocity", velocity_);
   doubles("contact_force", contact_force_);
   integers(kInt32, "joint_id", point_joint_);
+  if (rod_fields_) {
+    doubles("strain", strain_, 6);
+    doubles("stress", stress_, 6);
+  }
   f += "      </PointData>\n      <CellData Scalars=\"rod_id\">\n";
   integers(kInt32, "rod_id", cell_rod_);
   integers(kInt32, "body_id", cell_body_);
@@ -488,8 +536,9 @@ void VtkWriter::ComposeAsciiImage(double time) {
   f += "    </Piece>\n  </PolyData>\n</VTKFile>\n";
 }
 
-bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time) {
+bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time, double load_factor) {
   CalcPoints(model, data);
+  if (rod_fields_) CalcRodFields(model, data, load_factor);
   if (format_ == VtkFormat::kBinary) {
     std::memcpy(&image_[time_at_], &time, sizeof time);
     const std::size_t bytes = position_.size() * sizeof(double);
@@ -498,6 +547,10 @@ bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time) {
     std::memcpy(&image_[velocity_at_], velocity_.data(), bytes);
     std::memcpy(&image_[contact_force_at_], contact_force_.data(), bytes);
     std::memcpy(&image_[position_at_], position_.data(), bytes);
+    if (rod_fields_) {
+      std::memcpy(&image_[strain_at_], strain_.data(), 2 * bytes);
+      std::memcpy(&image_[stress_at_], stress_.data(), 2 * bytes);
+    }
   } else {
     ComposeAsciiImage(time);
   }

@@ -51,7 +51,8 @@ void ValidateOutputs(const Model& model, const OutputSpec& outputs) {
 }
 
 std::vector<std::string> PointColumns(const std::vector<OutputPoint>& points) {
-  static constexpr const char* kSuffix[9] = {"x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az"};
+  static constexpr const char* kSuffix[13] = {"x",  "y",  "z",  "vx", "vy", "vz", "ax",
+                                              "ay", "az", "qw", "qx", "qy", "qz"};
   std::vector<std::string> columns;
   for (const OutputPoint& p : points)
     for (const char* s : kSuffix) columns.push_back(p.name + "." + s);
@@ -95,6 +96,11 @@ void CalcReactionRow(const Model& model, const Data& data, std::vector<double>* 
     const Vec6 r = CalcJointReaction(model, data, static_cast<int>(jj));
     for (int c = 0; c < 6; ++c) (*row)[i++] = r(c);
   }
+}
+
+std::vector<std::string> RodFieldColumns() {
+  return {"rod",    "s",  "gamma1", "gamma2", "gamma3", "kappa1", "kappa2",
+          "kappa3", "n1", "n2",     "n3",     "m1",     "m2",     "m3"};
 }
 
 std::vector<std::string> EnergyColumns() {
@@ -153,15 +159,35 @@ std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJo
   return w.str();
 }
 
+Eigen::Vector4d FrameQuaternion(const Mat3& R) {
+  Eigen::Quaterniond q(R);
+  q.normalize();
+  Eigen::Vector4d out(q.w(), q.x(), q.y(), q.z());
+  // q and -q are the same rotation: w >= 0, and at w = 0 the first non-zero of x, y, z > 0.
+  int lead = 0;
+  while (lead < 3 && out(lead) == 0.0) ++lead;
+  if (out(lead) < 0.0) out = -out;
+  return out;
+}
+
 void CalcPointRow(const Model& model, const Data& data, const std::vector<OutputPoint>& points,
                   std::vector<double>* row) {
-  row->resize(9 * points.size());
+  row->resize(kPointColumns * points.size());
   double* out = row->data();
   for (const OutputPoint& p : points) {
-    const PointMotion m = p.rod >= 0 ? CalcRodPointMotion(model, data, p.rod, p.arc_length).motion
-                                     : CalcNodePointMotion(model, data, p.node, p.offset);
+    PointMotion m;
+    Eigen::Vector4d q;
+    if (p.rod >= 0) {
+      const RodPoint r = CalcRodPointMotion(model, data, p.rod, p.arc_length);
+      m = r.motion;
+      q = FrameQuaternion(r.frame.R);
+    } else {
+      m = CalcNodePointMotion(model, data, p.node, p.offset);
+      q = FrameQuaternion(data.H[static_cast<std::size_t>(p.node)].R);
+    }
     for (const Vec3* v : {&m.position, &m.velocity, &m.acceleration})
       for (int i = 0; i < 3; ++i) *out++ = (*v)(i);
+    for (int i = 0; i < 4; ++i) *out++ = q(i);
   }
 }
 
@@ -365,6 +391,28 @@ bool CsvWriter::WriteRow(double t, const std::vector<double>& values) {
   row_times_.push_back(t);
   return true;
 }
+
+bool CsvWriter::WriteRows(double t, const std::vector<double>& lead,
+                          const std::vector<double>& values, std::size_t width) {
+  if (fd_ < 0 || failed_) return false;
+  for (std::size_t i = 0; i + width <= values.size() && width > 0; i += width) {
+    AppendShortest(&batch_, t);
+    for (double v : lead) {
+      batch_ += ',';
+      AppendShortest(&batch_, v);
+    }
+    for (std::size_t k = i; k < i + width; ++k) {
+      batch_ += ',';
+      AppendShortest(&batch_, values[k]);
+    }
+    batch_ += '\n';
+  }
+  row_ends_.push_back(batch_.size());
+  row_times_.push_back(t);
+  return true;
+}
+
+void CsvWriter::Reserve(std::size_t bytes) { batch_.reserve(bytes); }
 
 std::size_t CsvWriter::WriteBatch() {
   if (fd_ < 0 || failed_) return 0;

@@ -17,9 +17,11 @@
 #include <filesystem>
 #include <new>
 #include <string>
+#include <utility>
 
 #include <unistd.h>
 
+#include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/input_table.h"
 #include "screwfem/io/vtk.h"
@@ -293,16 +295,25 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
     EXPECT_GT(active_steps, 10);  // with contacts active
     EXPECT_GT(pair_steps, 10);    // and the pair of moving shapes
-    // The rows of tendons.csv and forces.csv, once sized.
-    std::vector<double> tendons, forces, actuators;
+    // The rows of tendons.csv, forces.csv, actuators.csv, points.csv (a node point and a rod
+    // point, with their orientations) and rod_fields.csv (with the actuators), once sized.
+    std::vector<double> tendons, forces, actuators, points, fields;
+    const std::vector<OutputPoint> recorded = {
+        {.name = "ball", .node = model.rods[0].nodes.front(), .offset = Vec3(0.1, 0, 0)},
+        {.name = "arm", .rod = 0, .arc_length = 0.33}};
     CalcTendonRow(model, data, &tendons);
     CalcForceRow(model, data, &forces);
     CalcActuatorRow(model, data, data.time, &actuators);
+    CalcPointRow(model, data, recorded, &points);
+    CalcRodFieldRows(model, data, -1, 1.0, &fields);
     g_counting = true;
     CalcTendonRow(model, data, &tendons);
     CalcForceRow(model, data, &forces);
     CalcActuatorRow(model, data, data.time, &actuators);
+    CalcPointRow(model, data, recorded, &points);
+    CalcRodFieldRows(model, data, -1, 1.0, &fields);
     g_counting = false;
+    EXPECT_EQ(fields.size(), kRodFieldValues * model.elements.size());
     EXPECT_GT(actuators[1], 0.0);  // the muscle is active
     EXPECT_GT(tendons[2], 0.0);    // the tendon pulls
     EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the tendon and force rows";
@@ -396,11 +407,14 @@ TEST(NoAllocation, AdvanceWithAnObserverAllocatesNothing) {
   }
 }
 
-// Writing a ParaView frame (both encodings) between time steps allocates nothing once the
-// writer is open with room for the frames (the ascii text buffer is reserved for a frame too).
+// Writing a ParaView frame (both encodings, with and without the rod fields) between time
+// steps allocates nothing once the writer is open with room for the frames (the ascii text
+// buffer is reserved for a frame too).
 TEST(NoAllocation, ParaViewFramesAllocateNothing) {
   const Model model = MixedModel();
-  for (const VtkFormat format : {VtkFormat::kBinary, VtkFormat::kAscii}) {
+  for (const auto& [format, rod_fields] :
+       {std::pair{VtkFormat::kBinary, false}, std::pair{VtkFormat::kAscii, false},
+        std::pair{VtkFormat::kBinary, true}, std::pair{VtkFormat::kAscii, true}}) {
     const std::filesystem::path dir = std::filesystem::temp_directory_path() /
                                       ("screwfem_alloc_vtk_" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
@@ -411,7 +425,7 @@ TEST(NoAllocation, ParaViewFramesAllocateNothing) {
     std::string message;
     ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
     VtkWriter writer;
-    writer.Open(dir.string(), model, format, 20);
+    writer.Open(dir.string(), model, format, 20, rod_fields);
     g_allocations = 0;
     bool ok = true;
     for (int i = 0; i < 20; ++i) {
@@ -428,7 +442,8 @@ TEST(NoAllocation, ParaViewFramesAllocateNothing) {
     }
     EXPECT_TRUE(ok);
     EXPECT_EQ(writer.frames(), 20);
-    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations writing 20 frames, " << NameOf(format);
+    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations writing 20 frames, " << NameOf(format)
+                                       << ", rod fields " << rod_fields;
     std::filesystem::remove_all(dir);
   }
 }

@@ -165,7 +165,8 @@ TEST(RunScene, WritesTheDocumentedColumnsAndOneRowPerInterval) {
   const Table points = ReadCsv(dir + "/points.csv");
   ASSERT_TRUE(points.well_formed) << points.problem;
   const std::vector<std::string> expected = {"t",      "tip.x",  "tip.y",  "tip.z",  "tip.vx",
-                                             "tip.vy", "tip.vz", "tip.ax", "tip.ay", "tip.az"};
+                                             "tip.vy", "tip.vz", "tip.ax", "tip.ay", "tip.az",
+                                             "tip.qw", "tip.qx", "tip.qy", "tip.qz"};
   EXPECT_EQ(points.columns, expected);
   ASSERT_EQ(points.rows.size(), 51u);  // t = 0, 0.01, ..., 0.5
   for (std::size_t i = 0; i < points.rows.size(); ++i)
@@ -356,7 +357,7 @@ TEST(JointCoordinateEffort, SpringsAndDampersPushTowardsRest) {
 // --- static analyses -------------------------------------------------------------------------------
 
 // A static analysis records every converged load step (the path) with its load factor in a
-// column after t, and one ParaView frame at the end.
+// column after t, and a ParaView frame at each (the load factor as its time).
 TEST(RunScene, StaticAnalysisRecordsEveryLoadStepWithItsLoadFactor) {
   Scene s = Cantilever();
   s.analysis.kind = AnalysisKind::kStatic;
@@ -387,7 +388,18 @@ TEST(RunScene, StaticAnalysisRecordsEveryLoadStepWithItsLoadFactor) {
   ASSERT_TRUE(summary);
   EXPECT_EQ(summary->Find("settings.analysis")->string, "static");
   EXPECT_TRUE(summary->Find("static_solution.converged")->boolean);
-  EXPECT_EQ(summary->Find("outputs.vtk_frames")->number, 1.0);
+  EXPECT_EQ(summary->Find("outputs.vtk_frames")->number, 10.0);
+  // Each frame's time is its load step's load factor (all rows have the same t).
+  const std::string pvd = ReadFile(dir + "/vtk/motion.pvd");
+  std::size_t at = 0;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    at = pvd.find("timestep=\"", at);
+    ASSERT_NE(at, std::string::npos) << pvd;
+    at += 10;
+    EXPECT_EQ(std::strtod(pvd.c_str() + at, nullptr), t.rows[i][1]) << i;
+    EXPECT_NE(pvd.find("file=\"frame_0000" + std::to_string(i) + ".vtp\"", at), std::string::npos);
+  }
+  EXPECT_EQ(pvd.find("timestep=\"", at), std::string::npos);  // no eleventh frame
 }
 
 TEST(RunScene, StaticPreloadStartsTheDynamicsAtEquilibrium) {

@@ -270,8 +270,8 @@ class NumpyArraysTest(unittest.TestCase):
             self.assertEqual(array.dtype, np.float64, name)
         self.assertEqual(sim.node_frame(0).shape, (4, 4))
         self.assertEqual(sim.joint_relative_frame("hinge").shape, (4, 4))
-        self.assertEqual(sim.calc_point_row().shape, (9,))
-        self.assertEqual(len(sim.point_columns()), 9)
+        self.assertEqual(sim.calc_point_row().shape, (13,))  # x, v, a, orientation quaternion
+        self.assertEqual(len(sim.point_columns()), 13)
         self.assertEqual(sim.calc_joint_row().shape, (4,))
         self.assertEqual(sim.joint_columns(), ["hinge.q", "hinge.qd", "hinge.qdd", "hinge.effort"])
         motion = sim.point_motion("tip")
@@ -858,8 +858,10 @@ outputs:
     tip: {{body: arm, at: TIP}}
     third: {{rod: arm, s: {length / 3}}}
   vtk: false
+  rod_fields: true
 """
         scene = sf.parse_scene(text, "rollup.yaml")
+        self.assertTrue(scene.outputs.rod_fields)
         self.assertEqual((scene.model.num_rods, scene.model.num_elements, scene.model.num_nodes),
                          (1, 4, 5))
         self.assertEqual(scene.model.rods[0].nodes, [0, 1, 2, 3, 4])
@@ -884,10 +886,28 @@ outputs:
                                    rtol=0, atol=1e-12)
         self.assertAlmostEqual(sim.calc_energy().strain / (0.5 * moment ** 2 * length / ei), 1.0,
                                delta=1e-12)
+        # Section fields: t, rod, s, gamma1..3, kappa1..3, n1..3, m1..3 per element; the
+        # moment about y bends about section axis 2: kappa2 = M / EI, m2 = M, nothing else.
+        fields = sim.rod_fields("arm")
+        self.assertEqual(fields.shape, (4, 15))
+        np.testing.assert_allclose(fields[:, 2], [0.0625, 0.1875, 0.3125, 0.4375], atol=1e-15)
+        np.testing.assert_allclose(fields[:, 7], curvature, rtol=1e-12)
+        np.testing.assert_allclose(fields[:, 13], moment, rtol=1e-12)
+        others = np.delete(fields[:, 3:], [4, 10], axis=1)
+        self.assertLess(np.abs(others).max(), 1e-9)
         # run_scene solves the same problem and records the same row.
         with tempfile.TemporaryDirectory() as outdir:
             run = sf.run_scene(scene, outdir)
             header, rows = read_csv(os.path.join(outdir, "points.csv"))
+            with open(os.path.join(outdir, "rod_fields.csv"), newline="") as f:
+                field_rows = list(csv.reader(f))
+        # rod_fields.csv: t, load_factor, then the values; the last load step's 4 rows are the
+        # equilibrium sim.rod_fields saw.
+        self.assertEqual(field_rows[0][:4], ["t", "load_factor", "rod", "s"])
+        self.assertEqual(len(field_rows), 1 + 4 * 4)
+        last = np.array([[float(x) for x in r] for r in field_rows[-4:]])
+        np.testing.assert_array_equal(last[:, 1], 1.0)
+        np.testing.assert_allclose(last[:, 2:], fields[:, 1:], rtol=0, atol=1e-14)
         self.assertTrue(run.ok, run.message)
         # Static analyses: every load step's row at the same t, the load factor after t (the
         # dict keeps the last row, the equilibrium at load factor 1).

@@ -1,6 +1,8 @@
 // Output quantities (method.md §6).
 #pragma once
 
+#include <vector>
+
 #include "screwfem/model/data.h"
 
 namespace screwfem {
@@ -37,6 +39,31 @@ RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod, doubl
 // K (d/L - f0) without actuators); with `elastic`, also the elastic part K (d/L - f0 - eps0).
 void CalcRodStresses(const Model& model, const Data& data, int rod, std::vector<Vec6>* out,
                      std::vector<Vec6>* elastic = nullptr);
+
+// Section strain and stress along rods (rod_fields.csv, io/writers.h RodFieldColumns), from
+// the rod's constitutive law CalcRodLaw (elements/rod.h) with the actuation at data.time times
+// `load_factor` (statics scales actuation like loads; 1 in dynamics). One station per
+// element, at its mid arc length: a helical element's strain and stress are constant along it
+// (for loads at its ends, its stress is the mean of the exact stress field over the element,
+// which equals the field at the midpoint where that varies linearly). Per station
+// kRodFieldValues values:
+//   rod                  index in model.rods
+//   s                    reference arc length of the station from the rod's first node [m]
+//   eps = (gamma; kappa) strain (d - d0) / L relative to the reference configuration (zero at
+//                        rest), section components: gamma1 extension, gamma2 gamma3 shear [-];
+//                        kappa1 twist, kappa2 kappa3 bending curvatures about section axes 2
+//                        and 3 [1/m] (section axis 1 is the rod axis, model/section.h)
+//   sigma = (n; m)       stress resultants K eps - (K eps0 + sigma_a), what the section
+//                        transmits: the force [N] and moment [N m] (about the section centre)
+//                        that the part of the rod beyond the station (larger s) exerts on the
+//                        part before it, section components: n1 axial force (> 0 tension),
+//                        n2 n3 shear forces, m1 torque, m2 m3 bending moments
+// i.e. the engine's translation-first 6-vectors eps and sigma in their order. `rod` < 0: every
+// rod, in model order. *rows is resized to kRodFieldValues x stations (no allocation once it
+// has that size).
+inline constexpr int kRodFieldValues = 14;
+void CalcRodFieldRows(const Model& model, const Data& data, int rod, double load_factor,
+                      std::vector<double>* rows);
 
 // The force and moment [N; N m] a joint transmits to its side B (node_b) from side A, world
 // components, the moment about the origin of the joint frame on side B (H_B C_B): the

@@ -5,7 +5,8 @@
 // A Recording observes the stepping loop (solve/advance.h): passed to Advance, it holds the
 // run-time inputs of a table over each step, writes the rows and frames due at each step end
 // (and, for error-controlled steps, those due inside a step, from the interpolated state), and
-// keeps the summary up to date every 2 s. Static analyses record a row per load step.
+// keeps the summary up to date every 2 s. Static analyses record a row and a ParaView frame per
+// load step (the frame's time is the load factor).
 #pragma once
 
 #include <memory>
@@ -49,14 +50,15 @@ class Recording final : public AdvanceObserver {
   bool OutputInsideStep(double t) override;
   bool AfterStep(bool last) override;
 
-  // Static analyses: a row of the path at time t and `load_factor` (SolveStatic's on_step).
-  // False on a write error (then finished).
+  // Static analyses: the rows and the ParaView frame of the path at time t and `load_factor`
+  // (SolveStatic's on_step). False on a write error (then finished).
   bool RecordStaticStep(double t, double load_factor);
   // The outcome of a static solution (of a static analysis or a dynamic one's preload), for
   // the summary.
   void SetStaticResult(const StaticResult& result);
   // A converged static analysis at time t: the largest residual and rotation of the solution,
-  // its frame, and its row unless the path recorded it already; then options.on_step.
+  // its row and frame unless the path recorded them already (`row`: it did not, the solve
+  // took no step); then options.on_step.
   bool RecordStaticSolution(double t, bool row);
 
   // The row and frame of the current state unless it is the last one recorded (the end of a

@@ -1,21 +1,29 @@
 // Running a scene and writing its results (issue: the main job).
 //
 // OUTDIR/points.csv   t, then per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az (world, SI)
+//                     and P.qw P.qx P.qy P.qz: the unit quaternion, world from the point's
+//                     frame (the section frame along a rod, else the node frame), qw >= 0
+//                     (FrameQuaternion, writers.h)
 // OUTDIR/joints.csv   t, then per joint J (per coordinate i for multi-DOF joints: J.i.q ...):
 //                     J.q J.qd J.qdd J.effort
 // OUTDIR/reactions.csv t, then per joint with constraint rows: J.Fx J.Fy J.Fz J.Mx J.My J.Mz
 //                     (CalcJointReaction: on side B, world, about the joint point)
 // OUTDIR/energy.csv   t, kinetic strain spring gravity total, px py pz, Lx Ly Lz (world)
+// OUTDIR/rod_fields.csv (outputs.rod_fields) t, then per rod element, one row each: rod s
+//                     gamma1 gamma2 gamma3 kappa1 kappa2 kappa3 n1 n2 n3 m1 m2 m3 (section
+//                     strain and stress at the element's midpoint, CalcRodFieldRows)
 // OUTDIR/summary.json resolved settings, counts, steps, Newton iterations, halvings, wall time,
 //                     largest element rotation,
 //                     largest constraint residual, status and message
 // OUTDIR/vtk/frame_NNNNN.vtp and OUTDIR/vtk/motion.pvd (ParaView; the collection is written
-//                     once, when the run ends, also when it is interrupted or fails)
+//                     once, when the run ends, also when it is interrupted or fails; static
+//                     analyses: a frame per load step, its time the load factor)
 // OUTDIR/.screwfem.lock  held (flock) by the running run, with its process id
 // Files are written as the run goes, in whole rows: the CSV rows are collected and written
 // when 64 KiB have accumulated, at least every 2 s of wall time (with the summary), before
-// every on_step callback and at the end of the run; points.csv, joints.csv, reactions.csv and
-// energy.csv always hold the same rows. An interrupted run (stop request) leaves valid files up to the last
+// every on_step callback and at the end of the run; points.csv, joints.csv, reactions.csv,
+// energy.csv (and rod_fields.csv when it has their rows: it then ends at the same time) always
+// hold the same rows. An interrupted run (stop request) leaves valid files up to the last
 // completed output step; the files of a killed process end with a complete row; a write
 // error (a full disk) cuts a torn row off, and the summary says which file failed and how
 // many rows the tables hold.
@@ -81,7 +89,9 @@ struct RunResult {
 // (Profile::Breakpoints) in (start_time, end_time) falls on a step end (a grid step end within
 // a tenth of a step of a breakpoint moves onto it). Rows are recorded at start_time, at the
 // first step end at or after each multiple of outputs.interval (every step when 0) and at the
-// last step end. Static analyses: SolveStatic at statics.time, one row.
+// last step end. Static analyses: SolveStatic at statics.time; every converged load step is a
+// row of every table (t = statics.time, then its load factor) and a ParaView frame (the load
+// factor as its time).
 // Numerical failure, a stop request and write errors end the run with a result (and
 // summary.json status "failed" or "interrupted"), never an exception.
 // Throws InputError for invalid settings or outputs (naming the field), when outdir or its

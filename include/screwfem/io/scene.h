@@ -77,6 +77,11 @@ struct OutputSpec {
   bool vtk = true;            // ParaView files under vtk/
   double vtk_interval = 0.0;  // [s]; 0: same as interval
   VtkFormat vtk_format = VtkFormat::kBinary;
+  // rod_fields.csv (writers.h, RodFieldColumns): the section strain and stress of every rod.
+  bool rod_fields = false;
+  // [s] between its rows (0: every step; start and end included, as rows); < 0: at the rows
+  // of points.csv. Static analyses: every load step, whatever the interval.
+  double rod_fields_interval = -1.0;
 };
 
 struct Scene {

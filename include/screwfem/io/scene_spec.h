@@ -153,6 +153,8 @@ struct OutputsSpec {
   // [s]; 0: the same as interval; negative: `interval` when that is given (>= 0), else about
   // kDefaultVtkFrames frames over the run.
   double vtk_interval = -1.0;
+  bool rod_fields = false;            // see OutputSpec
+  double rod_fields_interval = -1.0;  // [s]; < 0: at the rows of points.csv
 };
 
 struct SceneSpec {

@@ -13,6 +13,10 @@
 //               the joint frame at joints), velocity [m/s], joint_id (-1 except at joints).
 //   Cell data:  rod_id, body_id, joint_id (-1 where they do not apply).
 //   Field data: TimeValue [s].
+//   With rod fields (Open's rod_fields, outputs.rod_fields), point data strain and stress (6
+//   components each: gamma1 gamma2 gamma3 kappa1 kappa2 kappa3 and n1 n2 n3 m1 m2 m3, section
+//   components as in rod_fields.csv, CalcRodFieldRows): at a rod node the mean of its elements
+//   on either side (at an end node, its element's), zero at the other points.
 // DIR/motion.pvd         the Collection, written once (atomically) when the run ends, also
 //                        when it is interrupted or fails: it lists exactly the complete frame
 //                        files on disk. (Rewriting it after every frame made a run quadratic
@@ -33,6 +37,7 @@
 //           text that reads back as the same value; for reading with a text editor or diff.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -49,12 +54,13 @@ class VtkWriter {
   // ids, and (binary) the whole file but its doubles. Reserves room for `expected_frames`
   // frames, so that writing up to that many allocates nothing.
   void Open(const std::string& dir, const Model& model, VtkFormat format = VtkFormat::kBinary,
-            int expected_frames = 0);
-  // Writes the next frame of data's current state at `time` (data of the model given to Open).
+            int expected_frames = 0, bool rod_fields = false);
+  // Writes the next frame of data's current state at `time` (data of the model given to Open;
+  // `load_factor` scales the rods' actuation in the rod fields, as in statics).
   // Returns false on a write error (errno kept; the incomplete frame file is removed and not
   // counted). Allocates no memory (binary, or ascii once its text buffer has grown to a
   // frame's size) while the frames fit the reserved count.
-  bool WriteFrame(const Model& model, const Data& data, double time);
+  bool WriteFrame(const Model& model, const Data& data, double time, double load_factor = 1.0);
   // Writes motion.pvd listing the frames written so far. Returns false on a write error.
   bool WriteCollection() const;
   int frames() const { return static_cast<int>(times_.size()); }
@@ -100,6 +106,15 @@ class VtkWriter {
   std::size_t time_at_ = 0, frame_axes_at_[3] = {0, 0, 0}, velocity_at_ = 0, position_at_ = 0,
               contact_force_at_ = 0;
   std::vector<double> times_;  // of the frames written, frame i in frame_<i>.vtp
+
+  // Rod fields (Open's rod_fields): per rod node point, the point and its two stations
+  // (CalcRodFieldRows' rows), the rows of a frame, and the per-point strain and stress.
+  void LayOutRodFields(const Model& model);
+  void CalcRodFields(const Model& model, const Data& data, double load_factor);
+  bool rod_fields_ = false;
+  std::vector<std::array<long long, 3>> rod_points_;
+  std::vector<double> field_rows_, strain_, stress_;
+  std::size_t strain_at_ = 0, stress_at_ = 0;
 };
 
 }  // namespace screwfem

@@ -21,7 +21,9 @@ namespace screwfem {
 // output entry.
 void ValidateOutputs(const Model& model, const OutputSpec& outputs);
 
-// Column names after "t": per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az.
+// Column names after "t": per point P: P.x P.y P.z P.vx P.vy P.vz P.ax P.ay P.az, then
+// P.qw P.qx P.qy P.qz (kPointColumns per point).
+inline constexpr std::size_t kPointColumns = 13;
 std::vector<std::string> PointColumns(const std::vector<OutputPoint>& points);
 // Per joint J with one coordinate: J.q J.qd J.qdd J.effort; with k > 1 coordinates the same
 // four per coordinate i as J.i.q ...; joints without coordinates (fixed) have no columns.
@@ -39,8 +41,10 @@ std::vector<std::string> JointColumns(const Model& model, const std::vector<Outp
 std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJoint>& joints);
 
 // Values of one row (without t), in column order, at data's current state: world position
-// [m], velocity [m/s] and acceleration [m/s^2] (method.md §6); joint coordinates [m or rad]
-// and their first and second time derivatives, and the effort [N or N m].
+// [m], velocity [m/s] and acceleration [m/s^2] (method.md §6) and the orientation of the
+// point's frame (FrameQuaternion: the section frame of a point along a rod, the node frame of
+// a node point, whatever its offset); joint coordinates [m or rad] and their first and
+// second time derivatives, and the effort [N or N m].
 // `row` is resized to the number of columns (no allocation once it has that size).
 void CalcPointRow(const Model& model, const Data& data, const std::vector<OutputPoint>& points,
                   std::vector<double>* row);
@@ -48,6 +52,11 @@ void CalcJointRow(const Model& model, const Data& data, const std::vector<Output
                   std::vector<double>* row);
 
 // (The effort column is JointCoordinateEffort, elements/joint.h.)
+
+// The unit quaternion (w, x, y, z) of a rotation R (world from frame), with the sign fixed so
+// that equal frames give equal columns: w >= 0, and when w = 0 the first non-zero of x, y, z
+// is positive.
+Eigen::Vector4d FrameQuaternion(const Mat3& R);
 
 // tendons.csv: per tendon T of the model, T.length [m], T.rate [m/s], T.tension [N];
 // forces.csv: per force element F, F.length [m], F.rate [m/s], F.force [N] (positive: tension)
@@ -92,6 +101,11 @@ void CalcReactionRow(const Model& model, const Data& data, std::vector<double>* 
 // Lx Ly Lz [kg m^2/s] (CalcMomentum: world, angular momentum about the world origin).
 std::vector<std::string> EnergyColumns();
 void CalcEnergyRow(const Model& model, const Data& data, std::vector<double>* row);
+// rod_fields.csv (long format, outputs.rod_fields): at each output time one row per station
+// (one per rod element, at its mid arc length): rod s gamma1 gamma2 gamma3 kappa1 kappa2 kappa3
+// n1 n2 n3 m1 m2 m3, the values of CalcRodFieldRows (assemble/outputs.h: units, section axes
+// and signs).
+std::vector<std::string> RodFieldColumns();
 
 // ---- files -----------------------------------------------------------------------------------
 
@@ -118,6 +132,13 @@ class CsvWriter {
   void Open(const std::string& path, const std::vector<std::string>& columns);
   // Appends "t,values..." to the batch (no file access). Returns false once a write has failed.
   bool WriteRow(double t, const std::vector<double>& values);
+  // Appends values.size() / width lines "t,lead...,values[i width .. (i + 1) width)" (long
+  // format: several lines at one time) as one row of the batch: a flush keeps or cuts them
+  // together, and rows() counts them as one.
+  bool WriteRows(double t, const std::vector<double>& lead, const std::vector<double>& values,
+                 std::size_t width);
+  // Reserves batch room for `bytes` (rows longer than the default reservation of 68 KiB).
+  void Reserve(std::size_t bytes);
   // Writes the batch. Returns false on a write error (errno kept): the rows that reached the
   // file whole stay, a torn row is cut off, the rest of the batch is dropped.
   bool Flush();
