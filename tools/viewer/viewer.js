@@ -12,8 +12,8 @@
 // Drawn true to size: rods as tubes of their section (round or rectangular; a rod without a
 // size in the frames thin, at 0.6 % of the mechanism), rigid bodies as their contact shapes or
 // else the box of their inertia, obstacles. Markers whose size means nothing: joints
-// (spheres), joint frames (x red, y green, z blue), links (lines from a body's frame to its
-// joints), tendons and force elements (thin tubes coloured by tension), contact forces
+// (spheres), joint frames (x red, y green, z blue), links (thin rods from a body's frame to
+// its joints), tendons and force elements (thin tubes coloured by tension), contact forces
 // (arrows from the contact point along the force on the shape, drawn over everything).
 //
 // URL parameters (for tests and links): t=SECONDS shows that time and stays paused;
@@ -509,19 +509,15 @@
     if (!b.shapes.length && !out.box && b.point !== null) out.lump = placed(sphere, bodyMaterial, layers.bodies);
     return out;
   });
-  var linkCount = 0;
-  data.bodies.forEach(function (b) { linkCount += b.segments.length; });
-  var linkGeometry = new THREE.BufferGeometry();
-  linkGeometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(6 * linkCount), 3));
-  var links = new THREE.LineSegments(linkGeometry, new THREE.LineBasicMaterial({ color: 0x4a5363 }));
-  links.frustumCulled = false;
-  layers.links.add(links);
+  // Links: thin grey rods from a body's frame to its joints and centre of mass (a drawing of
+  // how the body connects, of no size).
+  var linkMaterial = new THREE.MeshStandardMaterial({ color: 0x5b6474, roughness: 0.6 });
+  bodies.forEach(function (b) {
+    b.links = b.segments.map(function () { return placed(cylinder, linkMaterial, layers.links); });
+  });
   function updateBodies() {
-    var lp = linkGeometry.attributes.position.array, k = 0;
     bodies.forEach(function (b) {
-      b.segments.forEach(function (seg) {
-        for (var e = 0; e < 2; ++e, ++k) for (var c = 0; c < 3; ++c) lp[3 * k + c] = cur[3 * seg[e] + c];
-      });
+      b.segments.forEach(function (seg, k) { between(b.links[k], point(seg[0]), point(seg[1]), 0.5 * thinRadius); });
       if (b.box) {
         var h = halfSize(b.box.point).multiplyScalar(2);
         h.set(Math.max(h.x, 1e-3 * size0), Math.max(h.y, 1e-3 * size0), Math.max(h.z, 1e-3 * size0));
@@ -529,7 +525,6 @@
       }
       if (b.lump) b.lump.matrix.compose(point(b.point), new THREE.Quaternion(), new THREE.Vector3(1, 1, 1).multiplyScalar(jointRadius));
     });
-    linkGeometry.attributes.position.needsUpdate = true;
     shapes.forEach(updateShape);
   }
 
