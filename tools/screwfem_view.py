@@ -1,19 +1,29 @@
 """Writes a self-contained HTML viewer of a screwfem run (`screwfem view` runs this script
 with Debian's /usr/bin/python3).
 
-    screwfem_view.py OUTDIR [-o FILE.html]      (default: OUTDIR/view.html)
+    screwfem_view.py OUTDIR [-o FILE.html] [--max-frames N]     (default: OUTDIR/view.html)
 
-The page plays the run in a browser, offline (it opens from file://): rods as tubes, rigid
-bodies as boxes along their segments, joints as spheres, recorded points with trails, a ground
-grid and axes; play/pause, speed, a time slider, orbit/pan/zoom and follow-a-body.
+The page plays the run in a browser at real rate, offline (it opens from file://), true to
+size: rods as tubes of their section, rigid bodies as their contact shapes or else the box of
+their inertia, obstacles, tendons and force elements coloured by tension, contact forces as
+arrows, joints and joint frames, recorded points with trails, a ground grid; every layer can
+be switched off; play/pause, speed, a time slider, orbit/pan/zoom and follow-a-body
+(tools/viewer/viewer.js lists the URL parameters).
 
-Where the geometry comes from: the run's ParaView frames (vtk/motion.pvd, vtk/frame_*.vtp),
-read with tools/screwfem_vtk.py, which follows the VTK XML format (ASCII, inline base64 or
-appended raw/base64 data, zlib- or LZMA-compressed), not the text screwfem writes today. The
-frames carry every drawn point (rod nodes, body segment ends, joint frames) with its frame
-axes, so the page can orient the tube cross-sections and the body boxes. points.csv adds the
-recorded points (every output row, for the trails); summary.json the case name, status and
-gravity (the up direction); joints.json the joint names, types and drives.
+Where it comes from: the run's ParaView frames (vtk/motion.pvd, vtk/frame_*.vtp), read with
+tools/screwfem_vtk.py, which follows the VTK XML format (ASCII, inline base64 or appended
+raw/base64 data, zlib- or LZMA-compressed), not the text screwfem writes today. The frames
+carry every drawn point with its frame axes, the cells' kinds (include/screwfem/io/vtk.h),
+the sizes (radius, half_size), tensions and contact forces. points.csv adds the recorded
+points (every output row, for the trails); summary.json the case name, status and gravity
+(the up direction); joints.json the joint names, types and drives; tendons.csv and forces.csv
+the names of tendons and force elements.
+
+Page size: the first frame's positions of every point, then per frame those of the drawn
+points that move, orientations as quaternions of the points that have one (rod sections,
+boxes, joints, planes), contact forces of the contact points that ever touch, as 16-bit
+integers over each quantity's range (track); at most --max-frames frames (one in k beyond).
+The size is printed on stderr.
 
 The rods are coloured by a scalar only if the frames carry one: the speed |v| from the
 velocity array, and any other point array (a strain or a stress, for instance) per component.
@@ -171,8 +181,8 @@ def build_data(outdir, max_frames=DEFAULT_MAX_FRAMES):
             raise InputProblem(str(e)) from e
     notes = []
     if len(kept) < len(collection):
-        notes.append(f"{len(kept)} of {len(collection)} frames kept (every "
-                     f"{math.ceil(len(collection) / max(max_frames, 1))}th; --max-frames)")
+        notes.append(f"{len(kept)} of {len(collection)} frames kept (one in "
+                     f"{math.ceil(len(collection) / max(max_frames, 1))}; --max-frames)")
 
     # Topology from the first frame; every frame must have the same.
     first = frames[0][1]
