@@ -144,7 +144,11 @@ void BindValues(py::module_& m) {
                      "m] (a copy; assign a whole vector).")
       .def_readwrite("damping", &Section::damping, "Viscous damping on strain rates (per mode).")
       .def_readwrite("rayleigh_mass", &Section::rayleigh_mass, "a_M [1/s].")
-      .def_readwrite("rayleigh_stiffness", &Section::rayleigh_stiffness, "a_K [s].");
+      .def_readwrite("rayleigh_stiffness", &Section::rayleigh_stiffness, "a_K [s].")
+      .def_readwrite("width", &Section::width,
+                     "Outline for drawing only: extent along section axis 2 [m] (0: unknown).")
+      .def_readwrite("height", &Section::height, "Extent along section axis 3 [m].")
+      .def_readwrite("round", &Section::round, "Round (width = height = diameter) or a rectangle.");
 
   py::class_<Profile>(m, "Profile", "A time profile f(t) (profile.h).")
       .def_static("constant", &Profile::Constant, py::arg("value") = 1.0, "f(t) = value.")

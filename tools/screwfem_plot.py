@@ -631,26 +631,86 @@ def read_collection(outdir):
         raise InputProblem(str(e)) from e
 
 
+# Box edges as one path through the 8 corners (index bits: x, y, z), every edge at least once.
+BOX_PATH = (0, 1, 3, 2, 0, 4, 5, 7, 6, 4, 6, 2, 3, 7, 5, 1)
+
+
 def read_frame(path):
     """Points (n x 3) and cells of one .vtp frame: a list of (point indices, kind) with kind
-    'joint', 'rod' or 'body'."""
+    'joint' (a dot), 'rod', 'body' (a rigid body's link), 'tendon', 'force_element' or 'shape'
+    (lines). A rigid body's contact shapes become lines of the points added for them (box
+    edges, a sphere's three great circles, a capsule's axis and end circles); inertia boxes,
+    contact points and obstacles are left out, and so are the points no drawn cell uses."""
     try:
         frame = screwfem_vtk.read_frame(path)
     except screwfem_vtk.VtkError as e:
         raise InputProblem(str(e)) from e
-    points = np.array(frame["points"], dtype=float).reshape(-1, 3)
-    return points, list(zip(frame["cells"], frame["kinds"]))
+    xyz = np.array(frame["points"], dtype=float).reshape(-1, 3)
+    pd = frame["point_data"]
+    has_axes = all(a in pd for a in ("frame_x", "frame_y", "frame_z"))
+    half = np.array(pd["half_size"][1], dtype=float).reshape(-1, 3) if "half_size" in pd else None
+    radius = np.array(pd["radius"][1], dtype=float) if "radius" in pd else None
+
+    def axes(i):
+        if not has_axes:
+            return np.eye(3)
+        return np.column_stack([pd[a][1][3 * i:3 * i + 3] for a in ("frame_x", "frame_y", "frame_z")])
+
+    def circle(center, u, v, r):
+        angles = np.linspace(0.0, 2.0 * np.pi, 25)
+        return [center + r * (np.cos(a) * u + np.sin(a) * v) for a in angles]
+
+    out_points, cells, index = [], [], {}
+
+    def keep(i):
+        if i not in index:
+            index[i] = len(out_points)
+            out_points.append(xyz[i])
+        return index[i]
+
+    def added(path_points, kind="shape"):
+        first = len(out_points)
+        out_points.extend(path_points)
+        cells.append((list(range(first, len(out_points))), kind))
+
+    for ids, kind in zip(frame["cells"], frame["kinds"]):
+        if kind in ("joint", "rod", "body", "tendon", "force_element"):
+            cells.append(([keep(p) for p in ids], kind))
+        elif half is not None and kind == "box":
+            c, R, h = xyz[ids[0]], axes(ids[0]), half[ids[0]]
+            corners = [c + R @ (h * [1 if b & 1 else -1, 1 if b & 2 else -1, 1 if b & 4 else -1])
+                       for b in range(8)]
+            added([corners[b] for b in BOX_PATH])
+        elif radius is not None and kind == "sphere":
+            c, r, e = xyz[ids[0]], radius[ids[0]], np.eye(3)
+            for a in range(3):
+                added(circle(c, e[a], e[(a + 1) % 3], r))
+        elif radius is not None and kind == "capsule":
+            a, b, r = xyz[ids[0]], xyz[ids[1]], radius[ids[0]]
+            d = b - a
+            d = d / (np.linalg.norm(d) or 1.0)
+            u = np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0])
+            u /= np.linalg.norm(u)
+            v = np.cross(d, u)
+            added([a, b])
+            for end in (a, b):
+                added(circle(end, u, v, r))
+    points = np.array(out_points, dtype=float).reshape(-1, 3)
+    return points, cells
 
 
 def draw_frame(ax, points, cells, color, label=None):
-    """Draws one frame's geometry (rods thin, rigid bodies thick, joints as dots) on a 3D axis."""
+    """Draws one frame's geometry (rods thin, rigid bodies' links thick, shapes, tendons and
+    force elements thin, joints as dots) on a 3D axis."""
     first = True
+    widths = {"body": 2.5, "rod": 1.5}
     for ids, kind in cells:
         p = points[ids]
         if kind == "joint":
             ax.scatter(p[:, 0], p[:, 1], p[:, 2], color=color, s=12)
             continue
-        ax.plot(p[:, 0], p[:, 1], p[:, 2], color=color, linewidth=2.5 if kind == "body" else 1.5,
+        ax.plot(p[:, 0], p[:, 1], p[:, 2], color=color, linewidth=widths.get(kind, 0.8),
+                linestyle="--" if kind == "force_element" else "-",
                 label=label if first else None)
         first = False
 

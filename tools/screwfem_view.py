@@ -1,19 +1,29 @@
 """Writes a self-contained HTML viewer of a screwfem run (`screwfem view` runs this script
 with Debian's /usr/bin/python3).
 
-    screwfem_view.py OUTDIR [-o FILE.html]      (default: OUTDIR/view.html)
+    screwfem_view.py OUTDIR [-o FILE.html] [--max-frames N]     (default: OUTDIR/view.html)
 
-The page plays the run in a browser, offline (it opens from file://): rods as tubes, rigid
-bodies as boxes along their segments, joints as spheres, recorded points with trails, a ground
-grid and axes; play/pause, speed, a time slider, orbit/pan/zoom and follow-a-body.
+The page plays the run in a browser at real rate, offline (it opens from file://), true to
+size: rods as tubes of their section, rigid bodies as their contact shapes or else the box of
+their inertia, obstacles, tendons and force elements coloured by tension, contact forces as
+arrows, joints and joint frames, recorded points with trails, a ground grid; every layer can
+be switched off; play/pause, speed, a time slider, orbit/pan/zoom and follow-a-body
+(tools/viewer/viewer.js lists the URL parameters).
 
-Where the geometry comes from: the run's ParaView frames (vtk/motion.pvd, vtk/frame_*.vtp),
-read with tools/screwfem_vtk.py, which follows the VTK XML format (ASCII, inline base64 or
-appended raw/base64 data, zlib- or LZMA-compressed), not the text screwfem writes today. The
-frames carry every drawn point (rod nodes, body segment ends, joint frames) with its frame
-axes, so the page can orient the tube cross-sections and the body boxes. points.csv adds the
-recorded points (every output row, for the trails); summary.json the case name, status and
-gravity (the up direction); joints.json the joint names, types and drives.
+Where it comes from: the run's ParaView frames (vtk/motion.pvd, vtk/frame_*.vtp), read with
+tools/screwfem_vtk.py, which follows the VTK XML format (ASCII, inline base64 or appended
+raw/base64 data, zlib- or LZMA-compressed), not the text screwfem writes today. The frames
+carry every drawn point with its frame axes, the cells' kinds (include/screwfem/io/vtk.h),
+the sizes (radius, half_size), tensions and contact forces. points.csv adds the recorded
+points (every output row, for the trails); summary.json the case name, status and gravity
+(the up direction); joints.json the joint names, types and drives; tendons.csv and forces.csv
+the names of tendons and force elements.
+
+Page size: the first frame's positions of every point, then per frame those of the drawn
+points that move, orientations as quaternions of the points that have one (rod sections,
+boxes, joints, planes), contact forces of the contact points that ever touch, as 16-bit
+integers over each quantity's range (track); at most --max-frames frames (one in k beyond).
+The size is printed on stderr.
 
 The rods are coloured by a scalar only if the frames carry one: the speed |v| from the
 velocity array, and any other point array (a strain or a stress, for instance) per component.
@@ -38,8 +48,10 @@ import screwfem_vtk  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_THREE_DIR = "/usr/share/javascript/three"
-KNOWN_POINT_ARRAYS = {"frame_x", "frame_y", "frame_z", "velocity", "joint_id"}
+KNOWN_POINT_ARRAYS = {"frame_x", "frame_y", "frame_z", "velocity", "joint_id", "contact_force",
+                      "radius", "half_size"}
 MAX_RECORDED_ROWS = 4000  # recorded-point rows kept for the trails (every k-th row beyond)
+DEFAULT_MAX_FRAMES = 1500  # frames kept in the page (every k-th beyond; --max-frames)
 
 
 class InputProblem(Exception):
@@ -48,6 +60,25 @@ class InputProblem(Exception):
 
 def b64_floats(values):
     return base64.b64encode(struct.pack(f"<{len(values)}f", *values)).decode("ascii")
+
+
+def track(values, components=1, zero=False):
+    """Values that change from frame to frame, as 16-bit integers (the page's size): per
+    component c, value = mid[c] + q * scale[c] with q in [-32767, 32767], so a component is
+    resolved to 1/65534 of its range over the run (mid = 0 with `zero`: zero stays exact).
+    The page decodes them (viewer.js, decode)."""
+    mid, scale = [], []
+    for c in range(components):
+        column = values[c::components]
+        a, b = (min(column), max(column)) if column else (0.0, 0.0)
+        if zero:
+            a, b = -max(abs(a), abs(b)), max(abs(a), abs(b))
+        mid.append(0.5 * (a + b))
+        scale.append((b - a) / 65534 if b > a else 1.0)
+    q = [max(-32767, min(32767, round((v - mid[i % components]) / scale[i % components])))
+         for i, v in enumerate(values)]
+    return {"mid": mid, "scale": scale,
+            "data": base64.b64encode(struct.pack(f"<{len(q)}h", *q)).decode("ascii")}
 
 
 def read_json(path, required):
@@ -91,10 +122,47 @@ def read_recorded_points(path):
     if kept[-1] is not rows[-1]:
         kept.append(rows[-1])
     return {"names": names, "times": [r[0] for r in kept],
-            "xyz": b64_floats([v for r in kept for v in r[1:]])}
+            "xyz": track([v for r in kept for v in r[1:]], 3)}
 
 
-def build_data(outdir):
+def csv_names(path, suffix):
+    """The names of the columns NAME.suffix of a CSV header (tendons.csv, forces.csv), in order."""
+    if not os.path.isfile(path):
+        return []
+    with open(path, newline="") as f:
+        header = next(csv.reader(f), [])
+    return [c[:-len(suffix)] for c in header if c.endswith(suffix)]
+
+
+def quaternion(m):
+    """(x, y, z, w) of the rotation whose columns are m[0], m[1], m[2] (frame_x, _y, _z)."""
+    (xx, yx, zx), (xy, yy, zy), (xz, yz, zz) = m  # m[c][r]: column c, row r
+    trace = xx + yy + zz
+    if trace > 0:
+        s = 0.5 / math.sqrt(trace + 1.0)
+        return ((zy - yz) * s, (xz - zx) * s, (yx - xy) * s, 0.25 / s)
+    if xx > yy and xx > zz:
+        s = 2.0 * math.sqrt(max(1.0 + xx - yy - zz, 1e-300))
+        return (0.25 * s, (xy + yx) / s, (xz + zx) / s, (zy - yz) / s)
+    if yy > zz:
+        s = 2.0 * math.sqrt(max(1.0 + yy - xx - zz, 1e-300))
+        return ((xy + yx) / s, 0.25 * s, (yz + zy) / s, (xz - zx) / s)
+    s = 2.0 * math.sqrt(max(1.0 + zz - xx - yy, 1e-300))
+    return ((xz + zx) / s, (yz + zy) / s, 0.25 * s, (yx - xy) / s)
+
+
+def kept_frames(collection, max_frames):
+    """Every k-th frame (and the last) so that at most about max_frames remain."""
+    if max_frames <= 0 or len(collection) <= max_frames:
+        return collection
+    stride = math.ceil(len(collection) / max_frames)
+    kept = collection[::stride]
+    if kept[-1] is not collection[-1]:
+        kept.append(collection[-1])
+    return kept
+
+
+def build_data(outdir, max_frames=DEFAULT_MAX_FRAMES):
     summary = read_json(os.path.join(outdir, "summary.json"), required=True)
     joints_info = read_json(os.path.join(outdir, "joints.json"), required=False)
     try:
@@ -104,12 +172,17 @@ def build_data(outdir):
     if not collection:
         raise InputProblem(f"{outdir} has no ParaView frames (vtk/motion.pvd or vtk/frame_*.vtp): "
                            f"the viewer draws them; run with outputs.vtk: true")
+    kept = kept_frames(collection, max_frames)
     frames = []
-    for t, path in collection:
+    for t, path in kept:
         try:
             frames.append((t, screwfem_vtk.read_frame(path)))
         except screwfem_vtk.VtkError as e:
             raise InputProblem(str(e)) from e
+    notes = []
+    if len(kept) < len(collection):
+        notes.append(f"{len(kept)} of {len(collection)} frames kept (one in "
+                     f"{math.ceil(len(collection) / max(max_frames, 1))}; --max-frames)")
 
     # Topology from the first frame; every frame must have the same.
     first = frames[0][1]
@@ -117,25 +190,50 @@ def build_data(outdir):
     for t, f in frames[1:]:
         if len(f["points"]) != npoints or f["cells"] != first["cells"]:
             raise InputProblem(f"the frame at t = {t} s has another topology than the first one")
-    cd = first["cell_data"]
+    cd, pd = first["cell_data"], first["point_data"]
     ncell = len(first["cells"])
-    rod_id = cd.get("rod_id", (1, [-1] * ncell))[1]
-    body_id = cd.get("body_id", (1, [-1] * ncell))[1]
-    joint_id = cd.get("joint_id", (1, [-1] * ncell))[1]
-    rods, bodies, joints = {}, {}, []
-    for i, cell in enumerate(first["cells"]):
-        if rod_id[i] >= 0:
-            rods[rod_id[i]] = cell
-        elif body_id[i] >= 0:
-            body = bodies.setdefault(body_id[i], {"segments": [], "vertex": None})
-            if len(cell) >= 2:
-                body["segments"].append(cell[:2])
-            else:
-                body["vertex"] = cell[0]
-        elif joint_id[i] >= 0 and cell:
-            joints.append({"index": joint_id[i], "point": cell[0]})
+    item = cd.get("item_id", (1, [-1] * ncell))[1]
+    body_of = cd.get("body_id", (1, [-1] * ncell))[1]
+    joint_of = cd.get("joint_id", (1, [-1] * ncell))[1]
+    rod_of = cd.get("rod_id", (1, [-1] * ncell))[1]
+    rods, bodies, joints, shapes, lines, contacts, obstacles = {}, {}, [], [], [], [], []
+    oriented = set()
 
-    # Joint names, types and drives from joints.json (written by screwfem run).
+    def body(b):
+        return bodies.setdefault(b, {"segments": [], "point": None, "box": None, "shapes": []})
+
+    for i, (cell, kind) in enumerate(zip(first["cells"], first["kinds"])):
+        if kind == "rod":
+            rods[rod_of[i]] = cell
+            oriented.update(cell)
+        elif kind == "body":
+            if len(cell) >= 2:
+                body(body_of[i])["segments"].append(cell[:2])
+            else:
+                body(body_of[i])["point"] = cell[0]
+        elif kind == "body_point":
+            body(body_of[i])["point"] = cell[0]
+        elif kind == "inertia_box":
+            body(body_of[i])["box"] = cell[0]
+            oriented.add(cell[0])
+        elif kind in ("sphere", "capsule", "box"):
+            body(body_of[i])["shapes"].append(len(shapes))
+            shapes.append({"type": kind, "points": cell, "body": body_of[i]})
+            if kind == "box":
+                oriented.add(cell[0])
+        elif kind in ("tendon", "force_element"):
+            lines.append({"kind": kind, "points": cell, "item": item[i], "cell": i})
+        elif kind in ("contact", "pair_contact"):
+            contacts.append(cell[0])
+        elif kind in ("plane", "obstacle_sphere", "obstacle_capsule"):
+            obstacles.append({"type": kind.replace("obstacle_", ""), "points": cell})
+            if kind == "plane":
+                oriented.add(cell[0])
+        elif kind == "joint" and cell and joint_of[i] >= 0:
+            joints.append({"index": joint_of[i], "point": cell[0]})
+            oriented.add(cell[0])
+
+    # Names: joints from joints.json, tendons and force elements from their tables' columns.
     described = {}
     if joints_info:
         for j in joints_info.get("joints", []):
@@ -145,36 +243,86 @@ def build_data(outdir):
         j["name"] = d.get("name", f"joint {j['index']}")
         j["type"] = d.get("type", "")
         j["drive"] = d.get("drive", "none")
+    names = {"tendon": csv_names(os.path.join(outdir, "tendons.csv"), ".tension"),
+             "force_element": csv_names(os.path.join(outdir, "forces.csv"), ".force")}
+    for line in lines:
+        known = names[line["kind"]]
+        line["name"] = known[line["item"]] if 0 <= line["item"] < len(known) else \
+            f"{line['kind'].replace('_', ' ')} {line['item'] + 1}"
 
-    positions, axes = [], []
-    has_axes = all(a in first["point_data"] for a in ("frame_x", "frame_y", "frame_z"))
+    # Contact points that never carry a force are left out (most pairs never touch).
+    if "contact_force" in pd:
+        def touching(i):
+            return any(any(f["point_data"]["contact_force"][1][3 * i:3 * i + 3]) for _, f in frames)
+        contacts = [i for i in contacts if touching(i)]
+    else:
+        contacts = []
+    used = set(contacts) | set(oriented)
+    for cells in (rods.values(), [l["points"] for l in lines], [s["points"] for s in shapes],
+                  [o["points"] for o in obstacles]):
+        for cell in cells:
+            used.update(cell)
+    for b in bodies.values():
+        used.update(p for seg in b["segments"] for p in seg)
+        used.update(p for p in (b["point"], b["box"]) if p is not None)
+
+    # Positions: the first frame's for every point, then per frame those of the drawn points
+    # that move.
+    points = [f["points"] for _, f in frames]
+    moving = [i for i in sorted(used) if any(p[i] != points[0][i] for p in points[1:])]
+    has_axes = all(a in pd for a in ("frame_x", "frame_y", "frame_z"))
+    oriented = sorted(oriented) if has_axes else []
+    quats = []  # per frame, per oriented point, (x, y, z, w) in the hemisphere of the last one
     for _, f in frames:
-        for p in f["points"]:
-            positions.extend(p)
-        if has_axes:
-            pd = f["point_data"]
-            for i in range(npoints):
-                for a in ("frame_x", "frame_y", "frame_z"):
-                    axes.extend(pd[a][1][3 * i:3 * i + 3])
+        ax = [f["point_data"][a][1] for a in ("frame_x", "frame_y", "frame_z")] if has_axes else None
+        row = []
+        for k, i in enumerate(oriented):
+            q = quaternion([ax[c][3 * i:3 * i + 3] for c in range(3)])
+            if quats and sum(a * b for a, b in zip(q, quats[-1][k])) < 0:
+                q = tuple(-v for v in q)
+            row.append(q)
+        quats.append(row)
+    turning = [k for k in range(len(oriented)) if any(q[k] != quats[0][k] for q in quats[1:])]
 
-    # Scalar fields to colour the rods by.
-    fields, notes = [], []
-    if "velocity" in first["point_data"]:
+    # Sizes (constant): radius and half sizes per point; zero in frames written before them.
+    radius = pd.get("radius", (1, [0.0] * npoints))[1]
+    half = pd.get("half_size", (3, [0.0] * 3 * npoints))[1]
+    unsized = [k + 1 for k in sorted(rods) if not any(radius[i] > 0 for i in rods[k])]
+    if unsized:
+        notes.append("no section size for rod" + ("s " if len(unsized) > 1 else " ") +
+                     ", ".join(str(k) for k in unsized) + " (a section given by its stiffness, "
+                     "no contact_radius): drawn thin")
+
+    # Per-frame values: tensions, contact forces, the rods' colour fields.
+    tension = []
+    for _, f in frames:
+        values = f["cell_data"].get("tension", (1, [0.0] * ncell))[1]
+        tension.extend(values[line["cell"]] for line in lines)
+    forces = []
+    if "contact_force" in pd:
+        for _, f in frames:
+            v = f["point_data"]["contact_force"][1]
+            for i in contacts:
+                forces.extend(v[3 * i:3 * i + 3])
+    field_points = sorted({i for k in rods for i in rods[k]})
+    fields = []
+    if "velocity" in pd:
         values = []
         for _, f in frames:
             v = f["point_data"]["velocity"][1]
             values.extend(math.sqrt(v[3 * i] ** 2 + v[3 * i + 1] ** 2 + v[3 * i + 2] ** 2)
-                          for i in range(npoints))
-        fields.append({"name": "speed", "unit": "m/s", "values": b64_floats(values)})
-    extra = sorted(n for n in first["point_data"] if n not in KNOWN_POINT_ARRAYS)
+                          for i in field_points)
+        fields.append({"name": "speed", "unit": "m/s", "values": track(values)})
+    extra = sorted(n for n in pd if n not in KNOWN_POINT_ARRAYS)
     for name in extra:
-        ncomp = first["point_data"][name][0]
+        ncomp = pd[name][0]
         for c in range(ncomp):
             values = []
             for _, f in frames:
-                values.extend(f["point_data"][name][1][c::ncomp][:npoints])
+                v = f["point_data"][name][1]
+                values.extend(v[ncomp * i + c] for i in field_points)
             fields.append({"name": name if ncomp == 1 else f"{name}[{c}]", "unit": "",
-                           "values": b64_floats(values)})
+                           "values": track(values)})
     if not any("strain" in n or "stress" in n for n in extra):
         notes.append("the outputs carry no strain or stress: rods are coloured by speed at most")
 
@@ -183,19 +331,34 @@ def build_data(outdir):
     up = [-g / norm for g in gravity] if norm > 0 else [0.0, 0.0, 1.0]
     scene = summary.get("scene", {})
     return {
-        "format": "screwfem viewer data 1",
+        "format": "screwfem viewer data 2",
         "name": scene.get("name") or os.path.basename(os.path.normpath(outdir)),
         "source": scene.get("source", ""),
         "status": summary.get("status", ""),
         "message": summary.get("message", ""),
         "up": up,
         "times": [t for t, _ in frames],
+        "frames_total": len(collection),
         "npoints": npoints,
-        "positions": b64_floats(positions),
-        "axes": b64_floats(axes) if has_axes else None,
+        "x0": b64_floats([v for p in points[0] for v in p]),
+        "moving": moving,
+        "positions": track([v for p in points for i in moving for v in p[i]], 3),
+        "oriented": oriented,
+        "q0": b64_floats([v for q in quats[0] for v in q]) if oriented else "",
+        "turning": turning,
+        "quats": track([v for row in quats for k in turning for v in row[k]], 4),
+        "radius": b64_floats(radius),
+        "half": b64_floats(half),
         "rods": [rods[k] for k in sorted(rods)],
-        "bodies": [bodies[k] for k in sorted(bodies)],
+        "bodies": [dict(bodies[k], index=k) for k in sorted(bodies)],
+        "shapes": shapes,
         "joints": joints,
+        "lines": [{k: v for k, v in line.items() if k != "cell"} for line in lines],
+        "tension": track(tension, zero=True),
+        "contacts": contacts,
+        "forces": track(forces, 3, zero=True),
+        "obstacles": obstacles,
+        "field_points": field_points,
         "fields": fields,
         "recorded": read_recorded_points(os.path.join(outdir, "points.csv")),
         "notes": notes,
@@ -234,28 +397,36 @@ def write_html(data, out_path):
         html.append(parts[key].replace("</script", "<\\/script") if key != "@@TITLE@@" else parts[key])
         pos = at + len(key)
     os.makedirs(os.path.dirname(os.path.abspath(out_path)), exist_ok=True)
+    text = "".join(html).encode("utf-8")
     tmp = out_path + ".tmp"
-    with open(tmp, "w", encoding="utf-8") as f:
-        f.write("".join(html))
+    with open(tmp, "wb") as f:
+        f.write(text)
     os.replace(tmp, out_path)
+    return {"page": len(text), "library": len(three) + len(orbit), "data": len(data_json)}
 
 
 def main(argv):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("outdir", help="run output directory (screwfem run -o)")
     parser.add_argument("-o", "--output", help="HTML file to write (default: OUTDIR/view.html)")
+    parser.add_argument("--max-frames", type=int, default=DEFAULT_MAX_FRAMES,
+                        help=f"frames kept in the page, every k-th beyond (default "
+                             f"{DEFAULT_MAX_FRAMES}; 0: all)")
     args = parser.parse_args(argv)
     out_path = args.output or os.path.join(args.outdir, "view.html")
     try:
         if not os.path.isdir(args.outdir):
             raise InputProblem(f"{args.outdir} is not a directory")
-        data = build_data(args.outdir)
-        write_html(data, out_path)
+        data = build_data(args.outdir, args.max_frames)
+        sizes = write_html(data, out_path)
     except InputProblem as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     for note in data["notes"]:
         print(f"note: {note}", file=sys.stderr)
+    print(f"{out_path}: {sizes['page'] / 1e6:.2f} MB (three.js {sizes['library'] / 1e6:.2f} MB, "
+          f"run data {sizes['data'] / 1e6:.2f} MB: {len(data['times'])} frames of "
+          f"{data['npoints']} points)", file=sys.stderr)
     print(out_path)
     return 0
 

@@ -227,11 +227,27 @@ def read_collection(outdir):
     return sorted(frames) or None
 
 
+# The cell data `kind` of screwfem's frames (VtkCellKind, include/screwfem/io/vtk.h), by value.
+KIND_NAMES = ("joint", "rod", "body", "body_point", "tendon", "force_element", "contact",
+              "pair_contact", "sphere", "capsule", "box", "inertia_box", "plane",
+              "obstacle_sphere", "obstacle_capsule")
+
+
+def cell_kinds(cells, cell_data):
+    """The kind name of every cell: from the `kind` cell array (KIND_NAMES), or, in frames
+    written before it, 'rod', 'body' or 'joint' from the rod_id and body_id arrays."""
+    if "kind" in cell_data:
+        return [KIND_NAMES[k] if 0 <= k < len(KIND_NAMES) else "unknown"
+                for k in cell_data["kind"][1]]
+    rod = cell_data.get("rod_id", (1, [-1] * len(cells)))[1]
+    body = cell_data.get("body_id", (1, [-1] * len(cells)))[1]
+    return ["rod" if rod[i] >= 0 else "body" if body[i] >= 0 else "joint" for i in range(len(cells))]
+
+
 class Frame(dict):
     """One .vtp frame: 'time' (or None), 'points' (list of (x, y, z)), 'point_data' and
     'cell_data' (name -> (components, flat values)), 'cells' (list of point-index lists, the
-    vertices first, then the lines, as VTK orders them) and 'kinds' ('rod', 'body' or 'joint'
-    per cell, from the rod_id and body_id cell arrays)."""
+    vertices first, then the lines, as VTK orders them) and 'kinds' (per cell, cell_kinds)."""
 
 
 def read_frame(path):
@@ -273,8 +289,6 @@ def read_frame(path):
             cells.append([int(i) for i in connectivity[start:end]])
             start = end
     cell_data = arrays(piece.find("CellData"))
-    rod = cell_data.get("rod_id", (1, [-1] * len(cells)))[1]
-    body = cell_data.get("body_id", (1, [-1] * len(cells)))[1]
-    kinds = ["rod" if rod[i] >= 0 else "body" if body[i] >= 0 else "joint" for i in range(len(cells))]
+    kinds = cell_kinds(cells, cell_data)
     return Frame(time=time, points=points, point_data=arrays(piece.find("PointData")),
                  cell_data=cell_data, cells=cells, kinds=kinds)

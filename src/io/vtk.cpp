@@ -7,17 +7,20 @@
 #include <bit>
 #include <cerrno>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <tuple>
+#include <utility>
 
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/contact.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/rod.h"
+#include "screwfem/elements/tendon.h"
 #include "screwfem/io/writers.h"
 #include "screwfem/model/errors.h"
 
@@ -112,11 +115,68 @@ void VtkWriter::Open(const std::string& dir, const Model& model, VtkFormat forma
   } else {
     // Room for a frame of shortest doubles (at most 24 characters each) and the cells.
     image_.clear();
-    image_.reserve(4096 + (rod_fields_ ? 780 : 480) * sources_.size() +
+    image_.reserve(4096 + (rod_fields_ ? 900 : 600) * sources_.size() +
                    24 * (vert_connectivity_.size() + line_connectivity_.size()) +
-                   64 * cell_rod_.size());
+                   120 * cell_rod_.size());
   }
 }
+
+long long VtkWriter::AddPoint(const PointSource& source, double radius, const Vec3& half_size,
+                              int joint) {
+  sources_.push_back(source);
+  point_joint_.push_back(joint);
+  radius_.push_back(radius);
+  for (int k = 0; k < 3; ++k) half_size_.push_back(half_size(k));
+  return static_cast<long long>(sources_.size()) - 1;
+}
+
+void VtkWriter::AddVertex(long long point, const CellInfo& cell) {
+  vert_connectivity_.push_back(point);
+  vert_offsets_.push_back(static_cast<long long>(vert_connectivity_.size()));
+  vert_cells_.push_back(cell);
+}
+
+void VtkWriter::EndLine(const CellInfo& cell) {
+  line_offsets_.push_back(static_cast<long long>(line_connectivity_.size()));
+  line_cells_.push_back(cell);
+}
+
+void VtkWriter::AddLine(std::initializer_list<long long> points, const CellInfo& cell) {
+  line_connectivity_.insert(line_connectivity_.end(), points.begin(), points.end());
+  EndLine(cell);
+}
+
+namespace {
+
+// The drawn size of a rod's section: (radius, half sizes along the section frame's x, y, z).
+std::pair<double, Vec3> RodSectionSize(const Model& model, int rod) {
+  const Section& s = model.rods[static_cast<std::size_t>(rod)].section;
+  if (s.width > 0.0 && s.height > 0.0) {
+    const double radius = s.round ? 0.5 * s.width : 0.5 * std::hypot(s.width, s.height);
+    return {radius, Vec3(0.0, 0.5 * s.width, 0.5 * s.height)};
+  }
+  for (const ContactRod& c : model.contact_rods)
+    if (c.rod == rod) return {c.radius, Vec3(0.0, c.radius, c.radius)};
+  return {0.0, Vec3::Zero()};
+}
+
+// The solid box of a rigid body's mass and inertia: its principal axes (columns, a rotation)
+// and half sizes, a_i^2 = 3 (I_j + I_k - I_i) / (2 m) (a negative value, from inertia no box
+// has, clamped to 0). False for a body without mass or inertia.
+bool InertiaBox(const RigidBody& body, Mat3* axes, Vec3* half) {
+  if (!(body.mass > 0.0) || !(body.inertia.trace() > 0.0)) return false;
+  const Eigen::SelfAdjointEigenSolver<Mat3> eigen(0.5 * (body.inertia + body.inertia.transpose()));
+  *axes = eigen.eigenvectors();
+  if (axes->determinant() < 0.0) axes->col(2) *= -1.0;
+  const Vec3 I = eigen.eigenvalues();
+  for (int i = 0; i < 3; ++i) {
+    const double a2 = 1.5 * (I((i + 1) % 3) + I((i + 2) % 3) - I(i)) / body.mass;
+    (*half)(i) = std::sqrt(std::max(a2, 0.0));
+  }
+  return true;
+}
+
+}  // namespace
 
 // The drawn points and cells; constant for a model.
 void VtkWriter::LayOut(const Model& model) {
@@ -125,29 +185,11 @@ void VtkWriter::LayOut(const Model& model) {
   vert_offsets_.clear();
   line_connectivity_.clear();
   line_offsets_.clear();
+  vert_cells_.clear();
+  line_cells_.clear();
   point_joint_.clear();
-  cell_rod_.clear();
-  cell_body_.clear();
-  cell_joint_.clear();
-  std::vector<int> vert_rod, vert_body, vert_joint;  // vertices' cell data, put first below
-  const auto add_point = [&](const PointSource& s, int joint = -1) {
-    sources_.push_back(s);
-    point_joint_.push_back(joint);
-    return static_cast<long long>(sources_.size()) - 1;
-  };
-  const auto add_vert = [&](long long point, int rod, int body, int joint) {
-    vert_connectivity_.push_back(point);
-    vert_offsets_.push_back(static_cast<long long>(vert_connectivity_.size()));
-    vert_rod.push_back(rod);
-    vert_body.push_back(body);
-    vert_joint.push_back(joint);
-  };
-  const auto end_line = [&](int rod, int body) {
-    line_offsets_.push_back(static_cast<long long>(line_connectivity_.size()));
-    cell_rod_.push_back(rod);
-    cell_body_.push_back(body);
-    cell_joint_.push_back(-1);
-  };
+  radius_.clear();
+  half_size_.clear();
 
   // Joints: a vertex at the joint frame H_A C_A H_J, moving with side B when it is a node.
   std::vector<std::vector<Vec3>> attachments(model.nodes.size());
@@ -157,32 +199,65 @@ void VtkWriter::LayOut(const Model& model) {
     PointSource s;
     s.kind = PointSource::Kind::kJoint;
     s.index = joint;
-    add_vert(add_point(s, joint), -1, -1, joint);
+    AddVertex(AddPoint(s, 0.0, Vec3::Zero(), joint), {VtkCellKind::kJoint, joint, -1, -1, joint});
     if (j.node_a != kGround)
       attachments[static_cast<std::size_t>(j.node_a)].push_back(j.offset_a.x);
     if (j.node_b != kGround)
       attachments[static_cast<std::size_t>(j.node_b)].push_back(j.offset_b.x);
   }
 
-  // Rods: polylines through their nodes.
+  // Rods: polylines through their nodes, with the section's size.
   for (std::size_t r = 0; r < model.rods.size(); ++r) {
+    const int rod = static_cast<int>(r);
+    const auto [radius, half] = RodSectionSize(model, rod);
     for (int node : model.rods[r].nodes) {
       PointSource s;
       s.index = node;
-      line_connectivity_.push_back(add_point(s));
+      line_connectivity_.push_back(AddPoint(s, radius, half));
     }
-    end_line(static_cast<int>(r), -1);
+    EndLine({VtkCellKind::kRod, rod, rod, -1, -1});
   }
 
-  // Rigid bodies: segments from the node origin to the centre of mass and the attachments.
+  LayOutBodies(model, attachments);
+  LayOutLines(model);
+  LayOutContact(model);
+
+  // Cell data in the order VTK stores the cells: vertices, then lines.
+  cell_kind_.clear();
+  cell_item_.clear();
+  cell_rod_.clear();
+  cell_body_.clear();
+  cell_joint_.clear();
+  for (const std::vector<CellInfo>* cells : {&vert_cells_, &line_cells_})
+    for (const CellInfo& c : *cells) {
+      cell_kind_.push_back(static_cast<int>(c.kind));
+      cell_item_.push_back(c.item);
+      cell_rod_.push_back(c.rod);
+      cell_body_.push_back(c.body);
+      cell_joint_.push_back(c.joint);
+    }
+  tension_.assign(cell_kind_.size(), 0.0);
+
+  const std::size_t n = 3 * sources_.size();
+  for (std::vector<double>& axis : frame_axes_) axis.assign(n, 0.0);
+  velocity_.assign(n, 0.0);
+  position_.assign(n, 0.0);
+  contact_force_.assign(n, 0.0);
+}
+
+// Rigid bodies: segments from the node origin to the centre of mass and the attachments (a
+// vertex at the node for a body without any), the box of the inertia, the contact shapes.
+void VtkWriter::LayOutBodies(const Model& model,
+                             const std::vector<std::vector<Vec3>>& attachments) {
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     const RigidBody& body = model.bodies[b];
     const int id = static_cast<int>(b);
+    const CellInfo segment{VtkCellKind::kBodySegment, id, -1, id, -1};
     std::vector<Vec3> ends = attachments[static_cast<std::size_t>(body.node)];
     ends.push_back(body.com);
     PointSource s;
     s.index = body.node;
-    const long long origin = add_point(s);
+    const long long origin = AddPoint(s);
     bool drawn = false;
     for (std::size_t e = 0; e < ends.size(); ++e) {
       const Vec3& p = ends[e];
@@ -193,15 +268,51 @@ void VtkWriter::LayOut(const Model& model) {
       PointSource end = s;
       end.offset = p;
       end.origin = false;
-      line_connectivity_.push_back(origin);
-      line_connectivity_.push_back(add_point(end));
-      end_line(-1, id);
+      AddLine({origin, AddPoint(end)}, segment);
       drawn = true;
     }
-    if (!drawn) add_vert(origin, -1, id, -1);  // a point mass: a vertex at its node
+    if (!drawn) AddVertex(origin, {VtkCellKind::kBodyPoint, id, -1, id, -1});
+
+    Mat3 axes;
+    Vec3 half;
+    if (InertiaBox(body, &axes, &half)) {
+      PointSource c = s;
+      c.offset = body.com;
+      c.origin = false;
+      c.rotated = true;
+      c.axes = axes;
+      AddVertex(AddPoint(c, half.norm(), half), {VtkCellKind::kInertiaBox, id, -1, id, -1});
+    }
   }
 
-  // Tendons: polylines through their eyelets; force elements: a line between their ends.
+  for (std::size_t i = 0; i < model.contact_shapes.size(); ++i) {
+    const ContactShape& shape = model.contact_shapes[i];
+    const int id = static_cast<int>(i);
+    PointSource s;
+    s.index = model.bodies[static_cast<std::size_t>(shape.body)].node;
+    s.offset = shape.from;
+    s.origin = false;
+    const double r = shape.radius;
+    switch (shape.type) {
+      case ContactShapeType::kSphere:
+        AddVertex(AddPoint(s, r, Vec3::Constant(r)), {VtkCellKind::kSphere, id, -1, shape.body});
+        break;
+      case ContactShapeType::kBox:
+        AddVertex(AddPoint(s, shape.to.norm(), shape.to), {VtkCellKind::kBox, id, -1, shape.body});
+        break;
+      case ContactShapeType::kCapsule: {
+        PointSource to = s;
+        to.offset = shape.to;
+        AddLine({AddPoint(s, r, Vec3::Constant(r)), AddPoint(to, r, Vec3::Constant(r))},
+                {VtkCellKind::kCapsule, id, -1, shape.body});
+        break;
+      }
+    }
+  }
+}
+
+// Tendons: polylines through their eyelets; force elements: a line between their ends.
+void VtkWriter::LayOutLines(const Model& model) {
   const auto body_point = [&](const BodyPoint& p) {
     PointSource s;
     s.kind = p.node == kGround ? PointSource::Kind::kWorld : PointSource::Kind::kNode;
@@ -213,24 +324,27 @@ void VtkWriter::LayOut(const Model& model) {
     }
     s.offset = p.offset;
     s.origin = false;
-    return add_point(s);
+    return AddPoint(s);
   };
-  for (const Tendon& t : model.tendons) {
-    for (const BodyPoint& e : t.eyelets) line_connectivity_.push_back(body_point(e));
-    end_line(-1, -1);
+  for (std::size_t t = 0; t < model.tendons.size(); ++t) {
+    for (const BodyPoint& e : model.tendons[t].eyelets) line_connectivity_.push_back(body_point(e));
+    EndLine({VtkCellKind::kTendon, static_cast<int>(t)});
   }
-  for (const ForceElement& fe : model.force_elements) {
-    line_connectivity_.push_back(body_point(fe.a));
-    line_connectivity_.push_back(body_point(fe.b));
-    end_line(-1, -1);
+  for (std::size_t f = 0; f < model.force_elements.size(); ++f) {
+    const ForceElement& fe = model.force_elements[f];
+    AddLine({body_point(fe.a), body_point(fe.b)},
+            {VtkCellKind::kForceElement, static_cast<int>(f)});
   }
+}
 
+// Contact: the points that carry the contact forces, and the obstacles.
+void VtkWriter::LayOutContact(const Model& model) {
   // Contact pairs: a vertex at each pair's surface point, carrying the contact force.
   for (std::size_t i = 0; i < model.contact_pairs.size(); ++i) {
     PointSource s;
     s.kind = PointSource::Kind::kContact;
     s.index = static_cast<int>(i);
-    add_vert(add_point(s), -1, -1, -1);
+    AddVertex(AddPoint(s), {VtkCellKind::kContact, s.index});
   }
   // Moving shapes: a vertex per contact segment (the pairs change from step to step), at the
   // force-weighted mean of its contact points, carrying the sum of its contact forces.
@@ -239,22 +353,42 @@ void VtkWriter::LayOut(const Model& model) {
       PointSource s;
       s.kind = PointSource::Kind::kPairContact;
       s.index = static_cast<int>(i);
-      add_vert(add_point(s), -1, -1, -1);
+      AddVertex(AddPoint(s), {VtkCellKind::kPairContact, s.index});
     }
   segment_force_.assign(model.contact_segments.size(), Vec3::Zero());
   segment_point_.assign(model.contact_segments.size(), Vec3::Zero());
   segment_weight_.assign(model.contact_segments.size(), 0.0);
 
-  // Cell data in the order VTK stores the cells: vertices, then lines.
-  cell_rod_.insert(cell_rod_.begin(), vert_rod.begin(), vert_rod.end());
-  cell_body_.insert(cell_body_.begin(), vert_body.begin(), vert_body.end());
-  cell_joint_.insert(cell_joint_.begin(), vert_joint.begin(), vert_joint.end());
-
-  const std::size_t n = 3 * sources_.size();
-  for (std::vector<double>& axis : frame_axes_) axis.assign(n, 0.0);
-  velocity_.assign(n, 0.0);
-  position_.assign(n, 0.0);
-  contact_force_.assign(n, 0.0);
+  // Obstacles, fixed in the world: a plane's point with z along its normal, a sphere's
+  // centre, a capsule's axis.
+  for (std::size_t i = 0; i < model.obstacles.size(); ++i) {
+    const ContactObstacle& o = model.obstacles[i];
+    const int id = static_cast<int>(i);
+    PointSource s;
+    s.kind = PointSource::Kind::kWorld;
+    s.offset = o.point;
+    s.origin = false;
+    const Vec3 r3 = Vec3::Constant(o.radius);
+    switch (o.type) {
+      case ObstacleType::kPlane: {
+        const Mat3 along = FrameAlong(o.normal, Vec3::UnitZ());  // x along the normal
+        s.rotated = true;
+        s.axes << along.col(1), along.col(2), along.col(0);
+        AddVertex(AddPoint(s), {VtkCellKind::kPlane, id});
+        break;
+      }
+      case ObstacleType::kSphere:
+        AddVertex(AddPoint(s, o.radius, r3), {VtkCellKind::kObstacleSphere, id});
+        break;
+      case ObstacleType::kCapsule: {
+        PointSource to = s;
+        to.offset = o.to;
+        AddLine({AddPoint(s, o.radius, r3), AddPoint(to, o.radius, r3)},
+                {VtkCellKind::kObstacleCapsule, id});
+        break;
+      }
+    }
+  }
 }
 
 // The rods' polylines are the first lines (LayOut): point k of rod r is its node k, between
@@ -322,7 +456,7 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
     Mat3 R;
     if (s.kind == PointSource::Kind::kWorld) {
       x = s.offset;
-      R = Mat3::Identity();
+      R = s.axes;
       v = Vec3::Zero();
     } else if (s.kind == PointSource::Kind::kContact) {
       const ContactState c = CalcContactState(model, data, s.index);
@@ -370,7 +504,7 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
     } else {
       const SE3& H = data.H[static_cast<std::size_t>(s.index)];
       x = s.origin ? H.x : H.Act(s.offset);
-      R = H.R;
+      R = s.rotated ? Mat3(H.R * s.axes) : H.R;
       v = node_point(s.index, s.offset).velocity;
     }
     for (int k = 0; k < 3; ++k) {
@@ -378,6 +512,14 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
       velocity_[3 * i + k] = v(k);
       for (int axis = 0; axis < 3; ++axis) frame_axes_[axis][3 * i + k] = R(k, axis);
     }
+  }
+  // Tendon tensions and force element forces, as tendons.csv and forces.csv give them.
+  for (std::size_t c = 0; c < cell_kind_.size(); ++c) {
+    const VtkCellKind kind = static_cast<VtkCellKind>(cell_kind_[c]);
+    if (kind == VtkCellKind::kTendon)
+      tension_[c] = CalcTendonState(model, data, cell_item_[c]).force;
+    else if (kind == VtkCellKind::kForceElement)
+      tension_[c] = CalcForceElementState(model, data, cell_item_[c]).force;
   }
 }
 
@@ -426,14 +568,20 @@ void VtkWriter::ComposeBinaryImage() {
   array("        ", kFloat64, "velocity", 3, velocity_.data(), 3 * n, &velocity_at_);
   array("        ", kFloat64, "contact_force", 3, contact_force_.data(), 3 * n, &contact_force_at_);
   array("        ", kInt32, "joint_id", 1, point_joint_.data(), n, nullptr);
+  array("        ", kFloat64, "radius", 1, radius_.data(), n, nullptr);
+  array("        ", kFloat64, "half_size", 3, half_size_.data(), 3 * n, nullptr);
   if (rod_fields_) {
     array("        ", kFloat64, "strain", 6, strain_.data(), 6 * n, &strain_at_);
     array("        ", kFloat64, "stress", 6, stress_.data(), 6 * n, &stress_at_);
   }
   f += "      </PointData>\n      <CellData Scalars=\"rod_id\">\n";
-  array("        ", kInt32, "rod_id", 1, cell_rod_.data(), cell_rod_.size(), nullptr);
-  array("        ", kInt32, "body_id", 1, cell_body_.data(), cell_body_.size(), nullptr);
-  array("        ", kInt32, "joint_id", 1, cell_joint_.data(), cell_joint_.size(), nullptr);
+  const std::size_t cells = cell_kind_.size();
+  array("        ", kInt32, "rod_id", 1, cell_rod_.data(), cells, nullptr);
+  array("        ", kInt32, "body_id", 1, cell_body_.data(), cells, nullptr);
+  array("        ", kInt32, "joint_id", 1, cell_joint_.data(), cells, nullptr);
+  array("        ", kInt32, "kind", 1, cell_kind_.data(), cells, nullptr);
+  array("        ", kInt32, "item_id", 1, cell_item_.data(), cells, nullptr);
+  array("        ", kFloat64, "tension", 1, tension_.data(), cells, &tension_at_);
   f += "      </CellData>\n      <Points>\n";
   array("        ", kFloat64, "position", 3, position_.data(), 3 * n, &position_at_);
   f += "      </Points>\n";
@@ -510,6 +658,8 @@ void VtkWriter::ComposeAsciiImage(double time) {
   doubles("velocity", velocity_);
   doubles("contact_force", contact_force_);
   integers(kInt32, "joint_id", point_joint_);
+  doubles("radius", radius_, 1);
+  doubles("half_size", half_size_);
   if (rod_fields_) {
     doubles("strain", strain_, 6);
     doubles("stress", stress_, 6);
@@ -518,6 +668,9 @@ void VtkWriter::ComposeAsciiImage(double time) {
   integers(kInt32, "rod_id", cell_rod_);
   integers(kInt32, "body_id", cell_body_);
   integers(kInt32, "joint_id", cell_joint_);
+  integers(kInt32, "kind", cell_kind_);
+  integers(kInt32, "item_id", cell_item_);
+  doubles("tension", tension_, 1);
   f += "      </CellData>\n      <Points>\n";
   doubles("position", position_);
   f += "      </Points>\n";
@@ -546,6 +699,7 @@ bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time, do
       std::memcpy(&image_[frame_axes_at_[axis]], frame_axes_[axis].data(), bytes);
     std::memcpy(&image_[velocity_at_], velocity_.data(), bytes);
     std::memcpy(&image_[contact_force_at_], contact_force_.data(), bytes);
+    std::memcpy(&image_[tension_at_], tension_.data(), tension_.size() * sizeof(double));
     std::memcpy(&image_[position_at_], position_.data(), bytes);
     if (rod_fields_) {
       std::memcpy(&image_[strain_at_], strain_.data(), 2 * bytes);

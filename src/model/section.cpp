@@ -63,7 +63,10 @@ Section Section::Circle(double radius, const Material& material) {
   // Cowper (1966) for a solid circle.
   const double kappa = material.shear_coefficient > 0.0 ? material.shear_coefficient
                                                         : 6.0 * (1.0 + r.nu) / (7.0 + 6.0 * r.nu);
-  return Build(r, kappa, A, I, I, 2.0 * I);
+  Section s = Build(r, kappa, A, I, I, 2.0 * I);
+  s.width = s.height = 2.0 * radius;
+  s.round = true;
+  return s;
 }
 
 Section Section::Rectangle(double width, double height, const Material& material) {
@@ -80,7 +83,10 @@ Section Section::Rectangle(double width, double height, const Material& material
   const double kappa = material.shear_coefficient > 0.0
                            ? material.shear_coefficient
                            : 10.0 * (1.0 + r.nu) / (12.0 + 11.0 * r.nu);
-  return Build(r, kappa, A, I2, I3, J);
+  Section s = Build(r, kappa, A, I2, I3, J);
+  s.width = width;
+  s.height = height;
+  return s;
 }
 
 Section Section::Tube(double outer_radius, double inner_radius, const Material& material) {
@@ -97,7 +103,10 @@ Section Section::Tube(double outer_radius, double inner_radius, const Material& 
           ? material.shear_coefficient
           : 6.0 * (1.0 + r.nu) * (1.0 + m2) * (1.0 + m2) /
                 ((7.0 + 6.0 * r.nu) * (1.0 + m2) * (1.0 + m2) + (20.0 + 12.0 * r.nu) * m2);
-  return Build(r, kappa, A, I, I, 2.0 * I);
+  Section s = Build(r, kappa, A, I, I, 2.0 * I);
+  s.width = s.height = 2.0 * outer_radius;
+  s.round = true;
+  return s;
 }
 
 }  // namespace screwfem

@@ -518,9 +518,10 @@ TEST(RunScene, CollectionReferencesEveryFrameFileAndFramesHoldTheMechanism) {
     const std::string file = dir + "/vtk/" + pvd.substr(start, end - start);
     ASSERT_TRUE(std::filesystem::is_regular_file(file)) << file;
     const std::string vtp = ReadFile(file);
-    EXPECT_NE(vtp.find("NumberOfPoints=\"3\" NumberOfVerts=\"1\" NumberOfLines=\"1\""),
+    EXPECT_NE(vtp.find("NumberOfPoints=\"4\" NumberOfVerts=\"2\" NumberOfLines=\"1\""),
               std::string::npos)
-        << "one joint vertex, one body segment (node origin to centre of mass)";
+        << "one joint vertex and the body's inertia box, one body segment (node origin to "
+           "centre of mass)";
     for (const char* name :
          {"frame_x", "frame_y", "frame_z", "velocity", "joint_id", "rod_id", "body_id"})
       EXPECT_NE(vtp.find(std::string("Name=\"") + name + "\""), std::string::npos) << name;

@@ -3,6 +3,7 @@
 // scene key outputs.vtk_format selects the encoding, binary by default.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -12,7 +13,9 @@
 
 #include "io/run_test_util.h"
 #include "screwfem/assemble/outputs.h"
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/joint.h"
+#include "screwfem/elements/tendon.h"
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/io/vtk.h"
@@ -139,25 +142,33 @@ MovedGrm MoveGrm() {
 void ExpectFrameHoldsTheState(const std::string& file, const Model& model, const Data& data,
                               const std::string& format) {
   std::map<std::string, Array> a = ReadArrays(file);
-  for (const char* name :
-       {"FieldData/TimeValue", "Points/position", "PointData/frame_x", "PointData/frame_y",
-        "PointData/frame_z", "PointData/velocity", "PointData/joint_id", "CellData/rod_id",
-        "CellData/body_id", "CellData/joint_id", "Verts/connectivity", "Verts/offsets",
-        "Lines/connectivity", "Lines/offsets"}) {
+  for (const char* name : {"FieldData/TimeValue",     "Points/position",    "PointData/frame_x",
+                           "PointData/frame_y",       "PointData/frame_z",  "PointData/velocity",
+                           "PointData/joint_id",      "CellData/rod_id",    "CellData/body_id",
+                           "CellData/joint_id",       "PointData/radius",   "PointData/half_size",
+                           "PointData/contact_force", "CellData/kind",      "CellData/item_id",
+                           "CellData/tension",        "Verts/connectivity", "Verts/offsets",
+                           "Lines/connectivity",      "Lines/offsets"}) {
     ASSERT_TRUE(a.count(name)) << name;
     EXPECT_EQ(a[name].format, format) << name;
   }
   ASSERT_EQ(a["FieldData/TimeValue"].doubles.size(), 1u);
   EXPECT_EQ(std::memcmp(&a["FieldData/TimeValue"].doubles[0], &data.time, sizeof(double)), 0);
 
-  // Cells: vertices (the joints, in order), then lines (rods, then body segments).
+  // Cells: vertices (the joints, in order, then the bodies' inertia boxes), then lines (rods,
+  // then body segments).
   const std::vector<long long>& verts = a["Verts/connectivity"].integers;
   const std::vector<long long>& lines = a["Lines/connectivity"].integers;
   const std::vector<long long>& line_ends = a["Lines/offsets"].integers;
   const std::vector<long long>& rod_id = a["CellData/rod_id"].integers;
   const std::vector<long long>& body_id = a["CellData/body_id"].integers;
-  ASSERT_EQ(verts.size(), model.joints.size());  // no point masses in the GRM
+  const std::vector<long long>& kind = a["CellData/kind"].integers;
+  ASSERT_EQ(verts.size(), model.joints.size() + model.bodies.size());  // joints, inertia boxes
   ASSERT_EQ(rod_id.size(), verts.size() + line_ends.size());
+  ASSERT_EQ(kind.size(), rod_id.size());
+  for (std::size_t c = 0; c < verts.size(); ++c)
+    EXPECT_EQ(kind[c], static_cast<int>(c < model.joints.size() ? VtkCellKind::kJoint
+                                                                : VtkCellKind::kInertiaBox));
 
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const Joint& joint = model.joints[j];
@@ -173,6 +184,7 @@ void ExpectFrameHoldsTheState(const std::string& file, const Model& model, const
     const std::size_t cell = verts.size() + c;
     const long long end = line_ends[c];
     if (rod_id[cell] >= 0) {
+      EXPECT_EQ(kind[cell], static_cast<int>(VtkCellKind::kRod));
       const Rod& rod = model.rods[static_cast<std::size_t>(rod_id[cell])];
       ASSERT_EQ(end - start, static_cast<long long>(rod.nodes.size()));
       for (std::size_t k = 0; k < rod.nodes.size(); ++k) {
@@ -191,6 +203,7 @@ void ExpectFrameHoldsTheState(const std::string& file, const Model& model, const
       ++rods_seen;
     } else {
       ASSERT_GE(body_id[cell], 0);
+      EXPECT_EQ(kind[cell], static_cast<int>(VtkCellKind::kBodySegment));
       ASSERT_EQ(end - start, 2);
       const RigidBody& body = model.bodies[static_cast<std::size_t>(body_id[cell])];
       const SE3& H = data.H[static_cast<std::size_t>(body.node)];
@@ -253,6 +266,151 @@ TEST(VtkWriter, BinaryFramesOfOneModelDifferOnlyInTheirValues) {
             std::string::npos)
       << pvd;
   EXPECT_NE(pvd.find("file=\"frame_00001.vtp\""), std::string::npos) << pvd;
+}
+
+// The drawn sizes and the items beyond the mechanism's skeleton, on the viewer's true-size
+// scene (tests/view/true_size.yaml) moved 10 steps: rods carry their section's radius and half
+// sizes (circle, rectangle), the box, sphere and capsule shapes and the obstacles theirs, the
+// box body its inertia box; the tendon passes through its eyelets with its tension, and the
+// contact vertices carry CalcContactState's force (the box's bottom corners its weight).
+TEST(VtkWriter, FrameCarriesSizesShapesObstaclesTendonsAndContactForces) {
+  const Scene scene = LoadScene(std::string(SCREWFEM_SOURCE_DIR) + "/tests/view/true_size.yaml");
+  const Model& model = scene.model;
+  Data data = MakeData(model);
+  Integrator integ;
+  std::string why;
+  ASSERT_TRUE(InitializeDynamics(model, data, integ, scene.analysis.dynamic, &why)) << why;
+  for (int i = 0; i < 10; ++i) {
+    ASSERT_TRUE(Step(model, data, integ, 2e-3).ok);
+    data.time += 2e-3;
+  }
+  for (const VtkFormat format : {VtkFormat::kBinary, VtkFormat::kAscii}) {
+    SCOPED_TRACE(NameOf(format));
+    const ScopedDir dir("vtk_sizes");
+    VtkWriter w;
+    w.Open(dir.path(), model, format, 1);
+    ASSERT_TRUE(w.WriteFrame(model, data, data.time));
+    std::map<std::string, Array> a = ReadArrays(ReadFile(dir.path() + "/frame_00000.vtp"));
+    const std::vector<long long>& verts = a["Verts/connectivity"].integers;
+    const std::vector<long long>& lines = a["Lines/connectivity"].integers;
+    const std::vector<long long>& line_ends = a["Lines/offsets"].integers;
+    const std::vector<long long>& kind = a["CellData/kind"].integers;
+    const std::vector<long long>& item = a["CellData/item_id"].integers;
+    const std::vector<double>& radius = a["PointData/radius"].doubles;
+    const std::vector<double>& half = a["PointData/half_size"].doubles;
+    ASSERT_EQ(kind.size(), verts.size() + line_ends.size());
+    ASSERT_EQ(item.size(), kind.size());
+    ASSERT_EQ(a["CellData/tension"].doubles.size(), kind.size());
+    const auto half_size = [&](long long p) {
+      return Vec3(half[static_cast<std::size_t>(3 * p)], half[static_cast<std::size_t>(3 * p + 1)],
+                  half[static_cast<std::size_t>(3 * p + 2)]);
+    };
+    const auto position = [&](long long p) {
+      const std::vector<double>& x = a["Points/position"].doubles;
+      return Vec3(x[static_cast<std::size_t>(3 * p)], x[static_cast<std::size_t>(3 * p + 1)],
+                  x[static_cast<std::size_t>(3 * p + 2)]);
+    };
+    std::map<int, int> counts;
+    for (std::size_t c = 0; c < kind.size(); ++c) {
+      const VtkCellKind k = static_cast<VtkCellKind>(kind[c]);
+      const std::size_t i = static_cast<std::size_t>(item[c]);
+      ++counts[static_cast<int>(k)];
+      // The cell's points: a vertex, or the line's span of the connectivity.
+      std::vector<long long> points;
+      if (c < verts.size()) {
+        points = {verts[c]};
+      } else {
+        const std::size_t l = c - verts.size();
+        const long long begin = l == 0 ? 0 : line_ends[l - 1];
+        points.assign(lines.begin() + begin, lines.begin() + line_ends[l]);
+      }
+      const long long p = points[0];
+      const double r = radius[static_cast<std::size_t>(p)];
+      switch (k) {
+        case VtkCellKind::kRod:
+          for (long long q : points) {
+            if (model.rods[i].name == "beam") {
+              EXPECT_EQ(radius[static_cast<std::size_t>(q)], 0.008);
+              EXPECT_EQ(half_size(q), Vec3(0.0, 0.008, 0.008));
+            } else {
+              EXPECT_DOUBLE_EQ(radius[static_cast<std::size_t>(q)], 0.5 * std::hypot(0.01, 0.004));
+              EXPECT_EQ(half_size(q), Vec3(0.0, 0.005, 0.002));
+            }
+          }
+          break;
+        case VtkCellKind::kBox: {
+          const ContactShape& s = model.contact_shapes[i];
+          const SE3& H =
+              data.H[static_cast<std::size_t>(model.bodies[static_cast<std::size_t>(s.body)].node)];
+          ExpectSameBits(a["Points/position"], p, H.Act(s.from), "box centre");
+          ExpectSameBits(a["PointData/frame_z"], p, H.R.col(2), "box axis z");
+          EXPECT_EQ(half_size(p), Vec3(0.02, 0.02, 0.02));
+          break;
+        }
+        case VtkCellKind::kSphere:
+          EXPECT_EQ(r, 0.01);
+          break;
+        case VtkCellKind::kCapsule:
+          ASSERT_EQ(points.size(), 2u);
+          EXPECT_EQ(r, 0.004);
+          EXPECT_NEAR((position(points[1]) - position(points[0])).norm(), 0.04, 1e-12);
+          break;
+        case VtkCellKind::kInertiaBox:
+          if (model.bodies[i].name == "block") {
+            EXPECT_NEAR(half_size(p).minCoeff(), 0.02, 1e-6);
+            EXPECT_NEAR(half_size(p).maxCoeff(), 0.02, 1e-6);
+          }
+          break;
+        case VtkCellKind::kPlane:
+          ExpectSameBits(a["PointData/frame_z"], p, Vec3::UnitZ(), "plane normal");
+          break;
+        case VtkCellKind::kObstacleSphere:
+          EXPECT_EQ(r, 0.02);
+          ExpectSameBits(a["Points/position"], p, model.obstacles[i].point, "obstacle centre");
+          break;
+        case VtkCellKind::kObstacleCapsule:
+          EXPECT_EQ(r, 0.01);
+          break;
+        case VtkCellKind::kTendon: {
+          const Tendon& t = model.tendons[i];
+          ASSERT_EQ(points.size(), t.eyelets.size());
+          for (std::size_t e = 0; e < points.size(); ++e)
+            ExpectSameBits(a["Points/position"], points[e],
+                           BodyPointPosition(model, data, t.eyelets[e]), "eyelet");
+          EXPECT_EQ(a["CellData/tension"].doubles[c], CalcTendonState(model, data, item[c]).force);
+          EXPECT_EQ(a["CellData/tension"].doubles[c], 1.0);
+          break;
+        }
+        case VtkCellKind::kContact: {
+          const ContactState s = CalcContactState(model, data, item[c]);
+          const Vec3 F =
+              s.active ? Vec3(s.normal_force * s.normal + s.friction_force) : Vec3::Zero();
+          ExpectSameBits(a["PointData/contact_force"], p, F, "contact force");
+          break;
+        }
+        default:
+          break;
+      }
+    }
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kJoint)], 3);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kRod)], 2);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kBox)], 1);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kSphere)], 1);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kCapsule)], 1);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kInertiaBox)], 2);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kPlane)], 1);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kObstacleSphere)], 1);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kObstacleCapsule)], 1);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kTendon)], 1);
+    EXPECT_EQ(counts[static_cast<int>(VtkCellKind::kContact)],
+              static_cast<int>(model.contact_pairs.size()));
+    // The box rests on its four bottom corners: their upward forces carry its weight.
+    double lift = 0.0;
+    for (std::size_t c = 0; c < verts.size(); ++c)
+      if (kind[c] == static_cast<int>(VtkCellKind::kContact))
+        lift += a["PointData/contact_force"].doubles[static_cast<std::size_t>(3 * verts[c] + 2)];
+    EXPECT_NEAR(lift, 0.064 * 9.81, 0.01 * 0.064 * 9.81);
+  }
 }
 
 // The scene key: binary by default, ascii on request, in the summary; a bad value names the

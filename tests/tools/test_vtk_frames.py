@@ -1,5 +1,6 @@
 """The ParaView frames `screwfem run` writes, read back: the binary (default) and the ascii
-encoding of one run hold the same values bit for bit as tools/screwfem_vtk.py reads them, and,
+encoding of one run hold the same values bit for bit as tools/screwfem_vtk.py reads them (also
+the kinds, sizes, tensions and contact forces of tests/view/true_size.yaml), and,
 when VTK's own Python module is installed (Debian's python3-vtk9, not a dependency of the
 project), VTK's vtkXMLPolyDataReader — the reader ParaView uses — reads both to the same points.
 
@@ -58,6 +59,33 @@ class Frames(unittest.TestCase):
             self.assertEqual(fb["point_data"], fa["point_data"])
             self.assertEqual(fb["cell_data"], fa["cell_data"])
             self.assertEqual(fb["cells"], fa["cells"])
+
+    def test_sizes_shapes_tendons_and_forces_read_back_in_both_encodings(self):
+        # The viewer's true-size scene: every kind of cell, with the sizes and the per-frame
+        # tension and contact forces, the same in both encodings.
+        scene = os.path.join(SOURCE, "tests", "view", "true_size.yaml")
+        frames = {}
+        for fmt in ("binary", "ascii"):
+            out = os.path.join(self.tmp, "sizes_" + fmt)
+            subprocess.run([os.environ["SCREWFEM_CLI"], "run", scene, "-o", out, "-q",
+                            "--set", "analysis.end_time=0.02", "--set", f"outputs.vtk_format={fmt}"],
+                           check=True)
+            frames[fmt] = screwfem_vtk.read_frame(screwfem_vtk.read_collection(out)[-1][1])
+        binary, ascii_ = frames["binary"], frames["ascii"]
+        self.assertEqual(binary["point_data"], ascii_["point_data"])
+        self.assertEqual(binary["cell_data"], ascii_["cell_data"])
+        kinds = binary["kinds"]
+        for kind in ("joint", "rod", "body_point", "tendon", "contact", "pair_contact", "sphere",
+                     "capsule", "box", "inertia_box", "plane", "obstacle_sphere", "obstacle_capsule"):
+            self.assertIn(kind, kinds)
+        radius = binary["point_data"]["radius"][1]
+        rod = binary["cells"][kinds.index("rod")]
+        self.assertEqual([radius[i] for i in rod], [0.008] * len(rod))
+        tension = binary["cell_data"]["tension"][1]
+        self.assertEqual(tension[kinds.index("tendon")], 1.0)
+        force = binary["point_data"]["contact_force"][1]
+        lift = sum(force[3 * c[0] + 2] for c, k in zip(binary["cells"], kinds) if k == "contact")
+        self.assertAlmostEqual(lift, 0.064 * 9.81, delta=0.05 * 0.064 * 9.81)
 
     @unittest.skipIf(vtkXMLPolyDataReader is None, "VTK's Python module (python3-vtk9) not installed")
     def test_vtk_reads_both_encodings_to_the_same_points(self):

@@ -1,14 +1,29 @@
 // The screwfem viewer (inlined into the page by tools/screwfem_view.py; three.js r111).
 //
-// The run's data (element #run-data, written by screwfem_view.py) holds the drawn geometry of
-// every ParaView frame: point positions and frames, rods as point lists, rigid bodies as
-// segments, joints as points, per-point scalar fields to colour the rods by, and the recorded
-// points (points.csv). Between frames, positions are interpolated linearly in time.
+// The run's data (element #run-data, written by screwfem_view.py from the ParaView frames)
+// holds every drawn point's position at the first frame and, for the points that move, at
+// every frame; the orientations (quaternions) of the points that carry a frame (rod sections,
+// boxes, joints, planes); the constant sizes (radius, half sizes); what the cells are (rods,
+// rigid bodies' links, contact shapes and inertia boxes, joints, tendons and force elements
+// with their tensions, contact points with their forces, obstacles); the rods' colour fields
+// and the recorded points (points.csv). Between frames positions, tensions and forces are
+// interpolated linearly and orientations by normalised linear interpolation.
+//
+// Drawn true to size: rods as tubes of their section (round or rectangular; a rod without a
+// size in the frames thin, at 0.6 % of the mechanism), rigid bodies as their contact shapes or
+// else the box of their inertia, obstacles. Markers whose size means nothing: joints
+// (spheres), joint frames (x red, y green, z blue), links (thin rods from a body's frame to
+// its joints), tendons and force elements (thin tubes coloured by tension), contact forces
+// (arrows from the contact point along the force on the shape, drawn over everything).
 //
 // URL parameters (for tests and links): t=SECONDS shows that time and stays paused;
-// bare=1 draws the mechanism alone (no grid, axes, trails, labels or controls);
-// follow=NAME follows a body, rod, joint or recorded point; colour=FIELD colours the rods;
-// labels=1 shows the names of joints and recorded points; trail=SECONDS or all.
+// bare=1 draws the mechanism alone (no grid, axes, obstacles, trails, labels or controls);
+// hide=a,b and show=a,b switch the layers (rods bodies links joints frames tendons forces
+// obstacles points grid labels); follow=NAME follows a body, rod, joint or recorded point;
+// colour=FIELD colours the rods; labels=1; trail=SECONDS or all; speed=FACTOR;
+// camera: view=front|back|left|right|top|bottom|iso, target=X,Y,Z, span=METRES (the width of
+// the picture at the target), ortho=1 (orthographic), eye=X,Y,Z (perspective, from there);
+// force_scale=METRES_PER_NEWTON (arrow length).
 (function () {
   "use strict";
 
@@ -19,25 +34,52 @@
 
   // ---- data --------------------------------------------------------------------------------
   function floats(b64) {
+    if (!b64) return new Float32Array(0);
     var bytes = atob(b64), n = bytes.length, buf = new Uint8Array(n);
     for (var i = 0; i < n; ++i) buf[i] = bytes.charCodeAt(i);
     return new Float32Array(buf.buffer);
   }
+  // A track of screwfem_view.py: 16-bit integers q, value = mid + q scale per component.
+  function decode(t) {
+    if (!t || !t.data) return new Float32Array(0);
+    var bytes = atob(t.data), n = bytes.length >> 1, out = new Float32Array(n), nc = t.mid.length;
+    for (var i = 0; i < n; ++i) {
+      var q = bytes.charCodeAt(2 * i) | bytes.charCodeAt(2 * i + 1) << 8;
+      if (q > 32767) q -= 65536;
+      out[i] = t.mid[i % nc] + q * t.scale[i % nc];
+    }
+    return out;
+  }
+  function numberList(text) {
+    if (!text) return null;
+    var v = text.split(",").map(Number);
+    return v.every(isFinite) ? v : null;
+  }
   var times = data.times, nf = times.length, np = data.npoints;
-  var positions = floats(data.positions);
-  var axes = data.axes ? floats(data.axes) : null;
+  var x0 = floats(data.x0), moving = data.moving, track = decode(data.positions);
+  var oriented = data.oriented, q0 = floats(data.q0), turning = data.turning, quats = decode(data.quats);
+  var radius = floats(data.radius), half = floats(data.half);
+  var tensionTrack = decode(data.tension), forceTrack = decode(data.forces);
+  var nm = moving.length, nt = turning.length, nl = data.lines.length, nc = data.contacts.length;
+  var fieldPoints = data.field_points || [];
   var fields = data.fields.map(function (f) {
-    var v = floats(f.values), lo = Infinity, hi = -Infinity;
+    var v = decode(f.values), lo = Infinity, hi = -Infinity;
     for (var i = 0; i < v.length; ++i) { if (v[i] < lo) lo = v[i]; if (v[i] > hi) hi = v[i]; }
     return { name: f.name, unit: f.unit, values: v, lo: lo, hi: hi > lo ? hi : lo + 1 };
   });
   var rec = data.recorded;
-  var recXyz = rec ? floats(rec.xyz) : null, recTimes = rec ? rec.times : [];
+  var recXyz = rec ? decode(rec.xyz) : null, recTimes = rec ? rec.times : [];
   var t0 = nf ? times[0] : 0, t1 = nf ? times[nf - 1] : 0;
 
-  // Current geometry: interpolated positions (np x 3), frame axes (np x 9), field (np).
-  var cur = new Float32Array(np * 3), curAxes = new Float32Array(np * 9), curField = new Float32Array(np);
-  var field = null;
+  // Current state: positions (np x 3), quaternions of the oriented points, tensions, forces,
+  // the colour field on the field points.
+  var cur = new Float32Array(x0), curQ = new Float32Array(q0);
+  var curTension = new Float32Array(nl), curForce = new Float32Array(3 * nc);
+  var curField = new Float32Array(fieldPoints.length), field = null;
+  var slot = new Int32Array(np).fill(-1);  // point -> its index in `oriented`
+  oriented.forEach(function (p, k) { slot[p] = k; });
+  var fieldSlot = new Int32Array(np).fill(-1);
+  fieldPoints.forEach(function (p, k) { fieldSlot[p] = k; });
 
   // Index k and weight w with t between times[k] and times[k+1] (w in [0, 1]).
   function bracket(ts, t) {
@@ -47,42 +89,81 @@
     while (hi - lo > 1) { var mid = (lo + hi) >> 1; if (ts[mid] <= t) lo = mid; else hi = mid; }
     return [lo, (t - ts[lo]) / (ts[lo + 1] - ts[lo])];
   }
-  function lerpInto(out, src, stride, k, w) {
-    var a = k * stride, b = (k + 1) * stride;
-    for (var i = 0; i < stride; ++i) out[i] = w > 0 ? src[a + i] + w * (src[b + i] - src[a + i]) : src[a + i];
+  function lerp(src, stride, k, w, i) {
+    var a = src[k * stride + i];
+    return w > 0 ? a + w * (src[(k + 1) * stride + i] - a) : a;
   }
   function computeState(t) {
-    var kw = bracket(times, t);
-    lerpInto(cur, positions, np * 3, kw[0], kw[1]);
-    if (axes) lerpInto(curAxes, axes, np * 9, kw[0], kw[1]);
-    if (field) lerpInto(curField, field.values, np, kw[0], kw[1]);
+    var kw = bracket(times, t), k = kw[0], w = kw[1], i, c;
+    for (i = 0; i < nm; ++i)
+      for (c = 0; c < 3; ++c) cur[3 * moving[i] + c] = lerp(track, 3 * nm, k, w, 3 * i + c);
+    for (i = 0; i < nt; ++i) {
+      var o = 4 * turning[i], n2 = 0;
+      for (c = 0; c < 4; ++c) { curQ[o + c] = lerp(quats, 4 * nt, k, w, 4 * i + c); n2 += curQ[o + c] * curQ[o + c]; }
+      var s = n2 > 0 ? 1 / Math.sqrt(n2) : 1;
+      for (c = 0; c < 4; ++c) curQ[o + c] *= s;
+    }
+    for (i = 0; i < nl; ++i) curTension[i] = lerp(tensionTrack, nl, k, w, i);
+    for (i = 0; i < 3 * nc && forceTrack.length; ++i) curForce[i] = lerp(forceTrack, 3 * nc, k, w, i);
+    if (field) for (i = 0; i < fieldPoints.length; ++i) curField[i] = lerp(field.values, fieldPoints.length, k, w, i);
   }
   function point(i) { return new THREE.Vector3(cur[3 * i], cur[3 * i + 1], cur[3 * i + 2]); }
-  function axis(i, a) {
-    var o = 9 * i + 3 * a;
-    return new THREE.Vector3(curAxes[o], curAxes[o + 1], curAxes[o + 2]);
+  function quaternion(i) {
+    var o = 4 * slot[i];
+    return slot[i] < 0 ? new THREE.Quaternion() : new THREE.Quaternion(curQ[o], curQ[o + 1], curQ[o + 2], curQ[o + 3]);
   }
+  // Column a of point i's frame (x, y, z axis).
+  function axis(i, a) {
+    if (slot[i] < 0) return new THREE.Vector3(a === 0 ? 1 : 0, a === 1 ? 1 : 0, a === 2 ? 1 : 0);
+    var o = 4 * slot[i], x = curQ[o], y = curQ[o + 1], z = curQ[o + 2], w = curQ[o + 3];
+    if (a === 0) return new THREE.Vector3(1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w));
+    if (a === 1) return new THREE.Vector3(2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w));
+    return new THREE.Vector3(2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y));
+  }
+  function halfSize(i) { return new THREE.Vector3(half[3 * i], half[3 * i + 1], half[3 * i + 2]); }
 
-  // Bounding box of the whole motion (all frames and recorded points): sizes and framing.
-  var box = new THREE.Box3();
-  for (var i = 0; i + 2 < positions.length; i += 3)
-    box.expandByPoint(new THREE.Vector3(positions[i], positions[i + 1], positions[i + 2]));
+  // Bounding box of the mechanism's whole motion (every frame, the points' sizes and the
+  // recorded points; not the obstacles, which may reach far): sizes and framing.
+  var isObstacle = new Uint8Array(np);
+  data.obstacles.forEach(function (o) { o.points.forEach(function (p) { isObstacle[p] = 1; }); });
+  var box = new THREE.Box3(), box0 = new THREE.Box3(), v3 = new THREE.Vector3();
+  function expand(b, x, y, z, r) {
+    b.expandByPoint(v3.set(x - r, y - r, z - r));
+    b.expandByPoint(v3.set(x + r, y + r, z + r));
+  }
+  var isMoving = new Int32Array(np).fill(-1);
+  moving.forEach(function (p, k) { isMoving[p] = k; });
+  for (var i = 0; i < np; ++i) {
+    if (isObstacle[i]) continue;
+    var r = radius[i] || 0;
+    expand(box0, x0[3 * i], x0[3 * i + 1], x0[3 * i + 2], r);
+    if (isMoving[i] < 0) continue;
+    for (var f = 0; f < nf; ++f) {
+      var o = 3 * (f * nm + isMoving[i]);
+      expand(box, track[o], track[o + 1], track[o + 2], r);
+    }
+  }
+  box.union(box0);
   if (recXyz)
-    for (i = 0; i + 2 < recXyz.length; i += 3)
-      box.expandByPoint(new THREE.Vector3(recXyz[i], recXyz[i + 1], recXyz[i + 2]));
+    for (i = 0; i + 2 < recXyz.length; i += 3) box.expandByPoint(v3.set(recXyz[i], recXyz[i + 1], recXyz[i + 2]));
   if (box.isEmpty()) box.set(new THREE.Vector3(-0.5, -0.5, -0.5), new THREE.Vector3(0.5, 0.5, 0.5));
   var size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-6);
-  // The mechanism's own size (its initial bounding box) sets the drawn thicknesses and the
+  // The mechanism's own size (its initial bounding box) sets the markers' sizes and the
   // following camera's distance; the motion's size (box) sets the grid and the overall view.
-  var box0 = new THREE.Box3();
-  for (i = 0; i + 2 < np * 3; i += 3)
-    box0.expandByPoint(new THREE.Vector3(positions[i], positions[i + 1], positions[i + 2]));
-  if (recXyz)
-    for (i = 0; i + 2 < 3 * rec.names.length; i += 3)
-      box0.expandByPoint(new THREE.Vector3(recXyz[i], recXyz[i + 1], recXyz[i + 2]));
   var size0 = box0.isEmpty() ? size : Math.max(box0.getSize(new THREE.Vector3()).length(), 1e-3 * size);
-  var tubeRadius = 0.006 * size0, bodyWidth = 0.016 * size0, jointRadius = 0.014 * size0;
+  var thinRadius = 0.006 * size0, jointRadius = 0.012 * size0, lineRadius = 0.0015 * size0;
   var up = new THREE.Vector3().fromArray(data.up).normalize();
+
+  // ---- layers --------------------------------------------------------------------------------
+  var layerNames = ["rods", "bodies", "links", "joints", "frames", "tendons", "forces", "obstacles",
+                    "points", "grid", "labels"];
+  var shown = { rods: true, bodies: true, links: true, joints: true, frames: false, tendons: true,
+                forces: true, obstacles: !bare, points: !bare, grid: !bare, labels: false };
+  if (params.get("labels") === "1") shown.labels = true;
+  (params.get("hide") || "").split(",").forEach(function (n) { if (n in shown) shown[n] = false; });
+  (params.get("show") || "").split(",").forEach(function (n) { if (n in shown) shown[n] = true; });
+  var layers = {};
+  layerNames.forEach(function (n) { layers[n] = new THREE.Group(); });
 
   // ---- renderer, camera, controls ----------------------------------------------------------
   var container = document.getElementById("view");
@@ -97,11 +178,15 @@
   renderer.setClearColor(0xf5f6f8, 1);
   container.appendChild(renderer.domElement);
   var scene = new THREE.Scene();
-  var camera = new THREE.PerspectiveCamera(35, 1, size * 1e-3, size * 100);
+  layerNames.forEach(function (n) { scene.add(layers[n]); });
+  var ortho = params.get("ortho") === "1";
+  var camera = ortho ? new THREE.OrthographicCamera(-1, 1, 1, -1, size * 1e-3, size * 100)
+                     : new THREE.PerspectiveCamera(35, 1, size * 1e-3, size * 100);
   camera.up.copy(up);
   var controls = new THREE.OrbitControls(camera, renderer.domElement);
   controls.enableDamping = false;
   controls.screenSpacePanning = true;
+  var aspect = 1, orthoWidth = size;
 
   scene.add(new THREE.HemisphereLight(0xffffff, 0x8890a0, 0.75));
   var sun = new THREE.DirectionalLight(0xffffff, 0.65);
@@ -109,42 +194,77 @@
   camera.add(sun);
   scene.add(camera);
 
-  // Views the whole motion from the front-right and above (the up axis points up), from the
-  // nearest distance at which every corner of the motion's bounding box is in the picture.
-  function frameAll() {
-    var center = box.getCenter(new THREE.Vector3());
-    var side = new THREE.Vector3(1, 0, 0);
-    if (Math.abs(side.dot(up)) > 0.9) side.set(0, 1, 0);
-    side.sub(up.clone().multiplyScalar(side.dot(up))).normalize();
-    var depth = new THREE.Vector3().crossVectors(up, side);  // side x depth = up
-    var dir = side.clone().multiplyScalar(0.55).add(depth.multiplyScalar(-0.8))
-      .add(up.clone().multiplyScalar(0.5)).normalize();
-    var right = new THREE.Vector3().crossVectors(dir, up).negate().normalize();
-    var camUp = new THREE.Vector3().crossVectors(right, dir).negate().normalize();
-    var tanV = Math.tan(camera.fov * Math.PI / 360), tanH = tanV * camera.aspect;
-    var dist = 0;
+  // World directions for the named views: side (x without its up part), depth = up x side.
+  var side = new THREE.Vector3(1, 0, 0);
+  if (Math.abs(side.dot(up)) > 0.9) side.set(0, 1, 0);
+  side.sub(up.clone().multiplyScalar(side.dot(up))).normalize();
+  var depth = new THREE.Vector3().crossVectors(up, side);  // side x depth = up
+  // The direction from the target to the camera and the screen's up for a named view.
+  function viewDirection(name) {
+    var dirs = {
+      front: [depth.clone().negate(), up], back: [depth.clone(), up], right: [side.clone(), up],
+      left: [side.clone().negate(), up], top: [up.clone(), depth], bottom: [up.clone().negate(), depth.clone().negate()],
+    };
+    if (dirs[name]) return dirs[name];
+    return [side.clone().multiplyScalar(0.55).addScaledVector(depth, -0.8).addScaledVector(up, 0.5).normalize(), up];
+  }
+
+  function setProjection(width) {
+    if (ortho) {
+      orthoWidth = width;
+      camera.left = -width / 2; camera.right = width / 2;
+      camera.top = width / 2 / aspect; camera.bottom = -width / 2 / aspect;
+      camera.zoom = 1;
+    } else {
+      camera.aspect = aspect;
+    }
+    camera.updateProjectionMatrix();
+  }
+
+  // Places the camera: the URL's view, target, span and eye, else the whole motion from the
+  // front-right and above, from the nearest distance at which every corner of its bounding
+  // box is in the picture.
+  function frameAll(useUrl) {
+    var named = viewDirection(useUrl ? params.get("view") : null);
+    var dir = named[0].clone(), camUp = named[1].clone();
+    var target = (useUrl && numberList(params.get("target"))) || null;
+    var center = target ? new THREE.Vector3().fromArray(target) : box.getCenter(new THREE.Vector3());
+    var eye = useUrl && !ortho && numberList(params.get("eye"));
+    if (eye) dir = new THREE.Vector3().fromArray(eye).sub(center).normalize();
+    var right = new THREE.Vector3().crossVectors(dir, camUp).negate().normalize();
+    var screenUp = new THREE.Vector3().crossVectors(right, dir).negate().normalize();
+    var span = useUrl ? Number(params.get("span")) : NaN;
+    var tanV = Math.tan((ortho ? 35 : camera.fov) * Math.PI / 360), tanH = tanV * aspect;
+    var dist = 0, width = 0;
     for (var c = 0; c < 8; ++c) {
       var corner = new THREE.Vector3(c & 1 ? box.max.x : box.min.x, c & 2 ? box.max.y : box.min.y,
                                      c & 4 ? box.max.z : box.min.z).sub(center);
       var along = corner.dot(dir);  // towards the camera
       dist = Math.max(dist, along + Math.abs(corner.dot(right)) / tanH,
-                      along + Math.abs(corner.dot(camUp)) / tanV);
+                      along + Math.abs(corner.dot(screenUp)) / tanV);
+      width = Math.max(width, 2 * Math.abs(corner.dot(right)), 2 * Math.abs(corner.dot(screenUp)) * aspect);
     }
     dist = Math.max(dist * 1.08, 1e-3 * size);
+    if (span > 0) {
+      width = span;
+      if (!ortho) dist = span / 2 / tanH;
+    } else {
+      width *= 1.08;
+    }
+    camera.up.copy(camUp);
     controls.target.copy(center);
-    camera.position.copy(center).add(dir.multiplyScalar(dist));
-    camera.near = dist * 1e-3;
-    camera.far = dist * 50;
-    camera.updateProjectionMatrix();
+    if (eye) camera.position.fromArray(eye);
+    else camera.position.copy(center).addScaledVector(dir, ortho ? Math.max(dist, size) : dist);
+    var reach = camera.position.distanceTo(center) + size;
+    camera.near = ortho ? 0 : Math.max(reach * 1e-4, 1e-6);
+    camera.far = reach * 50;
+    setProjection(width);
     controls.update();
   }
 
   // ---- ground grid and axes -----------------------------------------------------------------
-  var decor = new THREE.Group();
-  scene.add(decor);
   (function () {
-    var lo = box.min.dot(up), hi = box.max.dot(up);
-    var floor = Math.min(0, lo);
+    var floor = Math.min(0, box.min.dot(up));
     var extent = size * 1.1;
     var step = Math.pow(10, Math.floor(Math.log10(extent / 10)));
     if (extent / step > 40) step *= 5; else if (extent / step > 20) step *= 2;
@@ -158,16 +278,14 @@
                Math.round(center.z / step) * step);
     center.add(up.clone().multiplyScalar(floor - 1e-4 * size));
     grid.position.copy(center);
-    decor.add(grid);
+    layers.grid.add(grid);
     var axesLen = Math.max(step, 0.12 * size);
-    var ax = new THREE.AxesHelper(axesLen);
-    decor.add(ax);
+    layers.grid.add(new THREE.AxesHelper(axesLen));
     ["x", "y", "z"].forEach(function (name, k) {
       var s = textSprite(name, ["#d0342c", "#2a9d3c", "#2c5fd0"][k], 0.035 * size);
       s.position.setComponent(k, axesLen * 1.08);
-      decor.add(s);
+      layers.grid.add(s);
     });
-    void hi;
   })();
 
   function textSprite(text, color, height) {
@@ -190,87 +308,6 @@
     return sprite;
   }
 
-  // ---- rods: tubes through the node frames -------------------------------------------------
-  var kSub = 6, kRadial = 12;
-  var rodColor = new THREE.Color(0x2f7fc1);
-  var rods = data.rods.map(function (ids) {
-    var rings = (ids.length - 1) * kSub + 1, nv = rings * (kRadial + 1);
-    var geom = new THREE.BufferGeometry();
-    var pos = new Float32Array(nv * 3), nor = new Float32Array(nv * 3), col = new Float32Array(nv * 3);
-    geom.setAttribute("position", new THREE.BufferAttribute(pos, 3));
-    geom.setAttribute("normal", new THREE.BufferAttribute(nor, 3));
-    geom.setAttribute("color", new THREE.BufferAttribute(col, 3));
-    var index = [];
-    for (var r = 0; r + 1 < rings; ++r)
-      for (var s = 0; s < kRadial; ++s) {
-        var a = r * (kRadial + 1) + s, b = a + kRadial + 1;
-        index.push(a, b, a + 1, b, b + 1, a + 1);
-      }
-    geom.setIndex(index);
-    var mat = new THREE.MeshStandardMaterial({ vertexColors: THREE.VertexColors, roughness: 0.55, metalness: 0.05 });
-    var mesh = new THREE.Mesh(geom, mat);
-    mesh.frustumCulled = false;
-    scene.add(mesh);
-    return { ids: ids, mesh: mesh, rings: rings };
-  });
-
-  function updateRod(rod) {
-    var ids = rod.ids, n = ids.length;
-    var geom = rod.mesh.geometry;
-    var pos = geom.attributes.position.array, nor = geom.attributes.normal.array, col = geom.attributes.color.array;
-    var p = ids.map(point), tang = [];
-    for (var i = 0; i < n; ++i) {
-      var a = p[Math.max(i - 1, 0)], b = p[Math.min(i + 1, n - 1)];
-      tang.push(b.clone().sub(a).multiplyScalar(i > 0 && i < n - 1 ? 0.5 : 1));
-    }
-    var normal = new THREE.Vector3(), binormal = new THREE.Vector3(), c = new THREE.Color();
-    var prevNormal = null, v = 0;
-    for (var e = 0; e + 1 < Math.max(n, 2); ++e) {
-      for (var s = e === 0 ? 0 : 1; s <= kSub; ++s) {
-        var u = s / kSub, i0 = Math.min(e, n - 1), i1 = Math.min(e + 1, n - 1);
-        // Cubic Hermite position and tangent between nodes i0 and i1.
-        var h00 = 2 * u * u * u - 3 * u * u + 1, h10 = u * u * u - 2 * u * u + u;
-        var h01 = -2 * u * u * u + 3 * u * u, h11 = u * u * u - u * u;
-        var x = p[i0].clone().multiplyScalar(h00).addScaledVector(tang[i0], h10)
-          .addScaledVector(p[i1], h01).addScaledVector(tang[i1], h11);
-        var d00 = 6 * u * u - 6 * u, d10 = 3 * u * u - 4 * u + 1, d01 = -d00, d11 = 3 * u * u - 2 * u;
-        var t = p[i0].clone().multiplyScalar(d00).addScaledVector(tang[i0], d10)
-          .addScaledVector(p[i1], d01).addScaledVector(tang[i1], d11);
-        if (t.lengthSq() < 1e-24) t.copy(tang[i0]);
-        if (t.lengthSq() < 1e-24) t.set(1, 0, 0);
-        t.normalize();
-        // Cross-section orientation: the nodes' frame y axes, interpolated, or carried along.
-        if (axes) normal.copy(axis(ids[i0], 1)).multiplyScalar(1 - u).addScaledVector(axis(ids[i1], 1), u);
-        else if (prevNormal) normal.copy(prevNormal);
-        else normal.set(0, 0, 1);
-        normal.addScaledVector(t, -normal.dot(t));
-        if (normal.lengthSq() < 1e-12) {
-          normal.set(Math.abs(t.x) < 0.9 ? 1 : 0, Math.abs(t.x) < 0.9 ? 0 : 1, 0);
-          normal.addScaledVector(t, -normal.dot(t));
-        }
-        normal.normalize();
-        prevNormal = normal.clone();
-        binormal.crossVectors(t, normal);
-        if (field) {
-          var f = (1 - u) * curField[ids[i0]] + u * curField[ids[i1]];
-          colormap((f - field.lo) / (field.hi - field.lo), c);
-        } else {
-          c.copy(rodColor);
-        }
-        for (var k = 0; k <= kRadial; ++k, ++v) {
-          var ang = 2 * Math.PI * k / kRadial, cs = Math.cos(ang), sn = Math.sin(ang);
-          var nx = cs * normal.x + sn * binormal.x, ny = cs * normal.y + sn * binormal.y, nz = cs * normal.z + sn * binormal.z;
-          pos[3 * v] = x.x + tubeRadius * nx; pos[3 * v + 1] = x.y + tubeRadius * ny; pos[3 * v + 2] = x.z + tubeRadius * nz;
-          nor[3 * v] = nx; nor[3 * v + 1] = ny; nor[3 * v + 2] = nz;
-          col[3 * v] = c.r; col[3 * v + 1] = c.g; col[3 * v + 2] = c.b;
-        }
-      }
-    }
-    geom.attributes.position.needsUpdate = true;
-    geom.attributes.normal.needsUpdate = true;
-    geom.attributes.color.needsUpdate = true;
-  }
-
   // Turbo-like colour ramp, x in [0, 1].
   var ramp = [[0.19, 0.07, 0.23], [0.27, 0.53, 0.98], [0.10, 0.89, 0.71], [0.64, 0.99, 0.24],
               [0.98, 0.73, 0.22], [0.89, 0.27, 0.04], [0.48, 0.02, 0.01]];
@@ -281,84 +318,347 @@
                       ramp[i][2] + w * (ramp[i + 1][2] - ramp[i][2]));
   }
 
-  // ---- rigid bodies: boxes along their segments, oriented by the body frame -----------------
+  // A mesh whose matrix the update sets (unit geometry scaled and placed).
+  function placed(geometry, material, layer) {
+    var m = new THREE.Mesh(geometry, material);
+    m.matrixAutoUpdate = false;
+    layer.add(m);
+    return m;
+  }
   var unitBox = new THREE.BoxBufferGeometry(1, 1, 1);
-  var bodyMaterial = new THREE.MeshStandardMaterial({ color: 0x8a94a6, roughness: 0.5, metalness: 0.2 });
-  var bodies = data.bodies.map(function (b) {
-    var meshes = b.segments.map(function () {
-      var m = new THREE.Mesh(unitBox, bodyMaterial);
-      m.matrixAutoUpdate = false;
-      scene.add(m);
-      return m;
-    });
-    var lump = null;
-    if (b.vertex !== null) {
-      lump = new THREE.Mesh(unitBox, bodyMaterial);
-      lump.matrixAutoUpdate = false;
-      scene.add(lump);
-    }
-    return { segments: b.segments, meshes: meshes, vertex: b.vertex, lump: lump };
-  });
-
-  function updateBody(body) {
-    body.segments.forEach(function (seg, k) {
-      var a = point(seg[0]), b = point(seg[1]);
-      var x = b.clone().sub(a), len = x.length();
-      x.normalize();
-      // Roll: the body frame's axis most perpendicular to the segment.
-      var y = new THREE.Vector3(0, 0, 1);
-      if (axes) {
-        var best = 2;
-        for (var j = 0; j < 3; ++j) {
-          var c = axis(seg[0], j), d = Math.abs(c.dot(x));
-          if (d < best) { best = d; y.copy(c); }
-        }
-      }
-      y.addScaledVector(x, -y.dot(x));
-      if (y.lengthSq() < 1e-12) y.set(Math.abs(x.z) < 0.9 ? 0 : 1, 0, Math.abs(x.z) < 0.9 ? 1 : 0).addScaledVector(x, -x.z);
-      y.normalize();
-      var z = new THREE.Vector3().crossVectors(x, y);
-      var m = body.meshes[k].matrix;
-      m.makeBasis(x.multiplyScalar(len + bodyWidth), y.multiplyScalar(bodyWidth), z.multiplyScalar(bodyWidth));
-      m.setPosition(a.add(b).multiplyScalar(0.5));
-    });
-    if (body.lump) {
-      var s = 2 * bodyWidth;
-      body.lump.matrix.makeScale(s, s, s).setPosition(point(body.vertex));
-    }
+  var sphere = new THREE.SphereBufferGeometry(1, 24, 16);
+  var cylinder = new THREE.CylinderBufferGeometry(1, 1, 1, 20, 1, true);  // along y, from -0.5 to 0.5
+  var cone = new THREE.ConeBufferGeometry(1, 1, 16);
+  var Y = new THREE.Vector3(0, 1, 0);
+  // Sets m's matrix to a cylinder (or cone) of radius r from a to b.
+  function between(m, a, b, r) {
+    var d = b.clone().sub(a), len = d.length();
+    var q = new THREE.Quaternion().setFromUnitVectors(Y, len > 0 ? d.clone().divideScalar(len) : Y);
+    m.matrix.compose(a.clone().add(b).multiplyScalar(0.5), q, new THREE.Vector3(r, Math.max(len, 1e-12), r));
   }
 
-  // ---- joints: spheres (actuated orange, passive teal, welds grey) ---------------------------
-  var sphere = new THREE.SphereBufferGeometry(1, 20, 14);
+  // ---- rods: tubes of their section through the node frames -----------------------------------
+  var kSub = 6, kRadial = 20;
+  var rodColor = new THREE.Color(0x2f7fc1);
+  var unsized = false;
+  var rods = data.rods.map(function (ids) {
+    var p0 = ids[0], round = true, sized = radius[p0] > 0;
+    if (sized) round = Math.abs(half[3 * p0 + 1] - radius[p0]) <= 1e-9 * radius[p0] &&
+                       Math.abs(half[3 * p0 + 2] - radius[p0]) <= 1e-9 * radius[p0];
+    if (!sized) unsized = true;
+    // The section's outline (u, v along the section's y and z half sizes) and its normals:
+    // a circle, or a rectangle with its corners doubled for sharp edges.
+    var prof = [];
+    if (round) {
+      for (var k = 0; k <= kRadial; ++k) {
+        var a = 2 * Math.PI * k / kRadial;
+        prof.push([Math.cos(a), Math.sin(a), Math.cos(a), Math.sin(a)]);
+      }
+    } else {
+      [[1, -1, 1, 1, 1, 0], [1, 1, -1, 1, 0, 1], [-1, 1, -1, -1, -1, 0], [-1, -1, 1, -1, 0, -1]].forEach(function (e) {
+        prof.push([e[0], e[1], e[4], e[5]], [e[2], e[3], e[4], e[5]]);
+      });
+    }
+    var np_ = prof.length, rings = (ids.length - 1) * kSub + 1;
+    var nv = rings * np_ + 2 * (np_ + 1);  // the side, then the two end caps (rim + centre)
+    var geom = new THREE.BufferGeometry();
+    var pos = new Float32Array(nv * 3), nor = new Float32Array(nv * 3), col = new Float32Array(nv * 3);
+    geom.setAttribute("position", new THREE.BufferAttribute(pos, 3));
+    geom.setAttribute("normal", new THREE.BufferAttribute(nor, 3));
+    geom.setAttribute("color", new THREE.BufferAttribute(col, 3));
+    var index = [];
+    for (var r = 0; r + 1 < rings; ++r)
+      for (var s = 0; s + 1 < np_; s += round ? 1 : 2) {
+        var a0 = r * np_ + s, b0 = a0 + np_;
+        index.push(a0, a0 + 1, b0, b0, a0 + 1, b0 + 1);
+      }
+    for (var cap = 0; cap < 2; ++cap) {
+      var base = rings * np_ + cap * (np_ + 1), centre = base + np_;
+      for (s = 0; s + 1 < np_; ++s)
+        index.push.apply(index, cap ? [centre, base + s, base + s + 1] : [centre, base + s + 1, base + s]);
+    }
+    geom.setIndex(index);
+    var mat = new THREE.MeshStandardMaterial({ vertexColors: THREE.VertexColors, roughness: 0.55, metalness: 0.05,
+                                               side: THREE.DoubleSide });
+    var mesh = new THREE.Mesh(geom, mat);
+    mesh.frustumCulled = false;
+    layers.rods.add(mesh);
+    return { ids: ids, mesh: mesh, rings: rings, prof: prof, round: round, sized: sized };
+  });
+
+  function updateRod(rod) {
+    var ids = rod.ids, n = ids.length, prof = rod.prof, npf = prof.length;
+    var geom = rod.mesh.geometry;
+    var pos = geom.attributes.position.array, nor = geom.attributes.normal.array, col = geom.attributes.color.array;
+    var p = ids.map(point), tang = [];
+    // Node tangents for the cubic Hermite centre line: the section's x axis (the rod's tangent
+    // for an unsheared rod) times the mean length of the adjacent elements.
+    for (var i = 0; i < n; ++i) {
+      var a = p[Math.max(i - 1, 0)], b = p[Math.min(i + 1, n - 1)];
+      var chord = b.clone().sub(a).multiplyScalar(i > 0 && i < n - 1 ? 0.5 : 1);
+      var x = axis(ids[i], 0);
+      tang.push(slot[ids[i]] >= 0 && x.dot(chord) > 0 ? x.multiplyScalar(chord.length()) : chord);
+    }
+    var normal = new THREE.Vector3(), binormal = new THREE.Vector3(), c = new THREE.Color();
+    var t = new THREE.Vector3(), v = 0, firstT = null;
+    var put = function (k, px, py, pz, nx, ny, nz) {
+      pos[3 * k] = px; pos[3 * k + 1] = py; pos[3 * k + 2] = pz;
+      nor[3 * k] = nx; nor[3 * k + 1] = ny; nor[3 * k + 2] = nz;
+      col[3 * k] = c.r; col[3 * k + 1] = c.g; col[3 * k + 2] = c.b;
+    };
+    var ends = [];
+    for (var e = 0; e + 1 < Math.max(n, 2); ++e) {
+      for (var s = e === 0 ? 0 : 1; s <= kSub; ++s) {
+        var u = s / kSub, i0 = Math.min(e, n - 1), i1 = Math.min(e + 1, n - 1);
+        var h00 = 2 * u * u * u - 3 * u * u + 1, h10 = u * u * u - 2 * u * u + u;
+        var h01 = -2 * u * u * u + 3 * u * u, h11 = u * u * u - u * u;
+        var xc = p[i0].clone().multiplyScalar(h00).addScaledVector(tang[i0], h10)
+          .addScaledVector(p[i1], h01).addScaledVector(tang[i1], h11);
+        var d00 = 6 * u * u - 6 * u, d10 = 3 * u * u - 4 * u + 1, d01 = -d00, d11 = 3 * u * u - 2 * u;
+        t.copy(p[i0]).multiplyScalar(d00).addScaledVector(tang[i0], d10)
+          .addScaledVector(p[i1], d01).addScaledVector(tang[i1], d11);
+        if (t.lengthSq() < 1e-24) t.copy(tang[i0]);
+        if (t.lengthSq() < 1e-24) t.set(1, 0, 0);
+        t.normalize();
+        // Cross-section: the nodes' section y axes interpolated, made normal to the tangent.
+        normal.copy(axis(ids[i0], 1)).multiplyScalar(1 - u).addScaledVector(axis(ids[i1], 1), u);
+        normal.addScaledVector(t, -normal.dot(t));
+        if (normal.lengthSq() < 1e-12) {
+          normal.set(Math.abs(t.x) < 0.9 ? 1 : 0, Math.abs(t.x) < 0.9 ? 0 : 1, 0);
+          normal.addScaledVector(t, -normal.dot(t));
+        }
+        normal.normalize();
+        binormal.crossVectors(t, normal);
+        var hy, hz;
+        if (rod.sized) {
+          hy = (1 - u) * half[3 * ids[i0] + 1] + u * half[3 * ids[i1] + 1];
+          hz = (1 - u) * half[3 * ids[i0] + 2] + u * half[3 * ids[i1] + 2];
+        } else {
+          hy = hz = thinRadius;
+        }
+        if (field) {
+          var fv = (1 - u) * curField[fieldSlot[ids[i0]]] + u * curField[fieldSlot[ids[i1]]];
+          colormap((fv - field.lo) / (field.hi - field.lo), c);
+        } else {
+          c.copy(rodColor);
+        }
+        for (var k = 0; k < npf; ++k, ++v) {
+          var q = prof[k];
+          put(v, xc.x + hy * q[0] * normal.x + hz * q[1] * binormal.x,
+              xc.y + hy * q[0] * normal.y + hz * q[1] * binormal.y,
+              xc.z + hy * q[0] * normal.z + hz * q[1] * binormal.z,
+              q[2] * normal.x + q[3] * binormal.x, q[2] * normal.y + q[3] * binormal.y,
+              q[2] * normal.z + q[3] * binormal.z);
+        }
+        if (v === npf) firstT = t.clone();
+        ends[v === npf ? 0 : 1] = xc;
+      }
+    }
+    // End caps: the first and last rings again with the axial normal, and their centres.
+    var rings = rod.rings;
+    for (var cap = 0; cap < 2; ++cap) {
+      var ring = cap ? rings - 1 : 0, nt_ = cap ? t : firstT, sign = cap ? 1 : -1;
+      var base = rings * npf + cap * (npf + 1);
+      for (k = 0; k < npf; ++k) {
+        var from = ring * npf + k;
+        put(base + k, pos[3 * from], pos[3 * from + 1], pos[3 * from + 2], sign * nt_.x, sign * nt_.y, sign * nt_.z);
+      }
+      var centre = ends[cap] || ends[0];
+      put(base + npf, centre.x, centre.y, centre.z, sign * nt_.x, sign * nt_.y, sign * nt_.z);
+    }
+    geom.attributes.position.needsUpdate = true;
+    geom.attributes.normal.needsUpdate = true;
+    geom.attributes.color.needsUpdate = true;
+  }
+
+  // ---- rigid bodies: contact shapes, else the box of the inertia; links as lines -------------
+  var bodyMaterial = new THREE.MeshStandardMaterial({ color: 0x8a94a6, roughness: 0.5, metalness: 0.2 });
+  // A box from the inertia is no geometry the run knows: drawn see-through.
+  var inertiaMaterial = new THREE.MeshStandardMaterial({ color: 0x8a94a6, roughness: 0.6, transparent: true,
+                                                         opacity: 0.35, depthWrite: false });
+  var shapes = data.shapes.map(function (s) {
+    var parts = [];
+    if (s.type === "capsule") {
+      parts = [placed(cylinder, bodyMaterial, layers.bodies), placed(sphere, bodyMaterial, layers.bodies),
+               placed(sphere, bodyMaterial, layers.bodies)];
+    } else {
+      parts = [placed(s.type === "box" ? unitBox : sphere, bodyMaterial, layers.bodies)];
+    }
+    return { type: s.type, points: s.points, parts: parts };
+  });
+  function updateShape(s) {
+    var c = point(s.points[0]), r = radius[s.points[0]];
+    if (s.type === "sphere") {
+      s.parts[0].matrix.compose(c, new THREE.Quaternion(), new THREE.Vector3(r, r, r));
+    } else if (s.type === "box") {
+      s.parts[0].matrix.compose(c, quaternion(s.points[0]), halfSize(s.points[0]).multiplyScalar(2));
+    } else {
+      var b = point(s.points[1]);
+      between(s.parts[0], c, b, r);
+      s.parts[1].matrix.compose(c, new THREE.Quaternion(), new THREE.Vector3(r, r, r));
+      s.parts[2].matrix.compose(b, new THREE.Quaternion(), new THREE.Vector3(r, r, r));
+    }
+  }
+  var bodies = data.bodies.map(function (b) {
+    var out = { index: b.index, segments: b.segments, point: b.point, box: null, lump: null,
+                shapes: b.shapes };
+    if (!b.shapes.length && b.box !== null) {
+      var h = halfSize(b.box);
+      if (h.x > 0 || h.y > 0 || h.z > 0) out.box = { point: b.box, mesh: placed(unitBox, inertiaMaterial, layers.bodies) };
+    }
+    if (!b.shapes.length && !out.box && b.point !== null) out.lump = placed(sphere, bodyMaterial, layers.bodies);
+    return out;
+  });
+  // Links: thin grey rods from a body's frame to its joints and centre of mass (a drawing of
+  // how the body connects, of no size).
+  var linkMaterial = new THREE.MeshStandardMaterial({ color: 0x5b6474, roughness: 0.6 });
+  bodies.forEach(function (b) {
+    b.links = b.segments.map(function () { return placed(cylinder, linkMaterial, layers.links); });
+  });
+  function updateBodies() {
+    bodies.forEach(function (b) {
+      b.segments.forEach(function (seg, k) { between(b.links[k], point(seg[0]), point(seg[1]), 0.5 * thinRadius); });
+      if (b.box) {
+        var h = halfSize(b.box.point).multiplyScalar(2);
+        h.set(Math.max(h.x, 1e-3 * size0), Math.max(h.y, 1e-3 * size0), Math.max(h.z, 1e-3 * size0));
+        b.box.mesh.matrix.compose(point(b.box.point), quaternion(b.box.point), h);
+      }
+      if (b.lump) b.lump.matrix.compose(point(b.point), new THREE.Quaternion(), new THREE.Vector3(1, 1, 1).multiplyScalar(jointRadius));
+    });
+    shapes.forEach(updateShape);
+  }
+
+  // ---- obstacles (fixed): planes as a patch around the motion, spheres, capsules -------------
+  var obstacleMaterial = new THREE.MeshStandardMaterial({ color: 0xb9ae98, roughness: 0.8 });
+  var planeMaterial = new THREE.MeshBasicMaterial({ color: 0xcfc6b4, transparent: true, opacity: 0.35,
+                                                    side: THREE.DoubleSide, depthWrite: false });
+  data.obstacles.forEach(function (o) {
+    var c = point(o.points[0]), r = radius[o.points[0]];
+    if (o.type === "plane") {
+      var q = quaternion(o.points[0]), n = axis(o.points[0], 2);
+      // Centred where the motion's centre projects onto the plane, 1.5 times its size.
+      var mid = box.getCenter(new THREE.Vector3());
+      mid.addScaledVector(n, -mid.clone().sub(c).dot(n));
+      var m = new THREE.Mesh(new THREE.PlaneBufferGeometry(1.5 * size, 1.5 * size), planeMaterial);
+      m.position.copy(mid);
+      m.quaternion.copy(q);  // the patch's normal (local z) along the plane's
+      m.renderOrder = -1;
+      layers.obstacles.add(m);
+    } else if (o.type === "sphere") {
+      placed(sphere, obstacleMaterial, layers.obstacles).matrix.compose(c, new THREE.Quaternion(), new THREE.Vector3(r, r, r));
+    } else {
+      var b = point(o.points[1]);
+      between(placed(cylinder, obstacleMaterial, layers.obstacles), c, b, r);
+      placed(sphere, obstacleMaterial, layers.obstacles).matrix.compose(c, new THREE.Quaternion(), new THREE.Vector3(r, r, r));
+      placed(sphere, obstacleMaterial, layers.obstacles).matrix.compose(b, new THREE.Quaternion(), new THREE.Vector3(r, r, r));
+    }
+  });
+
+  // ---- tendons and force elements: thin tubes coloured by tension -----------------------------
+  var maxTension = 0;
+  for (i = 0; i < tensionTrack.length; ++i) maxTension = Math.max(maxTension, Math.abs(tensionTrack[i]));
+  var lines = data.lines.map(function (l, k) {
+    var mat = new THREE.MeshBasicMaterial({ color: 0x000000 });
+    var segs = [];
+    for (var s = 0; s + 1 < l.points.length; ++s) segs.push(placed(cylinder, mat, layers.tendons));
+    var joints_ = l.points.map(function () { return placed(sphere, mat, layers.tendons); });
+    var label = l.name ? textSprite(l.name, "#1d2430", 0.03 * size0) : null;
+    if (label) layers.labels.add(label);
+    return { k: k, points: l.points, kind: l.kind, material: mat, segs: segs, knots: joints_, label: label };
+  });
+  function updateLines() {
+    var c = new THREE.Color();
+    lines.forEach(function (l) {
+      var T = curTension[l.k];
+      colormap(maxTension > 0 ? Math.max(T, 0) / maxTension : 0, c);
+      l.material.color.copy(c);
+      var r = l.kind === "tendon" ? lineRadius : 0.7 * lineRadius;
+      var p = l.points.map(point);
+      l.segs.forEach(function (m, s) { between(m, p[s], p[s + 1], r); });
+      l.knots.forEach(function (m, s) { m.matrix.compose(p[s], new THREE.Quaternion(), new THREE.Vector3(r, r, r)); });
+      if (l.label) l.label.position.copy(p[0].clone().add(p[p.length - 1]).multiplyScalar(0.5)).addScaledVector(up, 2 * jointRadius);
+    });
+  }
+
+  // ---- contact forces: arrows from the contact point along the force on the shape ----------------
+  var maxForce = 0;
+  for (i = 0; i + 2 < forceTrack.length; i += 3)
+    maxForce = Math.max(maxForce, Math.hypot(forceTrack[i], forceTrack[i + 1], forceTrack[i + 2]));
+  var forceScale = Number(params.get("force_scale"));
+  if (!(forceScale > 0)) forceScale = maxForce > 0 ? 0.15 * size0 / maxForce : 0;
+  var arrowRadius = 0.004 * size0;
+  var arrowMaterial = new THREE.MeshBasicMaterial({ color: 0xe31a1c, depthTest: false, transparent: true });
+  var arrows = data.contacts.map(function (p) {
+    var shaft = placed(cylinder, arrowMaterial, layers.forces), head = placed(cone, arrowMaterial, layers.forces);
+    shaft.renderOrder = head.renderOrder = 5;
+    return { point: p, shaft: shaft, head: head };
+  });
+  function updateArrows() {
+    arrows.forEach(function (a, k) {
+      var F = new THREE.Vector3(curForce[3 * k], curForce[3 * k + 1], curForce[3 * k + 2]);
+      var len = F.length() * forceScale;
+      var on = len > 1e-6 * size0 && F.length() > 1e-9 * maxForce;
+      a.shaft.visible = a.head.visible = on;
+      if (!on) return;
+      var dir = F.normalize(), from = point(a.point);
+      var headLen = Math.min(4 * arrowRadius, 0.5 * len);
+      var neck = from.clone().addScaledVector(dir, len - headLen);
+      between(a.shaft, from, neck, arrowRadius);
+      between(a.head, neck, from.clone().addScaledVector(dir, len), 2.2 * arrowRadius);
+    });
+  }
+
+  // ---- joints: spheres (actuated orange, passive teal, welds grey) and frames -----------------
   var jointMaterials = {
     actuated: new THREE.MeshStandardMaterial({ color: 0xe07b24, roughness: 0.4 }),
     passive: new THREE.MeshStandardMaterial({ color: 0x17a589, roughness: 0.4 }),
     weld: new THREE.MeshStandardMaterial({ color: 0x59606b, roughness: 0.6 }),
   };
-  var labels = new THREE.Group();
-  scene.add(labels);
   // Joints at the same place (a hinge and a weld at one point) share one label, "J1, W1".
+  function point0(i) { return new THREE.Vector3(x0[3 * i], x0[3 * i + 1], x0[3 * i + 2]); }
   var labelOwner = data.joints.map(function (j, k) {
     for (var i = 0; i < k; ++i)
       if (point0(data.joints[i].point).distanceTo(point0(j.point)) < 1e-6 * size) return i;
     return k;
   });
-  function point0(i) { return new THREE.Vector3(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]); }
   var joints = data.joints.map(function (j, k) {
     var kind = j.type === "fixed" ? "weld" : j.drive && j.drive !== "none" ? "actuated" : "passive";
     var m = new THREE.Mesh(sphere, jointMaterials[kind]);
     var r = kind === "weld" ? 0.6 * jointRadius : jointRadius;
     m.scale.set(r, r, r);
-    scene.add(m);
+    layers.joints.add(m);
     var label = null;
     if (j.name && labelOwner[k] === k) {
       var names = data.joints.filter(function (o, i) { return labelOwner[i] === k && o.name; })
         .map(function (o) { return o.name; });
       label = textSprite(names.join(", "), "#1d2430", 0.03 * size0);
-      labels.add(label);
+      layers.labels.add(label);
     }
     return { point: j.point, mesh: m, label: label, name: j.name };
   });
+  var frameGeometry = new THREE.BufferGeometry();
+  frameGeometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(18 * joints.length), 3));
+  var frameColors = new Float32Array(18 * joints.length);
+  for (i = 0; i < joints.length; ++i)
+    for (var a = 0; a < 3; ++a)
+      for (var e = 0; e < 2; ++e) frameColors[18 * i + 6 * a + 3 * e + a] = a === 1 ? 0.6 : 0.85;
+  frameGeometry.setAttribute("color", new THREE.BufferAttribute(frameColors, 3));
+  var frames = new THREE.LineSegments(frameGeometry, new THREE.LineBasicMaterial({ vertexColors: THREE.VertexColors }));
+  frames.frustumCulled = false;
+  layers.frames.add(frames);
+  function updateJoints() {
+    var fp = frameGeometry.attributes.position.array, len = 3.5 * jointRadius;
+    joints.forEach(function (j, k) {
+      var x = point(j.point);
+      j.mesh.position.copy(x);
+      if (j.label) j.label.position.copy(x).addScaledVector(up, 2.2 * jointRadius);
+      for (var a = 0; a < 3; ++a) {
+        var tip = x.clone().addScaledVector(axis(j.point, a), len), o = 18 * k + 6 * a;
+        fp[o] = x.x; fp[o + 1] = x.y; fp[o + 2] = x.z; fp[o + 3] = tip.x; fp[o + 4] = tip.y; fp[o + 5] = tip.z;
+      }
+    });
+    frameGeometry.attributes.position.needsUpdate = true;
+  }
 
   // ---- recorded points and their trails -------------------------------------------------------
   var recPoints = [];
@@ -368,9 +668,9 @@
     rec.names.forEach(function (name, k) {
       var color = recColors[k % recColors.length];
       var m = new THREE.Mesh(sphere, new THREE.MeshStandardMaterial({ color: color, roughness: 0.4 }));
-      var r = 0.75 * jointRadius;
+      var r = 0.6 * jointRadius;
       m.scale.set(r, r, r);
-      scene.add(m);
+      layers.points.add(m);
       var trailPos = new Float32Array(nr * 3);
       for (var i = 0; i < nr; ++i)
         for (var c = 0; c < 3; ++c) trailPos[3 * i + c] = recXyz[3 * (i * npr + k) + c];
@@ -378,9 +678,9 @@
       g.setAttribute("position", new THREE.BufferAttribute(trailPos, 3));
       var line = new THREE.Line(g, new THREE.LineBasicMaterial({ color: color, transparent: true, opacity: 0.75 }));
       line.frustumCulled = false;
-      scene.add(line);
+      layers.points.add(line);
       var label = textSprite(name, "#" + new THREE.Color(color).getHexString(), 0.03 * size0);
-      labels.add(label);
+      layers.labels.add(label);
       recPoints.push({ name: name, k: k, mesh: m, line: line, label: label });
     });
   }
@@ -408,8 +708,10 @@
   data.bodies.forEach(function (b, k) {
     var ids = [];
     b.segments.forEach(function (s) { ids.push(s[0], s[1]); });
-    if (b.vertex !== null) ids.push(b.vertex);
-    targets.push({ name: b.name || "rigid body " + (k + 1), what: "body", center: function () { return centroid(ids); } });
+    if (b.point !== null) ids.push(b.point);
+    if (b.box !== null) ids.push(b.box);
+    b.shapes.forEach(function (s) { ids.push(data.shapes[s].points[0]); });
+    if (ids.length) targets.push({ name: b.name || "rigid body " + (k + 1), what: "body", center: function () { return centroid(ids); } });
   });
   data.rods.forEach(function (ids, k) {
     targets.push({ name: (data.rod_names && data.rod_names[k]) || "rod " + (k + 1), what: "rod", center: function () { return centroid(ids); } });
@@ -429,23 +731,21 @@
 
   // ---- state and drawing -------------------------------------------------------------------
   var time = t0, playing = false, speed = 1, trail = 1;
-  var projected = null;  // screen box of the mechanism in CSS pixels, for tests
 
   function update() {
     computeState(time);
     rods.forEach(updateRod);
-    bodies.forEach(updateBody);
-    joints.forEach(function (j) {
-      j.mesh.position.copy(point(j.point));
-      if (j.label) j.label.position.copy(j.mesh.position).addScaledVector(up, 2.2 * jointRadius);
-    });
+    updateBodies();
+    updateLines();
+    updateArrows();
+    updateJoints();
     recPoints.forEach(function (p) {
       var x = recordedPoint(p.k, time);
       p.mesh.position.copy(x);
       p.label.position.copy(x).addScaledVector(up, -2.4 * jointRadius);  // joints' labels go above
       var end = bracket(recTimes, time)[0] + 1;
       var start = trail === "all" ? 0 : bracket(recTimes, time - trail)[0];
-      p.line.geometry.setDrawRange(start, trail === 0 || bare ? 0 : end - start);
+      p.line.geometry.setDrawRange(start, trail === 0 ? 0 : end - start);
     });
     if (follow) {
       var c = follow.center(time);
@@ -457,7 +757,7 @@
         // Start following: look at the target from the current direction, from a distance
         // that shows the mechanism (its initial size), whatever distance the motion needs.
         var dir = camera.position.clone().sub(controls.target).normalize();
-        var dist = 0.6 * size0 / Math.tan(camera.fov * Math.PI / 360);
+        var dist = 0.6 * size0 / Math.tan(35 * Math.PI / 360);
         controls.target.copy(c);
         camera.position.copy(c).addScaledVector(dir, dist);
       }
@@ -476,31 +776,59 @@
     renderer.setSize(w, h, false);
     renderer.domElement.style.width = w + "px";
     renderer.domElement.style.height = h + "px";
-    camera.aspect = w / Math.max(h, 1);
-    camera.updateProjectionMatrix();
+    aspect = w / Math.max(h, 1);
+    setProjection(ortho ? orthoWidth : 0);
   }
 
   function render() {
+    layerNames.forEach(function (n) { layers[n].visible = shown[n]; });
     renderer.render(scene, camera);
-    // Screen box of the drawn points (the test compares it with the pixels).
+    // Screen box of the mechanism's points (the test compares it with the pixels).
     var w = renderer.domElement.clientWidth, h = renderer.domElement.clientHeight;
-    var x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity, v = new THREE.Vector3();
+    var sx0 = Infinity, sy0 = Infinity, sx1 = -Infinity, sy1 = -Infinity, v = new THREE.Vector3();
     for (var i = 0; i < np; ++i) {
+      if (isObstacle[i]) continue;
       v.set(cur[3 * i], cur[3 * i + 1], cur[3 * i + 2]).project(camera);
       var sx = (v.x + 1) / 2 * w, sy = (1 - v.y) / 2 * h;
-      x0 = Math.min(x0, sx); x1 = Math.max(x1, sx); y0 = Math.min(y0, sy); y1 = Math.max(y1, sy);
+      sx0 = Math.min(sx0, sx); sx1 = Math.max(sx1, sx); sy0 = Math.min(sy0, sy); sy1 = Math.max(sy1, sy);
     }
-    projected = [x0, y0, x1, y1].map(function (q) { return Math.round(q); });
     document.body.setAttribute("data-time", time.toFixed(6));
-    document.body.setAttribute("data-bbox", projected.join(","));
+    document.body.setAttribute("data-bbox", [sx0, sy0, sx1, sy1].map(Math.round).join(","));
   }
+  // Screen position [CSS px] of a world point (for tests and links).
+  window.screwfemProject = function (x, y, z) {
+    var v = new THREE.Vector3(x, y, z).project(camera);
+    return [(v.x + 1) / 2 * renderer.domElement.clientWidth, (1 - v.y) / 2 * renderer.domElement.clientHeight];
+  };
 
   // ---- controls --------------------------------------------------------------------------
   var playButton = document.getElementById("play");
+  var scheduled = false, last = null;
+  // Frames are requested only while playing: a paused page does no work and is idle, as a
+  // headless browser taking a screenshot expects.
+  function schedule() {
+    if (!scheduled && playing) { scheduled = true; requestAnimationFrame(tick); }
+  }
   function setPlaying(on) {
     playing = on && t1 > t0;
     playButton.textContent = playing ? "Pause" : "Play";
     last = null;
+    schedule();
+  }
+  function tick(now) {
+    scheduled = false;
+    if (!playing) return;
+    if (last !== null) {
+      time += speed * (now - last) / 1000;
+      if (time > t1) {
+        if (document.getElementById("loop").checked) time = t0 + (time - t1) % Math.max(t1 - t0, 1e-9);
+        else { time = t1; setPlaying(false); }
+      }
+    }
+    last = now;
+    update();
+    render();
+    schedule();
   }
   playButton.addEventListener("click", function () {
     if (!playing && time >= t1) time = t0;
@@ -511,17 +839,26 @@
     update();
     render();
   });
-  document.getElementById("speed").addEventListener("change", function (e) { speed = Number(e.target.value); });
+  var speedSelect = document.getElementById("speed");
+  speedSelect.addEventListener("change", function (e) { speed = Number(e.target.value); });
   document.getElementById("trail").addEventListener("change", function (e) {
     trail = e.target.value === "all" ? "all" : Number(e.target.value);
     update(); render();
   });
   followSelect.addEventListener("change", function (e) { setFollow(e.target.value); update(); render(); });
-  document.getElementById("labels").addEventListener("change", function (e) {
-    labels.visible = e.target.checked; render();
+  var layerBox = document.getElementById("layers");
+  layerNames.forEach(function (n) {
+    var label = document.createElement("label"), box_ = document.createElement("input");
+    box_.type = "checkbox";
+    box_.id = "show-" + n;
+    box_.checked = shown[n];
+    box_.addEventListener("change", function () { shown[n] = box_.checked; render(); });
+    label.appendChild(box_);
+    label.appendChild(document.createTextNode(n));
+    layerBox.appendChild(label);
   });
   document.getElementById("reset").addEventListener("click", function () {
-    followSelect.value = ""; setFollow(null); frameAll(); update(); render();
+    followSelect.value = ""; setFollow(null); frameAll(false); update(); render();
   });
   var colourSelect = document.getElementById("colour");
   fields.forEach(function (f, k) {
@@ -532,7 +869,7 @@
   });
   function setField(k) {
     field = k === "" || k === null ? null : fields[Number(k)];
-    var legend = document.getElementById("legend");
+    var legend = document.getElementById("legend-field");
     legend.hidden = !field;
     if (field) {
       document.getElementById("legend-name").textContent = field.name + (field.unit ? " [" + field.unit + "]" : "");
@@ -555,34 +892,32 @@
   controls.addEventListener("change", function () { if (!playing) render(); });
   window.addEventListener("resize", function () { resize(); render(); });
 
-  var last = null;
-  function tick(now) {
-    if (playing) {
-      if (last !== null) {
-        time += speed * (now - last) / 1000;
-        if (time > t1) {
-          if (document.getElementById("loop").checked) time = t0 + (time - t1) % Math.max(t1 - t0, 1e-9);
-          else { time = t1; setPlaying(false); }
-        }
-      }
-      last = now;
-      update();
-      render();
-    }
-    requestAnimationFrame(tick);
-  }
-
   // ---- start -------------------------------------------------------------------------------
   document.getElementById("case").textContent = data.name || "screwfem run";
   var notes = [];
   if (data.status && data.status !== "completed") notes.push("run " + data.status + (data.message ? ": " + data.message : ""));
   notes = notes.concat(data.notes || []);
   document.getElementById("note").textContent = notes.join(" \u00b7 ");
-  labels.visible = !bare && params.get("labels") === "1";
-  document.getElementById("labels").checked = labels.visible;
-  if (bare) decor.visible = false;
+  // Legends of the tension colours and the arrows' scale.
+  if (lines.length) {
+    document.getElementById("legend-tension").hidden = false;
+    document.getElementById("tension-max").textContent = maxTension.toPrecision(3) + " N";
+  }
+  if (forceScale > 0 && arrows.length) {
+    var ref = Math.pow(10, Math.floor(Math.log10(0.1 * size0)));  // a round length
+    document.getElementById("legend-force").hidden = false;
+    document.getElementById("force-scale").textContent =
+      (ref >= 0.01 ? (ref * 100).toPrecision(2) + " cm" : (ref * 1000).toPrecision(2) + " mm") +
+      " = " + (ref / forceScale).toPrecision(3) + " N";
+  }
+  if (params.has("speed") && Number(params.get("speed")) > 0) {
+    speed = Number(params.get("speed"));
+    var so = Array.prototype.find.call(speedSelect.options, function (o) { return Number(o.value) === speed; });
+    if (!so) { so = document.createElement("option"); so.value = String(speed); so.textContent = speed + "x"; speedSelect.appendChild(so); }
+    speedSelect.value = so.value;
+  }
   resize();
-  frameAll();
+  frameAll(true);
   if (params.has("colour")) {
     fields.forEach(function (f, k) { if (f.name === params.get("colour")) { colourSelect.value = String(k); setField(k); } });
   }
@@ -607,7 +942,8 @@
   }
   update();
   render();
+  if (unsized && !data.notes.some(function (n) { return n.indexOf("no section size") >= 0; }))
+    document.getElementById("note").textContent += " \u00b7 rods without a section size: drawn thin";
   if (document.body.getAttribute("data-state") !== "error") document.body.setAttribute("data-state", "ready");
   if (!frozen) setPlaying(nf > 1);
-  requestAnimationFrame(tick);
 })();

@@ -1,18 +1,43 @@
 // ParaView output of a run: one PolyData file per recorded frame and a Collection file that
 // lists them with their times.
 //
-// DIR/frame_NNNNN.vtp   the mechanism at one time (world frame, metres):
-//   vertices   one per joint, at the joint frame's origin (side A);
-//   polylines  one per rod, through its nodes in order;
+// DIR/frame_NNNNN.vtp   the mechanism at one time (world frame, metres), every cell tagged with
+// its kind (cell data `kind`, VtkCellKind below; a Threshold on it separates them in ParaView):
+//   vertices   one per joint, at the joint frame's origin (side A), with its frame axes (kJoint);
+//              one per rigid body without segments, at its node (kBodyPoint); one per contact
+//              pair with an obstacle, at the shape's surface point (kContact), and one per
+//              contact segment of the moving shapes (kPairContact), carrying the contact force;
+//              one per sphere and box contact shape of a rigid body, at its centre with the
+//              body's axes (kSphere, kBox); one per rigid body of positive mass, the box of its
+//              inertia at its centre of mass with the principal axes (kInertiaBox); one per
+//              plane and sphere obstacle at its point, z along a plane's normal (kPlane,
+//              kObstacleSphere);
+//   polylines  one per rod, through its nodes in order (kRod);
 //   lines      per rigid body, from its node origin to its centre of mass and to every joint
-//              attachment point on it (so a link between two joints is drawn between them);
-//   polylines  one per tendon, through its eyelets, and one line per force element between its
-//              ends (rod_id = body_id = joint_id = -1; on the ground the frame axes are the
-//              world's).
+//              attachment point on it (kBodySegment: a link between two joints is drawn between
+//              them); one per capsule shape and capsule obstacle, between its ends (kCapsule,
+//              kObstacleCapsule);
+//   polylines  one per tendon, through its eyelets at their current positions (kTendon), and one
+//              line per force element between its ends (kForceElement); on the ground the frame
+//              axes are the world's.
 //   Point data: frame_x, frame_y, frame_z (axes of the node frame, the section frame on rods,
-//               the joint frame at joints), velocity [m/s], joint_id (-1 except at joints).
-//   Cell data:  rod_id, body_id, joint_id (-1 where they do not apply).
+//               the joint frame at joints, a shape's or inertia box's axes), velocity [m/s],
+//               contact_force [N] (the force on the shape at kContact and kPairContact points,
+//               zero elsewhere and when the pair is not touching), joint_id (-1 except at
+//               joints), radius [m] and half_size [m] (constant, below).
+//   Cell data:  kind, item_id (the cell's index in its own table: the joint, rod, body, tendon,
+//               force element, contact pair, contact segment, contact shape or obstacle),
+//               rod_id, body_id (also on a body's shapes and inertia box), joint_id (-1 where
+//               they do not apply), tension [N] (a tendon's tension, a force element's force,
+//               positive pulling; zero on other cells).
 //   Field data: TimeValue [s].
+// The sizes (radius, and half_size along the point's frame axes x, y, z): on a rod's points the
+// section (Section's outline: radius = half_size y = half_size z for a round section; a
+// rectangle's half-diagonal and (0, width/2, height/2)), else the rod's contact radius, else 0
+// (a section given by its stiffness only: no size known); a sphere's or a capsule's radius (and
+// r, r, r); a box's half-diagonal and half sizes; an inertia box's: the solid box of the body's
+// mass and principal moments (half sizes a_i with a_1^2 = 3 (I_2 + I_3 - I_1) / (2 m)); an
+// obstacle sphere's or capsule's radius; zero elsewhere.
 //   With rod fields (Open's rod_fields, outputs.rod_fields), point data strain and stress (6
 //   components each: gamma1 gamma2 gamma3 kappa1 kappa2 kappa3 and n1 n2 n3 m1 m2 m3, section
 //   components as in rod_fields.csv, CalcRodFieldRows): at a rod node the mean of its elements
@@ -39,6 +64,7 @@
 
 #include <array>
 #include <cstddef>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -46,6 +72,26 @@
 #include "screwfem/model/data.h"
 
 namespace screwfem {
+
+// The cell data `kind` of the frames (values fixed: readers such as tools/screwfem_vtk.py and
+// ParaView thresholds use the numbers).
+enum class VtkCellKind : int {
+  kJoint = 0,
+  kRod = 1,
+  kBodySegment = 2,
+  kBodyPoint = 3,
+  kTendon = 4,
+  kForceElement = 5,
+  kContact = 6,
+  kPairContact = 7,
+  kSphere = 8,
+  kCapsule = 9,
+  kBox = 10,
+  kInertiaBox = 11,
+  kPlane = 12,
+  kObstacleSphere = 13,
+  kObstacleCapsule = 14,
+};
 
 class VtkWriter {
  public:
@@ -78,8 +124,26 @@ class VtkWriter {
     double xi = 0.0;  // kSection
     Vec3 offset = Vec3::Zero();  // kNode: point in the node frame [m]; kWorld: world point
     bool origin = true;          // kNode: the node frame's origin itself
+    // kNode, kWorld when `rotated`: the point's axes in the node frame (the world's); the
+    // frame axes written are then R axes.
+    bool rotated = false;
+    Mat3 axes = Mat3::Identity();
+  };
+  // The constant data of one cell.
+  struct CellInfo {
+    VtkCellKind kind = VtkCellKind::kJoint;
+    int item = -1, rod = -1, body = -1, joint = -1;
   };
   void LayOut(const Model& model);
+  void LayOutBodies(const Model& model, const std::vector<std::vector<Vec3>>& attachments);
+  void LayOutLines(const Model& model);
+  void LayOutContact(const Model& model);
+  long long AddPoint(const PointSource& source, double radius = 0.0,
+                     const Vec3& half_size = Vec3::Zero(), int joint = -1);
+  void AddVertex(long long point, const CellInfo& cell);
+  void AddLine(std::initializer_list<long long> points, const CellInfo& cell);
+  // Closes a polyline of the points appended to line_connectivity_ since the last line.
+  void EndLine(const CellInfo& cell);
   void CalcPoints(const Model& model, const Data& data);
   void ComposeBinaryImage();
   void ComposeAsciiImage(double time);
@@ -88,11 +152,16 @@ class VtkWriter {
   std::string dir_, path_;  // path_: the frame file being written (capacity kept)
   VtkFormat format_ = VtkFormat::kBinary;
   std::vector<PointSource> sources_;
-  // Cells (constant): vertices then lines, as VTK stores them.
+  // Cells (constant): vertices then lines, as VTK stores them; their data in that order.
   std::vector<long long> vert_connectivity_, vert_offsets_, line_connectivity_, line_offsets_;
-  std::vector<int> point_joint_, cell_rod_, cell_body_, cell_joint_;
+  std::vector<CellInfo> vert_cells_, line_cells_;
+  std::vector<int> point_joint_, cell_kind_, cell_item_, cell_rod_, cell_body_, cell_joint_;
+  // Constant point sizes: radius (1 per point) and half sizes (3 per point).
+  std::vector<double> radius_, half_size_;
   // Per-frame values, 3 per point.
   std::vector<double> frame_axes_[3], velocity_, position_;
+  // Per-frame cell values: the tension of tendon and force element cells (zero elsewhere).
+  std::vector<double> tension_;
   // The contact force on the shape at each contact pair's point (zero elsewhere and when the
   // pair is inactive), for glyphs.
   std::vector<double> contact_force_;
@@ -104,7 +173,7 @@ class VtkWriter {
   // ascii, recomposed per frame in the same buffer.
   std::string image_;
   std::size_t time_at_ = 0, frame_axes_at_[3] = {0, 0, 0}, velocity_at_ = 0, position_at_ = 0,
-              contact_force_at_ = 0;
+              contact_force_at_ = 0, tension_at_ = 0;
   std::vector<double> times_;  // of the frames written, frame i in frame_<i>.vtp
 
   // Rod fields (Open's rod_fields): per rod node point, the point and its two stations

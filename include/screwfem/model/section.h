@@ -26,6 +26,12 @@ struct Section {
   // a_M / (2 w) + a_K w / 2. a_M also damps rigid-body motion; a_K acts on strain rates.
   double rayleigh_mass = 0.0;       // a_M [1/s], >= 0
   double rayleigh_stiffness = 0.0;  // a_K [s], >= 0
+  // The outline, for drawing only (the mechanics reads the diagonals above; the ParaView
+  // frames draw rods with it, io/vtk.h): the extent along section axes 2 and 3 [m] (a circle's
+  // or a tube's outer diameter twice, a rectangle's width and height) and whether it is round.
+  // Set by Circle, Rectangle and Tube; zero for FromDiagonals (a caller may set them).
+  double width = 0.0, height = 0.0;
+  bool round = false;
 
   static Section FromDiagonals(const Vec6& stiffness, const Vec6& inertia = Vec6::Zero());
   // Solid circle of radius r.
