@@ -194,9 +194,11 @@ def main():
         cmd += ["--config-settings", f"build-dir={build}"]
     cmd.append(str(source))
     print(" ".join(cmd), flush=True)
-    # -v: pip shows the backend's output (else only on failure); kept to check its log.
+    # -v: pip shows the backend's output (else only on failure); kept to check its log. A
+    # session of its own, without a controlling terminal: the backend's line for the user
+    # goes to its stderr, into this log, not to the terminal ctest runs in.
     pip = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                         text=True)
+                         text=True, start_new_session=True)
     print(pip.stdout, flush=True)
     if pip.returncode != 0:
         print("pip install failed", file=sys.stderr)
