@@ -26,8 +26,8 @@ No sdist and no editable installs.
 
 pip 23 shows a backend's output (stdout and stderr, one pipe) only with ``pip install -v`` or
 when the build fails; without -v it shows a spinner. So the one line that says where the
-extension is built, how many files are to be compiled and about how long that takes is also
-written to the terminal (/dev/tty) when there is one; the build's progress lines (make's
+extension is built, how many files are to be compiled and about how long that takes goes to
+the terminal (/dev/tty) when there is one, else to stderr; the build's progress lines (make's
 ``[ 45%] Building CXX object ...``, ninja's ``[12/17] ...``) go to stderr, which
 ``pip install -v`` shows as they come.
 """
