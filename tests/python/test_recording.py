@@ -156,7 +156,7 @@ class RecordingEnds(unittest.TestCase):
         self.assertEqual(summary["status"], "interrupted")
         self.assertEqual(summary["signal"], "SIGINT")
 
-    def test_the_last_state_is_recorded_and_plot_reads_it(self):
+    def test_the_last_state_is_recorded(self):
         out = self.dir / "run"
         with self.sim.record(str(out)):  # rows every 0.01 s
             for _ in range(7):

@@ -12,11 +12,15 @@ InputError naming the entity and the field.
 import json
 import math
 import pathlib
+import sys
 import tempfile
 import unittest
 
 import screwfem as sf
 from screwfem import _screwfem
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "python"))
+import grm_in_code  # noqa: E402  (the GRM built in code)
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 GRM = ROOT / "examples" / "grm"
@@ -27,56 +31,9 @@ SUMMARY_FIELDS_OF_THE_SOURCE = {"source", "wall_seconds", "real_time_factor"}
 
 
 def grm_spec(case):
-    """examples/grm/grm_{case}.yaml with the spec API: 'soft_k' (K = 10 on every joint,
-    series-elastic drives) or 'rigid' (ideal joints, prescribed drives)."""
-    soft = case == "soft_k"
-    spec = sf.SceneSpec(name="GRM, case 2: soft joints, K = 10" if soft else
-                        "GRM, case 1: rigid joints", gravity=(0, 0, -9.81))
-    points = {"P0": (0, 0, 0), "P1": (0.2, 0.6, 0), "P2p": (1, 1, 0), "P3p": (1.2, 0, 0),
-              "P2": (0, 1, 0), "P3": (0.2, 1.5, 0), "P4": (0.5, 1.3, 0.2), "P5": (0.8, 1.6, 0.2),
-              "P6": (1, 1.8, 0.3), "P7": (1.2, 2, 0.4), "P8": (1.4, 2.2, 0.5)}
-    for name, p in points.items():
-        spec.add_point(name, p)
-    for name, a, b in (("base", "P0", "P3p"), ("crank", "P0", "P1"), ("link12", "P1", "P2"),
-                       ("guide", "P2", "P3"), ("link34", "P3", "P4"), ("link45", "P4", "P5")):
-        spec.add_rigid_body(name, between=(a, b), mass=0.15, inertia=[1e-4] * 3,
-                            fixed=name == "base")
-    arm = sf.Section([1e6, 1e6, 1e6, 1, 1, 1], [0.1, 0.1, 0.1, 0.5, 0.5, 0.5])
-    spec.add_soft_body("coupler", from_="P1", to="P2p", section=arm)
-    spec.add_soft_body("rocker", from_="P2p", to="P3p", section=arm)
-    spec.add_soft_body("arm56", path=["P5", "P6"], section=arm)
-    spec.add_soft_body("arm67", path=["P6", "P7"], section=arm, weld_start="arm56")
-    spec.add_soft_body("arm78", path=["P7", "P8"], section=arm, weld_start="arm67")
-    k = {"stiffness": 10} if soft else {}
-
-    def drive(q):
-        return {"type": "series_elastic" if soft else "prescribed",
-                "profile": sf.Profile.bang_bang(0, 1, q)}
-
-    z = [0, 0, 1]
-    spec.add_joint("J0", "revolute", at="P0", between=("ground", "crank"), axis=z, **k,
-                   drive=drive(math.pi / 6))
-    spec.add_joint("J1", "revolute", at="P1", between=("crank", "coupler"), axis=z, **k)
-    spec.add_joint("W1", "fixed", at="P1", between=("crank", "link12"))
-    spec.add_joint("J2p", "revolute", at="P2p", between=("coupler", "rocker"), axis=z, **k)
-    spec.add_joint("J3p", "revolute", at="P3p", between=("rocker", "base"), axis=z, **k)
-    spec.add_joint("J2", "revolute", at="P2", between=("link12", "guide"), axis=z, **k,
-                   drive=drive(math.pi / 6))
-    spec.add_joint("J3", sf.JointType.PRISMATIC, at="P3", between=("guide", "link34"),
-                   axis={"from": "P2", "to": "P3"}, **k, drive=drive(0.75))
-    spec.add_joint("J4", "revolute", at="P4", between=("link34", "link45"), axis=z, **k)
-    spec.add_joint("J5", "revolute", at="P5", between=("link45", "arm56"), axis=[1, 0, 0], **k,
-                   drive=drive(math.pi / 3))
-    s_law = sf.Profile.bang_bang(0, 1)
-    spec.add_load("f1", body="arm67", at="P6", force=[100, -100, 0], profile=s_law)
-    spec.add_load("f2", body="arm78", at="P7", force=[-100, 100, 0], profile=s_law)
-    spec.add_load("f3", body="arm78", at="P8", force=[100, -100, 0], profile=s_law)
-    spec.set_analysis(type="dynamic", start_time=0, end_time=2, step=1e-3, rho_inf=0.8,
-                      align_steps=True, rod_inertia="exact")
-    spec.add_output_point("P8", body="arm78", at="P8")
-    spec.add_output_point("P4", body="link34", at="P4")
-    spec.set_outputs(joints="all", interval=0.001, vtk=True, vtk_interval=0.02)
-    return spec
+    """examples/grm/grm_{case}.yaml with the spec API, as examples/python/grm_in_code.py
+    builds it ('soft_k' or 'rigid'): the test checks the example's construction."""
+    return grm_in_code.build_grm(case)
 
 
 def run_files(scene, folder):
