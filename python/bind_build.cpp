@@ -281,7 +281,8 @@ void BindValues(py::module_& m) {
 
   py::class_<Actuator>(m, "Actuator",
                        "Internal actuation of a rod over [from, to] of its arc length "
-                       "(model.h; method-next.md §N5): an element transmits sigma = K (eps - "
+                       "(model.h; docs/numerics.md, 'Active stress and rest strain'): an element "
+                       "transmits sigma = K (eps - "
                        "eps0) - sigma_a. PRESSURE: sigma_a = p A [1, 0, 0, 0, r3, -r2]; MUSCLE: "
                        "-u max_stress A [1, 0, 0, 0, r3, -r2], u clamped to [0, 1]; REST_STRAIN: "
                        "eps0 = v vector; ACTIVE_STRESS: sigma_a = v vector; the value from "
@@ -341,9 +342,10 @@ void BindValues(py::module_& m) {
       .def_readwrite("conaffinity", &ContactObstacle::conaffinity,
                      "Contact affinity bitmask (see contype).");
 
-  py::class_<ContactSettings>(m, "ContactSettings",
-                              "The contact law (method-next.md §N6.3); negative values are the "
-                              "defaults set by build().")
+  py::class_<ContactSettings>(
+      m, "ContactSettings",
+      "The contact law (docs/numerics.md, 'Contact'); negative values are the "
+      "defaults set by build().")
       .def(py::init<>())
       .def_readwrite("stiffness", &ContactSettings::stiffness, "k_n [N/m]")
       .def_readwrite("onset", &ContactSettings::onset, "delta [m]")

@@ -41,7 +41,7 @@ void BindModel(py::module_& m) {
     joint_type.value(upper.c_str(), FindJointType(type_name)->type);
   }
   BindEnum<DriveKind>(m, "DriveKind", "Drive on one joint coordinate (model.h).");
-  BindEnum<RodInertia>(m, "RodInertia", "Rod inertia model (method.md §2.5).");
+  BindEnum<RodInertia>(m, "RodInertia", "Rod inertia model (docs/numerics.md, 'Rod inertia').");
   BindEnum<LoadFrame>(m, "LoadFrame", "Frame of an applied load's components (model.h).");
   BindEnum<ActuatorType>(m, "ActuatorType", "Kind of a rod actuator (model.h, Actuator).");
   BindEnum<ContactShapeType>(m, "ContactShapeType", "A rigid body's collision shape (model.h).");
@@ -63,7 +63,7 @@ void BindModel(py::module_& m) {
                     "(node frame), or -1 when fixed.")
       .def("__repr__", [](const Node& n) { return "<screwfem.Node '" + n.name + "'>"; });
 
-  py::class_<RodElement>(m, "RodElement", "A two-node helical element (method.md §2.2). Read-only.")
+  py::class_<RodElement>(m, "RodElement", "A two-node helical element (elements/rod.h). Read-only.")
       .def_readonly("rod", &RodElement::rod, "Index of the rod the element belongs to.")
       .def_readonly("node_a", &RodElement::node_a, "First node of the element.")
       .def_readonly("node_b", &RodElement::node_b, "Second node of the element.")
@@ -95,7 +95,7 @@ void BindModel(py::module_& m) {
   py::class_<Joint>(m, "Joint",
                     "A joint: relative frame H_J in a subgroup between frame A (node_a, or the "
                     "ground, -1) and frame B (node_b), placed by the offsets C_A, C_B: "
-                    "H_B C_B = H_A C_A H_J (method.md §4.1). Read-only.")
+                    "H_B C_B = H_A C_A H_J (elements/joint.h). Read-only.")
       .def_readonly("name", &Joint::name, "Unique name (the scene's joints: key).")
       .def_readonly("type", &Joint::type,
                     "JointType: the Lie subgroup of the relative frame (REVOLUTE, PRISMATIC, ...).")

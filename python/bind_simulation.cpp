@@ -317,7 +317,7 @@ and indices out of range IndexError.)doc")
           },
           "Lagrange multipliers (nc; writable view): generalised constraint forces [N, N m] "
           "conjugate to the constraint rows (6 relative-frame rows per joint from Joint.row, "
-          "one row per prescribed drive from Joint.drive_row; method.md §4.3-4.4).")
+          "one row per prescribed drive from Joint.drive_row; elements/joint.h).")
       .def_property_readonly(
           "q_joint", [](S& s) -> const Vector& { return s.data().q_joint; },
           "Joint coordinates (nv - nv_nodes; read-only view) [m or rad], in velocity order "
@@ -377,7 +377,7 @@ and indices out of range IndexError.)doc")
       .def("initialize", &S::Initialize, py::arg("options") = py::none(),
            R"doc(initialize(options=None)
 
-InitializeDynamics: consistent initial accelerations and multipliers (method.md §5.4) at the
+InitializeDynamics: consistent initial accelerations and multipliers (docs/numerics.md, 'Restarts at breakpoints') at the
 current time from the current configuration and velocities; allocates the integrator.
 `options` (DynamicOptions) defaults to scene.analysis.dynamic. Raises SolverError if the
 saddle-point system is singular, InputError for invalid options.)doc")

@@ -41,7 +41,7 @@ fi
 "$statics_example" | tee out/statics.txt
 end "statics example"
 
-# The GRM of the method paper (examples/grm, ../shared/grm.md): the rigid case, and the soft
+# The GRM of the method paper (examples/grm; README "The GRM example"): the rigid case, and the soft
 # cases in both readings (series-elastic actuated joints, and springs in parallel with
 # prescribed ones). Each run writes points.csv, joints.csv, joints.json, summary.json and
 # ParaView frames into out/grm_<case>/.

@@ -92,7 +92,7 @@ void RollUp(int* failures) {
     const double phi = 2.0 * kPi * lambda;
     const Vec3 tip = d.H[static_cast<std::size_t>(c.tip)].x;
     // The tip rotation including whole turns: the sum of the element rotations, each on its
-    // continuous branch (method.md §2.7).
+    // continuous branch (elements/rod.h).
     double rotation = 0.0;
     for (const Vec3& w : d.w_ref) rotation += w.z();
     const double x = L * std::sin(phi) / phi, y = L * (1.0 - std::cos(phi)) / phi;

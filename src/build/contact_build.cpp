@@ -430,7 +430,7 @@ void AddShapeObstaclePairs(Model& m, const ContactShape& c, int oi, double* r_mi
       }
       break;
     case ContactShapeType::kBox: {
-      // method-next.md §N6.2: 8 vertex spheres and (against curved obstacles) 12 edge
+      // docs/numerics.md, "Contact": 8 vertex spheres and (against curved obstacles) 12 edge
       // capsules, of radius 0.
       *r_min = std::min(*r_min, c.to.minCoeff());
       Vec3 v[8];
@@ -445,7 +445,7 @@ void AddShapeObstaclePairs(Model& m, const ContactShape& c, int oi, double* r_mi
   }
 }
 
-// Defaults (method-next.md §N6.4) and the damping of each pair.
+// Defaults (docs/numerics.md, "Contact") and the damping of each pair.
 void ResolveContactLaw(Model& m, const std::vector<double>& masses, double r_min, double w_max) {
   ContactSettings& law = m.contact;
   const double gravity = ContactGravity(m);
@@ -460,7 +460,7 @@ void ResolveContactLaw(Model& m, const std::vector<double>& masses, double r_min
 
 }  // namespace
 
-// Contact (method-next.md §N6): validates shapes, obstacles and the law, enumerates the
+// Contact (docs/numerics.md, "Contact"): validates shapes, obstacles and the law, enumerates the
 // (moving shape, obstacle) pairs and resolves the defaults (model.h, ContactSettings).
 void BuildContacts(Model& m) {
   m.contact_pairs.clear();

@@ -63,7 +63,7 @@ namespace {
 // edge is a block of the iteration matrix that the assembly writes (rod elements couple
 // their nodes, joints their constraint rows with both nodes and their coordinates, drives
 // their row with the coordinates). The term d(B^T lambda)/dq, which would couple the two
-// nodes of a joint, is not assembled (method.md §5.2). The permuted matrix has these blocks
+// nodes of a joint, is not assembled (docs/architecture.md, "One time step"). The permuted matrix has these blocks
 // only: model.pattern_last, checked by the assembly. Blocks are numbered in the order they are
 // added: the free nodes' (NodeBlocks), then the constraint kinds' coordinates and rows in the
 // order of the rows (AddConstraintBlocks).

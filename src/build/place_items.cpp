@@ -217,7 +217,7 @@ void GroupTendonSegments(Model& m) {
 
 }  // namespace
 
-// Tendons (method-next.md §N4): eyelets, tension profile, unique names; their segments.
+// Tendons (docs/numerics.md, "Tendons and force elements"): eyelets, tension profile, unique names; their segments.
 void BuildTendons(Model& m) {
   m.tendon_segments.clear();
   std::set<std::string> names;
@@ -302,7 +302,7 @@ void SetActuatorUnits(Actuator& a, const ActuatorError& fail) {
     if (!(a.area > 0.0) || !std::isfinite(a.area))
       fail("area", "must be a positive area [m^2], got " + std::to_string(a.area));
     if (!a.offset.allFinite()) fail("offset", "must be finite");
-    // sigma_a per unit pressure: A [e1; r x e1] (method-next.md §N5.2).
+    // sigma_a per unit pressure: A [e1; r x e1] (docs/numerics.md, "Active stress and rest strain").
     Vec6 unit;
     unit << 1.0, 0.0, 0.0, 0.0, a.offset(2), -a.offset(1);
     unit *= a.area;
@@ -336,7 +336,7 @@ void ListElementActuators(Model& m) {
 
 }  // namespace
 
-// Actuators (method-next.md §N5): rod, range at nodes, values; eps0 and sigma_a per unit
+// Actuators (docs/numerics.md, "Active stress and rest strain"): rod, range at nodes, values; eps0 and sigma_a per unit
 // profile value; the per-element lists of Model::element_actuators.
 void BuildActuators(Model& m) {
   std::set<std::string> names;

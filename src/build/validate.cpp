@@ -220,7 +220,7 @@ void CheckConnected(const Model& m, const std::vector<char>& used) {
 }
 
 void CheckJointFramesCoincide(const Model& m) {
-  // The joint frames must coincide in the reference configuration (H_J = I, method.md §4.2).
+  // The joint frames must coincide in the reference configuration (H_J = I, elements/joint.h).
   for (std::size_t i = 0; i < m.joints.size(); ++i) {
     const Joint& j = m.joints[i];
     const SE3& HA = NodeReferenceFrame(m, j.node_a);

@@ -56,7 +56,7 @@ ContactForce ContactForceLaw(double gap, const Vec3& n, const Vec3& v_c,
                              const ContactLawParameters& law, bool tangent) {
   ContactForce out;
   if (gap >= law.onset) return out;
-  // Normal force (method-next.md §N6.3): f_n = max(0, f_e - c_n w(g) dg/dt).
+  // Normal force (docs/numerics.md, "Contact"): f_n = max(0, f_e - c_n w(g) dg/dt).
   out.normal = ContactNormalLaw(gap, n.dot(v_c), law);
   const double f_n = out.normal.force;
   if (!(f_n > 0.0)) return out;

@@ -47,7 +47,7 @@ void CalcRodGaussVelocities(const Vec6& d, const Vec12& eta_ab, Vec6 (&eta)[kRod
 }
 
 namespace {
-// s X Y for X, Y of the block form [A B; 0 A] of T and T^-1 (method.md §1.3):
+// s X Y for X, Y of the block form [A B; 0 A] of T and T^-1 (lie/se3.h):
 // s [A_x A_y, A_x B_y + B_x A_y; 0, A_x A_y], three 3x3 products instead of a 6x6 one.
 void ScaledTangentProduct(double s, const Mat6& X, const Mat6& Y, Mat6* out) {
   const Mat3 Ax = s * X.topLeftCorner<3, 3>();
@@ -72,7 +72,7 @@ void CompleteRodGeometry(bool gauss_points, bool tangents, RodGeometry* out) {
     for (int i = 0; i < n; ++i) out->series_gp[i] = CalcTSeries(kRodGaussXi[i] * phi);
   }
   TSE3InvAndScaledTSE3(d, out->series, n, kRodGaussXi, out->series_gp, &out->Ti, out->T);
-  // P = [-T^-1(-d)  T^-1(d)] with T^-1(-d) = T^-1(d) - ad(d) (method.md §2.3).
+  // P = [-T^-1(-d)  T^-1(d)] with T^-1(-d) = T^-1(d) - ad(d) (elements/rod.h).
   out->P.leftCols<6>() = ad(d) - out->Ti;
   out->P.rightCols<6>() = out->Ti;
   if (tangents)
@@ -125,7 +125,7 @@ void CalcRodInternal(const RodElement& element, const Section& section, const Ro
   out->energy = law.energy;
   out->force.noalias() = P.transpose() * out->stress;
   if (!tangent) return;
-  // K_t = (1/L) P^T K P + [D(-d, sigma); D(d, sigma)] P   (method.md §2.4), with
+  // K_t = (1/L) P^T K P + [D(-d, sigma); D(d, sigma)] P   (elements/rod.h), with
   // D(-d, sigma) = Star(sigma) - D(d, sigma) (derivative of T^-T(-d) sigma =
   // T^-T(d) sigma - Star(sigma) d), as one product Y P, Y = (1/L) P^T K + [D(-d); D(d)].
   const Mat6 D = DTSE3InvT(out->d, out->stress, geometry.series);
@@ -144,7 +144,7 @@ void CalcRodInternal(const RodElement& element, const Section& section, const SE
 }
 
 Mat6x12 CalcRodNDirectional(double xi, const Vec6& d, const Vec6& dd) {
-  // N = [Ad(exp(-xi d)) - xi T(xi d) T^-1(-d),  xi T(xi d) T^-1(d)]   (method.md §2.5), and
+  // N = [Ad(exp(-xi d)) - xi T(xi d) T^-1(-d),  xi T(xi d) T^-1(d)]   (docs/numerics.md, "Rod inertia"), and
   //   d Ad(exp(X)) = Ad(exp(X)) ad(T(X) dX) with X = -xi d,
   //   d [xi T(xi d)] = xi dT(xi d; xi dd),  d T^-1(+-d) = dT^-1(+-d; +-dd).
   const Mat6 T = xi * TSE3(xi * d);

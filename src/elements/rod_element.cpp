@@ -21,7 +21,7 @@ bool RodElementKind::Calc(const Model& m, const Data& d, const Item& e, const No
   const bool tangent = o.tangent;
   const double rhoA = sec.inertia(0);
   const bool has_gravity = rhoA > 0.0 && m.gravity.squaredNorm() > 0.0;
-  // Inertia (option A or B, method.md §2.5) and damping: forces and the M, C blocks.
+  // Inertia (option A or B, docs/numerics.md, "Rod inertia") and damping: forces and the M, C blocks.
   const bool has_inertia = o.dynamics && sec.inertia.squaredNorm() > 0.0;
   const bool has_damping =
       o.dynamics && (sec.damping.squaredNorm() > 0.0 || sec.rayleigh_stiffness > 0.0 ||
@@ -38,7 +38,7 @@ bool RodElementKind::Calc(const Model& m, const Data& d, const Item& e, const No
   const bool node_tangent = tangent && o.node_tangent;
   Vec12& r = t->residual;
   Mat12& stiffness = t->stiffness;
-  // Actuation (method-next.md §N5.1): sigma = K (eps - eps0) - sigma_a in the same kernel.
+  // Actuation (docs/numerics.md, "Active stress and rest strain"): sigma = K (eps - eps0) - sigma_a in the same kernel.
   RodActuation act;
   const bool actuated = CalcRodActuation(m, d, e, o.time, o.load_factor, &act);
   CalcRodConservative(el, sec, geo, HA,

@@ -1,4 +1,4 @@
-// Velocity-dependent forces of the helical rod element: inertia (method.md §2.5, options A and
+// Velocity-dependent forces of the helical rod element: inertia (docs/numerics.md, "Rod inertia", options A and
 // B) and damping (strain-rate and Rayleigh). Stateless, fixed-size, allocation-free kernels.
 #include <cmath>
 #include <type_traits>
@@ -32,12 +32,12 @@ template <InertiaTangent kTangent>
 void InertiaExact(const RodElement& element, const Section& section, const RodGeometry& geometry,
                   const Vec12& eta_ab, const Vec12& eta_dot_ab, double c_mass, double c_gyro,
                   Vec12* force, Mat12* mass_out, Mat12* gyro_out, double* kinetic_energy) {
-  // Exact field (method.md §2.5) with N = [I - N_B, N_B], N_B = xi T(X) T^-1(d), X = xi d:
+  // Exact field (docs/numerics.md, "Rod inertia") with N = [I - N_B, N_B], N_B = xi T(X) T^-1(d), X = xi d:
   //   eta(xi)     = eta_A + xi T(X) y,                 y = T^-1(d) (eta_B - eta_A),
   //   eta_dot(xi) = eta_dot_A + xi T(X) T^-1(d) (eta_dot_B - eta_dot_A) + (dN_B/dt)(eta_B - eta_A),
   //   (dN_B/dt) v = xi T(X) [dT^-1(d; d_dot) v - xi dT^-1(X; d_dot) T(X) T^-1(d) v],
   // from d/dt T(X) = -T(X) dT^-1(X; xi d_dot) T(X) and the linearity of dT^-1 in its direction,
-  // with d_dot = P eta_AB = y + ad(d) eta_A (method.md §2.3).
+  // with d_dot = P eta_AB = y + ad(d) eta_A (elements/rod.h).
   // Force L int N^T f dxi, f = M eta_dot - ad(eta)^T M eta: with N_B^T f = T^-T(d) xi T^T f,
   //   g_B = T^-T(d) Phi,  g_A = L sum w_i f_i - g_B,  Phi = L sum w_i xi_i T_i^T f_i.
   const double L = element.length;
@@ -167,7 +167,8 @@ void CalcRodInertiaConstant(const RodElement& element, const Section& section, c
     const Vec6 eta = n[0] * eta_ab.head<6>() + n[1] * eta_ab.tail<6>();
     const Vec6 M_eta = M * eta;
     const Vec6 f = -(ad(eta).transpose() * M_eta);
-    const Mat6 G = -(ad(eta).transpose() * M + Star(M_eta));  // d f / d eta (method.md §2.5)
+    const Mat6 G =
+        -(ad(eta).transpose() * M + Star(M_eta));  // d f / d eta (docs/numerics.md, "Rod inertia")
     for (int a = 0; a < 2; ++a) {
       out->force.segment<6>(6 * a) += 0.5 * L * n[a] * f;
       for (int c = 0; c < 2; ++c)

@@ -99,7 +99,7 @@ bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Ve
   const Vec3 e = delta / l;
   out->length = l;
   out->direction = e;
-  // method-next.md §N4.2: gradient J^T e with J = [-R_A S(r_A)  R_B S(r_B)].
+  // docs/numerics.md, "Tendons and force elements": gradient J^T e with J = [-R_A S(r_A)  R_B S(r_B)].
   const Vec3 e_A = H_A.R.transpose() * e, e_B = H_B.R.transpose() * e;
   out->gradient.segment<3>(0) = -e_A;
   out->gradient.segment<3>(3) = -r_A.cross(e_A);
@@ -174,7 +174,7 @@ bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& g
   const SE3& H_A = *x.H[0];
   const SE3& H_B = *x.H[1];
   // The stiffness blocks c_K tau d2l before the node tangents, summed over the group's segments
-  // (method-next.md §N4.2, the factors of CalcPointDistance's hessian; a tendon has no mass or
+  // (docs/numerics.md, "Tendons and force elements", the factors of CalcPointDistance's hessian; a tendon has no mass or
   // damping). With R^T R = I, e_X = R_X^T e, s_A = -1, s_B = +1, P_X = (I - e_X e_X^T) / l and
   // P_AB = (R_A^T R_B - e_A e_B^T) / l:
   //   K_XX = S(r_X)^T [P_X   s_X Skew(e_X) - P_X Skew(r_X)]   (the string, and the rotation of e
@@ -202,7 +202,7 @@ bool TendonSegmentKind::Calc(const Model& model, const Data& data, const Item& g
         K_AB.setZero();
       }
     }
-    // method-next.md §N4.3, prescribed tension: residual +tau dl/dq, tangent tau d2l.
+    // docs/numerics.md, "Tendons and force elements", prescribed tension: residual +tau dl/dq, tangent tau d2l.
     t->residual.noalias() += tau * g.gradient;
     const double arm = std::max({1.0, s.a.offset.norm(), s.b.offset.norm()});
     scale = std::max(scale, tau * arm);  // the pulls of two segments at an eyelet cancel

@@ -79,8 +79,7 @@ const char* SignalName(int signal) {
   }
 }
 
-// Largest relative rotation |w| of one rod element [rad], on its continued branch (method.md
-// §2.7): the branch references are the accepted state's rotations.
+// Largest relative rotation |w| of one rod element [rad], on its continued branch (elements/rod.h): the branch references are the accepted state's rotations.
 double MaxElementRotation(const Data& data) {
   double m = 0.0;
   for (const Vec3& w : data.w_ref) m = std::max(m, w.norm());

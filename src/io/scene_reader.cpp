@@ -722,7 +722,7 @@ void SceneReader::ReadJointAxes(const Node& value, const std::string& path,
   }
 }
 
-// Springs, dampers, drive (method.md §4.4, §4.5).
+// Springs, dampers, drive (elements/joint.h).
 void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
                                    const JointTypeInfo& info, JointSpec& j) {
   const std::string who = std::string(info.name) + " joints";
@@ -928,7 +928,7 @@ void SceneReader::ReadForces(const Node* node) {
   }
 }
 
-// actuation: {NAME: {type, rod, from, to, ...}} (method-next.md §N5.2; docs/scene-format.md).
+// actuation: {NAME: {type, rod, from, to, ...}} (docs/numerics.md, "Active stress and rest strain"; docs/scene-format.md).
 void SceneReader::ReadActuation(const Node* node) {
   if (node == nullptr || node->IsNull()) return;
   r_.CheckNames(*node, "actuation", "actuator");

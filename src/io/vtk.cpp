@@ -428,7 +428,7 @@ void VtkWriter::CalcRodFields(const Model& model, const Data& data, double load_
   }
 }
 
-// Positions, frame axes and velocities of the points at data's state (method.md §6).
+// Positions, frame axes and velocities of the points at data's state (assemble/outputs.h).
 void VtkWriter::CalcPoints(const Model& model, const Data& data) {
   // The contact forces on each contact segment, and their points weighted by |F|.
   std::fill(segment_force_.begin(), segment_force_.end(), Vec3::Zero());
@@ -466,7 +466,7 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
       const Vec3 F = c.active ? Vec3(c.normal_force * c.normal + c.friction_force) : Vec3::Zero();
       for (int k = 0; k < 3; ++k) contact_force_[3 * i + k] = F(k);
     } else if (s.kind == PointSource::Kind::kSection) {
-      // H_A exp(xi d) and the interpolated body velocity N(xi, d) [eta_A; eta_B] (method.md §2.5).
+      // H_A exp(xi d) and the interpolated body velocity N(xi, d) [eta_A; eta_B] (docs/numerics.md, "Rod inertia").
       const RodElement& e = model.elements[static_cast<std::size_t>(s.index)];
       const SE3& HA = NodeFrame(data, e.node_a);
       const Vec6 d = CalcRodRelativeMotion(HA, NodeFrame(data, e.node_b),

@@ -1,4 +1,4 @@
-// SE(3) toolkit: method.md §1. Series thresholds are chosen so that the truncation error of
+// SE(3) toolkit: lie/se3.h. Series thresholds are chosen so that the truncation error of
 // the series and the cancellation error of the closed form are both below ~1e-14 relative at
 // the switch (checked in tests/lie/se3_*_test.cpp against long-double series).
 #include "screwfem/lie/se3.h"
@@ -21,7 +21,7 @@ double Poly(const double (&c)[N], double x) {
   return r;
 }
 
-// Coefficients of T(xi) = I + t1 A + t2 A^2 + t3 A^3 + t4 A^4, A = ad(xi) (method.md §1.3 B).
+// Coefficients of T(xi) = I + t1 A + t2 A^2 + t3 A^3 + t4 A^4, A = ad(xi) (lie/se3.h B).
 struct TCoeffs {
   double t1, t2, t3, t4;
 };
@@ -43,7 +43,7 @@ TCoeffs TCoefficients(double phi) {
 }
 
 // Coefficients of T^-1(xi) = I + A/2 + s2 A^2 + s4 A^4 and their scaled derivatives
-// hat_s_k = (1/phi) d s_k / d phi (method.md §1.3 B, §1.4).
+// hat_s_k = (1/phi) d s_k / d phi (lie/se3.h B).
 struct TInvCoeffs {
   double s2, s4;
 };
@@ -495,7 +495,7 @@ Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi) {
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma) { return DTSE3InvT(xi, sigma, TInvSeries(xi)); }
 
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma, const TSeries& series) {
-  // method.md §1.4 evaluated in the blocks of the form-B series (see TSE3Inv):
+  // lie/se3.h evaluated in the blocks of the form-B series (see TSE3Inv):
   //   T^-T = [Dg^T 0; Q^T Dg^T],  Dg^T x = x - (w x x)/2 + e W^2 x,
   //   Q^T x = -(u x x)/2 + e C_2 x - 2 c s4 W^2 x,
   // e = s2 - theta^2 s4, c = w.u, W^2 x = w (w.x) - theta^2 x, C_2 x = u (w.x) + w (u.x) - 2 c x,

@@ -36,7 +36,7 @@ ProfileValue EvalTerm(const ProfileTerm& p, double t, const Eigen::VectorXd* inp
     case ProfileTerm::Kind::kBangBang: {
       // The pieces are chosen by comparing t with the breakpoints themselves (the values
       // Breakpoints() returns), so that Eval(b) is the right limit at a breakpoint b and
-      // EvalLeft(b) the left one, whatever the rounding of t - t0 (method-next.md §N1.6).
+      // EvalLeft(b) the left one, whatever the rounding of t - t0 (docs/numerics.md, "Restarts at breakpoints").
       const double T = p.t1 - p.t0, tau = t - p.t0;
       const double a = 4.0 * s / (T * T);
       if (t < p.t0) break;

@@ -1,4 +1,4 @@
-// Dense output of error-controlled steps (method-next.md §N2.3): the state anywhere inside the
+// Dense output of error-controlled steps (docs/numerics.md, "Adaptive time steps"): the state anywhere inside the
 // last accepted AdaptiveStep, interpolated on the Lie group.
 #include <algorithm>
 
@@ -14,7 +14,7 @@ void InterpolateStep(const Model& model, const Data& data, Integrator& integ, do
   const double h = integ.dense_h;
   const double th = h > 0.0 ? std::clamp((t - integ.dense_t0) / h, 0.0, 1.0) : 1.0;
   const double th2 = th * th, th3 = th2 * th;
-  // Cubic Hermite basis and its derivatives (method-next.md §N2.3).
+  // Cubic Hermite basis and its derivatives (docs/numerics.md, "Adaptive time steps").
   const double h10 = th3 - 2.0 * th2 + th, h01 = -2.0 * th3 + 3.0 * th2, h11 = th3 - th2;
   const double d10 = 3.0 * th2 - 4.0 * th + 1.0, d01 = 6.0 * th - 6.0 * th2,
                d11 = 3.0 * th2 - 2.0 * th;

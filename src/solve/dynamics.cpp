@@ -78,7 +78,7 @@ void ValidateDynamicOptions(const DynamicOptions& o, const std::string& owner) {
 
 namespace {
 
-// Consistent accelerations and multipliers at data's state and time (method.md §5.4), and the
+// Consistent accelerations and multipliers at data's state and time (docs/numerics.md, "Restarts at breakpoints"), and the
 // auxiliary acceleration a = vdot. Uses the integrator's workspace (no allocation unless it
 // fails); integ.q_start is overwritten with the current state.
 bool ConsistentStart(const Model& model, Data& data, Integrator& integ, std::string* message) {
@@ -122,7 +122,7 @@ bool ConsistentStart(const Model& model, Data& data, Integrator& integ, std::str
   return true;
 }
 
-// DynamicOptions::perturbed_start (method-next.md §N1.2 step 4): before the first step after
+// DynamicOptions::perturbed_start (docs/numerics.md, "Restarts at breakpoints" step 4): before the first step after
 // a start or restart, of size h, a = vdot + (alpha_m - alpha_f) (vdot_s - vdot) with vdot_s
 // the consistent acceleration at q exp(h v + h^2 vdot / 2), v + h vdot, t + h. One-sided
 // (the left side of a breakpoint lies across the jump). The state is restored afterwards.

@@ -1,4 +1,4 @@
-// Error-controlled time steps (method-next.md §N2; docs/numerics.md, "Adaptive time steps"):
+// Error-controlled time steps (docs/numerics.md, "Adaptive time steps"; docs/numerics.md, "Adaptive time steps"):
 // the local error estimate of a generalized-alpha step, its weighted norm, the PI controller
 // of the step size and AdaptiveStep.
 #include <algorithm>
@@ -17,7 +17,7 @@ double LocalErrorConstant(const GeneralizedAlpha& p) {
 
 namespace {
 
-// PI controller (method-next.md §N2.4): the estimate is O(h^3).
+// PI controller (docs/numerics.md, "Adaptive time steps"): the estimate is O(h^3).
 constexpr double kSafety = 0.9, kMaxGrowth = 2.0, kMinShrink = 0.2;
 constexpr double kOrder = 3.0, kGainI = 0.3 / kOrder, kGainP = 0.4 / kOrder;
 
@@ -32,7 +32,7 @@ bool IsTranslation(const Model& model, int i) {
   return false;
 }
 
-// The weighted RMS norm of integ.error (method-next.md §N2.1): component i divided by
+// The weighted RMS norm of integ.error (docs/numerics.md, "Adaptive time steps"): component i divided by
 // atol_i + rtol |h dq_i|; *worst = the component with the largest ratio.
 double WeightedErrorNorm(const Model& model, const Integrator& integ, double h, int* worst) {
   const DynamicOptions& o = integ.options;
@@ -105,7 +105,7 @@ AdaptiveStepEnd ChooseStepEnd(const Integrator& integ, double t0, double h, doub
   return e;
 }
 
-// method-next.md §N2.2: a_n approximates vdot at t_n + (alpha_m - alpha_f) h; rescale it to
+// docs/numerics.md, "Adaptive time steps": a_n approximates vdot at t_n + (alpha_m - alpha_f) h; rescale it to
 // the new step size, or the scheme is first order on a variable grid.
 void RescaleAuxiliaryAcceleration(const Data& data, Integrator& integ, double h) {
   if (integ.h_last > 0.0 && h != integ.h_last)

@@ -56,7 +56,7 @@ bool CalcLinearizedSystem(const Model& model, Data& data, const ModalOptions& op
   data.vdot.setZero();
   bool ok = true;
 
-  // K, B and the equilibrium residual: the static assembly (method.md §5.6), unscaled.
+  // K, B and the equilibrium residual: the static assembly (docs/architecture.md, "One time step"), unscaled.
   AssemblyOptions o;
   o.time = options.time;
   o.load_factor = 1.0;

@@ -57,7 +57,7 @@ void ValidateStaticOptions(const StaticOptions& o, const std::string& owner) {
 
 namespace {
 
-// Scale of the constraint rows: the largest stiffness of the model (method.md §5.6).
+// Scale of the constraint rows: the largest stiffness of the model (docs/architecture.md, "One time step").
 double ConstraintScale(const Model& model) {
   double k_scale = 1.0;
   for (const Rod& r : model.rods)
@@ -66,7 +66,7 @@ double ConstraintScale(const Model& model) {
   return k_scale;
 }
 
-// Weights of the arc-length metric (method-next.md §N3.1), velocity layout: translations (node
+// Weights of the arc-length metric (docs/numerics.md, "Path-following statics"), velocity layout: translations (node
 // translations, joint coordinates whose axis has no rotation part) 1 / length_scale^2,
 // rotations rotation_weight.
 Eigen::VectorXd MetricWeights(const Model& model, double rotation_weight) {
@@ -180,7 +180,7 @@ struct StaticSolver {
 
   // With data.residual assembled (matrix included) at s = opt.load_factor: the load vector
   // F = -dR/ds = R(s) - R(s + 1) (R is affine in s: loads and drive values are scaled by it),
-  // the factorisation, x_r = -A^-1 R and x_f = A^-1 F (method-next.md §N3.2). False if the
+  // the factorisation, x_r = -A^-1 R and x_f = A^-1 F (docs/numerics.md, "Path-following statics"). False if the
   // matrix is singular or an assembly failed.
   bool BorderedSolves(std::string& cause) {
     r_s = data.residual;
@@ -303,7 +303,7 @@ std::string StepCapMessage(int steps, double s) {
       steps, s);
 }
 
-// Load stepping (method.md §5.6) with a bounded increment and step count.
+// Load stepping (docs/architecture.md, "One time step") with a bounded increment and step count.
 class LoadStepPath {
  public:
   LoadStepPath(StaticSolver& s, const StaticStepCallback& on_step)
@@ -485,7 +485,7 @@ class LoadStepPath {
 
 namespace {
 
-// Arc-length continuation (method-next.md §N3.3-§N3.4): Crisfield's cylindrical (psi = 0) or
+// Arc-length continuation (docs/numerics.md, "Path-following statics"): Crisfield's cylindrical (psi = 0) or
 // spherical constraint on the summed Newton corrections, the multipliers carried by the two
 // bordered solves, the predictor's sign from the previous step, the root of the smaller
 // angle, a step-length controller, and the end load factor reached by a load-controlled
@@ -628,7 +628,7 @@ class ArcLengthPath {
   }
 
   // One arc-length step of length dl from the converged state: predictor and corrector
-  // (method-next.md §N3.3). On convergence dx_ and *ds hold the step's increments.
+  // (docs/numerics.md, "Path-following statics"). On convergence dx_ and *ds hold the step's increments.
   LoadStepEnd Step(double dl, StaticStep& step, double* ds, std::string& cause) {
     const Model& model = S_.model;
     const StaticOptions& o = S_.options;

@@ -14,7 +14,7 @@ namespace screwfem::generalized_alpha {
 
 namespace {
 
-// ---- the stages of one generalized-alpha step (method.md §5.2) -------------------------------
+// ---- the stages of one generalized-alpha step (docs/architecture.md, "One time step") -------------------------------
 
 // The step's constants: h, the iteration-matrix coefficients beta' and gamma', the residual
 // scale beta h^2 and c_a, with the auxiliary acceleration a_{n+1} = a_base + c_a vdot_{n+1}.
@@ -51,7 +51,7 @@ void Predict(Data& data, Integrator& integ, const StepConstants& c, bool from_la
   data.time += h;
 }
 
-// ConstraintFormulation::kGgl (method-next.md §N1.3): the gradient B_n = B(q_n) of the step's
+// ConstraintFormulation::kGgl (docs/numerics.md, "Stabilised index 2"): the gradient B_n = B(q_n) of the step's
 // start, which multiplies nu in the configuration update. Data holds q_n. The rows of slack
 // length-driven tendons hold their gradient too (their route's dL/dq at q_n): a tendon caught
 // taut during the step then corrects along it (its row of B T B_n^T is not zero).
@@ -65,8 +65,7 @@ void PrepareGglStep(const Model& model, Data& data, Integrator& integ) {
 }
 
 // ConstraintFormulation::kGgl: the position-constraint rows of the iteration at the current
-// iterate, B(q) T with the tangent operators the matrix was assembled with (method-next.md
-// §N1.3; Delta x enters q as q_n o exp(h dq + Delta x)), and the factorised B T B_n^T that
+// iterate, B(q) T with the tangent operators the matrix was assembled with (docs/numerics.md, "Stabilised index 2"; Delta x enters q as q_n o exp(h dq + Delta x)), and the factorised B T B_n^T that
 // gives the nu correction (held rows and columns, ForEachHeldRow: the identity). False if it is singular
 // (redundant constraints the build did not find).
 bool FactorizeGglCross(const Model& model, const Data& data, Integrator& integ) {
@@ -132,7 +131,7 @@ AssemblyOptions DynamicAssemblyOptions(const DynamicOptions& opt, const StepCons
   o.s_multipliers = 1.0 / c.bh2;
   o.use_node_tangent = opt.use_tangent_operator;
   // Stabilised index 2: the constraint rows of the matrix are the velocity constraint's,
-  // B + (h beta / gamma) Z T (method-next.md §N1.3, scaled by D_L).
+  // B + (h beta / gamma) Z T (docs/numerics.md, "Stabilised index 2", scaled by D_L).
   if (opt.constraints == ConstraintFormulation::kGgl)
     o.velocity_constraint_tangent = 1.0 / c.gamma_p;  // h beta / gamma
   return o;
@@ -212,8 +211,7 @@ bool ConvergedByEstimate(const DynamicOptions& opt, const IterateMeasures& m, do
 //
 // ConstraintFormulation::kGgl (docs/numerics.md, "Stabilised index 2"): the unknowns are the
 // Newmark correction y = dx + B_n^T dnu (which moves v and vdot), dlambda and dnu. With the
-// (1,3) block and the coupling Z T B_n^T dnu of the velocity rows dropped (method-next.md
-// §N1.3; both multiply dnu, which is of the size of the position-constraint defect), the
+// (1,3) block and the coupling Z T B_n^T dnu of the velocity rows dropped (docs/numerics.md, "Stabilised index 2"; both multiply dnu, which is of the size of the position-constraint defect), the
 // system is block triangular:
 //   [S_3 with rows B + (h beta / gamma) Z T] [y; dmu] = -[r; (h beta / gamma)(B v + dphi/dt)],
 //   B T B_n^T dnu = B T y + phi,   dx = y - B_n^T dnu,

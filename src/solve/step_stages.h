@@ -1,4 +1,4 @@
-// Internal to screwfem::solve: the stages of one generalized-alpha step (method.md §5.2) and
+// Internal to screwfem::solve: the stages of one generalized-alpha step (docs/architecture.md, "One time step") and
 // what the fixed steps (Step, dynamics.cpp) and the error-controlled ones (AdaptiveStep,
 // error_control.cpp) share around them: trying a step, saving and restoring its start, counting
 // an accepted step and the restart after it.
@@ -23,14 +23,14 @@ inline AssemblyOptions MassMatrixOptions(double time) {
   return o;
 }
 
-// One generalized-alpha step of size h from the current state (method.md §5.2): predict, then
+// One generalized-alpha step of size h from the current state (docs/architecture.md, "One time step"): predict, then
 // Newton iterations of update configuration -> assemble -> check convergence -> correct, then
 // accept. Returns the number of Newton corrections, or -1 on failure (state then undefined:
 // the caller restores). `conservative`: full Newton from the zero-acceleration start, whatever
 // the options (the retry of a step the faster settings could not do).
 // The step ends at t_end (= its start + h up to rounding; exactly a breakpoint when it ends on
 // one); `left_limit`: the profiles are evaluated just before t_end (a step ending on a
-// breakpoint, method-next.md §N1.2 step 1).
+// breakpoint, docs/numerics.md, "Restarts at breakpoints" step 1).
 int TryStep(const Model& model, Data& data, Integrator& integ, double h, double t_end,
             bool left_limit, bool conservative, std::string* why);
 
@@ -52,7 +52,7 @@ void CountAcceptedStep(Integrator& integ, double h, int iterations);
 
 // After an accepted (sub)step: when it ended on a breakpoint, or a length-driven tendon went
 // slack or taut in it (docs/numerics.md, "Length-driven tendons"), the forces jump, so the
-// integrator restarts as at the start (method-next.md §N1.2: consistent vdot, lambda and a from
+// integrator restarts as at the start (docs/numerics.md, "Restarts at breakpoints": consistent vdot, lambda and a from
 // the right limits); a tendon caught taut first stops its route's stretching rate
 // inelastically (CatchTendons). *restarted says whether it restarted. False, with the message,
 // when the catch or the restart failed.

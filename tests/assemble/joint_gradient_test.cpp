@@ -1,4 +1,4 @@
-// Finite-difference checks of the assembled iteration matrix (assemble.h, method.md §3, §4.3,
+// Finite-difference checks of the assembled iteration matrix (assemble.h, elements/rigid_body.h,
 // §4.5): constraint rows and their transposes for every joint type away from phi = 0, and the
 // equilibrium rows (stiffness, mass and damping blocks) of rigid bodies, point loads and joint
 // springs/dampers. Every derivative is taken through the retraction of assemble.h
@@ -200,7 +200,7 @@ TEST(JointGradient, ConstraintRowsEqualFiniteDifferenceOfPhiForEveryJointTypeAwa
 }
 
 // In dynamics the node columns of the constraint rows are B T(xi) for the configuration
-// H = H_n exp(xi): the derivative with respect to the correction of xi (method.md §5.2). The
+// H = H_n exp(xi): the derivative with respect to the correction of xi (docs/architecture.md, "One time step"). The
 // coordinates of spherical, planar and free joints retract the same way, H_J = H_Jn exp(A_J x),
 // and their columns carry A_J^T T(A_J x) A_J (stored after the node tangents, as the
 // integrator does); abelian and universal coordinates retract additively.
@@ -622,7 +622,7 @@ TEST(EquilibriumTangent, ConstraintForceDerivativeMatchesFiniteDifferenceForEver
   }
 }
 
-// Stabilised index 2 (method-next.md §N1.3): with AssemblyOptions::velocity_constraint_tangent
+// Stabilised index 2 (docs/numerics.md, "Stabilised index 2"): with AssemblyOptions::velocity_constraint_tangent
 // = c the constraint rows of the matrix are s_C (B + c Z), without the tangent operator on B
 // (the rows linearise B(q) v, whose velocity derivative is B), and Z is the derivative of the
 // velocity constraint B(q) v at fixed v through the retraction (CalcVelocityConstraint).

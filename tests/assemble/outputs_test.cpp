@@ -1,4 +1,4 @@
-// Point kinematics of method.md §6 against finite differences of a known frame motion.
+// Point kinematics of assemble/outputs.h against finite differences of a known frame motion.
 #include <gtest/gtest.h>
 
 #include "screwfem/assemble/outputs.h"

@@ -1,4 +1,4 @@
-// Tests of rod actuation in the element kernel (method-next.md §N5.1): with a rest-strain
+// Tests of rod actuation in the element kernel (docs/numerics.md, "Active stress and rest strain"): with a rest-strain
 // change eps0 and an active stress sigma_a, sigma = K (eps - eps0) - sigma_a, the force is the
 // gradient of V = L/2 (eps - eps0)^T K (eps - eps0) - L eps^T sigma_a and the tangent (the same
 // formula with the total sigma) is the derivative of the force; both are checked by central
@@ -149,7 +149,7 @@ TEST(RodActuationKernel, ConservativeKernelWithWeightAndNodeTangentsMatchesFinit
 }
 
 TEST(RodActuationKernel, RestStrainAndEquivalentActiveStressGiveTheSameForceAndTangent) {
-  // sigma_a = K eps0 (method-next.md §N5.1): the same equilibria, the same element terms.
+  // sigma_a = K eps0 (docs/numerics.md, "Active stress and rest strain"): the same equilibria, the same element terms.
   const Case c = MakeCase(3);
   RodActuation a, b;
   a.rest_strain = c.act.rest_strain;

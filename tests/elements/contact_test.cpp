@@ -1,4 +1,4 @@
-// Tests of frictional contact (elements/contact.h, method-next.md §N6): the tangent blocks
+// Tests of frictional contact (elements/contact.h, docs/numerics.md, "Contact"): the tangent blocks
 // against central finite differences through the retraction and in the velocities, the
 // normal force against the gradient of the penalty potential, the closest-point geometry
 // against sampling, and closed-form motions: resting on a plane (T6.1), Coulomb sliding and
@@ -319,7 +319,7 @@ void MakePuck(Puck* p, ContactShapeType type, double mu, double eps_v, const Vec
   ASSERT_TRUE(InitializeDynamics(p->model, p->data, p->integ, opt, &message)) << message;
 }
 
-// method-next.md §N6.6 T6.1: equilibrium gap g* = delta - sqrt(2 delta W / k) on the onset branch.
+// docs/numerics.md, "Contact": equilibrium gap g* = delta - sqrt(2 delta W / k) on the onset branch.
 double RestingGap(double weight) { return 1e-4 - std::sqrt(2.0 * 1e-4 * weight / 1e6); }
 
 TEST(ContactValidation, SphereRestsOnThePlaneAtRadiusPlusTheEquilibriumGap) {

@@ -1,4 +1,4 @@
-// Tests of the rod element's inertia (method.md §2.5, options A and B) and damping kernels.
+// Tests of the rod element's inertia (docs/numerics.md, "Rod inertia", options A and B) and damping kernels.
 //
 // Derivatives are checked by central finite differences (velocities and accelerations enter
 // linearly or quadratically, so those differences are exact up to round-off; configurations
@@ -156,7 +156,7 @@ TEST(RodInertia, OptionACombinedMatrixIsTheWeightedSumOfMassAndGyroscopicBlocks)
 }
 
 TEST(RodInertia, OptionAInterpolationHalvesSumToTheIdentity) {
-  // RodGeometry's N = [I - N_B, N_B] (method.md §2.5): CalcRodN's left half is I - N_B.
+  // RodGeometry's N = [I - N_B, N_B] (docs/numerics.md, "Rod inertia"): CalcRodN's left half is I - N_B.
   for (double rotation : {0.0, 1e-7, 0.4, 2.5, 4.0}) {
     const Case c = MakeCase(32, rotation);
     RodGeometry g;
@@ -300,7 +300,7 @@ TEST(RodInertia, OptionAGyroscopicBlockOmitsExactlyTheVelocityDerivativeOfTheDnD
 }
 
 TEST(RodInertia, OptionAIterationMatrixBlockIsConsistentToOrderH) {
-  // Iteration-matrix block of the element, beta' M_e + gamma' C + K_ine (method.md §5.2), with
+  // Iteration-matrix block of the element, beta' M_e + gamma' C + K_ine (docs/architecture.md, "One time step"), with
   // the exact C and K_ine from finite differences versus the implemented beta' M_e + gamma' C_t
   // (no configuration term). The relative error must fall like h.
   const Case c = MakeCase(107, 1.9);

@@ -1,4 +1,4 @@
-// Tests of the two-node helical Cosserat rod element (method.md §2.2-2.7) and of the section
+// Tests of the two-node helical Cosserat rod element (elements/rod.h) and of the section
 // helpers. Every analytic derivative is checked by central finite differences through the
 // retraction H <- H ExpSE3(eps e_i) (style.md "Tests"); the branch reference w_ref is held fixed
 // while perturbing, as in a Newton iteration.
@@ -197,7 +197,7 @@ TEST(RodInternal, ForceIsEnergyGradientAndTangentIsForceDerivativeForLargeRotati
 }
 
 TEST(RodInternal, ForceAndTangentAreConsistentOnTheFarBranchPastPi) {
-  // Relative rotation 4 rad with w_ref on that branch (method.md §2.7): the principal log would
+  // Relative rotation 4 rad with w_ref on that branch (elements/rod.h): the principal log would
   // give 2 pi - 4 about the opposite axis; the element must use the continued branch.
   std::mt19937 rng(2025);
   for (const double rotation : {3.5, 4.0, 5.5}) {
@@ -233,7 +233,7 @@ TEST(RodInternal, ForceAndTangentAreConsistentForCurvedReferenceAndGeneralSectio
 
 TEST(RodInternal, GeometricStiffnessTermIsSignificant) {
   // The tangent without the geometric term, (1/L) P^T K P, is far from the FD tangent: the
-  // FD check above therefore really tests the D(d, sigma) terms of method.md §2.4.
+  // FD check above therefore really tests the D(d, sigma) terms of elements/rod.h.
   std::mt19937 rng(2027);
   const RodElement el = MakeElement(MakeVec6(1.3, 0.0, 0.0, 0.0, 0.0, 0.0));
   const SE3 H_A = RandomFrame(rng);

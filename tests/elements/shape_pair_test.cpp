@@ -1,4 +1,4 @@
-// Tests of contact between two moving shapes (elements/shape_pair.h, method-next.md §N6): the
+// Tests of contact between two moving shapes (elements/shape_pair.h, docs/numerics.md, "Contact"): the
 // residual against the gradient of the penalty potential, the stiffness against central
 // differences through the retraction at the frozen closest parameters and normal (what the
 // tangent linearises), the damping and friction blocks against differences in the velocities,

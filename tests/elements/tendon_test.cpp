@@ -1,5 +1,5 @@
 // Tests of the point-distance geometry shared by tendons and force elements, and of their
-// element kinds (elements/tendon.h, method-next.md §N4.2). Every analytic derivative is checked
+// element kinds (elements/tendon.h, docs/numerics.md, "Tendons and force elements"). Every analytic derivative is checked
 // by central finite differences through the retraction H <- H ExpSE3(eps e_i); forces against
 // the gradient of their potential (tau L for a tendon at constant tension, 1/2 k (l - l0)^2
 // for a spring); the world resultant of a force element's forces vanishes (momentum).
@@ -178,7 +178,7 @@ TEST(TendonSegmentKind, SegmentsSumToTensionTimesTheLengthGradientWithTheExactTa
       },
       1e-6);
   EXPECT_LT(RelativeError(K, dr), 1e-7);
-  // The tangent is not symmetric (the rotation terms, method-next.md §N4.2).
+  // The tangent is not symmetric (the rotation terms, docs/numerics.md, "Tendons and force elements").
   EXPECT_GT((K - K.transpose()).norm(), 1e-3 * K.norm());
   // The rate is the gradient times the velocities (the first tendon alone).
   const Chain one = MakeChain(rng, tau);

@@ -1,7 +1,7 @@
-// The generic robotic mechanism (GRM, ../shared/grm.md) run from its example scenes
+// The generic robotic mechanism (GRM, examples/grm and README "The GRM example") run from its example scenes
 // examples/grm/grm_{rigid,soft_k,soft_kd,soft_k_parallel,soft_kd_parallel}.yaml through
 // LoadScene and RunScene. The checks are
-// the ones grm.md lists as checkable without the paper's curves: actuated joints follow their
+// the ones README's GRM lists as checkable without the paper's curves: actuated joints follow their
 // profiles exactly in case 1, constraints hold, recorded velocities and accelerations are the
 // time derivatives of recorded positions and velocities, the free joint's point follows the
 // closed-form kinematics of the actuated chain, second-order convergence in space and time,
@@ -40,7 +40,7 @@ using test::Table;
 
 constexpr double kPi = std::numbers::pi;
 
-// --- grm.md: geometry, actuation, joints ---------------------------------------------------------
+// --- README's GRM: geometry, actuation, joints ---------------------------------------------------------
 
 // Table I (initial configuration) [m].
 const Vec3 kP2(0.0, 1.0, 0.0);
@@ -62,8 +62,8 @@ struct JointMotion {
   double q, qd, qdd;
 };
 
-// grm.md "Actuation": a = 4 q_f / T^2; q = a t^2 / 2 for t <= T/2, q_f - a (T - t)^2 / 2 for
-// T/2 < t <= T, q_f after. At a jump the acceleration is the right limit (method.md §5.4; the
+// README's GRM "Actuation": a = 4 q_f / T^2; q = a t^2 / 2 for t <= T/2, q_f - a (T - t)^2 / 2 for
+// T/2 < t <= T, q_f after. At a jump the acceleration is the right limit (docs/numerics.md, "Restarts at breakpoints"; the
 // integrator restarts there, DynamicOptions::restart_at_breakpoints).
 JointMotion BangBang(double q_final, double t) {
   constexpr double T = 1.0;
@@ -76,12 +76,12 @@ JointMotion BangBang(double q_final, double t) {
 // Rotation about world z by q.
 Mat3 Rz(double q) { return Eigen::AngleAxisd(q, Vec3::UnitZ()).toRotationMatrix(); }
 
-// The prismatic axis of J3: the unit vector 2 -> 3 (grm.md joints: (cos 1.1903, sin 1.1903, 0)).
+// The prismatic axis of J3: the unit vector 2 -> 3 (README's GRM joints: (cos 1.1903, sin 1.1903, 0)).
 Vec3 E23() { return (kP3 - kP2).normalized(); }
 
-// World position of P4 from the coordinates of J0, J2 and J3. The chain (grm.md "Bodies") is
+// World position of P4 from the coordinates of J0, J2 and J3. The chain (README's GRM "Bodies") is
 // ground -J0- crank (welded to link12 at 1) -J2- guide -J3- link34, and P4 is a point of link34.
-// Every joint frame is world-aligned at t = 0 (method.md §4.2) and rides on its first body:
+// Every joint frame is world-aligned at t = 0 (elements/joint.h) and rides on its first body:
 // J0 turns everything after it about z through P0 = 0; J2 turns guide and link34 about z
 // through P2, which is carried by the crank; J3 slides link34 by q3 along e23 fixed in the guide.
 // Composing: P4(t) = Rz(q0) (P2 + Rz(q2) ((P3 - P2) + q3 e23 + (P4_0 - P3))).
@@ -150,7 +150,7 @@ void ExpectCompletedWithConstraintsHeld(const GrmRun& run, double end_time, long
   EXPECT_EQ(run.result.steps, steps);
   EXPECT_LT(run.result.max_constraint_residual, 1e-8);
   EXPECT_EQ(SummaryNumber(run, "max_constraint_residual"), run.result.max_constraint_residual);
-  // Every element stays on a branch one helical element represents (method.md §2.7).
+  // Every element stays on a branch one helical element represents (elements/rod.h).
   EXPECT_EQ(SummaryNumber(run, "max_element_rotation"), run.result.max_element_rotation);
   EXPECT_GT(run.result.max_element_rotation, 0.0);
   EXPECT_LT(run.result.max_element_rotation, 2.0 * kPi - 0.05);
@@ -187,13 +187,13 @@ class GrmRigid : public ::testing::Test {
   static inline std::optional<GrmRun> run_;
 };
 
-// Case 1 (grm.md "The three cases"): the actuated joints are rheonomic constraints alpha = q(t)
-// (method.md §4.4), so their coordinates are the profile at every row, to the solver's
+// Case 1 (README's GRM "The three cases"): the actuated joints are rheonomic constraints alpha = q(t)
+// (elements/joint.h), so their coordinates are the profile at every row, to the solver's
 // constraint tolerance. Measured: |alpha - q| <= 1.1e-16 for all four joints; largest
 // constraint residual 1.1e-15.
 //
 // Their rates are exact as well (to Newton round-off) at every row: the integrator restarts at
-// each jump of q'' from the right limits (method-next.md §N1.2), so no transient follows a jump.
+// each jump of q'' from the right limits (docs/numerics.md, "Restarts at breakpoints"), so no transient follows a jump.
 // Without restarts (issue 14) each jump at 0.5 s and 1 s started an alternating transient
 // decaying by about 0.85 per step at rho_inf = 0.8, with peaks |qd - q'| = 1.7e-4 and
 // |qdd - q''| = 7.9 for J5 after 0.5 s.
@@ -224,17 +224,17 @@ TEST_F(GrmRigid, ActuatedJointsFollowTheirBangBangProfiles) {
 }
 
 // The rates of a prescribed coordinate are fixed by the generalized-alpha update alone
-// (method.md §5.2): alpha_{n+1} = alpha_n + h v_n + h^2 (1/2 - beta) a_n + h^2 beta a_{n+1},
+// (docs/architecture.md, "One time step"): alpha_{n+1} = alpha_n + h v_n + h^2 (1/2 - beta) a_n + h^2 beta a_{n+1},
 // v_{n+1} = v_n + h (1 - gamma) a_n + h gamma a_{n+1},
 // (1 - alpha_m) a_{n+1} + alpha_m a_n = (1 - alpha_f) vdot_{n+1} + alpha_f vdot_n,
-// started from the consistent state a_0 = vdot_0 = q''(0+) (method.md §5.4) and restarted the
-// same way at each jump (vdot = a = q''(t+), method-next.md §N1.2). Driving this recurrence
+// started from the consistent state a_0 = vdot_0 = q''(0+) (docs/numerics.md, "Restarts at breakpoints") and restarted the
+// same way at each jump (vdot = a = q''(t+), docs/numerics.md, "Restarts at breakpoints"). Driving this recurrence
 // with the closed-form q(t_n) must reproduce the recorded qd and qdd at every row. Measured: |qd - v_n| <= 1.3e-12, |qdd - vdot_n| <= 2.3e-8 (Newton
 // round-off of the accelerations).
 TEST_F(GrmRigid, ActuatedJointRatesAreTheGeneralizedAlphaResponseToTheirProfiles) {
   const double rho = SummaryNumber(run(), "settings.rho_inf");
   ASSERT_DOUBLE_EQ(rho, 0.8);  // grm_rigid.yaml
-  // Chung-Hulbert parameters (method.md §5.2).
+  // Chung-Hulbert parameters (docs/architecture.md, "One time step").
   const double alpha_m = (2 * rho - 1) / (rho + 1), alpha_f = rho / (rho + 1);
   const double gamma = 0.5 + alpha_f - alpha_m, beta = 0.25 * (gamma + 0.5) * (gamma + 0.5);
   const std::vector<double> t = Series(run().joints, "t");
@@ -280,7 +280,7 @@ TEST_F(GrmRigid, ActuatedJointRatesAreTheGeneralizedAlphaResponseToTheirProfiles
 // out the row after each jump, whose stencil uses the left limit recorded at the jump.
 //
 // Each jump of the prescribed accelerations excites ringing of the soft arms' fast modes
-// (method.md §5.5; about 4 steps per period, damped by rho_inf = 0.8): the acceleration
+// (docs/architecture.md, "One time step"; about 4 steps per period, damped by rho_inf = 0.8): the acceleration
 // mismatch of P8 peaks at 9.9 m/s^2 just after a jump (the bound above still holds, as the
 // ringing is in the recorded accelerations: ratio 1.5). 150 ms after each jump it has settled:
 // from then on the mismatch must be below 1e-3 of the point's largest acceleration (measured:
@@ -341,10 +341,10 @@ TEST_F(GrmRigid, RecordedPointVelocitiesAndAccelerationsAreTimeDerivatives) {
 }
 
 // P4 is a point of link34 (outputs of grm_rigid.yaml). Its position is fixed by the actuated
-// coordinates of J0, J2, J3 alone (P4FromChain, derived from grm.md's topology), so in case 1
+// coordinates of J0, J2, J3 alone (P4FromChain, derived from README's GRM's topology), so in case 1
 // it follows the closed form with q(t) of the profiles. Measured: 4.0e-15 m (the same with the
 // recorded coordinates). Its recorded velocity matches the chain's velocity for the recorded
-// joint rates up to the velocity-level constraint drift of the index-3 scheme (method.md §5.5:
+// joint rates up to the velocity-level constraint drift of the index-3 scheme (docs/architecture.md, "One time step":
 // not enforced, O(h^2)); measured 5.2e-6 m/s = 5.2 h^2 (2.1e-5 and 1.3e-6 at h = 2e-3 and 5e-4).
 TEST_F(GrmRigid, FreeJointPointFollowsTheClosedFormPathOfTheActuatedChain) {
   const Table& points = run().points;
@@ -375,7 +375,7 @@ TEST_F(GrmRigid, FreeJointPointFollowsTheClosedFormPathOfTheActuatedChain) {
   EXPECT_NEAR(Vec3(vx.back(), vy.back(), vz.back()).norm(), 0.0, 1e-9);
 }
 
-// --- case 1: convergence of the tip (grm.md: O(L_e^2) in space, O(h^2) in time) ----------------
+// --- case 1: convergence of the tip (README's GRM: O(L_e^2) in space, O(h^2) in time) ----------------
 
 // P8 (the tip, a node of arm78) at the last row of rigid-case runs ending at t = 0.5 s.
 struct Tips {
@@ -478,7 +478,7 @@ TEST(GrmAdaptive, ReachesTheFixedStepTrajectoryInAThirdOfTheSteps) {
 }
 
 // Halving the element length of the five soft bodies (2, 4, 8, 16 elements each) at h = 1e-3:
-// the differences of the tip position at 0.5 s fall by about 4 (O(L_e^2), grm.md; method.md §8
+// the differences of the tip position at 0.5 s fall by about 4 (O(L_e^2), README's GRM; docs/numerics.md
 // test 7). Measured differences 1.016e-2, 1.931e-3, 4.930e-4 m; ratios 5.26 and 3.92 (the
 // 2-element mesh is not yet asymptotic). A first-order method would give ratios near 2.
 TEST(GrmConvergence, TipPositionConvergesAtSecondOrderInTheElementLength) {
@@ -498,7 +498,7 @@ TEST(GrmConvergence, TipPositionConvergesAtSecondOrderInTheElementLength) {
 }
 
 // Halving the step (h = 4e-3, 2e-3, 1e-3, 5e-4) with 4 elements per soft body: tip position
-// and velocity at 0.5 s converge at second order (method.md §5.2; §8 test 6). Measured position
+// and velocity at 0.5 s converge at second order (docs/architecture.md, "One time step"). Measured position
 // differences 1.620e-5, 4.062e-6, 1.016e-6 m (ratios 3.99, 4.00) and velocity differences
 // 9.43e-4, 2.35e-4, 5.88e-5 m/s (ratios 4.00, 4.00). (At h = 2.5e-4 the velocity difference
 // stops falling, 6.2e-5 m/s: the ringing of the arms started at t = 0 decays per step, i.e.
@@ -526,21 +526,20 @@ TEST(GrmConvergence, TipPositionAndVelocityConvergeAtSecondOrderInTheStep) {
 
 // --- cases 2 and 3: soft joints, 8 elements per soft body, h = 1e-3, 2 s ----------------------
 
-// grm.md "The three cases": K = 10 N/m or N m/rad on every joint, D = 0 (case 2) or 5
+// README's GRM "The three cases": K = 10 N/m or N m/rad on every joint, D = 0 (case 2) or 5
 // (case 3). Passive joints: spring (and damper) towards 0. Actuated joints: series-elastic
 // towards the profile q(t). The effort column (io/writers.h JointCoordinateEffort,
 // assemble.h JointDriveEffort) is the generalised force the spring-damper applies to the
 // joint coordinate: K (q(t) - alpha) + D (q'(t) - alpha') for a series-elastic drive and
 // -(K alpha + D alpha') for a passive soft joint, i.e. minus the internal force
-// g = K (alpha - q(t)) + D (alpha' - q'(t)) of method.md §4.5. Measured agreement 1e-15
+// g = K (alpha - q(t)) + D (alpha' - q'(t)) of elements/joint.h. Measured agreement 1e-15
 // (relative).
 //
 // P4 depends on the coordinates of J0, J2, J3 alone through rigid bodies, so it must sit at
-// P4FromChain of the recorded coordinates (the relative-frame constraints hold, method.md
-// §4.3). Measured 3e-14 m (case 2) and 6e-14 m (case 3), with P4 travelling up to 27 m.
+// P4FromChain of the recorded coordinates (the relative-frame constraints hold, elements/joint.h). Measured 3e-14 m (case 2) and 6e-14 m (case 3), with P4 travelling up to 27 m.
 //
 // The series-elastic drives do not prescribe the coordinates: the 100 N loads overpower the
-// 10 N/m spring of J3, which ends metres past its rest (grm.md "What the paper's loads do";
+// 10 N/m spring of J3, which ends metres past its rest (README's GRM "What the paper's loads do";
 // measured max |alpha - q(t)|: J3 24.8 m (case 2), 13.6 m (case 3); J0, J2, J5 0.5-3 rad).
 void ExpectSoftCase(const std::string& scene, double damping) {
   constexpr double K = 10.0;
@@ -672,7 +671,7 @@ TEST(GrmSoftKdParallel, ActuatedJointsFollowTheirProfilesExactlyAndPassiveSpring
 // the state): E(t) - E(0) = W_loads + W_drives - W_dampers, with E the kinetic, strain,
 // joint-spring and gravity energy (CalcEnergy; the series-elastic springs measured from q(t)),
 // and the works integrated by the trapezoidal rule over the steps:
-//   loads:   f(t) . v_P at the load points (world-frame dead loads, grm.md Table IV);
+//   loads:   f(t) . v_P at the load points (world-frame dead loads, README's GRM Table IV);
 //   drives:  effort q'(t), the power the moving spring end puts in (effort as above);
 //   dampers: D (alpha' - q'(t))^2 (series-elastic) and D alpha'^2 (passive), all >= 0.
 // The imbalance is the numerical dissipation of generalized-alpha (rho_inf = 0.8) plus the

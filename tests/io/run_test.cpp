@@ -702,7 +702,7 @@ TEST(RunScene, SummaryReadsRunningWhileTheRunIsUnderWay) {
 }
 
 // A cantilever bent by a tip moment growing without bound: its elements pass the 2 pi a
-// helical element can represent (method.md §2.7), and the step fails.
+// helical element can represent (elements/rod.h), and the step fails.
 TEST(RunScene, FailedStepReportsTimeAndCauseAndKeepsEarlierRows) {
   Scene s = Cantilever(4e-3, 1.0);
   s.model.point_loads[0].force.setZero();

@@ -10,7 +10,7 @@
 // shear and the rotation-against-shear modes, sqrt(GA / rho I) = 1414 rad/s and above: physical,
 // they converge as h shrinks), and their share of the effort rings until generalized-alpha damps
 // them: for 100 to 150 steps at the scene's rho_inf = 0.8, for about 10 steps at rho_inf = 0. So
-// the claims checked here are, with the restart at the switches (method-next.md §N1.2) and
+// the claims checked here are, with the restart at the switches (docs/numerics.md, "Restarts at breakpoints") and
 // rho_inf = 0:
 //  - ten steps after a switch, J2, J3 and J5's second differences are back at the smooth level
 //    (at most 1.5 times the largest before the switch) and shrink like h^2 (a step-to-step
@@ -18,7 +18,7 @@
 //  - J0, which carries the soft four-bar loop (coupler and rocker), keeps a resolved vibration
 //    of that loop after the switch: its second differences stay below 3e-3 of its range.
 //  - without the restart the first steps after the switch ring (index 3, the sign-alternating
-//    error of method-next.md §N1.1), with the restart they do not: the test can fail.
+//    error of docs/numerics.md, "Restarts at breakpoints"), with the restart they do not: the test can fail.
 // Index 3 and the stabilised index 2 (analysis.constraints: ggl) give the same efforts here to
 // two digits (measured); the test runs index 3, which is three times cheaper on this scene.
 //
@@ -128,7 +128,7 @@ TEST(SwitchEfforts, SmoothTenStepsAfterASwitchWithRestartsAndFullNumericalDampin
 }
 
 // Without the restart the integrator carries its auxiliary acceleration across the jump and
-// the first steps after it ring (method-next.md §N1.1); measured at rho_inf = 0.8 over the ten
+// the first steps after it ring (docs/numerics.md, "Restarts at breakpoints"); measured at rho_inf = 0.8 over the ten
 // steps after the first: |d2| 0.26 (J0), 0.19, 0.12, 0.052 (J5) of the range without the
 // restart, 0.042, 0.034, 0.032, 0.0047 with it (the soft bodies' stiff modes, which rho_inf =
 // 0.8 damps slowly).

@@ -49,7 +49,7 @@ TEST(TendonScene, StaticFingerWithoutTheSpringCurlsIntoTheEyeletModelsArc) {
   StaticOptions o = s.analysis.statics;
   const StaticResult r = SolveStatic(s.model, d, o);
   ASSERT_TRUE(r.converged) << r.message;
-  // 8 elements: the values of tests/validation/tendon_test.cpp (method-next.md T4.3).
+  // 8 elements: the values of tests/validation/tendon_test.cpp (docs/numerics.md T4.3).
   const Vec3 tip = d.H[static_cast<std::size_t>(s.model.rods[0].nodes.back())].x;
   EXPECT_NEAR(tip.x(), 0.820295, 2e-6);
   EXPECT_NEAR(tip.y(), 0.484594, 2e-6);

@@ -175,7 +175,7 @@ MatL<N> ExpSeries(const MatL<N>& X) {
 }
 
 // 4x4 algebra matrix and 6x6 ad operator in long double, built entry by entry from the definitions
-// of method.md §1.1 (not from the library).
+// of lie/se3.h (not from the library).
 inline Mat4L WedgeLd(const Vec6& xi) {
   const auto u = xi.head<3>().cast<LD>();
   const auto w = xi.tail<3>().cast<LD>();
@@ -209,7 +209,7 @@ Eigen::Matrix<S, 6, 6> AdOf(const Eigen::Matrix<S, 6, 1>& xi) {
 
 inline Mat6L AdLd(const Vec6& xi) { return AdOf<LD>(xi.cast<LD>()); }
 
-// T(xi) = sum_k (-1)^k/(k+1)! ad(xi)^k (method.md §1.3), 120 terms.
+// T(xi) = sum_k (-1)^k/(k+1)! ad(xi)^k (lie/se3.h), 120 terms.
 template <typename S>
 Eigen::Matrix<S, 6, 6> TSeriesOf(const Eigen::Matrix<S, 6, 1>& xi) {
   using M = Eigen::Matrix<S, 6, 6>;

@@ -1,4 +1,4 @@
-// Algebraic identities of the se(3) operators and exp/log round trips (method.md §1.1, §1.2),
+// Algebraic identities of the se(3) operators and exp/log round trips (lie/se3.h),
 // checked at the identity, in the small-angle series ranges, at generic angles, near pi, exactly
 // at pi and past pi.
 #include <gtest/gtest.h>

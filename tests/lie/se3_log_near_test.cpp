@@ -1,4 +1,4 @@
-// LogSE3Near: the logarithm on a continuous branch (method.md §2.7). Of the rotation vectors
+// LogSE3Near: the logarithm on a continuous branch (elements/rod.h). Of the rotation vectors
 // (theta + 2 pi k) n of a rotation, it returns the one closest to w_ref and recomputes the
 // translation part on that branch.
 #include <gtest/gtest.h>

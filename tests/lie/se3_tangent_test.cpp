@@ -1,4 +1,4 @@
-// Tangent operators of exp/log on SO(3) and SE(3) (method.md §1.2-§1.4): identities, accuracy
+// Tangent operators of exp/log on SO(3) and SE(3) (lie/se3.h): identities, accuracy
 // against long-double series across the series/closed-form switches, and finite-difference checks
 // through the right-trivialised retraction H exp(wedge(dh)).
 #include <gtest/gtest.h>

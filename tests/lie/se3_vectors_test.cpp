@@ -1,4 +1,4 @@
-// Reference values of method.md §9 (from the verified Python prototype), printed with 12
+// Reference values of docs/numerics.md (from the verified Python prototype), printed with 12
 // decimals: compared to 1e-11 absolute.
 #include <gtest/gtest.h>
 

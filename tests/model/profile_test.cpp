@@ -1,4 +1,4 @@
-// Time profiles of loads and drives (profile.h; method.md §4.4, [G] Tables III and IV).
+// Time profiles of loads and drives (profile.h; elements/joint.h, [G] Tables III and IV).
 #include <gtest/gtest.h>
 
 #include <cmath>

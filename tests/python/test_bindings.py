@@ -708,7 +708,7 @@ class ModelBuilderTest(unittest.TestCase):
 
     def test_actuators_from_python_curl_the_rod_and_take_inputs(self):
         # A cantilever (EA = 1e5 N, EI = 1 N m^2) with a pressure chamber driven by the input
-        # "p": one element bends by kappa3 = -p A r2 / EI exactly (method-next.md T5.2).
+        # "p": one element bends by kappa3 = -p A r2 / EI exactly (docs/numerics.md T5.2).
         b = sf.ModelBuilder()
         section = sf.Section(np.array([1e5, 1e5, 1e5, 1.0, 1.0, 1.0]), np.ones(6))
         rod = b.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 1, section)
@@ -773,7 +773,7 @@ class ModelBuilderTest(unittest.TestCase):
         self.assertAlmostEqual(tension, 50.0, delta=1e-6)
 
     def test_contact_from_python_holds_a_sphere_on_a_plane_at_the_equilibrium_gap(self):
-        # method-next.md T6.1: gap g* = delta - sqrt(2 delta m g / k) on the onset branch.
+        # docs/numerics.md T6.1: gap g* = delta - sqrt(2 delta m g / k) on the onset branch.
         b = sf.ModelBuilder()
         gap = 1e-4 - math.sqrt(2 * 1e-4 * 9.81 / 1e6)
         frame = np.eye(4)

@@ -1,4 +1,4 @@
-// Generalized-alpha integrator (dynamics.h, method.md §5.2-5.4): parameters, Newton
+// Generalized-alpha integrator (dynamics.h, docs/architecture.md, "One time step"): parameters, Newton
 // convergence with the tangent operators of node and joint retractions, consistent start.
 #include <gtest/gtest.h>
 

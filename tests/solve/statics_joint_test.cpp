@@ -1,4 +1,4 @@
-// Static equilibrium with joints (statics.h, method.md §4.4, §4.5, §5.6): a rigid pendulum
+// Static equilibrium with joints (statics.h, elements/joint.h): a rigid pendulum
 // held by a soft revolute joint under gravity, and prescribed, force and series-elastic drives
 // evaluated at StaticOptions::time.
 //

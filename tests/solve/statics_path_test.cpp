@@ -1,10 +1,10 @@
-// Path-following statics (statics.h; method-next.md §N3, docs/numerics.md "Path-following
+// Path-following statics (statics.h; docs/numerics.md, "Path-following statics", docs/numerics.md "Path-following
 // statics"): a bounded solve that stops at a limit point with a message, arc-length
 // continuation through the limit points of the von Mises two-bar truss (closed form),
 // displacement control through a prescribed drive past its limit loads, continuation from a
 // loaded state, and every converged step reported.
 //
-// Von Mises truss (method-next.md §N3.6 T3.1): supports at (-a, 0) and (a, 0), apex at (0, h),
+// Von Mises truss (docs/numerics.md, "Path-following statics"): supports at (-a, 0) and (a, 0), apex at (0, h),
 // two bars of axial stiffness EA, each one helical rod element (exact for a straight bar:
 // N = EA (l / L0 - 1)), pinned by revolute joints about z at the supports and at the apex; a
 // downward apex load P = s P_ref. With the apex descent w:
@@ -173,7 +173,7 @@ TEST(PathFollowingStatics, LoadSteppingStopsAtTheTrussLimitLoadAndReportsIt) {
 // P_ref, every converged point on P(w), the two limit points found.
 TEST(PathFollowingStatics, ArcLengthTracesTheVonMisesTrussThroughBothLimitPoints) {
   const double p_ref = 0.08, p_star = TrussLimitLoad();
-  EXPECT_NEAR(p_star, 0.038383740, 1e-9);  // method-next.md §N3.6
+  EXPECT_NEAR(p_star, 0.038383740, 1e-9);  // docs/numerics.md, "Path-following statics"
   const Truss t = MakeTruss(p_ref, false);
   Data d = MakeData(t.model);
   StaticOptions opt;
@@ -212,7 +212,7 @@ TEST(PathFollowingStatics, ArcLengthTracesTheVonMisesTrussThroughBothLimitPoints
   EXPECT_NEAR(p_ref * r2.limit_points[1], -p_star, 5e-6 * p_star);
 }
 
-// Displacement control (method-next.md §N3.6 T3.2): the apex pushed down by a prescribed
+// Displacement control (docs/numerics.md, "Path-following statics"): the apex pushed down by a prescribed
 // drive; plain load stepping passes both limit loads, and the drive's effort equals P(w) at
 // every load step.
 TEST(PathFollowingStatics, DisplacementControlTracesTheTrussPastItsLimitLoads) {

@@ -1,4 +1,4 @@
-// Length-driven tendons (model.h TendonDrive::kLength, method-next.md §N4.3): the rheonomic
+// Length-driven tendons (model.h TendonDrive::kLength, docs/numerics.md, "Tendons and force elements"): the rheonomic
 // constraint L(q) = L_p(t) whose multiplier is the tension, and the slack rule (the tension is
 // never negative: the row is released when it would be, and re-activated when the route's
 // length reaches L_p; docs/numerics.md "Length-driven tendons").
@@ -6,7 +6,7 @@
 // Closed forms: a mass on a vertical slider hanging on a tendon routed over two ground eyelets
 // (tension m (g + z''), position z = 2 - L_p); the straight cantilever tendon (the multiplier of
 // the length that a prescribed tension produces is that tension, and the tip is the discrete
-// model's value of method-next.md T4.3); free fall while slack.
+// model's value of docs/numerics.md T4.3); free fall while slack.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -123,7 +123,7 @@ TEST(LengthDrivenTendon, GradientRowIsTheLengthGradient) {
 }
 
 TEST(LengthDrivenTendon, StraightCantileverEffortIsTheTensionThatGivesTheLength) {
-  // method-next.md T4.3: L = 1, EA = GA = 1e5, EI = GJ = 1, 4 elements, eyelets at every node
+  // docs/numerics.md T4.3: L = 1, EA = GA = 1e5, EI = GJ = 1, 4 elements, eyelets at every node
   // 0.02 m from the axis (section y), tau = 50: tip (0.729126, 0.572854). Drawn by tension,
   // the tendon's length is L*; drawn to L* by length, the multiplier is 50 and the shape the same.
   const auto solve = [](bool by_length, double value, Data* out) {
@@ -144,7 +144,7 @@ TEST(LengthDrivenTendon, StraightCantileverEffortIsTheTensionThatGivesTheLength)
     const Model m = b.Build();
     *out = MakeData(m);
     StaticOptions opt;
-    opt.load_steps = 40;  // a follower-like load (method-next.md §N4.5)
+    opt.load_steps = 40;  // a follower-like load (docs/numerics.md, "Tendons and force elements")
     const StaticResult r = SolveStatic(m, *out, opt);
     EXPECT_TRUE(r.converged) << r.message;
     return m;

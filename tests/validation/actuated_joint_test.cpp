@@ -85,7 +85,7 @@ TEST(ActuatedJointJ2, ConsistentStartHasTheRightLimitOfTheProfileAcceleration) {
     SCOPED_TRACE(JointTypeName(drive.type));
     Link l;
     MakeLink(&l, drive, 0.9);
-    // q''(0+) = 4 q_f / T^2: 2 pi / 3 = 2.0944 rad/s^2 (method.md §8 test 9), 3 m/s^2.
+    // q''(0+) = 4 q_f / T^2: 2 pi / 3 = 2.0944 rad/s^2 (docs/numerics.md), 3 m/s^2.
     EXPECT_NEAR(l.data.vdot(l.coord), 4.0 * drive.stroke, 1e-12);
     if (drive.type == JointType::kRevolute) {
       EXPECT_NEAR(l.data.vdot(l.coord), 2.0944, 1e-4);
@@ -158,7 +158,7 @@ TEST(ActuatedJointJ2, PositionFollowsTheProfileAndEffortMatchesTheClosedFormAway
 
 // Without restarts at the breakpoints (DynamicOptions::restart_at_breakpoints = false, the
 // behaviour before issue 14): right after each jump of q'' the multiplier (and q'' of the
-// scheme) carries a transient of generalized-alpha (method.md §5.5): its first values are of the size of the jump whatever h,
+// scheme) carries a transient of generalized-alpha (docs/architecture.md, "One time step"): its first values are of the size of the jump whatever h,
 // but it decays by the spurious root (|.| <= rho_inf) per step, so its duration and its time
 // integral (the impulse error) are O(h).
 TEST(ActuatedJointJ2, EffortTransientAfterAccelerationJumpsLastsOh) {

@@ -1,4 +1,4 @@
-// Error-controlled time steps (AdaptiveStep, AdvanceTo, InterpolateStep; method-next.md §N2,
+// Error-controlled time steps (AdaptiveStep, AdvanceTo, InterpolateStep; docs/numerics.md, "Adaptive time steps",
 // docs/numerics.md "Adaptive time steps") on the validation problems M1 (pendulum) and M2
 // (heavy top) and on a free body in uniform motion:
 //  - the local error estimate C h^2 (a_{n+1} - a_n) against the true local error (the step's
@@ -149,7 +149,7 @@ TEST(AdaptiveSteps, PendulumKeepsTheValidationToleranceWithFewerSteps) {
 }
 
 // The global error falls with the tolerance as tol^(2/3) (a controlled local error of a
-// second-order method, method-next.md §N2.6 T2.1): the log-log slope over three decades.
+// second-order method, docs/numerics.md, "Adaptive time steps"): the log-log slope over three decades.
 TEST(AdaptiveSteps, GlobalErrorFallsWithTheToleranceAtTheControlledRate) {
   std::vector<double> tol = {1e-3, 1e-4, 1e-5, 1e-6}, err;
   for (double t : tol) {

@@ -1,4 +1,4 @@
-// The capstan (Euler-Eytelwein; method-next.md §N6.6 T6.5, issue 16): a soft cord (small EI)
+// The capstan (Euler-Eytelwein; docs/numerics.md, "Contact", issue 16): a soft cord (small EI)
 // wrapped over a fixed cylinder (a capsule obstacle) through an angle theta, loaded by T1 at one
 // end and T2 at the other. Coulomb friction holds it while T2/T1 < e^{mu theta}, and it slips
 // above. With the regularised law (docs/numerics.md, "Contact") a held cord creeps: every contact

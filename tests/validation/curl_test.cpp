@@ -1,5 +1,5 @@
 // A soft cantilever curled by a large end moment applied suddenly: element rotations pass pi
-// during the motion (branch continuation of the logarithm, method.md §2.7), and the energy
+// during the motion (branch continuation of the logarithm, elements/rod.h), and the energy
 // balance of the undamped dynamics (rho_inf = 1) converges at second order in h.
 //
 // Rod: L = 1 along x, clamped at x = 0, 3 elements, EA = GA = 1e3 N, GJ = EI = 1 N m^2,

@@ -1,4 +1,4 @@
-// The flexible mechanism of method.md §8 tests 7-9 (reference numbers of the Python prototype).
+// The flexible mechanism of docs/numerics.md tests 7-9 (reference numbers of the Python prototype).
 //
 // Reconstruction (the prototype is described only in words): every joint axis is world z and
 // the chain starts along world x, so the mechanism moves in the horizontal plane and gravity
@@ -21,12 +21,12 @@
 //    ~3e-6 m of option A, where the prototype lists ~1e-3 m lower values. The prototype's B
 //    numbers are reproduced to ~1e-6 m when, in addition to the inertia, the rod's GRAVITY is
 //    distributed with the linear field N = [(1 - xi) I, xi I] (lumped nodal forces rhoA L_e g / 2,
-//    no nodal moments), as checked below. method.md §2.5 defines option B as the linear field
+//    no nodal moments), as checked below. docs/numerics.md, "Rod inertia" defines option B as the linear field
 //    "in the inertia term only" and §2.6 writes the gravity load with the exact N, which is
 //    what screwfem does for both options. So the prototype's A-B gap (9.7e-4 -> 2.4e-4 ->
 //    6.0e-5 m in tip z) and the "tip z differs by 1.0e-3 m (4 % of the sag) between A and B"
-//    of method.md §2.5 measure consistent versus lumped gravity loading, not the inertia
-//    options; the listed option-B values are wrong for option B as method.md defines it.
+//    of docs/numerics.md, "Rod inertia" measure consistent versus lumped gravity loading, not the inertia
+//    options; the listed option-B values are wrong for option B as docs/numerics.md defines it.
 //  * The inertia options themselves differ by O(L_e^2) in the tip position (mostly in-plane,
 //    1.3e-4 m with 3 elements), asserted below; in tip z alone the gap is below 3e-6 m and not
 //    monotone.
@@ -46,7 +46,7 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kEnd = 0.6;
 const Vec3 kGravity(0.0, 0.0, -9.81);
 
-// method.md §8 test 7.
+// docs/numerics.md
 constexpr double kStepSizes[4] = {1e-2, 5e-3, 2.5e-3, 1.25e-3};
 constexpr double kPrototypeB[4] = {-0.0250677, -0.0250731, -0.0250745, -0.0250748};
 constexpr double kPrototypeA[3] = {-0.0240993, -0.0241047, -0.0241060};
@@ -55,7 +55,7 @@ constexpr double kPrototypeMeshA[3] = {-0.024099, -0.024203, -0.024282};  // h =
 constexpr double kPrototypeMeshB[3] = {-0.025068, -0.024444, -0.024343};
 
 enum class Gravity {
-  kConsistent,  // screwfem: exact virtual displacement field N (method.md §2.6)
+  kConsistent,  // screwfem: exact virtual displacement field N (elements/rod.h)
   kLumped,      // linear field for the rod's gravity: nodal forces rhoA L_e g / 2 per element end
 };
 

@@ -1,7 +1,7 @@
 // A planar four-bar linkage built from spatial joints: a closed loop, with and without
 // redundant constraints.
 //
-// Geometry (the loop of [G]'s example, method.md §7.2): ground pivots O = (0, 0, 0) and
+// Geometry (the loop of [G]'s example, docs/numerics.md): ground pivots O = (0, 0, 0) and
 // D = (1.2, 0, 0), crank O-A with A = (0.2, 0.6, 0) (0.6325 m), coupler A-B with B = (1, 1, 0)
 // (0.8944 m), rocker D-B (1.0198 m): Grashof crank-rocker. Each link is a rigid body (m = 0.15
 // kg, J = 1e-4 kg m^2 about its CoM at mid-link) whose node sits at its first joint point
@@ -209,8 +209,7 @@ struct EffortErrors {
   double iterations_per_step = 0.0;
 };
 
-// The crank turns by pi/6 in 1 s with the bang-bang law ([G]'s link profile, method-next.md
-// §N1.6 T1.2) starting at 0.1 s: switches at 0.1, 0.6 and 1.1 s.
+// The crank turns by pi/6 in 1 s with the bang-bang law ([G]'s link profile, docs/numerics.md, "Restarts at breakpoints") starting at 0.1 s: switches at 0.1, 0.6 and 1.1 s.
 EffortErrors BangBangCrank(Variant variant, bool restart, double rho_inf, double h,
                            ConstraintFormulation constraints = ConstraintFormulation::kIndex3,
                            bool perturbed_start = false) {
@@ -304,7 +303,7 @@ TEST(FourBar, BangBangCrankEffortWithStabilisedIndexTwoIsExactAtEveryStep) {
       // Measured at h = 1e-3: rho_inf = 1: 3.15e-7 N m everywhere (1.26e-6 at h = 2e-3, second
       // order); rho_inf = 0.9: 3.72e-6 N m (7.57e-6 at h = 2e-3), 1.0e-6 on the first step after
       // a switch: first order, from the plain restart a = vdot+ (the perturbed start of
-      // method-next.md §N1.2 step 4 is not implemented; with rho_inf = 1, a = vdot exactly).
+      // docs/numerics.md, "Restarts at breakpoints" step 4 is not implemented; with rho_inf = 1, a = vdot exactly).
       // Index 3: 8.5e-4 N m. |B v + dphi/dt| 7.7e-12 (the constraint tolerance, scaled by
       // gamma / (h beta), decides; index 3 leaves O(h^2)).
       EXPECT_LT(fine.max_effort, rho == 1.0 ? 1e-6 : 5e-6);
@@ -319,7 +318,7 @@ TEST(FourBar, BangBangCrankEffortWithStabilisedIndexTwoIsExactAtEveryStep) {
   }
 }
 
-// The perturbed start of method-next.md §N1.2 step 4 (DynamicOptions::perturbed_start): after
+// The perturbed start of docs/numerics.md, "Restarts at breakpoints" step 4 (DynamicOptions::perturbed_start): after
 // each restart a = vdot+ + (alpha_m - alpha_f) (vdot_s - vdot+), vdot_s one step ahead. With
 // GGL at rho_inf = 0.9 the effort error becomes second order in h (the plain start a = vdot+
 // leaves it first order, previous test).

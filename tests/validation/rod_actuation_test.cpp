@@ -1,7 +1,7 @@
-// Internal actuation of rods against closed forms (method-next.md §N5.3):
+// Internal actuation of rods against closed forms (docs/numerics.md, "Active stress and rest strain"):
 //  * T5.1 a rest curvature kappa0 on a cantilever: the exact solution is stress-free, a circular
 //    arc, and one helical element reproduces it to Newton tolerance with no clamp reaction;
-//    kappa0 L = 0.9 (2 pi) needs the branch continuation of method.md §2.7 (one element);
+//    kappa0 L = 0.9 (2 pi) needs the branch continuation of elements/rod.h (one element);
 //  * T5.2 a pressure chamber: the strains p A / EA, p A r3 / EI2, -p A r2 / EI3 exactly; two
 //    equal chambers at +-r extend the rod without bending it;
 //  * T5.4 a free rod whose rest curvature is ramped from 0 to 2 pi / L curls into a closed

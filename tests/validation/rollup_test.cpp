@@ -5,7 +5,7 @@
 // (sin(kappa s), 1 - cos(kappa s)) / kappa, rotated by kappa s about z. The helical element
 // represents this constant-strain state exactly, so one element is exact for every lambda < 1
 // (element rotation 2 pi lambda < 2 pi; past pi only thanks to the branch continuation of
-// method.md §2.7), and the full circle needs two elements.
+// elements/rod.h), and the full circle needs two elements.
 #include <gtest/gtest.h>
 
 #include <cmath>

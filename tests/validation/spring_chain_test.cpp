@@ -103,7 +103,7 @@ TEST(SpringChain, StabilisedIndexTwoAtRhoInfOneConvergesFastAndConservesEnergyTo
   // joint's constraint force lost its tangent operator, AddJoints; kinetic energy up to 2 J),
   // 3.58 / 2.92 iterations per step (index 3: 3.90 at h = 1e-3, energy error 1.2e-2 J, |B v|
   // 0.097), |B v + dphi/dt| 2.8e-8, |phi| 3.7e-14. Before the matrix had Z and the position rows
-  // B(q) T of the iterate (method-next.md §N1.3): 4.32 / 3.63 iterations per step. The velocity
+  // B(q) T of the iterate (docs/numerics.md, "Stabilised index 2"): 4.32 / 3.63 iterations per step. The velocity
   // constraint is tolerance-limited, not round-off: its rows enter the constraint test scaled by
   // h beta / gamma = 5e-4, so constraint_tolerance 1e-11 admits |B v| 2e-8 (and the estimated
   // convergence test a little more on the last iterate).

@@ -1,4 +1,4 @@
-// Behaviour of the static Newton solver with load stepping (method.md §5.6): quadratic
+// Behaviour of the static Newton solver with load stepping (docs/architecture.md, "One time step"): quadratic
 // convergence, halving of failed load increments, round-off floors of stiff rods, and failure
 // reports instead of crashes.
 #include <gtest/gtest.h>

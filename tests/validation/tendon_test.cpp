@@ -1,4 +1,4 @@
-// Tendons and force elements against closed forms (method-next.md §N4.4, §N4.6):
+// Tendons and force elements against closed forms (docs/numerics.md, "Tendons and force elements"):
 //  * a straight tendon at offset d along a straight cantilever, eyelets at every node, tension
 //    tau: every element takes the same curvature (the discrete model's values of T4.3), which
 //    tends to the continuous arc kappa = tau d / EI at second order in the element length; the
@@ -44,7 +44,7 @@ Cantilever SolveCantilever(int elements, double tension) {
   Cantilever c{b.Build(), {}, {}};
   c.data = MakeData(c.model);
   StaticOptions o;
-  o.load_steps = 40;  // a follower-like load (method-next.md §N4.5)
+  o.load_steps = 40;  // a follower-like load (docs/numerics.md, "Tendons and force elements")
   c.result = SolveStatic(c.model, c.data, o);
   return c;
 }
@@ -76,7 +76,7 @@ Vec6 ClampReaction(const Cantilever& c) {
 
 TEST(TendonValidation, StraightTendonWithEyeletsAtEveryNodeBendsTheRodIntoAnArc) {
   const double tau = 50.0;
-  // The discrete model's curvature and tip (method-next.md §N4.6, T4.3) and the continuum arc.
+  // The discrete model's curvature and tip (docs/numerics.md, "Tendons and force elements", T4.3) and the continuum arc.
   const int elements[3] = {4, 8, 16};
   const double kappa[3] = {1.331886, 1.067189, 1.016023};
   const Vec3 tip[3] = {{0.729126, 0.572854, 0}, {0.820295, 0.484594, 0}, {0.836197, 0.465553, 0}};

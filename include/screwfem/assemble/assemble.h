@@ -1,4 +1,4 @@
-// Assembly of the global residual and iteration matrix (method.md §5.1-5.3, §5.6).
+// Assembly of the global residual and iteration matrix (docs/architecture.md, "One time step").
 //
 // Residual (global order, data.residual):
 //   rows [0, nv):       s_R * ( g_ine + g_int - g_ext + B^T lambda )
@@ -49,14 +49,14 @@ void Retract(const Model& model, Data& data, const Eigen::Ref<const Eigen::Vecto
 double ScaledIncrementSize(const Model& model, const Eigen::Ref<const Eigen::VectorXd>& dx);
 
 // Moves every element's branch reference to its current relative rotation (call after an
-// accepted step; method.md §2.7).
+// accepted step; elements/rod.h).
 void UpdateBranchReferences(const Model& model, Data& data);
 
 // Energies of the current state (for balances and tests): the sum of the element kinds'
 // energies and the joints' springs.
 Energy CalcEnergy(const Model& model, const Data& data);
 
-// The constraint gradient B(q) (nc x nv, method.md §4.3; joint coordinates without tangent
+// The constraint gradient B(q) (nc x nv, elements/joint.h; joint coordinates without tangent
 // operator) at data's configuration times x (velocity layout): out = B x (nc). Rows held at
 // zero (ForEachHeldRow) are zero. No allocation.
 void CalcConstraintGradientTimes(const Model& model, const Data& data,

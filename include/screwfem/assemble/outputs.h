@@ -1,4 +1,4 @@
-// Output quantities (method.md §6).
+// Output quantities (assemble/outputs.h).
 #pragma once
 
 #include <vector>
@@ -16,7 +16,7 @@ struct PointMotion {
 
 // For a frame H = (R, x) with body velocity eta = [v; w] and its time derivative eta_dot,
 // and a point p given in the frame: x_P = x + R p, x_P' = R (v + w x p),
-// x_P'' = R (v' + w' x p + w x (v + w x p))   (method.md §6).
+// x_P'' = R (v' + w' x p + w x (v + w x p))   (assemble/outputs.h).
 PointMotion CalcPointMotion(const SE3& H, const Vec6& eta, const Vec6& eta_dot, const Vec3& p);
 
 // The same for a point p in the frame of `node` (a fixed node has zero velocity).
@@ -24,7 +24,7 @@ PointMotion CalcNodePointMotion(const Model& model, const Data& data, int node, 
 
 // Section frame and motion of the point of rod `rod` at reference arc length s (clamped to
 // [0, length]) on the section centre line: H(xi) = H_A exp(xi d), eta(xi) = N(xi, d) eta_AB,
-// eta_dot(xi) = N eta_dot_AB + (dN/dd . d_dot) eta_AB (method.md §2.5, §6).
+// eta_dot(xi) = N eta_dot_AB + (dN/dd . d_dot) eta_AB (docs/numerics.md, "Rod inertia").
 struct RodPoint {
   SE3 frame;
   PointMotion motion;
@@ -35,7 +35,7 @@ RodPoint CalcRodPointMotion(const Model& model, const Data& data, int rod, doubl
 
 // Section stress resultants of every element of a rod (section frame: N, V2, V3, T, M2, M3),
 // written into out (size = number of elements): what the section transmits,
-// sigma = K (d/L - f0 - eps0) - sigma_a with the actuation at data.time (method-next.md §N5.1;
+// sigma = K (d/L - f0 - eps0) - sigma_a with the actuation at data.time (docs/numerics.md, "Active stress and rest strain";
 // K (d/L - f0) without actuators); with `elastic`, also the elastic part K (d/L - f0 - eps0).
 void CalcRodStresses(const Model& model, const Data& data, int rod, std::vector<Vec6>* out,
                      std::vector<Vec6>* elastic = nullptr);
@@ -75,7 +75,7 @@ Vec6 CalcJointReaction(const Model& model, const Data& data, int joint);
 
 // Linear momentum [kg m/s] and angular momentum about the world origin [kg m^2/s], world
 // components: rigid bodies exactly, rods by 3-point Gauss quadrature of the exact helical
-// velocity field eta(xi) = N(xi, d) eta_AB with the sectional mass matrix (method.md §2.5).
+// velocity field eta(xi) = N(xi, d) eta_AB with the sectional mass matrix (docs/numerics.md, "Rod inertia").
 Vec6 CalcMomentum(const Model& model, const Data& data);
 
 }  // namespace screwfem

@@ -14,7 +14,7 @@ namespace screwfem {
 
 // A joint, added in one call by ModelBuilder::AddJoint(const JointSpec&). The joint frame is
 // world-aligned at `point` in the reference configuration, so H_J = I and the coordinates are 0
-// there (method.md §4.2).
+// there (elements/joint.h).
 struct JointSpec {
   std::string name;
   JointType type = JointType::kRevolute;
@@ -27,13 +27,13 @@ struct JointSpec {
   Vec3 axis = Vec3::UnitZ();
   Vec3 axis2 = Vec3::Zero();
   double pitch = 0.0;
-  // Springs and dampers on the coordinates (method.md §4.4), JointSpringCount entries used:
+  // Springs and dampers on the coordinates (elements/joint.h), JointSpringCount entries used:
   // stiffness [N/m or N m/rad], damping [N s/m or N m s/rad], rest [m or rad] (global
   // coordinates only).
   Vec6 stiffness = Vec6::Zero();
   Vec6 damping = Vec6::Zero();
   Vec6 rest = Vec6::Zero();
-  // A drive on one coordinate (method.md §4.5): prescribed q(t) [m or rad], force f(t) [N or
+  // A drive on one coordinate (elements/joint.h): prescribed q(t) [m or rad], force f(t) [N or
   // N m], or a series-elastic spring whose rest value follows the profile.
   DriveKind drive = DriveKind::kNone;
   int drive_coordinate = 0;
@@ -97,14 +97,14 @@ class ModelBuilder {
   // A joint at world point `point` with world axis `axis` (plane normal for planar joints;
   // `axis2` is the second axis of a universal joint), between node_a and node_b (either may be
   // kGround). The joint frame is world-aligned in the reference configuration, so H_J = I and
-  // the coordinates are 0 there (method.md §4.2). Returns the joint index; AddJoint(JointSpec)
+  // the coordinates are 0 there (elements/joint.h). Returns the joint index; AddJoint(JointSpec)
   // also sets stiffness, damping and a drive.
   int AddJointAt(std::string name, JointType type, int node_a, int node_b, const Vec3& point,
                  const Vec3& axis = Vec3::UnitZ(), const Vec3& axis2 = Vec3::Zero(),
                  double pitch = 0.0);
   // A tendon through `eyelets` (at least two body points, in routing order: node frames with
   // node-frame offsets, or world points on kGround) pulling with tension tau(t) [N]
-  // (method-next.md §N4). Eyelets sit on nodes: an eyelet on a rod is a section frame's node
+  // (docs/numerics.md, "Tendons and force elements"). Eyelets sit on nodes: an eyelet on a rod is a section frame's node
   // plus an offset (FindRodNodeAtArcLength places one at an arc length). Build checks: at least
   // two eyelets, valid nodes, finite offsets, consecutive eyelets apart in the reference
   // configuration, and a tension profile that cannot become negative (each term's lower bound
@@ -125,7 +125,7 @@ class ModelBuilder {
   // `tolerance` [m] (negative: 1e-8 max(1, rod length)); node -1 and the nearest node and its
   // arc-length distance otherwise.
   NodeMatch FindRodNodeAtArcLength(int rod, double s, double tolerance = -1.0) const;
-  // Internal actuation of a rod (model.h, Actuator; method-next.md §N5). Build checks: a valid
+  // Internal actuation of a rod (model.h, Actuator; docs/numerics.md, "Active stress and rest strain"). Build checks: a valid
   // rod, [from, to] inside it and at nodes (an error names the nearest node's arc length),
   // positive area for pressure and muscle, non-negative max_stress, finite offset and vector,
   // the profile's inputs, unique names. Errors carry EntityKind::kActuator.
@@ -138,7 +138,7 @@ class ModelBuilder {
   // A run-time input (Model::inputs) that profiles take with Profile::Input(index); returns
   // the index. Names are unique.
   int AddInput(std::string name, double default_value = 0.0);
-  // Contact (method-next.md §N6, elements/contact.h). A rod in contact is a chain of capsules
+  // Contact (docs/numerics.md, "Contact", elements/contact.h). A rod in contact is a chain of capsules
   // of `radius` around its element chords (its nodes' spheres against planes); a rigid body
   // carries shapes in its frame (model.h, ContactShape); obstacles are fixed in the world.
   // Build pairs every rod and body that has shapes with every obstacle, except excluded pairs

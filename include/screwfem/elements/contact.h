@@ -1,5 +1,5 @@
 // Frictional contact between moving shapes and obstacles fixed in the world, as an element kind
-// (method-next.md §N6, recommendation (c); docs/numerics.md, "Contact").
+// (docs/numerics.md, "Contact": a penalty law).
 //
 // Each item is a (moving shape, obstacle) pair enumerated by ModelBuilder::Build
 // (model.h, ContactPair): a rod element's chord capsule, a rod node's sphere, or a primitive of
@@ -10,7 +10,7 @@
 // p_s = p(s*) - r n, which moves with the item's node(s) as sum_k W_k (x_k + R_k l_k): weights
 // W_k and node-frame levers l_k = b_k - r R_k^T n (b_k the axis point's offset in node k).
 //
-// Law (method-next.md §N6.3): C1 penalty f_e(g) with onset delta and stiffness k_n, damping
+// Law (docs/numerics.md, "Contact"): C1 penalty f_e(g) with onset delta and stiffness k_n, damping
 // -c_n w(g) dg/dt, f_n = max(0, f_e + f_d); regularised Coulomb friction
 // f_t = -mu f_n v_t / sqrt(|v_t|^2 + eps_v^2) at the surface point, applied implicitly.
 // Friction and damping act in dynamics only (statics: frictionless contact).
@@ -21,8 +21,7 @@
 
 namespace screwfem {
 
-// The elastic normal force f_e(g) [N] >= 0 and its derivative df_e/dg <= 0 (method-next.md
-// §N6.3): 0 for g >= delta, k (delta - g)^2 / (2 delta) on [0, delta), k (delta/2 - g) below.
+// The elastic normal force f_e(g) [N] >= 0 and its derivative df_e/dg <= 0 (docs/numerics.md, "Contact"): 0 for g >= delta, k (delta - g)^2 / (2 delta) on [0, delta), k (delta/2 - g) below.
 struct NormalLaw {
   double force = 0.0;
   double slope = 0.0;
@@ -42,7 +41,7 @@ struct ContactLawParameters {
 };
 ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping, bool dynamics);
 
-// The normal force of the law (method-next.md §N6.3) at gap g closing at rate dg/dt:
+// The normal force of the law (docs/numerics.md, "Contact") at gap g closing at rate dg/dt:
 // f_n = f_e(g) - c_n w(g) dg/dt with w(g) = min(1, (delta - g) / delta) (the damping grows in
 // over the onset), and its derivatives. The pair pushes only while g < delta and f_n > 0.
 struct ContactNormal {
@@ -119,7 +118,7 @@ ContactState CalcContactState(const Model& model, const Data& data, int pair);
 
 // Closest parameters (s, t) of segments P0 + s (P1 - P0) and Q0 + t (Q1 - Q0), clamped to
 // [0, 1] (Ericson, Real-Time Collision Detection, 2005, section 5.1.9). Parallel segments take
-// the middle of the overlap of their projections (method-next.md section N6.5: the force then
+// the middle of the overlap of their projections (docs/numerics.md, "Contact": the force then
 // does not jump between an element's nodes), or the nearest ends when they do not overlap.
 // Shared by the obstacle pairs (capsule obstacles) and the pairs of moving shapes.
 void ClosestSegmentParameters(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1,

@@ -1,4 +1,4 @@
-// Joints (method.md §4): the joint-type table and the joint kernel.
+// Joints (elements/joint.h): the joint-type table and the joint kernel.
 //
 // A joint is a relative frame H_J in a Lie subgroup between frame A (node a, or the ground)
 // and frame B (node b), placed by constant offsets: H_B C_B = H_A C_A H_J (model.h, Joint).
@@ -23,7 +23,7 @@ using JointMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 
 
 // ---- the joint-type table ---------------------------------------------------------------------
 
-// The law of a soft joint's springs (method.md §4.5):
+// The law of a soft joint's springs (elements/joint.h):
 //   kCoordinates:    force K (alpha - rest) on each global coordinate alpha;
 //   kLogarithm:      energy 1/2 delta^T K delta with delta = A_J^T log(H_J), for subgroups
 //                    without global coordinates (spherical, planar); no rest value;
@@ -39,17 +39,17 @@ struct JointTypeInfo {
   // Global coordinates: H_J is a function of the coordinates alpha (the abelian subgroups, and
   // the universal joint as a product of two one-parameter subgroups); they retract additively
   // and may be driven. Otherwise H_J is stored and retracts by the exponential,
-  // H_J <- H_J exp(A_J dx) (method.md §5.2).
+  // H_J <- H_J exp(A_J dx) (docs/architecture.md, "One time step").
   bool global_coordinates;
   bool constrained;  // 6 relative-frame constraint rows (a free joint has none)
   // Scene keys the type uses: `axis` (the plane normal of a planar joint), `axis2` (orthogonal
   // to `axis`), `pitch` [m/rad].
   bool uses_axis, uses_axis2, uses_pitch;
   JointSpringLaw spring_law;
-  // A_J (6 x dof) for the unit axis e, the second axis e2 and the pitch (method.md §4.2).
+  // A_J (6 x dof) for the unit axis e, the second axis e2 and the pitch (elements/joint.h).
   Mat6X (*basis)(const Vec3& e, const Vec3& e2, double pitch);
   // Global coordinates only: H_J(alpha) and the configuration-dependent basis A_J(alpha), the
-  // columns of d H_J = H_J wedge(A_J(alpha) d alpha) (method.md §4.2; the constant A_J for
+  // columns of d H_J = H_J wedge(A_J(alpha) d alpha) (elements/joint.h; the constant A_J for
   // abelian subgroups).
   SE3 (*relative_frame)(const Mat6X& basis, const double* alpha);
   void (*current_basis)(const Mat6X& basis, const double* alpha, Mat6X* out);
@@ -61,7 +61,7 @@ const JointTypeInfo* FindJointType(std::string_view name);
 // Every type's name, in table order.
 std::vector<std::string> JointTypeNameList();
 const char* JointTypeName(JointType type);
-// Joint basis A_J of a type (method.md §4.2), for axis e (unit) and pitch p. For a planar
+// Joint basis A_J of a type (elements/joint.h), for axis e (unit) and pitch p. For a planar
 // joint e is the plane normal; for universal joints e is the first axis and e2 the second.
 // Returns 6 x k.
 Mat6X JointBasis(JointType type, const Vec3& e, const Vec3& e2 = Vec3::Zero(), double pitch = 0.0);
@@ -78,7 +78,7 @@ Mat6X JointCurrentBasis(const Model& model, const Data& data, int joint);
 // Constraint value phi_J = log(H_J^-1 C_A^-1 H_A^-1 H_B C_B) (6) of a joint.
 Vec6 JointConstraint(const Model& model, const Data& data, int joint);
 
-// The constraint gradient of one joint (method.md §4.3) in factored form, for frames H_A, H_B
+// The constraint gradient of one joint (elements/joint.h) in factored form, for frames H_A, H_B
 // (identity for the ground) and H_J:
 //   B_A = -T^-1(phi) Ad(G_A),  G_A = C_B^-1 H_B^-1 H_A,
 //   B_B =  T^-1(phi) Ad(C_B^-1),
@@ -122,7 +122,7 @@ void CalcJointConstraintForceTangent(const Joint& joint, const JointGradient& g,
                                      const Mat6X& basis, JointForceTangent* out);
 
 // The derivative Z = d(B v)/dq of one joint's velocity constraint rows at fixed velocities
-// (method-next.md §N1.3, the (3,1) block of the stabilised index-2 iteration matrix): columns
+// (docs/numerics.md, "Stabilised index 2", the (3,1) block of the stabilised index-2 iteration matrix): columns
 // ordered [x_A (6), x_B (6), x_J (k)] as in CalcJointConstraintForceTangent. With
 // u = Ad(C_B^-1) v_B - Ad(G_A) v_A - A_J v_J, B v = T^-1(phi) u + ad(phi) A_J v_J and
 //   Z dx = [dT^-1(phi)/dphi . dphi] u + T^-1(phi) Ad(G_A) ad(v_A) (x_A - Ad(G_A^-1 C_B^-1) x_B)
@@ -135,7 +135,7 @@ void CalcJointVelocityConstraintTangent(const Joint& joint, const JointGradient&
                                         const Eigen::Ref<const Eigen::VectorXd>& v_j,
                                         const Mat6X& basis, JointVelocityTangent* out);
 
-// The spring-damper law of global coordinate c of a joint (method.md §4.5, spring law
+// The spring-damper law of global coordinate c of a joint (elements/joint.h, spring law
 // kCoordinates): the generalised force on the coordinate's residual row
 //   f = K_c (alpha - rest) + D_c (alpha_dot - rest_rate)   (D_c in dynamics only),
 // with rest = rest_c and rest_rate = 0, except on the coordinate of a series-elastic drive,
@@ -152,7 +152,7 @@ JointCoordinateSpring JointCoordinateSpringLaw(const Joint& joint, int c, double
                                                double alpha_dot, const ProfileValue& drive,
                                                double load_factor, bool dynamics);
 
-// Springs, dampers and the drive on a joint's coordinates (method.md §4.4, §4.5): the
+// Springs, dampers and the drive on a joint's coordinates (elements/joint.h): the
 // generalised force f (k) that enters the coordinate rows of the residual, and its derivatives
 // K_q = df/dalpha and D_q = df/d(alpha_dot) (top-left k x k). `dynamics` adds the dampers;
 // `load_factor` scales drives (statics). A prescribed drive adds its multiplier lambda to its
@@ -171,7 +171,7 @@ void CalcJointCoordinateTerms(const Model& model, const Data& data, int joint, d
                               JointCoordinateTerms* out);
 
 // Tangent operator of the coordinates of a joint without global coordinates, whose H_J
-// retracts by H_J exp(A_J x) with x = h dq_J (method.md §5.2): T_k = A_J^T T(A_J x) A_J in the
+// retracts by H_J exp(A_J x) with x = h dq_J (docs/architecture.md, "One time step"): T_k = A_J^T T(A_J x) A_J in the
 // top-left k x k of *out (identity elsewhere). A_J spans a subalgebra with orthonormal columns.
 void CalcJointCoordinateTangent(const Joint& joint, const Eigen::Ref<const Eigen::VectorXd>& x,
                                 Mat6* out);
@@ -193,7 +193,7 @@ Vec6 CalcFreeJointDeflection(const Model& model, const Data& data, int joint);
 // The springs and dampers of joints with JointSpringLaw::kRelativeMotion, as an element kind
 // (elements/element.h) on the joint's two nodes: delta varies like a rod element's relative
 // motion between the joint frames, d delta = P(delta) E [dh_A; dh_B] with
-// E = diag(Ad(C_A^-1), Ad(C_B^-1)) and G = P E (method.md §2.3). Force G^T (K delta + D G
+// E = diag(Ad(C_A^-1), Ad(C_B^-1)) and G = P E (elements/rod.h). Force G^T (K delta + D G
 // eta_AB); stiffness G^T K G + E^T [D(-delta, s); D(delta, s)] P E with s = K delta (§2.4);
 // damping block G^T D G (its configuration derivative omitted, as for rods). Energy
 // 1/2 delta^T K delta.

@@ -8,7 +8,7 @@
 namespace screwfem {
 
 // A world (dead) force F with node-frame components f at the node-frame point p: adds the
-// generalised force [f; p x f] to *g and the tangent of -g to *K (method.md §3).
+// generalised force [f; p x f] to *g and the tangent of -g to *K (elements/rigid_body.h).
 void AddDeadForce(const Vec3& f, const Vec3& p, Vec6* g, Mat6* K);
 
 struct PointLoadKind {

@@ -5,7 +5,7 @@
 namespace screwfem {
 
 // 3 points, exact for polynomials of degree 5: rod inertia (option A), distributed loads,
-// gravity potential (method.md §2.5, §2.6).
+// gravity potential (docs/numerics.md, "Rod inertia").
 inline constexpr int kGauss3Points = 3;
 inline constexpr double kGauss3Xi[kGauss3Points] = {0.5 - 0.3872983346207417, 0.5,
                                                     0.5 + 0.3872983346207417};

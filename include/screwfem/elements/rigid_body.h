@@ -1,4 +1,4 @@
-// The rigid body as an element kind (method.md §3): a mass with inertia on one node, its
+// The rigid body as an element kind (elements/rigid_body.h): a mass with inertia on one node, its
 // weight, inertia and gyroscopic forces. Stateless and fixed-size; the contract is
 // elements/element.h.
 #pragma once
@@ -7,7 +7,7 @@
 
 namespace screwfem {
 
-// Mass matrix about the node origin, node-frame components (method.md §3):
+// Mass matrix about the node origin, node-frame components (elements/rigid_body.h):
 // [m I, -m S(c); m S(c), J_c - m S(c)^2], c the centre of mass.
 Mat6 RigidBodyMass(const RigidBody& body);
 

@@ -1,4 +1,4 @@
-// The two-node helical Cosserat rod element (method.md §2.2-2.6): a stateless kernel.
+// The two-node helical Cosserat rod element (elements/rod.h): a stateless kernel.
 #pragma once
 
 #include "screwfem/elements/element.h"
@@ -11,12 +11,12 @@ namespace screwfem {
 using Mat6x12 = Eigen::Matrix<double, 6, 12>;
 
 // The rod's Gauss rule: 3 points (elements/quadrature.h) for inertia (option A) and
-// distributed loads (§2.5, §2.6).
+// distributed loads (elements/rod.h).
 inline constexpr int kRodGaussPoints = kGauss3Points;
 inline constexpr const double (&kRodGaussXi)[kRodGaussPoints] = kGauss3Xi;
 inline constexpr const double (&kRodGaussW)[kRodGaussPoints] = kGauss3W;
 
-// Relative motion d = log(H_A^-1 H_B) on the branch closest to w_ref (method.md §2.7).
+// Relative motion d = log(H_A^-1 H_B) on the branch closest to w_ref (elements/rod.h).
 Vec6 CalcRodRelativeMotion(const SE3& H_A, const SE3& H_B, const Vec3& w_ref);
 
 // P(d) = [-T^-1(-d)  T^-1(d)]: delta d = P [dh_A; dh_B] and d_dot = P [eta_A; eta_B] (§2.3).
@@ -60,7 +60,7 @@ void CalcRodGeometry(const Vec6& d, bool gauss_points, bool tangents, RodGeometr
 void CalcRodGeometry(const SE3& H_A, const SE3& H_B, const Vec3& w_ref, bool gauss_points,
                      bool tangents, RodGeometry* out);
 
-// The actuation of one element at one time (method-next.md §N5.1): a rest-strain change eps0
+// The actuation of one element at one time (docs/numerics.md, "Active stress and rest strain"): a rest-strain change eps0
 // and an active stress sigma_a, section frame, constant over the element.
 struct RodActuation {
   Vec6 rest_strain = Vec6::Zero();    // eps0
@@ -101,7 +101,7 @@ struct RodInternal {
 };
 
 // Internal forces and consistent tangent of one element (§2.4), with actuation when given
-// (method-next.md §N5.1: the same tangent formula with the total sigma; actuation frozen).
+// (docs/numerics.md, "Active stress and rest strain": the same tangent formula with the total sigma; actuation frozen).
 void CalcRodInternal(const RodElement& element, const Section& section, const SE3& H_A,
                      const SE3& H_B, const Vec3& w_ref, RodInternal* out,
                      const RodActuation* actuation = nullptr);
@@ -113,7 +113,7 @@ void CalcRodInternal(const RodElement& element, const Section& section, const Ro
 // Directional derivative of N(xi, d) along dd: d/de N(xi, d + e dd) (for d/dt N, dd = d_dot).
 Mat6x12 CalcRodNDirectional(double xi, const Vec6& d, const Vec6& dd);
 
-// Velocity-dependent forces of one element (method.md §2.5): inertia and damping, with the
+// Velocity-dependent forces of one element (docs/numerics.md, "Rod inertia"): inertia and damping, with the
 // blocks of the iteration matrix. Inputs are the relative motion d on the current branch, the
 // node body velocities eta_AB = [eta_A; eta_B] and accelerations eta_dot_AB (zero for a fixed
 // node). Every kernel is fixed-size and allocation-free.
@@ -131,7 +131,7 @@ struct RodInertiaTerms {
 // The residual is exact: the power eta_AB^T g_ine is the time derivative of the kinetic energy
 // of the same quadrature, and for a free element the world resultant of g_ine is the rate of
 // the linear and angular momentum of the exact field.
-// Tangent (a documented quasi-Newton choice, method.md §2.5): `mass` is exact, `gyroscopic`
+// Tangent (a documented quasi-Newton choice, docs/numerics.md, "Rod inertia"): `mass` is exact, `gyroscopic`
 // is the option-B form evaluated with the exact N and the exact Gauss-point velocities,
 //   C_t = -L int N^T (ad(eta)^T M + Star(M eta)) N dxi,
 // which omits d[(dN/dt) eta_AB]/d eta_AB (the same order in |eta| as C_t itself) and
@@ -230,7 +230,7 @@ void AddRodDistributedDeadForce(const RodElement& element, const RodGeometry& ge
 // right-multiplied by blockdiag(T_A, T_B) when both are given (the node tangent operators of
 // the dynamic iteration). The two share one geometric term D(d, sigma - L s), s the dead
 // force's d-gradient, and one product with P (tests/elements/rod_load_test.cpp compares).
-// With `actuation`, sigma = K (strain - eps0) - sigma_a throughout (method-next.md §N5.1).
+// With `actuation`, sigma = K (strain - eps0) - sigma_a throughout (docs/numerics.md, "Active stress and rest strain").
 void CalcRodConservative(const RodElement& element, const Section& section,
                          const RodGeometry& geometry, const SE3& H_A, const Vec3& f_w,
                          const Mat6* T_A, const Mat6* T_B, Vec12* force, Mat12* stiffness,
@@ -239,8 +239,8 @@ void CalcRodConservative(const RodElement& element, const Section& section,
 // ---- the rod element as an element kind (elements/element.h) --------------------------------
 
 // One helical element: internal forces, the weight of the rod (gravity times rhoA), inertia
-// (the model's option, §2.5) and damping, with the element matrix. Calc fails when the
-// element's relative rotation leaves the admissible range (model.max_element_rotation, §2.7)
+// (the model's option) and damping, with the element matrix. Calc fails when the
+// element's relative rotation leaves the admissible range (model.max_element_rotation)
 // or its forces are not finite (terms->failure: the rotation).
 struct RodElementKind {
   static constexpr int kNodes = 2;

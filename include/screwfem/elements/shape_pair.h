@@ -1,4 +1,4 @@
-// Frictional contact between two moving shapes, as an element kind (method-next.md §N6.2-N6.3;
+// Frictional contact between two moving shapes, as an element kind (docs/numerics.md, "Contact";
 // docs/numerics.md, "Contact between moving shapes").
 //
 // Each item is a ShapePair (model.h) found by the broad phase (UpdateShapePairs, below, at every

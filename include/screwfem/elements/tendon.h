@@ -1,4 +1,4 @@
-// Tendons and point-to-point force elements (method-next.md §N4): forces along the straight
+// Tendons and point-to-point force elements (docs/numerics.md, "Tendons and force elements"): forces along the straight
 // line between two body points (model.h, BodyPoint), as element kinds (elements/element.h).
 //
 // Both rest on one piece of geometry, the distance between two body-fixed points and its
@@ -16,7 +16,7 @@
 namespace screwfem {
 
 // The distance between p_A = x_A + R_A r_A and p_B = x_B + R_B r_B, and its derivatives under
-// H_A <- H_A exp(dh_A), H_B <- H_B exp(dh_B) (method-next.md §N4.2), with S(r) = [I  -Skew(r)]:
+// H_A <- H_A exp(dh_A), H_B <- H_B exp(dh_B) (docs/numerics.md, "Tendons and force elements"), with S(r) = [I  -Skew(r)]:
 //   l = |p_B - p_A|,  e = (p_B - p_A) / l (world),  J = [-R_A S(r_A)   R_B S(r_B)] (3 x 12),
 //   gradient  dl/d[dh_A; dh_B] = J^T e = [-e_A; -r_A x e_A; e_B; r_B x e_B],  e_X = R_X^T e;
 //   hessian   J^T (I - e e^T) J / l + blockdiag(-S(r_A)^T Skew(e_A) [0 I], S(r_B)^T Skew(e_B) [0 I])
@@ -38,7 +38,7 @@ bool CalcPointDistance(const SE3& H_A, const Vec3& r_A, const SE3& H_B, const Ve
 double TendonTension(const Tendon& tendon, const Data& data, double time, double load_factor = 1.0);
 
 // A length-driven tendon's prescribed length and its first two time derivatives at `time`
-// (method-next.md §N4.3): L_p(t), in statics moved from the reference length by the load
+// (docs/numerics.md, "Tendons and force elements"): L_p(t), in statics moved from the reference length by the load
 // factor f: L_ref + f (L_p(t) - L_ref).
 ProfileValue TendonTargetLength(const Tendon& tendon, const Data& data, double time,
                                 double load_factor = 1.0);
@@ -67,7 +67,7 @@ bool CalcSegmentGradient(const Model& model, const Data& data, const TendonSegme
 int UpdateTendonSlack(const Model& model, Data& data, double time, double load_factor = 1.0);
 
 // The straight segments of tendons between two nodes (eyelets on nodes): the residual rows
-// tau dl/d[dh_A; dh_B] and the stiffness tau d2l of each (method-next.md §N4.2, §N4.3 with
+// tau dl/d[dh_A; dh_B] and the stiffness tau d2l of each (docs/numerics.md, "Tendons and force elements"
 // prescribed tension); the segments of a tendon add up to tau dL/dq and its exact tangent. One
 // item is one Model::tendon_segment_groups entry, the segments of all tendons along the same
 // node pair (Build), summed before the node tangents are applied. No energy (the tension may

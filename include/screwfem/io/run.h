@@ -76,7 +76,7 @@ struct RunResult {
   double wall_seconds = 0.0;
   double max_constraint_residual = 0.0;
   // Largest relative rotation of one rod element over the run [rad], on its continued branch;
-  // one helical element is valid below 2 pi (method.md §2.7).
+  // one helical element is valid below 2 pi (elements/rod.h).
   double max_element_rotation = 0.0;
   std::string message;    // why it stopped early, with the time
   bool io_error = false;  // it failed writing its files (message: which and why)

@@ -41,7 +41,7 @@ std::vector<std::string> JointColumns(const Model& model, const std::vector<Outp
 std::string JointsDescriptionJson(const Model& model, const std::vector<OutputJoint>& joints);
 
 // Values of one row (without t), in column order, at data's current state: world position
-// [m], velocity [m/s] and acceleration [m/s^2] (method.md §6) and the orientation of the
+// [m], velocity [m/s] and acceleration [m/s^2] (assemble/outputs.h) and the orientation of the
 // point's frame (FrameQuaternion: the section frame of a point along a rod, the node frame of
 // a node point, whatever its offset); joint coordinates [m or rad] and their first and
 // second time derivatives, and the effort [N or N m].
@@ -65,7 +65,7 @@ std::vector<std::string> TendonColumns(const Model& model);
 std::vector<std::string> ForceColumns(const Model& model);
 void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row);
 void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row);
-// actuators.csv: per actuator A of the model (method-next.md §N5), the column A: its profile's
+// actuators.csv: per actuator A of the model (docs/numerics.md, "Active stress and rest strain"), the column A: its profile's
 // value at t (pressure [Pa], activation [-] clamped to [0, 1], or the factor of its vector;
 // elements/rod.h, ActuatorValue); in static analyses the applied value is this times the
 // load_factor column.

@@ -1,4 +1,4 @@
-// SE(3) / se(3) toolkit (method.md §1).
+// SE(3) / se(3) toolkit (lie/se3.h).
 //
 // Conventions, fixed for the whole code base:
 //  * A frame H = (R, x) maps frame coordinates to world coordinates: p_W = R p + x.
@@ -41,7 +41,7 @@ struct SE3 {
   Mat4 Matrix() const;
 };
 
-// --- algebra operators (method.md §1.1) -------------------------------------------------------
+// --- algebra operators (lie/se3.h) -------------------------------------------------------
 // The small ones are inline: they sit in the inner loops of the element kernels.
 inline Mat3 Skew(const Vec3& a) {  // Skew(a) b = a x b
   Mat3 S;
@@ -111,9 +111,9 @@ Mat3 TSO3Inv(const Vec3& w);
 // --- SE(3) -----------------------------------------------------------------------------------
 SE3 ExpSE3(const Vec6& xi);
 Vec6 LogSE3(const SE3& H);     // principal branch (rotation angle <= pi)
-Mat6 TSE3(const Vec6& xi);     // right tangent operator, method.md §1.3 form B
+Mat6 TSE3(const Vec6& xi);     // right tangent operator, lie/se3.h form B
 Mat6 TSE3Inv(const Vec6& xi);  // singular at |w| = 2 pi k, k != 0
-// D(xi, sigma) = d/dxi [ TSE3Inv(xi)^T sigma ]  (method.md §1.4).
+// D(xi, sigma) = d/dxi [ TSE3Inv(xi)^T sigma ]  (lie/se3.h).
 Mat6 DTSE3InvT(const Vec6& xi, const Vec6& sigma);
 
 // Directional derivative d/de TSE3Inv(xi + e dxi) at e = 0 (from form B: with A = ad(xi),
@@ -125,8 +125,8 @@ Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v);
 // Directional derivative of TSE3: -T (dT^-1) T.
 Mat6 TSE3Directional(const Vec6& xi, const Vec6& dxi);
 
-// The scalar coefficients of the series of T and T^-1 at one angle phi = |w| (method.md §1.3
-// form B, §1.4), for the kernels that evaluate several operators at the same xi: one call
+// The scalar coefficients of the series of T and T^-1 at one angle phi = |w| (lie/se3.h
+// form B), for the kernels that evaluate several operators at the same xi: one call
 // (one sincos of phi/2) instead of one set of trigonometric functions per operator.
 struct TSeries {
   double t1, t2, t3, t4;  // T(xi) = I + t1 A + t2 A^2 + t3 A^3 + t4 A^4, A = ad(xi)
@@ -145,7 +145,7 @@ Vec6 TSE3InvDirectionalTimes(const Vec6& xi, const Vec6& dxi, const Vec6& v, con
 void TSE3InvAndScaledTSE3(const Vec6& xi, const TSeries& c, int n, const double* scales,
                           const TSeries* scaled, Mat6* Ti, Mat6* T);
 
-// Logarithm on a continuous branch (method.md §2.7): of all rotation vectors representing the
+// Logarithm on a continuous branch (elements/rod.h): of all rotation vectors representing the
 // rotation of H, w_k = (theta + 2 pi k) n, returns the one closest to w_ref, with the
 // translation part recomputed on that branch. The caller must reject |w| near 2 pi.
 Vec6 LogSE3Near(const SE3& H, const Vec3& w_ref);

@@ -1,6 +1,6 @@
 // Entries of a matrix outside the band of a BandedLU, on a few blocks of unknowns, and the
 // solve of the whole matrix by the Woodbury identity (docs/numerics.md, "Pairs and the band";
-// option (ii) of method-next.md §N6.3).
+// option (ii) of docs/numerics.md, "Contact").
 //
 // The whole matrix is A + P E P^T: A the banded matrix (BandedLU), P (n x k) the selection of
 // the k coupled unknowns (block_size consecutive unknowns per block in use), E (k x k) the

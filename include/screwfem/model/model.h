@@ -37,13 +37,13 @@ struct Node {
   Vec6 initial_velocity = Vec6::Zero();
 };
 
-// One two-node helical element (method.md §2.2).
+// One two-node helical element (elements/rod.h).
 struct RodElement {
   int rod = -1;
   int node_a = -1, node_b = -1;
   double length = 0.0;     // reference arc length L = |u(d0)|
   Vec6 d0 = Vec6::Zero();  // reference relative motion log(H_A0^-1 H_B0)
-  // Its actuators (method-next.md §N5): Model::element_actuators[first_actuator + i],
+  // Its actuators (docs/numerics.md, "Active stress and rest strain"): Model::element_actuators[first_actuator + i],
   // i < num_actuators (set by Build).
   int first_actuator = 0;
   int num_actuators = 0;
@@ -120,11 +120,11 @@ struct BodyPoint {
 };
 
 // A tendon (cable) routed through an ordered list of eyelets, sliding through them without
-// friction (method-next.md §N4): its length is the sum of the straight segments between
+// friction (docs/numerics.md, "Tendons and force elements"): its length is the sum of the straight segments between
 // consecutive eyelets and it pulls with a prescribed tension tau(t) >= 0. Each segment is an
 // item of TendonSegmentKind (elements/tendon.h).
 //
-// Or it is drawn by length (method-next.md §N4.3, a motor in position mode): the rheonomic
+// Or it is drawn by length (docs/numerics.md, "Tendons and force elements", a motor in position mode): the rheonomic
 // constraint L(q) - L_p(t) = 0, one multiplier row whose multiplier is the tension; unilateral
 // (the tendon goes slack when the solved tension would be negative and is taut again when its
 // path length reaches L_p: Data::tendon_slack, docs/numerics.md "Length-driven tendons").
@@ -171,12 +171,12 @@ struct ForceElement {
   Profile actuator = Profile::Constant(0.0);  // [N], scaled by the load factor in statics
 };
 
-// Internal actuation of a rod (method-next.md §N5): a rest-strain change eps0(t) and an active
+// Internal actuation of a rod (docs/numerics.md, "Active stress and rest strain"): a rest-strain change eps0(t) and an active
 // section stress sigma_a(t) (section frame; axial, shear 2, shear 3, torsion, bending 2,
 // bending 3), constant over each element it covers, so that an element transmits
 // sigma = K (eps - eps0) - sigma_a. Every type is linear in its profile's value v(t):
 //  * kPressure: a chamber of area A at section offset r = (0, r2, r3), pressure v [Pa]:
-//    sigma_a = v A [1, 0, 0, 0, r3, -r2] (the end caps pushed apart, §N5.2);
+//    sigma_a = v A [1, 0, 0, 0, r3, -r2] (the end caps pushed apart);
 //  * kMuscle: fibres of area A at offset r, maximal stress s_max [Pa], activation v clamped to
 //    [0, 1]: sigma_a = -v s_max A [1, 0, 0, 0, r3, -r2] (fibre tension compresses the section);
 //  * kRestStrain: eps0 = v * vector;  * kActiveStress: sigma_a = v * vector.
@@ -226,8 +226,8 @@ enum class JointType {
 
 enum class DriveKind {
   kNone,           // passive joint
-  kPrescribed,     // rheonomic constraint alpha_i = q(t) on one coordinate (method.md §4.4)
-  kSeriesElastic,  // spring/damper towards q(t) on one coordinate (method.md §4.5)
+  kPrescribed,     // rheonomic constraint alpha_i = q(t) on one coordinate (elements/joint.h)
+  kSeriesElastic,  // spring/damper towards q(t) on one coordinate (elements/joint.h)
   kForce,          // generalised force f(t) on one coordinate
 };
 template <>
@@ -241,7 +241,7 @@ struct EnumNames<DriveKind> {
 };
 
 // A joint: relative frame H_J in a subgroup between frame A (node a, or the ground) and frame
-// B (node b), placed by the constant offsets C_A, C_B (method.md §4.1): H_B C_B = H_A C_A H_J.
+// B (node b), placed by the constant offsets C_A, C_B (elements/joint.h): H_B C_B = H_A C_A H_J.
 struct Joint {
   std::string name;
   JointType type = JointType::kRevolute;
@@ -270,7 +270,7 @@ struct Joint {
 };
 
 enum class RodInertia {
-  kExact,     // option A: exact helical velocity field, M(d), 3-point Gauss (method.md §2.5)
+  kExact,  // option A: exact helical velocity field, M(d), 3-point Gauss (docs/numerics.md, "Rod inertia")
   kConstant,  // option B: linear velocity interpolation, constant mass matrix
 };
 template <>
@@ -288,7 +288,7 @@ struct ModelInput {
   double default_value = 0.0;  // Data::inputs after MakeData
 };
 
-// Contact (method-next.md §N6; elements/contact.h): penalty normal law and regularised
+// Contact (docs/numerics.md, "Contact"; elements/contact.h): penalty normal law and regularised
 // Coulomb friction between moving shapes and obstacles fixed in the world.
 //
 // A collision shape fixed in a rigid body's frame. Sizes in metres, node-frame components.
@@ -345,7 +345,7 @@ struct ContactExclusion {
   int index = -1;
   int obstacle = -1;
 };
-// The contact law (method-next.md §N6.3). Negative values are defaults set by Build
+// The contact law (docs/numerics.md, "Contact"). Negative values are defaults set by Build
 // (§N6.4): onset 0.01 r_min, stiffness 100 W_max / onset (W_max the largest weight one pair
 // carries, with |g| = 9.81 m/s^2 when there is no gravity: the resting gap is 0.86 onset),
 // slip velocity 1e-3 m/s.
@@ -456,8 +456,9 @@ struct Model {
   int num_contact_entities = 0;
   std::vector<char> contact_entity_pairs;
   std::vector<double> contact_entity_self_skip;
-  Vec3 gravity = Vec3::Zero();                  // [m/s^2], world frame
-  RodInertia rod_inertia = RodInertia::kExact;  // option A by default (method.md §2.5)
+  Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
+  RodInertia rod_inertia =
+      RodInertia::kExact;  // option A by default (docs/numerics.md, "Rod inertia")
 
   // Sizes and the solver's ordering (computed by ModelBuilder::Build).
   int nv = 0;        // velocity unknowns
@@ -480,7 +481,7 @@ struct Model {
   std::vector<int> redundant_rows;
   std::vector<std::string> warnings;  // non-fatal findings of Build, for the user
 
-  // Largest |rotation| one element may reach (method.md §2.7): 2 pi minus a safety margin.
+  // Largest |rotation| one element may reach (elements/rod.h): 2 pi minus a safety margin.
   double max_element_rotation = 2.0 * 3.14159265358979323846 - 0.05;
 
   int FindNode(const std::string& name) const;  // -1 if absent

@@ -35,7 +35,7 @@ struct ProfileTerm {
 };
 
 // Sum of terms. Right-continuous: at a switch time Eval returns the derivatives that hold just
-// after it (the right limit needed for consistent initial accelerations, method.md §5.4).
+// after it (the right limit needed for consistent initial accelerations, docs/numerics.md, "Restarts at breakpoints").
 class Profile {
  public:
   Profile() = default;

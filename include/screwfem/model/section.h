@@ -1,4 +1,4 @@
-// Cross-section properties of a Cosserat rod (method.md §2.1).
+// Cross-section properties of a Cosserat rod (elements/rod.h).
 //
 // 6-vectors are translation first: stiffness = (EA, GA2, GA3, GJ, EI2, EI3) in
 // (N, N, N, N m^2, N m^2, N m^2); inertia per unit length = (rhoA, rhoA, rhoA, rhoJ1, rhoI2,

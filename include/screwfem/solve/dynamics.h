@@ -1,4 +1,4 @@
-// Lie group generalized-alpha time integration of the constrained DAE (method.md §5.2-5.4).
+// Lie group generalized-alpha time integration of the constrained DAE (docs/architecture.md, "One time step").
 //
 // Index-3 formulation with the Bottasso-Dopico-Trainelli scaling; configurations update
 // through the retraction from the state at the start of the step; Newton on the scaled
@@ -97,7 +97,7 @@ struct DynamicOptions {
   // Both converge to the same solution (they solve the same residual to the same tolerances).
   NewtonMatrix newton_matrix = NewtonMatrix::kSimplified;
   double refresh_ratio = 0.1;
-  // The acceleration vdot_{n+1} the Newton iteration starts from (method.md §5.2):
+  // The acceleration vdot_{n+1} the Newton iteration starts from (docs/architecture.md, "One time step"):
   //   kZero:  vdot_{n+1} = 0 (Arnold & Bruls 2007);
   //   kLast:  vdot_{n+1} = vdot_n, an O(h) closer start for smooth motions;
   //   kAdaptive:          per step, whichever of the two was closer at the previous step
@@ -116,14 +116,14 @@ struct DynamicOptions {
   //               above its tolerance (the GRM: 2.0 instead of 2.1-2.6 iterations per step).
   ConvergenceTest convergence = ConvergenceTest::kEstimated;
   // Restart at the breakpoints of drive and load profiles (docs/numerics.md, "Restarts at
-  // breakpoints"; method-next.md §N1.2): Step never straddles a breakpoint (it ends a substep
+  // breakpoints"; docs/numerics.md, "Restarts at breakpoints"): Step never straddles a breakpoint (it ends a substep
   // exactly on it), the substep that ends on it sees the profiles' left limits, and there
   // vdot, lambda and the auxiliary acceleration are re-initialised from the right limits as at
-  // the start (method.md §5.4). Without it the auxiliary acceleration carries the old branch
+  // the start (docs/numerics.md, "Restarts at breakpoints"). Without it the auxiliary acceleration carries the old branch
   // across a jump of a prescribed acceleration, and efforts and accelerations ring as
   // (-rho_inf)^k for many steps.
   bool restart_at_breakpoints = true;
-  // The auxiliary acceleration after the start and after each restart (method-next.md §N1.2
+  // The auxiliary acceleration after the start and after each restart (docs/numerics.md, "Restarts at breakpoints"
   // step 4, after Arnold, Brüls and Cardona 2015): false: a = vdot (first order in the
   // multipliers for a few steps when alpha_m != alpha_f); true: a = vdot + (alpha_m - alpha_f)
   // (vdot_s - vdot), vdot_s the consistent acceleration at the state predicted one step ahead
@@ -136,14 +136,14 @@ struct DynamicOptions {
   // from a = vdot instead (counted in Integrator::perturbed_start_skips).
   bool perturbed_start = false;
   // How the joints' constraints enter the step (docs/numerics.md, "Stabilised index 2"):
-  //   kIndex3: phi(q) = 0 at the end of each step (method.md §5.2);
+  //   kIndex3: phi(q) = 0 at the end of each step (docs/architecture.md, "One time step");
   //   kGgl:    also the velocity constraint B(q) v + d phi/dt = 0, with a second multiplier nu
-  //            acting on the configuration update only (method-next.md §N1.3, Arnold & Hante
+  //            acting on the configuration update only (docs/numerics.md, "Stabilised index 2", Arnold & Hante
   //            2017): velocities satisfy the constraints to round-off and multipliers
   //            (actuator efforts) are second-order accurate.
   ConstraintFormulation constraints = ConstraintFormulation::kIndex3;
   // Error-controlled steps (AdaptiveStep, AdvanceTo; docs/numerics.md, "Adaptive time steps";
-  // method-next.md §N2). A step is accepted when the weighted RMS of its local position error
+  // docs/numerics.md, "Adaptive time steps"). A step is accepted when the weighted RMS of its local position error
   // estimate C h^2 (a_{n+1} - a_n) is at most 1, each component weighted by
   //   absolute_tolerance (node translations and prismatic coordinates in units of the model's
   //   length scale, rotations and other coordinates in rad) + relative_tolerance |h dq_i|.
@@ -179,7 +179,7 @@ struct Integrator {
   State q_start;
   Eigen::VectorXd v_start, vdot_start, a_start, lambda_start, dq, a_base;
   // Restarts: the breakpoints after the start time (sorted, ProfileBreakpoints) and the
-  // workspace of the consistent-acceleration solve (Bdot v by differences, method.md §5.4).
+  // workspace of the consistent-acceleration solve (Bdot v by differences, docs/numerics.md, "Restarts at breakpoints").
   std::vector<double> breakpoints;
   Eigen::VectorXd phi_plus, phi_minus, phi_zero, bdot_v, v_work;
   // Length-driven tendons: Data::tendon_slack at the step's start (restored with it); a step
@@ -230,7 +230,7 @@ struct Integrator {
   // Error control (AdaptiveStep). The controller's next step size (0 before the first), the
   // error of the last accepted step (for the PI controller; 0: none), whether the next step
   // may grow (not after a rejection), the size of the last accepted step (the auxiliary
-  // acceleration is rescaled when the next differs, method-next.md §N2.2), the local error
+  // acceleration is rescaled when the next differs, docs/numerics.md, "Adaptive time steps"), the local error
   // estimate of the last attempted step (nv, velocity layout) and its weighted norm.
   double h_control = 0.0, err_last = 0.0, h_last = 0.0;
   bool allow_growth = true;
@@ -253,7 +253,7 @@ struct StepResult {
   std::string message;       // on failure: when and why (allocated only on failure)
 };
 
-// Computes consistent initial accelerations and multipliers (method.md §5.4) at data.time
+// Computes consistent initial accelerations and multipliers (docs/numerics.md, "Restarts at breakpoints") at data.time
 // from data's configuration and velocities, and allocates the workspace. Profiles use their
 // right limit at the start time. Returns false with a message if the saddle-point system is
 // singular.
@@ -274,7 +274,7 @@ bool RestartDynamics(const Model& model, Data& data, Integrator& integrator,
 StepResult Step(const Model& model, Data& data, Integrator& integrator, double h,
                 const StopRequest& stop = {});
 
-// ---- error-controlled steps (method-next.md §N2; docs/numerics.md, "Adaptive time steps") ----
+// ---- error-controlled steps (docs/numerics.md, "Adaptive time steps"; docs/numerics.md, "Adaptive time steps") ----
 
 // The constant C of the local error estimate eps = C h^2 (a_{n+1} - a_n) of generalized-alpha:
 // beta - 1/6 + (alpha_m - alpha_f) / 2.
@@ -291,7 +291,7 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integrator, 
                         const StopRequest& stop = {});
 
 // Dense output: sets `out` (a Data of the same model, e.g. a copy of data) to the state at time
-// t inside the last accepted AdaptiveStep [t_n, t_n + h] (method-next.md §N2.3): node frames
+// t inside the last accepted AdaptiveStep [t_n, t_n + h] (docs/numerics.md, "Adaptive time steps"): node frames
 // H_n exp(psi(theta)) with the cubic Hermite increment psi in the Lie algebra that matches
 // H, v at both ends (joint coordinates the same way), velocities T(psi) psi' / h, and
 // accelerations and multipliers linear between the step's ends. Pose error O(h^4), velocity

@@ -1,6 +1,6 @@
 // Where time steps end. The profile breakpoints (the times where a drive or load profile has a
 // kink or a jump) and the one rule that puts a step's end on them, used by the step schedule of
-// a run (StepSchedule: a uniform grid with the breakpoints inserted, method.md §5.5), by Step's
+// a run (StepSchedule: a uniform grid with the breakpoints inserted, docs/architecture.md, "One time step"), by Step's
 // substeps and by AdaptiveStep; and the check that a run's step ends are representable.
 #pragma once
 
@@ -56,7 +56,7 @@ void ValidateTimeGrid(double start, double end, double step, const std::string& 
 
 // The step ends of a dynamic run with fixed steps (Advance, StepPolicy): a uniform grid with
 // the profile breakpoints inserted, so that jumps of prescribed accelerations and load rates
-// fall on step ends (method.md §5.5). Each end is computed from the start and the step's
+// fall on step ends (docs/architecture.md, "One time step"). Each end is computed from the start and the step's
 // index, so round-off does not accumulate over the run.
 class StepSchedule {
  public:

@@ -1,4 +1,4 @@
-// Static equilibrium on the Lie group with load stepping (method.md §5.6).
+// Static equilibrium on the Lie group with load stepping (docs/architecture.md, "One time step").
 #pragma once
 
 #include <array>
@@ -13,7 +13,7 @@
 
 namespace screwfem {
 
-// How the load factor s moves (scene key analysis.statics.method; method-next.md §N3,
+// How the load factor s moves (scene key analysis.statics.method; docs/numerics.md, "Path-following statics",
 // docs/numerics.md "Path-following statics"):
 //   kLoad:      load stepping, s prescribed per step (passes limit points of a *prescribed
 //               drive's* path, i.e. displacement control, but stops at a limit load);
@@ -45,7 +45,7 @@ struct StaticOptions {
   // Accepted steps at most (either method); 0: automatic, 2 load_steps + 1000. The solve
   // stops with a message when it is reached.
   int max_steps = 0;
-  // Arc length (method kArcLength; method-next.md §N3.3-§N3.4). Lengths are in the metric
+  // Arc length (method kArcLength; docs/numerics.md, "Path-following statics"). Lengths are in the metric
   // |dx|^2 = sum (translations / length_scale)^2 + rotation_weight sum rotations^2 over the
   // node and joint unknowns (joint coordinates by the kind of their axis).
   double arc_length = 0.0;      // first arc length; 0: |dx/ds| (end - start) / load_steps
