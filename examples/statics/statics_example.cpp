@@ -1,12 +1,12 @@
 // screwfem statics example: two classic large-deformation problems of a Cosserat rod, solved
 // with the helical (SE(3)) element and the static Newton solver with load stepping.
 //
-// 1. Roll-up (validation.md S1): a cantilever (L = 10, EI = 100) under an end moment
+// 1. Roll-up (docs/validation.md, S1): a cantilever (L = 10, EI = 100) under an end moment
 //    M = lambda 2 pi EI / L curls into a circular arc, and for lambda = 1 into a full circle
 //    with the tip back at the root. The arc has constant strain, which the helical element
 //    represents exactly, so 10 elements reproduce the closed form to round-off:
 //    tip = L (sin phi, 1 - cos phi) / phi, tip rotation phi = 2 pi lambda.
-// 2. Elastica (validation.md S3): the same kind of cantilever (L = 1, EI = 1) under a dead
+// 2. Elastica (docs/validation.md, S3): the same kind of cantilever (L = 1, EI = 1) under a dead
 //    transverse tip force P, compared with Mattiasson's table for P L^2 / EI = 1, 2, 5, 10.
 //    The moment now varies along the rod, so the element is not exact: it converges at O(h^2),
 //    and 32 elements give about three significant digits (the test suite uses 128 for four).

@@ -179,7 +179,8 @@ void AddRodSectionLoad(double xi, double weight, const SE3& H_A, const Vec6& d, 
   const Vec6 z = xi * tF;
   g->head<6>() += weight * (Ad_m.transpose() * F - Ti_m.transpose() * z);
   g->tail<6>() += weight * (Ti_p.transpose() * z);
-  // Derivative of N^T F in d at fixed F (12 x 6), using D(x, y) = d/dx [T^-T(x) y] (§1.4) and
+  // Derivative of N^T F in d at fixed F (12 x 6), using D(x, y) = d/dx [T^-T(x) y]
+  // (docs/theory.md §1.4) and
   // d/dx [T(x)^T F] = -T(x)^T D(x, T(x)^T F):
   //   dz/dd = -xi^2 T(xi d)^T D(xi d, T(xi d)^T F)
   //   d(Ad(exp(-xi d))^T F)/dd = -xi Star(Ad_m^T F) T(-xi d)

@@ -140,7 +140,7 @@ void ControlAfterAcceptedStep(Integrator& integ, double h, double hs, double err
   else
     factor = kSafety * std::pow(e, -1.0 / kOrder);
   factor = std::clamp(factor, kMinShrink, integ.allow_growth ? kMaxGrowth : 1.0);
-  // A step shortened to land on a target keeps the controller's size (§N2.4 step 5).
+  // A step shortened to land on a target keeps the controller's size (docs/theory.md §N2.4).
   integ.h_control = truncated ? std::max(h, hs * factor) : hs * factor;
   integ.h_control = std::clamp(integ.h_control, opt.min_step, opt.max_step);
   integ.err_last = e;

@@ -1,7 +1,7 @@
 // Finite-difference checks of the assembled iteration matrix (assemble.h, elements/rigid_body.h,
-// §4.5): constraint rows and their transposes for every joint type away from phi = 0, and the
-// equilibrium rows (stiffness, mass and damping blocks) of rigid bodies, point loads and joint
-// springs/dampers. Every derivative is taken through the retraction of assemble.h
+// docs/theory.md §4.5): constraint rows and their transposes for every joint type away from
+// phi = 0, and the equilibrium rows (stiffness, mass and damping blocks) of rigid bodies, point
+// loads and joint springs/dampers. Every derivative is taken through the retraction of assemble.h
 // (right-trivialised node increments, additive coordinate increments), by central differences.
 #include <gtest/gtest.h>
 

@@ -356,7 +356,8 @@ TEST(ContactValidation, SlidingBoxStopsAfterTheCoulombDistanceAndASphereRollsOnA
   const double distance = box.data.H[0].x.x();
   const double exact = v0 * v0 / (2.0 * mu * kG);
   EXPECT_NEAR(distance, exact, 0.01 * exact);
-  EXPECT_NEAR(distance, exact, eps_v * v0 / (mu * kG));  // the creep-phase bound (§N6.6)
+  // The creep-phase bound (docs/validation.md, T6.2).
+  EXPECT_NEAR(distance, exact, eps_v * v0 / (mu * kG));
   EXPECT_LT((box.data.H[0].R * box.data.v.head<3>()).norm(), 1e-6);
 
   Puck ball;
@@ -388,7 +389,8 @@ TEST(ContactValidation, BoxOnAnInclineStaysBelowTheFrictionAngleAndSlidesAboveIt
     }
     const double s = downhill.dot(p.data.H[0].x - x0);
     if (std::tan(a) < mu) {
-      // Creep of the regularised law: v = eps_v x / sqrt(1 - x^2), x = tan(a) / mu (§N6.5).
+      // Creep of the regularised law: v = eps_v x / sqrt(1 - x^2), x = tan(a) / mu
+      // (docs/theory.md §N6.5).
       const double x = std::tan(a) / mu;
       const double creep = eps_v * x / std::sqrt(1.0 - x * x);
       EXPECT_GE(s, 0.0);

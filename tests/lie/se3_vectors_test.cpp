@@ -1,5 +1,5 @@
-// Reference values of docs/numerics.md (from the verified Python prototype), printed with 12
-// decimals: compared to 1e-11 absolute.
+// Reference values computed by an independent Python prototype of the method (numpy/scipy,
+// docs/validation.md), printed with 12 decimals: compared to 1e-11 absolute.
 #include <gtest/gtest.h>
 
 #include "lie/lie_test_util.h"
@@ -18,7 +18,7 @@ Vec6 VectorXi() {
   return xi;
 }
 
-TEST(Se3TestVectors, ExpSE3MatchesMethodSection9) {
+TEST(Se3TestVectors, ExpSE3MatchesPrototypeValues) {
   Mat4 expected;
   expected << 0.714075363402, -0.619656510510, -0.325764001026, 0.094116818494,  //
       0.432164945528, 0.756260965523, -0.491225825749, -0.229085933085,          //
@@ -27,7 +27,7 @@ TEST(Se3TestVectors, ExpSE3MatchesMethodSection9) {
   EXPECT_TRUE(MatrixNear(ExpSE3(VectorXi()).Matrix(), expected, kPrinted));
 }
 
-TEST(Se3TestVectors, TSE3MatchesMethodSection9) {
+TEST(Se3TestVectors, TSE3MatchesPrototypeValues) {
   Mat6 expected = Mat6::Zero();
   expected.topRows<3>() << 0.902176502363, 0.249164069559, 0.272852389724, -0.086669237872,
       0.105603805409, 0.108715074353,  //
@@ -39,7 +39,7 @@ TEST(Se3TestVectors, TSE3MatchesMethodSection9) {
   EXPECT_TRUE(MatrixNear(TSE3(VectorXi()), expected, kPrinted));
 }
 
-TEST(Se3TestVectors, TSE3InvMatchesMethodSection9) {
+TEST(Se3TestVectors, TSE3InvMatchesPrototypeValues) {
   Mat6 expected = Mat6::Zero();
   expected.topRows<3>() << 0.948502110807, -0.316884553834, -0.229738535400, -0.047839443771,
       -0.161159449512, -0.084582514126,  //
@@ -51,7 +51,7 @@ TEST(Se3TestVectors, TSE3InvMatchesMethodSection9) {
   EXPECT_TRUE(MatrixNear(TSE3Inv(VectorXi()), expected, kPrinted));
 }
 
-TEST(Se3TestVectors, DTSE3InvTMatchesMethodSection9) {
+TEST(Se3TestVectors, DTSE3InvTMatchesPrototypeValues) {
   Vec6 sigma;
   sigma << 1.0, 2.0, 3.0, 4.0, 5.0, 6.0;
   Mat6 expected;
@@ -67,7 +67,7 @@ TEST(Se3TestVectors, DTSE3InvTMatchesMethodSection9) {
   EXPECT_TRUE(MatrixNear(DTSE3InvT(VectorXi(), sigma), expected, kPrinted));
 }
 
-TEST(Se3TestVectors, LogSE3NearPiMatchesMethodSection9) {
+TEST(Se3TestVectors, LogSE3NearPiMatchesPrototypeValues) {
   SE3 H;
   H.R = ExpSO3(Vec3(0.0, 0.0, test::kPi - 1e-9));
   H.x = Vec3(1.0, 2.0, 3.0);

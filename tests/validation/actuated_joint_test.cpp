@@ -1,4 +1,4 @@
-// Validation J2 (validation.md): joints driven by a prescribed bang-bang motion; the drive's
+// Validation J2 (docs/validation.md): joints driven by a prescribed bang-bang motion; the drive's
 // multiplier is the actuator effort.
 //
 // A single rigid link (the seed paper's: m = 0.15 kg, J = 1e-4 kg m^2 about the CoM, CoM at

@@ -69,7 +69,7 @@ double ExactFlow(double alpha, double rate, double h) {
   return q;
 }
 
-// The exact bob position at time t (validation.md M1).
+// The exact bob position at time t (docs/validation.md, M1).
 Vec3 ExactPosition(double t) {
   const double k = std::sin(kPi / 4), K = test::EllipticK(k * k);
   const double theta = 2.0 * std::asin(k * test::JacobiElliptic(K - std::sqrt(kG) * t, k * k).sn);

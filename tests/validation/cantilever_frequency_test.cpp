@@ -1,4 +1,4 @@
-// Validation D1 (validation.md): natural bending frequencies of a slender cantilever.
+// Validation D1 (docs/validation.md): natural bending frequencies of a slender cantilever.
 //
 // L = 10, EI = 100, rhoA = 1 (EA = GA = 1e6, GJ = 100, rotary inertia 1e-6: shear and rotary
 // inertia corrections below 1e-5). Euler-Bernoulli: omega_n = (beta_n L)^2 sqrt(EI/(rhoA L^4)),

@@ -1,5 +1,6 @@
-// Validation S3 (validation.md): cantilever elastica under a dead transverse tip load,
-// against the table of Mattiasson (1981), recomputed to 6 digits in validation.md.
+// Validation S3 (docs/validation.md): cantilever elastica under a dead transverse tip load,
+// against the table of Mattiasson (1981), recomputed to 6 digits by quadrature of the exact
+// first integral (docs/validation.md, S3).
 //
 // L = 1, EI = 1, P = alpha = P L^2 / EI, load fixed in space along +y, rod along x.
 // Inextensibility and unshearability are approached with EA = GA = 1e7 EI / L^2 (the Cosserat

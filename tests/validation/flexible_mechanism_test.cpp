@@ -22,8 +22,8 @@
 //    numbers are reproduced to ~1e-6 m when, in addition to the inertia, the rod's GRAVITY is
 //    distributed with the linear field N = [(1 - xi) I, xi I] (lumped nodal forces rhoA L_e g / 2,
 //    no nodal moments), as checked below. docs/numerics.md, "Rod inertia" defines option B as the linear field
-//    "in the inertia term only" and §2.6 writes the gravity load with the exact N, which is
-//    what screwfem does for both options. So the prototype's A-B gap (9.7e-4 -> 2.4e-4 ->
+//    "in the inertia term only" and docs/theory.md §2.6 writes the gravity load with the exact N,
+//    which is what screwfem does for both options. So the prototype's A-B gap (9.7e-4 -> 2.4e-4 ->
 //    6.0e-5 m in tip z) and the "tip z differs by 1.0e-3 m (4 % of the sag) between A and B"
 //    of docs/numerics.md, "Rod inertia" measure consistent versus lumped gravity loading, not the inertia
 //    options; the listed option-B values are wrong for option B as docs/numerics.md defines it.

@@ -278,7 +278,8 @@ TEST(FourBar, BangBangCrankEffortFollowsClosedFormInverseDynamicsWithoutRingingA
     // First order in h, everywhere and right after the switches.
     EXPECT_NEAR(coarse.max_effort / with.max_effort, 2.0, 0.2);
     EXPECT_NEAR(coarse.after_switch / with.after_switch, 2.0, 0.2);
-    // Without restarts the effort and the acceleration ring after every switch (§N1.1).
+    // Without restarts the effort and the acceleration ring after every switch
+    // (docs/theory.md §N1.1).
     EXPECT_GT(without.after_switch, 0.3);
     EXPECT_GT(without.max_accel, 4.0);
   }

@@ -159,7 +159,7 @@ TEST(FreeRod, MomentumAndEnergyAreConservedToSecondOrderAndTheMomentumRateToRoun
 }
 
 TEST(FreeRod, FreeFreeBendingFrequenciesAndSixRigidModes) {
-  // Free-free Euler-Bernoulli: beta L = 4.7300407449, 7.8532046241 (validation.md D1), here
+  // Free-free Euler-Bernoulli: beta L = 4.7300407449, 7.8532046241 (docs/validation.md, D1), here
   // with EI = 10, rhoA = 1, L = 1 and 24 elements, made slender (EA = GA = 1e7, rotary inertia
   // 1e-7: Timoshenko corrections below 1e-5).
   const Model model = MakeFreeRod(24, 1e7, 1e-7);

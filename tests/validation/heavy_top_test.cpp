@@ -1,4 +1,4 @@
-// Validation M2 (validation.md): the heavy (Lagrange) top on a spherical joint.
+// Validation M2 (docs/validation.md): the heavy (Lagrange) top on a spherical joint.
 //
 // m = 15 kg, inertia about the CoM J = diag(0.234375, 0.46875, 0.234375) kg m^2 (symmetry axis
 // = body y), CoM at (0, 1, 0) m from the fixed point, gravity (0, 0, -9.81), R(0) = I, body
@@ -130,8 +130,8 @@ TEST(HeavyTopM2, InvariantDriftConvergesAtSecondOrder) {
   EXPECT_LT(d1.lz / d2.lz, 4.5);
   EXPECT_LT(d2.energy, 2e-5);  // measured 1.3e-5
   // The vertical momentum is the sensitive one: the 150 rad/s spin makes its error constant
-  // large (measured 1.5e-2 relative at h = 5e-4, 3e-4 at h = 1e-4 — validation.md's "< 1e-6
-  // at h = 1e-4" is out of reach for a second-order method on this problem).
+  // large (measured 1.5e-2 relative at h = 5e-4, 3e-4 at h = 1e-4 — a bound of 1e-6 at
+  // h = 1e-4 is out of reach for a second-order method on this problem).
   EXPECT_LT(d2.lz, 2e-2);
   // The spin is conserved to round-off: with J_x = J_z about the fixed point and the gravity
   // torque normal to the symmetry axis, its equation is w_y' = 0 and the scheme preserves it.

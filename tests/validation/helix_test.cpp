@@ -1,8 +1,8 @@
-// Validation S2 (validation.md): a follower end moment turns a straight rod into a helix
+// Validation S2 (docs/validation.md): a follower end moment turns a straight rod into a helix
 // (Harsch & Eugster; cardillo's examples/Herrmann2025_mixed_Cosserat_rod/02_helix.py).
 //
 // Target helix: R0 = 10, height h = 50, n = 2 turns; c = h / (2 pi R0 n),
-// L = sqrt(1 + c^2) 2 pi R0 n (= 135.25; validation.md's "~133.1" is a typo: 2 pi R0 n alone is
+// L = sqrt(1 + c^2) 2 pi R0 n (= 135.25; 2 pi R0 n alone, the length without the rise, is
 // 125.66). Circular section with E = 1, G = 0.5, so G Ip = E I exactly (needed for a pure
 // moment to produce a helix). The clamp frame is the helix frame at alpha = 0; the body-fixed
 // tip moment M_B = kappa_h (c G Ip, 0, E I), kappa_h = 1 / (R0 (1 + c^2)), gives the constant
@@ -47,8 +47,8 @@ struct HelixResult {
 };
 
 HelixResult SolveHelix(int num_elements, int load_steps) {
-  // Slenderness L / r = 10 (validation.md allows 1e1 ... 1e4: no force acts, so EA and GA do
-  // not enter the answer). With L / r = 100 (EA L^2 / EI = 4e4) plain Newton needs about 64
+  // Slenderness L / r = 10 (any of 1e1 ... 1e4 would do: no force acts, so EA and GA do not
+  // enter the answer). With L / r = 100 (EA L^2 / EI = 4e4) plain Newton needs about 64
   // load steps: with 8 ... 32 the first iterate of each step raises the residual 50-100x and
   // the solve runs out of its 12 load-step halvings near load factor 0.3.
   const Section section = Section::Circle(kLength / 10.0, Material{1.0, 0.5, -1.0, 0.0, 0.0});

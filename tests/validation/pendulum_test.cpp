@@ -1,4 +1,4 @@
-// Validation M1 (validation.md): the IFToMM simple pendulum (benchmark A01).
+// Validation M1 (docs/validation.md): the IFToMM simple pendulum (benchmark A01).
 //
 // A point mass of 1 kg on a massless bar of 1 m, pinned at the origin, gravity 9.81 m/s^2 along
 // -y, released at rest from P = (-1, 0). Model: one node at the pivot carrying a rigid body
@@ -26,7 +26,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kG = 9.81;
-constexpr double kPeriod = 2.36784194758;  // validation.md M1
+constexpr double kPeriod = 2.36784194758;  // docs/validation.md, M1
 
 struct Pendulum {
   Model model;

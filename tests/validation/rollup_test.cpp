@@ -1,4 +1,4 @@
-// Validation S1 (validation.md): a straight cantilever rolled up by an end moment.
+// Validation S1 (docs/validation.md): a straight cantilever rolled up by an end moment.
 //
 // L = 10, EI = 100 (EA = GA = 1e4, GJ = 100), moment M = lambda 2 pi EI / L about z at the tip.
 // Exact: curvature kappa = M / EI everywhere; the section at s is at

@@ -1,5 +1,5 @@
-// Validation J1 (validation.md): soft revolute and prismatic joints (spring-damper on the joint
-// coordinate) against the closed-form damped oscillator.
+// Validation J1 (docs/validation.md): soft revolute and prismatic joints (spring-damper on the
+// joint coordinate) against the closed-form damped oscillator.
 //
 // One rigid body (the seed paper's link: m = 0.15 kg, J = 1e-4 kg m^2 about the CoM, CoM at
 // l_c = 0.25 m along x from the node) on a joint to the ground at the node, no gravity:

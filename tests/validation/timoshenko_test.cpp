@@ -1,4 +1,4 @@
-// Validation S4 (validation.md): Timoshenko cantilever, PyElastica's case
+// Validation S4 (docs/validation.md): Timoshenko cantilever, PyElastica's case
 // (Gazzola et al. 2018, §3.4.3; examples/TimoshenkoBeamCase).
 //
 // L = 3, solid circle r = 0.25, E = 1e6, G = 1e4, shear coefficient 4/3, dead transverse tip

@@ -1,4 +1,4 @@
-// Validation M3 (validation.md): torque-free asymmetric rigid body near its intermediate axis
+// Validation M3 (docs/validation.md): torque-free asymmetric rigid body near its intermediate axis
 // (Dzhanibekov effect).
 //
 // A free rigid body (one node with a rigid body, no joint, no gravity): I = diag(1, 2, 3)

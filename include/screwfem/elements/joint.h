@@ -181,8 +181,8 @@ void RetractJoint(const Model& model, Data& data, int joint,
                   const Eigen::Ref<const Eigen::VectorXd>& dx);
 
 // Largest |phi| over all constraint rows at `time`: the relative-frame constraints of the
-// joints (JointConstraint) and the prescribed drives alpha - q(t) (§4.4). The value
-// MaxConstraintViolation (assemble.h) computes from a whole residual assembly, for one
+// joints (JointConstraint) and the prescribed drives alpha - q(t) (docs/theory.md §4.4). The
+// value MaxConstraintViolation (assemble.h) computes from a whole residual assembly, for one
 // logarithm per joint.
 double CalcMaxJointConstraint(const Model& model, const Data& data, double time);
 
@@ -194,9 +194,9 @@ Vec6 CalcFreeJointDeflection(const Model& model, const Data& data, int joint);
 // (elements/element.h) on the joint's two nodes: delta varies like a rod element's relative
 // motion between the joint frames, d delta = P(delta) E [dh_A; dh_B] with
 // E = diag(Ad(C_A^-1), Ad(C_B^-1)) and G = P E (elements/rod.h). Force G^T (K delta + D G
-// eta_AB); stiffness G^T K G + E^T [D(-delta, s); D(delta, s)] P E with s = K delta (§2.4);
-// damping block G^T D G (its configuration derivative omitted, as for rods). Energy
-// 1/2 delta^T K delta.
+// eta_AB); stiffness G^T K G + E^T [D(-delta, s); D(delta, s)] P E with s = K delta
+// (docs/theory.md §2.4); damping block G^T D G (its configuration derivative omitted, as for
+// rods). Energy 1/2 delta^T K delta.
 struct JointSpringKind {
   static constexpr int kNodes = 2;
   using Item = int;  // joint index

@@ -19,11 +19,12 @@ inline constexpr const double (&kRodGaussW)[kRodGaussPoints] = kGauss3W;
 // Relative motion d = log(H_A^-1 H_B) on the branch closest to w_ref (elements/rod.h).
 Vec6 CalcRodRelativeMotion(const SE3& H_A, const SE3& H_B, const Vec3& w_ref);
 
-// P(d) = [-T^-1(-d)  T^-1(d)]: delta d = P [dh_A; dh_B] and d_dot = P [eta_A; eta_B] (§2.3).
+// P(d) = [-T^-1(-d)  T^-1(d)]: delta d = P [dh_A; dh_B] and d_dot = P [eta_A; eta_B]
+// (docs/theory.md §2.3).
 Mat6x12 CalcRodP(const Vec6& d);
 
-// Exact velocity / virtual-displacement interpolation of the helical element (§2.5):
-// eta(xi) = N(xi, d) [eta_A; eta_B], xi in [0, 1].
+// Exact velocity / virtual-displacement interpolation of the helical element
+// (docs/theory.md §2.5): eta(xi) = N(xi, d) [eta_A; eta_B], xi in [0, 1].
 Mat6x12 CalcRodN(double xi, const Vec6& d);
 
 // The same interpolation applied at the rod's Gauss points without forming N (for the energy
@@ -38,9 +39,11 @@ void CalcRodGaussVelocities(const Vec6& d, const Vec12& eta_ab, Vec6 (&eta)[kRod
 // kernels below that take it are the ones the assembly calls; the overloads taking H or d
 // compute it themselves):
 //  * d on the current branch, T^-1(d) and P(d) = [-T^-1(-d)  T^-1(d)], with
-//    T^-1(-d) = T^-1(d) - ad(d) (the series of T^-1 is even but for its ad/2 term; §1.3);
+//    T^-1(-d) = T^-1(d) - ad(d) (the series of T^-1 is even but for its ad/2 term;
+//    docs/theory.md §1.3);
 //  * at the Gauss points xi_i (kRodGaussXi), T(xi_i d) and, for tangents,
-//    N_B(xi_i) = xi_i T(xi_i d) T^-1(d). The interpolation of §2.5 is N = [I - N_B, N_B]:
+//    N_B(xi_i) = xi_i T(xi_i d) T^-1(d). The interpolation of docs/theory.md §2.5 is
+//    N = [I - N_B, N_B]:
 //    its halves sum to Ad(exp(-X)) + xi T(X) ad(d) = Ad(exp(-X)) + T(X) ad(X) = I (X = xi d,
 //    T(X) ad(X) = I - exp(-ad(X)) for the right tangent), so eta(xi) = eta_A + N_B (eta_B - eta_A).
 struct RodGeometry {
@@ -97,10 +100,11 @@ struct RodInternal {
   Vec6 elastic_stress;  // K (strain - eps0)
   double energy;        // L/2 (strain - eps0)^T K (strain - eps0) - L strain^T sigma_a
   Vec12 force;          // g_int = P^T sigma  (node A then node B, node-frame components)
-  Mat12 stiffness;      // d g_int / d[dh_A; dh_B], with the geometric term (§2.4)
+  Mat12 stiffness;      // d g_int / d[dh_A; dh_B] with the geometric term (docs/theory.md §2.4)
 };
 
-// Internal forces and consistent tangent of one element (§2.4), with actuation when given
+// Internal forces and consistent tangent of one element (docs/theory.md §2.4), with actuation
+// when given
 // (docs/numerics.md, "Active stress and rest strain": the same tangent formula with the total sigma; actuation frozen).
 void CalcRodInternal(const RodElement& element, const Section& section, const SE3& H_A,
                      const SE3& H_B, const Vec3& w_ref, RodInternal* out,

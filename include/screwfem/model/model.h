@@ -346,9 +346,9 @@ struct ContactExclusion {
   int obstacle = -1;
 };
 // The contact law (docs/numerics.md, "Contact"). Negative values are defaults set by Build
-// (§N6.4): onset 0.01 r_min, stiffness 100 W_max / onset (W_max the largest weight one pair
-// carries, with |g| = 9.81 m/s^2 when there is no gravity: the resting gap is 0.86 onset),
-// slip velocity 1e-3 m/s.
+// (docs/theory.md §N6.4): onset 0.01 r_min, stiffness 100 W_max / onset (W_max the largest
+// weight one pair carries, with |g| = 9.81 m/s^2 when there is no gravity: the resting gap is
+// 0.86 onset), slip velocity 1e-3 m/s.
 struct ContactSettings {
   double stiffness = -1.0;      // k_n [N/m]
   double onset = -1.0;          // delta [m]: the force starts at gap delta

@@ -19,7 +19,8 @@ struct ProfileTerm {
     kConstant,    // scale
     kRamp,        // 0 before t0, linear to scale at t1, scale after
     kBangBang,    // triangular velocity / bang-bang acceleration from 0 to scale on [t0, t1]
-                  // (the paper's point-to-point law and its "S-shaped" force law, method §4.4)
+                  // (the paper's point-to-point law and its "S-shaped" force law;
+                  // docs/theory.md §4.4)
     kSmoothStep,  // quintic C2 step 10u^3 - 15u^4 + 6u^5 from 0 to scale on [t0, t1]
     kSine,        // scale * sin(2 pi frequency (t - t0) + phase) for t >= t0, 0 before
     kTable,       // piecewise-linear through (times[i], values[i]) * scale, held constant outside

@@ -1,5 +1,5 @@
 // Linearisation of the constrained equations of motion about an equilibrium, natural
-// frequencies and mode shapes (validation.md D1).
+// frequencies and mode shapes (docs/validation.md, D1).
 //
 // The matrices come from the same assembly as the Newton solvers (assemble/assemble.h), read
 // back from the banded matrix through model.permutation:
