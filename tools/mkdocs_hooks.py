@@ -167,8 +167,33 @@ def _rewrite_links(text, page, config):
 
 
 def _rewrite_spans(text, repl):
-    pieces = re.split(r"(`+[^`]*?`+)", text)
-    return "".join(p if p.startswith("`") else _LINK.sub(repl, p) for p in pieces)
+    # Inline code is set aside (a link inside it is text), but a link whose label is code
+    # ([`a.yaml`](a.yaml)) is still a link: the spans become placeholders while links are found.
+    spans = []
+
+    def hide(m):
+        spans.append(m.group(0))
+        return "\x00%d\x00" % (len(spans) - 1)
+
+    def show(s):
+        return re.sub("\x00([0-9]+)\x00", lambda m: spans[int(m.group(1))], s)
+
+    hidden = re.sub(r"(`+)[^`].*?\1", hide, text, flags=re.S)
+    return show(_LINK.sub(lambda m: repl(_Shown(m, show)), hidden))
+
+
+class _Shown:
+    """A link match with its label's code spans restored (what repl reads)."""
+
+    def __init__(self, m, show):
+        self._groups = tuple(show(g) for g in m.groups())
+        self._all = show(m.group(0))
+
+    def groups(self):
+        return self._groups
+
+    def group(self, i):
+        return self._all if i == 0 else self._groups[i - 1]
 
 
 def on_page_markdown(markdown, page, config, files):
