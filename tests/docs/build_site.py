@@ -9,6 +9,8 @@ page (tools/mkdocs_hooks.py). Any other WARNING or ERROR line in MkDocs' log fai
 every page of the nav and every tutorial notebook has its HTML page; when the tutorial tests
 have left executed notebooks in --notebooks (BUILD/tutorials/NAME/NAME.ipynb), every tutorial
 page shows its figures (each <img> of an output exists in the site) and says it was executed.
+Last, README.md's links (it is not part of the site): every relative target exists, and an
+anchor into a docs page names a heading of that page.
 """
 
 import argparse
@@ -85,8 +87,26 @@ def main():
         for src in outputs:
             if not (html.parent / src).is_file():
                 fail("%s: figure %s is missing from the site" % (nb.name, src))
+    # README.md, the repository's front page, is not part of the site; its links are checked
+    # here: every relative target exists, and an anchor into a docs page names an id of its page.
+    readme = (source / "README.md").read_text(encoding="utf-8")
+    readme_links = 0
+    for target in re.findall(r"\]\(([^()\s]+)\)", re.sub(r"```.*?```", "", readme, flags=re.S)):
+        if re.match(r"[a-z]+:", target):
+            continue
+        readme_links += 1
+        path, _, anchor = target.partition("#")
+        if path and not (source / path).exists():
+            fail("README.md links to %s, which does not exist" % target)
+        if anchor:
+            if not path.startswith("docs/") or not path.endswith(".md"):
+                fail("README.md: cannot check the anchor of %s" % target)
+            page = site / (path[len("docs/"):-3] + ".html")
+            if not re.search(r'\sid="%s"' % re.escape(anchor), page.read_text(encoding="utf-8")):
+                fail("README.md links to %s: no heading '%s' on that page" % (target, anchor))
     print("docs_site: %d pages in the nav, %d tutorials (%d with their outputs), built in %.1f s "
-          "into %s" % (len(nav_pages), len(notebooks), executed, seconds, site), flush=True)
+          "into %s; README.md's %d links checked" % (len(nav_pages), len(notebooks), executed,
+                                                    seconds, site, readme_links), flush=True)
 
 
 if __name__ == "__main__":
