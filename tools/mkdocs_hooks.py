@@ -15,6 +15,11 @@
 3. Anchors. MkDocs 1.4 checks that a linked page exists, not the part after '#': every
    `page.md#anchor` and `#anchor` link must name a heading (or another id) of its target page.
 
+4. Math. Pages write $...$ and $$...$$ (pymdownx.arithmatex in generic mode, mkdocs.yml); MathJax
+   2 typesets them in the browser. The part of Debian's libjs-mathjax that its TeX-AMS_CHTML
+   configuration loads (1.6 MB) is copied into the site's js/mathjax/, so the site works offline
+   and from file://; js/mathjax-config.js tells MathJax to read arithmatex's delimiters only.
+
 Warnings go through the `mkdocs` logger, so `mkdocs build --strict` fails on them
 (tests/docs/build_site.py, ctest docs_site).
 """
@@ -25,6 +30,7 @@ import os
 import pathlib
 import posixpath
 import re
+import shutil
 import tempfile
 import warnings
 from urllib.parse import unquote, urlsplit
@@ -217,7 +223,40 @@ def on_page_content(content, page, config, files):
     return content
 
 
+MATHJAX = pathlib.Path("/usr/share/javascript/mathjax")  # Debian's libjs-mathjax
+_MATHJAX_PARTS = ["MathJax.js", "config/TeX-AMS_CHTML.js", "extensions", "jax/input/TeX", "jax/element",
+                  "jax/output/CommonHTML", "fonts/HTML-CSS/TeX/woff", "localization/en"]
+_MATHJAX_CONFIG = """// MathJax 2 (Debian's libjs-mathjax): typeset what pymdownx.arithmatex marked (tools/mkdocs_hooks.py).
+window.MathJax = {
+  tex2jax: {inlineMath: [["\\\\(", "\\\\)"]], displayMath: [["\\\\[", "\\\\]"]],
+            processEscapes: false, ignoreClass: ".*", processClass: "arithmatex"},
+  "HTML-CSS": {availableFonts: ["TeX"], imageFont: null},
+  CommonHTML: {webFont: "TeX"},
+  menuSettings: {zoom: "None"},
+  showMathMenu: false
+};
+"""
+
+
+def _copy_mathjax(site_dir):
+    if not (MATHJAX / "MathJax.js").is_file():
+        log.warning("MathJax not found in %s: install Debian's libjs-mathjax "
+                    "(scripts/setup-deps.sh rest); the site's math stays as TeX", MATHJAX)
+        return
+    js = pathlib.Path(site_dir) / "js"
+    js.mkdir(parents=True, exist_ok=True)
+    (js / "mathjax-config.js").write_text(_MATHJAX_CONFIG, encoding="utf-8")
+    for part in _MATHJAX_PARTS:
+        src, dst = MATHJAX / part, js / "mathjax" / part
+        if src.is_dir():
+            shutil.copytree(src, dst, dirs_exist_ok=True)  # follows Debian's symlinks
+        else:
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(src, dst)
+
+
 def on_post_build(config):
+    _copy_mathjax(config["site_dir"])
     for src, url, target, fragment in _links:
         if target not in _ids:
             continue  # not a page (a file): MkDocs checked the file itself

@@ -9,7 +9,7 @@ page (tools/mkdocs_hooks.py). Any other WARNING or ERROR line in MkDocs' log fai
 every page of the nav and every tutorial notebook has its HTML page; when the tutorial tests
 have left executed notebooks in --notebooks (BUILD/tutorials/NAME/NAME.ipynb), every tutorial
 page shows its figures (each <img> of an output exists in the site) and says it was executed.
-Last, README.md's links (it is not part of the site): every relative target exists, and an
+Pages with formulas find MathJax in the site. Last, README.md's links (it is not part of the site): every relative target exists, and an
 anchor into a docs page names a heading of that page.
 """
 
@@ -87,6 +87,11 @@ def main():
         for src in outputs:
             if not (html.parent / src).is_file():
                 fail("%s: figure %s is missing from the site" % (nb.name, src))
+    # Formulas: pages with math load MathJax from the site itself.
+    with_math = [h for h in site.rglob("*.html") if 'class="arithmatex"' in h.read_text(encoding="utf-8")]
+    if with_math and not (site / "js" / "mathjax" / "MathJax.js").is_file():
+        fail("%d pages have formulas but the site has no js/mathjax/MathJax.js" % len(with_math))
+
     # README.md, the repository's front page, is not part of the site; its links are checked
     # here: every relative target exists, and an anchor into a docs page names an id of its page.
     readme = (source / "README.md").read_text(encoding="utf-8")
