@@ -15,12 +15,15 @@ whatever the mesh; summary.json must say the static solution completed.
 python: the first ```python block runs in this process. Its PI controller must have settled the
 tip on the target height (within 0.1 mm, at rest within 1 mm/s), and the pressure it settled at
 must be the pressure that holds the tip at that height in statics by the closed form above
-(solved for p by bisection), within 0.5 % (measured: 9 um and 0.05 %): a controller that ended anywhere else, or a pressure
+(solved for p by bisection), within 0.5 % (measured: 9 um and 0.05 %), and the line it prints
+must be the one the README quotes (to 1e-5 m and 0.1 %): a controller that ended anywhere else, or a pressure
 chamber that bent the rod by another law, fails.
 """
 
 import argparse
+import contextlib
 import csv
+import io
 import json
 import math
 import pathlib
@@ -115,7 +118,20 @@ def check_python(args, readme):
     work = args.work / "python"
     work.mkdir(parents=True, exist_ok=True)
     namespace = {"__name__": "__readme__"}
-    exec(compile(code, "README.md (python block)", "exec"), namespace)
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        exec(compile(code, "README.md (python block)", "exec"), namespace)
+    print(printed.getvalue(), end="")
+    # The line the README says it prints, to its digits (the controller's end state).
+    line = r"tip height ([0-9.]+) m at p = ([0-9]+) Pa"
+    quoted, got = re.search("`" + line + "`", readme), re.search(line, printed.getvalue())
+    if not quoted or not got:
+        sys.exit("readme_examples: FAILED: no 'tip height ... m at p = ... Pa' line in %s"
+                 % ("the README" if not quoted else "the program's output"))
+    if abs(float(quoted[1]) - float(got[1])) > 1e-5 or \
+            abs(float(quoted[2]) - float(got[2])) > 1e-3 * float(quoted[2]):
+        sys.exit("readme_examples: FAILED: the program printed '%s', the README says '%s'"
+                 % (got[0], quoted[0][1:-1]))
     sim, target = namespace["sim"], namespace["target"]
     tip = sim.point_motion("tip")
     height, speed = tip.position[1], math.hypot(*tip.velocity)
