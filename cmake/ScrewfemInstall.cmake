@@ -1,4 +1,4 @@
-# Install and export (README.md, "Install"): `cmake --install <build> --prefix <dir>` installs
+# Install and export (docs/install.md, "Install"): `cmake --install <build> --prefix <dir>` installs
 #   include/screwfem/...                     the public headers
 #   lib/libscrewfem_<layer>.a                one static library per layer
 #   lib/cmake/screwfem/screwfemConfig.cmake  find_package(screwfem) -> screwfem::core, ::io, ...

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the benchmarks in Release (build/release), runs them and rewrites bench/RESULTS.md
-# from their JSON results (README.md, "Benchmarks"):
+# from their JSON results (docs/benchmarks.md):
 #   screwfem_bench_statics   -> bench/results_statics.json   (rod assembly and solve)
 #   screwfem_bench_dynamics  -> bench/results_dynamics.json  (GRM runs, rod time steps)
 #   screwfem_bench_outputs   -> bench/results_outputs.json   (cost of a run's outputs)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# GRM convergence study (README.md, "Convergence"): builds screwfem in Release (build/release),
+# GRM convergence study (docs/getting-started.md, "Convergence"): builds screwfem in Release (build/release),
 # runs the rigid GRM with 2, 4, 8 and 16 elements per soft body and several steps into
 # out/convergence/, and writes the table to out/convergence/table.md (also printed).
 # Run as root if dependencies may be missing.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The main job (README.md, "Quick start", first command): installs missing Debian packages,
+# The main job (README.md, first command; docs/getting-started.md): installs missing Debian packages,
 # builds what it runs (the screwfem program, the statics example and the Python module) in
 # Release into build/main, runs the statics example and the GRM cases, plots the GRM results,
 # writes a browser viewer per case, and runs the closed-loop soft arm from Python, recorded,
@@ -41,7 +41,7 @@ fi
 "$statics_example" | tee out/statics.txt
 end "statics example"
 
-# The GRM of the method paper (examples/grm; README "The GRM example"): the rigid case, and the soft
+# The GRM of the method paper (examples/grm; docs/getting-started.md, "The GRM example"): the rigid case, and the soft
 # cases in both readings (series-elastic actuated joints, and springs in parallel with
 # prescribed ones). Each run writes points.csv, joints.csv, joints.json, summary.json and
 # ParaView frames into out/grm_<case>/.

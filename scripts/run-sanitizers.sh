@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The whole GoogleTest suite under AddressSanitizer + UndefinedBehaviorSanitizer, on demand
-# (README.md, "Tests"): every test program of tests/ and every test of the Release suite but the
+# (docs/maintainers.md, "Test command: time and history"): every test program of tests/ and every test of the Release suite but the
 # Python tools' tests, in the tree of the test command's sanitizer stage (build/asan;
 # scripts/sanitizer-config.sh), to which it adds the test programs that stage leaves out.
 # The test command (scripts/run-tests.sh) cannot afford them within its 15 minutes. At 984e479

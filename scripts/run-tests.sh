@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The test job (README.md, "Quick start", second command; also .ci/run):
+# The test job (README.md, second command; docs/getting-started.md; also .ci/run):
 #   1. installs missing Debian packages (those the Release build needs first; the rest while it
 #      compiles);
 #   2. Release build in build/release, its ctest suite, and every example program
@@ -198,7 +198,7 @@ if [[ $release_built -eq 1 ]]; then
   # The other test programs (the io and solve tests, the validation problems, the kernels' own
   # tests, the allocation counts) run in the Release suite above, and under the sanitizers in
   # scripts/run-sanitizers.sh, on demand: building and running them instrumented took 550 s
-  # more, and the whole test command must stay under 15 minutes (README.md, "Tests").
+  # more, and the whole test command must stay under 15 minutes (docs/maintainers.md).
   if configure_and_build "ASan+UBSan" "$asan_dir" "${asan_cmake_args[@]}" \
       -DSCREWFEM_TEST_PROGRAMS="linalg;build"; then
     run_ctest "ASan+UBSan" "$asan_dir" -E "$asan_always_excluded"

@@ -7,7 +7,7 @@
 # sanitizers on. SCREWFEM_NATIVE=OFF: the portable instruction set (the Release build uses the
 # machine's), so the code runs on both code paths of Eigen's vectorisation. Clang (not GCC): it
 # provides libFuzzer, so one tree serves the sanitizer tests and the fuzzers; it also compiles
-# the sanitizer build faster than GCC (README.md, "Fuzzing").
+# the sanitizer build faster than GCC (docs/maintainers.md, "Fuzzing").
 asan_dir=build/asan
 asan_cmake_args=(-DSCREWFEM_SANITIZE=ON -DCMAKE_CXX_COMPILER=clang++ -DSCREWFEM_FUZZ=ON
   -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"

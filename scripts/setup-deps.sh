@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs the Debian packages screwfem needs (README.md, "Dependencies"), and only those that
-# are missing. Silent when everything is already installed; needs root only to install.
+# Installs the Debian packages screwfem needs (README.md, "Dependencies", says why each; details
+# in docs/install.md), and only those that are missing. Silent when everything is already
+# installed; needs root only to install.
 set -euo pipefail
 
 # Groups, so that a job installs only what it uses and the test job can compile while the
@@ -9,7 +10,8 @@ set -euo pipefail
 #   main   build + what the main job's figures and viewer pages need (scripts/run-main.sh);
 #   rest   the figures' and viewer's packages + what only the tests use (the sanitizer
 #          compiler, clang-format for the lint, Chromium for the viewer test, venv/pip for
-#          the package test, Dask, nbconvert and ipykernel for the tutorial notebooks);
+#          the package test, Dask, nbconvert and ipykernel for the tutorial notebooks, mkdocs,
+#          pymdownx and MathJax for the documentation site of the test docs_site);
 #   bench  build + what only the benchmarks use: MuJoCo, which screwfem_bench_mujoco runs side
 #          by side with screwfem on the same model (bench/RESULTS.md, "Spring chain against
 #          MuJoCo"; the bench builds only when it is found, the tests never need it);
@@ -28,6 +30,7 @@ test_packages=(
   python3-dask python3-distributed python3-pandas
   chromium python3-websocket
   jupyter-nbconvert python3-ipykernel
+  mkdocs python3-pymdownx libjs-mathjax
 )
 case "${1:-all}" in
   build) packages=("${build_packages[@]}") ;;

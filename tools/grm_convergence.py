@@ -7,7 +7,7 @@ and steps h = 1e-3 and 5e-4, and with 4 elements at h = 2e-3 and 2.5e-4, over it
 OUTDIR/e<elements>_h<step>/, and prints the position of P8 at t = 0.5, 1, 1.5 and 2 s for
 every run, then the differences between successive refinements at t = 0.5 s and their
 ratios (about 4 for a second-order method, about 2 for a first-order one).
-scripts/run-convergence.sh runs it; README.md ("Convergence") shows its output.
+scripts/run-convergence.sh runs it; docs/getting-started.md ("Convergence") shows its output.
 Standard library only (Debian's /usr/bin/python3).
 """
 

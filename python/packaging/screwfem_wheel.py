@@ -50,7 +50,7 @@ import zipfile
 _SOURCE = pathlib.Path(__file__).resolve().parents[2]
 _TARGET = "_screwfem"
 # Existing build trees of the source tree that an install reuses, in order of preference when
-# none holds a built extension: the main job's and the test job's (README.md, "Quick start").
+# none holds a built extension: the main job's and the test job's (docs/getting-started.md).
 _REUSABLE = ("build/main", "build/release")
 # CPU seconds of one translation unit of the _screwfem target and the libraries it links, for
 # the announcement's estimate: a clean build/wheel compiles 17 (12 of the libraries, 5 of the

@@ -632,8 +632,21 @@ void Reader::ExpectMap(const Node& node, const std::string& path) const {
     Fail(node.location, path, "expected a map (key: value entries), got " + Describe(node));
 }
 
+namespace {
+KeyCheckObserver key_check_observer = nullptr;
+void* key_check_context = nullptr;
+}  // namespace
+
+void SetKeyCheckObserver(KeyCheckObserver observer, void* context) {
+  key_check_observer = observer;
+  key_check_context = context;
+}
+
 void Reader::CheckKeys(const Node& map, const std::string& path,
-                       const std::vector<std::string>& allowed) const {
+                       const std::vector<std::string>& allowed, const char* function,
+                       int line) const {
+  if (key_check_observer != nullptr)
+    key_check_observer(KeyCheck{path, &allowed, function, line}, key_check_context);
   ExpectMap(map, path);
   for (std::size_t i = 0; i < map.entries.size(); ++i) {
     const MapEntry& e = map.entries[i].first;

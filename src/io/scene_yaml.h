@@ -104,8 +104,9 @@ class Reader {
   // Checks that `node` is a map whose keys are all in `allowed` and not repeated; the first
   // offending key (in file order) is reported.
   void ExpectMap(const Node& node, const std::string& path) const;
-  void CheckKeys(const Node& map, const std::string& path,
-                 const std::vector<std::string>& allowed) const;
+  // `function` and `line` name the call (filled in by the compiler) for the key observer below.
+  void CheckKeys(const Node& map, const std::string& path, const std::vector<std::string>& allowed,
+                 const char* function = __builtin_FUNCTION(), int line = __builtin_LINE()) const;
   // A map of named entries: names must be plain identifiers and unique.
   void CheckNames(const Node& map, const std::string& path, const std::string& entity) const;
   const Node& Require(const Node& map, const std::string& path, const std::string& key) const;
@@ -133,6 +134,19 @@ class Reader {
  private:
   std::string source_;
 };
+
+// The scene reference test (tests/io/scene_reference_test.cpp) holds docs/scene-format.md and
+// the reader together: it reads scenes with an observer installed, which sees every map the
+// reader checks, with the keys it allows there, so the keys the reader accepts have one source
+// of truth, the lists at the CheckKeys calls. Not for use outside that test (not thread-safe).
+struct KeyCheck {
+  std::string path;                         // dotted path of the map ("" for the top level)
+  const std::vector<std::string>* allowed;  // the keys allowed there
+  const char* function;                     // the reader function that checked it
+  int line;                                 // and the line of the call
+};
+using KeyCheckObserver = void (*)(const KeyCheck& check, void* context);
+void SetKeyCheckObserver(KeyCheckObserver observer, void* context);
 
 // Evaluates a number written as a decimal literal or a small arithmetic expression
 // (+ - * / parentheses, the constants pi and deg = pi/180, the functions sqrt sin cos tan asin

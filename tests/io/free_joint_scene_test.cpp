@@ -1,4 +1,4 @@
-// A scene with a free joint carrying springs and dampers (README "Joint library": a 6-DOF
+// A scene with a free joint carrying springs and dampers (docs/user-guide.md, "Joint library": a 6-DOF
 // elastic connection) compiles and runs: six springs per joint are read, the joint adds no
 // unknowns and no constraint rows, and the dynamics starts and moves (before, the joint's six
 // massless coordinates were decoupled from the bodies and the start was singular).

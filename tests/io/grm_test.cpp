@@ -1,7 +1,7 @@
-// The generic robotic mechanism (GRM, examples/grm and README "The GRM example") run from its example scenes
+// The generic robotic mechanism (GRM, examples/grm and docs/getting-started.md, "The GRM example") run from its example scenes
 // examples/grm/grm_{rigid,soft_k,soft_kd,soft_k_parallel,soft_kd_parallel}.yaml through
 // LoadScene and RunScene. The checks are
-// the ones README's GRM lists as checkable without the paper's curves: actuated joints follow their
+// the ones the GRM example's lists as checkable without the paper's curves: actuated joints follow their
 // profiles exactly in case 1, constraints hold, recorded velocities and accelerations are the
 // time derivatives of recorded positions and velocities, the free joint's point follows the
 // closed-form kinematics of the actuated chain, second-order convergence in space and time,
@@ -40,7 +40,7 @@ using test::Table;
 
 constexpr double kPi = std::numbers::pi;
 
-// --- README's GRM: geometry, actuation, joints ---------------------------------------------------------
+// --- the GRM example's: geometry, actuation, joints ---------------------------------------------------------
 
 // Table I (initial configuration) [m].
 const Vec3 kP2(0.0, 1.0, 0.0);
@@ -62,7 +62,7 @@ struct JointMotion {
   double q, qd, qdd;
 };
 
-// README's GRM "Actuation": a = 4 q_f / T^2; q = a t^2 / 2 for t <= T/2, q_f - a (T - t)^2 / 2 for
+// the GRM example's "Actuation": a = 4 q_f / T^2; q = a t^2 / 2 for t <= T/2, q_f - a (T - t)^2 / 2 for
 // T/2 < t <= T, q_f after. At a jump the acceleration is the right limit (docs/numerics.md, "Restarts at breakpoints"; the
 // integrator restarts there, DynamicOptions::restart_at_breakpoints).
 JointMotion BangBang(double q_final, double t) {
@@ -76,10 +76,10 @@ JointMotion BangBang(double q_final, double t) {
 // Rotation about world z by q.
 Mat3 Rz(double q) { return Eigen::AngleAxisd(q, Vec3::UnitZ()).toRotationMatrix(); }
 
-// The prismatic axis of J3: the unit vector 2 -> 3 (README's GRM joints: (cos 1.1903, sin 1.1903, 0)).
+// The prismatic axis of J3: the unit vector 2 -> 3 (the GRM example's joints: (cos 1.1903, sin 1.1903, 0)).
 Vec3 E23() { return (kP3 - kP2).normalized(); }
 
-// World position of P4 from the coordinates of J0, J2 and J3. The chain (README's GRM "Bodies") is
+// World position of P4 from the coordinates of J0, J2 and J3. The chain (the GRM example's "Bodies") is
 // ground -J0- crank (welded to link12 at 1) -J2- guide -J3- link34, and P4 is a point of link34.
 // Every joint frame is world-aligned at t = 0 (elements/joint.h) and rides on its first body:
 // J0 turns everything after it about z through P0 = 0; J2 turns guide and link34 about z
@@ -187,7 +187,7 @@ class GrmRigid : public ::testing::Test {
   static inline std::optional<GrmRun> run_;
 };
 
-// Case 1 (README's GRM "The three cases"): the actuated joints are rheonomic constraints alpha = q(t)
+// Case 1 (the GRM example's "The three cases"): the actuated joints are rheonomic constraints alpha = q(t)
 // (elements/joint.h), so their coordinates are the profile at every row, to the solver's
 // constraint tolerance. Measured: |alpha - q| <= 1.1e-16 for all four joints; largest
 // constraint residual 1.1e-15.
@@ -341,7 +341,7 @@ TEST_F(GrmRigid, RecordedPointVelocitiesAndAccelerationsAreTimeDerivatives) {
 }
 
 // P4 is a point of link34 (outputs of grm_rigid.yaml). Its position is fixed by the actuated
-// coordinates of J0, J2, J3 alone (P4FromChain, derived from README's GRM's topology), so in case 1
+// coordinates of J0, J2, J3 alone (P4FromChain, derived from the GRM's topology), so in case 1
 // it follows the closed form with q(t) of the profiles. Measured: 4.0e-15 m (the same with the
 // recorded coordinates). Its recorded velocity matches the chain's velocity for the recorded
 // joint rates up to the velocity-level constraint drift of the index-3 scheme (docs/architecture.md, "One time step":
@@ -375,7 +375,7 @@ TEST_F(GrmRigid, FreeJointPointFollowsTheClosedFormPathOfTheActuatedChain) {
   EXPECT_NEAR(Vec3(vx.back(), vy.back(), vz.back()).norm(), 0.0, 1e-9);
 }
 
-// --- case 1: convergence of the tip (README's GRM: O(L_e^2) in space, O(h^2) in time) ----------------
+// --- case 1: convergence of the tip (the GRM example's: O(L_e^2) in space, O(h^2) in time) ----------------
 
 // P8 (the tip, a node of arm78) at the last row of rigid-case runs ending at t = 0.5 s.
 struct Tips {
@@ -421,7 +421,7 @@ std::vector<double> SuccessiveRatios(const std::vector<Vec3>& values, std::vecto
 // The rigid GRM at 8 elements (the scene as shipped, a row every 1 ms) with step: auto and
 // tolerance 3e-6 against h = 1e-3: P8 within 2 mm of the fixed step's over the whole run (the
 // fixed step's own error is 0.19 mm against h = 2.5e-4; the 8 -> 16 element difference is 8 to
-// 12 mm after 1.5 s, README "Convergence") in at most a third of the steps. Measured: 649
+// 12 mm after 1.5 s, docs/getting-started.md, "Convergence") in at most a third of the steps. Measured: 649
 // steps against 2000, 0 rejected, P8 at most 1.48 mm from the fixed step's (at t = 1.837 s).
 // The rows inside steps are interpolated (InterpolateStep): the prescribed coordinates, piecewise
 // quadratic between breakpoints, are reproduced exactly by the cubic Hermite interpolant, and
@@ -478,7 +478,7 @@ TEST(GrmAdaptive, ReachesTheFixedStepTrajectoryInAThirdOfTheSteps) {
 }
 
 // Halving the element length of the five soft bodies (2, 4, 8, 16 elements each) at h = 1e-3:
-// the differences of the tip position at 0.5 s fall by about 4 (O(L_e^2), README's GRM; docs/numerics.md
+// the differences of the tip position at 0.5 s fall by about 4 (O(L_e^2), the GRM example's; docs/numerics.md
 // test 7). Measured differences 1.016e-2, 1.931e-3, 4.930e-4 m; ratios 5.26 and 3.92 (the
 // 2-element mesh is not yet asymptotic). A first-order method would give ratios near 2.
 TEST(GrmConvergence, TipPositionConvergesAtSecondOrderInTheElementLength) {
@@ -526,7 +526,7 @@ TEST(GrmConvergence, TipPositionAndVelocityConvergeAtSecondOrderInTheStep) {
 
 // --- cases 2 and 3: soft joints, 8 elements per soft body, h = 1e-3, 2 s ----------------------
 
-// README's GRM "The three cases": K = 10 N/m or N m/rad on every joint, D = 0 (case 2) or 5
+// the GRM example's "The three cases": K = 10 N/m or N m/rad on every joint, D = 0 (case 2) or 5
 // (case 3). Passive joints: spring (and damper) towards 0. Actuated joints: series-elastic
 // towards the profile q(t). The effort column (io/writers.h JointCoordinateEffort,
 // assemble.h JointDriveEffort) is the generalised force the spring-damper applies to the
@@ -539,14 +539,14 @@ TEST(GrmConvergence, TipPositionAndVelocityConvergeAtSecondOrderInTheStep) {
 // P4FromChain of the recorded coordinates (the relative-frame constraints hold, elements/joint.h). Measured 3e-14 m (case 2) and 6e-14 m (case 3), with P4 travelling up to 27 m.
 //
 // The series-elastic drives do not prescribe the coordinates: the 100 N loads overpower the
-// 10 N/m spring of J3, which ends metres past its rest (README's GRM "What the paper's loads do";
+// 10 N/m spring of J3, which ends metres past its rest (the GRM example's "What the paper's loads do";
 // measured max |alpha - q(t)|: J3 24.8 m (case 2), 13.6 m (case 3); J0, J2, J5 0.5-3 rad).
 void ExpectSoftCase(const std::string& scene, double damping) {
   constexpr double K = 10.0;
   const GrmRun run = RunGrm(scene, {"defaults.elements=8", "analysis.step=1e-3"}, scene);
   ExpectCompletedWithConstraintsHeld(run, 2.0, 2000);
   // 8 elements per soft body keep every element below half a turn although the arms fold
-  // (measured 1.69 rad in case 2, 1.61 rad in case 3; README, "Elements per soft body").
+  // (measured 1.69 rad in case 2, 1.61 rad in case 3; docs/getting-started.md, "The GRM example").
   EXPECT_LT(run.result.max_element_rotation, kPi);
   EXPECT_GT(run.result.max_element_rotation, 1.0);
   ASSERT_EQ(run.joints.rows.size(), 2001u);  // outputs.interval = 1e-3
@@ -671,7 +671,7 @@ TEST(GrmSoftKdParallel, ActuatedJointsFollowTheirProfilesExactlyAndPassiveSpring
 // the state): E(t) - E(0) = W_loads + W_drives - W_dampers, with E the kinetic, strain,
 // joint-spring and gravity energy (CalcEnergy; the series-elastic springs measured from q(t)),
 // and the works integrated by the trapezoidal rule over the steps:
-//   loads:   f(t) . v_P at the load points (world-frame dead loads, README's GRM Table IV);
+//   loads:   f(t) . v_P at the load points (world-frame dead loads, the GRM example's Table IV);
 //   drives:  effort q'(t), the power the moving spring end puts in (effort as above);
 //   dampers: D (alpha' - q'(t))^2 (series-elastic) and D alpha'^2 (passive), all >= 0.
 // The imbalance is the numerical dissipation of generalized-alpha (rho_inf = 0.8) plus the

@@ -51,8 +51,8 @@
 //   binary  every array in one <AppendedData encoding="raw"> block after the XML: per array a
 //           UInt64 byte count, then the values in the machine's byte order (byte_order says
 //           which). Doubles are stored exactly. Raw appended rather than inline base64 (the
-//           other binary encoding VTK and ParaView read; README.md, "ParaView frames", has the
-//           measurements): base64 takes 4/3 of the bytes of the arrays and must be encoded
+//           other binary encoding VTK and ParaView read; docs/user-guide.md, "ParaView
+//           frames", has the measurements): base64 takes 4/3 of the bytes of the arrays and must be encoded
 //           on every frame, raw data is the arrays' memory itself; and since every array's
 //           size is fixed by the model, the whole file (XML, offsets, connectivity, ids) is
 //           composed once at Open and a frame only copies its doubles into it. What raw data
