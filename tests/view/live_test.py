@@ -127,6 +127,7 @@ class LiveView(unittest.TestCase):
             self.assertTrue(done.wait(10), "the step did not return after resuming")
             worker.join()
             self.assertFalse(view.paused)
+            self.assertTrue(wait_for(lambda: self.page()["paused"] == "0"))
             # Paused again, close() releases the step.
             self.click_pause()
             self.assertTrue(wait_for(lambda: view.paused))
