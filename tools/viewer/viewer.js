@@ -958,7 +958,19 @@
     t1 = m.t;
     if (nf === 1) t0 = m.t;
     if (liveFollow) time = t1;
+    // Until the camera is moved by hand, the picture frames the whole motion so far.
+    var before = box.clone();
+    for (i = 0; i < nm; ++i) {
+      var p = moving[i];
+      if (!isObstacle[p]) expand(box, x[3 * i], x[3 * i + 1], x[3 * i + 2], radius[p] || 0);
+    }
+    if (liveFrame && !box.equals(before)) {
+      size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-6);
+      frameAll(true);
+    }
   }
+  var liveFrame = true;
+  controls.addEventListener("start", function () { liveFrame = false; });
   var liveDrawPending = false;
   function liveDraw() {
     if (liveDrawPending) return;
@@ -1007,7 +1019,8 @@
   // ---- start -------------------------------------------------------------------------------
   document.getElementById("case").textContent = data.name || "screwfem run";
   var notes = [];
-  if (data.status && data.status !== "completed") notes.push("run " + data.status + (data.message ? ": " + data.message : ""));
+  if (data.live) notes.push("live: following the running simulation");
+  else if (data.status && data.status !== "completed") notes.push("run " + data.status + (data.message ? ": " + data.message : ""));
   notes = notes.concat(data.notes || []);
   document.getElementById("note").textContent = notes.join(" \u00b7 ");
   // Legends of the tension colours and the arrows' scale.
