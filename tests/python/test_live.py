@@ -182,6 +182,16 @@ class LiveView(unittest.TestCase):
             self.assertEqual(times[2], sim.time)
             self.assertEqual(view.frames_sent, 3)
 
+    def test_static_load_steps_are_frames(self):
+        # tests/view/chamber.yaml: 4 load steps, a frame each with the load factor as its time.
+        sim = sf.Simulation(sf.load_scene(os.path.join(SOURCE, "tests", "view", "chamber.yaml")))
+        with sim.view(max_rate=0) as view:
+            client = Client(view.url)
+            self.assertTrue(client.wait(lambda: view.clients == 1))
+            sim.solve_static()
+            self.assertTrue(client.wait(lambda: len(client.frames()) == 4))
+            self.assertEqual([m["t"] for m in client.frames()], [0.25, 0.5, 0.75, 1.0])
+
     def test_stepping_cost_without_a_page(self):
         sim = self.sim
         steps = 10
