@@ -6,7 +6,8 @@ with Debian's /usr/bin/python3).
 The page plays the run in a browser at real rate, offline (it opens from file://), true to
 size: rods as tubes of their section, rigid bodies as their contact shapes or else the box of
 their inertia, obstacles, tendons and force elements coloured by tension, contact forces as
-arrows, joints and joint frames, recorded points with trails, a ground grid; every layer can
+arrows, pressure chambers inside the rods, joints and joint frames, recorded points with
+trails, a ground grid; every layer can
 be switched off; play/pause, speed, a time slider, orbit/pan/zoom and follow-a-body
 (tools/viewer/viewer.js lists the URL parameters).
 
@@ -28,6 +29,10 @@ The size is printed on stderr.
 The rods are coloured by a scalar only if the frames carry one: the speed |v| from the
 velocity array, and any other point array (a strain or a stress, for instance) per component.
 Today's frames carry no strain or stress, and the page says so.
+
+The same code builds the page of a running Python simulation (Simulation.view,
+python/screwfem/_live.py): page_data(..., live=True) for its first frame, live_frame for each
+frame its WebSocket sends.
 
 three.js r111 comes from Debian's libjs-three (/usr/share/javascript/three; another directory
 with SCREWFEM_THREE_DIR) and is inlined with examples/js/controls/OrbitControls.js.

@@ -14,12 +14,15 @@
 // else the box of their inertia, obstacles. Markers whose size means nothing: joints
 // (spheres), joint frames (x red, y green, z blue), links (thin rods from a body's frame to
 // its joints), tendons and force elements (thin tubes coloured by tension), contact forces
-// (arrows from the contact point along the force on the shape, drawn over everything).
+// (arrows from the contact point along the force on the shape, drawn over everything);
+// pressure chambers as see-through tubes of their area's circle inside the rods. A static
+// run's time is its load factor (labelled lambda). A page served by Simulation.view (data.live)
+// receives its frames over a WebSocket ("live view" below).
 //
 // URL parameters (for tests and links): t=SECONDS shows that time and stays paused;
 // bare=1 draws the mechanism alone (no grid, axes, obstacles, trails, labels or controls);
-// hide=a,b and show=a,b switch the layers (rods bodies links joints frames tendons forces
-// obstacles points grid labels); follow=NAME follows a body, rod, joint or recorded point;
+// hide=a,b and show=a,b switch the layers (rods chambers bodies links joints frames tendons
+// forces obstacles points grid labels); follow=NAME follows a body, rod, joint or recorded point;
 // colour=FIELD colours the rods; labels=1; trail=SECONDS or all; speed=FACTOR;
 // camera: view=front|back|left|right|top|bottom|iso, target=X,Y,Z, span=METRES (the width of
 // the picture at the target), ortho=1 (orthographic), eye=X,Y,Z (perspective, from there);
