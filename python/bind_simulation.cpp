@@ -883,6 +883,44 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "calc_energy() -> Energy\n\nKinetic, strain, spring and gravity energies of the "
           "current state [J] (CalcEnergy).")
       .def(
+          "view",
+          [](py::object self, int port, bool open_browser, const std::string& host,
+             py::object max_rate, py::object pause_timeout) {
+            return py::module_::import("screwfem._live")
+                .attr("LiveView")(self, py::arg("port") = port,
+                                  py::arg("open_browser") = open_browser, py::arg("host") = host,
+                                  py::arg("max_rate") = max_rate,
+                                  py::arg("pause_timeout") = pause_timeout);
+          },
+          py::arg("port") = 0, py::arg("open_browser") = false, py::arg("host") = "127.0.0.1",
+          py::arg("max_rate") = 30.0, py::arg("pause_timeout") = py::none(),
+          "view(port=0, open_browser=False, host='127.0.0.1', max_rate=30.0, "
+          "pause_timeout=None) -> LiveView\n\nLive view: serves the browser viewer "
+          "(tools/viewer) on http://host:port/ (port 0: a free one) from a background thread "
+          "and pushes the simulation's frame to every connected page over a WebSocket after "
+          "each step(), advance_to(), simulate() and static load step (the last step of every "
+          "call; the steps inside one call at most max_rate frames per second of wall time, "
+          "None or 0: all). Nothing is built while no page is connected. The page's Pause "
+          "button pauses the simulation: a step taken while paused waits at its end until "
+          "the page resumes, every page has gone, close() is called or pause_timeout seconds "
+          "have passed. Returns a LiveView (screwfem/_live.py) with .url, .close() and "
+          "context-manager support; docs/python.md, 'Live view'. Needs Debian's "
+          "python3-websockets.")
+      .def(
+          "_set_step_hook", [](S& s, py::object hook) { s.SetStepHook(std::move(hook)); },
+          py::arg("hook"),
+          "_set_step_hook(hook)\n\nhook(t, last) after every accepted step (None: none); "
+          "used by view().")
+      .def(
+          "_step_hook", [](S& s) { return s.step_hook(); },
+          "_step_hook() -> callable or None\n\nThe hook _set_step_hook set.")
+      .def(
+          "_vtk_frame",
+          [](S& s, double time, double load_factor) { return s.VtkFrame(time, load_factor); },
+          py::arg("time"), py::arg("load_factor") = 1.0,
+          "_vtk_frame(time, load_factor=1.0) -> bytes\n\nThe ParaView frame of the current "
+          "state (io/vtk.h, binary), as view() sends it.")
+      .def(
           "max_constraint_violation",
           [](S& s) { return MaxConstraintViolation(s.model(), s.data(), s.data().time, 1.0); },
           "max_constraint_violation() -> float\n\nLargest |phi| over all constraint rows at the "

@@ -333,6 +333,10 @@ BodySpec SpecReader::ReadBody(py::handle obj, const std::string& path, std::size
                        "joint of type fixed)");
   }
   b.contact_radius = NonNegative(get("contact_radius"), f("contact_radius"));
+  b.visual_radius = NonNegative(get("visual_radius"), f("visual_radius"));
+  if (b.rigid && b.visual_radius > 0.0)
+    Fail(f("visual_radius"),
+         "rigid bodies are drawn as their shapes (visual_radius is for soft bodies)");
   const py::list shapes = List(get("shapes"), f("shapes"));
   for (std::size_t i = 0; i < shapes.size(); ++i)
     b.shapes.push_back(Object<ContactShape>(shapes[i], Index(f("shapes"), i), "ContactShape"));
@@ -677,8 +681,9 @@ py::object ToPython(const BodySpec& b) {
       py::arg("initial_angular") = Tuple(b.initial_angular), py::arg("path") = path,
       py::arg("elements") = b.elements, py::arg("section") = b.section, py::arg("up") = Tuple(b.up),
       py::arg("weld_start") = b.weld_start, py::arg("weld_end") = b.weld_end,
-      py::arg("contact_radius") = b.contact_radius, py::arg("shapes") = shapes,
-      py::arg("contype") = b.contype, py::arg("conaffinity") = b.conaffinity);
+      py::arg("contact_radius") = b.contact_radius, py::arg("visual_radius") = b.visual_radius,
+      py::arg("shapes") = shapes, py::arg("contype") = b.contype,
+      py::arg("conaffinity") = b.conaffinity);
 }
 
 py::object ToPython(const JointEntrySpec& j) {

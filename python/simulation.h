@@ -7,6 +7,8 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <cstdio>
 #include <optional>
 #include <stdexcept>
@@ -16,6 +18,7 @@
 #include "screwfem/elements/joint.h"
 #include "screwfem/io/recording.h"
 #include "screwfem/io/scene.h"
+#include "screwfem/io/vtk.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/advance.h"
 #include "screwfem/solve/dynamics.h"
@@ -121,9 +124,18 @@ class Simulation {
                           ? recording_
                           : nullptr;
     const double t = o.time;
+    std::optional<py::error_already_set> hook_error;
     StaticResult r = SolveStatic(model(), data_, o, signals.request(), [&](const StaticStep& step) {
       if (path != nullptr) path->RecordStaticStep(t, step.load_factor);
+      if (!step_hook_.is_none() && !hook_error) {
+        try {
+          step_hook_(step.load_factor, step.load_factor == o.end_load_factor);
+        } catch (py::error_already_set& e) {
+          hook_error.emplace(std::move(e));
+        }
+      }
     });
+    if (hook_error) throw std::move(*hook_error);
     if (recording_ != nullptr) recording_->SetStaticResult(r);
     if (path != nullptr && r.converged && !path->finished())
       path->RecordStaticSolution(t, r.load_steps == 0);
@@ -209,6 +221,21 @@ class Simulation {
   // recording takes solve_static's path; a dynamic one's starts at the first step.
   void Attach(Recording* recording) { recording_ = recording; }
   Recording* recording() const { return recording_; }
+  // Simulation.view: a callable hook(t, last) run after every accepted step (t the time, or
+  // the load factor of a static load step; last: the call's final step), None: none. It may
+  // block (the live view's pause) and raise (the stepping call then raises it).
+  void SetStepHook(py::object hook) { step_hook_ = std::move(hook); }
+  const py::object& step_hook() const { return step_hook_; }
+  // The ParaView frame of the current state (io/vtk.h, binary), composed in memory: the live
+  // view's frames. `time` is the frame's TimeValue.
+  py::bytes VtkFrame(double time, double load_factor) {
+    if (!vtk_) {
+      vtk_ = std::make_unique<VtkWriter>();
+      vtk_->Open("", model(), VtkFormat::kBinary, 0, false);
+    }
+    const std::string& image = vtk_->ComposeFrame(model(), data_, time, load_factor);
+    return py::bytes(image.data(), image.size());
+  }
   // run_scene with a callback steps this simulation: its own stepping is refused meanwhile.
   void SetInRun(bool in_run) { in_run_ = in_run; }
   void SetInitialized() { initialized_ = true; }
@@ -231,13 +258,14 @@ class Simulation {
   // failure, a signal or a write error.
   StepResult Run(const StepPolicy& policy, double t_until) {
     PythonSignals signals;
-    RecordingSteps observer(recording_);
+    RecordingSteps observer(recording_, step_hook_, data_);
     if (recording_ != nullptr && !recording_->started() && !recording_->finished())
       recording_->Start();
     if (recording_ != nullptr && recording_->finished()) ThrowRecordingFailed();
-    AdvanceResult r =
-        screwfem::Advance(model(), data_, integrator_, policy, t_until,
-                          recording_ != nullptr ? &observer : nullptr, signals.request());
+    const bool observed = recording_ != nullptr || !step_hook_.is_none();
+    AdvanceResult r = screwfem::Advance(model(), data_, integrator_, policy, t_until,
+                                        observed ? &observer : nullptr, signals.request());
+    if (observer.hook_error) throw std::move(*observer.hook_error);
     signals.ThrowIfRaised();
     if (r.stopped) ThrowRecordingFailed();
     if (!r.ok) RaiseSolverError(r.message, py::cast(static_cast<StepResult>(r)));
@@ -245,17 +273,39 @@ class Simulation {
   }
 
   // The recording's observer for steps driven from Python: the rows and frames due by its
-  // clocks only (the end of the run is where the recording is closed, which records it).
+  // clocks only (the end of the run is where the recording is closed, which records it); and
+  // the step hook (Simulation.view), after every step. An exception of the hook ends the
+  // stepping (hook_error, raised by Run).
   class RecordingSteps : public AdvanceObserver {
    public:
-    explicit RecordingSteps(Recording* r) : r_(r) {}
-    void BeforeStep(double t) override { r_->BeforeStep(t); }
-    double NextOutputTime() const override { return r_->NextOutputTime(); }
-    bool OutputInsideStep(double t) override { return r_->OutputInsideStep(t); }
-    bool AfterStep(bool /*last*/) override { return r_->AfterStep(false); }
+    RecordingSteps(Recording* r, const py::object& hook, const Data& data)
+        : r_(r), hook_(hook), data_(data) {}
+    void BeforeStep(double t) override {
+      if (r_ != nullptr) r_->BeforeStep(t);
+    }
+    double NextOutputTime() const override {
+      return r_ != nullptr ? r_->NextOutputTime() : std::numeric_limits<double>::infinity();
+    }
+    bool OutputInsideStep(double t) override {
+      return r_ != nullptr ? r_->OutputInsideStep(t) : true;
+    }
+    bool AfterStep(bool last) override {
+      if (r_ != nullptr && !r_->AfterStep(false)) return false;
+      if (hook_.is_none()) return true;
+      try {
+        hook_(data_.time, last);
+      } catch (py::error_already_set& e) {
+        hook_error.emplace(std::move(e));
+        return false;
+      }
+      return true;
+    }
+    std::optional<py::error_already_set> hook_error;
 
    private:
     Recording* r_;
+    const py::object& hook_;
+    const Data& data_;
   };
 
   [[noreturn]] void ThrowRecordingFailed() const {
@@ -290,6 +340,8 @@ class Simulation {
   bool in_run_ = false;
   std::optional<StepSchedule> schedule_;
   std::array<double, 4> schedule_key_{};
+  py::object step_hook_ = py::none();
+  std::unique_ptr<VtkWriter> vtk_;
 };
 
 }  // namespace screwfem::python

@@ -10,8 +10,9 @@ set -euo pipefail
 #   main   build + what the main job's figures and viewer pages need (scripts/run-main.sh);
 #   rest   the figures' and viewer's packages + what only the tests use (the sanitizer
 #          compiler, clang-format for the lint, Chromium for the viewer test, venv/pip for
-#          the package test, Dask, nbconvert and ipykernel for the tutorial notebooks, mkdocs,
-#          pymdownx and MathJax for the documentation site of the test docs_site);
+#          the package test, Dask, nbconvert and ipykernel for the tutorial notebooks,
+#          websockets for Simulation.view's live view, mkdocs, pymdownx and MathJax for the
+#          documentation site of the test docs_site);
 #   bench  build + what only the benchmarks use: MuJoCo, which screwfem_bench_mujoco runs side
 #          by side with screwfem on the same model (bench/RESULTS.md, "Spring chain against
 #          MuJoCo"; the bench builds only when it is found, the tests never need it);
@@ -28,7 +29,7 @@ bench_packages=(libmujoco-dev)
 test_packages=(
   clang clang-format python3-venv python3-pip
   python3-dask python3-distributed python3-pandas
-  chromium python3-websocket
+  chromium python3-websocket python3-websockets
   jupyter-nbconvert python3-ipykernel
   mkdocs python3-pymdownx libjs-mathjax
 )

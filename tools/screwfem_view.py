@@ -6,7 +6,8 @@ with Debian's /usr/bin/python3).
 The page plays the run in a browser at real rate, offline (it opens from file://), true to
 size: rods as tubes of their section, rigid bodies as their contact shapes or else the box of
 their inertia, obstacles, tendons and force elements coloured by tension, contact forces as
-arrows, joints and joint frames, recorded points with trails, a ground grid; every layer can
+arrows, pressure chambers inside the rods, joints and joint frames, recorded points with
+trails, a ground grid; every layer can
 be switched off; play/pause, speed, a time slider, orbit/pan/zoom and follow-a-body
 (tools/viewer/viewer.js lists the URL parameters).
 
@@ -28,6 +29,10 @@ The size is printed on stderr.
 The rods are coloured by a scalar only if the frames carry one: the speed |v| from the
 velocity array, and any other point array (a strain or a stress, for instance) per component.
 Today's frames carry no strain or stress, and the page says so.
+
+The same code builds the page of a running Python simulation (Simulation.view,
+python/screwfem/_live.py): page_data(..., live=True) for its first frame, live_frame for each
+frame its WebSocket sends.
 
 three.js r111 comes from Debian's libjs-three (/usr/share/javascript/three; another directory
 with SCREWFEM_THREE_DIR) and is inlined with examples/js/controls/OrbitControls.js.
@@ -162,6 +167,15 @@ def kept_frames(collection, max_frames):
     return kept
 
 
+def actuator_names(path):
+    """The actuator names of actuators.csv's header (its columns after t and load_factor)."""
+    if not os.path.isfile(path):
+        return []
+    with open(path, newline="") as f:
+        header = next(csv.reader(f), [])
+    return [c for c in header if c not in ("t", "load_factor")]
+
+
 def build_data(outdir, max_frames=DEFAULT_MAX_FRAMES):
     summary = read_json(os.path.join(outdir, "summary.json"), required=True)
     joints_info = read_json(os.path.join(outdir, "joints.json"), required=False)
@@ -183,20 +197,27 @@ def build_data(outdir, max_frames=DEFAULT_MAX_FRAMES):
     if len(kept) < len(collection):
         notes.append(f"{len(kept)} of {len(collection)} frames kept (one in "
                      f"{math.ceil(len(collection) / max(max_frames, 1))}; --max-frames)")
+    names = {"tendon": csv_names(os.path.join(outdir, "tendons.csv"), ".tension"),
+             "force_element": csv_names(os.path.join(outdir, "forces.csv"), ".force"),
+             "chamber": actuator_names(os.path.join(outdir, "actuators.csv"))}
+    scene = summary.get("scene", {})
+    return page_data(frames, len(collection), summary, joints_info, names,
+                     scene.get("name") or os.path.basename(os.path.normpath(outdir)),
+                     read_recorded_points(os.path.join(outdir, "points.csv")), notes)
 
-    # Topology from the first frame; every frame must have the same.
-    first = frames[0][1]
-    npoints = len(first["points"])
-    for t, f in frames[1:]:
-        if len(f["points"]) != npoints or f["cells"] != first["cells"]:
-            raise InputProblem(f"the frame at t = {t} s has another topology than the first one")
-    cd, pd = first["cell_data"], first["point_data"]
+
+def describe(first, joints_info, names):
+    """What the cells of a frame are (the page's topology), from its first frame: rods, bodies,
+    joints, contact shapes, tendon and force element lines, contact points, obstacles,
+    chambers, and the points that carry a frame."""
+    cd = first["cell_data"]
     ncell = len(first["cells"])
     item = cd.get("item_id", (1, [-1] * ncell))[1]
     body_of = cd.get("body_id", (1, [-1] * ncell))[1]
     joint_of = cd.get("joint_id", (1, [-1] * ncell))[1]
     rod_of = cd.get("rod_id", (1, [-1] * ncell))[1]
-    rods, bodies, joints, shapes, lines, contacts, obstacles = {}, {}, [], [], [], [], []
+    rods, bodies, joints, shapes, lines, contacts, obstacles, chambers = \
+        {}, {}, [], [], [], [], [], []
     oriented = set()
 
     def body(b):
@@ -232,8 +253,12 @@ def build_data(outdir, max_frames=DEFAULT_MAX_FRAMES):
         elif kind == "joint" and cell and joint_of[i] >= 0:
             joints.append({"index": joint_of[i], "point": cell[0]})
             oriented.add(cell[0])
+        elif kind == "chamber":
+            chambers.append({"points": cell, "item": item[i], "rod": rod_of[i]})
+            oriented.update(cell)
 
-    # Names: joints from joints.json, tendons and force elements from their tables' columns.
+    # Names: joints from joints.json, tendons, force elements and chambers from their tables'
+    # columns (or the model).
     described = {}
     if joints_info:
         for j in joints_info.get("joints", []):
@@ -243,46 +268,122 @@ def build_data(outdir, max_frames=DEFAULT_MAX_FRAMES):
         j["name"] = d.get("name", f"joint {j['index']}")
         j["type"] = d.get("type", "")
         j["drive"] = d.get("drive", "none")
-    names = {"tendon": csv_names(os.path.join(outdir, "tendons.csv"), ".tension"),
-             "force_element": csv_names(os.path.join(outdir, "forces.csv"), ".force")}
     for line in lines:
-        known = names[line["kind"]]
+        known = names.get(line["kind"], [])
         line["name"] = known[line["item"]] if 0 <= line["item"] < len(known) else \
             f"{line['kind'].replace('_', ' ')} {line['item'] + 1}"
+    for c in chambers:
+        known = names.get("chamber", [])
+        c["name"] = known[c["item"]] if 0 <= c["item"] < len(known) else f"chamber {c['item'] + 1}"
+    return {"rods": rods, "bodies": bodies, "joints": joints, "shapes": shapes, "lines": lines,
+            "contacts": contacts, "obstacles": obstacles, "chambers": chambers,
+            "oriented": oriented, "ncell": ncell}
+
+
+def used_points(top, contacts):
+    """The points the page draws."""
+    used = set(contacts) | set(top["oriented"])
+    for cells in (top["rods"].values(), [l["points"] for l in top["lines"]],
+                  [s["points"] for s in top["shapes"]], [o["points"] for o in top["obstacles"]],
+                  [c["points"] for c in top["chambers"]]):
+        for cell in cells:
+            used.update(cell)
+    for b in top["bodies"].values():
+        used.update(p for seg in b["segments"] for p in seg)
+        used.update(p for p in (b["point"], b["box"]) if p is not None)
+    return used
+
+
+def frame_quats(f, oriented, previous):
+    """(x, y, z, w) of every oriented point of frame f, each in the hemisphere of `previous`
+    (the last frame's, or None)."""
+    pd = f["point_data"]
+    ax = [pd[a][1] for a in ("frame_x", "frame_y", "frame_z")]
+    row = []
+    for k, i in enumerate(oriented):
+        q = quaternion([ax[c][3 * i:3 * i + 3] for c in range(3)])
+        if previous and sum(a * b for a, b in zip(q, previous[k])) < 0:
+            q = tuple(-v for v in q)
+        row.append(q)
+    return row
+
+
+def field_list(pd):
+    """The rods' colour fields a frame's point data gives: (name, unit, array, component);
+    component -1: the speed |v| of the velocity array."""
+    out = []
+    if "velocity" in pd:
+        out.append(("speed", "m/s", "velocity", -1))
+    for name in sorted(n for n in pd if n not in KNOWN_POINT_ARRAYS):
+        ncomp = pd[name][0]
+        for c in range(ncomp):
+            out.append((name if ncomp == 1 else f"{name}[{c}]", "", name, c))
+    return out
+
+
+def field_values(f, field, points):
+    """The values of one colour field (field_list) at `points` of frame f."""
+    _, _, name, c = field
+    v = f["point_data"][name][1]
+    if c < 0:
+        return [math.sqrt(v[3 * i] ** 2 + v[3 * i + 1] ** 2 + v[3 * i + 2] ** 2) for i in points]
+    ncomp = f["point_data"][name][0]
+    return [v[ncomp * i + c] for i in points]
+
+
+def frame_tensions(f, lines, ncell):
+    values = f["cell_data"].get("tension", (1, [0.0] * ncell))[1]
+    return [values[line["cell"]] for line in lines]
+
+
+def frame_forces(f, contacts):
+    v = f["point_data"]["contact_force"][1]
+    return [x for i in contacts for x in v[3 * i:3 * i + 3]]
+
+
+def page_data(frames, frames_total, summary, joints_info, names, name, recorded, notes,
+              live=False):
+    """The page's data ('screwfem viewer data 2') from frames [(t, frame)]: tracks of the
+    values that change over them. live: the page of Simulation.view, whose later frames come
+    over its WebSocket (live_frame): every drawn point counts as moving, every oriented one as
+    turning and every contact point as touching."""
+    # Topology from the first frame; every frame must have the same.
+    first = frames[0][1]
+    npoints = len(first["points"])
+    for t, f in frames[1:]:
+        if len(f["points"]) != npoints or f["cells"] != first["cells"]:
+            raise InputProblem(f"the frame at t = {t} s has another topology than the first one")
+    pd = first["point_data"]
+    top = describe(first, joints_info, names)
+    rods, bodies, lines = top["rods"], top["bodies"], top["lines"]
+    ncell = top["ncell"]
 
     # Contact points that never carry a force are left out (most pairs never touch).
     if "contact_force" in pd:
         def touching(i):
             return any(any(f["point_data"]["contact_force"][1][3 * i:3 * i + 3]) for _, f in frames)
-        contacts = [i for i in contacts if touching(i)]
+        contacts = top["contacts"] if live else [i for i in top["contacts"] if touching(i)]
     else:
         contacts = []
-    used = set(contacts) | set(oriented)
-    for cells in (rods.values(), [l["points"] for l in lines], [s["points"] for s in shapes],
-                  [o["points"] for o in obstacles]):
-        for cell in cells:
-            used.update(cell)
-    for b in bodies.values():
-        used.update(p for seg in b["segments"] for p in seg)
-        used.update(p for p in (b["point"], b["box"]) if p is not None)
+    used = used_points(top, contacts)
 
     # Positions: the first frame's for every point, then per frame those of the drawn points
     # that move.
     points = [f["points"] for _, f in frames]
-    moving = [i for i in sorted(used) if any(p[i] != points[0][i] for p in points[1:])]
+    static = {i for o in top["obstacles"] for i in o["points"]}
+    if live:
+        moving = [i for i in sorted(used) if i not in static]
+    else:
+        moving = [i for i in sorted(used) if any(p[i] != points[0][i] for p in points[1:])]
     has_axes = all(a in pd for a in ("frame_x", "frame_y", "frame_z"))
-    oriented = sorted(oriented) if has_axes else []
+    oriented = sorted(top["oriented"]) if has_axes else []
     quats = []  # per frame, per oriented point, (x, y, z, w) in the hemisphere of the last one
     for _, f in frames:
-        ax = [f["point_data"][a][1] for a in ("frame_x", "frame_y", "frame_z")] if has_axes else None
-        row = []
-        for k, i in enumerate(oriented):
-            q = quaternion([ax[c][3 * i:3 * i + 3] for c in range(3)])
-            if quats and sum(a * b for a, b in zip(q, quats[-1][k])) < 0:
-                q = tuple(-v for v in q)
-            row.append(q)
-        quats.append(row)
-    turning = [k for k in range(len(oriented)) if any(q[k] != quats[0][k] for q in quats[1:])]
+        quats.append(frame_quats(f, oriented, quats[-1] if quats else None) if has_axes else [])
+    if live:
+        turning = list(range(len(oriented)))
+    else:
+        turning = [k for k in range(len(oriented)) if any(q[k] != quats[0][k] for q in quats[1:])]
 
     # Sizes (constant): radius and half sizes per point; zero in frames written before them.
     radius = pd.get("radius", (1, [0.0] * npoints))[1]
@@ -291,38 +392,18 @@ def build_data(outdir, max_frames=DEFAULT_MAX_FRAMES):
     if unsized:
         notes.append("no section size for rod" + ("s " if len(unsized) > 1 else " ") +
                      ", ".join(str(k) for k in unsized) + " (a section given by its stiffness, "
-                     "no contact_radius): drawn thin")
+                     "no contact_radius or visual_radius): drawn thin")
 
     # Per-frame values: tensions, contact forces, the rods' colour fields.
-    tension = []
-    for _, f in frames:
-        values = f["cell_data"].get("tension", (1, [0.0] * ncell))[1]
-        tension.extend(values[line["cell"]] for line in lines)
-    forces = []
-    if "contact_force" in pd:
-        for _, f in frames:
-            v = f["point_data"]["contact_force"][1]
-            for i in contacts:
-                forces.extend(v[3 * i:3 * i + 3])
+    tension = [v for _, f in frames for v in frame_tensions(f, lines, ncell)]
+    forces = [v for _, f in frames for v in frame_forces(f, contacts)] \
+        if "contact_force" in pd else []
     field_points = sorted({i for k in rods for i in rods[k]})
     fields = []
-    if "velocity" in pd:
-        values = []
-        for _, f in frames:
-            v = f["point_data"]["velocity"][1]
-            values.extend(math.sqrt(v[3 * i] ** 2 + v[3 * i + 1] ** 2 + v[3 * i + 2] ** 2)
-                          for i in field_points)
-        fields.append({"name": "speed", "unit": "m/s", "values": track(values)})
+    for field in field_list(pd):
+        values = [v for _, f in frames for v in field_values(f, field, field_points)]
+        fields.append({"name": field[0], "unit": field[1], "values": track(values)})
     extra = sorted(n for n in pd if n not in KNOWN_POINT_ARRAYS)
-    for name in extra:
-        ncomp = pd[name][0]
-        for c in range(ncomp):
-            values = []
-            for _, f in frames:
-                v = f["point_data"][name][1]
-                values.extend(v[ncomp * i + c] for i in field_points)
-            fields.append({"name": name if ncomp == 1 else f"{name}[{c}]", "unit": "",
-                           "values": track(values)})
     if not any("strain" in n or "stress" in n for n in extra):
         notes.append("the outputs carry no strain or stress: rods are coloured by speed at most")
 
@@ -330,15 +411,16 @@ def build_data(outdir, max_frames=DEFAULT_MAX_FRAMES):
     norm = math.sqrt(sum(g * g for g in gravity))
     up = [-g / norm for g in gravity] if norm > 0 else [0.0, 0.0, 1.0]
     scene = summary.get("scene", {})
-    return {
+    data = {
         "format": "screwfem viewer data 2",
-        "name": scene.get("name") or os.path.basename(os.path.normpath(outdir)),
+        "name": name,
         "source": scene.get("source", ""),
+        "static": summary.get("settings", {}).get("analysis") == "static",
         "status": summary.get("status", ""),
         "message": summary.get("message", ""),
         "up": up,
         "times": [t for t, _ in frames],
-        "frames_total": len(collection),
+        "frames_total": frames_total,
         "npoints": npoints,
         "x0": b64_floats([v for p in points[0] for v in p]),
         "moving": moving,
@@ -351,18 +433,40 @@ def build_data(outdir, max_frames=DEFAULT_MAX_FRAMES):
         "half": b64_floats(half),
         "rods": [rods[k] for k in sorted(rods)],
         "bodies": [dict(bodies[k], index=k) for k in sorted(bodies)],
-        "shapes": shapes,
-        "joints": joints,
+        "shapes": top["shapes"],
+        "joints": top["joints"],
         "lines": [{k: v for k, v in line.items() if k != "cell"} for line in lines],
         "tension": track(tension, zero=True),
         "contacts": contacts,
         "forces": track(forces, 3, zero=True),
-        "obstacles": obstacles,
+        "obstacles": top["obstacles"],
+        "chambers": top["chambers"],
         "field_points": field_points,
         "fields": fields,
-        "recorded": read_recorded_points(os.path.join(outdir, "points.csv")),
+        "recorded": recorded,
         "notes": notes,
     }
+    if live:
+        # What live_frame needs of the topology (not sent to the page).
+        data["_live"] = {"lines": lines, "ncell": ncell, "quats": quats[-1],
+                         "fields": field_list(pd), "has_contact": "contact_force" in pd}
+    return data
+
+
+def live_frame(data, t, f):
+    """One frame of Simulation.view's WebSocket, for a page whose data is page_data(...,
+    live=True): {'t', 'x' (moving points' positions), 'q' (turning points' quaternions),
+    'tension', 'forces', 'fields'}, the arrays as base64 little-endian float32. Updates the
+    hemisphere of the quaternions kept in data['_live']."""
+    live = data["_live"]
+    q = frame_quats(f, data["oriented"], live["quats"]) if data["oriented"] else []
+    live["quats"] = q
+    x = [v for i in data["moving"] for v in f["points"][i]]
+    return {"t": t, "x": b64_floats(x), "q": b64_floats([v for row in q for v in row]),
+            "tension": frame_tensions(f, live["lines"], live["ncell"]),
+            "forces": b64_floats(frame_forces(f, data["contacts"])) if live["has_contact"] else "",
+            "fields": [b64_floats(field_values(f, field, data["field_points"]))
+                       for field in live["fields"]]}
 
 
 def read_text(path, what):
@@ -374,6 +478,17 @@ def read_text(path, what):
 
 
 def write_html(data, out_path):
+    text = render_html(data)
+    os.makedirs(os.path.dirname(os.path.abspath(out_path)), exist_ok=True)
+    tmp = out_path + ".tmp"
+    with open(tmp, "wb") as f:
+        f.write(text)
+    os.replace(tmp, out_path)
+    return {"page": len(text), "library": render_html.library, "data": render_html.data}
+
+
+def render_html(data):
+    """The page's bytes (UTF-8): the template with three.js, the viewer and the data inlined."""
     three_dir = os.environ.get("SCREWFEM_THREE_DIR") or DEFAULT_THREE_DIR
     three = read_text(os.path.join(three_dir, "three.min.js"),
                       "three.js (Debian package libjs-three; or set SCREWFEM_THREE_DIR)")
@@ -396,13 +511,8 @@ def write_html(data, out_path):
         html.append(template[pos:at])
         html.append(parts[key].replace("</script", "<\\/script") if key != "@@TITLE@@" else parts[key])
         pos = at + len(key)
-    os.makedirs(os.path.dirname(os.path.abspath(out_path)), exist_ok=True)
-    text = "".join(html).encode("utf-8")
-    tmp = out_path + ".tmp"
-    with open(tmp, "wb") as f:
-        f.write(text)
-    os.replace(tmp, out_path)
-    return {"page": len(text), "library": len(three) + len(orbit), "data": len(data_json)}
+    render_html.library, render_html.data = len(three) + len(orbit), len(data_json)
+    return "".join(html).encode("utf-8")
 
 
 def main(argv):

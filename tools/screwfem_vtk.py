@@ -179,6 +179,10 @@ def _parse(path):
             raw = f.read()
     except OSError as e:
         raise VtkError(f"cannot read {path}: {e}") from e
+    return _parse_bytes(raw, path)
+
+
+def _parse_bytes(raw, path):
     appended = None
     start = raw.find(b"<AppendedData")
     if start >= 0:
@@ -230,7 +234,7 @@ def read_collection(outdir):
 # The cell data `kind` of screwfem's frames (VtkCellKind, include/screwfem/io/vtk.h), by value.
 KIND_NAMES = ("joint", "rod", "body", "body_point", "tendon", "force_element", "contact",
               "pair_contact", "sphere", "capsule", "box", "inertia_box", "plane",
-              "obstacle_sphere", "obstacle_capsule")
+              "obstacle_sphere", "obstacle_capsule", "chamber")
 
 
 def cell_kinds(cells, cell_data):
@@ -253,7 +257,16 @@ class Frame(dict):
 def read_frame(path):
     if not os.path.isfile(path):
         raise VtkError(f"{path} not found (listed in motion.pvd but missing?)")
-    root, appended = _parse(path)
+    return _frame(*_parse(path), path)
+
+
+def read_frame_bytes(raw, name="frame"):
+    """A frame from the bytes of a .vtp file (the live view's frames, Simulation._vtk_frame);
+    `name` stands for the path in messages."""
+    return _frame(*_parse_bytes(raw, name), name)
+
+
+def _frame(root, appended, path):
     fmt = _Format(root, path)
     piece = root.find("PolyData/Piece")
     if piece is None:

@@ -374,6 +374,9 @@ def build_wheel(wheel_directory, config_settings=None, metadata_directory=None):
     files = [(f"screwfem/{p.name}", p.read_bytes())
              for p in sorted((_SOURCE / "python" / "screwfem").glob("*.py"))]
     files.append((f"screwfem/{extension.name}", extension.read_bytes()))
+    # The viewer's files, for Simulation.view (screwfem/_live.py looks in screwfem/_viewer).
+    for rel in ("screwfem_view.py", "screwfem_vtk.py", "viewer/viewer.html", "viewer/viewer.js"):
+        files.append((f"screwfem/_viewer/{rel}", (_SOURCE / "tools" / rel).read_bytes()))
     info = _dist_info(name, version)
     files += [
         (f"{info}/METADATA", _metadata(name, version, project).encode()),

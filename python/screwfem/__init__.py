@@ -22,6 +22,9 @@ command line.
 ``Env`` and ``VectorEnv`` are Gymnasium-style reinforcement-learning environments over a scene
 (actions into its run-time inputs, ``reset``/``step``, ``Box`` spaces); VectorEnv steps its
 copies on C++ threads (screwfem/_env.py, docs/python.md).
+
+``Simulation.view()`` shows a simulation stepped from Python in the browser viewer as it steps
+(a ``LiveView``: a local server and a WebSocket; screwfem/_live.py, docs/python.md "Live view").
 """
 
 from . import _screwfem
@@ -32,6 +35,7 @@ from ._spec import (  # noqa: F401  (the scene spec: python/screwfem/_spec.py)
     OutputPointSpec, OutputsSpec, SceneSpec, TendonSpec, read_scene_spec, route_helical,
     route_offset)
 from ._env import Box, Env, VectorEnv  # noqa: F401  (environments: python/screwfem/_env.py)
+from ._live import LiveView  # noqa: F401  (Simulation.view: python/screwfem/_live.py)
 from ._sweep import (  # noqa: F401  (sweeps: python/screwfem/_sweep.py)
     DEFAULT_METRICS, Counters, MaxConstraintResidual, PeakJointEffort, PointPosition, Run,
     WallTime, format_overrides, run_variant, sweep, variant_id, variants)
@@ -41,4 +45,4 @@ __all__ = [name for name in dir(_screwfem) if not name.startswith("_")] + [
     "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort", "DEFAULT_METRICS"] + [
     "SceneSpec", "BodySpec", "JointEntrySpec", "LoadSpec", "BodyPointSpec", "TendonSpec",
     "ForceSpec", "ActuatorSpec", "OutputPointSpec", "ContactSpec", "OutputsSpec",
-    "read_scene_spec", "route_offset", "route_helical", "Box", "Env", "VectorEnv"]
+    "read_scene_spec", "route_offset", "route_helical", "Box", "Env", "VectorEnv", "LiveView"]

@@ -100,6 +100,9 @@ class BodySpec:
     weld_end: int = _f(-1, doc="The same at the last point.")
     contact_radius: float = _f(0.0, doc="Soft bodies, with contact: the capsule radius [m] "
                                "(add_soft_body takes the section's radius by default).")
+    visual_radius: float = _f(0.0, doc="Soft bodies: the radius the rod is drawn with [m] (VTK "
+                              "frames, viewer), for drawing only; 0: the section's own size.",
+                              scene="visual_radius (of the body, else of its section)")
     shapes: list = _f(factory=list, doc="Rigid bodies, with contact: ContactShape objects in "
                       "the body frame [m] (add_rigid_body takes world points, as the scene).")
     contype: int = _f(1, doc="Contact group bitmask (MuJoCo's contype).")
@@ -541,14 +544,15 @@ class SceneSpec:
 
     def add_soft_body(self, name, *, section, path=None, from_=None, to=None, elements=8,
                       up=(0.0, 0.0, 1.0), weld_start=None, weld_end=None, free=False,
-                      contact_radius=None, contype=1, conaffinity=1):
+                      contact_radius=None, visual_radius=0.0, contype=1, conaffinity=1):
         """A soft body, a rod (the scene's ``type: soft``); returns its BodySpec.
 
         path: at least two points (or names of `points`), or from_ and to: one segment;
         section: a Section; elements: per path segment; up: the section z axis is as close as
         possible to it; weld_start, weld_end: an earlier soft body (name) whose node at the
         first (last) point is shared; free: floating; contact_radius [m]: the capsule radius
-        with contact (default: the radius of Section.circle, .rectangle or .tube)."""
+        with contact (default: the radius of Section.circle, .rectangle or .tube);
+        visual_radius [m]: the radius the rod is drawn with (0: the section's own size)."""
         where = self._name(name, "bodies", "body")
         if path is not None and (from_ is not None or to is not None):
             raise _error(f"{where}.path", "give either from_ and to, or path, not both")
@@ -567,7 +571,8 @@ class SceneSpec:
             contact_radius = getattr(section, "radius", 0.0)
         body = BodySpec(name=name, rigid=False, free=free, path=points, elements=elements,
                         section=section, up=_vector(up, 3, f"{where}.up"),
-                        contact_radius=contact_radius, contype=contype,
+                        contact_radius=contact_radius, visual_radius=visual_radius,
+                        contype=contype,
                         conaffinity=conaffinity)
         if weld_start is not None:
             body.weld_start = self.body_index(weld_start, f"{where}.weld_start")

@@ -16,6 +16,17 @@ namespace screwfem {
 
 namespace {
 
+// A soft body's section with its outline for drawing: a circle of visual_radius when given
+// (Section::width and height are read only by the ParaView frames and the viewer).
+Section DrawnSection(const BodySpec& b) {
+  Section s = b.section;
+  if (b.visual_radius > 0.0) {
+    s.width = s.height = 2.0 * b.visual_radius;
+    s.round = true;
+  }
+  return s;
+}
+
 std::string FormatVec(const Vec3& v) {
   std::ostringstream s;
   s.precision(6);
@@ -236,7 +247,7 @@ void SceneCompiler::AddSoftBody(int b) {
   const int end = weld(s.weld_end, s.path.back(), "end_node");
   try {
     body_index_[static_cast<std::size_t>(b)] =
-        builder_.AddRodAlongPath(s.name, s.path, s.elements, s.section, s.up, start, end);
+        builder_.AddRodAlongPath(s.name, s.path, s.elements, DrawnSection(s), s.up, start, end);
   } catch (const InputError& e) {
     Fail(source, e);
   }

@@ -52,6 +52,7 @@ const std::vector<std::string> kBodyKeys = {"type",
                                             "weld_end",
                                             "initial_velocity",
                                             "contact_radius",
+                                            "visual_radius",
                                             "shapes",
                                             "contype",
                                             "conaffinity"};
@@ -140,6 +141,7 @@ class SceneReader {
   std::map<std::string, Section> sections_;
   std::vector<std::string> material_names_, section_names_;
   std::map<std::string, double> section_radius_;  // the contact radius a section implies
+  std::map<std::string, double> section_visual_;  // a section's visual_radius
 };
 
 // --- values ------------------------------------------------------------------------------------
@@ -378,10 +380,13 @@ void SceneReader::ReadSections(const Node* node) {
   for (const auto& [entry, value_binding] : node->entries) {
     const Node& value = value_binding;  // a variable the lambdas below can capture (Clang 14)
     const std::string path = Join("sections", entry.key);
-    r_.CheckKeys(value, path,
-                 {"stiffness", "inertia", "damping", "rayleigh_mass", "rayleigh_stiffness", "shape",
-                  "material", "radius", "width", "height", "outer_radius", "inner_radius"});
+    r_.CheckKeys(
+        value, path,
+        {"stiffness", "inertia", "damping", "rayleigh_mass", "rayleigh_stiffness", "shape",
+         "material", "radius", "width", "height", "outer_radius", "inner_radius", "visual_radius"});
     Section s;
+    if (const Node* v = value.Find("visual_radius"))
+      section_visual_[entry.key] = r_.PositiveNumber(*v, Join(path, "visual_radius"));
     if (const Node* shape = value.Find("shape")) {
       NotUsedBy(value, path, {"stiffness", "inertia"}, "sections given by shape and material");
       const std::string kind =
@@ -515,6 +520,7 @@ void SceneReader::ReadRigidBody(const Node& n, const std::string& path, BodySpec
   }
   if (const Node* com = n.Find("com")) com_world = Point(*com, Join(path, "com"));
   NotUsedBy(n, path, {"contact_radius"}, "rigid bodies (they carry 'shapes')");
+  NotUsedBy(n, path, {"visual_radius"}, "rigid bodies (they are drawn as their 'shapes')");
   if (const Node* sh = n.Find("shapes")) ReadShapes(*sh, Join(path, "shapes"), b);
   ReadGroups(n, path, &b.contype, &b.conaffinity);
   b.mass = r_.PositiveNumber(r_.Require(n, path, "mass"), Join(path, "mass"));
@@ -602,6 +608,10 @@ void SceneReader::ReadSoftBody(const Node& n, const std::string& path, BodySpec&
     b.contact_radius = r->second;
   if (const Node* c = n.Find("contact_radius"))
     b.contact_radius = r_.PositiveNumber(*c, Join(path, "contact_radius"));
+  if (const auto v = section_visual_.find(section_name); v != section_visual_.end())
+    b.visual_radius = v->second;
+  if (const Node* v = n.Find("visual_radius"))
+    b.visual_radius = r_.PositiveNumber(*v, Join(path, "visual_radius"));
   ReadGroups(n, path, &b.contype, &b.conaffinity);
 }
 

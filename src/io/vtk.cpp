@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <numbers>
 #include <tuple>
 #include <utility>
 
@@ -99,9 +100,11 @@ bool WriteWholeFile(const std::string& path, const char* data, std::size_t size)
 void VtkWriter::Open(const std::string& dir, const Model& model, VtkFormat format,
                      int expected_frames, bool rod_fields) {
   if (!IsEnumValue(format)) throw InputError("VtkWriter::Open: unknown VtkFormat value");
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw InputError("cannot create directory " + dir + ": " + ec.message());
+  if (!dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw InputError("cannot create directory " + dir + ": " + ec.message());
+  }
   dir_ = dir;
   format_ = format;
   times_.clear();
@@ -221,6 +224,7 @@ void VtkWriter::LayOut(const Model& model) {
   LayOutBodies(model, attachments);
   LayOutLines(model);
   LayOutContact(model);
+  LayOutChambers(model);
 
   // Cell data in the order VTK stores the cells: vertices, then lines.
   cell_kind_.clear();
@@ -393,6 +397,28 @@ void VtkWriter::LayOutContact(const Model& model) {
 
 // The rods' polylines are the first lines (LayOut): point k of rod r is its node k, between
 // its elements k - 1 and k.
+// Pressure chambers: a polyline per actuator of type pressure through its centroid at the rod
+// nodes it covers, of the radius of a circle of its area.
+void VtkWriter::LayOutChambers(const Model& model) {
+  for (std::size_t a = 0; a < model.actuators.size(); ++a) {
+    const Actuator& act = model.actuators[a];
+    if (act.type != ActuatorType::kPressure || act.rod < 0 || act.num_elements <= 0) continue;
+    const Rod& rod = model.rods[static_cast<std::size_t>(act.rod)];
+    const int first = act.first_element - rod.first_element;
+    if (first < 0 || first + act.num_elements >= static_cast<int>(rod.nodes.size())) continue;
+    const double radius = std::sqrt(std::max(act.area, 0.0) / std::numbers::pi);
+    for (int k = first; k <= first + act.num_elements; ++k) {
+      PointSource s;
+      s.index = rod.nodes[static_cast<std::size_t>(k)];
+      s.origin = false;
+      s.offset = Vec3(0.0, act.offset(1), act.offset(2));
+      s.rotated = true;
+      line_connectivity_.push_back(AddPoint(s, radius, Vec3(0.0, radius, radius)));
+    }
+    EndLine({VtkCellKind::kChamber, static_cast<int>(a), act.rod, -1, -1});
+  }
+}
+
 void VtkWriter::LayOutRodFields(const Model& model) {
   rod_points_.clear();
   const std::size_t n = rod_fields_ ? 6 * sources_.size() : 0;
@@ -690,6 +716,17 @@ void VtkWriter::ComposeAsciiImage(double time) {
 }
 
 bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time, double load_factor) {
+  ComposeFrame(model, data, time, load_factor);
+  path_.assign(dir_);
+  path_ += '/';
+  AppendFrameName(&path_, frames());
+  if (!WriteWholeFile(path_, image_.data(), image_.size())) return false;
+  times_.push_back(time);
+  return true;
+}
+
+const std::string& VtkWriter::ComposeFrame(const Model& model, const Data& data, double time,
+                                           double load_factor) {
   CalcPoints(model, data);
   if (rod_fields_) CalcRodFields(model, data, load_factor);
   if (format_ == VtkFormat::kBinary) {
@@ -708,12 +745,7 @@ bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time, do
   } else {
     ComposeAsciiImage(time);
   }
-  path_.assign(dir_);
-  path_ += '/';
-  AppendFrameName(&path_, frames());
-  if (!WriteWholeFile(path_, image_.data(), image_.size())) return false;
-  times_.push_back(time);
-  return true;
+  return image_;
 }
 
 bool VtkWriter::WriteCollection() const {

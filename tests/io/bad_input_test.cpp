@@ -678,5 +678,49 @@ TEST(BadInput, ActuatorRangeMustLieOnRodNodes) {
               "bad.yaml:6:93", "actuation.a.profile.name: unknown input 'u'");
 }
 
+// visual_radius (docs/scene-format.md, sections and soft bodies): positive, soft bodies only;
+// it sets the rod's drawn outline (Section::width, height, round), the body's over its
+// section's.
+TEST(BadInput, VisualRadius) {
+  ExpectError("sections:\n  s: {stiffness: [1, 1, 1, 1, 1, 1], visual_radius: 0}\n",
+              "bad.yaml:2:53", "sections.s.visual_radius: expected a positive number, got '0'");
+  ExpectError(kHead +
+                  "bodies:\n  r: {type: soft, from: A, to: B, section: s, visual_radius: -0.01, "
+                  "free: true}\n",
+              "bad.yaml:4:62", "bodies.r.visual_radius: expected a positive number, got '-0.01'");
+  ExpectError(kHead +
+                  "bodies:\n  b: {type: rigid, at: A, mass: 1, inertia: [1, 1, 1], fixed: true, "
+                  "visual_radius: 0.1}\n",
+              "bad.yaml:4:69",
+              "bodies.b.visual_radius: 'visual_radius' is not used by rigid bodies");
+}
+
+TEST(BadInput, VisualRadiusSetsTheDrawnOutline) {
+  const std::string text =
+      "points: {A: [0, 0, 0], B: [1, 0, 0], C: [2, 0, 0]}\n"
+      "sections:\n"
+      "  s: {stiffness: [1, 1, 1, 1, 1, 1], visual_radius: 0.01}\n"
+      "  r: {shape: rectangle, width: 0.02, height: 0.01, material: {E: 1e9, nu: 0.3, "
+      "density: 1000}}\n"
+      "bodies:\n"
+      "  a: {type: soft, from: A, to: B, section: s, free: true}\n"
+      "  b: {type: soft, from: B, to: C, section: s, visual_radius: 0.03, free: true}\n"
+      "  c: {type: soft, from: A, to: C, section: r, free: true}\n"
+      "  d: {type: soft, from: A, to: C, section: r, visual_radius: 0.005, free: true}\n";
+  const Scene scene = ParseScene(text, "ok.yaml");
+  const auto& rods = scene.model.rods;
+  ASSERT_EQ(rods.size(), 4u);
+  EXPECT_EQ(rods[0].section.width, 0.02);  // the section's visual_radius
+  EXPECT_EQ(rods[0].section.height, 0.02);
+  EXPECT_TRUE(rods[0].section.round);
+  EXPECT_EQ(rods[1].section.width, 0.06);  // the body's, over the section's
+  EXPECT_EQ(rods[2].section.width, 0.02);  // the rectangle's own outline
+  EXPECT_EQ(rods[2].section.height, 0.01);
+  EXPECT_FALSE(rods[2].section.round);
+  EXPECT_EQ(rods[3].section.width, 0.01);  // drawn round, the mechanics unchanged
+  EXPECT_TRUE(rods[3].section.round);
+  EXPECT_EQ(rods[3].section.stiffness, rods[2].section.stiffness);
+}
+
 }  // namespace
 }  // namespace screwfem::bad_input_test

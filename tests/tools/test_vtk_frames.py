@@ -8,6 +8,7 @@ project), VTK's vtkXMLPolyDataReader — the reader ParaView uses — reads both
         (from tests/tools; SCREWFEM_SOURCE_DIR, SCREWFEM_CLI = the screwfem program)
 """
 
+import math
 import os
 import shutil
 import subprocess
@@ -86,6 +87,52 @@ class Frames(unittest.TestCase):
         force = binary["point_data"]["contact_force"][1]
         lift = sum(force[3 * c[0] + 2] for c, k in zip(binary["cells"], kinds) if k == "contact")
         self.assertAlmostEqual(lift, 0.064 * 9.81, delta=0.05 * 0.064 * 9.81)
+
+    def test_chambers_and_visual_radius(self):
+        # tests/view/chamber.yaml: a static run of 4 load steps (a frame each, the load factor
+        # as its time) of a rod drawn by visual_radius 10 mm with a pressure chamber of 50 mm^2
+        # at r = (0, -5 mm, 0) along its whole length.
+        scene = os.path.join(SOURCE, "tests", "view", "chamber.yaml")
+        for fmt in ("binary", "ascii"):
+            out = os.path.join(self.tmp, "chamber_" + fmt)
+            subprocess.run([os.environ["SCREWFEM_CLI"], "run", scene, "-o", out, "-q",
+                            "--set", f"outputs.vtk_format={fmt}"], check=True)
+            collection = screwfem_vtk.read_collection(out)
+            self.assertEqual([t for t, _ in collection], [0.25, 0.5, 0.75, 1.0])
+            for lam, path in (collection[0], collection[-1]):
+                f = screwfem_vtk.read_frame(path)
+                kinds, pd = f["kinds"], f["point_data"]
+                self.assertEqual(kinds.count("chamber"), 1)
+                rod = f["cells"][kinds.index("rod")]
+                chamber = f["cells"][kinds.index("chamber")]
+                self.assertEqual(len(rod), 9)
+                self.assertEqual(len(chamber), 9)  # every node: the chamber covers the rod
+                self.assertEqual(f["cell_data"]["item_id"][1][kinds.index("chamber")], 0)
+                radius, half = pd["radius"][1], pd["half_size"][1]
+                r = (5e-5 / math.pi) ** 0.5
+                for i in rod:
+                    self.assertEqual((radius[i], half[3 * i:3 * i + 3]), (0.01, [0.0, 0.01, 0.01]))
+                for i in chamber:
+                    self.assertAlmostEqual(radius[i], r, delta=1e-15)
+                    self.assertEqual(half[3 * i + 1:3 * i + 3], [radius[i], radius[i]])
+                # The chamber's points: the rod nodes' points offset by -5 mm along their
+                # section y axis, with the rods' axes.
+                fy = pd["frame_y"][1]
+                for a, b in zip(rod, chamber):
+                    for k in range(3):
+                        self.assertAlmostEqual(f["points"][b][k],
+                                               f["points"][a][k] - 0.005 * fy[3 * a + k],
+                                               delta=1e-15)
+                        self.assertEqual(fy[3 * b + k], fy[3 * a + k])
+                # Curled towards +y: the arc of curvature lambda p A |r2| / EI = lambda 12.5
+                # 1/m (per reference length 0.1 m) stretched by lambda p A / EA
+                # (examples/pneumatic/finger.yaml), to 1e-9 m.
+                tip = f["points"][rod[-1]]
+                kappa, stretch = lam * 12.5, 1 + lam * 5.0 / 225
+                self.assertAlmostEqual(tip[0], stretch * math.sin(kappa * 0.1) / kappa, delta=1e-9)
+                self.assertAlmostEqual(tip[1], stretch * (1 - math.cos(kappa * 0.1)) / kappa,
+                                       delta=1e-9)
+                self.assertAlmostEqual(tip[2], 0.0, delta=1e-12)
 
     @unittest.skipIf(vtkXMLPolyDataReader is None, "VTK's Python module (python3-vtk9) not installed")
     def test_vtk_reads_both_encodings_to_the_same_points(self):

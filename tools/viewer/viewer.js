@@ -14,12 +14,15 @@
 // else the box of their inertia, obstacles. Markers whose size means nothing: joints
 // (spheres), joint frames (x red, y green, z blue), links (thin rods from a body's frame to
 // its joints), tendons and force elements (thin tubes coloured by tension), contact forces
-// (arrows from the contact point along the force on the shape, drawn over everything).
+// (arrows from the contact point along the force on the shape, drawn over everything);
+// pressure chambers as see-through tubes of their area's circle inside the rods. A static
+// run's time is its load factor (labelled lambda). A page served by Simulation.view (data.live)
+// receives its frames over a WebSocket ("live view" below).
 //
 // URL parameters (for tests and links): t=SECONDS shows that time and stays paused;
 // bare=1 draws the mechanism alone (no grid, axes, obstacles, trails, labels or controls);
-// hide=a,b and show=a,b switch the layers (rods bodies links joints frames tendons forces
-// obstacles points grid labels); follow=NAME follows a body, rod, joint or recorded point;
+// hide=a,b and show=a,b switch the layers (rods chambers bodies links joints frames tendons
+// forces obstacles points grid labels); follow=NAME follows a body, rod, joint or recorded point;
 // colour=FIELD colours the rods; labels=1; trail=SECONDS or all; speed=FACTOR;
 // camera: view=front|back|left|right|top|bottom|iso, target=X,Y,Z, span=METRES (the width of
 // the picture at the target), ortho=1 (orthographic), eye=X,Y,Z (perspective, from there);
@@ -155,10 +158,10 @@
   var up = new THREE.Vector3().fromArray(data.up).normalize();
 
   // ---- layers --------------------------------------------------------------------------------
-  var layerNames = ["rods", "bodies", "links", "joints", "frames", "tendons", "forces", "obstacles",
-                    "points", "grid", "labels"];
-  var shown = { rods: true, bodies: true, links: true, joints: true, frames: false, tendons: true,
-                forces: true, obstacles: !bare, points: !bare, grid: !bare, labels: false };
+  var layerNames = ["rods", "chambers", "bodies", "links", "joints", "frames", "tendons", "forces",
+                    "obstacles", "points", "grid", "labels"];
+  var shown = { rods: true, chambers: true, bodies: true, links: true, joints: true, frames: false,
+                tendons: true, forces: true, obstacles: !bare, points: !bare, grid: !bare, labels: false };
   if (params.get("labels") === "1") shown.labels = true;
   (params.get("hide") || "").split(",").forEach(function (n) { if (n in shown) shown[n] = false; });
   (params.get("show") || "").split(",").forEach(function (n) { if (n in shown) shown[n] = true; });
@@ -341,7 +344,9 @@
   var kSub = 6, kRadial = 20;
   var rodColor = new THREE.Color(0x2f7fc1);
   var unsized = false;
-  var rods = data.rods.map(function (ids) {
+  // A tube through the points ids (a rod, or a chamber inside one), coloured by the field or
+  // its colour.
+  function makeTube(ids, layer, material, color, fielded) {
     var p0 = ids[0], round = true, sized = radius[p0] > 0;
     if (sized) round = Math.abs(half[3 * p0 + 1] - radius[p0]) <= 1e-9 * radius[p0] &&
                        Math.abs(half[3 * p0 + 2] - radius[p0]) <= 1e-9 * radius[p0];
@@ -378,12 +383,25 @@
         index.push.apply(index, cap ? [centre, base + s, base + s + 1] : [centre, base + s + 1, base + s]);
     }
     geom.setIndex(index);
-    var mat = new THREE.MeshStandardMaterial({ vertexColors: THREE.VertexColors, roughness: 0.55, metalness: 0.05,
-                                               side: THREE.DoubleSide });
-    var mesh = new THREE.Mesh(geom, mat);
+    var mesh = new THREE.Mesh(geom, material);
     mesh.frustumCulled = false;
-    layers.rods.add(mesh);
-    return { ids: ids, mesh: mesh, rings: rings, prof: prof, round: round, sized: sized };
+    layer.add(mesh);
+    return { ids: ids, mesh: mesh, rings: rings, prof: prof, round: round, sized: sized, color: color,
+             fielded: fielded };
+  }
+  var rodMaterial = new THREE.MeshStandardMaterial({ vertexColors: THREE.VertexColors, roughness: 0.55,
+                                                     metalness: 0.05, side: THREE.DoubleSide });
+  var rods = data.rods.map(function (ids) { return makeTube(ids, layers.rods, rodMaterial, rodColor, true); });
+  // Pressure chambers: tubes of their area's circle along their centroid, drawn over the rods
+  // (see-through, no depth test) so that they show inside them.
+  var chamberColor = new THREE.Color(0x1e9e3c);
+  var chamberMaterial = new THREE.MeshStandardMaterial({ vertexColors: THREE.VertexColors, roughness: 0.6,
+                                                         transparent: true, opacity: 0.7, depthTest: false,
+                                                         depthWrite: false });
+  var chambers = (data.chambers || []).map(function (c) {
+    var tube = makeTube(c.points, layers.chambers, chamberMaterial, chamberColor, false);
+    tube.mesh.renderOrder = 4;
+    return tube;
   });
 
   function updateRod(rod) {
@@ -436,11 +454,11 @@
         } else {
           hy = hz = thinRadius;
         }
-        if (field) {
+        if (field && rod.fielded) {
           var fv = (1 - u) * curField[fieldSlot[ids[i0]]] + u * curField[fieldSlot[ids[i1]]];
           colormap((fv - field.lo) / (field.hi - field.lo), c);
         } else {
-          c.copy(rodColor);
+          c.copy(rod.color);
         }
         for (var k = 0; k < npf; ++k, ++v) {
           var q = prof[k];
@@ -556,7 +574,7 @@
 
   // ---- tendons and force elements: thin tubes coloured by tension -----------------------------
   var maxTension = 0;
-  for (i = 0; i < tensionTrack.length; ++i) maxTension = Math.max(maxTension, Math.abs(tensionTrack[i]));
+  for (i = 0; i < nl * nf; ++i) maxTension = Math.max(maxTension, Math.abs(tensionTrack[i]));
   var lines = data.lines.map(function (l, k) {
     var mat = new THREE.MeshBasicMaterial({ color: 0x000000 });
     var segs = [];
@@ -584,7 +602,7 @@
   var maxForce = 0;
   for (i = 0; i + 2 < forceTrack.length; i += 3)
     maxForce = Math.max(maxForce, Math.hypot(forceTrack[i], forceTrack[i + 1], forceTrack[i + 2]));
-  var forceScale = Number(params.get("force_scale"));
+  var forceScale = Number(params.get("force_scale")), forceScaleFixed = forceScale > 0;
   if (!(forceScale > 0)) forceScale = maxForce > 0 ? 0.15 * size0 / maxForce : 0;
   var arrowRadius = 0.004 * size0;
   var arrowMaterial = new THREE.MeshBasicMaterial({ color: 0xe31a1c, depthTest: false, transparent: true });
@@ -735,6 +753,7 @@
   function update() {
     computeState(time);
     rods.forEach(updateRod);
+    chambers.forEach(updateRod);
     updateBodies();
     updateLines();
     updateArrows();
@@ -764,8 +783,9 @@
       followLast = c;
       controls.update();
     }
-    document.getElementById("time").textContent =
-      "t = " + time.toFixed(3) + " s  (" + t0.toFixed(3) + " to " + t1.toFixed(3) + " s)";
+    document.getElementById("time").textContent = data.static
+      ? "\u03bb = " + time.toFixed(3) + "  (load factor, " + t0.toFixed(3) + " to " + t1.toFixed(3) + ")"
+      : "t = " + time.toFixed(3) + " s  (" + t0.toFixed(3) + " to " + t1.toFixed(3) + " s)";
     var slider = document.getElementById("slider");
     if (document.activeElement !== slider || playing)
       slider.value = String(Math.round(1000 * (t1 > t0 ? (time - t0) / (t1 - t0) : 0)));
@@ -836,6 +856,7 @@
   });
   document.getElementById("slider").addEventListener("input", function (e) {
     time = t0 + (t1 - t0) * Number(e.target.value) / 1000;
+    liveFollow = Number(e.target.value) >= 1000;  // a live page follows the simulation at the end
     update();
     render();
   });
@@ -892,10 +913,117 @@
   controls.addEventListener("change", function () { if (!playing) render(); });
   window.addEventListener("resize", function () { resize(); render(); });
 
+
+  // ---- live view (Simulation.view): frames over a WebSocket -----------------------------------
+  // data.live: the page was served by a running simulation (python/screwfem/_live.py). Every
+  // message is a frame ({t, x, q, tension, forces, fields}: the moving points' positions, the
+  // turning points' quaternions, ... as base64 float32, in the order of the data's tracks) or
+  // the simulation's state ({paused}). The page shows the newest frame while the slider is at
+  // its end (liveFollow); the Pause button pauses the simulation itself.
+  var liveFollow = true;
+  var LIVE_MAX_FRAMES = 20000;  // beyond, the oldest half is dropped
+  function grow(arr, need) {
+    if (arr.length >= need) return arr;
+    var out = new Float32Array(Math.max(need, 2 * arr.length, 64));
+    out.set(arr);
+    return out;
+  }
+  function dropOldest(k) {
+    times.splice(0, k);
+    var shift = function (arr, stride) { arr.copyWithin(0, k * stride, nf * stride); };
+    shift(track, 3 * nm); shift(quats, 4 * nt); shift(tensionTrack, nl); shift(forceTrack, 3 * nc);
+    fields.forEach(function (f) { shift(f.values, fieldPoints.length); });
+    nf -= k;
+    t0 = times[0];
+  }
+  function appendFrame(m) {
+    if (nf >= LIVE_MAX_FRAMES) dropOldest(nf >> 1);
+    var x = floats(m.x), q = floats(m.q), fc = floats(m.forces), i;
+    track = grow(track, (nf + 1) * 3 * nm); track.set(x.subarray(0, 3 * nm), nf * 3 * nm);
+    quats = grow(quats, (nf + 1) * 4 * nt); quats.set(q.subarray(0, 4 * nt), nf * 4 * nt);
+    tensionTrack = grow(tensionTrack, (nf + 1) * nl);
+    for (i = 0; i < nl; ++i) {
+      tensionTrack[nf * nl + i] = m.tension[i];
+      maxTension = Math.max(maxTension, Math.abs(m.tension[i]));
+    }
+    if (nc) {
+      forceTrack = grow(forceTrack, (nf + 1) * 3 * nc); forceTrack.set(fc.subarray(0, 3 * nc), nf * 3 * nc);
+      for (i = 0; i + 2 < fc.length; i += 3) maxForce = Math.max(maxForce, Math.hypot(fc[i], fc[i + 1], fc[i + 2]));
+      if (!forceScaleFixed && maxForce > 0) forceScale = 0.15 * size0 / maxForce;
+    }
+    fields.forEach(function (f, k) {
+      var v = floats(m.fields[k]), n = fieldPoints.length;
+      f.values = grow(f.values, (nf + 1) * n); f.values.set(v.subarray(0, n), nf * n);
+      for (i = 0; i < n; ++i) { if (v[i] < f.lo) f.lo = v[i]; if (v[i] > f.hi) f.hi = v[i]; }
+    });
+    times.push(m.t);
+    nf += 1;
+    t1 = m.t;
+    if (nf === 1) t0 = m.t;
+    if (liveFollow) time = t1;
+    // Until the camera is moved by hand, the picture frames the whole motion so far.
+    var before = box.clone();
+    for (i = 0; i < nm; ++i) {
+      var p = moving[i];
+      if (!isObstacle[p]) expand(box, x[3 * i], x[3 * i + 1], x[3 * i + 2], radius[p] || 0);
+    }
+    if (liveFrame && !box.equals(before)) {
+      size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-6);
+      frameAll(true);
+    }
+  }
+  var liveFrame = true;
+  controls.addEventListener("start", function () { liveFrame = false; });
+  var liveDrawPending = false;
+  function liveDraw() {
+    if (liveDrawPending) return;
+    liveDrawPending = true;
+    requestAnimationFrame(function () {
+      liveDrawPending = false;
+      update();
+      render();
+    });
+  }
+  function startLive() {
+    var body = document.body, received = 0, paused = false;
+    var pause = document.getElementById("live-pause");
+    pause.hidden = false;
+    body.setAttribute("data-live", "connecting");
+    body.setAttribute("data-received", "0");
+    body.setAttribute("data-frames", String(nf));
+    var socket = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + data.live.path);
+    window.screwfemLive = socket;
+    socket.onopen = function () { body.setAttribute("data-live", "open"); };
+    socket.onclose = function () {
+      body.setAttribute("data-live", "closed");
+      pause.disabled = true;
+      pause.textContent = "ended";
+    };
+    socket.onmessage = function (e) {
+      var m = JSON.parse(e.data);
+      if ("paused" in m) {
+        paused = m.paused;
+        pause.textContent = paused ? "Resume sim" : "Pause sim";
+        body.setAttribute("data-paused", paused ? "1" : "0");
+        return;
+      }
+      appendFrame(m);
+      received += 1;
+      body.setAttribute("data-received", String(received));
+      body.setAttribute("data-frames", String(nf));
+      body.setAttribute("data-sim-time", String(m.t));
+      liveDraw();
+    };
+    pause.addEventListener("click", function () {
+      if (socket.readyState === 1) socket.send(JSON.stringify({ pause: !paused }));
+    });
+  }
+
   // ---- start -------------------------------------------------------------------------------
   document.getElementById("case").textContent = data.name || "screwfem run";
   var notes = [];
-  if (data.status && data.status !== "completed") notes.push("run " + data.status + (data.message ? ": " + data.message : ""));
+  if (data.live) notes.push("live: following the running simulation");
+  else if (data.status && data.status !== "completed") notes.push("run " + data.status + (data.message ? ": " + data.message : ""));
   notes = notes.concat(data.notes || []);
   document.getElementById("note").textContent = notes.join(" \u00b7 ");
   // Legends of the tension colours and the arrows' scale.
@@ -945,5 +1073,6 @@
   if (unsized && !data.notes.some(function (n) { return n.indexOf("no section size") >= 0; }))
     document.getElementById("note").textContent += " \u00b7 rods without a section size: drawn thin";
   if (document.body.getAttribute("data-state") !== "error") document.body.setAttribute("data-state", "ready");
-  if (!frozen) setPlaying(nf > 1);
+  if (data.live) startLive();
+  else if (!frozen) setPlaying(nf > 1);
 })();

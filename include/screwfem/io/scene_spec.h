@@ -43,6 +43,10 @@ struct BodySpec {
   // smaller side of a rectangle). Rigid bodies: shapes, points in the world at the reference
   // configuration (ContactShape::body is set by the compiler). Group bitmasks of both.
   double contact_radius = 0.0;
+  // Soft bodies: the radius the rod is drawn with [m] (the VTK frames' radius, the viewer's
+  // tube), for drawing only; 0: the section's own outline (Section::width, height), else the
+  // contact radius, else thin (io/vtk.h). The scene's visual_radius of the body or its section.
+  double visual_radius = 0.0;
   std::vector<ContactShape> shapes;
   unsigned contype = 1, conaffinity = 1;
 };

@@ -19,7 +19,10 @@
 //              kObstacleCapsule);
 //   polylines  one per tendon, through its eyelets at their current positions (kTendon), and one
 //              line per force element between its ends (kForceElement); on the ground the frame
-//              axes are the world's.
+//              axes are the world's;
+//   polylines  one per pressure chamber (an actuator of type pressure), through the points of
+//              its centroid, the offset (0, r2, r3) in the section frame of every rod node it
+//              covers, with the section's axes (kChamber, item_id the actuator).
 //   Point data: frame_x, frame_y, frame_z (axes of the node frame, the section frame on rods,
 //               the joint frame at joints, a shape's or inertia box's axes), velocity [m/s],
 //               contact_force [N] (the force on the shape at kContact and kPairContact points,
@@ -37,7 +40,8 @@
 // (a section given by its stiffness only: no size known); a sphere's or a capsule's radius (and
 // r, r, r); a box's half-diagonal and half sizes; an inertia box's: the solid box of the body's
 // mass and principal moments (half sizes a_i with a_1^2 = 3 (I_2 + I_3 - I_1) / (2 m)); an
-// obstacle sphere's or capsule's radius; zero elsewhere.
+// obstacle sphere's or capsule's radius; a chamber's: the circle of its area, sqrt(A / pi) (and
+// 0, r, r); zero elsewhere.
 //   With rod fields (Open's rod_fields, outputs.rod_fields), point data strain and stress (6
 //   components each: gamma1 gamma2 gamma3 kappa1 kappa2 kappa3 and n1 n2 n3 m1 m2 m3, section
 //   components as in rod_fields.csv, CalcRodFieldRows): at a rod node the mean of its elements
@@ -91,11 +95,13 @@ enum class VtkCellKind : int {
   kPlane = 12,
   kObstacleSphere = 13,
   kObstacleCapsule = 14,
+  kChamber = 15,
 };
 
 class VtkWriter {
  public:
-  // Creates the directory if needed (throws InputError if it cannot) and lays out the frames
+  // Creates the directory if needed (throws InputError if it cannot; an empty `dir`: none, for
+  // frames only composed in memory by ComposeFrame) and lays out the frames
   // of `model`: which point each node, joint and body segment becomes, the cells and their
   // ids, and (binary) the whole file but its doubles. Reserves room for `expected_frames`
   // frames, so that writing up to that many allocates nothing.
@@ -107,6 +113,11 @@ class VtkWriter {
   // counted). Allocates no memory (binary, or ascii once its text buffer has grown to a
   // frame's size) while the frames fit the reserved count.
   bool WriteFrame(const Model& model, const Data& data, double time, double load_factor = 1.0);
+  // The bytes of the frame WriteFrame would write next, composed in memory and not written
+  // (nor counted): the live view of Python's Simulation.view reads them. The reference stays
+  // valid until the next ComposeFrame or WriteFrame.
+  const std::string& ComposeFrame(const Model& model, const Data& data, double time,
+                                  double load_factor = 1.0);
   // Writes motion.pvd listing the frames written so far. Returns false on a write error.
   bool WriteCollection() const;
   int frames() const { return static_cast<int>(times_.size()); }
@@ -138,6 +149,7 @@ class VtkWriter {
   void LayOutBodies(const Model& model, const std::vector<std::vector<Vec3>>& attachments);
   void LayOutLines(const Model& model);
   void LayOutContact(const Model& model);
+  void LayOutChambers(const Model& model);
   long long AddPoint(const PointSource& source, double radius = 0.0,
                      const Vec3& half_size = Vec3::Zero(), int joint = -1);
   void AddVertex(long long point, const CellInfo& cell);
