@@ -8,11 +8,12 @@
 #      libFuzzer harnesses of tests/fuzz) and its ctest suite: every example scene's first
 #      steps, the fuzz regression corpus, and the linalg and build test programs (the whole
 #      suite under the sanitizers is scripts/run-sanitizers.sh, on demand);
-#   4. the two fuzz targets, concurrently, for SCREWFEM_FUZZ_SECONDS each (default 20) on the
-#      seed corpus (the example scenes, tests/data/, tests/fuzz/regressions/): any crash, sanitizer
+#   4. the three fuzz targets (parse, build, run) in two concurrent slots for
+#      SCREWFEM_FUZZ_SECONDS (default 20; run_fuzzers) on the seed corpus (the example scenes,
+#      tests/data/, tests/fuzz/seeds/NAME/, tests/fuzz/regressions/NAME/): any crash, sanitizer
 #      report, leak, timeout (10 s per input) or out-of-memory (1024 MB) fails the job, and
 #      the failing input is copied into tests/fuzz/regressions/NAME/ (commit it: ctest
-#      replays that corpus in every build).
+#      replays that corpus in every build). Longer campaigns: scripts/fuzz-campaign.sh.
 #   5. the lint (scripts/lint.sh): every C++ file as .clang-format lays it out, and commit
 #      subjects of at most 72 characters with a body; a broken rule counts as one failure.
 # Runs every phase even after a failure (except the sanitizer build when the Release build
@@ -102,28 +103,41 @@ run_examples() {
   end "examples (Release)"
 }
 
-# run_fuzzers DIR: both libFuzzer targets at once (one per core), each for
-# SCREWFEM_FUZZ_SECONDS; one pass or one failure per target in the counts.
+# fuzz_target DIR NAME SECONDS: one libFuzzer target on its seed corpus (the example scenes,
+# tests/data/, tests/fuzz/seeds/NAME/ and tests/fuzz/regressions/NAME/) for SECONDS; its log,
+# artifacts and exit status go to DIR/fuzz/NAME/.
+fuzz_target() {
+  local dir=$1 name=$2 seconds=$3 work=$1/fuzz/$2 seeds=()
+  rm -rf "$work"
+  mkdir -p "$work/corpus" "$work/artifacts"
+  [[ -d "tests/fuzz/seeds/$name" ]] && seeds+=("tests/fuzz/seeds/$name")
+  # The first directory receives new inputs; the others are read-only seeds.
+  "$dir/tests/fuzz/screwfem_fuzz_$name" "$work/corpus" examples/*/ tests/data "${seeds[@]}" \
+    "tests/fuzz/regressions/$name" -max_total_time="$seconds" -timeout=10 \
+    -rss_limit_mb=1024 -max_len=65536 -print_final_stats=1 \
+    -artifact_prefix="$work/artifacts/" > "$work/log.txt" 2>&1
+  echo $? > "$work/status"
+}
+
+# run_fuzzers DIR: the three libFuzzer targets in two concurrent slots (one per core) for
+# SCREWFEM_FUZZ_SECONDS (default 20) of wall time: the run target (the whole run path, the
+# slowest per input) in one slot for all of it, parse then build in the other for half of it
+# each. One pass or one failure per target in the counts.
 run_fuzzers() {
-  local dir=$1 seconds=${SCREWFEM_FUZZ_SECONDS:-20} name work pids=() status
-  begin "fuzzing (2 x ${seconds} s)"
-  for name in parse build; do
+  local dir=$1 seconds=${SCREWFEM_FUZZ_SECONDS:-20} name work status
+  local half=$(((seconds + 1) / 2))
+  begin "fuzzing (2 slots x ${seconds} s)"
+  (
+    fuzz_target "$dir" parse "$half"
+    fuzz_target "$dir" build "$half"
+  ) &
+  local slot_a=$!
+  fuzz_target "$dir" run "$seconds" &
+  local slot_b=$!
+  wait "$slot_a" "$slot_b"
+  for name in parse build run; do
     work=$dir/fuzz/$name
-    rm -rf "$work"
-    mkdir -p "$work/corpus" "$work/artifacts"
-    # The first directory receives new inputs; the others are read-only seeds.
-    "$dir/tests/fuzz/screwfem_fuzz_$name" "$work/corpus" examples/*/ tests/data \
-      "tests/fuzz/regressions/$name" -max_total_time="$seconds" -timeout=10 \
-      -rss_limit_mb=1024 -max_len=65536 -print_final_stats=1 \
-      -artifact_prefix="$work/artifacts/" > "$work/log.txt" 2>&1 &
-    pids+=($!)
-  done
-  local i=0
-  for name in parse build; do
-    wait "${pids[$i]}"
-    status=$?
-    i=$((i + 1))
-    work=$dir/fuzz/$name
+    status=$(cat "$work/status" 2> /dev/null || echo 1)
     grep -E '^stat::(number_of_executed_units|average_exec_per_sec)' "$work/log.txt" |
       sed "s/^/fuzz $name: /"
     if [[ $status -eq 0 ]]; then
@@ -140,7 +154,7 @@ run_fuzzers() {
       fail "fuzz $name: exit status $status (log in $work/log.txt)"
     fi
   done
-  end "fuzzing (2 x ${seconds} s)"
+  end "fuzzing (2 slots x ${seconds} s)"
 }
 
 total_start=$(now_us)
