@@ -6,8 +6,9 @@
 #      (build/release/examples/**/*_example, run from the repository root without arguments);
 #   3. AddressSanitizer + UndefinedBehaviorSanitizer build in build/asan (clang, with the
 #      libFuzzer harnesses of tests/fuzz) and its ctest suite: every example scene's first
-#      steps, the fuzz regression corpus, and the linalg and build test programs (the whole
-#      suite under the sanitizers is scripts/run-sanitizers.sh, on demand);
+#      steps, the fuzz regression corpus, and the solve, io, elements, validation, linalg and
+#      build test programs less their longest tests (the whole suite under the sanitizers is
+#      scripts/run-sanitizers.sh, on demand);
 #   4. the three fuzz targets (parse, build, run) in two concurrent slots for
 #      SCREWFEM_FUZZ_SECONDS (default 20; run_fuzzers) on the seed corpus (the example scenes,
 #      tests/data/, tests/fuzz/seeds/NAME/, tests/fuzz/regressions/NAME/): any crash, sanitizer
@@ -202,20 +203,24 @@ if [[ $release_built -eq 1 ]]; then
   source scripts/sanitizer-config.sh
   # The sanitizer stage (scripts/sanitizer-config.sh) instruments the product: the libraries,
   # the command-line program and the fuzz harnesses. It runs
-  #  - every example scene's first steps through the instrumented program (test
-  #    sanitizer_example_scenes: rods, rigid bodies, joints, tendons, pressure, rest curvature,
+  #  - every example scene's first steps through the instrumented program (tests
+  #    sanitizer_scene_*: rods, rigid bodies, joints, tendons, pressure, rest curvature,
   #    contact, run-time inputs, and the files they write);
-  #  - the regression corpus of the fuzzers, then both fuzzers for 20 s each (parsing and
-  #    building from random scenes);
-  #  - two test programs: tests/linalg (the banded storage and its index arithmetic) and
-  #    tests/build (the model builder and the redundancy analysis).
-  # The other test programs (the io and solve tests, the validation problems, the kernels' own
-  # tests, the allocation counts) run in the Release suite above, and under the sanitizers in
-  # scripts/run-sanitizers.sh, on demand: building and running them instrumented took 550 s
-  # more, and the whole test command must stay under 15 minutes (README.md, "Tests").
+  #  - the regression corpus and seeds of the fuzzers, then the three fuzzers (run_fuzzers);
+  #  - six test programs ($asan_stage_programs): tests/solve (statics, dynamics, tendons),
+  #    tests/io (scenes, runs, the files, the CLI, limits), tests/elements (the kernels,
+  #    contact, tendons), tests/validation (closed-form problems), tests/linalg and
+  #    tests/build, less their longest tests (tests/sanitize/long_tests.txt).
+  # lie, model, assemble and alloc, and the long tests, run in the Release suite above, and
+  # under the sanitizers in scripts/run-sanitizers.sh, on demand. Measured on the loaded
+  # 2-core machine (CPU time; it ran about 1.2 times its idle value): the four programs added
+  # 158 CPU-s to the build (io 54, validation 46, elements 45, solve 12), and the stage's 429
+  # tests took 107 CPU-s; projected on 2 idle cores, about +66 s of build and +55 s of tests,
+  # less the 20 s of the viewer's Chromium tests, which no longer run here: about 14.3 min in
+  # all (docs/fuzzing.md).
   if configure_and_build "ASan+UBSan" "$asan_dir" "${asan_cmake_args[@]}" \
-      -DSCREWFEM_TEST_PROGRAMS="linalg;build"; then
-    run_ctest "ASan+UBSan" "$asan_dir" -E "$asan_always_excluded"
+      -DSCREWFEM_TEST_PROGRAMS="$asan_stage_programs"; then
+    run_ctest "ASan+UBSan" "$asan_dir" -E "$asan_always_excluded|$asan_stage_excluded"
     run_fuzzers "$asan_dir"
   fi
 else
