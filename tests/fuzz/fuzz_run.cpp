@@ -97,21 +97,22 @@ bool PollStop(void* context) {
   return --budget->left < 0;
 }
 
-// One output directory per process, emptied before every run and removed at exit.
+// One output directory per process, emptied before every run and removed after it (libFuzzer
+// ends a session with _Exit, so a destructor alone would leave the last run's files).
 struct OutputDir {
   std::filesystem::path path;
   OutputDir() {
     path = std::filesystem::temp_directory_path() /
            ("screwfem-fuzz-run-" + std::to_string(static_cast<long>(getpid())));
   }
-  ~OutputDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path, ec);
-  }
+  ~OutputDir() { Remove(); }
   std::string Fresh() const {
+    Remove();
+    return path.string();
+  }
+  void Remove() const {
     std::error_code ec;
     std::filesystem::remove_all(path, ec);
-    return path.string();
   }
 };
 
@@ -170,6 +171,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     r = screwfem::RunScene(scene, dir, options);
   } catch (const screwfem::InputError& e) {
+    outdir.Remove();
     if (std::string(e.what()).empty()) Fail("RunScene", "an InputError without a message");
     Say("run refused", e.what());
     return 0;
@@ -179,6 +181,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (!std::filesystem::is_regular_file(std::filesystem::path(dir) / "summary.json"))
     Fail("RunScene", "returned without summary.json");
   if (!r.ok && r.message.empty()) Fail("RunScene", "stopped early without a message");
+  outdir.Remove();
   Say(r.ok            ? "completed"
       : r.interrupted ? "interrupted"
                       : "failed",
