@@ -2,8 +2,9 @@
 # The whole GoogleTest suite under AddressSanitizer + UndefinedBehaviorSanitizer, on demand
 # (docs/maintainers.md, "Test command: time and history"): every test program of tests/ and every test of the Release suite but the
 # Python tools' tests, in the tree of the test command's sanitizer stage (build/asan;
-# scripts/sanitizer-config.sh), to which it adds the test programs that stage leaves out.
-# The test command (scripts/run-tests.sh) cannot afford them within its 15 minutes. At 984e479
+# scripts/sanitizer-config.sh), to which it adds the test programs that stage leaves out (lie,
+# model, assemble, alloc) and whose long tests (tests/sanitize/long_tests.txt) it runs too: the
+# test command (scripts/run-tests.sh) cannot afford them within its budget. At 984e479
 # all 811 tests passed (one skipped: the out-of-memory test, since AddressSanitizer reserves
 # more address space than its limit). Run at the lowest priority beside other builds it took
 # 27 min to build and 34 min to run, so expect the better part of an hour; the full-length GRM

@@ -6,13 +6,15 @@
 #      (build/release/examples/**/*_example, run from the repository root without arguments);
 #   3. AddressSanitizer + UndefinedBehaviorSanitizer build in build/asan (clang, with the
 #      libFuzzer harnesses of tests/fuzz) and its ctest suite: every example scene's first
-#      steps, the fuzz regression corpus, and the linalg and build test programs (the whole
-#      suite under the sanitizers is scripts/run-sanitizers.sh, on demand);
-#   4. the two fuzz targets, concurrently, for SCREWFEM_FUZZ_SECONDS each (default 20) on the
-#      seed corpus (the example scenes, tests/data/, tests/fuzz/regressions/): any crash, sanitizer
+#      steps, the fuzz regression corpus, and the solve, io, elements, validation, linalg and
+#      build test programs less their longest tests (the whole suite under the sanitizers is
+#      scripts/run-sanitizers.sh, on demand);
+#   4. the three fuzz targets (parse, build, run) in two concurrent slots for
+#      SCREWFEM_FUZZ_SECONDS (default 20; run_fuzzers) on the seed corpus (the example scenes,
+#      tests/data/, tests/fuzz/seeds/NAME/, tests/fuzz/regressions/NAME/): any crash, sanitizer
 #      report, leak, timeout (10 s per input) or out-of-memory (1024 MB) fails the job, and
 #      the failing input is copied into tests/fuzz/regressions/NAME/ (commit it: ctest
-#      replays that corpus in every build).
+#      replays that corpus in every build). Longer campaigns: scripts/fuzz-campaign.sh.
 #   5. the lint (scripts/lint.sh): every C++ file as .clang-format lays it out, and commit
 #      subjects of at most 72 characters with a body; a broken rule counts as one failure.
 # Runs every phase even after a failure (except the sanitizer build when the Release build
@@ -102,28 +104,41 @@ run_examples() {
   end "examples (Release)"
 }
 
-# run_fuzzers DIR: both libFuzzer targets at once (one per core), each for
-# SCREWFEM_FUZZ_SECONDS; one pass or one failure per target in the counts.
+# fuzz_target DIR NAME SECONDS: one libFuzzer target on its seed corpus (the example scenes,
+# tests/data/, tests/fuzz/seeds/NAME/ and tests/fuzz/regressions/NAME/) for SECONDS; its log,
+# artifacts and exit status go to DIR/fuzz/NAME/.
+fuzz_target() {
+  local dir=$1 name=$2 seconds=$3 work=$1/fuzz/$2 seeds=()
+  rm -rf "$work"
+  mkdir -p "$work/corpus" "$work/artifacts"
+  [[ -d "tests/fuzz/seeds/$name" ]] && seeds+=("tests/fuzz/seeds/$name")
+  # The first directory receives new inputs; the others are read-only seeds.
+  "$dir/tests/fuzz/screwfem_fuzz_$name" "$work/corpus" examples/*/ tests/data "${seeds[@]}" \
+    "tests/fuzz/regressions/$name" -max_total_time="$seconds" -timeout=10 \
+    -rss_limit_mb=1024 -max_len=65536 -print_final_stats=1 \
+    -artifact_prefix="$work/artifacts/" > "$work/log.txt" 2>&1
+  echo $? > "$work/status"
+}
+
+# run_fuzzers DIR: the three libFuzzer targets in two concurrent slots (one per core) for
+# SCREWFEM_FUZZ_SECONDS (default 20) of wall time: the run target (the whole run path, the
+# slowest per input) in one slot for all of it, parse then build in the other for half of it
+# each. One pass or one failure per target in the counts.
 run_fuzzers() {
-  local dir=$1 seconds=${SCREWFEM_FUZZ_SECONDS:-20} name work pids=() status
-  begin "fuzzing (2 x ${seconds} s)"
-  for name in parse build; do
+  local dir=$1 seconds=${SCREWFEM_FUZZ_SECONDS:-20} name work status
+  local half=$(((seconds + 1) / 2))
+  begin "fuzzing (2 slots x ${seconds} s)"
+  (
+    fuzz_target "$dir" parse "$half"
+    fuzz_target "$dir" build "$half"
+  ) &
+  local slot_a=$!
+  fuzz_target "$dir" run "$seconds" &
+  local slot_b=$!
+  wait "$slot_a" "$slot_b"
+  for name in parse build run; do
     work=$dir/fuzz/$name
-    rm -rf "$work"
-    mkdir -p "$work/corpus" "$work/artifacts"
-    # The first directory receives new inputs; the others are read-only seeds.
-    "$dir/tests/fuzz/screwfem_fuzz_$name" "$work/corpus" examples/*/ tests/data \
-      "tests/fuzz/regressions/$name" -max_total_time="$seconds" -timeout=10 \
-      -rss_limit_mb=1024 -max_len=65536 -print_final_stats=1 \
-      -artifact_prefix="$work/artifacts/" > "$work/log.txt" 2>&1 &
-    pids+=($!)
-  done
-  local i=0
-  for name in parse build; do
-    wait "${pids[$i]}"
-    status=$?
-    i=$((i + 1))
-    work=$dir/fuzz/$name
+    status=$(cat "$work/status" 2> /dev/null || echo 1)
     grep -E '^stat::(number_of_executed_units|average_exec_per_sec)' "$work/log.txt" |
       sed "s/^/fuzz $name: /"
     if [[ $status -eq 0 ]]; then
@@ -140,7 +155,7 @@ run_fuzzers() {
       fail "fuzz $name: exit status $status (log in $work/log.txt)"
     fi
   done
-  end "fuzzing (2 x ${seconds} s)"
+  end "fuzzing (2 slots x ${seconds} s)"
 }
 
 total_start=$(now_us)
@@ -188,20 +203,24 @@ if [[ $release_built -eq 1 ]]; then
   source scripts/sanitizer-config.sh
   # The sanitizer stage (scripts/sanitizer-config.sh) instruments the product: the libraries,
   # the command-line program and the fuzz harnesses. It runs
-  #  - every example scene's first steps through the instrumented program (test
-  #    sanitizer_example_scenes: rods, rigid bodies, joints, tendons, pressure, rest curvature,
+  #  - every example scene's first steps through the instrumented program (tests
+  #    sanitizer_scene_*: rods, rigid bodies, joints, tendons, pressure, rest curvature,
   #    contact, run-time inputs, and the files they write);
-  #  - the regression corpus of the fuzzers, then both fuzzers for 20 s each (parsing and
-  #    building from random scenes);
-  #  - two test programs: tests/linalg (the banded storage and its index arithmetic) and
-  #    tests/build (the model builder and the redundancy analysis).
-  # The other test programs (the io and solve tests, the validation problems, the kernels' own
-  # tests, the allocation counts) run in the Release suite above, and under the sanitizers in
-  # scripts/run-sanitizers.sh, on demand: building and running them instrumented took 550 s
-  # more, and the whole test command must stay under 15 minutes (docs/maintainers.md).
+  #  - the regression corpus and seeds of the fuzzers, then the three fuzzers (run_fuzzers);
+  #  - six test programs ($asan_stage_programs): tests/solve (statics, dynamics, tendons),
+  #    tests/io (scenes, runs, the files, the CLI, limits), tests/elements (the kernels,
+  #    contact, tendons), tests/validation (closed-form problems), tests/linalg and
+  #    tests/build, less their longest tests (tests/sanitize/long_tests.txt).
+  # lie, model, assemble and alloc, and the long tests, run in the Release suite above, and
+  # under the sanitizers in scripts/run-sanitizers.sh, on demand. Measured on the loaded
+  # 2-core machine (CPU time; it ran about 1.2 times its idle value): the four programs added
+  # 158 CPU-s to the build (io 54, validation 46, elements 45, solve 12), and the stage's 429
+  # tests took 107 CPU-s; projected on 2 idle cores, about +66 s of build and +55 s of tests,
+  # less the 20 s of the viewer's Chromium tests, which no longer run here: about 14.3 min in
+  # all (docs/fuzzing.md, docs/maintainers.md).
   if configure_and_build "ASan+UBSan" "$asan_dir" "${asan_cmake_args[@]}" \
-      -DSCREWFEM_TEST_PROGRAMS="linalg;build"; then
-    run_ctest "ASan+UBSan" "$asan_dir" -E "$asan_always_excluded"
+      -DSCREWFEM_TEST_PROGRAMS="$asan_stage_programs"; then
+    run_ctest "ASan+UBSan" "$asan_dir" -E "$asan_always_excluded|$asan_stage_excluded"
     run_fuzzers "$asan_dir"
   fi
 else

@@ -16,5 +16,14 @@ asan_cmake_args=(-DSCREWFEM_SANITIZE=ON -DCMAKE_CXX_COMPILER=clang++ -DSCREWFEM_
 export ASAN_OPTIONS=detect_leaks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # Python code, with nothing of screwfem's C++ in it but the run that makes its input: the
-# tests of the Python tools (plots, viewer, VTK reader) are never run under the sanitizers.
-asan_always_excluded='^viewer_chromium$|^tools_|^Cli\.Plot(DrawsPoints|Animate)'
+# tests of the Python tools (plots, the viewer in Chromium, the VTK reader) are never run
+# under the sanitizers.
+asan_always_excluded='^viewer_|^tools_|^Cli\.Plot(DrawsPoints|Animate)'
+# The test command's sanitizer stage (scripts/run-tests.sh): the test programs it builds (the
+# solver, io with the scenes, contact and tendons, the element kernels and the validation
+# problems, besides linalg and build; not lie, model, assemble and alloc), and the tests of
+# them it leaves out, the longest (tests/sanitize/long_tests.txt; each name a whole-name
+# regex). scripts/run-sanitizers.sh builds every program and runs every test.
+asan_stage_programs="linalg;build;solve;elements;validation;io"
+asan_stage_excluded=$(grep -Ev '^(#|$)' tests/sanitize/long_tests.txt | sed -e 's/\./\\./g' \
+  -e 's/.*/^&$/' | paste -sd '|')
