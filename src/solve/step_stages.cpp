@@ -163,7 +163,7 @@ bool AssembleIterate(const Model& model, Data& data, const DynamicOptions& opt, 
                     data.failed_element, data.failed_rotation);
     else
       std::snprintf(buf, sizeof buf, "the residual is not finite");
-    *why = buf;
+    *why = data.shape_pair_limit_reached ? ShapePairLimitMessage(model) : std::string(buf);
   }
   return false;
 }
