@@ -409,6 +409,9 @@ class MathTextInNames(unittest.TestCase):
         self.addCleanup(shutil.rmtree, tmp, True)
         name = "run$\\frac{$"
         write_run(os.path.join(tmp, name))
+        for table in os.listdir(os.path.join(tmp, name)):  # two tables suffice (and are quick)
+            if table not in ("points.csv", "energy.csv", "summary.json"):
+                os.remove(os.path.join(tmp, name, table))
         figures = {}
         save = screwfem_plot.save_figure
 
