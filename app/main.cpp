@@ -1,7 +1,8 @@
 // The screwfem command-line program (thin: parse arguments, call the library).
 //
 //   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet] [--force]
-//   screwfem check SCENE.yaml [--set key=value]...
+//                [--inputs TABLE.csv] [--max-memory SIZE]
+//   screwfem check SCENE.yaml [--set key=value]... [--max-memory SIZE]
 //   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1]
 //                 [--animate [--fps 25] [--speed 1]]
 //   screwfem view OUTDIR [-o FILE.html]
@@ -36,6 +37,7 @@
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/model/errors.h"
+#include "screwfem/model/memory.h"
 
 extern char** environ;
 
@@ -68,17 +70,37 @@ void PrintWarnings(const screwfem::Model& model) {
   for (const std::string& w : model.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 }
 
+// An InputError while reading or building after a stop signal: the signal's exit code.
+int InputErrorExit(const screwfem::InputError& e) {
+  const int signal = g_stop.load();
+  if (signal != 0) {
+    std::fprintf(stderr, "interrupted: %s\n", e.what());
+    return 128 + signal;
+  }
+  std::fprintf(stderr, "error: %s\n", e.what());
+  return kExitInput;
+}
+
+// --max-memory SIZE: the process default of the memory limit (model/memory.h).
+void SetMaxMemory(const std::string& size) {
+  if (!size.empty())
+    screwfem::SetDefaultMemoryLimit(screwfem::ParseMemorySize(size, "--max-memory"));
+}
+
 int Run(const std::string& scene_path, const std::string& outdir,
         const std::vector<std::string>& overrides, const std::string& inputs, bool quiet,
-        bool force) {
+        bool force, const std::string& max_memory) {
   try {
-    const screwfem::Scene scene = screwfem::LoadScene(scene_path, overrides);
+    SetMaxMemory(max_memory);
+    screwfem::StopRequest stop;
+    stop.flag = &g_stop;
+    const screwfem::Scene scene = screwfem::LoadScene(scene_path, overrides, stop);
     PrintWarnings(scene.model);
     screwfem::RunOptions options;
     options.progress = !quiet && isatty(STDERR_FILENO);
-    options.stop.flag = &g_stop;
+    options.stop = stop;
     options.replace_results = force;
-    if (!inputs.empty()) options.inputs = screwfem::ReadInputTable(inputs, scene.model);
+    if (!inputs.empty()) options.inputs = screwfem::ReadInputTable(inputs, scene.model, stop);
     const screwfem::RunResult r = screwfem::RunScene(scene, outdir, options);
     const char* status = r.ok                                        ? "completed"
                          : !r.interrupted                            ? "failed"
@@ -94,13 +116,14 @@ int Run(const std::string& scene_path, const std::string& outdir,
     if (r.interrupted) return r.signal > 0 ? 128 + r.signal : kExitInterrupted;
     return r.io_error ? kExitInput : kExitFailed;
   } catch (const screwfem::InputError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitInput;
+    return InputErrorExit(e);
   }
 }
 
-int Check(const std::string& scene_path, const std::vector<std::string>& overrides) {
+int Check(const std::string& scene_path, const std::vector<std::string>& overrides,
+          const std::string& max_memory) {
   try {
+    SetMaxMemory(max_memory);
     const screwfem::Scene scene = screwfem::LoadScene(scene_path, overrides);
     const screwfem::Model& m = scene.model;
     const screwfem::AnalysisSettings& a = scene.analysis;
@@ -118,6 +141,11 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
                 m.nv, m.nc, m.redundant_rows.size(), m.bandwidth);
     std::printf("  recorded: %zu points, %zu joints\n", scene.outputs.points.size(),
                 scene.outputs.joints.size());
+    std::printf(
+        "  memory: about %s for the solver's workspace (limit %s)\n",
+        screwfem::FormatBytes(screwfem::TotalBytes(screwfem::EstimateDataMemory(m))).c_str(),
+        screwfem::FormatBytes(static_cast<double>(screwfem::ResolveMemoryLimit(m.memory_limit)))
+            .c_str());
     for (const std::string& w : m.warnings) std::printf("  warning: %s\n", w.c_str());
     return 0;
   } catch (const screwfem::InputError& e) {
@@ -254,7 +282,7 @@ int Main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("screwfem ") + SCREWFEM_VERSION);
 
-  std::string scene_path, outdir, figdir, points, times, html, inputs, fps, speed;
+  std::string scene_path, outdir, figdir, points, times, html, inputs, fps, speed, max_memory;
   std::vector<std::string> overrides, outdirs;
   bool quiet = false, force = false, animate = false;
   const auto add_overrides = [&](CLI::App* cmd) {
@@ -262,6 +290,12 @@ int Main(int argc, char** argv) {
                     "override a scene value, e.g. analysis.step=5e-4 (repeatable)")
         ->type_name("KEY=VALUE")
         ->allow_extra_args(false);
+  };
+  const auto add_max_memory = [&](CLI::App* cmd) {
+    cmd->add_option("--max-memory", max_memory,
+                    "refuse a scene whose model and solver would need more memory than SIZE "
+                    "(e.g. 8G, 512M; default: half the physical memory; docs/limits.md)")
+        ->type_name("SIZE");
   };
 
   CLI::App* run = app.add_subcommand("run", "run a scene and write its results");
@@ -272,6 +306,7 @@ int Main(int argc, char** argv) {
                   "CSV table of run-time input values: header t,NAME,..., one row per time "
                   "(linear between rows, held outside; docs/scene-format.md)")
       ->type_name("TABLE.csv");
+  add_max_memory(run);
   run->add_flag("-q,--quiet", quiet, "no progress bar");
   run->add_flag("-f,--force", force,
                 "replace the results of an earlier run in OUTDIR (removes screwfem's files only)");
@@ -279,6 +314,7 @@ int Main(int argc, char** argv) {
   CLI::App* check = app.add_subcommand("check", "validate a scene and print its size");
   check->add_option("scene", scene_path, "scene file (YAML)")->required();
   add_overrides(check);
+  add_max_memory(check);
 
   CLI::App* plot = app.add_subcommand("plot", "plot results of one or more runs (matplotlib)");
   plot->add_option("outdirs", outdirs, "run output directories")->required();
@@ -314,9 +350,9 @@ int Main(int argc, char** argv) {
   }
   if (run->parsed()) {
     InstallStopHandlers();
-    return Run(scene_path, outdir, overrides, inputs, quiet, force);
+    return Run(scene_path, outdir, overrides, inputs, quiet, force, max_memory);
   }
-  if (check->parsed()) return Check(scene_path, overrides);
+  if (check->parsed()) return Check(scene_path, overrides, max_memory);
   if (sweep->parsed()) return Sweep(sweep->remaining());
   if (view->parsed()) return View(outdir, html);
   return Plot(outdirs, figdir, points, times, animate, fps, speed);

@@ -633,7 +633,8 @@ MUJOCO_SECTION = "## Spring chain against MuJoCo"
 SWEEP_SECTION = "## Parameter sweeps on Dask"
 PLOT_SECTION = "## Animation of `screwfem plot`"
 VECTOR_ENV_SECTION = "## Vector environments (Python)"
-KEPT_SECTIONS = (MUJOCO_SECTION, PLOT_SECTION, SWEEP_SECTION, VECTOR_ENV_SECTION)
+CHECK_SECTION = "## Checks at size"
+KEPT_SECTIONS = (MUJOCO_SECTION, PLOT_SECTION, SWEEP_SECTION, VECTOR_ENV_SECTION, CHECK_SECTION)
 
 
 def main():

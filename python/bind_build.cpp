@@ -438,6 +438,15 @@ void BindBuild(py::module_& m) {
            "No contact between two moving entities (each a rod or a rigid body, by index).")
       .def("set_contact_settings", &B::SetContactSettings, py::arg("settings"),
            "The contact law's settings (ContactSettings) for every pair.")
+      .def(
+          "set_memory_limit",
+          [](B& b, const py::object& size) {
+            b.SetMemoryLimit(MemorySize(size, "ModelBuilder.set_memory_limit"));
+          },
+          py::arg("size"),
+          "The memory the model and its solver may need: bytes or a size such as '8G' (None: "
+          "the process default, screwfem.set_memory_limit). build() raises InputError naming "
+          "the part beyond it (docs/limits.md).")
       .def("build", &B::Build, "The validated Model.");
 }
 

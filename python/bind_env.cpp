@@ -152,6 +152,7 @@ std::vector<std::string> StepMany(const std::vector<Simulation*>& sims, double h
     if (!sims[i]->initialized())
       throw std::logic_error("_step_many: sims[" + std::to_string(i) +
                              "] is not initialized (call initialize() first)");
+    sims[i]->CheckInputsFinite("_step_many: sims[" + std::to_string(i) + "]");
   }
   std::vector<Simulation*> sorted(sims);
   std::sort(sorted.begin(), sorted.end());

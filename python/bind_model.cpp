@@ -40,6 +40,7 @@ void BindModel(py::module_& m) {
     for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
     joint_type.value(upper.c_str(), FindJointType(type_name)->type);
   }
+  CheckEnumConstructor(joint_type, "JointType");
   BindEnum<DriveKind>(m, "DriveKind", "Drive on one joint coordinate (model.h).");
   BindEnum<RodInertia>(m, "RodInertia", "Rod inertia model (docs/numerics.md, 'Rod inertia').");
   BindEnum<LoadFrame>(m, "LoadFrame", "Frame of an applied load's components (model.h).");

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bind.h"
+#include "screwfem/model/memory.h"
 #include "simulation.h"
 #include "screwfem/io/input_table.h"
 #include "screwfem/io/run.h"
@@ -25,12 +26,41 @@ namespace py = pybind11;
 
 namespace screwfem::python {
 
+// A memory size from Python: None (0: the process default), a positive int of bytes, or a
+// size text such as '8G' (ParseMemorySize).
+std::size_t MemorySize(const py::object& v, const std::string& setting) {
+  if (v.is_none()) return 0;
+  if (py::isinstance<py::str>(v)) return ParseMemorySize(v.cast<std::string>(), setting);
+  if (py::isinstance<py::bool_>(v) || !py::isinstance<py::int_>(v) ||
+      v.cast<py::int_>() <= py::int_(0))
+    throw InputError(setting + ": expected None, a number of bytes > 0 or a size such as '8G'");
+  return v.cast<std::size_t>();
+}
+
 namespace {
 
 bool OnMainThread() {
   const py::module_ threading = py::module_::import("threading");
   return threading.attr("current_thread")().is(threading.attr("main_thread")());
 }
+
+// The process default for the length of one call (max_memory of load_scene, parse_scene).
+class ScopedMemoryLimit {
+ public:
+  ScopedMemoryLimit(const py::object& size, const std::string& setting)
+      : old_(DefaultMemoryLimit()), set_(!size.is_none()) {
+    if (set_) SetDefaultMemoryLimit(MemorySize(size, setting));
+  }
+  ~ScopedMemoryLimit() {
+    if (set_) SetDefaultMemoryLimit(old_);
+  }
+  ScopedMemoryLimit(const ScopedMemoryLimit&) = delete;
+  ScopedMemoryLimit& operator=(const ScopedMemoryLimit&) = delete;
+
+ private:
+  std::size_t old_;
+  bool set_;
+};
 
 // run_scene with a callback: RunScene on the state of a Simulation that the callback receives.
 // The run stops (as interrupted) once the callback has raised, and the exception is raised
@@ -54,6 +84,12 @@ RunResult RunWithCallback(const Scene& scene, const std::string& outdir, RunOpti
   const auto call = [&] {
     try {
       callback(sim_object);
+      // Inputs written through the input_values view: the run must not step on a NaN.
+      const std::string bad = sim.NonFiniteInput("run_scene: after the callback");
+      if (!bad.empty()) {
+        PyErr_SetString(PyExc_ValueError, bad.c_str());
+        throw py::error_already_set();
+      }
     } catch (py::error_already_set& e) {
       state.error.emplace(std::move(e));
     }
@@ -293,16 +329,68 @@ void BindScenesAndRuns(py::module_& m) {
       .def("__repr__", [](const Scene& s) { return "<screwfem.Scene '" + s.name + "'>"; });
 
   m.def(
-      "load_scene", &LoadScene, py::arg("path"), py::arg("overrides") = std::vector<std::string>{},
-      "load_scene(path, overrides=[]) -> Scene\n\n"
+      "load_scene",
+      [](const std::string& path, const std::vector<std::string>& overrides,
+         const py::object& max_memory) {
+        const ScopedMemoryLimit limit(max_memory, "load_scene: max_memory");
+        PythonSignals signals;
+        try {
+          return LoadScene(path, overrides, signals.request());
+        } catch (const InputError&) {
+          signals.ThrowIfRaised();  // Ctrl-C while reading: KeyboardInterrupt
+          throw;
+        }
+      },
+      py::arg("path"), py::arg("overrides") = std::vector<std::string>{},
+      py::arg("max_memory") = py::none(),
+      "load_scene(path, overrides=[], max_memory=None) -> Scene\n\n"
       "Parses and compiles a scene file (docs/scene-format.md). `overrides` are 'key.path=value'\n"
       "strings applied to the YAML tree before compilation (e.g. 'analysis.step=5e-4',\n"
-      "'bodies.arm56.elements=8'). Raises InputError with the message\n"
+      "'bodies.arm56.elements=8'). `max_memory` (bytes, or a size such as '8G'; None: the\n"
+      "process default, set_memory_limit) bounds the memory the model and its solver may need\n"
+      "(docs/limits.md). Raises InputError with the message\n"
       "'FILE:LINE:COLUMN: FIELD: what was expected'.");
-  m.def("parse_scene", &ParseScene, py::arg("yaml_text"), py::arg("source_name"),
-        py::arg("overrides") = std::vector<std::string>{},
-        "parse_scene(yaml_text, source_name, overrides=[]) -> Scene\n\n"
-        "As load_scene, from YAML text; messages name `source_name` as the file.");
+  m.def(
+      "parse_scene",
+      [](const std::string& text, const std::string& source,
+         const std::vector<std::string>& overrides, const py::object& max_memory) {
+        const ScopedMemoryLimit limit(max_memory, "parse_scene: max_memory");
+        return ParseScene(text, source, overrides);
+      },
+      py::arg("yaml_text"), py::arg("source_name"),
+      py::arg("overrides") = std::vector<std::string>{}, py::arg("max_memory") = py::none(),
+      "parse_scene(yaml_text, source_name, overrides=[], max_memory=None) -> Scene\n\n"
+      "As load_scene, from YAML text; messages name `source_name` as the file.");
+  m.def(
+      "set_memory_limit",
+      [](const py::object& size) { SetDefaultMemoryLimit(MemorySize(size, "set_memory_limit")); },
+      py::arg("size"),
+      "set_memory_limit(size)\n\n"
+      "The memory limit of this process (the CLI's --max-memory): bytes, or a size such as\n"
+      "'8G' or '512M' (powers of 1024); None: the default, half the physical memory. Building a\n"
+      "model (load_scene, parse_scene, ModelBuilder.build) estimates what it and its solver\n"
+      "will allocate and raises InputError, naming the largest part, beyond it\n"
+      "(docs/limits.md).");
+  m.def(
+      "parse_memory_size",
+      [](const std::string& text) { return ParseMemorySize(text, "memory size"); }, py::arg("text"),
+      "parse_memory_size(text) -> int\n\nBytes of a size such as '8G', '512MiB' or '1000000' "
+      "(K, M, G, T: powers of 1024); InputError otherwise.");
+  m.def(
+      "memory_limit", []() { return ResolveMemoryLimit(0); },
+      "memory_limit() -> int\n\nThe memory limit in force [bytes] (set_memory_limit).");
+  m.def(
+      "estimate_memory",
+      [](const Model& model) {
+        py::list out;
+        for (const MemoryPart& p : EstimateDataMemory(model))
+          out.append(py::make_tuple(p.part, p.bytes, p.why));
+        return out;
+      },
+      py::arg("model"),
+      "estimate_memory(model) -> list of (part, bytes, why)\n\n"
+      "What a Simulation of `model` allocates (MakeData): the banded LU factors, the state,\n"
+      "the off-band coupling and the broad phase of pairs of moving shapes.");
 
   py::class_<RunResult>(m, "RunResult", "Outcome of run_scene (run.h).")
       .def_readonly("ok", &RunResult::ok, "The analysis completed.")
@@ -336,7 +424,15 @@ void BindScenesAndRuns(py::module_& m) {
         RunOptions options;
         options.progress = progress;
         options.replace_results = force;
-        if (inputs) options.inputs = ReadInputTable(*inputs, scene.model);
+        if (inputs) {
+          PythonSignals signals;
+          try {
+            options.inputs = ReadInputTable(*inputs, scene.model, signals.request());
+          } catch (const InputError&) {
+            signals.ThrowIfRaised();  // Ctrl-C while reading: KeyboardInterrupt
+            throw;
+          }
+        }
         if (!callback.is_none()) return RunWithCallback(scene, outdir, options, callback, every);
         // On Python's main thread the run polls for signals (Ctrl-C), which needs the GIL. On
         // another thread (a Dask worker's) no signal is ever delivered: the run releases the
@@ -385,6 +481,8 @@ not modify `scene` from another thread meanwhile).)doc");
       "every breakpoint in (start, end), and end.")
       .def(py::init([](double start, double end, double step, std::vector<double> breakpoints) {
              ValidateTimeGrid(start, end, step, "StepSchedule");
+             for (double b : breakpoints)
+               if (!std::isfinite(b)) throw InputError("StepSchedule: breakpoints must be finite");
              return StepSchedule(start, end, step, std::move(breakpoints));
            }),
            py::arg("start"), py::arg("end"), py::arg("step"),

@@ -292,6 +292,7 @@ and indices out of range IndexError.)doc")
             if (v.size() != s.data().v.size())
               throw InputError("Simulation.v: expected " + std::to_string(s.data().v.size()) +
                                " values, got " + std::to_string(v.size()));
+            if (!v.allFinite()) throw InputError("Simulation.v: must be finite");
             s.data().v = v;
           },
           "Velocities (nv; writable view): per free node the body velocity [v (m/s); w (rad/s)] "
@@ -303,6 +304,7 @@ and indices out of range IndexError.)doc")
             if (v.size() != s.data().vdot.size())
               throw InputError("Simulation.vdot: expected " + std::to_string(s.data().vdot.size()) +
                                " values");
+            if (!v.allFinite()) throw InputError("Simulation.vdot: must be finite");
             s.data().vdot = v;
           },
           "Accelerations (nv; writable view): time derivatives of v [m/s^2, rad/s^2], same "
@@ -313,6 +315,7 @@ and indices out of range IndexError.)doc")
             if (v.size() != s.data().lambda.size())
               throw InputError("Simulation.lambda_: expected " +
                                std::to_string(s.data().lambda.size()) + " values");
+            if (!v.allFinite()) throw InputError("Simulation.lambda_: must be finite");
             s.data().lambda = v;
           },
           "Lagrange multipliers (nc; writable view): generalised constraint forces [N, N m] "
@@ -494,12 +497,16 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
       .def(
           "calc_rod_point_motion",
           [](S& s, long rod, double arc) {
+            if (!std::isfinite(arc))
+              throw InputError("Simulation.calc_rod_point_motion: s must be finite");
             return CalcRodPointMotion(s.model(), s.data(), s.Rod(rod), arc);
           },
           py::arg("rod"), py::arg("s"))
       .def(
           "calc_rod_point_motion",
           [](S& s, const std::string& rod, double arc) {
+            if (!std::isfinite(arc))
+              throw InputError("Simulation.calc_rod_point_motion: s must be finite");
             return CalcRodPointMotion(s.model(), s.data(), s.Rod(rod), arc);
           },
           py::arg("rod"), py::arg("s"),

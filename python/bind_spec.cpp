@@ -159,7 +159,7 @@ class SpecReader {
   // A value of an enum with a vocabulary: the Python enum or its name ("world").
   template <class E>
   E Enum(py::handle v, const std::string& f) const {
-    if (py::isinstance<E>(v)) return v.cast<E>();
+    if (py::isinstance<E>(v)) return v.cast<E>();  // checked (bind.h)
     if (py::isinstance<py::str>(v))
       if (const auto e = EnumFromName<E>(v.cast<std::string>())) return *e;
     Fail(f, "expected one of " + Join(EnumNameList<E>()) + ", got " + Describe(v));

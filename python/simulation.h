@@ -53,6 +53,7 @@ class Simulation {
   void Initialize(const std::optional<DynamicOptions>& options) {
     const DynamicOptions o = options ? *options : scene_.analysis.dynamic;
     ValidateDynamicOptions(o, "DynamicOptions");
+    CheckInputsFinite("Simulation.initialize");
     initialized_ = false;
     std::string why;
     if (!InitializeDynamics(model(), data_, integrator_, o, &why)) {
@@ -116,6 +117,7 @@ class Simulation {
     o.time = data_.time;
     if (options) o = *options;
     ValidateStaticOptions(o, "StaticOptions");
+    CheckInputsFinite("Simulation.solve_static");
     data_.time = o.time;
     initialized_ = false;
     PythonSignals signals;
@@ -217,6 +219,25 @@ class Simulation {
     throw py::key_error("no output point named '" + name + "' in the scene's outputs.points");
   }
 
+  // "" when every run-time input value is finite, else the message naming the first that is
+  // not: Simulation.input_values is a writable NumPy view, whose element writes
+  // (sim.input_values[0] = nan) no setter sees, so every call that steps or solves checks.
+  std::string NonFiniteInput(const std::string& where) const {
+    for (Eigen::Index i = 0; i < data_.inputs.size(); ++i)
+      if (!std::isfinite(data_.inputs(i))) {
+        char value[32];
+        std::snprintf(value, sizeof value, "%g", data_.inputs(i));
+        return where + ": input_values[" + std::to_string(i) + "] (input '" +
+               model().inputs[static_cast<std::size_t>(i)].name + "') is " + value +
+               "; run-time inputs must be finite";
+      }
+    return "";
+  }
+  void CheckInputsFinite(const std::string& where) const {
+    const std::string bad = NonFiniteInput(where);
+    if (!bad.empty()) throw InputError(bad);
+  }
+
   // Simulation.record: the recording the steps write to (nullptr: none). A static scene's
   // recording takes solve_static's path; a dynamic one's starts at the first step.
   void Attach(Recording* recording) { recording_ = recording; }
@@ -252,6 +273,7 @@ class Simulation {
       throw InputError(std::string("Simulation.") + method +
                        ": the recording is of a static analysis (scene.analysis.kind STATIC), "
                        "which records solve_static; set the kind to DYNAMIC before record()");
+    CheckInputsFinite(std::string("Simulation.") + method);
   }
 
   // Advance under `policy` to t_until, with the recording (if any) observing; raises on

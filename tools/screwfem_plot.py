@@ -63,6 +63,9 @@ import sys
 import matplotlib
 
 matplotlib.use("Agg")
+# Titles, labels and legends carry run folder, point and joint names as given: no mathtext (a
+# run folder named 'run$\\frac{$' was a parse error and a traceback).
+matplotlib.rcParams["text.parse_math"] = False
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 import numpy as np  # noqa: E402

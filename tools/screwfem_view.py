@@ -42,6 +42,7 @@ Standard library only. Exit status: 0 on success, 2 when an input is missing or 
 import argparse
 import base64
 import csv
+import html
 import json
 import math
 import os
@@ -477,6 +478,18 @@ def read_text(path, what):
         raise InputProblem(f"cannot read {what} {path}: {e}") from e
 
 
+def script_json(data):
+    """The JSON text of `data` for a <script> element, safe for any strings in it: every "<",
+    ">" and "&" (which JSON allows only inside strings) is written as a \\u escape, so that no
+    "</script>", "<!--" or "<script" can end the element early or switch the HTML tokenizer into
+    its escaped script states (a scene named '<!--<script>' swallowed the rest of the page),
+    and U+2028 and U+2029 likewise. JSON.parse reads the same values back."""
+    text = json.dumps(data, separators=(",", ":"), ensure_ascii=False)
+    for c in "<>&\u2028\u2029":
+        text = text.replace(c, "\\u%04x" % ord(c))
+    return text
+
+
 def write_html(data, out_path):
     text = render_html(data)
     os.makedirs(os.path.dirname(os.path.abspath(out_path)), exist_ok=True)
@@ -496,23 +509,22 @@ def render_html(data):
                       "the three.js orbit controls (libjs-three)")
     template = read_text(os.path.join(HERE, "viewer", "viewer.html"), "the viewer template")
     viewer = read_text(os.path.join(HERE, "viewer", "viewer.js"), "the viewer script")
-    # "</" inside a <script> element would end it early.
-    data_json = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
-    title = (data["name"].replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;"))
+    data_json = script_json(data)
+    title = html.escape(data["name"], quote=True)
     parts = {"@@TITLE@@": title, "@@THREE_JS@@": three, "@@ORBIT_JS@@": orbit,
              "@@DATA_JSON@@": data_json, "@@VIEWER_JS@@": viewer}
-    html, pos = [], 0
+    page, pos = [], 0
     while True:  # one pass: the inlined texts are not searched for markers
         hits = [(template.find(k, pos), k) for k in parts if template.find(k, pos) >= 0]
         if not hits:
-            html.append(template[pos:])
+            page.append(template[pos:])
             break
         at, key = min(hits)
-        html.append(template[pos:at])
-        html.append(parts[key].replace("</script", "<\\/script") if key != "@@TITLE@@" else parts[key])
+        page.append(template[pos:at])
+        page.append(parts[key].replace("</script", "<\\/script") if key != "@@TITLE@@" else parts[key])
         pos = at + len(key)
     render_html.library, render_html.data = len(three) + len(orbit), len(data_json)
-    return "".join(html).encode("utf-8")
+    return "".join(page).encode("utf-8")
 
 
 def main(argv):

@@ -87,6 +87,9 @@ def main(argv=None):
     p.add_argument("--resume", action="store_true", help="run only the variants missing in -o")
     p.add_argument("--keep-outputs", action="store_true",
                    help="keep each variant's files in OUTPUT/runs/VARIANT_ID/")
+    p.add_argument("--max-memory", metavar="SIZE",
+                   help="refuse variants whose model and solver would need more memory than "
+                        "SIZE, e.g. 8G (default: half the physical memory; docs/limits.md)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress line")
     args = parser.parse_args(argv)
 
@@ -114,7 +117,7 @@ def main(argv=None):
         df = sf.sweep(args.scene, parameters, metrics=metrics, scheduler=args.scheduler,
                       workers=args.workers, outdir=args.output, samples=args.samples,
                       seed=args.seed, resume=args.resume, keep_outputs=args.keep_outputs,
-                      progress=False if args.quiet else None)
+                      progress=False if args.quiet else None, max_memory=args.max_memory)
     except KeyboardInterrupt:
         print(f"\nscrewfem sweep: interrupted; finished rows kept in {args.output} "
               "(--resume runs the missing variants)", file=sys.stderr)

@@ -27,7 +27,7 @@ import sys
 import tempfile
 import time
 
-from ._screwfem import InputError, parse_scene, run_scene
+from ._screwfem import InputError, parse_memory_size, parse_scene, run_scene
 
 __all__ = [
     "sweep", "variants", "format_overrides", "variant_id", "run_variant", "Run",
@@ -277,7 +277,7 @@ def _plain(value):
 # One variant (the task)
 
 def run_variant(scene_text, scene_source, overrides, metrics=DEFAULT_METRICS, keep_dir=None,
-                vtk=False):
+                vtk=False, max_memory=None):
     """Runs one variant and returns its row (a dict): variant_id, overrides ('; '-joined),
     status, message and the metrics' columns.
 
@@ -287,14 +287,15 @@ def run_variant(scene_text, scene_source, overrides, metrics=DEFAULT_METRICS, ke
     e.g. a metric that raised on a completed run). Metrics are evaluated for failed runs too
     (on the rows recorded before the failure); one that raises there gives NaN.
     `keep_dir` keeps the run's files there (vtk/ only when `vtk`); otherwise they go to a
-    temporary directory removed afterwards.
+    temporary directory removed afterwards. `max_memory` bounds the memory of the variant's
+    model and solver (parse_scene; a larger variant is 'invalid').
     """
     overrides = list(overrides)
     vid = variant_id(overrides)
     row = {"variant_id": vid, "overrides": "; ".join(overrides), "status": "", "message": ""}
     t0, c0 = time.perf_counter(), time.thread_time()
     try:
-        scene = parse_scene(scene_text, scene_source, overrides)
+        scene = parse_scene(scene_text, scene_source, overrides, max_memory=max_memory)
     except InputError as e:
         row.update(status="invalid", message=str(e))
         return row
@@ -332,6 +333,33 @@ def run_variant(scene_text, scene_source, overrides, metrics=DEFAULT_METRICS, ke
 
 
 # ---------------------------------------------------------------------------------------------
+# Files read from disk, with their size limits (docs/limits.md): the scene file as the C++
+# reader's (kMaxSceneBytes), the manifest, and each journal row.
+MAX_SCENE_BYTES = 16 << 20
+MAX_MANIFEST_BYTES = 256 << 20
+MAX_JOURNAL_LINE = 1 << 20
+
+
+def _read_limited(path, limit, what):
+    """The bytes of a regular file of at most `limit` bytes (ValueError otherwise: a device such
+    as /dev/zero, a directory, a larger file), read in pieces (Ctrl-C interrupts it)."""
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise ValueError(f"sweep: {path}: the {what} is not a regular file")
+    chunks, size = [], 0
+    with open(path, "rb") as f:
+        while True:
+            chunk = f.read(1 << 16)
+            if not chunk:
+                break
+            size += len(chunk)
+            if size > limit:
+                raise ValueError(f"sweep: {path}: the {what} is larger than {limit >> 20} MiB "
+                                 "(the limit)")
+            chunks.append(chunk)
+    return b"".join(chunks)
+
+
 # The journal (OUTDIR/rows.jsonl)
 
 def _read_journal(path):
@@ -340,9 +368,15 @@ def _read_journal(path):
     rows = {}
     if not path.exists():
         return rows
+    if not path.is_file():
+        raise ValueError(f"sweep: {path}: not a regular file")
     with open(path) as f:
-        for line in f:
+        while True:
+            line = f.readline(MAX_JOURNAL_LINE)
             if not line.endswith("\n"):
+                if len(line) >= MAX_JOURNAL_LINE:
+                    raise ValueError(f"sweep: {path}: a line longer than {MAX_JOURNAL_LINE} "
+                                     "characters (not a journal of screwfem sweep)")
                 break
             try:
                 row = json.loads(line)
@@ -454,7 +488,7 @@ def _write_table(df, outdir):
 
 def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=None, workers=None,
           outdir=None, samples=None, seed=0, resume=False, keep_outputs=False, vtk=False,
-          progress=None, timeout=None):
+          progress=None, timeout=None, max_memory=None):
     """Runs every variant of `scene` and returns a pandas DataFrame, one row per variant.
 
     scene       scene file (YAML); workers receive its text, so they need no shared files.
@@ -480,6 +514,9 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
                 variant's files in OUTDIR/runs/<variant_id>/ on the worker's file system
                 (ParaView files only with `vtk`).
     timeout     seconds to wait for the whole sweep (None: no limit); raises TimeoutError.
+    max_memory  bytes, or a size such as '8G': variants whose model and solver would need more
+                are 'invalid' (parse_scene's max_memory; default: half the physical memory of
+                the worker; docs/limits.md). The CLI's --max-memory.
 
     Columns: variant (index in the variant list), variant_id, one per parameter, overrides,
     status ('completed', 'failed', 'invalid', 'error'; see run_variant), message, then the
@@ -488,8 +525,10 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
     Ctrl-C (KeyboardInterrupt) stops the sweep with the finished rows kept in OUTDIR and
     re-raises.
     """
+    if isinstance(max_memory, str):
+        max_memory = parse_memory_size(max_memory)  # InputError (a ValueError) before any run
     scene_path = pathlib.Path(scene)
-    scene_text = scene_path.read_text()
+    scene_text = _read_limited(scene_path, MAX_SCENE_BYTES, "scene file").decode()
     assignments = variants(parameters, samples=samples, seed=seed)
     overrides = [format_overrides(a) for a in assignments]
     ids = [variant_id(o) for o in overrides]
@@ -513,7 +552,7 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
         if resume:
             old = outdir / MANIFEST_FILE
             if old.exists():
-                previous = json.loads(old.read_text())
+                previous = json.loads(_read_limited(old, MAX_MANIFEST_BYTES, "manifest"))
                 if previous.get("scene_sha256") != manifest["scene_sha256"]:
                     raise ValueError(f"sweep: cannot resume in {outdir}: the scene file changed "
                                      "since the rows there were computed")
@@ -546,10 +585,10 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
                 if deadline is not None and time.monotonic() > deadline:
                     raise TimeoutError("sweep: timed out")
                 finish(i, run_variant(scene_text, str(scene_path), overrides[i], metrics,
-                                      keep_dir(i), vtk))
+                                      keep_dir(i), vtk, max_memory))
         else:
             _run_on_dask(todo, lambda i: (scene_text, str(scene_path), overrides[i], metrics,
-                                          keep_dir(i), vtk),
+                                          keep_dir(i), vtk, max_memory),
                          ids, finish, client, scheduler, workers, deadline)
     finally:
         if journal:

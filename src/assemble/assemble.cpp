@@ -341,6 +341,7 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   Scatter s(model, data, options);
   // The pairs of moving shapes near each other in this state (elements/shape_pair.h).
   UpdateShapePairs(model, data);
+  if (data.shape_pair_limit_reached) return false;  // ShapePairLimitMessage says why
   if (!AddKinds(model, data, options, s, kElementKinds)) return false;
   ForEachKind<ConstraintKinds>(
       [&]<class Kind>() { AddConstraintKind<Kind>(model, data, options, s); });

@@ -3,13 +3,16 @@
 // the entity pairs that may touch, and resolves the law's defaults.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "build_steps.h"
+#include "screwfem/build/model_builder.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/model/errors.h"
+#include "screwfem/model/memory.h"
 
 namespace screwfem::build_steps {
 
@@ -79,26 +82,37 @@ void CheckPairExclusions(const Model& m) {
     }
 }
 
-bool PairExcluded(const Model& m, const ContactEntity& a, const ContactEntity& b) {
-  for (const ContactPairExclusion& x : m.contact_pair_exclusions)
-    for (int k = 0; k < 2; ++k)
-      if (x.rod[k] == a.rod && x.index[k] == a.index && x.rod[1 - k] == b.rod &&
-          x.index[1 - k] == b.index)
-        return true;
-  return false;
-}
-
-// Joined: a shared node or a joint between their nodes.
-bool EntitiesJoined(const Model& m, const ContactEntity& a, const ContactEntity& b) {
-  auto has = [](const ContactEntity& e, int node) {
-    return std::find(e.nodes.begin(), e.nodes.end(), node) != e.nodes.end();
+// The entity pairs (i < k) that never touch: excluded (contact: exclude) or joined (a shared
+// node or a joint between their nodes). Built in time linear in the nodes, joints and
+// exclusions (the pairwise tests took time quadratic in the entities times their nodes).
+std::set<std::pair<int, int>> SeparatedEntityPairs(const Model& m,
+                                                   const std::vector<ContactEntity>& entities) {
+  std::set<std::pair<int, int>> out;
+  const auto add = [&](int a, int b) {
+    if (a >= 0 && b >= 0 && a != b) out.insert({std::min(a, b), std::max(a, b)});
   };
-  for (int n : a.nodes)
-    if (has(b, n)) return true;
-  for (const Joint& j : m.joints)
-    if ((has(a, j.node_a) && has(b, j.node_b)) || (has(a, j.node_b) && has(b, j.node_a)))
-      return true;
-  return false;
+  // Entity of each rod and body.
+  std::vector<int> of_rod(m.rods.size(), -1), of_body(m.bodies.size(), -1);
+  for (std::size_t e = 0; e < entities.size(); ++e)
+    (entities[e].rod ? of_rod : of_body)[static_cast<std::size_t>(entities[e].index)] =
+        static_cast<int>(e);
+  for (const ContactPairExclusion& x : m.contact_pair_exclusions)
+    add((x.rod[0] ? of_rod : of_body)[static_cast<std::size_t>(x.index[0])],
+        (x.rod[1] ? of_rod : of_body)[static_cast<std::size_t>(x.index[1])]);
+  // The entities holding each node (a node shared by two entities joins them).
+  std::vector<std::vector<int>> of_node(m.nodes.size());
+  for (std::size_t e = 0; e < entities.size(); ++e)
+    for (int n : entities[e].nodes)
+      if (n >= 0) of_node[static_cast<std::size_t>(n)].push_back(static_cast<int>(e));
+  for (const std::vector<int>& list : of_node)
+    for (std::size_t i = 0; i < list.size(); ++i)
+      for (std::size_t k = i + 1; k < list.size(); ++k) add(list[i], list[k]);
+  for (const Joint& j : m.joints) {
+    if (j.node_a < 0 || j.node_b < 0) continue;
+    for (int a : of_node[static_cast<std::size_t>(j.node_a)])
+      for (int b : of_node[static_cast<std::size_t>(j.node_b)]) add(a, b);
+  }
+  return out;
 }
 
 bool FixedOrGround(const Model& m, int node) {
@@ -205,16 +219,36 @@ void PairContactEntities(Model& m, const std::vector<ContactEntity>& entities,
   const ContactSettings& law = m.contact;
   const double gravity = ContactGravity(m);
   const int ne = static_cast<int>(entities.size());
+  const std::size_t une = static_cast<std::size_t>(ne);
+  // Group bitmasks per entity (the first ContactGroup of each, ContactGroupOf), in one pass.
+  std::vector<ContactGroup> groups(une);
+  {
+    std::vector<int> of_rod(m.rods.size(), -1), of_body(m.bodies.size(), -1);
+    for (std::size_t e = 0; e < une; ++e) {
+      (entities[e].rod ? of_rod : of_body)[static_cast<std::size_t>(entities[e].index)] =
+          static_cast<int>(e);
+      groups[e] = ContactGroup{entities[e].rod, entities[e].index, 1u, 1u};
+    }
+    std::vector<char> set(une, 0);
+    for (const ContactGroup& g : m.contact_groups) {
+      const std::vector<int>& of = g.rod ? of_rod : of_body;
+      if (g.index < 0 || g.index >= static_cast<int>(of.size())) continue;
+      const int e = of[static_cast<std::size_t>(g.index)];
+      if (e < 0 || set[static_cast<std::size_t>(e)]) continue;
+      set[static_cast<std::size_t>(e)] = 1;
+      groups[static_cast<std::size_t>(e)] = g;
+    }
+  }
+  const std::set<std::pair<int, int>> separated = SeparatedEntityPairs(m, entities);
   for (int i = 0; i < ne; ++i) {
     const ContactEntity& a = entities[static_cast<std::size_t>(i)];
-    const ContactGroup ga = ContactGroupOf(m, a.rod, a.index);
+    const ContactGroup& ga = groups[static_cast<std::size_t>(i)];
     for (int k = i + 1; k < ne; ++k) {
-      const ContactEntity& b = entities[static_cast<std::size_t>(k)];
-      const ContactGroup gb = ContactGroupOf(m, b.rod, b.index);
+      const ContactGroup& gb = groups[static_cast<std::size_t>(k)];
       if (((ga.contype & gb.conaffinity) | (gb.contype & ga.conaffinity)) == 0u) continue;
-      if (PairExcluded(m, a, b) || EntitiesJoined(m, a, b)) continue;
-      m.contact_entity_pairs[static_cast<std::size_t>(i * ne + k)] = 1;
-      m.contact_entity_pairs[static_cast<std::size_t>(k * ne + i)] = 1;
+      if (!separated.empty() && separated.count({i, k}) > 0) continue;
+      m.contact_entity_pairs[static_cast<std::size_t>(i) * une + static_cast<std::size_t>(k)] = 1;
+      m.contact_entity_pairs[static_cast<std::size_t>(k) * une + static_cast<std::size_t>(i)] = 1;
       WeighEntityPair(sizes, i, k, gravity, r_min, w_max);
     }
     if (a.rod && law.self) {
@@ -251,8 +285,15 @@ void BuildContactSegments(Model& m, double* r_min, double* w_max) {
   const std::vector<ContactEntity> entities = ListContactEntities(m);
   CheckPairExclusions(m);
   const int ne = static_cast<int>(entities.size());
+  // The table of entity pairs (a byte per ordered pair), before it is allocated.
+  const double table = static_cast<double>(ne) * static_cast<double>(ne);
+  CheckMemory({{"table of contact entities that may touch", table,
+                std::to_string(ne) + " contact entities (soft bodies with contact, rigid bodies "
+                                     "with shapes), squared"}},
+              m.memory_limit, "contact between moving shapes",
+              "Fewer bodies with contact shapes would make it smaller");
   m.num_contact_entities = ne;
-  m.contact_entity_pairs.assign(static_cast<std::size_t>(ne * ne), 0);
+  m.contact_entity_pairs.assign(static_cast<std::size_t>(ne) * static_cast<std::size_t>(ne), 0);
   m.contact_entity_self_skip.assign(static_cast<std::size_t>(ne), -1.0);
   const EntitySizes sizes = AddContactSegments(m, entities);
   PairContactEntities(m, entities, sizes, r_min, w_max);
@@ -445,6 +486,66 @@ void AddShapeObstaclePairs(Model& m, const ContactShape& c, int oi, double* r_mi
   }
 }
 
+// The number of pairs AddRodObstaclePairs and AddShapeObstaclePairs make for obstacle oi.
+double CountObstaclePairs(const Model& m, int oi) {
+  const bool plane = m.obstacles[static_cast<std::size_t>(oi)].type == ObstacleType::kPlane;
+  double count = 0.0;
+  for (const ContactRod& c : m.contact_rods) {
+    if (!MayTouchObstacle(m, oi, true, c.rod)) continue;
+    const Rod& rod = m.rods[static_cast<std::size_t>(c.rod)];
+    if (!plane) {
+      count += rod.num_elements;
+      continue;
+    }
+    for (int node : rod.nodes) count += m.nodes[static_cast<std::size_t>(node)].fixed ? 0.0 : 1.0;
+  }
+  for (const ContactShape& c : m.contact_shapes) {
+    if (!MayTouchObstacle(m, oi, false, c.body)) continue;
+    if (m.nodes[static_cast<std::size_t>(m.bodies[static_cast<std::size_t>(c.body)].node)].fixed)
+      continue;
+    switch (c.type) {
+      case ContactShapeType::kSphere:
+        count += 1;
+        break;
+      case ContactShapeType::kCapsule:
+        count += plane ? 2 : 1;
+        break;
+      case ContactShapeType::kBox:
+        count += plane ? 8 : 20;
+        break;
+    }
+  }
+  return count;
+}
+
+// The pairs of moving shapes and obstacles, before they are made: at most kMaxObstaclePairs
+// (every pair is tested at every assembly), within the memory limit.
+void CheckObstaclePairs(const Model& m) {
+  if (m.obstacles.empty()) return;
+  double count = 0.0;
+  for (int oi = 0; oi < static_cast<int>(m.obstacles.size()); ++oi)
+    count += CountObstaclePairs(m, oi);
+  const std::string hint =
+      "Exclude the shapes that cannot reach an obstacle (contact: exclude: [[body, obstacle]], "
+      "or the contype and conaffinity bitmasks), or use fewer obstacles or rod elements";
+  char why[256];
+  std::snprintf(why, sizeof why,
+                "%.0f pairs: every contact shape (a rod element or node, a body's shape) "
+                "against each of the %zu obstacles",
+                count, m.obstacles.size());
+  if (count > kMaxObstaclePairs) {
+    char head[256];
+    std::snprintf(head, sizeof head,
+                  "contact: the moving shapes and obstacles make %.0f pairs, more than %.0f "
+                  "(the limit: every pair is tested at every assembly)",
+                  count, kMaxObstaclePairs);
+    throw InputError(std::string(head) + ". " + hint);
+  }
+  CheckMemory({{"pairs of moving shapes and obstacles",
+                count * static_cast<double>(sizeof(ContactPair) + sizeof(double)), why}},
+              m.memory_limit, "contact with obstacles", hint);
+}
+
 // Defaults (docs/numerics.md, "Contact") and the damping of each pair.
 void ResolveContactLaw(Model& m, const std::vector<double>& masses, double r_min, double w_max) {
   ContactSettings& law = m.contact;
@@ -468,7 +569,8 @@ void BuildContacts(Model& m) {
   ValidateContactShapes(m);
   ValidateObstacles(m);
   ValidateContactLaw(m);
-  // Pairs: each moving shape against each obstacle it may touch.
+  // Pairs: each moving shape against each obstacle it may touch; counted before they are made.
+  CheckObstaclePairs(m);
   double r_min = INFINITY, w_max = 0.0;
   std::vector<double> masses;  // per pair, for the damping
   for (int oi = 0; oi < static_cast<int>(m.obstacles.size()); ++oi) {

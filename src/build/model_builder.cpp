@@ -12,6 +12,7 @@
 
 #include "build_steps.h"
 #include "screwfem/model/errors.h"
+#include "screwfem/model/memory.h"
 
 namespace screwfem {
 
@@ -200,6 +201,11 @@ Model ModelBuilder::Build() const {
   CheckJointFramesCoincide(m);
   FindRedundantConstraints(m);
   OrderUnknowns(m);
+  // The workspace MakeData allocates for this model, before anyone allocates it.
+  CheckMemory(EstimateDataMemory(m), m.memory_limit, "the model's solver workspace",
+              "The band is the widest span of coupled unknowns in the solver's ordering "
+              "(closed loops, tendons, force elements and contact between distant bodies "
+              "widen it); fewer elements make fewer unknowns");
   return m;
 }
 

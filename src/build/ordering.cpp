@@ -2,14 +2,17 @@
 // unknowns and multipliers, and the solver ordering with its band pattern.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "build_steps.h"
+#include "screwfem/build/model_builder.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/registry.h"
 #include "screwfem/linalg/banded_lu.h"
+#include "screwfem/model/data.h"
 #include "screwfem/model/errors.h"
 
 namespace screwfem::build_steps {
@@ -125,8 +128,10 @@ void LinkElementNodes(const Model& m, BlockGraph& g) {
 // with every node of the other, when the product of their node counts is at most
 // ContactSettings::band_pair_nodes (bodies, short rods: the band has room for the coupling);
 // the couplings of the others that fall outside the band enter the solve as a low-rank
-// update (Data::coupling), so that long rods do not widen the band.
-void LinkContactEntities(const Model& m, BlockGraph& g) {
+// update (Data::coupling), so that long rods do not widen the band. When these links number
+// more than kMaxBandContactLinks in all (thousands of bodies that may touch each other), none
+// is made, with a warning.
+void LinkContactEntities(Model& m, BlockGraph& g) {
   const int ne = m.num_contact_entities;
   // Per entity: its nodes with unknowns, sorted and unique.
   std::vector<std::vector<int>> entity_nodes(static_cast<std::size_t>(ne));
@@ -137,17 +142,40 @@ void LinkContactEntities(const Model& m, BlockGraph& g) {
     std::sort(list.begin(), list.end());
     list.erase(std::unique(list.begin(), list.end()), list.end());
   }
+  const auto linked = [&](int a, int b) {
+    const bool touch =
+        a == b ? m.contact_entity_self_skip[static_cast<std::size_t>(a)] >= 0.0
+               : m.contact_entity_pairs[static_cast<std::size_t>(a) * static_cast<std::size_t>(ne) +
+                                        static_cast<std::size_t>(b)] != 0;
+    const double links = static_cast<double>(entity_nodes[static_cast<std::size_t>(a)].size()) *
+                         static_cast<double>(entity_nodes[static_cast<std::size_t>(b)].size());
+    return touch && links <= static_cast<double>(m.contact.band_pair_nodes) ? links : 0.0;
+  };
+  // The links first: beyond kMaxBandContactLinks in all, none goes in the band.
+  double total = 0.0;
+  long pairs = 0;
   for (int a = 0; a < ne; ++a)
     for (int b = a; b < ne; ++b) {
-      const bool touch = a == b ? m.contact_entity_self_skip[static_cast<std::size_t>(a)] >= 0.0
-                                : m.contact_entity_pairs[static_cast<std::size_t>(a * ne + b)] != 0;
-      const std::vector<int>& na = entity_nodes[static_cast<std::size_t>(a)];
-      const std::vector<int>& nbs = entity_nodes[static_cast<std::size_t>(b)];
-      if (!touch || static_cast<double>(na.size()) * static_cast<double>(nbs.size()) >
-                        static_cast<double>(m.contact.band_pair_nodes))
-        continue;
-      for (int x : na)
-        for (int y : nbs) g.Link(g.OfNode(x), g.OfNode(y));
+      const double links = linked(a, b);
+      total += links;
+      pairs += links > 0.0 ? 1 : 0;
+    }
+  if (total > kMaxBandContactLinks) {
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "the %ld pairs of contact entities that may touch would couple %.0f node "
+                  "pairs in the solver's band (more than %.0f): they are left off the band, "
+                  "and those that touch enter the solve as the off-band coupling (at most %d "
+                  "nodes at a time)",
+                  pairs, total, kMaxBandContactLinks, kMaxCoupledNodes);
+    m.warnings.emplace_back(text);
+    return;
+  }
+  for (int a = 0; a < ne; ++a)
+    for (int b = a; b < ne; ++b) {
+      if (linked(a, b) == 0.0) continue;
+      for (int x : entity_nodes[static_cast<std::size_t>(a)])
+        for (int y : entity_nodes[static_cast<std::size_t>(b)]) g.Link(g.OfNode(x), g.OfNode(y));
     }
 }
 

@@ -112,35 +112,47 @@ Vec3 ReferencePosition(const Model& m, const BodyPoint& p) {
 // An eyelet at an arc length of a rod (BodyPoint::rod >= 0): on the node there (within 1e-8
 // of the element length) or between the nodes of the element holding it (element, xi, node A).
 // "" when placed, else why not.
-std::string PlaceOnRod(const Model& m, BodyPoint& p) {
+// Per rod, the arc length at each node (prefix[k]: the sum of the first k element lengths,
+// added in order), made on first use: a point is placed by a binary search, so that a tendon
+// of n eyelets on a rod of N elements is placed in n log N (a walk along the rod per eyelet
+// took 19.6 s for 1e4 eyelets).
+using ArcPrefixes = std::vector<std::vector<double>>;
+
+std::string PlaceOnRod(const Model& m, BodyPoint& p, ArcPrefixes& prefixes) {
   if (p.rod < 0) return {};
   if (p.rod >= static_cast<int>(m.rods.size())) return "invalid rod " + std::to_string(p.rod);
   const Rod& rod = m.rods[static_cast<std::size_t>(p.rod)];
   if (!(p.arc_length >= 0.0 && p.arc_length <= rod.length * (1.0 + 1e-12)))
     return "arc length " + std::to_string(p.arc_length) + " m is off the rod (length " +
            std::to_string(rod.length) + " m)";
-  double s0 = 0.0;
-  for (int k = 0; k < rod.num_elements; ++k) {
-    const int e = rod.first_element + k;
-    const RodElement& el = m.elements[static_cast<std::size_t>(e)];
-    if (p.arc_length <= s0 + el.length || k == rod.num_elements - 1) {
-      const double xi = std::clamp((p.arc_length - s0) / el.length, 0.0, 1.0);
-      p.element = -1;
-      p.xi = 0.0;
-      if (xi <= 1e-8) {
-        p.node = el.node_a;
-      } else if (xi >= 1.0 - 1e-8) {
-        p.node = el.node_b;
-      } else {
-        p.node = el.node_a;
-        p.element = e;
-        p.xi = xi;
-      }
-      return {};
-    }
-    s0 += el.length;
+  if (rod.num_elements <= 0) return "rod '" + rod.name + "' has no elements";
+  if (prefixes.size() != m.rods.size()) prefixes.assign(m.rods.size(), {});
+  std::vector<double>& prefix = prefixes[static_cast<std::size_t>(p.rod)];
+  if (prefix.empty()) {
+    prefix.push_back(0.0);
+    for (int k = 0; k < rod.num_elements; ++k)
+      prefix.push_back(prefix.back() +
+                       m.elements[static_cast<std::size_t>(rod.first_element + k)].length);
   }
-  return "rod '" + rod.name + "' has no elements";
+  // The first element whose end is at or beyond the point (the last one otherwise).
+  const auto end = std::lower_bound(prefix.begin() + 1, prefix.end() - 1, p.arc_length);
+  const int k = static_cast<int>(end - prefix.begin()) - 1;
+  const int e = rod.first_element + k;
+  const RodElement& el = m.elements[static_cast<std::size_t>(e)];
+  const double xi =
+      std::clamp((p.arc_length - prefix[static_cast<std::size_t>(k)]) / el.length, 0.0, 1.0);
+  p.element = -1;
+  p.xi = 0.0;
+  if (xi <= 1e-8) {
+    p.node = el.node_a;
+  } else if (xi >= 1.0 - 1e-8) {
+    p.node = el.node_b;
+  } else {
+    p.node = el.node_a;
+    p.element = e;
+    p.xi = xi;
+  }
+  return {};
 }
 
 }  // namespace
@@ -149,14 +161,14 @@ namespace {
 
 // Places the eyelets of tendon `index` (PlaceOnRod) and checks them: valid body points, and
 // consecutive eyelets apart in the reference configuration.
-void PlaceTendonEyelets(const Model& m, Tendon& t, int index, const std::string& label) {
+void PlaceTendonEyelets(const Model& m, Tendon& t, int index, const std::string& label,
+                        ArcPrefixes& prefixes) {
   for (std::size_t k = 0; k < t.eyelets.size(); ++k) {
-    const std::string part = "eyelets[" + std::to_string(k) + "]";
-    std::string problem = PlaceOnRod(m, t.eyelets[k]);
+    std::string problem = PlaceOnRod(m, t.eyelets[k], prefixes);
     if (problem.empty()) problem = BodyPointProblem(m, t.eyelets[k]);
     if (!problem.empty())
       throw InputError(label + ": eyelet " + std::to_string(k) + ": " + problem,
-                       {EntityKind::kTendon, index, part}, problem);
+                       {EntityKind::kTendon, index, "eyelets[" + std::to_string(k) + "]"}, problem);
     if (k == 0) continue;
     const double l =
         (ReferencePosition(m, t.eyelets[k]) - ReferencePosition(m, t.eyelets[k - 1])).norm();
@@ -164,7 +176,7 @@ void PlaceTendonEyelets(const Model& m, Tendon& t, int index, const std::string&
       const std::string what = "coincides with eyelet " + std::to_string(k - 1) +
                                " in the reference configuration (no direction between them)";
       throw InputError(label + ": eyelet " + std::to_string(k) + " " + what,
-                       {EntityKind::kTendon, index, part}, what);
+                       {EntityKind::kTendon, index, "eyelets[" + std::to_string(k) + "]"}, what);
     }
   }
 }
@@ -220,6 +232,7 @@ void GroupTendonSegments(Model& m) {
 // Tendons (docs/numerics.md, "Tendons and force elements"): eyelets, tension profile, unique names; their segments.
 void BuildTendons(Model& m) {
   m.tendon_segments.clear();
+  ArcPrefixes prefixes;
   std::set<std::string> names;
   for (std::size_t i = 0; i < m.tendons.size(); ++i) {
     Tendon& t = m.tendons[i];
@@ -230,7 +243,7 @@ void BuildTendons(Model& m) {
       throw InputError(label + ": needs at least two eyelets (it runs between them), got " +
                            std::to_string(t.eyelets.size()),
                        entity);
-    PlaceTendonEyelets(m, t, index, label);
+    PlaceTendonEyelets(m, t, index, label, prefixes);
     t.reference_length = 0.0;
     for (std::size_t k = 0; k + 1 < t.eyelets.size(); ++k)
       t.reference_length +=
@@ -362,13 +375,14 @@ void BuildActuators(Model& m) {
 // reference distance when negative), names.
 void BuildForceElements(Model& m) {
   std::set<std::string> names;
+  ArcPrefixes prefixes;
   for (std::size_t i = 0; i < m.force_elements.size(); ++i) {
     ForceElement& f = m.force_elements[i];
     const std::string label = "force element '" + f.name + "'";
     const int index = static_cast<int>(i);
     const EntityRef entity{EntityKind::kForceElement, index, {}};
     for (const auto& [p, part] : {std::pair<BodyPoint*, const char*>{&f.a, "a"}, {&f.b, "b"}}) {
-      std::string problem = PlaceOnRod(m, *p);  // an end at an arc length, as an eyelet
+      std::string problem = PlaceOnRod(m, *p, prefixes);  // at an arc length, as an eyelet
       if (problem.empty()) problem = BodyPointProblem(m, *p);
       if (!problem.empty())
         throw InputError(label + ": end " + part + ": " + problem,

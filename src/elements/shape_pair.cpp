@@ -641,8 +641,15 @@ std::vector<ShapePair> AllShapePairs(const Model& model) {
 
 void UpdateShapePairs(const Model& model, Data& data) {
   FindShapePairs(model, data);
+  data.shape_pair_limit_reached = false;
+  if (!data.shape_pair_overflow) return;
+  const std::size_t limit = ShapePairPoolLimit(model);
   while (data.shape_pair_overflow) {
-    GrowShapePairPool(data);
+    if (data.shape_pairs.size() >= limit) {
+      data.shape_pair_limit_reached = true;
+      return;
+    }
+    GrowShapePairPool(data, limit);
     FindShapePairs(model, data);
   }
 }

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <map>
 #include <sstream>
+#include <unordered_map>
 
 #include "scene_yaml.h"
 #include "screwfem/io/scene_spec.h"
@@ -137,6 +138,7 @@ class SceneReader {
   long total_elements_ = 0;  // over all rods (kMaxTotalElements)
   Vec3 default_up_ = Vec3::UnitZ();
   std::vector<std::pair<std::string, Vec3>>& points_ = spec_.points;
+  std::unordered_map<std::string, int> input_index_;  // spec_.inputs by name
   std::map<std::string, Material> materials_;
   std::map<std::string, Section> sections_;
   std::vector<std::string> material_names_, section_names_;
@@ -259,11 +261,11 @@ Profile SceneReader::ReadProfileTerm(const Node& node, const std::string& path) 
     NotUsedBy(node, path, {"t0", "t1", "frequency", "phase", "times", "values"}, who);
     const Node& nn = r_.Require(node, path, "name");
     const std::string name = r_.Text(nn, Join(path, "name"));
+    // By name in constant time: a scene of 1e5 inputs and profiles took 12.6 s to check.
+    const auto found = input_index_.find(name);
+    if (found != input_index_.end()) return Profile::Input(found->second, s);
     std::vector<std::string> names;
-    for (std::size_t i = 0; i < spec_.inputs.size(); ++i) {
-      if (spec_.inputs[i].first == name) return Profile::Input(static_cast<int>(i), s);
-      names.push_back(spec_.inputs[i].first);
-    }
+    for (const auto& input : spec_.inputs) names.push_back(input.first);
     r_.Fail(nn.location, Join(path, "name"),
             "unknown input '" + name + "'" +
                 (names.empty() ? std::string(" (the scene declares no inputs: add an inputs: "
@@ -779,8 +781,10 @@ void SceneReader::ReadJointSprings(const Node& value, const std::string& path,
 void SceneReader::ReadInputs(const Node* node) {
   if (node == nullptr || node->IsNull()) return;
   r_.CheckNames(*node, "inputs", "input");
-  for (const auto& [entry, value] : node->entries)
+  for (const auto& [entry, value] : node->entries) {
+    input_index_.emplace(entry.key, static_cast<int>(spec_.inputs.size()));
     spec_.inputs.emplace_back(entry.key, r_.Number(value, Join("inputs", entry.key)));
+  }
 }
 
 void SceneReader::ReadLoads(const Node* node) {

@@ -1,6 +1,9 @@
 #include "screwfem/model/data.h"
 
 #include <algorithm>
+#include <string>
+
+#include "screwfem/model/memory.h"
 
 namespace screwfem {
 
@@ -72,9 +75,29 @@ Data MakeData(const Model& model) {
   return d;
 }
 
-void GrowShapePairPool(Data& data) {
-  data.shape_pairs.resize(std::max<std::size_t>(64, 2 * data.shape_pairs.size()));
+void GrowShapePairPool(Data& data, std::size_t limit) {
+  data.shape_pairs.resize(std::max<std::size_t>(64, std::min(limit, 2 * data.shape_pairs.size())));
   data.shape_pair_overflow = false;
+}
+
+std::size_t ShapePairPoolLimit(const Model& model) {
+  const double rest = TotalBytes(EstimateDataMemory(model));
+  const double limit = static_cast<double>(ResolveMemoryLimit(model.memory_limit));
+  const double room = std::max(0.0, (limit - rest) / (2.0 * sizeof(ShapePair)));
+  // Never below the pool MakeData allocates.
+  const double first = 4.0 * static_cast<double>(model.contact_segments.size()) + 64.0;
+  return static_cast<std::size_t>(
+      std::max(first, std::min(room, static_cast<double>(kMaxShapePairs))));
+}
+
+std::string ShapePairLimitMessage(const Model& model) {
+  const std::size_t limit = ShapePairPoolLimit(model);
+  return "the broad phase found more than " + std::to_string(limit) +
+         " pairs of moving shapes near each other (the limit: at most " +
+         std::to_string(kMaxShapePairs) + ", and " +
+         FormatBytes(static_cast<double>(limit) * sizeof(ShapePair)) +
+         " within the memory limit); a smaller contact onset, a larger self_skip or fewer, "
+         "longer elements make fewer pairs";
 }
 
 }  // namespace screwfem

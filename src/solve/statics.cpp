@@ -148,7 +148,9 @@ struct StaticSolver {
     const bool ok = Assemble(model, data, opt);
     opt.assemble_matrix = true;
     if (ok) return true;
-    if (data.failed_element >= 0) {
+    if (data.shape_pair_limit_reached) {
+      cause = ShapePairLimitMessage(model);
+    } else if (data.failed_element >= 0) {
       cause = ElementLabel(model, data.failed_element) +
               FormatNumbers(
                   " rotates by %.4g rad, beyond what one helical element represents "

@@ -163,7 +163,10 @@ bool AssembleIterate(const Model& model, Data& data, const DynamicOptions& opt, 
                     data.failed_element, data.failed_rotation);
     else
       std::snprintf(buf, sizeof buf, "the residual is not finite");
-    *why = buf;
+    if (data.shape_pair_limit_reached)
+      *why = ShapePairLimitMessage(model);
+    else
+      *why = buf;  // into the string's storage: no allocation inside a step
   }
   return false;
 }

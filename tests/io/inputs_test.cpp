@@ -229,5 +229,52 @@ TEST(InputTable, RunWithAnInputTableWritesTheSameRowsAsATableProfile) {
             test::ReadFile(by_table.path() + "/reactions.csv"));
 }
 
+// 1e5 inputs (their names were checked pairwise, and each input profile searched and copied
+// them: 12.6 s to check): the scene, a load on the last of them, and a table with a column for
+// each, in reverse order, all resolved by name (bench/check_scaling.py times them).
+TEST(Inputs, AHundredThousandInputsResolveByName) {
+  constexpr int kCount = 100000;
+  std::string inputs = "inputs: {";
+  for (int i = 0; i < kCount; ++i) {
+    inputs += i ? ", u" : "u";
+    inputs += std::to_string(i);
+    inputs += ": ";
+    inputs += std::to_string(i % 7);
+  }
+  inputs += "}\n";
+  std::string scene = Cantilever("{type: input, name: u99999, scale: 2}");
+  scene.replace(scene.find("inputs: {u: 0.0, w: 1.5}\n"), 25, inputs);
+  const Scene parsed = ParseScene(scene, "in.yaml");
+  ASSERT_EQ(parsed.model.inputs.size(), static_cast<std::size_t>(kCount));
+  EXPECT_EQ(parsed.model.inputs[kCount - 1].name, "u99999");
+  EXPECT_EQ(parsed.model.inputs[kCount - 1].default_value, 99999 % 7);
+  Data data = MakeData(parsed.model);
+  data.inputs(kCount - 1) = 1.25;
+  EXPECT_EQ(EvalProfile(parsed.model.point_loads[0].profile, 0.0, data).value, 2.5);
+  // Duplicates are still found, at the second one.
+  std::string twice = scene;
+  twice.replace(twice.find(", u99999: "), 10, ", u12345: ");
+  EXPECT_NE(Error(twice).find("duplicate input name 'u12345' (first defined at in.yaml:2:"),
+            std::string::npos)
+      << Error(twice).substr(0, 200);
+  // A table with every input, last first.
+  std::string table = "t";
+  for (int i = kCount - 1; i >= 0; --i) table += ",u" + std::to_string(i);
+  table += "\n0";
+  for (int i = kCount - 1; i >= 0; --i) table += "," + std::to_string(i);
+  table += "\n";
+  const InputTable t = ParseInputTable(table, "u.csv", parsed.model);
+  ASSERT_EQ(t.inputs.size(), static_cast<std::size_t>(kCount));
+  SetInputsAt(t, 0.0, data);
+  for (int i = 0; i < kCount; ++i) ASSERT_EQ(data.inputs(i), i) << i;
+  table.replace(table.find(",u0\n"), 4, ",u7\n");
+  try {
+    ParseInputTable(table, "u.csv", parsed.model);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(": input 'u7' has two columns"), std::string::npos);
+  }
+}
+
 }  // namespace
 }  // namespace screwfem::inputs_test

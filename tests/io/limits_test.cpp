@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -348,6 +349,181 @@ TEST(Limits, FiveHundredWeldsAndAHundredThousandElementRodCheckQuickly) {
   const ChildResult r = RunCli(tmp.path(), {"check", file});
   ExpectBounded(r);
   EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// --- memory (docs/limits.md, "Memory") ----------------------------------------------------------
+
+// 1000 sphere obstacles beside a 100,000-element rod (a 60 KB scene): 1e8 pairs. `check` ran
+// 66 s up to 3.4 GB and ran out of memory; it now refuses them from their count.
+TEST(Limits, ThousandSphereObstaclesAndAHundredThousandElementRodAreRefusedQuickly) {
+  REQUIRE_CLI();
+  ScopedDir tmp("limits_obstacles");
+  std::string scene = RodScene();
+  scene.replace(scene.find("E: [1, 0, 0]"), 12, "E: [100, 0, 0]");
+  scene.replace(scene.find("section: s}"), 11, "section: s, elements: 100000}");
+  std::string obstacles = "contact:\n  obstacles:\n";
+  for (int i = 0; i < 1000; ++i)
+    for (const std::string& piece :
+         {std::string("    o"), std::to_string(i), std::string(": {type: sphere, center: ["),
+          std::to_string(0.1 * i), std::string(", 1, 0], radius: 0.05}\n")})
+      obstacles += piece;
+  scene.insert(scene.find("analysis:"), obstacles);
+  const std::string file = tmp.path() + "/obstacles.yaml";
+  std::ofstream(file) << scene;
+  const ChildResult r = RunCli(tmp.path(), {"check", file});
+  ExpectBounded(r);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("obstacles.yaml: contact: the moving shapes and obstacles make 100000000 "
+                       "pairs, more than 10000000 (the limit: every pair is tested at every "
+                       "assembly). Exclude the shapes that cannot reach an obstacle"),
+            std::string::npos)
+      << r.err;
+}
+
+// 10,000 free spheres on a plane: every two may touch. Their links in the band made a band of
+// 59,999 (86 GB of LU factors for a run); they now stay off the band, with a warning.
+TEST(Limits, TenThousandSpheresOnAPlaneCheckQuicklyWithASmallBand) {
+  REQUIRE_CLI();
+  ScopedDir tmp("limits_spheres");
+  std::string scene = "bodies:\n";
+  for (int i = 0; i < 10000; ++i) {
+    const std::string n = std::to_string(i), x = std::to_string(0.2 * (i % 100)),
+                      y = std::to_string(0.2 * (i / 100));
+    for (const std::string& piece :
+         {std::string("  b"), n, std::string(": {type: rigid, at: ["), x, std::string(", "), y,
+          std::string(", 0.1], mass: 0.1, inertia: [1e-4, 1e-4, 1e-4], free: true, shapes: "
+                      "[{type: sphere, center: ["),
+          x, std::string(", "), y, std::string(", 0.1], radius: 0.05}]}\n")})
+      scene += piece;
+  }
+  scene +=
+      "contact:\n  obstacles:\n    ground: {type: plane, point: [0, 0, 0], normal: [0, 0, 1]}\n"
+      "analysis: {type: dynamic, end_time: 0.01, step: 1e-3}\n";
+  const std::string file = tmp.path() + "/spheres.yaml";
+  std::ofstream(file) << scene;
+  const ChildResult r = RunChild(tmp.path(), [&] {
+    const int out = open((tmp.path() + "/stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out, 1);
+    std::vector<std::string> text = {kCli, "check", file};
+    std::vector<char*> argv;
+    for (std::string& a : text) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    execv(kCli, argv.data());
+    return 127;
+  });
+  ExpectBounded(r);
+  EXPECT_EQ(r.code, 0) << r.err;
+  const std::string out = ReadFile(tmp.path() + "/stdout.txt");
+  EXPECT_NE(out.find("unknowns: nv = 60000, nc = 0 (0 redundant constraint rows), bandwidth 5\n"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("warning: the 49995000 pairs of contact entities that may touch would "
+                     "couple 49995000 node pairs in the solver's band (more than 1000000)"),
+            std::string::npos)
+      << out;
+}
+
+TEST(Limits, MaxMemoryRefusesAModelBeyondItNamingTheBandedFactors) {
+  REQUIRE_CLI();
+  ScopedDir tmp("limits_max_memory");
+  std::string scene = RodScene();
+  scene.replace(scene.find("section: s}"), 11, "section: s, elements: 100000}");
+  const std::string file = tmp.path() + "/rod.yaml";
+  std::ofstream(file) << scene;
+  ChildResult r = RunCli(tmp.path(), {"check", file, "--max-memory", "10M"});
+  ExpectBounded(r);
+  EXPECT_EQ(r.code, 2) << r.err;
+  // 600,012 unknowns (a rod of 100,000 elements and its clamp's 6 rows), bandwidth 11:
+  // 600012 x 34 x 8 bytes + 52 bytes each.
+  EXPECT_NE(r.err.find("rod.yaml: the model's solver workspace needs about "), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find(", more than the memory limit of 10 MiB (set by --max-memory or "
+                       "max_memory; --max-memory SIZE or max_memory= change it): the largest "
+                       "part is the banded LU factors of the iteration matrix, 185 MiB (600012 "
+                       "unknowns (nv = 600006, nc = 6) x 34 band entries (bandwidth 11: 3 x 11 + "
+                       "1) x 8 bytes)"),
+            std::string::npos)
+      << r.err;
+  r = RunCli(tmp.path(), {"check", file, "--max-memory", "1G"});
+  ExpectBounded(r);
+  EXPECT_EQ(r.code, 0) << r.err;
+  r = RunCli(tmp.path(), {"check", file, "--max-memory", "lots"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err,
+            "error: --max-memory: expected a size such as 8G or 512M (K, M, G, T: powers of "
+            "1024), got 'lots'\n");
+}
+
+// --- run-time input tables ------------------------------------------------------------------------
+
+std::string InputScene() {
+  std::string scene = Pendulum();
+  scene.insert(scene.find("analysis:"), "inputs: {u: 0.0}\n");
+  return scene;
+}
+
+// `--inputs /dev/zero` read the whole device: out of memory after 33 s under a 1 GiB cap.
+TEST(Limits, InputTableOfDevZeroStopsAtItsSizeLimit) {
+  REQUIRE_CLI();
+  ScopedDir tmp("limits_inputs_devzero");
+  const std::string file = tmp.path() + "/scene.yaml";
+  std::ofstream(file) << InputScene();
+  const ChildResult r =
+      RunCli(tmp.path(), {"run", file, "-o", tmp.path() + "/out", "--inputs", "/dev/zero"});
+  ExpectBounded(r);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(r.err, "error: /dev/zero: the input table is larger than 64 MiB (the limit)\n");
+}
+
+// Ctrl-C while the input table is read (a FIFO whose writer sends nothing): the run ends at
+// once with 130 (it was ignored for 69 s).
+TEST(Limits, InputTableReadIsInterruptedBySigint) {
+  REQUIRE_CLI();
+  ScopedDir tmp("limits_inputs_fifo");
+  const std::string file = tmp.path() + "/scene.yaml";
+  std::ofstream(file) << InputScene();
+  const std::string fifo = tmp.path() + "/table.csv";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int err = open((tmp.path() + "/stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(err, 2);
+    const int null = open("/dev/null", O_WRONLY);
+    dup2(null, 1);
+    std::vector<std::string> text = {kCli,       "run", file, "-o", tmp.path() + "/out",
+                                     "--inputs", fifo};
+    std::vector<char*> argv;
+    for (std::string& a : text) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    execv(kCli, argv.data());
+    _exit(127);
+  }
+  // A writer that writes part of a header and keeps the FIFO open.
+  const int writer = open(fifo.c_str(), O_WRONLY);
+  ASSERT_GE(writer, 0);
+  ASSERT_EQ(write(writer, "t,", 2), 2);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  kill(pid, SIGINT);
+  int status = 0;
+  bool ended = false;
+  for (int i = 0; i < 2000 && !ended; ++i) {
+    ended = waitpid(pid, &status, WNOHANG) == pid;
+    if (!ended) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!ended) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+  }
+  close(writer);
+  ASSERT_TRUE(ended) << "the run did not end on SIGINT";
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_LT(seconds, 9.0);
+  EXPECT_EQ(ReadFile(tmp.path() + "/stderr.txt"),
+            "interrupted: " + fifo + ": reading the input table was interrupted\n");
 }
 
 }  // namespace

@@ -194,5 +194,41 @@ TEST(TendonScene, EyeletsAtArcLengthsBetweenNodesSitOnTheElementSections) {
   EXPECT_GT(tip.y(), 0.3);  // curled towards the tendon
 }
 
+// A tendon of 10,000 eyelets at arc lengths along a 10,000-element rod (each eyelet walked the
+// rod, with a logarithm per node: 19.6 s to check): every eyelet on the node or the element
+// section at its arc length, found by binary searches (bench/check_scaling.py times them).
+TEST(TendonScene, TenThousandEyeletsAlongARodAreEachAtTheirArcLength) {
+  constexpr int kElements = 10000;
+  std::string eyelets;
+  for (int k = 1; k < kElements; ++k) {
+    eyelets += k > 1 ? ", {body: arm, s: " : "{body: arm, s: ";
+    eyelets += std::to_string(k) + "e-4, offset: [0, 0.005, 0]}";
+  }
+  eyelets += ", {body: arm, s: 0.99995, offset: [0, 0.005, 0]}";  // inside the last element
+  const std::string scene =
+      "points: {O: [0, 0, 0], E: [1, 0, 0]}\n"
+      "materials: {m: {E: 1e6, nu: 0.45, density: 1000}}\n"
+      "sections: {s: {shape: circle, radius: 0.01, material: m}}\n"
+      "bodies:\n  arm: {type: soft, from: O, to: E, section: s, elements: 10000}\n"
+      "joints:\n  clamp: {type: fixed, at: O, between: [ground, arm]}\n"
+      "tendons:\n  t: {eyelets: [" +
+      eyelets + "], tension: 1}\nanalysis: {type: static}\n";
+  const Scene parsed = ParseScene(scene, "long.yaml");
+  const Model& m = parsed.model;
+  const Rod& rod = m.rods[0];
+  const Tendon& t = m.tendons[0];
+  ASSERT_EQ(t.eyelets.size(), static_cast<std::size_t>(kElements));
+  for (int k = 1; k < kElements; ++k) {
+    const BodyPoint& p = t.eyelets[static_cast<std::size_t>(k - 1)];
+    ASSERT_EQ(p.node, rod.nodes[static_cast<std::size_t>(k)]) << k;
+    ASSERT_EQ(p.element, -1) << k;
+  }
+  const BodyPoint& last = t.eyelets.back();
+  EXPECT_EQ(last.element, rod.first_element + kElements - 1);
+  EXPECT_EQ(last.node, rod.nodes[kElements - 1]);
+  EXPECT_NEAR(last.xi, 0.5, 1e-9);
+  EXPECT_EQ(m.tendon_segments.size(), static_cast<std::size_t>(kElements - 1));
+}
+
 }  // namespace
 }  // namespace screwfem::tendon_scene_test

@@ -1104,6 +1104,95 @@ outputs: {points: {tip: {body: arm, at: B}}}
 """
 
 
+class MemoryLimitTest(unittest.TestCase):
+    """The memory limit from Python (docs/limits.md): max_memory of load_scene and parse_scene,
+    set_memory_limit, ModelBuilder.set_memory_limit and estimate_memory."""
+
+    def test_max_memory_refuses_a_scene_beyond_it_and_is_restored(self):
+        before = sf.memory_limit()
+        with self.assertRaisesRegex(
+                sf.InputError, r"pendulum.yaml: the model's solver workspace needs about .*, "
+                r"more than the memory limit of 1000 B \(set by --max-memory or max_memory; "
+                r"--max-memory SIZE or max_memory= change it\): the largest part is the "):
+            sf.load_scene(PENDULUM, max_memory=1000)
+        self.assertEqual(sf.memory_limit(), before)
+        scene = sf.load_scene(PENDULUM, max_memory="1G")
+        with open(PENDULUM) as f:
+            text = f.read()
+        with self.assertRaisesRegex(sf.InputError, "more than the memory limit of 1000 B"):
+            sf.parse_scene(text, "p.yaml", max_memory=1000)
+        parts = sf.estimate_memory(scene.model)
+        self.assertEqual(parts[0][0], "banded LU factors of the iteration matrix")
+        n = scene.model.nv + scene.model.nc
+        b = scene.model.bandwidth
+        self.assertEqual(parts[0][1], n * (3 * b + 1) * 8 + 52 * n)
+        for bad in ("lots", "0", -5, 0, 1.5, True):
+            with self.assertRaises(ValueError):
+                sf.load_scene(PENDULUM, max_memory=bad)
+
+    def test_process_and_builder_limits(self):
+        before = sf.memory_limit()
+        sf.set_memory_limit("2G")
+        try:
+            self.assertEqual(sf.memory_limit(), 2 << 30)
+            with self.assertRaisesRegex(sf.InputError, r"memory limit of 1000 B \(set by "):
+                sf.load_scene(PENDULUM, max_memory=1000)
+            self.assertEqual(sf.memory_limit(), 2 << 30)
+        finally:
+            sf.set_memory_limit(None)
+        self.assertEqual(sf.memory_limit(), before)
+        self.assertEqual(sf.parse_memory_size("512M"), 512 << 20)
+        b = sf.ModelBuilder()
+        node = b.add_node(np.eye(4), "n")
+        b.add_rigid_body("body", node, 1.0, [0, 0, 0], np.eye(3))
+        b.set_memory_limit(100)
+        with self.assertRaisesRegex(sf.InputError, r"memory limit of 100 B \(set by "
+                                                   r"ModelBuilder.set_memory_limit;"):
+            b.build()
+        b.set_memory_limit(None)
+        b.build()
+
+
+class EnumValidationTest(unittest.TestCase):
+    """Enum values from Python: an integer outside an enum is a ValueError, never a value that
+    reaches C++ (JointType(99) aborted the interpreter in joint_type_name and add_joint)."""
+
+    ENUMS = ["JointType", "DriveKind", "RodInertia", "LoadFrame", "ActuatorType",
+             "ContactShapeType", "ObstacleType", "NewtonMatrix", "Predictor", "ConvergenceTest",
+             "ConstraintFormulation", "StaticMethod", "AnalysisKind", "VtkFormat"]
+
+    def test_every_enum_refuses_integers_outside_it(self):
+        for name in self.ENUMS:
+            cls = getattr(sf, name)
+            members = list(cls.__members__.values())
+            for m in members:
+                self.assertEqual(cls(int(m)), m)
+            for bad in (len(members) + 7, -1, 99):
+                if bad in [int(m) for m in members]:
+                    continue
+                with self.assertRaisesRegex(ValueError, f"^{name}: {bad} is not a member \\("):
+                    cls(bad)
+
+    def test_an_unpickled_out_of_range_joint_type_is_refused_where_it_enters(self):
+        bad = sf.JointType.__new__(sf.JointType)
+        bad.__setstate__(99)
+        with self.assertRaisesRegex(ValueError, r"^JointType: 99 is not a member \(REVOLUTE, "):
+            sf.joint_type_name(bad)
+        spec = sf.JointSpec()
+        with self.assertRaisesRegex(ValueError, "JointType: 99 is not a member"):
+            spec.type = bad
+        self.assertEqual(spec.type, sf.JointType.REVOLUTE)
+        options = sf.DynamicOptions()
+        newton = sf.NewtonMatrix.__new__(sf.NewtonMatrix)
+        newton.__setstate__(5)
+        with self.assertRaisesRegex(ValueError, r"NewtonMatrix: 5 is not a member \(SIMPLIFIED, FULL\)"):
+            options.newton_matrix = newton
+
+    def test_joint_type_names_of_valid_members(self):
+        self.assertEqual(sf.joint_type_name(sf.JointType.REVOLUTE), "revolute")
+        self.assertEqual(sf.joint_type_name(sf.JointType(int(sf.JointType.FREE))), "free")
+
+
 class InputsAndStateTest(unittest.TestCase):
     """Run-time inputs (sim.inputs), state save/restore, rod arrays, body outputs."""
 
@@ -1123,6 +1212,28 @@ class InputsAndStateTest(unittest.TestCase):
         for _ in range(20):
             sim.step(2e-3)
         self.assertGreater(sim.point_motion("tip").position[2], 1e-4)  # pushed up
+
+    def test_non_finite_values_written_through_the_input_view_are_refused(self):
+        sim = sf.Simulation(sf.parse_scene(CANTILEVER, "arm.yaml"))
+        sim.input_values[0] = math.nan  # an element write: no setter sees it
+        message = (r"input_values\[0\] \(input 'u'\) is nan; run-time inputs must be finite")
+        with self.assertRaisesRegex(ValueError, "Simulation.initialize: " + message):
+            sim.initialize()
+        sim.input_values[0] = 0.0
+        sim.initialize()
+        sim.input_values[0] = math.inf
+        t = sim.time
+        for call in (lambda: sim.step(2e-3), lambda: sim.advance_to(t + 1e-3),
+                     lambda: sim.simulate(t + 1e-3)):
+            with self.assertRaisesRegex(ValueError, r"input_values\[0\] \(input 'u'\) is inf"):
+                call()
+        self.assertEqual(sim.time, t)
+        with self.assertRaisesRegex(ValueError, "Simulation.solve_static: "):
+            sim.solve_static()
+        with self.assertRaisesRegex(ValueError, r"_step_many: sims\[0\]: input_values\[0\]"):
+            sf._screwfem._step_many([sim], 1e-3)
+        with self.assertRaisesRegex(ValueError, "must be finite"):
+            sim.input_values = [math.nan]
 
     def test_restored_state_repeats_the_rollout_bit_for_bit(self):
         sim = sf.Simulation(sf.parse_scene(CANTILEVER, "arm.yaml"))

@@ -108,6 +108,45 @@ class JournalTest(unittest.TestCase):
             assert_same_bits(self, first, again, REPRODUCIBLE[6:])
 
 
+class BoundedInputsTest(unittest.TestCase):
+    """The files a sweep reads are bounded regular files; max_memory reaches the variants
+    (docs/limits.md)."""
+
+    def test_a_device_or_a_huge_scene_is_refused_before_any_run(self):
+        with self.assertRaisesRegex(ValueError, r"^sweep: /dev/zero: the scene file is not a "
+                                                r"regular file$"):
+            sf.sweep("/dev/zero", {"analysis.end_time": [0.05]}, scheduler="serial")
+        with tempfile.TemporaryDirectory() as tmp:
+            big = pathlib.Path(tmp) / "big.yaml"
+            with open(big, "wb") as f:
+                f.truncate((16 << 20) + 1)
+            with self.assertRaisesRegex(ValueError, "big.yaml: the scene file is larger than "
+                                                    r"16 MiB \(the limit\)$"):
+                sf.sweep(str(big), {"analysis.end_time": [0.05]}, scheduler="serial")
+
+    def test_a_journal_line_beyond_a_megabyte_is_an_error(self):
+        grid = {"analysis.end_time": [0.05]}
+        with tempfile.TemporaryDirectory() as tmp:
+            sf.sweep(PENDULUM, grid, metrics=METRICS[1:], scheduler="serial", outdir=tmp)
+            with open(pathlib.Path(tmp) / _sweep.ROWS_FILE, "a") as f:
+                f.write("x" * (1 << 20) + "\n")
+            with self.assertRaisesRegex(ValueError, "a line longer than 1048576 characters"):
+                sf.sweep(PENDULUM, grid, scheduler="serial", outdir=tmp, resume=True)
+
+    def test_max_memory_makes_larger_variants_invalid(self):
+        with self.assertRaisesRegex(ValueError, "memory size: expected a size such as 8G"):
+            sf.sweep(PENDULUM, {"analysis.end_time": [0.05]}, scheduler="serial",
+                     max_memory="lots")
+        df = sf.sweep(PENDULUM, {"analysis.end_time": [0.05]}, scheduler="serial",
+                      max_memory=1000)
+        self.assertEqual(list(df["status"]), ["invalid"])
+        self.assertRegex(df["message"][0], r"more than the memory limit of 1000 B \(set by "
+                                           r"--max-memory or max_memory;")
+        df = sf.sweep(PENDULUM, {"analysis.end_time": [0.05]}, scheduler="serial",
+                      max_memory="1G")
+        self.assertEqual(list(df["status"]), ["completed"])
+
+
 class ClusterSweepTest(unittest.TestCase):
     """Sweeps on one LocalCluster of 2 worker processes, shared by the tests of this class."""
 

@@ -403,6 +403,38 @@ class Tables(unittest.TestCase):
 
 # ---- animation -----------------------------------------------------------------------------------
 
+class MathTextInNames(unittest.TestCase):
+    def test_run_folder_with_dollar_signs_is_plotted_by_name(self):
+        tmp = tempfile.mkdtemp(prefix="screwfem_plot_names_")
+        self.addCleanup(shutil.rmtree, tmp, True)
+        name = "run$\\frac{$"
+        write_run(os.path.join(tmp, name))
+        for table in os.listdir(os.path.join(tmp, name)):  # two tables suffice (and are quick)
+            if table not in ("points.csv", "energy.csv", "summary.json"):
+                os.remove(os.path.join(tmp, name, table))
+        figures = {}
+        save = screwfem_plot.save_figure
+
+        def keep(fig, figdir, file_name):
+            figures[file_name] = fig
+            return save(fig, figdir, file_name)
+
+        screwfem_plot.save_figure = keep
+        try:
+            with contextlib.redirect_stdout(io.StringIO()), \
+                    contextlib.redirect_stderr(io.StringIO()) as err:
+                status = screwfem_plot.main([os.path.join(tmp, name), "-o",
+                                             os.path.join(tmp, "fig")])
+        finally:
+            screwfem_plot.save_figure = save
+        self.assertEqual(status, 0, err.getvalue())
+        self.assertNotIn("Traceback", err.getvalue())
+        self.assertIn(f"energy_{name}.png", os.listdir(os.path.join(tmp, "fig")))
+        titles = [t.get_text() for fig in figures.values() for t in
+                  [fig._suptitle] + [ax.title for ax in fig.axes] if t is not None]
+        self.assertTrue(any(name in t for t in titles), titles)
+
+
 class FramePlan(unittest.TestCase):
     def test_frames_and_durations_follow_fps_and_speed(self):
         times = np.arange(0, 201) * 0.01  # 2 s recorded at 100 frames per second

@@ -158,6 +158,50 @@ class ViewerInChromium(unittest.TestCase):
         self.assertTrue(later > start or later == 1.0, f"{start} -> {later}")
 
 
+# Names that broke the page: '<!--<script>' in the data put the HTML tokenizer into its escaped
+# script state, so that no later </script> ended the data element (a blank page).
+HOSTILE_NAME = "<!--<script></script><b>&amp; \"q\" 'a' \u2028 $x$"
+
+
+class HostileNames(unittest.TestCase):
+    """A scene and a run folder named with HTML and script markup: the page works and shows
+    the name as text."""
+
+    def test_hostile_scene_name_is_text(self):
+        import screwfem_chromium
+
+        with tempfile.TemporaryDirectory(prefix="screwfem-view-names-") as tmp:
+            outdir = os.path.join(tmp, "run <!--<script>")
+            scene = os.path.join(ARGS.source, "tests", "data", "pendulum.yaml")
+            subprocess.run([ARGS.screwfem, "run", scene, "-o", outdir, "--quiet",
+                            "--set", "analysis.end_time=0.1", "--set", "name=" + HOSTILE_NAME],
+                           check=True, stdout=subprocess.DEVNULL)
+            page = os.path.join(tmp, "view.html")
+            view = subprocess.run([ARGS.screwfem, "view", outdir, "-o", page],
+                                  capture_output=True, text=True)
+            self.assertEqual(view.returncode, 0, view.stderr)
+            with open(page, encoding="utf-8") as f:
+                text = f.read()
+            data = text[text.index('<script id="run-data" type="application/json">'):]
+            data = data[data.index(">") + 1:data.index("</script>")]
+            self.assertNotIn("<", data)
+            self.assertEqual(json.loads(data)["name"], HOSTILE_NAME)
+            with screwfem_chromium.Chromium(400, 300) as browser:
+                browser.load(pathlib.Path(page).as_uri() + "?bare=1&t=0",
+                             "['ready', 'error'].includes(document.body.dataset.state)")
+                got = browser.evaluate(
+                    "({state: document.body.dataset.state, title: document.title,"
+                    " name: JSON.parse(document.getElementById('run-data').textContent).name,"
+                    " scripts: document.scripts.length,"
+                    " errors: document.getElementById('errors').textContent})")
+                problems = browser.console_problems()
+            self.assertEqual(got["state"], "ready", got["errors"])
+            self.assertEqual(got["title"], HOSTILE_NAME + " - screwfem viewer")
+            self.assertEqual(got["name"], HOSTILE_NAME)
+            self.assertEqual(got["scripts"], 5)
+            self.assertEqual(problems, [])
+
+
 def main():
     global ARGS
     parser = argparse.ArgumentParser()

@@ -157,6 +157,12 @@ class ModelBuilder {
   // itself when ContactSettings::self.
   void ExcludeContactPair(bool rod_a, int index_a, bool rod_b, int index_b);
   Model& model() { return model_; }
+  const Model& model() const { return model_; }
+  // The memory the model may need [bytes] (0: the process default; model/memory.h). Build()
+  // estimates, before allocating them, the pairs of moving shapes and obstacles, the table of
+  // contact entities, the contact couplings of the ordering and the workspace of MakeData (the
+  // banded LU above all), and throws InputError naming the part that exceeds it.
+  void SetMemoryLimit(std::size_t bytes) { model_.memory_limit = bytes; }
 
   // Validates and computes sizes and the ordering. Throws InputError.
   Model Build() const;
@@ -166,6 +172,16 @@ class ModelBuilder {
   EntityRef NextRod() const { return {EntityKind::kRod, static_cast<int>(model_.rods.size()), {}}; }
   Model model_;
 };
+
+// The most pairs of moving shapes and obstacles a model may have (Build: InputError naming
+// the count; every pair is tested at every assembly): a 100,000-element rod against 100 curved
+// obstacles.
+inline constexpr double kMaxObstaclePairs = 1e7;
+// The most node couplings the solver ordering puts in the band for pairs of contact entities
+// that may touch (ContactSettings::band_pair_nodes each): beyond, none is (they enter the solve
+// as the off-band coupling when they touch) and Build warns. 10,000 spheres that may touch
+// each other made a band of 59,999 (86 GB of LU factors).
+inline constexpr double kMaxBandContactLinks = 1e6;
 
 // Redundant constraint rows at the reference configuration (called by ModelBuilder::Build on
 // a model whose layout is set; build/redundancy.cpp): fills model.redundant_rows and adds a

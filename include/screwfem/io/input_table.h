@@ -7,10 +7,12 @@
 // values (the scene's defaults). See docs/scene-format.md, "Run-time inputs".
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
 #include "screwfem/model/data.h"
+#include "screwfem/solve/stop.h"
 
 namespace screwfem {
 
@@ -25,8 +27,16 @@ struct InputTable {
 // expected" for malformed numbers, ragged rows, times not increasing, an unknown input name or
 // a repeated column.
 InputTable ParseInputTable(const std::string& text, const std::string& source, const Model& model);
-// Reads and parses a file (InputError if it cannot be read).
-InputTable ReadInputTable(const std::string& path, const Model& model);
+// The largest input table file ReadInputTable reads (docs/limits.md).
+inline constexpr std::size_t kMaxInputTableBytes = std::size_t{64} << 20;  // 64 MiB
+
+// Reads and parses a file of at most kMaxInputTableBytes, polling `stop` while reading.
+// InputError "PATH: is a directory, not an input table" / "PATH: cannot open the input table" /
+// "PATH: the input table is larger than 64 MiB (the limit)" (a file without a size, /dev/zero
+// or a pipe, stops there) / "PATH: reading the input table was interrupted", and those of
+// ParseInputTable.
+InputTable ReadInputTable(const std::string& path, const Model& model,
+                          const StopRequest& stop = {});
 
 // data.inputs of the table's columns at time t (linear between rows, held outside them). No
 // allocation.

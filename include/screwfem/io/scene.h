@@ -9,6 +9,7 @@
 #include "screwfem/model/data.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/statics.h"
+#include "screwfem/solve/stop.h"
 
 namespace screwfem {
 
@@ -95,16 +96,19 @@ struct Scene {
   std::vector<std::pair<std::string, Vec3>> named_points;
 };
 
-// Size limits of the input (docs/scene-format.md, "Limits"): a scene file or text, and one
-// override string. LoadScene reads at most kMaxSceneBytes + 1 bytes, so a file without a size
-// (/dev/zero, a pipe) stops there.
+// Size limits of the input (docs/limits.md): a scene file or text, and one override string.
+// LoadScene reads at most kMaxSceneBytes + 64 KiB bytes, so a file without a size (/dev/zero,
+// a pipe) stops there.
 inline constexpr std::size_t kMaxSceneBytes = std::size_t{16} << 20;    // 16 MiB
 inline constexpr std::size_t kMaxOverrideBytes = std::size_t{1} << 20;  // 1 MiB
 
 // Parses and compiles a scene. `overrides` are "key.path=value" strings applied to the YAML
 // tree before compilation (e.g. "analysis.step=5e-4", "bodies.arm56.elements=8").
 // Throws InputError with a message "FILE:LINE:COLUMN: FIELD: what was expected".
-Scene LoadScene(const std::string& path, const std::vector<std::string>& overrides = {});
+// `stop` is polled while the file is read (InputError "PATH: reading the scene file was
+// interrupted" when it asks to stop).
+Scene LoadScene(const std::string& path, const std::vector<std::string>& overrides = {},
+                const StopRequest& stop = {});
 Scene ParseScene(const std::string& yaml_text, const std::string& source_name,
                  const std::vector<std::string>& overrides = {});
 

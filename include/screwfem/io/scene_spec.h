@@ -13,6 +13,7 @@
 
 #include "screwfem/build/model_builder.h"
 #include "screwfem/io/scene.h"
+#include "screwfem/solve/stop.h"
 
 namespace screwfem {
 
@@ -220,10 +221,10 @@ struct SceneSources {
 SceneSpec ReadSceneSpec(const std::string& yaml_text, const std::string& source_name,
                         const std::vector<std::string>& overrides, SceneSources* sources);
 
-// ReadSceneSpec of a scene file (read as LoadScene reads it, with its size limit); messages
-// name `path`.
+// ReadSceneSpec of a scene file (read as LoadScene reads it, with its size limit, polling
+// `stop` while reading); messages name `path`.
 SceneSpec LoadSceneSpec(const std::string& path, const std::vector<std::string>& overrides,
-                        SceneSources* sources);
+                        SceneSources* sources, const StopRequest& stop = {});
 
 // Compiles a spec into a Scene through ModelBuilder: finds the nodes of joints, welds, loads
 // and output points, checks that every body is connected, builds the Model. Errors, including

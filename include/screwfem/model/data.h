@@ -2,6 +2,8 @@
 // docs/architecture.md, "Model and Data"). Algorithms read the Model and write Data.
 #pragma once
 
+#include <cstddef>
+#include <string>
 #include <vector>
 
 #include "screwfem/linalg/band_coupling.h"
@@ -31,6 +33,9 @@ struct ShapePairGrid {
 // factorisation costs 6 banded solves per node and a dense LU of 6 x that size; 128 nodes: 14 MB).
 constexpr int kMaxCoupledNodes = 128;
 
+// The most pairs of moving shapes a broad phase may find at once (ShapePairPoolLimit).
+constexpr std::size_t kMaxShapePairs = 2000000;
+
 struct Data {
   double time = 0.0;
   std::vector<SE3> H;              // node frames
@@ -50,6 +55,9 @@ struct Data {
   std::vector<ShapePair> shape_pairs;
   int num_shape_pairs = 0;
   bool shape_pair_overflow = false;  // the last broad phase found more pairs than the pool
+  // The pool is at its limit (ShapePairPoolLimit) and the last broad phase found more pairs:
+  // the assembly fails, and the step's message says so.
+  bool shape_pair_limit_reached = false;
   ShapePairGrid shape_pair_grid;
 
   // Workspaces of the Newton solvers.
@@ -75,9 +83,19 @@ struct Data {
 // Allocates Data for a model and sets the reference state (at rest).
 Data MakeData(const Model& model);
 
-// Doubles the pool of shape pairs (Data::shape_pairs; at least 64) and clears the overflow
-// flag: called between steps when a broad phase found the pool full (allocates).
-void GrowShapePairPool(Data& data);
+// Doubles the pool of shape pairs (Data::shape_pairs; at least 64, at most `limit`) and clears
+// the overflow flag: called between steps when a broad phase found the pool full (allocates).
+void GrowShapePairPool(Data& data, std::size_t limit = kMaxShapePairs);
+
+// The most pairs of moving shapes the broad phase's pool may hold (docs/limits.md): at most
+// kMaxShapePairs (each pair is assembled at every Newton iteration), and what the memory limit
+// (Model::memory_limit, model/memory.h) leaves beside the rest of Data, counted twice (the
+// pool is copied when it grows); never below the pool MakeData allocates (4 per contact
+// segment and 64). Without a limit the pool grew with whatever a broad phase found (7.5 GB was
+// reported for a resting rod in self-contact at 10,000 elements).
+std::size_t ShapePairPoolLimit(const Model& model);
+// The message of an assembly that stopped at that limit.
+std::string ShapePairLimitMessage(const Model& model);
 
 // The one evaluation of a profile by a kernel or solver: at time t, with this simulation's
 // run-time input values (a profile with ProfileTerm::kInput terms reads data.inputs).

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -480,6 +481,10 @@ struct Model {
   // which leaves the motion unchanged; see ModelBuilder::Build.
   std::vector<int> redundant_rows;
   std::vector<std::string> warnings;  // non-fatal findings of Build, for the user
+
+  // The memory Build() and MakeData may use [bytes] (model/memory.h; 0: the process default,
+  // else half the physical memory). Build() refuses a model whose parts would exceed it.
+  std::size_t memory_limit = 0;
 
   // Largest |rotation| one element may reach (elements/rod.h): 2 pi minus a safety margin.
   double max_element_rotation = 2.0 * 3.14159265358979323846 - 0.05;

@@ -1,0 +1,176 @@
+#include "screwfem/model/memory.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "screwfem/model/data.h"
+#include "screwfem/model/errors.h"
+#include "screwfem/model/model.h"
+
+namespace screwfem {
+
+namespace {
+
+std::atomic<std::size_t> g_default_limit{0};
+
+// When sysconf cannot tell.
+constexpr std::size_t kUnknownPhysicalLimit = std::size_t{16} << 30;
+
+}  // namespace
+
+std::size_t PhysicalMemoryBytes() {
+  const long pages = sysconf(_SC_PHYS_PAGES);
+  const long page = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return 0;
+  return static_cast<std::size_t>(pages) * static_cast<std::size_t>(page);
+}
+
+void SetDefaultMemoryLimit(std::size_t bytes) { g_default_limit.store(bytes); }
+std::size_t DefaultMemoryLimit() { return g_default_limit.load(); }
+
+std::size_t ResolveMemoryLimit(std::size_t model_limit) {
+  if (model_limit > 0) return model_limit;
+  const std::size_t process = g_default_limit.load();
+  if (process > 0) return process;
+  const std::size_t physical = PhysicalMemoryBytes();
+  if (physical == 0) return kUnknownPhysicalLimit;
+  return static_cast<std::size_t>(kDefaultMemoryShare * static_cast<double>(physical));
+}
+
+std::string DescribeMemoryLimit(std::size_t model_limit) {
+  if (model_limit > 0) return "set by ModelBuilder.set_memory_limit";
+  if (g_default_limit.load() > 0) return "set by --max-memory or max_memory";
+  const std::size_t physical = PhysicalMemoryBytes();
+  if (physical == 0) return "the default when the physical memory is unknown";
+  char text[96];
+  std::snprintf(text, sizeof text, "the default: %.0f %% of the physical memory, %s",
+                100.0 * kDefaultMemoryShare, FormatBytes(static_cast<double>(physical)).c_str());
+  return text;
+}
+
+std::string FormatBytes(double bytes) {
+  static const char* const kUnits[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  int unit = 0;
+  while (bytes >= 1024.0 && unit < 6) {
+    bytes /= 1024.0;
+    ++unit;
+  }
+  char text[32];
+  if (unit == 0)
+    std::snprintf(text, sizeof text, "%.0f B", bytes);
+  else
+    std::snprintf(text, sizeof text, "%.3g %s", bytes, kUnits[unit]);
+  return text;
+}
+
+std::size_t ParseMemorySize(const std::string& text, const std::string& setting) {
+  const auto fail = [&]() -> std::size_t {
+    throw InputError(setting + ": expected a size such as 8G or 512M (K, M, G, T: powers of " +
+                     "1024), got '" + text.substr(0, 64) + "'");
+  };
+  if (text.empty() || text.size() > 64 || std::isspace(static_cast<unsigned char>(text[0])))
+    return fail();
+  char* end = nullptr;
+  errno = 0;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || errno == ERANGE || !std::isfinite(value) || !(value > 0.0))
+    return fail();
+  std::string unit(end);
+  for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  double scale = 1.0;
+  if (!unit.empty()) {
+    const std::string head = unit.substr(0, 1);
+    const std::string tail = unit.substr(1);
+    if (tail != "" && tail != "B" && tail != "IB") return fail();
+    if (head == "B" && tail.empty())
+      scale = 1.0;
+    else if (head == "K")
+      scale = 1024.0;
+    else if (head == "M")
+      scale = 1024.0 * 1024.0;
+    else if (head == "G")
+      scale = 1024.0 * 1024.0 * 1024.0;
+    else if (head == "T")
+      scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
+    else
+      return fail();
+  }
+  const double bytes = std::floor(value * scale);
+  if (!(bytes >= 1.0) || bytes >= 1.8e19) return fail();
+  return static_cast<std::size_t>(bytes);
+}
+
+std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
+  std::vector<MemoryPart> parts;
+  const double n = std::max(m.num_unknowns(), 1);
+  const double kl = m.bandwidth;
+  char why[256];
+  // BandedLU::Resize: ldab = 2 kl + ku + 1 doubles per column; per unknown 9 ints/doubles more.
+  std::snprintf(why, sizeof why,
+                "%d unknowns (nv = %d, nc = %d) x %d band entries (bandwidth %d: 3 x %d + 1) x "
+                "8 bytes",
+                m.num_unknowns(), m.nv, m.nc, 3 * m.bandwidth + 1, m.bandwidth, m.bandwidth);
+  parts.push_back(
+      {"banded LU factors of the iteration matrix", n * (3.0 * kl + 1.0) * 8.0 + n * 52.0, why});
+  // The state and the Newton workspaces: vectors of n, node frames and tangents, element
+  // branch references.
+  const double nodes = static_cast<double>(m.nodes.size());
+  parts.push_back({"state and Newton workspaces",
+                   n * 8.0 * 6.0 + nodes * (sizeof(SE3) + sizeof(Mat6)) +
+                       static_cast<double>(m.elements.size()) * sizeof(Vec3) +
+                       static_cast<double>(m.joints.size()) * sizeof(SE3),
+                   "vectors of the unknowns, node frames and tangents"});
+  const double segments = static_cast<double>(m.contact_segments.size());
+  if (segments > 0 && MayHaveShapePairs(m)) {
+    // BandCoupling at its largest (kMaxCoupledNodes): 3 k^2 + 2 k + n doubles, k = 6 nodes.
+    const double k = 6.0 * kMaxCoupledNodes;
+    std::snprintf(why, sizeof why, "at most %d nodes of 6 unknowns: 3 x %.0f^2 doubles",
+                  kMaxCoupledNodes, k);
+    parts.push_back(
+        {"off-band coupling of pairs of moving shapes",
+         (3.0 * k * k + 2.0 * k + n) * 8.0 + (3.0 * kMaxCoupledNodes * kMaxCoupledNodes + n) * 4.0,
+         why});
+    // MakeData: the grid's arrays and the first pool of 4 pairs per segment.
+    double buckets = 1;
+    while (buckets < 16 * segments) buckets *= 2;
+    std::snprintf(why, sizeof why, "%.0f contact segments: the grid and a pool of %.0f pairs",
+                  segments, 4 * segments + 64);
+    parts.push_back({"broad phase of pairs of moving shapes",
+                     segments * (4 * sizeof(Vec3) + 1 + 4 + 8 * (4 + sizeof(Eigen::Vector3i))) +
+                         (buckets + 1) * 4 + (4 * segments + 64) * sizeof(ShapePair),
+                     why});
+  }
+  return parts;
+}
+
+double TotalBytes(const std::vector<MemoryPart>& parts) {
+  double total = 0.0;
+  for (const MemoryPart& p : parts) total += p.bytes;
+  return total;
+}
+
+void CheckMemory(const std::vector<MemoryPart>& parts, std::size_t model_limit,
+                 const std::string& what, const std::string& hint) {
+  const double total = TotalBytes(parts);
+  const std::size_t limit = ResolveMemoryLimit(model_limit);
+  if (total <= static_cast<double>(limit) || parts.empty()) return;
+  const MemoryPart* largest = &parts.front();
+  for (const MemoryPart& p : parts)
+    if (p.bytes > largest->bytes) largest = &p;
+  std::string message =
+      what + " needs about " + FormatBytes(total) + ", more than the memory limit of " +
+      FormatBytes(static_cast<double>(limit)) + " (" + DescribeMemoryLimit(model_limit) +
+      "; --max-memory SIZE or max_memory= change it): the largest part is the " + largest->part +
+      ", " + FormatBytes(largest->bytes) + " (" + largest->why + ")";
+  if (!hint.empty()) message += ". " + hint;
+  throw InputError(message);
+}
+
+}  // namespace screwfem
