@@ -110,9 +110,12 @@ class RecordingHandle {
     if (type.is_none()) {
       if (recording_->RecordFinalState()) recording_->Finish("completed", {});
     } else if (PyErr_GivenExceptionMatches(type.ptr(), PyExc_KeyboardInterrupt)) {
-      recording_->Interrupted(SIGINT, FormatNumbers("at t = %.9g s; the last recorded row is at "
-                                                    "t = %.9g s",
-                                                    sim_.data().time, recording_->last_row_time()));
+      const bool statics = sim_.scene().analysis.kind == AnalysisKind::kStatic;
+      recording_->Interrupted(
+          SIGINT, statics
+                      ? FormatNumbers("at load factor λ = %.9g", recording_->Result().load_factor)
+                      : FormatNumbers("at t = %.9g s; the last recorded row is at t = %.9g s",
+                                      sim_.data().time, recording_->last_row_time()));
     } else {
       const std::string name = py::str(type.attr("__name__"));
       recording_->Finish("failed", name + ": " + std::string(py::str(value)));

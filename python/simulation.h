@@ -121,7 +121,10 @@ class Simulation {
                           ? recording_
                           : nullptr;
     const double t = o.time;
-    StaticResult r = SolveStatic(model(), data_, o, signals.request(), [&](const StaticStep& step) {
+    // A write error on the recorded path stops the solve at its next Newton iteration.
+    const StopRequest stop =
+        path != nullptr ? path->StopWhenFinished(signals.request()) : signals.request();
+    StaticResult r = SolveStatic(model(), data_, o, stop, [&](const StaticStep& step) {
       if (path != nullptr) path->RecordStaticStep(t, step.load_factor);
     });
     if (recording_ != nullptr) recording_->SetStaticResult(r);
