@@ -249,6 +249,24 @@ class OutputFolder(unittest.TestCase):
         for name in ("joints.csv", "tendons.csv", "forces.csv"):
             self.assertEqual(len(rows(out / name)), len(table), name)
 
+    def test_static_tendon_tension_is_scaled_by_the_load_factor(self):
+        # tendons.csv holds the applied tension, load_factor x 50 N, as tendon_state gives it.
+        sim = sf.Simulation(sf.load_scene(FINGER, ["analysis.type=static",
+                                                   "analysis.load_steps=4"]))
+        out = self.dir / "scaled"
+        with sim.record(str(out)):
+            sim.solve_static()
+        table = rows(out / "tendons.csv")
+        self.assertEqual(table[0], ["t", "load_factor", "flexor.length", "flexor.rate",
+                                    "flexor.tension"])
+        # (4 load steps, some of them halved: the rows are the converged load factors.)
+        self.assertGreaterEqual(len(table) - 1, 4)
+        for r in table[1:]:
+            self.assertEqual(float(r[4]), 50.0 * float(r[1]))
+        self.assertEqual(float(table[-1][4]), 50.0)
+        self.assertEqual(sim.tendon_state("flexor", load_factor=0.5)[2], 25.0)
+        self.assertEqual(sim.tendon_state("flexor")[2], 50.0)
+
     def test_a_write_error_stops_a_dynamic_run(self):
         sim = sf.Simulation(sf.load_scene(FINGER, ["analysis.end_time=100",
                                                    "outputs.interval=0", "outputs.vtk=false"]))
