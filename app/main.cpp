@@ -119,7 +119,11 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
     const screwfem::AnalysisSettings& a = scene.analysis;
     std::printf("%s: %s\n", scene.source.c_str(), scene.name.c_str());
     if (a.kind == screwfem::AnalysisKind::kStatic)
-      std::printf("  analysis: static at t = %g s\n", a.statics.time);
+      std::printf(
+          "  analysis: static, load factor λ from %g to %g in %d load steps (loads at "
+          "t = %g s)\n",
+          a.statics.start_load_factor, a.statics.end_load_factor, a.statics.load_steps,
+          a.statics.time);
     else
       std::printf("  analysis: dynamic from %g to %g s, step %g s, rho_inf %g%s\n", a.start_time,
                   a.end_time, a.step, a.dynamic.rho_inf,

@@ -494,6 +494,11 @@ TEST(Cli, StaticRunsNameTheLoadFactorAndStopAtAWriteError) {
                      tmp.path());
   ASSERT_EQ(o.code, 0) << o.err;
   EXPECT_EQ(o.out.rfind("completed: load factor λ = 1, 10 load steps, ", 0), 0u) << o.out;
+  o = RunCli({"check", finger, "--set", "analysis.type=static"}, tmp.path());
+  EXPECT_NE(o.out.find("\n  analysis: static, load factor λ from 0 to 1 in 10 load steps (loads "
+                       "at t = 2 s)\n"),
+            std::string::npos)
+      << o.out;
   const std::string out = tmp.path() + "/full";
   o = RunCliWithLimit({"run", finger, "-o", out, "--set", "analysis.type=static", "--set",
                        "analysis.load_steps=2000", "--set", "outputs.vtk=false"},
