@@ -20,6 +20,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -100,17 +101,29 @@ int Run(const std::string& scene_path, const std::string& outdir,
     options.progress = !quiet && isatty(STDERR_FILENO);
     options.stop = stop;
     options.replace_results = force;
+    // A file size limit (ulimit -f) makes a write fail with EFBIG rather than kill the
+    // program: the run then ends as failed, its files cut at a complete row, the summary
+    // saying why (Python ignores SIGXFSZ as well).
+    std::signal(SIGXFSZ, SIG_IGN);
     if (!inputs.empty()) options.inputs = screwfem::ReadInputTable(inputs, scene.model, stop);
     const screwfem::RunResult r = screwfem::RunScene(scene, outdir, options);
+    const bool statics = scene.analysis.kind == screwfem::AnalysisKind::kStatic;
     const char* status = r.ok                                        ? "completed"
                          : !r.interrupted                            ? "failed"
                          : r.signal == SIGTERM || r.signal == SIGHUP ? "terminated"
                                                                      : "interrupted";
+    // Static analyses: where the load path got to (every state has the same t).
+    char where[64];
+    if (statics)
+      std::snprintf(where, sizeof where, "load factor λ = %.6g, %ld load steps", r.load_factor,
+                    r.steps);
+    else
+      std::snprintf(where, sizeof where, "t = %.6g s, %ld steps", r.end_time, r.steps);
     std::printf(
-        "%s: t = %.6g s, %ld steps, %ld Newton iterations (at most %d per step), %ld halvings, "
-        "%.3g s wall, max |phi| %.2g, max element rotation %.3g rad -> %s\n",
-        status, r.end_time, r.steps, r.newton_iterations, r.max_iterations_per_step, r.halvings,
-        r.wall_seconds, r.max_constraint_residual, r.max_element_rotation, outdir.c_str());
+        "%s: %s, %ld Newton iterations (at most %d per step), %ld halvings, %.3g s wall, "
+        "max |phi| %.2g, max element rotation %.3g rad -> %s\n",
+        status, where, r.newton_iterations, r.max_iterations_per_step, r.halvings, r.wall_seconds,
+        r.max_constraint_residual, r.max_element_rotation, outdir.c_str());
     if (!r.ok) std::fprintf(stderr, "%s\n", r.message.c_str());
     if (r.ok) return 0;
     if (r.interrupted) return r.signal > 0 ? 128 + r.signal : kExitInterrupted;
@@ -129,7 +142,11 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
     const screwfem::AnalysisSettings& a = scene.analysis;
     std::printf("%s: %s\n", scene.source.c_str(), scene.name.c_str());
     if (a.kind == screwfem::AnalysisKind::kStatic)
-      std::printf("  analysis: static at t = %g s\n", a.statics.time);
+      std::printf(
+          "  analysis: static, load factor λ from %g to %g in %d load steps (loads at "
+          "t = %g s)\n",
+          a.statics.start_load_factor, a.statics.end_load_factor, a.statics.load_steps,
+          a.statics.time);
     else
       std::printf("  analysis: dynamic from %g to %g s, step %g s, rho_inf %g%s\n", a.start_time,
                   a.end_time, a.step, a.dynamic.rho_inf,
@@ -146,6 +163,17 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
         screwfem::FormatBytes(screwfem::TotalBytes(screwfem::EstimateDataMemory(m))).c_str(),
         screwfem::FormatBytes(static_cast<double>(screwfem::ResolveMemoryLimit(m.memory_limit)))
             .c_str());
+    // The output times the run will record, against outputs.max_rows (refused above it).
+    const screwfem::OutputEstimate e = screwfem::EstimateOutputs(scene, scene.outputs);
+    const auto count = [](double n) {
+      return std::isnan(n) ? std::string("(not known ahead: step auto, interval 0)")
+                           : std::to_string(static_cast<long long>(n));
+    };
+    std::printf("  outputs: about %s rows per table, %s ParaView frames", count(e.rows).c_str(),
+                count(e.frames).c_str());
+    if (e.field_times > 0.0) std::printf(", %s rod_fields.csv times", count(e.field_times).c_str());
+    std::printf(" (outputs.max_rows %ld)\n", scene.outputs.max_rows);
+    screwfem::CheckOutputRows(scene, scene.outputs);
     for (const std::string& w : m.warnings) std::printf("  warning: %s\n", w.c_str());
     return 0;
   } catch (const screwfem::InputError& e) {

@@ -304,7 +304,11 @@ void BindScenesAndRuns(py::module_& m) {
                      "Write rod_fields.csv: section strain and stress of every rod element.")
       .def_readwrite("rod_fields_interval", &OutputSpec::rod_fields_interval,
                      "Time between rod_fields.csv rows [s]; 0: every step; < 0: at the rows "
-                     "of points.csv.");
+                     "of points.csv.")
+      .def_readwrite("max_rows", &OutputSpec::max_rows,
+                     "Most output times a run records (rows of each table, rod_fields.csv "
+                     "times, ParaView frames; default 1000000): run_scene and record refuse a "
+                     "scene estimated above it (estimate_outputs), and a run reaching it fails.");
 
   py::class_<Scene>(m, "Scene",
                     "A compiled scene (scene.h): the model plus what to do with it (analysis) and "
@@ -411,11 +415,43 @@ void BindScenesAndRuns(py::module_& m) {
       .def_readonly("max_element_rotation", &RunResult::max_element_rotation,
                     "Largest relative rotation of one rod element over the run [rad] (a helical "
                     "element is valid below 2 pi).")
-      .def_readonly("message", &RunResult::message, "Why it stopped early, with the time.")
+      .def_readonly("message", &RunResult::message,
+                    "Why it stopped early, with the time (static analyses: the load factor).")
+      .def_readonly("io_error", &RunResult::io_error,
+                    "It failed writing its files (message: which and why).")
+      .def_readonly("load_factor", &RunResult::load_factor,
+                    "Static analyses: the load factor reached; NaN for dynamic ones.")
       .def("__repr__", [](const RunResult& r) {
         return std::string("<screwfem.RunResult ok=") + (r.ok ? "True" : "False") +
                " steps=" + std::to_string(r.steps) + ">";
       });
+
+  py::class_<OutputEstimate>(m, "OutputEstimate",
+                             "The output times a run is estimated to record (run.h).")
+      .def_readonly("rows", &OutputEstimate::rows,
+                    "Rows of each table (NaN: not known ahead, step auto with interval 0).")
+      .def_readonly("field_times", &OutputEstimate::field_times,
+                    "rod_fields.csv times at its own interval (0 when it has none).")
+      .def_readonly("frames", &OutputEstimate::frames, "ParaView frames (0 without vtk).")
+      .def("__repr__", [](const OutputEstimate& e) {
+        return FormatNumbers("<screwfem.OutputEstimate rows=%g field_times=%g frames=%g>", e.rows,
+                             e.field_times, e.frames);
+      });
+  m.def(
+      "estimate_outputs",
+      [](const Scene& scene, const std::optional<OutputSpec>& outputs, bool check) {
+        const OutputSpec& o = outputs ? *outputs : scene.outputs;
+        if (check) CheckOutputRows(scene, o);
+        return EstimateOutputs(scene, o);
+      },
+      py::arg("scene"), py::arg("outputs") = py::none(), py::arg("check") = false,
+      R"doc(estimate_outputs(scene, outputs=None, check=False) -> OutputEstimate
+
+The rows per table, rod_fields.csv times and ParaView frames a run of `scene` with `outputs`
+(default: the scene's) is estimated to record, as `screwfem check` prints them. With `check`,
+raises ValueError as run_scene and record do when one is above outputs.max_rows, naming the
+setting that fixes it (outputs.interval, outputs.vtk_interval, outputs.rod_fields or
+outputs.max_rows).)doc");
 
   m.def(
       "run_scene",

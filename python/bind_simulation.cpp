@@ -110,9 +110,12 @@ class RecordingHandle {
     if (type.is_none()) {
       if (recording_->RecordFinalState()) recording_->Finish("completed", {});
     } else if (PyErr_GivenExceptionMatches(type.ptr(), PyExc_KeyboardInterrupt)) {
-      recording_->Interrupted(SIGINT, FormatNumbers("at t = %.9g s; the last recorded row is at "
-                                                    "t = %.9g s",
-                                                    sim_.data().time, recording_->last_row_time()));
+      const bool statics = sim_.scene().analysis.kind == AnalysisKind::kStatic;
+      recording_->Interrupted(
+          SIGINT, statics
+                      ? FormatNumbers("at load factor λ = %.9g", recording_->Result().load_factor)
+                      : FormatNumbers("at t = %.9g s; the last recorded row is at t = %.9g s",
+                                      sim_.data().time, recording_->last_row_time()));
     } else {
       const std::string name = py::str(type.attr("__name__"));
       recording_->Finish("failed", name + ": " + std::string(py::str(value)));
@@ -551,13 +554,15 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
 
       .def(
           "tendon_state",
-          [](S& s, const std::string& name) {
-            const LineForceState t = CalcTendonState(s.model(), s.data(), s.TendonIndex(name));
+          [](S& s, const std::string& name, double load_factor) {
+            const LineForceState t =
+                CalcTendonState(s.model(), s.data(), s.TendonIndex(name), load_factor);
             return py::make_tuple(t.length, t.rate, t.force);
           },
-          py::arg("tendon"),
-          "tendon_state(tendon) -> (length [m], rate [m/s], tension [N]) of a tendon (name), "
-          "as tendons.csv records it.")
+          py::arg("tendon"), py::arg("load_factor") = 1.0,
+          "tendon_state(tendon, load_factor=1.0) -> (length [m], rate [m/s], tension [N]) of a "
+          "tendon (name), as tendons.csv records it: the tension applied at `load_factor` (a "
+          "static path's, whose rows record the scaled tension; 1 in dynamics).")
       .def(
           "actuator_value",
           [](S& s, const std::string& name) {
@@ -609,14 +614,15 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "assemble/outputs.h; actuation at full value, as in dynamics).")
       .def(
           "force_element_state",
-          [](S& s, const std::string& name) {
+          [](S& s, const std::string& name, double load_factor) {
             const LineForceState f =
-                CalcForceElementState(s.model(), s.data(), s.ForceElementIndex(name));
+                CalcForceElementState(s.model(), s.data(), s.ForceElementIndex(name), load_factor);
             return py::make_tuple(f.length, f.rate, f.force);
           },
-          py::arg("element"),
-          "force_element_state(element) -> (length [m], rate [m/s], force [N], positive in "
-          "tension) of a force element (name), as forces.csv records it.")
+          py::arg("element"), py::arg("load_factor") = 1.0,
+          "force_element_state(element, load_factor=1.0) -> (length [m], rate [m/s], force [N], "
+          "positive in tension) of a force element (name), as forces.csv records it: its actuator "
+          "scaled by `load_factor` (a static path's; 1 in dynamics).")
       .def(
           "contact_states",
           [](S& s) {

@@ -551,6 +551,7 @@ OutputsSpec SpecReader::ReadOutputs(py::handle obj, const std::string& path) con
   o.vtk_interval = Number(get("vtk_interval"), f("vtk_interval"));
   o.rod_fields = Bool(get("rod_fields"), f("rod_fields"));
   o.rod_fields_interval = Number(get("rod_fields_interval"), f("rod_fields_interval"));
+  o.max_rows = Integer(get("max_rows"), f("max_rows"), 1, kMaxMaxRows);
   return o;
 }
 
@@ -775,7 +776,7 @@ py::object ToPython(const SceneSpec& s) {
       py::arg("joints") = py::cast(o.joints), py::arg("interval") = o.interval,
       py::arg("vtk") = o.vtk, py::arg("vtk_format") = o.vtk_format,
       py::arg("vtk_interval") = o.vtk_interval, py::arg("rod_fields") = o.rod_fields,
-      py::arg("rod_fields_interval") = o.rod_fields_interval);
+      py::arg("rod_fields_interval") = o.rod_fields_interval, py::arg("max_rows") = o.max_rows);
   return SpecClass("SceneSpec")(
       py::arg("name") = s.name, py::arg("gravity") = Tuple(s.gravity),
       py::arg("rod_inertia") = s.rod_inertia, py::arg("points") = points,

@@ -126,8 +126,11 @@ class Simulation {
                           ? recording_
                           : nullptr;
     const double t = o.time;
+    // A write error on the recorded path stops the solve at its next Newton iteration.
+    const StopRequest stop =
+        path != nullptr ? path->StopWhenFinished(signals.request()) : signals.request();
     std::optional<py::error_already_set> hook_error;
-    StaticResult r = SolveStatic(model(), data_, o, signals.request(), [&](const StaticStep& step) {
+    StaticResult r = SolveStatic(model(), data_, o, stop, [&](const StaticStep& step) {
       if (path != nullptr) path->RecordStaticStep(t, step.load_factor);
       if (!step_hook_.is_none() && !hook_error) {
         try {

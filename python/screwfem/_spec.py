@@ -272,6 +272,9 @@ class OutputsSpec:
     rod_fields_interval: float = _f(-1.0, doc="[s] between rod_fields rows; 0: every step; "
                                     "negative: at the rows of points.csv.",
                                     scene="rod_fields: true or the interval")
+    max_rows: int = _f(1000000, doc="Most output times a run records (rows per table, "
+                       "rod_fields times, ParaView frames); check and run refuse a scene "
+                       "estimated above it.")
 
 
 # ---- value checks of the adders ----------------------------------------------------------------
@@ -1034,10 +1037,11 @@ class SceneSpec:
         return self._add("outputs.points", p, self.outputs.points)
 
     def set_outputs(self, *, joints=None, interval=None, vtk=None, vtk_interval=None,
-                    vtk_format=None, rod_fields=None):
+                    vtk_format=None, rod_fields=None, max_rows=None):
         """The scene's ``outputs:`` keys: joints ('all', 'none' or a list of joint names),
         interval [s] (0: every step), vtk (bool), vtk_interval [s], vtk_format ('binary' or
-        'ascii'), rod_fields (True, False or the interval between its rows [s])."""
+        'ascii'), rod_fields (True, False or the interval between its rows [s]), max_rows
+        (the most output times a run records, a whole number from 1 to 1e9)."""
         o = self.outputs
         if joints is not None:
             if joints in ("all", "none"):
@@ -1066,6 +1070,12 @@ class SceneSpec:
                     raise _error("outputs.rod_fields", "expected true, false or an interval "
                                  f">= 0 s, got {rod_fields!r}")
                 o.rod_fields, o.rod_fields_interval = True, interval
+        if max_rows is not None:
+            v = _number(max_rows, "outputs.max_rows")
+            if v != math.floor(v) or not 1 <= v <= 1e9:
+                raise _error("outputs.max_rows", "expected a whole number from 1 to "
+                             f"1000000000, got {max_rows!r}")
+            o.max_rows = int(v)
         return o
 
 

@@ -384,20 +384,22 @@ void AddSegmentState(const Model& model, const Data& data, const BodyPoint& a, c
 
 }  // namespace
 
-LineForceState CalcTendonState(const Model& model, const Data& data, int tendon) {
+LineForceState CalcTendonState(const Model& model, const Data& data, int tendon,
+                               double load_factor) {
   const Tendon& td = model.tendons[static_cast<std::size_t>(tendon)];
   LineForceState s;
   for (std::size_t k = 0; k + 1 < td.eyelets.size(); ++k)
     AddSegmentState(model, data, td.eyelets[k], td.eyelets[k + 1], &s);
-  s.force = TendonTension(td, data, data.time);
+  s.force = TendonTension(td, data, data.time, load_factor);
   return s;
 }
 
-LineForceState CalcForceElementState(const Model& model, const Data& data, int element) {
+LineForceState CalcForceElementState(const Model& model, const Data& data, int element,
+                                     double load_factor) {
   const ForceElement& fe = model.force_elements[static_cast<std::size_t>(element)];
   LineForceState s;
   AddSegmentState(model, data, fe.a, fe.b, &s);
-  s.force = ForceElementLaw(fe, data, s.length, s.rate, data.time, 1.0).force;
+  s.force = ForceElementLaw(fe, data, s.length, s.rate, data.time, load_factor).force;
   return s;
 }
 

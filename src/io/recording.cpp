@@ -13,8 +13,10 @@
 #include <optional>
 #include <vector>
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "screwfem/assemble/assemble.h"
@@ -41,6 +43,8 @@ void ValidateRecordedOutputs(const Model& model, const OutputSpec& o) {
   };
   require(std::isfinite(o.interval) && o.interval >= 0.0, "outputs.interval",
           "must be a finite time >= 0 s");
+  require(o.max_rows >= 1 && o.max_rows <= kMaxMaxRows, "outputs.max_rows",
+          "must be a whole number from 1 to " + std::to_string(kMaxMaxRows));
   require(std::isfinite(o.vtk_interval) && o.vtk_interval >= 0.0, "outputs.vtk_interval",
           "must be a finite time >= 0 s");
   require(IsEnumValue(o.vtk_format), "outputs.vtk_format",
@@ -63,6 +67,20 @@ int ExpectedFrames(const Scene& scene, const OutputSpec& o) {
       std::ceil((a.end_time - a.start_time) / interval) + 2.0 +
       static_cast<double>(a.align_steps ? ProfileBreakpoints(scene.model).size() : 0);
   return static_cast<int>(std::clamp(frames, 1.0, 1e6));
+}
+
+// The output times of one clock of a dynamic analysis (EstimateOutputs, run.h).
+double EstimateTimes(const Scene& scene, double interval) {
+  const AnalysisSettings& a = scene.analysis;
+  const double span = std::max(a.end_time - a.start_time, 0.0);
+  // The start, each multiple of the interval after it and the end (when it is no multiple).
+  const double clock = interval > 0.0 ? std::ceil(span / interval * (1.0 - 1e-12)) + 1.0 : NAN;
+  if (a.adaptive_steps) return clock;
+  const double breakpoints =
+      a.align_steps ? static_cast<double>(ProfileBreakpoints(scene.model).size()) : 0.0;
+  const double steps = std::ceil(span / a.step * (1.0 - 1e-12)) + breakpoints;
+  if (interval <= a.step) return steps + 1.0;
+  return std::min(clock, steps + 1.0);
 }
 
 // "SIGINT", ... for the signals a run is stopped by; nullptr for others and 0.
@@ -89,41 +107,102 @@ double MaxElementRotation(const Data& data) {
 // Rows collected before the tables are written (writers.h, CsvWriter).
 constexpr std::size_t kRowBatchBytes = 64 * 1024;
 
+// The names of screwfem's files in `folder` (writers.h, IsOutputFileName; `vtk`: its vtk
+// subfolder), sorted. Throws InputError (OutputFolder::CheckNotLink) when one of
+// them is a symbolic link or not a regular file.
+std::vector<std::string> OwnFiles(const OutputFolder& folder, bool vtk) {
+  std::vector<std::string> own;
+  if (!vtk) {
+    for (const char* name : kOutputFiles)
+      if (folder.CheckNotLink(name)) own.emplace_back(name);
+    return own;
+  }
+  const int fd = ::dup(folder.fd());
+  DIR* d = fd >= 0 ? ::fdopendir(fd) : nullptr;
+  if (d == nullptr) {
+    const int error = errno;
+    if (fd >= 0) ::close(fd);
+    throw InputError("cannot read directory " + folder.path() + ": " + std::strerror(error));
+  }
+  ::rewinddir(d);
+  while (const dirent* e = ::readdir(d))
+    if (IsOutputFileName(e->d_name, true)) own.emplace_back(e->d_name);
+  ::closedir(d);
+  std::sort(own.begin(), own.end());
+  for (const std::string& name : own) folder.CheckNotLink(name.c_str());
+  return own;
+}
+
 // Refuses a directory that holds the files of an earlier run, unless `replace`: then removes
-// them (screwfem's own files only: the tables, joints.json, the summary, the ParaView frames and
-// collection, and vtk/ when that leaves it empty), so no stale frame or table survives.
-void PrepareOutputDirectory(const std::string& dir, bool replace) {
-  namespace fs = std::filesystem;
-  std::vector<fs::path> own;
-  std::error_code ec;
-  for (const char* name : {"summary.json", "summary.json.tmp", "points.csv", "joints.csv",
-                           "joints.json", "reactions.csv", "energy.csv", "rod_fields.csv"})
-    if (fs::exists(fs::path(dir) / name, ec)) own.push_back(fs::path(dir) / name);
-  const fs::path vtk = fs::path(dir) / "vtk";
-  if (fs::is_directory(vtk, ec))
-    for (const fs::directory_entry& e : fs::directory_iterator(vtk, ec)) {
-      const std::string name = e.path().filename().string();
-      if (name == "motion.pvd" || name == "motion.pvd.tmp" ||
-          (name.rfind("frame_", 0) == 0 && e.path().extension() == ".vtp"))
-        own.push_back(e.path());
-    }
-  if (own.empty()) return;
+// them: screwfem's own files only (writers.h, kOutputFiles, kVtkFiles and the frames), each by
+// its name in the folder (unlinkat), and vtk/ when that leaves it empty, so that no stale
+// table or frame survives and nothing else is touched. A symbolic link at one of those names,
+// or a vtk/ that is a link, is refused (InputError naming it), with or without `replace`:
+// nothing is followed.
+void PrepareOutputDirectory(const OutputFolder& folder, bool replace) {
+  const std::vector<std::string> own = OwnFiles(folder, false);
+  std::vector<std::string> own_vtk;
+  OutputFolder vtk;
+  if (folder.CheckNotLink(kVtkFolder, true)) {
+    vtk.OpenSubfolder(folder, kVtkFolder, false);
+    own_vtk = OwnFiles(vtk, true);
+  }
+  if (own.empty() && own_vtk.empty()) return;
   if (!replace) {
+    std::vector<std::string> all = own;
+    for (const std::string& f : own_vtk) all.push_back(std::string(kVtkFolder) + "/" + f);
     std::string list;
-    for (std::size_t i = 0; i < own.size() && i < 4; ++i)
-      list += (i > 0 ? ", " : "") + fs::relative(own[i], dir, ec).string();
-    if (own.size() > 4) list += ", ...";
-    throw InputError("output directory " + dir + " holds the results of an earlier run (" + list +
+    for (std::size_t i = 0; i < all.size() && i < 4; ++i) list += (i > 0 ? ", " : "") + all[i];
+    if (all.size() > 4) list += ", ...";
+    throw InputError("output directory " + folder.path() +
+                     " holds the results of an earlier run (" + list +
                      "); choose another directory, or replace them with --force (Python: "
                      "run_scene(..., force=True)), which removes screwfem's files only");
   }
-  for (const fs::path& p : own)
-    if (!fs::remove(p, ec) && ec)
-      throw InputError("cannot remove " + p.string() + ": " + ec.message());
-  if (fs::is_directory(vtk, ec) && fs::is_empty(vtk, ec)) fs::remove(vtk, ec);
+  for (const std::string& f : own)
+    if (!folder.Remove(f.c_str()) && errno != ENOENT)
+      throw InputError("cannot remove " + folder.path() + "/" + f + ": " + std::strerror(errno));
+  for (const std::string& f : own_vtk)
+    if (!vtk.Remove(f.c_str()) && errno != ENOENT)
+      throw InputError("cannot remove " + vtk.path() + "/" + f + ": " + std::strerror(errno));
+  if (vtk.is_open()) ::unlinkat(folder.fd(), kVtkFolder, AT_REMOVEDIR);  // only when empty
 }
 
 }  // namespace
+
+OutputEstimate EstimateOutputs(const Scene& scene, const OutputSpec& o) {
+  OutputEstimate e;
+  const AnalysisSettings& a = scene.analysis;
+  if (a.kind == AnalysisKind::kStatic) {
+    e.rows = static_cast<double>(a.statics.load_steps) + 1.0;
+    e.frames = o.vtk ? e.rows : 0.0;
+    return e;
+  }
+  e.rows = EstimateTimes(scene, o.interval);
+  if (o.vtk) e.frames = EstimateTimes(scene, o.vtk_interval > 0.0 ? o.vtk_interval : o.interval);
+  if (o.rod_fields && o.rod_fields_interval >= 0.0)
+    e.field_times = EstimateTimes(scene, o.rod_fields_interval);
+  return e;
+}
+
+void CheckOutputRows(const Scene& scene, const OutputSpec& o) {
+  const OutputEstimate e = EstimateOutputs(scene, o);
+  const double limit = static_cast<double>(o.max_rows);
+  const bool statics = scene.analysis.kind == AnalysisKind::kStatic;
+  const auto check = [&](double count, const char* what, const char* setting) {
+    if (!(count > limit)) return;  // (NaN: not estimated)
+    throw InputError(FormatNumbers("outputs.max_rows: the run would record about %.0f ", count) +
+                     what + ", above the limit of " + std::to_string(o.max_rows) +
+                     " (outputs.max_rows); " +
+                     (statics ? std::string("use fewer load steps (analysis.statics.load_steps)")
+                              : std::string("record less often (") + setting + ")") +
+                     " or raise outputs.max_rows");
+  };
+  check(e.rows, "rows in each table", "outputs.interval");
+  check(e.field_times, "rod_fields.csv times", "outputs.rod_fields");
+  check(e.frames, "ParaView frames",
+        o.vtk_interval > 0.0 ? "outputs.vtk_interval" : "outputs.vtk_interval or outputs.interval");
+}
 
 // Types of Recording::Impl's members (a named namespace: Impl has external linkage).
 namespace recording_internal {
@@ -159,11 +238,24 @@ class OutputLock {
     if (fd_ >= 0) ::close(fd_);
   }
 
-  // Throws InputError naming the other process when another run holds the directory.
-  void Acquire(const std::string& dir) {
+  // Throws InputError naming the other process when another run holds the directory, and
+  // when the lock file is a symbolic link, a hard link of another file or not a regular file
+  // (it is written: the process id).
+  void Acquire(const OutputFolder& folder) {
+    const std::string dir = folder.path();
+    fd_ = ::openat(folder.fd(), kOutputLockFile,
+                   O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK, 0644);
+    struct stat st {};
+    int open_error = fd_ < 0 ? errno : 0;
+    if (fd_ >= 0 && ::fstat(fd_, &st) != 0) open_error = errno;
+    if (fd_ >= 0 && open_error == 0 && !S_ISREG(st.st_mode)) open_error = EISDIR;
+    if (fd_ >= 0 && open_error == 0 && st.st_nlink > 1) open_error = EMLINK;
+    if (open_error != 0) {
+      if (fd_ >= 0) ::close(fd_);
+      fd_ = -1;
+      throw InputError(folder.CreateError(kOutputLockFile, open_error));
+    }
     const std::string path = dir + "/" + kOutputLockFile;
-    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw InputError("cannot create " + path + ": " + std::strerror(errno));
     if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
       const int error = errno;
       char pid[32] = {};
@@ -209,63 +301,69 @@ class Recording::Impl {
         wall_start_(Clock::now()),
         last_summary_(wall_start_) {
     ValidateRecordedOutputs(model, outputs_);
-    std::error_code ec;
-    std::filesystem::create_directories(outdir, ec);
-    if (ec) throw InputError("cannot create the output directory " + outdir + ": " + ec.message());
-    lock_.Acquire(outdir);
-    PrepareOutputDirectory(outdir, options.replace_results);
-    summary_path_ = outdir + "/summary.json";
+    CheckOutputRows(scene, outputs_);
+    folder_.Open(outdir, true);
+    lock_.Acquire(folder_);
+    PrepareOutputDirectory(folder_, options.replace_results);
     try {
-      points_.Open(outdir + "/points.csv", StaticColumns(PointColumns(outputs_.points)));
-      joints_.Open(outdir + "/joints.csv", StaticColumns(JointColumns(model_, outputs_.joints)));
-      reactions_.Open(outdir + "/reactions.csv", StaticColumns(ReactionColumns(model_)));
-      energy_.Open(outdir + "/energy.csv", StaticColumns(EnergyColumns()));
+      points_.Open(folder_, kPointsFile, StaticColumns(PointColumns(outputs_.points)));
+      joints_.Open(folder_, kJointsFile, StaticColumns(JointColumns(model_, outputs_.joints)));
+      reactions_.Open(folder_, kReactionsFile, StaticColumns(ReactionColumns(model_)));
+      energy_.Open(folder_, kEnergyFile, StaticColumns(EnergyColumns()));
       // Tendons and force elements: their tables only when the model has them.
       if (!model_.tendons.empty()) {
-        tendons_.Open(outdir + "/tendons.csv", StaticColumns(TendonColumns(model_)));
+        tendons_.Open(folder_, kTendonsFile, StaticColumns(TendonColumns(model_)));
         tables_[num_tables_++] = &tendons_;
       }
       if (!model_.force_elements.empty()) {
-        forces_.Open(outdir + "/forces.csv", StaticColumns(ForceColumns(model_)));
+        forces_.Open(folder_, kForcesFile, StaticColumns(ForceColumns(model_)));
         tables_[num_tables_++] = &forces_;
       }
       if (!model_.actuators.empty()) {
-        actuators_.Open(outdir + "/actuators.csv", StaticColumns(ActuatorColumns(model_)));
+        actuators_.Open(folder_, kActuatorsFile, StaticColumns(ActuatorColumns(model_)));
         tables_[num_tables_++] = &actuators_;
       }
       // Rod fields (long format, one row per element at each output time, written as one
-      // block): with the rows of points.csv it is flushed together with those tables and cut
-      // at the same output time; at an interval of its own it is flushed with them, alone.
+      // block), at the rows of points.csv or at an interval of its own.
       if (outputs_.rod_fields) {
-        rod_fields_.Open(outdir + "/rod_fields.csv", StaticColumns(RodFieldColumns()));
+        rod_fields_.Open(folder_, kRodFieldsFile, StaticColumns(RodFieldColumns()));
         // Room for a batch and two more blocks of up to 24 characters a value.
         rod_fields_.Reserve(kRowBatchBytes +
                             2 * model_.elements.size() * (kRodFieldValues + 2) * 24);
         lead_.reserve(1);
-        if (!FieldsApart()) tables_[num_tables_++] = &rod_fields_;
+        tables_[num_tables_++] = &rod_fields_;
       }
-      // Contacts: one row per active pair (long format), flushed with the other tables.
-      if (!model_.contact_pairs.empty())
-        contacts_.Open(outdir + "/contacts.csv", StaticColumns(ContactColumns()));
-      if (MayHaveShapePairs(model_))
-        pair_contacts_.Open(outdir + "/pair_contacts.csv", StaticColumns(PairContactColumns()));
+      // Contacts: one row per active pair (long format).
+      if (!model_.contact_pairs.empty()) {
+        contacts_.Open(folder_, kContactsFile, StaticColumns(ContactColumns()));
+        tables_[num_tables_++] = &contacts_;
+      }
+      if (MayHaveShapePairs(model_)) {
+        pair_contacts_.Open(folder_, kPairContactsFile, StaticColumns(PairContactColumns()));
+        tables_[num_tables_++] = &pair_contacts_;
+      }
       if (outputs_.vtk) {
         vtk_.emplace();
-        vtk_->Open(outdir + "/vtk", model_, outputs_.vtk_format, ExpectedFrames(scene, outputs_),
+        vtk_->Open(folder_, model_, outputs_.vtk_format, ExpectedFrames(scene, outputs_),
                    outputs_.rod_fields);
       }
+      if (scene_.analysis.kind == AnalysisKind::kStatic)
+        event_load_factors_.reserve(static_cast<std::size_t>(ExpectedFrames(scene, outputs_)));
       if (!WriteSummary())
-        throw InputError("cannot write " + summary_path_ + ": " + std::strerror(errno));
-      if (!WriteFileAtomically(outdir + "/joints.json",
+        throw InputError("cannot write " + folder_.path() + "/" + kSummaryFile + ": " +
+                         std::strerror(errno));
+      if (!WriteFileAtomically(folder_, kJointsDescriptionFile,
                                JointsDescriptionJson(model_, outputs_.joints)))
-        throw InputError("cannot write " + outdir + "/joints.json: " + std::strerror(errno));
+        throw InputError("cannot write " + folder_.path() + "/" + kJointsDescriptionFile + ": " +
+                         std::strerror(errno));
     } catch (const InputError&) {
       // No header-only tables without a summary that explains them.
       for (std::size_t i = 0; i < num_tables_; ++i) tables_[i]->Close();
-      if (rod_fields_.path().size() > 0) rod_fields_.Close();
-      if (contacts_.path().size() > 0) contacts_.Close();
-      if (pair_contacts_.path().size() > 0) pair_contacts_.Close();
-      PrepareOutputDirectory(outdir, true);
+      try {
+        PrepareOutputDirectory(folder_, true);
+      } catch (const InputError&) {
+        // (a link planted meanwhile: left alone)
+      }
       throw;
     }
   }
@@ -276,20 +374,14 @@ class Recording::Impl {
     finished_ = true;
     const bool failed_before = io_error_ || std::string(status) == "failed";
     const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_);
-    if (!w && FieldsApart() && !rod_fields_.Flush()) w = &rod_fields_;
-    if (!w && contacts_.path().size() > 0 && !contacts_.Flush()) w = &contacts_;
-    if (!w && pair_contacts_.path().size() > 0 && !pair_contacts_.Flush()) w = &pair_contacts_;
     if (w && !failed_before) {
       status = "failed";
-      message = FormatNumbers("cannot write at t = %.9g s: ", data_.time) + w->path() + ": " +
+      message = "cannot write at " + When(data_.time, load_factor_) + ": " + w->path() + ": " +
                 std::strerror(errno);
       io_error_ = true;
     }
     bool closed = true;
     for (std::size_t i = 0; i < num_tables_; ++i) closed = tables_[i]->Close() && closed;
-    if (FieldsApart()) closed = rod_fields_.Close() && closed;
-    if (contacts_.path().size() > 0) closed = contacts_.Close() && closed;
-    if (pair_contacts_.path().size() > 0) closed = pair_contacts_.Close() && closed;
     if (!closed && !failed_before && !io_error_) {
       status = "failed";
       message = "cannot close the tables: " + std::string(std::strerror(errno));
@@ -303,10 +395,26 @@ class Recording::Impl {
     status_ = status;
     message_ = std::move(message);
     if (io_error_ && points_.failed())
-      message_ += FormatNumbers("; the tables hold the %g rows up to t = %.9g s",
-                                static_cast<double>(points_.rows()), points_.last_time());
+      message_ += points_.rows() == 0
+                      ? std::string("; the tables hold no rows")
+                      : "; the tables hold the " + std::to_string(points_.rows()) + " rows up to " +
+                            When(points_.last_time(), LoadFactorOfEvent(points_.last_key()));
     if (progress_) progress_->Finish(data_.time, integ_.steps);
     WriteSummary();
+  }
+
+  // "t = 0.25 s", or in static analyses (where every row has the same t) "load factor
+  // λ = 0.5".
+  std::string When(double t, double load_factor) const {
+    if (scene_.analysis.kind == AnalysisKind::kStatic)
+      return FormatNumbers("load factor λ = %.9g", load_factor);
+    return FormatNumbers("t = %.9g s", t);
+  }
+  // Static analyses: the load factor of the output event `key` (Record's sequence number).
+  double LoadFactorOfEvent(long long key) const {
+    return key >= 0 && key < static_cast<long long>(event_load_factors_.size())
+               ? event_load_factors_[static_cast<std::size_t>(key)]
+               : load_factor_;
   }
 
   RunResult Result() const {
@@ -327,6 +435,7 @@ class Recording::Impl {
     r.max_element_rotation = max_rotation_;
     r.message = message_;
     r.io_error = io_error_;
+    if (statics) r.load_factor = has_static_ ? static_.load_factor : load_factor_;
     return r;
   }
   // Dynamic analyses: the first row and frame, the output clocks from there.
@@ -408,6 +517,7 @@ class Recording::Impl {
   void SetStaticResult(const StaticResult& result) {
     static_ = result;
     has_static_ = true;
+    if (finished_) WriteSummary();  // ended by a write error on the path: the solution's count
   }
   bool RecordStaticSolution(double t, bool row) {
     max_constraint_ = CalcMaxJointConstraint(model_, data_, t);
@@ -419,6 +529,19 @@ class Recording::Impl {
       options_.on_step(t);
     }
     return true;
+  }
+
+  StopRequest StopWhenFinished(const StopRequest& stop) {
+    outer_stop_ = stop;
+    StopRequest r;
+    r.flag = stop.flag;  // its signal number stays the request's
+    r.context = this;
+    r.poll = [](void* context) {
+      const Impl* impl = static_cast<const Impl*>(context);
+      const StopRequest& o = impl->outer_stop_;
+      return impl->finished_ || (o.poll != nullptr && o.poll(o.context));
+    };
+    return r;
   }
 
   // The current state's row and frame unless it was the last recorded (recording.h).
@@ -475,54 +598,79 @@ class Recording::Impl {
   }
   bool Record(double t, bool row, bool frame, bool fields, const Data& data) {
     const bool statics = scene_.analysis.kind == AnalysisKind::kStatic;
-    if ((row && outputs_.rod_fields && !FieldsApart()) || fields) {
-      CalcRodFieldRows(model_, data, -1, statics ? load_factor_ : 1.0, &row_);
-      if (statics) lead_.assign(1, load_factor_);
-      rod_fields_.WriteRows(t, lead_, row_, kRodFieldValues);
-    }
-    if (row) {
-      CalcPointRow(model_, data, outputs_.points, &row_);
-      points_.WriteRow(t, WithLoadFactor(row_));
-      CalcJointRow(model_, data, outputs_.joints, &row_);
-      joints_.WriteRow(t, WithLoadFactor(row_));
-      CalcReactionRow(model_, data, &row_);
-      reactions_.WriteRow(t, WithLoadFactor(row_));
-      CalcEnergyRow(model_, data, &row_);
-      energy_.WriteRow(t, WithLoadFactor(row_));
-      if (tendons_.path().size() > 0) {
-        CalcTendonRow(model_, data, &row_);
-        tendons_.WriteRow(t, WithLoadFactor(row_));
+    // The runtime bound (outputs.max_rows): a run that would write more rows or frames than
+    // the limit ends, as failed, before it does.
+    const long limit = outputs_.max_rows;
+    if (row && row_events_ >= limit) return LimitReached("rows of the tables", t);
+    if (fields && FieldsApart() && field_events_ >= limit)
+      return LimitReached("rod field times", t);
+    if (frame && vtk_ && vtk_->frames() >= limit) return LimitReached("ParaView frames", t);
+    const bool fields_now = (row && outputs_.rod_fields && !FieldsApart()) || fields;
+    if (row || fields_now) {
+      // One output event: its rows in every table share the key, so that a write error cuts
+      // every table at the same event (FlushTogether).
+      const long long key = events_++;
+      if (statics) event_load_factors_.push_back(load_factor_);
+      if (fields_now) {
+        CalcRodFieldRows(model_, data, -1, statics ? load_factor_ : 1.0, &row_);
+        if (statics) lead_.assign(1, load_factor_);
+        rod_fields_.WriteRows(t, lead_, row_, kRodFieldValues, key);
+        if (fields) ++field_events_;
       }
-      if (forces_.path().size() > 0) {
-        CalcForceRow(model_, data, &row_);
-        forces_.WriteRow(t, WithLoadFactor(row_));
+      if (row) {
+        ++row_events_;
+        const double lf = statics ? load_factor_ : 1.0;
+        CalcPointRow(model_, data, outputs_.points, &row_);
+        points_.WriteRow(t, WithLoadFactor(row_), key);
+        CalcJointRow(model_, data, outputs_.joints, &row_);
+        joints_.WriteRow(t, WithLoadFactor(row_), key);
+        CalcReactionRow(model_, data, &row_);
+        reactions_.WriteRow(t, WithLoadFactor(row_), key);
+        CalcEnergyRow(model_, data, &row_);
+        energy_.WriteRow(t, WithLoadFactor(row_), key);
+        if (tendons_.path().size() > 0) {
+          CalcTendonRow(model_, data, &row_, lf);
+          tendons_.WriteRow(t, WithLoadFactor(row_), key);
+        }
+        if (forces_.path().size() > 0) {
+          CalcForceRow(model_, data, &row_, lf);
+          forces_.WriteRow(t, WithLoadFactor(row_), key);
+        }
+        if (actuators_.path().size() > 0) {
+          CalcActuatorRow(model_, data, t, &row_);
+          actuators_.WriteRow(t, WithLoadFactor(row_), key);
+        }
+        if (contacts_.path().size() > 0) {
+          for (int i = 0; i < static_cast<int>(model_.contact_pairs.size()); ++i)
+            if (CalcContactRow(model_, data, i, &row_))
+              contacts_.WriteRow(t, WithLoadFactor(row_), key);
+        }
+        if (pair_contacts_.path().size() > 0) {
+          for (int i = 0; i < data.num_shape_pairs; ++i)
+            if (CalcPairContactRow(model_, data, i, &row_))
+              pair_contacts_.WriteRow(t, WithLoadFactor(row_), key);
+        }
+        last_row_time_ = t;
       }
-      if (actuators_.path().size() > 0) {
-        CalcActuatorRow(model_, data, t, &row_);
-        actuators_.WriteRow(t, WithLoadFactor(row_));
-      }
-      if (contacts_.path().size() > 0) {
-        for (int i = 0; i < static_cast<int>(model_.contact_pairs.size()); ++i)
-          if (CalcContactRow(model_, data, i, &row_)) contacts_.WriteRow(t, WithLoadFactor(row_));
-      }
-      if (pair_contacts_.path().size() > 0) {
-        for (int i = 0; i < data.num_shape_pairs; ++i)
-          if (CalcPairContactRow(model_, data, i, &row_))
-            pair_contacts_.WriteRow(t, WithLoadFactor(row_));
-      }
-      last_row_time_ = t;
       std::size_t batch = 0;
       for (std::size_t i = 0; i < num_tables_; ++i)
         batch = std::max(batch, tables_[i]->batch_bytes());
-      batch = std::max(batch, contacts_.batch_bytes());
-      batch = std::max(batch, pair_contacts_.batch_bytes());
       if (batch >= kRowBatchBytes && !FlushRows(t)) return false;
     }
-    if (fields && rod_fields_.batch_bytes() >= kRowBatchBytes && !FlushRows(t)) return false;
     if (frame && vtk_ &&
         !vtk_->WriteFrame(model_, data, statics ? load_factor_ : t, statics ? load_factor_ : 1.0))
       return WriteFailed(vtk_->dir() + "/frame files", t);
     return true;
+  }
+
+  // Ends the run as failed when it reaches outputs.max_rows (`what`: which output); false.
+  bool LimitReached(const char* what, double t) {
+    Finish("failed",
+           "outputs.max_rows: the run reached " + std::to_string(outputs_.max_rows) + " " + what +
+               " (the limit) at " + When(t, load_factor_) +
+               "; record less often (outputs.interval, outputs.vtk_interval, outputs.rod_fields) "
+               "or raise outputs.max_rows");
+    return false;
   }
 
   // A row of a static analysis starts with the load factor (StaticColumns).
@@ -538,17 +686,14 @@ class Recording::Impl {
   bool FlushRows(double t) {
     if (const CsvWriter* w = CsvWriter::FlushTogether(tables_.data(), num_tables_))
       return WriteFailed(w->path(), t);
-    if (FieldsApart() && !rod_fields_.Flush()) return WriteFailed(rod_fields_.path(), t);
-    if (contacts_.path().size() > 0 && !contacts_.Flush()) return WriteFailed(contacts_.path(), t);
-    if (pair_contacts_.path().size() > 0 && !pair_contacts_.Flush())
-      return WriteFailed(pair_contacts_.path(), t);
     return true;
   }
 
   bool WriteFailed(const std::string& path, double t) {
     io_error_ = true;
+    const int error = errno;
     Finish("failed",
-           FormatNumbers("cannot write at t = %.9g s: ", t) + path + ": " + std::strerror(errno));
+           "cannot write at " + When(t, load_factor_) + ": " + path + ": " + std::strerror(error));
     return false;
   }
 
@@ -702,30 +847,32 @@ class Recording::Impl {
     for (const std::string& w : model_.warnings) j.String(w);
     j.EndArray();
     j.EndObject();
-    return WriteFileAtomically(summary_path_, j.str());
+    return WriteFileAtomically(folder_, kSummaryFile, j.str());
   }
 
   const Scene& scene_;
   const OutputSpec outputs_;
   const Model& model_;
   const RunOptions& options_;
-  std::string summary_path_;
+  OutputFolder folder_;  // the output directory, open (writers.h)
   Data& data_;
   Data dense_;  // step: auto: the state interpolated at output times inside a step
   Integrator& integ_;
   StaticResult static_;
   bool has_static_ = false;
   CsvWriter points_, joints_, reactions_, energy_, tendons_, forces_, actuators_;
-  // Long format, a block of rows per output time (WriteRows); flushed with the tables when it
-  // has their rows, else (FieldsApart) alone.
+  // Long format, a block of rows per output time (WriteRows), at the rows of points.csv or
+  // (FieldsApart) at its own times.
   CsvWriter rod_fields_;
   std::vector<double> lead_;  // values after t on every rod_fields.csv row: the load factor
                               // in static analyses, none otherwise
-  CsvWriter contacts_;        // long format (one row per active pair): not flushed together
+  CsvWriter contacts_;        // long format (one row per active pair)
   CsvWriter pair_contacts_;   // the same for pairs of moving shapes (pair_contacts.csv)
-  // The open tables, flushed together (points, joints, reactions and energy always).
-  std::array<CsvWriter*, 8> tables_ = {&points_, &joints_, &reactions_, &energy_,
-                                       nullptr,  nullptr,  nullptr,     nullptr};
+  // The open tables, flushed together (points, joints, reactions and energy always), their
+  // rows keyed by the output event (events_), so that a write error cuts every one of them
+  // at the same output time.
+  std::array<CsvWriter*, 10> tables_ = {&points_, &joints_, &reactions_, &energy_, nullptr,
+                                        nullptr,  nullptr,  nullptr,     nullptr,  nullptr};
   std::size_t num_tables_ = 4;
   std::optional<VtkWriter> vtk_;
   std::optional<ProgressBar> progress_;
@@ -739,11 +886,16 @@ class Recording::Impl {
   double max_constraint_ = 0.0;
   double max_rotation_ = 0.0;   // largest relative rotation of one rod element so far [rad]
   double last_row_time_ = NAN;  // of the last row recorded (in the files once flushed)
+  long long events_ = 0;        // output events recorded (the tables' row keys)
+  long row_events_ = 0;         // ... with rows (outputs.max_rows)
+  long field_events_ = 0;       // ... of rod_fields.csv at its own interval
+  std::vector<double> event_load_factors_;  // static analyses: the load factor of each event
   std::string status_ = "running", message_;
   int signal_ = 0;         // the stop request's signal number
   bool io_error_ = false;  // the run failed writing its files
   OutputLock lock_;
   bool finished_ = false;
+  StopRequest outer_stop_;  // StopWhenFinished's
 };
 
 Recording::Recording(const Scene& scene, const OutputSpec& outputs, const Model& model, Data& data,
@@ -768,6 +920,9 @@ bool Recording::RecordStaticSolution(double t, bool row) {
   return impl_->RecordStaticSolution(t, row);
 }
 bool Recording::RecordFinalState() { return impl_->RecordFinalState(); }
+StopRequest Recording::StopWhenFinished(const StopRequest& stop) {
+  return impl_->StopWhenFinished(stop);
+}
 void Recording::Finish(const char* status, std::string message) {
   impl_->Finish(status, std::move(message));
 }

@@ -71,11 +71,13 @@ class Run {
     data_.time = so.time;
     SetInputsAt(options_.inputs, so.time, data_);
     if (!AssembleInitial()) return;
+    // A write error while recording the path ends the recording: the solver stops at its next
+    // Newton iteration (StopWhenFinished) rather than solving the rest of the path.
     const StaticResult result = SolveStatic(
-        model_, data_, so, options_.stop,
+        model_, data_, so, recording_.StopWhenFinished(options_.stop),
         [&](const StaticStep& step) { recording_.RecordStaticStep(so.time, step.load_factor); });
     recording_.SetStaticResult(result);
-    if (recording_.finished()) return;  // a write error while recording the path
+    if (recording_.finished()) return;  // a write error (or outputs.max_rows) on the path
     if (result.interrupted) {
       Interrupted(
           FormatNumbers("static solution interrupted at load factor %.6g", result.load_factor));

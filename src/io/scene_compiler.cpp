@@ -492,6 +492,7 @@ void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
                                             : DefaultOutputInterval(a, kDefaultVtkFrames);
   out->rod_fields = o.rod_fields;
   out->rod_fields_interval = o.rod_fields_interval;
+  out->max_rows = o.max_rows;
 }
 
 void SceneCompiler::CheckReferences() const {

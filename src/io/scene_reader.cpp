@@ -1344,7 +1344,8 @@ void SceneReader::ReadOutputs(const Node* node) {
   if (node == nullptr || node->IsNull()) return;
   const std::string path = "outputs";
   r_.CheckKeys(*node, path,
-               {"points", "joints", "interval", "vtk", "vtk_format", "vtk_interval", "rod_fields"});
+               {"points", "joints", "interval", "vtk", "vtk_format", "vtk_interval", "rod_fields",
+                "max_rows"});
   if (const Node* pts = node->Find("points")) {
     const std::string pp = Join(path, "points");
     r_.CheckNames(*pts, pp, "output point");
@@ -1365,6 +1366,8 @@ void SceneReader::ReadOutputs(const Node* node) {
   if (const Node* v = node->Find("vtk_interval"))
     out->vtk_interval = r_.NonNegativeNumber(*v, Join(path, "vtk_interval"));
   if (const Node* v = node->Find("rod_fields")) ReadRodFields(*v, Join(path, "rod_fields"));
+  if (const Node* v = node->Find("max_rows"))
+    out->max_rows = r_.Integer(*v, Join(path, "max_rows"), 1, static_cast<int>(kMaxMaxRows));
 }
 
 // true (at the rows of points.csv), false, or the interval between rows [s] (>= 0).

@@ -68,10 +68,12 @@ void AppendArrayTag(std::string* f, const char* indent, VtkType type, const char
   }
 }
 
-// Writes `size` bytes to a new file at path (open/write/close: no stdio buffer to allocate).
-// On failure removes the file and returns false with errno kept.
-bool WriteWholeFile(const std::string& path, const char* data, std::size_t size) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+// Writes `size` bytes to a new file `name` of `folder` (open/write/close: no stdio buffer to
+// allocate; OutputFolder::Create: never through a link). On failure removes the file and
+// returns false with errno kept.
+bool WriteWholeFile(const OutputFolder& folder, const char* name, const char* data,
+                    std::size_t size) {
+  const int fd = folder.Create(name);
   if (fd < 0) return false;
   bool ok = true;
   while (ok && size > 0) {
@@ -89,7 +91,7 @@ bool WriteWholeFile(const std::string& path, const char* data, std::size_t size)
     saved = errno;
   }
   if (!ok) {
-    std::remove(path.c_str());
+    folder.Remove(name);
     errno = saved;
   }
   return ok;
@@ -100,16 +102,24 @@ bool WriteWholeFile(const std::string& path, const char* data, std::size_t size)
 void VtkWriter::Open(const std::string& dir, const Model& model, VtkFormat format,
                      int expected_frames, bool rod_fields) {
   if (!IsEnumValue(format)) throw InputError("VtkWriter::Open: unknown VtkFormat value");
-  if (!dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec) throw InputError("cannot create directory " + dir + ": " + ec.message());
-  }
-  dir_ = dir;
+  // An empty dir composes frames in memory only (ComposeFrame, the live view).
+  if (!dir.empty()) folder_.Open(dir, true);
+  Prepare(model, format, expected_frames, rod_fields);
+}
+
+void VtkWriter::Open(const OutputFolder& parent, const Model& model, VtkFormat format,
+                     int expected_frames, bool rod_fields) {
+  if (!IsEnumValue(format)) throw InputError("VtkWriter::Open: unknown VtkFormat value");
+  folder_.OpenSubfolder(parent, kVtkFolder, true);
+  Prepare(model, format, expected_frames, rod_fields);
+}
+
+void VtkWriter::Prepare(const Model& model, VtkFormat format, int expected_frames,
+                        bool rod_fields) {
   format_ = format;
   times_.clear();
   times_.reserve(static_cast<std::size_t>(std::max(expected_frames, 1)));
-  path_.reserve(dir_.size() + 32);
+  name_.reserve(32);
   LayOut(model);
   rod_fields_ = rod_fields;
   LayOutRodFields(model);
@@ -455,7 +465,7 @@ void VtkWriter::CalcRodFields(const Model& model, const Data& data, double load_
 }
 
 // Positions, frame axes and velocities of the points at data's state (assemble/outputs.h).
-void VtkWriter::CalcPoints(const Model& model, const Data& data) {
+void VtkWriter::CalcPoints(const Model& model, const Data& data, double load_factor) {
   // The contact forces on each contact segment, and their points weighted by |F|.
   std::fill(segment_force_.begin(), segment_force_.end(), Vec3::Zero());
   std::fill(segment_point_.begin(), segment_point_.end(), Vec3::Zero());
@@ -539,13 +549,14 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data) {
       for (int axis = 0; axis < 3; ++axis) frame_axes_[axis][3 * i + k] = R(k, axis);
     }
   }
-  // Tendon tensions and force element forces, as tendons.csv and forces.csv give them.
+  // Tendon tensions and force element forces at the load factor, as tendons.csv and forces.csv
+  // give them.
   for (std::size_t c = 0; c < cell_kind_.size(); ++c) {
     const VtkCellKind kind = static_cast<VtkCellKind>(cell_kind_[c]);
     if (kind == VtkCellKind::kTendon)
-      tension_[c] = CalcTendonState(model, data, cell_item_[c]).force;
+      tension_[c] = CalcTendonState(model, data, cell_item_[c], load_factor).force;
     else if (kind == VtkCellKind::kForceElement)
-      tension_[c] = CalcForceElementState(model, data, cell_item_[c]).force;
+      tension_[c] = CalcForceElementState(model, data, cell_item_[c], load_factor).force;
   }
 }
 
@@ -717,17 +728,16 @@ void VtkWriter::ComposeAsciiImage(double time) {
 
 bool VtkWriter::WriteFrame(const Model& model, const Data& data, double time, double load_factor) {
   ComposeFrame(model, data, time, load_factor);
-  path_.assign(dir_);
-  path_ += '/';
-  AppendFrameName(&path_, frames());
-  if (!WriteWholeFile(path_, image_.data(), image_.size())) return false;
+  name_.clear();
+  AppendFrameName(&name_, frames());
+  if (!WriteWholeFile(folder_, name_.c_str(), image_.data(), image_.size())) return false;
   times_.push_back(time);
   return true;
 }
 
 const std::string& VtkWriter::ComposeFrame(const Model& model, const Data& data, double time,
                                            double load_factor) {
-  CalcPoints(model, data);
+  CalcPoints(model, data, load_factor);
   if (rod_fields_) CalcRodFields(model, data, load_factor);
   if (format_ == VtkFormat::kBinary) {
     std::memcpy(&image_[time_at_], &time, sizeof time);
@@ -763,7 +773,7 @@ bool VtkWriter::WriteCollection() const {
     text += line;
   }
   text += "  </Collection>\n</VTKFile>\n";
-  return WriteFileAtomically(dir_ + "/motion.pvd", text);
+  return WriteFileAtomically(folder_, kCollectionFile, text);
 }
 
 }  // namespace screwfem

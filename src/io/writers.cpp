@@ -1,6 +1,7 @@
 #include "screwfem/io/writers.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -8,8 +9,10 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <span>
+#include <stdexcept>
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
@@ -241,15 +244,18 @@ std::vector<std::string> ForceColumns(const Model& model) {
   return LineColumns(model.force_elements, ".force");
 }
 
-void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row) {
+void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row,
+                   double load_factor) {
   CalcLineRow(
-      model.tendons.size(), [&](int i) { return CalcTendonState(model, data, i); }, row);
+      model.tendons.size(), [&](int i) { return CalcTendonState(model, data, i, load_factor); },
+      row);
 }
 
-void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row) {
+void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row,
+                  double load_factor) {
   CalcLineRow(
-      model.force_elements.size(), [&](int i) { return CalcForceElementState(model, data, i); },
-      row);
+      model.force_elements.size(),
+      [&](int i) { return CalcForceElementState(model, data, i, load_factor); }, row);
 }
 
 std::vector<std::string> ActuatorColumns(const Model& model) {
@@ -357,13 +363,16 @@ std::size_t WriteAll(int fd, const char* data, std::size_t size) {
 
 CsvWriter::~CsvWriter() { Close(); }
 
-void CsvWriter::Open(const std::string& path, const std::vector<std::string>& columns) {
+void CsvWriter::Open(const OutputFolder& folder, const char* name,
+                     const std::vector<std::string>& columns) {
   Close();
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd_ < 0) throw InputError("cannot create " + path + ": " + std::strerror(errno));
+  const std::string path = folder.path() + "/" + name;
+  fd_ = folder.Create(name);
+  if (fd_ < 0) throw InputError(folder.CreateError(name, errno));
   path_ = path;
   rows_ = 0;
   last_time_ = std::numeric_limits<double>::quiet_NaN();
+  last_key_ = -1;
   failed_ = false;
   batch_.clear();
   batch_.reserve(kCsvBatchBytes + 4096);
@@ -371,6 +380,8 @@ void CsvWriter::Open(const std::string& path, const std::vector<std::string>& co
   row_ends_.reserve(4096);
   row_times_.clear();
   row_times_.reserve(4096);
+  row_keys_.clear();
+  row_keys_.reserve(4096);
   std::string header = "t";
   for (const std::string& c : columns) header += "," + c;
   header += '\n';
@@ -379,8 +390,9 @@ void CsvWriter::Open(const std::string& path, const std::vector<std::string>& co
   file_bytes_ = static_cast<long long>(header.size());
 }
 
-bool CsvWriter::WriteRow(double t, const std::vector<double>& values) {
+bool CsvWriter::WriteRow(double t, const std::vector<double>& values, long long key) {
   if (fd_ < 0 || failed_) return false;
+  row_keys_.push_back(NextKey(key));
   AppendShortest(&batch_, t);
   for (double v : values) {
     batch_ += ',';
@@ -393,8 +405,9 @@ bool CsvWriter::WriteRow(double t, const std::vector<double>& values) {
 }
 
 bool CsvWriter::WriteRows(double t, const std::vector<double>& lead,
-                          const std::vector<double>& values, std::size_t width) {
+                          const std::vector<double>& values, std::size_t width, long long key) {
   if (fd_ < 0 || failed_) return false;
+  row_keys_.push_back(NextKey(key));
   for (std::size_t i = 0; i + width <= values.size() && width > 0; i += width) {
     AppendShortest(&batch_, t);
     for (double v : lead) {
@@ -434,10 +447,14 @@ void CsvWriter::KeepBatchRows(std::size_t n) {
   }
   file_bytes_ = end;
   rows_ += static_cast<long>(n);
-  if (n > 0) last_time_ = row_times_[n - 1];
+  if (n > 0) {
+    last_time_ = row_times_[n - 1];
+    last_key_ = row_keys_[n - 1];
+  }
   batch_.clear();
   row_ends_.clear();
   row_times_.clear();
+  row_keys_.clear();
 }
 
 bool CsvWriter::Flush() { return FlushTogether({this}) == nullptr; }
@@ -448,20 +465,25 @@ const CsvWriter* CsvWriter::FlushTogether(std::initializer_list<CsvWriter*> writ
 
 const CsvWriter* CsvWriter::FlushTogether(CsvWriter* const* list, std::size_t n) {
   const std::span<CsvWriter* const> writers(list, n);
-  std::size_t keep = static_cast<std::size_t>(-1);
+  // The key of the first row that did not reach its file whole, over the writers that
+  // failed: every writer keeps its rows below it (the output times all of them hold whole).
+  long long cut = std::numeric_limits<long long>::max();
   const CsvWriter* failed = nullptr;
   int failed_errno = 0;
   for (CsvWriter* w : writers) {
     const bool was_failed = w->failed_ || w->fd_ < 0;
-    keep = std::min(keep, w->WriteBatch());
+    const std::size_t whole = w->WriteBatch();
     if ((w->failed_ || w->fd_ < 0) && failed == nullptr) {
       failed = w;
       failed_errno = was_failed ? EIO : errno;
     }
+    if (w->failed_ && whole < w->row_keys_.size()) cut = std::min(cut, w->row_keys_[whole]);
   }
   for (CsvWriter* w : writers) {
     if (w->fd_ < 0) continue;
-    if (failed != nullptr) w->failed_ = true;  // the tables stay at the same row
+    if (failed != nullptr) w->failed_ = true;  // the tables stay at the same output time
+    const std::size_t keep = static_cast<std::size_t>(
+        std::lower_bound(w->row_keys_.begin(), w->row_keys_.end(), cut) - w->row_keys_.begin());
     w->KeepBatchRows(keep);
   }
   if (failed != nullptr) errno = failed_errno;
@@ -614,20 +636,146 @@ JsonWriter& JsonWriter::Null() {
 
 // ---- files -------------------------------------------------------------------------------------
 
-bool WriteFileAtomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  std::FILE* f = std::fopen(tmp.c_str(), "w");
-  bool written = false, closed = false;
-  if (f != nullptr) {
-    written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-    closed = std::fclose(f) == 0;
+bool IsFrameFileName(std::string_view name) {
+  constexpr std::string_view head = "frame_", tail = ".vtp";
+  if (name.size() < head.size() + 5 + tail.size() || name.substr(0, head.size()) != head ||
+      name.substr(name.size() - tail.size()) != tail)
+    return false;
+  const std::string_view digits = name.substr(head.size(), name.size() - head.size() - tail.size());
+  return std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+bool IsOutputFileName(std::string_view name, bool vtk) {
+  if (vtk) {
+    for (const char* f : kVtkFiles)
+      if (name == f) return true;
+    return IsFrameFileName(name);
   }
-  if (written && closed) return std::rename(tmp.c_str(), path.c_str()) == 0;
+  for (const char* f : kOutputFiles)
+    if (name == f) return true;
+  return false;
+}
+
+OutputFolder::~OutputFolder() { Close(); }
+
+void OutputFolder::Close() {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+void OutputFolder::Open(const std::string& path, bool create) {
+  Close();
+  if (create) {
+    std::error_code ec;
+    std::filesystem::create_directories(path, ec);
+    if (ec) throw InputError("cannot create the output directory " + path + ": " + ec.message());
+  }
+  fd_ = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd_ < 0)
+    throw InputError("cannot open the output directory " + path + ": " + std::strerror(errno));
+  path_ = path;
+}
+
+void OutputFolder::OpenSubfolder(const OutputFolder& parent, const char* name, bool create) {
+  Close();
+  path_ = parent.path() + "/" + name;
+  if (create && ::mkdirat(parent.fd(), name, 0777) != 0 && errno != EEXIST)
+    throw InputError("cannot create directory " + path_ + ": " + std::strerror(errno));
+  parent.CheckNotLink(name, true);
+  fd_ = ::openat(parent.fd(), name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd_ < 0) {
+    const int error = errno;
+    if (error == ELOOP || error == ENOTDIR) parent.CheckNotLink(name, true);
+    throw InputError("cannot open directory " + path_ + ": " + std::strerror(error));
+  }
+}
+
+bool OutputFolder::CheckNotLink(const char* name, bool folder) const {
+  struct stat st {};
+  if (::fstatat(fd_, name, &st, AT_SYMLINK_NOFOLLOW) != 0) return false;
+  const std::string path = path_ + "/" + name;
+  if (S_ISLNK(st.st_mode))
+    throw InputError(path +
+                     " is a symbolic link; screwfem writes its files into the output directory "
+                     "itself and never through a link: remove the link or choose another "
+                     "output directory");
+  if (folder ? !S_ISDIR(st.st_mode) : !S_ISREG(st.st_mode))
+    throw InputError(path + " is not a " + (folder ? "directory" : "regular file") +
+                     "; remove it or choose another output directory");
+  return true;
+}
+
+int OutputFolder::Create(const char* name) const {
+  const std::string_view n(name);
+  const bool vtk = !IsOutputFileName(n, false);
+  if (vtk && !IsOutputFileName(n, true))
+    throw std::logic_error("OutputFolder::Create: '" + std::string(n) +
+                           "' is not one of screwfem's output files (writers.h, kOutputFiles)");
+  // No O_TRUNC before the checks: a hard link's other file must not be emptied. O_NONBLOCK:
+  // a FIFO at the name fails (ENXIO) rather than blocking.
+  const int fd =
+      ::openat(fd_, name, O_WRONLY | O_CREAT | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK, 0666);
+  if (fd < 0) return -1;
+  struct stat st {};
+  int error = 0;
+  if (::fstat(fd, &st) != 0)
+    error = errno;
+  else if (!S_ISREG(st.st_mode))
+    error = EISDIR;
+  else if (st.st_nlink > 1)
+    error = EMLINK;
+  else if (::ftruncate(fd, 0) != 0 || ::fcntl(fd, F_SETFL, O_WRONLY) != 0)
+    error = errno;
+  if (error != 0) {
+    ::close(fd);
+    errno = error;
+    return -1;
+  }
+  return fd;
+}
+
+bool OutputFolder::Remove(const char* name) const { return ::unlinkat(fd_, name, 0) == 0; }
+
+std::string OutputFolder::CreateError(const char* name, int error) const {
+  const std::string path = path_ + "/" + name;
+  if (error == ELOOP)
+    return path +
+           " is a symbolic link; screwfem writes its files into the output directory itself "
+           "and never through a link: remove the link or choose another output directory";
+  if (error == EMLINK)
+    return "cannot create " + path +
+           ": it is a hard link of another file, which screwfem would overwrite; remove it or "
+           "choose another output directory";
+  if (error == EISDIR)
+    return "cannot create " + path +
+           ": it is not a regular file; remove it or choose another "
+           "output directory";
+  return "cannot create " + path + ": " + std::strerror(error);
+}
+
+bool WriteFileAtomically(const OutputFolder& folder, const char* name, const std::string& text) {
+  const std::string tmp = std::string(name) + kTemporarySuffix;
+  int fd = folder.Create(tmp.c_str());
+  if (fd >= 0) {
+    const bool written = WriteAll(fd, text.data(), text.size()) == text.size();
+    int saved = errno;
+    const bool closed = ::close(fd) == 0;
+    if (!closed) saved = errno;
+    if (written && closed && ::renameat(folder.fd(), tmp.c_str(), folder.fd(), name) == 0)
+      return true;
+    errno = saved;
+  }
   // No room for a second copy (a full disk): overwrite the existing file in place, which
-  // reuses its blocks (a summary is rewritten with about its earlier size).
+  // reuses its blocks (a summary is rewritten with about its earlier size); never through a
+  // link (O_NOFOLLOW), only a regular file of its own.
   const int saved = errno;
-  std::remove(tmp.c_str());
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+  ::unlinkat(folder.fd(), tmp.c_str(), 0);
+  fd = ::openat(folder.fd(), name, O_WRONLY | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
+  struct stat st {};
+  if (fd >= 0 && (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink > 1)) {
+    ::close(fd);
+    fd = -1;
+  }
   if (fd < 0) {
     errno = saved;
     return false;

@@ -218,11 +218,11 @@ TEST(Cli, SigtermAndSighupEndTheRunWithConsistentFilesAndSayWhichSignal) {
   for (const int signal : {SIGTERM, SIGHUP}) {
     const ScopedDir tmp("cli_sigterm");
     const std::string out = tmp.path() + "/out";
-    const pid_t pid = Spawn(
-        kCli,
-        {"run", kPendulum, "-o", out, "--set", "analysis.step=1e-5", "--set",
-         "analysis.end_time=1000", "--set", "outputs.vtk=false", "--set", "outputs.interval=1e-4"},
-        tmp.path());
+    const pid_t pid = Spawn(kCli,
+                            {"run", kPendulum, "-o", out, "--set", "analysis.step=1e-5", "--set",
+                             "analysis.end_time=1000", "--set", "outputs.vtk=false", "--set",
+                             "outputs.interval=1e-4", "--set", "outputs.max_rows=1e9"},
+                            tmp.path());
     ASSERT_GT(pid, 0);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     while (ReadCsv(out + "/points.csv").rows.size() < 3 &&
@@ -451,6 +451,83 @@ TEST(Cli, CheckPrintsCountsWithoutRunning) {
   ASSERT_EQ(o.code, 0) << o.err;
   EXPECT_NE(o.out.find("1 rigid bodies, 1 joints"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("nv = 7, nc = 6"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("\n  outputs: about 51 rows per table, 6 ParaView frames "
+                       "(outputs.max_rows 1000000)\n"),
+            std::string::npos)
+      << o.out;
+}
+
+// `check` refuses a scene estimated past outputs.max_rows (here step: auto over 10 s with a
+// row every 1e-5 s: 1e6 + 1 rows, above the default limit), naming the settings; exit 2.
+TEST(Cli, CheckRefusesAScenePastMaxRows) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_check_rows");
+  const Outcome o =
+      RunCli({"check", kPendulum, "--set", "analysis.step=auto", "--set", "analysis.tolerance=1e-6",
+              "--set", "analysis.end_time=10", "--set", "outputs.interval=1e-5"},
+             tmp.path());
+  EXPECT_EQ(o.code, 2) << o.out << o.err;
+  EXPECT_NE(o.out.find("  outputs: about 1000001 rows per table, 101 ParaView frames "
+                       "(outputs.max_rows 1000000)"),
+            std::string::npos)
+      << o.out;
+  EXPECT_EQ(o.err,
+            "error: outputs.max_rows: the run would record about 1000001 rows in each table, "
+            "above the limit of 1000000 (outputs.max_rows); record less often (outputs.interval) "
+            "or raise outputs.max_rows\n");
+  const Outcome run = RunCli({"run", kPendulum, "-o", tmp.path() + "/out", "--set",
+                              "analysis.step=auto", "--set", "analysis.tolerance=1e-6", "--set",
+                              "analysis.end_time=10", "--set", "outputs.interval=1e-5"},
+                             tmp.path());
+  EXPECT_EQ(run.code, 2);
+  EXPECT_EQ(run.err, o.err);
+  EXPECT_FALSE(std::filesystem::exists(tmp.path() + "/out/points.csv"));
+}
+
+// Static runs speak of the load factor: the result line, and a write error (which stops the
+// path at once: 2000 load steps, the first 64 KiB of rows past a 30000-byte limit).
+TEST(Cli, StaticRunsNameTheLoadFactorAndStopAtAWriteError) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_static");
+  const std::string finger = std::string(SCREWFEM_SOURCE_DIR) + "/examples/tendon/finger.yaml";
+  Outcome o = RunCli({"run", finger, "-o", tmp.path() + "/ok", "--set", "analysis.type=static"},
+                     tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_EQ(o.out.rfind("completed: load factor λ = 1, 10 load steps, ", 0), 0u) << o.out;
+  o = RunCli({"check", finger, "--set", "analysis.type=static"}, tmp.path());
+  EXPECT_NE(o.out.find("\n  analysis: static, load factor λ from 0 to 1 in 10 load steps (loads "
+                       "at t = 2 s)\n"),
+            std::string::npos)
+      << o.out;
+  const std::string out = tmp.path() + "/full";
+  o = RunCliWithLimit({"run", finger, "-o", out, "--set", "analysis.type=static", "--set",
+                       "analysis.load_steps=2000", "--set", "outputs.vtk=false"},
+                      tmp.path(), RLIMIT_FSIZE, 30000);
+  EXPECT_EQ(o.code, 2) << o.err;
+  EXPECT_EQ(o.out.rfind("failed: load factor λ = ", 0), 0u) << o.out;
+  EXPECT_EQ(o.err.rfind("cannot write at load factor λ = ", 0), 0u) << o.err;
+  EXPECT_NE(o.err.find(": File too large; the tables hold the "), std::string::npos) << o.err;
+  const auto summary = ParseJsonFile(out + "/summary.json");
+  ASSERT_TRUE(summary);
+  EXPECT_EQ(summary->Find("status")->string, "failed");
+  EXPECT_LT(summary->Find("static_solution.load_steps")->number, 1000.0);  // of 2000
+}
+
+// A link planted at the lock file's name is refused, naming it; what it points to is untouched.
+TEST(Cli, ALinkInTheOutputFolderIsRefused) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_link");
+  const std::string out = tmp.path() + "/out", victim = tmp.path() + "/victim.txt";
+  std::filesystem::create_directories(out);
+  std::ofstream(victim) << "precious\n";
+  std::filesystem::create_symlink(victim, out + "/.screwfem.lock");
+  const Outcome o = RunCli({"run", kPendulum, "-o", out, "--force"}, tmp.path());
+  EXPECT_EQ(o.code, 2);
+  EXPECT_EQ(o.err, "error: " + out +
+                       "/.screwfem.lock is a symbolic link; screwfem writes its files into the "
+                       "output directory itself and never through a link: remove the link or "
+                       "choose another output directory\n");
+  EXPECT_EQ(ReadFile(victim), "precious\n");
 }
 
 bool PythonHasMatplotlib(const std::string& dir) {

@@ -649,6 +649,7 @@ TEST(RunScene, StopRequestEndsStaticSolutionsAndPreloadsAsInterrupted) {
       s.analysis.kind = AnalysisKind::kStatic;
     s.analysis.statics.time = 1.0;
     s.analysis.statics.load_steps = 1000000;  // about a minute
+    s.outputs.max_rows = kMaxMaxRows;         // (a row per load step)
     int polls = 0;
     RunOptions options;
     options.stop.poll = [](void* count) { return ++*static_cast<int*>(count) > 50; };

@@ -9,10 +9,13 @@ and a summary saying how the run ended.
     cd tests/python && PYTHONPATH=<build>/python /usr/bin/python3 -m unittest -v test_recording
 """
 
+import contextlib
 import csv
 import json
 import math
+import os
 import pathlib
+import resource
 import tempfile
 import unittest
 
@@ -21,6 +24,19 @@ import screwfem as sf
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 ARM = str(ROOT / "examples" / "python" / "soft_arm_control.yaml")
 PENDULUM = str(ROOT / "tests" / "data" / "pendulum.yaml")
+FINGER = str(ROOT / "examples" / "tendon" / "finger.yaml")
+
+
+@contextlib.contextmanager
+def file_size_limit(nbytes):
+    """RLIMIT_FSIZE for this process (Python ignores SIGXFSZ: writes past it fail with EFBIG,
+    as on a full disk)."""
+    old = resource.getrlimit(resource.RLIMIT_FSIZE)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, old[1]))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, old)
 
 # The summary fields that depend on the clock (or on how the run was started), not on the run.
 CLOCK_FIELDS = {"wall_seconds", "real_time_factor"}
@@ -198,6 +214,116 @@ class RecordingEnds(unittest.TestCase):
         self.sim.time = 2.0
         with self.assertRaisesRegex(ValueError, "pass a step h"):
             self.sim.step()
+
+
+class OutputFolder(unittest.TestCase):
+    """Simulation.record has the CLI's protections: the same C++ Recording."""
+
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.dir = pathlib.Path(self.tmp.name)
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def test_a_write_error_stops_a_static_path_at_once(self):
+        # 2000 load steps; the first 64 KiB of rows do not fit under the 30000-byte limit: the
+        # solve stops at its next Newton iteration and raises, the summary says why.
+        sim = sf.Simulation(sf.load_scene(FINGER, ["analysis.type=static",
+                                                   "analysis.load_steps=2000",
+                                                   "outputs.vtk=false"]))
+        out = self.dir / "static"
+        with file_size_limit(30000):
+            with self.assertRaisesRegex(RuntimeError, "writing the files failed: cannot write "
+                                        "at load factor λ = .*: File too large; the tables "
+                                        "hold the [0-9]+ rows up to load factor λ = "):
+                with sim.record(str(out)):
+                    sim.solve_static()
+        summary = json.loads((out / "summary.json").read_text())
+        self.assertEqual(summary["status"], "failed")
+        self.assertIn("File too large", summary["message"])
+        steps = summary["static_solution"]["load_steps"]
+        table = rows(out / "points.csv")
+        self.assertGreater(steps, len(table) - 1)
+        self.assertLess(steps, 1000)  # of 2000
+        for name in ("joints.csv", "tendons.csv", "forces.csv"):
+            self.assertEqual(len(rows(out / name)), len(table), name)
+
+    def test_static_tendon_tension_is_scaled_by_the_load_factor(self):
+        # tendons.csv holds the applied tension, load_factor x 50 N, as tendon_state gives it.
+        sim = sf.Simulation(sf.load_scene(FINGER, ["analysis.type=static",
+                                                   "analysis.load_steps=4"]))
+        out = self.dir / "scaled"
+        with sim.record(str(out)):
+            sim.solve_static()
+        table = rows(out / "tendons.csv")
+        self.assertEqual(table[0], ["t", "load_factor", "flexor.length", "flexor.rate",
+                                    "flexor.tension"])
+        # (4 load steps, some of them halved: the rows are the converged load factors.)
+        self.assertGreaterEqual(len(table) - 1, 4)
+        for r in table[1:]:
+            self.assertEqual(float(r[4]), 50.0 * float(r[1]))
+        self.assertEqual(float(table[-1][4]), 50.0)
+        self.assertEqual(sim.tendon_state("flexor", load_factor=0.5)[2], 25.0)
+        self.assertEqual(sim.tendon_state("flexor")[2], 50.0)
+
+    def test_a_write_error_stops_a_dynamic_run(self):
+        sim = sf.Simulation(sf.load_scene(FINGER, ["analysis.end_time=100",
+                                                   "outputs.interval=0", "outputs.vtk=false"]))
+        sim.initialize()
+        out = self.dir / "dynamic"
+        with file_size_limit(30000):
+            with self.assertRaisesRegex(RuntimeError, "cannot write at t = .*File too large"):
+                with sim.record(str(out)):
+                    sim.simulate()
+        self.assertLess(sim.time, 5.0)
+        summary = json.loads((out / "summary.json").read_text())
+        self.assertEqual(summary["status"], "failed")
+
+    def test_links_are_refused(self):
+        victim = self.dir / "victim.txt"
+        victim.write_text("precious\n")
+        out = self.dir / "out"
+        out.mkdir()
+        os.symlink(victim, out / "tendons.csv")
+        sim = sf.Simulation(sf.load_scene(PENDULUM))
+        sim.initialize()
+        for force in (False, True):
+            with self.assertRaisesRegex(ValueError, "tendons.csv is a symbolic link; screwfem "
+                                        "writes its files into the output directory itself"):
+                with sim.record(str(out), force=force):
+                    pass
+        self.assertEqual(victim.read_text(), "precious\n")
+
+    def test_max_rows_estimate_and_refusal(self):
+        scene = sf.load_scene(PENDULUM)
+        e = sf.estimate_outputs(scene)
+        self.assertEqual((e.rows, e.field_times, e.frames), (51.0, 0.0, 6.0))
+        self.assertEqual(scene.outputs.max_rows, 1000000)
+        sim = sf.Simulation(scene)
+        sim.initialize()
+        outputs = scene.outputs
+        outputs.max_rows = 100
+        self.assertEqual(sf.estimate_outputs(scene, outputs).rows, 51.0)
+        # record's interval 1e-3 s: a row every step, 501 rows.
+        scene2 = sf.load_scene(PENDULUM, ["outputs.max_rows=100"])
+        sim2 = sf.Simulation(scene2)
+        sim2.initialize()
+        with self.assertRaisesRegex(ValueError, "about 501 rows in each table, above the limit "
+                                    "of 100 .* record less often .outputs.interval."):
+            with sim2.record(str(self.dir / "x"), interval=1e-3):
+                pass
+        self.assertFalse((self.dir / "x").exists())
+        every_step = sf.load_scene(PENDULUM, ["outputs.interval=0", "outputs.max_rows=500"])
+        with self.assertRaisesRegex(ValueError, "about 501 rows in each table, above the limit "
+                                    "of 500"):
+            sf.estimate_outputs(every_step, check=True)
+        spec = sf.read_scene_spec(PENDULUM)
+        spec.set_outputs(max_rows=5e5)
+        self.assertEqual(spec.outputs.max_rows, 500000)
+        self.assertEqual(spec.compile().outputs.max_rows, 500000)
+        with self.assertRaisesRegex(ValueError, "outputs.max_rows"):
+            spec.set_outputs(max_rows=0)
 
 
 class Callbacks(unittest.TestCase):

@@ -146,7 +146,7 @@ struct TendonSpanSegmentKind {
 // The force element's law: the tension f = k (l - l_0) + c dl/dt + lambda F(t) [N] at length l
 // and rate dl/dt (positive: pulling the points together), with the actuator's value
 // lambda F(t) at load factor lambda. The one definition behind the kernel (ForceElementKind)
-// and what the outputs report (CalcForceElementState, load factor 1).
+// and what the outputs report (CalcForceElementState, at the recorded load factor).
 struct ForceElementForce {
   double force = 0.0;     // f [N]
   double actuator = 0.0;  // lambda F(t) [N]
@@ -183,14 +183,19 @@ struct ForceElementKind {
 };
 
 // What the outputs report (io/writers.cpp, tendons.csv and forces.csv), in the current state of
-// data at data.time: length [m], its rate [m/s] and the tension or force [N].
+// data at data.time: length [m], its rate [m/s] and the tension or force [N] applied at
+// `load_factor` (static analyses: the load step's; dynamics: 1): a tension-driven tendon's
+// lambda T(t), a force element's actuator part lambda F(t) (its spring and damper are not
+// scaled), as the kernels apply them; a length-driven tendon's multiplier.
 struct LineForceState {
   double length = 0.0;
   double rate = 0.0;
   double force = 0.0;
 };
-LineForceState CalcTendonState(const Model& model, const Data& data, int tendon);
-LineForceState CalcForceElementState(const Model& model, const Data& data, int element);
+LineForceState CalcTendonState(const Model& model, const Data& data, int tendon,
+                               double load_factor = 1.0);
+LineForceState CalcForceElementState(const Model& model, const Data& data, int element,
+                                     double load_factor = 1.0);
 // The world position of a body point on a node (or the ground) in the current state.
 Vec3 BodyPointPosition(const Data& data, const BodyPoint& point);
 // The frame a body point is fixed in, in the current state: its node's, or for a point between

@@ -18,6 +18,7 @@
 #include "screwfem/solve/advance.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/statics.h"
+#include "screwfem/solve/stop.h"
 
 namespace screwfem {
 
@@ -60,6 +61,12 @@ class Recording final : public AdvanceObserver {
   // its row and frame unless the path recorded them already (`row`: it did not, the solve
   // took no step); then options.on_step.
   bool RecordStaticSolution(double t, bool row);
+
+  // `stop` extended to also ask to stop once this recording has finished (a write error, or
+  // outputs.max_rows reached on the path), for the static solver that records through
+  // RecordStaticStep: it then stops before its next Newton iteration rather than solving
+  // the rest of the path. Valid while the Recording lives; one at a time.
+  StopRequest StopWhenFinished(const StopRequest& stop);
 
   // The row and frame of the current state unless it is the last one recorded (the end of a
   // run driven step by step); false on a write error (then finished).

@@ -19,18 +19,26 @@
 //                     once, when the run ends, also when it is interrupted or fails; static
 //                     analyses: a frame per load step, its time the load factor)
 // OUTDIR/.screwfem.lock  held (flock) by the running run, with its process id
+// The names are one list (writers.h, kOutputFiles, kVtkFiles, IsFrameFileName). OUTDIR is
+// opened once, by a directory descriptor, and every file is created relative to it with
+// O_NOFOLLOW: a symbolic link (or another file's hard link) at one of these names, or a vtk/
+// that is a link, is refused (InputError naming the path), never written through.
 // Files are written as the run goes, in whole rows: the CSV rows are collected and written
 // when 64 KiB have accumulated, at least every 2 s of wall time (with the summary), before
 // every on_step callback and at the end of the run; points.csv, joints.csv, reactions.csv,
 // energy.csv (and rod_fields.csv when it has their rows: it then ends at the same time) always
 // hold the same rows. An interrupted run (stop request) leaves valid files up to the last
 // completed output step; the files of a killed process end with a complete row; a write
-// error (a full disk) cuts a torn row off, and the summary says which file failed and how
-// many rows the tables hold.
+// error (a full disk, a file size limit) cuts a torn row off, every table (contacts.csv,
+// pair_contacts.csv and rod_fields.csv included) at the same last output time, ends the run at
+// once (a static path at its next Newton iteration), and the summary says which file failed,
+// why, and how many rows the tables hold. Static analyses name the load factor (λ) in their
+// messages, where dynamic ones name the time.
 #pragma once
 
 #include <atomic>
 #include <functional>
+#include <limits>
 #include <string>
 
 #include "screwfem/io/input_table.h"
@@ -54,9 +62,10 @@ struct RunOptions {
   // simulated time [s], once the step's output rows are written to the files (flushed). For
   // tests and embedding.
   std::function<void(double t)> on_step;
-  // An outdir that holds the files of an earlier run (summary.json, points.csv, joints.csv,
-  // vtk/ frames) is refused unless this is set; then those files (and no others) are removed
-  // first. The CLI's --force.
+  // An outdir that holds the files of an earlier run (any of writers.h's kOutputFiles, or
+  // kVtkFiles and frames in vtk/) is refused unless this is set; then exactly those files are
+  // removed first, by name (a link is refused, never followed), and vtk/ if that leaves it
+  // empty. The CLI's --force.
   bool replace_results = false;
   // Run-time input values over time (the CLI's --inputs). Each step's inputs are the table's
   // values at the step's end, where the implicit step evaluates its loads (docs/numerics.md,
@@ -78,9 +87,30 @@ struct RunResult {
   // Largest relative rotation of one rod element over the run [rad], on its continued branch;
   // one helical element is valid below 2 pi (elements/rod.h).
   double max_element_rotation = 0.0;
-  std::string message;    // why it stopped early, with the time
+  std::string message;    // why it stopped early, with the time (statics: the load factor)
   bool io_error = false;  // it failed writing its files (message: which and why)
+  // Static analyses: the load factor reached (the last converged state's); NaN otherwise.
+  double load_factor = std::numeric_limits<double>::quiet_NaN();
 };
+
+// The output times a run of `scene` with `outputs` is estimated to record, each bounded by
+// outputs.max_rows (docs/scene-format.md, "outputs"): rows of the tables, rod_fields.csv
+// times at its own interval (0 when it has none) and ParaView frames (0 without vtk).
+// Static analyses: one per load step and the start (load_steps + 1). Dynamic analyses with
+// fixed steps: the start, the end, and one per interval or, below a step, per step (and per
+// profile breakpoint with align_steps); with step: auto, from the interval and the duration
+// alone: ceil((end_time - start_time) / interval) + 1; with interval 0 the number of steps is
+// not known ahead (NaN: not estimated; the bound is then kept at run time only).
+struct OutputEstimate {
+  double rows = 0.0;
+  double field_times = 0.0;
+  double frames = 0.0;
+};
+OutputEstimate EstimateOutputs(const Scene& scene, const OutputSpec& outputs);
+// Throws InputError when an estimate is above outputs.max_rows, naming the output, the
+// setting that sets it (outputs.interval, outputs.vtk_interval, outputs.rod_fields) and
+// outputs.max_rows. `check` and RunScene (and Simulation.record) call it.
+void CheckOutputRows(const Scene& scene, const OutputSpec& outputs);
 
 // Runs the scene's analysis and writes the outputs into outdir (created if needed).
 //

@@ -59,6 +59,9 @@ struct OutputJoint {
 // gives interval but not vtk_interval writes frames at that interval.
 inline constexpr int kDefaultOutputRows = 1000;
 inline constexpr int kDefaultVtkFrames = 100;
+// outputs.max_rows: its default and the largest value a scene may give.
+inline constexpr long kDefaultMaxRows = 1000000;
+inline constexpr long kMaxMaxRows = 1000000000;
 
 // Encoding of the ParaView frames (vtk.h).
 enum class VtkFormat { kBinary, kAscii };
@@ -83,6 +86,11 @@ struct OutputSpec {
   // [s] between its rows (0: every step; start and end included, as rows); < 0: at the rows
   // of points.csv. Static analyses: every load step, whatever the interval.
   double rod_fields_interval = -1.0;
+  // The most output times a run records (docs/scene-format.md, "outputs"): rows of each table
+  // (a long table's block of rows at one time counts once), rod_fields.csv times and ParaView
+  // frames, each. `check` and `run` refuse a scene estimated to record more (EstimateOutputs,
+  // run.h), and a run that reaches it ends as failed. In [1, kMaxMaxRows].
+  long max_rows = kDefaultMaxRows;
 };
 
 struct Scene {

@@ -160,6 +160,7 @@ struct OutputsSpec {
   double vtk_interval = -1.0;
   bool rod_fields = false;            // see OutputSpec
   double rod_fields_interval = -1.0;  // [s]; < 0: at the rows of points.csv
+  long max_rows = kDefaultMaxRows;    // see OutputSpec
 };
 
 struct SceneSpec {

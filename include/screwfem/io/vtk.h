@@ -73,6 +73,7 @@
 #include <vector>
 
 #include "screwfem/io/scene.h"
+#include "screwfem/io/writers.h"
 #include "screwfem/model/data.h"
 
 namespace screwfem {
@@ -107,8 +108,14 @@ class VtkWriter {
   // frames, so that writing up to that many allocates nothing.
   void Open(const std::string& dir, const Model& model, VtkFormat format = VtkFormat::kBinary,
             int expected_frames = 0, bool rod_fields = false);
+  // The same in the subfolder kVtkFolder of a run's output folder (writers.h, OutputFolder):
+  // created if needed, refused (InputError naming the path) when it is a symbolic link; the
+  // frames and the collection are created in it by its descriptor, never through a link.
+  void Open(const OutputFolder& parent, const Model& model, VtkFormat format = VtkFormat::kBinary,
+            int expected_frames = 0, bool rod_fields = false);
   // Writes the next frame of data's current state at `time` (data of the model given to Open;
-  // `load_factor` scales the rods' actuation in the rod fields, as in statics).
+  // `load_factor` scales the rods' actuation in the rod fields and the tendons' tensions and
+  // force elements' actuators, as in statics).
   // Returns false on a write error (errno kept; the incomplete frame file is removed and not
   // counted). Allocates no memory (binary, or ascii once its text buffer has grown to a
   // frame's size) while the frames fit the reserved count.
@@ -121,7 +128,7 @@ class VtkWriter {
   // Writes motion.pvd listing the frames written so far. Returns false on a write error.
   bool WriteCollection() const;
   int frames() const { return static_cast<int>(times_.size()); }
-  const std::string& dir() const { return dir_; }
+  const std::string& dir() const { return folder_.path(); }
   VtkFormat format() const { return format_; }
 
  private:
@@ -156,12 +163,14 @@ class VtkWriter {
   void AddLine(std::initializer_list<long long> points, const CellInfo& cell);
   // Closes a polyline of the points appended to line_connectivity_ since the last line.
   void EndLine(const CellInfo& cell);
-  void CalcPoints(const Model& model, const Data& data);
+  void CalcPoints(const Model& model, const Data& data, double load_factor);
   void ComposeBinaryImage();
   void ComposeAsciiImage(double time);
   bool WriteImage();
 
-  std::string dir_, path_;  // path_: the frame file being written (capacity kept)
+  void Prepare(const Model& model, VtkFormat format, int expected_frames, bool rod_fields);
+  OutputFolder folder_;  // the frames' folder, open
+  std::string name_;     // the frame file being written (capacity kept)
   VtkFormat format_ = VtkFormat::kBinary;
   std::vector<PointSource> sources_;
   // Cells (constant): vertices then lines, as VTK stores them; their data in that order.

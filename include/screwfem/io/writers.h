@@ -1,8 +1,10 @@
 // Result tables and the run summary (see run.h for the files): the columns and values of
-// points.csv and joints.csv, a CSV writer that writes whole rows, a small JSON text builder
-// and an atomic file replacement.
+// points.csv and joints.csv, the list of the files a run writes and the output folder that
+// creates them (by a directory descriptor, never through a link), a CSV writer that writes
+// whole rows, a small JSON text builder and an atomic file replacement.
 #pragma once
 
+#include <array>
 #include <cstdio>
 #include <initializer_list>
 #include <limits>
@@ -63,8 +65,12 @@ Eigen::Vector4d FrameQuaternion(const Mat3& R);
 // (elements/tendon.h, CalcTendonState and CalcForceElementState).
 std::vector<std::string> TendonColumns(const Model& model);
 std::vector<std::string> ForceColumns(const Model& model);
-void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row);
-void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row);
+// The tension and force are those applied at `load_factor` (static analyses: the row's load
+// factor, as the solver applies them; CalcTendonState).
+void CalcTendonRow(const Model& model, const Data& data, std::vector<double>* row,
+                   double load_factor = 1.0);
+void CalcForceRow(const Model& model, const Data& data, std::vector<double>* row,
+                  double load_factor = 1.0);
 // actuators.csv: per actuator A of the model (docs/numerics.md, "Active stress and rest strain"), the column A: its profile's
 // value at t (pressure [Pa], activation [-] clamped to [0, 1], or the factor of its vector;
 // elements/rod.h, ActuatorValue); in static analyses the applied value is this times the
@@ -117,6 +123,83 @@ void AppendNumber(std::string* text, double value, int precision);
 // "0.10000000000000001"; infinities and NaN as "inf", "-inf", "nan".
 void AppendShortest(std::string* text, double value);
 
+// ---- the output folder -------------------------------------------------------------------------
+
+// The files a run can write into its output folder (run.h describes them): the one list that
+// the writers create from (OutputFolder::Create refuses any other name) and that --force
+// (RunOptions::replace_results) removes, nothing else. kOutputFiles are in the folder itself,
+// kVtkFiles and the frames (IsFrameFileName) in its subfolder kVtkFolder. The lock file
+// (kOutputLockFile, run.h) is not a result: it stays.
+inline constexpr const char* kSummaryFile = "summary.json";
+inline constexpr const char* kJointsDescriptionFile = "joints.json";
+inline constexpr const char* kPointsFile = "points.csv";
+inline constexpr const char* kJointsFile = "joints.csv";
+inline constexpr const char* kReactionsFile = "reactions.csv";
+inline constexpr const char* kEnergyFile = "energy.csv";
+inline constexpr const char* kTendonsFile = "tendons.csv";
+inline constexpr const char* kForcesFile = "forces.csv";
+inline constexpr const char* kActuatorsFile = "actuators.csv";
+inline constexpr const char* kContactsFile = "contacts.csv";
+inline constexpr const char* kPairContactsFile = "pair_contacts.csv";
+inline constexpr const char* kRodFieldsFile = "rod_fields.csv";
+inline constexpr const char* kVtkFolder = "vtk";
+inline constexpr const char* kCollectionFile = "motion.pvd";
+// The temporary files of WriteFileAtomically: the name followed by this.
+inline constexpr const char* kTemporarySuffix = ".tmp";
+inline constexpr std::array<const char*, 14> kOutputFiles = {
+    kSummaryFile,      "summary.json.tmp", kJointsDescriptionFile, "joints.json.tmp",
+    kPointsFile,       kJointsFile,        kReactionsFile,         kEnergyFile,
+    kTendonsFile,      kForcesFile,        kActuatorsFile,         kContactsFile,
+    kPairContactsFile, kRodFieldsFile};
+inline constexpr std::array<const char*, 2> kVtkFiles = {kCollectionFile, "motion.pvd.tmp"};
+// frame_NNNNN.vtp: "frame_", five or more digits, ".vtp" (VtkWriter's frame files).
+bool IsFrameFileName(std::string_view name);
+// `name` is one of screwfem's files of the output folder (kOutputFiles), or of its vtk
+// subfolder (`vtk`: kVtkFiles and the frames).
+bool IsOutputFileName(std::string_view name, bool vtk);
+
+// A folder of results, held open by a directory descriptor (O_DIRECTORY | O_CLOEXEC): every
+// file is created relative to it with O_NOFOLLOW, so renaming or replacing the folder's path
+// while a run writes cannot redirect its files, and a symbolic link (or another file's hard
+// link) planted at one of screwfem's names is refused rather than written through.
+class OutputFolder {
+ public:
+  OutputFolder() = default;
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  ~OutputFolder();
+
+  // Opens the folder at `path`, created first (with its parents) when `create`. The path
+  // itself may go through links (it is the caller's choice); what is inside may not. Throws
+  // InputError naming the path when it cannot.
+  void Open(const std::string& path, bool create);
+  // Opens subfolder `name` (kVtkFolder) of `parent`, created when `create`; throws InputError
+  // when it is a symbolic link or not a folder.
+  void OpenSubfolder(const OutputFolder& parent, const char* name, bool create);
+  // Creates file `name` (IsOutputFileName, else std::logic_error) for writing, emptied, and
+  // returns its descriptor (O_WRONLY | O_CLOEXEC), or -1 with errno: ELOOP for a symbolic
+  // link at that name, EMLINK for a file with other hard links, EISDIR (or ENXIO) for
+  // something other than a regular file. Allocates nothing.
+  int Create(const char* name) const;
+  // Throws InputError when `name` is a symbolic link, or names something other than a
+  // regular file (or a folder, with `folder`), with a message naming the path; nothing
+  // happens when it does not exist. Returns whether it exists.
+  bool CheckNotLink(const char* name, bool folder = false) const;
+  // Removes file `name` (the name itself, never what a link points to); false with errno.
+  bool Remove(const char* name) const;
+  // The message for a failed Create (errno `error`) of `name`: "cannot create PATH: ...",
+  // for a link "PATH is a symbolic link; ...".
+  std::string CreateError(const char* name, int error) const;
+  bool is_open() const { return fd_ >= 0; }
+  int fd() const { return fd_; }
+  const std::string& path() const { return path_; }
+  void Close();
+
+ private:
+  int fd_ = -1;
+  std::string path_;
+};
+
 // A CSV table: header "t,<columns>", then one row per call, each value written as the
 // shortest text that reads back as the same double (AppendShortest). Rows are collected in memory (a batch) and written to the file by Flush
 // or FlushTogether, so that the file ends with a complete row: when a write fails (a full
@@ -128,24 +211,29 @@ class CsvWriter {
   CsvWriter& operator=(const CsvWriter&) = delete;
   ~CsvWriter();
 
-  // Creates (truncates) the file and writes the header. Throws InputError when it cannot.
-  void Open(const std::string& path, const std::vector<std::string>& columns);
+  // Creates file `name` of `folder` (OutputFolder::Create: a new, empty regular file, never
+  // through a link) and writes the header. Throws InputError when it cannot.
+  void Open(const OutputFolder& folder, const char* name, const std::vector<std::string>& columns);
   // Appends "t,values..." to the batch (no file access). Returns false once a write has failed.
-  bool WriteRow(double t, const std::vector<double>& values);
+  // `key` orders the rows for FlushTogether: the output time's sequence number, shared by
+  // the tables written at that time (several rows may have the same key, non-decreasing);
+  // -1: the row's own index in the table.
+  bool WriteRow(double t, const std::vector<double>& values, long long key = -1);
   // Appends values.size() / width lines "t,lead...,values[i width .. (i + 1) width)" (long
   // format: several lines at one time) as one row of the batch: a flush keeps or cuts them
   // together, and rows() counts them as one.
   bool WriteRows(double t, const std::vector<double>& lead, const std::vector<double>& values,
-                 std::size_t width);
+                 std::size_t width, long long key = -1);
   // Reserves batch room for `bytes` (rows longer than the default reservation of 68 KiB).
   void Reserve(std::size_t bytes);
   // Writes the batch. Returns false on a write error (errno kept): the rows that reached the
   // file whole stay, a torn row is cut off, the rest of the batch is dropped.
   bool Flush();
-  // Flushes tables that collect the same rows (points.csv and joints.csv) so that they keep
-  // the same number of rows: after a write error in any of them, every one is cut back to the
-  // rows all of them hold whole, and none accepts more rows. Returns nullptr, or the first
-  // writer whose write failed (errno kept).
+  // Flushes tables written at the same output times (points.csv, joints.csv, contacts.csv,
+  // ...) so that they end at the same one: after a write error in any of them, every one is
+  // cut back to the rows whose key is below the key of the first row that did not reach the
+  // file whole (the output times all of them hold whole), and none accepts more rows.
+  // Returns nullptr, or the first writer whose write failed (errno kept).
   static const CsvWriter* FlushTogether(std::initializer_list<CsvWriter*> writers);
   // The same for the first n writers of an array.
   static const CsvWriter* FlushTogether(CsvWriter* const* writers, std::size_t n);
@@ -155,6 +243,7 @@ class CsvWriter {
   // Rows in the file (after the last flush) and the time of the last one (NaN: none).
   long rows() const { return rows_; }
   double last_time() const { return last_time_; }
+  long long last_key() const { return last_key_; }  // of the last row in the file (-1: none)
   std::size_t batch_bytes() const { return batch_.size(); }
   bool failed() const { return failed_; }
 
@@ -162,6 +251,9 @@ class CsvWriter {
   // Writes the batch; returns the number of its rows written whole (the file may end with a
   // torn row after them), sets failed_ on an error.
   std::size_t WriteBatch();
+  long long NextKey(long long key) const {
+    return key >= 0 ? key : rows_ + static_cast<long long>(row_ends_.size());
+  }
   // Cuts the file to its rows before the batch plus the batch's first n rows, drops the batch.
   void KeepBatchRows(std::size_t n);
 
@@ -170,9 +262,11 @@ class CsvWriter {
   std::string batch_;                  // complete rows not yet written
   std::vector<std::size_t> row_ends_;  // end offset of each batch row in batch_
   std::vector<double> row_times_;      // t of each batch row
+  std::vector<long long> row_keys_;    // key of each batch row (WriteRow)
   long long file_bytes_ = 0;           // bytes in the file before the batch
   long rows_ = 0;
   double last_time_ = std::numeric_limits<double>::quiet_NaN();
+  long long last_key_ = -1;
   bool failed_ = false;
 };
 
@@ -211,10 +305,11 @@ class JsonWriter {
 // JSON string literal contents: escapes quotes, backslashes and control characters.
 std::string JsonEscape(std::string_view text);
 
-// Replaces the file at path by text through a temporary file in the same directory and a
-// rename, so a reader never sees a partial file. When the temporary file cannot be written
-// (a full disk) an existing file is overwritten in place instead. Returns false (errno kept)
-// on failure.
-bool WriteFileAtomically(const std::string& path, const std::string& text);
+// Replaces file `name` of `folder` by text through a temporary file (name + kTemporarySuffix,
+// OutputFolder::Create) and a rename in the folder, so a reader never sees a partial file.
+// When the temporary file cannot be written (a full disk) an existing regular file of that
+// name is overwritten in place instead (never through a link). Returns false (errno kept) on
+// failure.
+bool WriteFileAtomically(const OutputFolder& folder, const char* name, const std::string& text);
 
 }  // namespace screwfem
