@@ -163,12 +163,13 @@ struct StaticSolver {
   }
 
   // Convergence test of the state just assembled (data.residual); records |R|_inf in step.
-  bool Converged(double last_increment, StaticStep& step, double* res_out) const {
+  bool Converged(double last_increment, StaticStep& step, double* res_out, double* con_out) const {
     const double res = model.nv > 0 ? data.residual.head(model.nv).cwiseAbs().maxCoeff() : 0.0;
     const double con =
         model.nc > 0 ? data.residual.tail(model.nc).cwiseAbs().maxCoeff() / k_scale : 0.0;
     step.residual_norms.push_back(res);
     *res_out = res;
+    *con_out = con;
     const double scale = std::max(data.force_scale, 1e-300);
     // Below this level the residual is round-off (e.g. eps EA |d|/L in a stiff rod).
     const double floor =
@@ -178,6 +179,16 @@ struct StaticSolver {
     const bool at_floor = res <= floor;
     return con <= options.constraint_tolerance && last_increment <= options.increment_tolerance &&
            (at_floor || res <= options.residual_tolerance * scale);
+  }
+
+  // Why a load step ran out of Newton iterations: all three criteria of Converged, so that a
+  // step held back by its constraints or its increment does not read as "residual 0".
+  std::string NotConverged(double res, double con, double last_increment) const {
+    return FormatNumbers(
+               "Newton did not converge in %g iterations (force residual %.3g, relative %.3g; ",
+               options.max_iterations, res, res / std::max(data.force_scale, 1e-300)) +
+           FormatNumbers("constraint residual %.3g, tolerance %.3g; last scaled increment %.3g)",
+                         con, options.constraint_tolerance, last_increment);
   }
 
   // With data.residual assembled (matrix included) at s = opt.load_factor: the load vector
@@ -228,8 +239,8 @@ struct StaticSolver {
     for (int it = 0; it <= options.max_iterations; ++it) {
       if (stop.Requested()) return LoadStepEnd::kStopped;
       if (!AssembleAt(true, cause)) return LoadStepEnd::kFailed;
-      double res = 0.0;
-      bool converged = Converged(last_increment, step, &res);
+      double res = 0.0, con = 0.0;
+      bool converged = Converged(last_increment, step, &res, &con);
       if (converged && switches_left > 0 &&
           UpdateTendonSlack(model, data, opt.time, opt.load_factor) > 0) {
         --switches_left;
@@ -242,9 +253,7 @@ struct StaticSolver {
         return LoadStepEnd::kConverged;
       }
       if (it == options.max_iterations) {
-        cause =
-            FormatNumbers("Newton did not converge in %g iterations (residual %.3g, relative %.3g)",
-                          options.max_iterations, res, res / std::max(data.force_scale, 1e-300));
+        cause = NotConverged(res, con, last_increment);
         return LoadStepEnd::kFailed;
       }
       if (!SolveAssembledSystem(model, data)) {
@@ -641,15 +650,14 @@ class ArcLengthPath {
       if (S_.stop.Requested()) return LoadStepEnd::kStopped;
       S_.opt.load_factor = s_ + *ds;
       if (!S_.AssembleAt(true, cause)) return LoadStepEnd::kFailed;
-      double res = 0.0;
-      const bool converged = S_.Converged(last_increment, step, &res);
+      double res = 0.0, con = 0.0;
+      const bool converged = S_.Converged(last_increment, step, &res, &con);
       if (it > 0 && converged) {
         step.iterations = it;
         return LoadStepEnd::kConverged;
       }
       if (it == o.max_iterations) {
-        cause = FormatNumbers("Newton did not converge in %g iterations (residual %.3g)",
-                              o.max_iterations, res);
+        cause = S_.NotConverged(res, con, last_increment);
         return LoadStepEnd::kFailed;
       }
       if (!S_.BorderedSolves(cause)) return LoadStepEnd::kFailed;

@@ -59,6 +59,26 @@ TEST(StaticsWithJoints, SoftRevolutePendulumSettlesWhereTheSpringBalancesGravity
   }
 }
 
+// A load step that runs out of Newton iterations names all three criteria: the force residual,
+// the constraint residual against its tolerance and the last scaled increment (a step held
+// back by its constraints or its increment used to read "residual 0").
+TEST(StaticsWithJoints, NonConvergenceMessageNamesEveryCriterion) {
+  ModelBuilder b;
+  const int j = AddPendulum(b, -1.0);
+  b.model().joints[static_cast<std::size_t>(j)].stiffness(0) = 3.0;  // swings to 1.208 rad
+  const Model m = b.Build();
+  Data d = MakeData(m);
+  StaticOptions opt;
+  opt.load_steps = 1;
+  opt.max_halvings = 0;
+  opt.max_iterations = 1;
+  const StaticResult r = SolveStatic(m, d, opt);
+  ASSERT_FALSE(r.converged);
+  for (const char* part : {"Newton did not converge in 1 iterations (force residual ",
+                           "; constraint residual ", ", tolerance ", "; last scaled increment "})
+    EXPECT_NE(r.message.find(part), std::string::npos) << part << " in: " << r.message;
+}
+
 // A prescribed drive is a rheonomic constraint alpha = s q(t) (s = load factor); SolveStatic
 // evaluates it at options.time. Its effort holds the weight: tau = m g l cos q for a bob at
 // (+l, 0, 0) (torque about +z applied to the bar).
