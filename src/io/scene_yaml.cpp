@@ -645,9 +645,9 @@ void SetKeyCheckObserver(KeyCheckObserver observer, void* context) {
 
 void Reader::CheckKeys(const Node& map, const std::string& path,
                        const std::vector<std::string>& allowed, const char* function,
-                       int line) const {
+                       const char* file, int line) const {
   if (key_check_observer != nullptr)
-    key_check_observer(KeyCheck{path, &allowed, function, line}, key_check_context);
+    key_check_observer(KeyCheck{path, &allowed, function, file, line}, key_check_context);
   ExpectMap(map, path);
   std::unordered_map<std::string_view, std::size_t> first;  // key -> its first entry
   for (std::size_t i = 0; i < map.entries.size(); ++i) {

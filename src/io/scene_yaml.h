@@ -104,9 +104,11 @@ class Reader {
   // Checks that `node` is a map whose keys are all in `allowed` and not repeated; the first
   // offending key (in file order) is reported.
   void ExpectMap(const Node& node, const std::string& path) const;
-  // `function` and `line` name the call (filled in by the compiler) for the key observer below.
+  // `function`, `file` and `line` name the call (filled in by the compiler) for the key
+  // observer below.
   void CheckKeys(const Node& map, const std::string& path, const std::vector<std::string>& allowed,
-                 const char* function = __builtin_FUNCTION(), int line = __builtin_LINE()) const;
+                 const char* function = __builtin_FUNCTION(), const char* file = __builtin_FILE(),
+                 int line = __builtin_LINE()) const;
   // A map of named entries: names must be plain identifiers and unique.
   void CheckNames(const Node& map, const std::string& path, const std::string& entity) const;
   const Node& Require(const Node& map, const std::string& path, const std::string& key) const;
@@ -143,6 +145,7 @@ struct KeyCheck {
   std::string path;                         // dotted path of the map ("" for the top level)
   const std::vector<std::string>* allowed;  // the keys allowed there
   const char* function;                     // the reader function that checked it
+  const char* file;                         // the file of the call (as the compiler names it)
   int line;                                 // and the line of the call
 };
 using KeyCheckObserver = void (*)(const KeyCheck& check, void* context);

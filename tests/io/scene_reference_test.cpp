@@ -2,7 +2,7 @@
 //
 // The keys the reader accepts have one source of truth: the lists it passes to CheckKeys, which
 // also give the "unknown key" errors. The test reads scenes that reach every CheckKeys call of
-// src/io/scene_reader.cpp (the example scenes, tests/data and tests/io/data/every_key.yaml)
+// src/io/scene_reader*.cpp (the example scenes, tests/data and tests/io/data/every_key.yaml)
 // with an observer installed (scene_yaml::SetKeyCheckObserver), so it sees every map the reader
 // checks, its dotted path and the keys allowed there. The reference documents keys in tables
 // whose first header cell is `key`; each map of the reader belongs to one or more sections of
@@ -23,6 +23,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "io/scene_yaml.h"
@@ -114,13 +115,13 @@ const SectionRule* RuleFor(const std::string& function, const std::string& patte
 struct Observed {
   std::map<std::size_t, std::set<std::string>> keys;
   std::map<std::size_t, std::set<std::string>> paths;  // examples, for messages
-  std::set<int> lines;                                 // CheckKeys calls reached
+  std::set<std::pair<std::string, int>> lines;         // CheckKeys calls reached: file, line
   std::set<std::string> unmapped;                      // "function: pattern"
 };
 
 void Observe(const scene_yaml::KeyCheck& check, void* context) {
   auto* o = static_cast<Observed*>(context);
-  o->lines.insert(check.line);
+  o->lines.emplace(std::filesystem::path(check.file).filename().string(), check.line);
   const std::string function = check.function;
   const std::string pattern = Pattern(check.path);
   const SectionRule* rule = RuleFor(function, pattern);
@@ -202,7 +203,9 @@ class SceneReference : public ::testing::Test {
       }
     }
     scene_yaml::SetKeyCheckObserver(nullptr, nullptr);
-    reader_source_ = ReadFile(root / "src" / "io" / "scene_reader.cpp");
+    for (const char* name :
+         {"scene_reader.cpp", "scene_reader_items.cpp", "scene_reader_analysis.cpp"})
+      reader_sources_[name] = ReadFile(root / "src" / "io" / name);
     docs_ = DocumentedKeys(ReadFile(root / "docs" / "scene-format.md"));
   }
   static void TearDownTestSuite() {
@@ -212,25 +215,27 @@ class SceneReference : public ::testing::Test {
 
   static Observed* observed_;
   static std::string errors_;
-  static std::string reader_source_;
+  static std::map<std::string, std::string> reader_sources_;  // the reader's files by name
   static std::map<std::string, std::set<std::string>> docs_;
 };
 Observed* SceneReference::observed_ = nullptr;
 std::string SceneReference::errors_;
-std::string SceneReference::reader_source_;
+std::map<std::string, std::string> SceneReference::reader_sources_;
 std::map<std::string, std::set<std::string>> SceneReference::docs_;
 
 TEST_F(SceneReference, TheScenesReadAndReachEveryKeyCheck) {
   EXPECT_EQ(errors_, "") << "every scene read must succeed";
-  std::istringstream in(reader_source_);
-  std::string line;
-  std::vector<int> calls;
-  for (int n = 1; std::getline(in, line); ++n)
-    if (line.find("CheckKeys(") != std::string::npos) calls.push_back(n);
+  std::vector<std::pair<std::string, int>> calls;
+  for (const auto& [name, text] : reader_sources_) {
+    std::istringstream in(text);
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n)
+      if (line.find("CheckKeys(") != std::string::npos) calls.emplace_back(name, n);
+  }
   ASSERT_FALSE(calls.empty());
-  for (int n : calls)
-    EXPECT_TRUE(observed_->lines.count(n))
-        << "src/io/scene_reader.cpp:" << n
+  for (const auto& call : calls)
+    EXPECT_TRUE(observed_->lines.count(call))
+        << "src/io/" << call.first << ":" << call.second
         << ": this CheckKeys call is reached by no scene; add what it reads to "
            "tests/io/data/every_key.yaml";
   EXPECT_EQ(observed_->lines.size(), calls.size())

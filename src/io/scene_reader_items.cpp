@@ -1,0 +1,389 @@
+// The scene reader (scene_reader_impl.h): inputs, loads, tendons, force elements, actuation and
+// contact.
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <unordered_map>
+
+#include "scene_reader_impl.h"
+#include "screwfem/io/scene_spec.h"
+#include "screwfem/model/errors.h"
+#include "screwfem/solve/schedule.h"
+
+namespace screwfem::scene_reading {
+
+// inputs: {NAME: DEFAULT, ...}: the run-time inputs that profiles take ({type: input, name}).
+void SceneReader::ReadInputs(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "inputs", "input");
+  for (const auto& [entry, value] : node->entries) {
+    input_index_.emplace(entry.key, static_cast<int>(spec_.inputs.size()));
+    spec_.inputs.emplace_back(entry.key, r_.Number(value, Join("inputs", entry.key)));
+  }
+}
+
+void SceneReader::ReadLoads(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "loads", "load");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("loads", entry.key);
+    src_.loads.push_back({Field(entry.key_location, path), {}});
+    spec_.loads.emplace_back();
+    spec_.loads.back().name = entry.key;
+    ReadLoad(value, path, spec_.loads.back(), src_.loads.back());
+  }
+}
+
+void SceneReader::ReadLoad(const Node& value, const std::string& path, LoadSpec& load,
+                           EntitySource& source) {
+  r_.CheckKeys(value, path,
+               {"body", "at", "s", "distributed", "force", "moment", "frame", "profile"});
+  load.body = Body(r_.Require(value, path, "body"), Join(path, "body"));
+  const bool rigid = spec_.bodies[static_cast<std::size_t>(load.body)].rigid;
+  const Node* f = value.Find("force");
+  const Node* m = value.Find("moment");
+  if (f == nullptr && m == nullptr)
+    r_.Fail(value.location, path, "missing key 'force' (or 'moment')");
+  if (f != nullptr) load.force = r_.Vector3(*f, Join(path, "force"));
+  if (m != nullptr) load.moment = r_.Vector3(*m, Join(path, "moment"));
+  if (const Node* fr = value.Find("frame"))
+    load.frame = r_.Enum<LoadFrame>(*fr, Join(path, "frame"));
+  if (const Node* p = value.Find("profile")) load.profile = ReadProfile(*p, Join(path, "profile"));
+
+  // Where: a point of a rigid body, a rod node, a rod section at arc length s, or the
+  // whole rod (per unit length).
+  const Node* at = value.Find("at");
+  const Node* s = value.Find("s");
+  bool distributed = false;
+  if (const Node* d = value.Find("distributed"))
+    distributed = r_.Bool(*d, Join(path, "distributed"));
+  const int given = (at != nullptr) + (s != nullptr) + (distributed ? 1 : 0);
+  if (given > 1) r_.Fail(value.location, path, "give one of 'at', 's' or 'distributed: true'");
+  if (rigid && (s != nullptr || distributed))
+    r_.Fail(value.location, path, "'s' and 'distributed' apply to soft bodies only");
+  if (given == 0)
+    r_.Fail(value.location, path,
+            rigid ? "missing key 'at'" : "missing key 'at' (or 's', or 'distributed: true')");
+  if (at != nullptr) {
+    load.where = LoadSpec::Where::kAt;
+    load.at = Point(*at, Join(path, "at"));
+    source.parts.emplace_back("at", Field(at->location, Join(path, "at")));
+  } else if (s != nullptr) {
+    load.where = LoadSpec::Where::kArcLength;
+    load.arc_length = r_.NonNegativeNumber(*s, Join(path, "s"));
+    source.parts.emplace_back("s", Field(s->location, Join(path, "s")));
+  } else {
+    load.where = LoadSpec::Where::kDistributed;
+  }
+}
+
+// {body: NAME or ground, at: POINT} or, on a soft body, {body, s: ARC_LENGTH, offset: [x, y, z]}
+// (the node at `at` or at arc length s, and the offset in its section frame).
+BodyPointSpec SceneReader::ReadBodyPoint(const Node& node, const std::string& path) const {
+  r_.ExpectMap(node, path);
+  r_.CheckKeys(node, path, {"body", "at", "s", "offset"});
+  BodyPointSpec p;
+  const Node* body = node.Find("body");
+  if (body != nullptr && r_.Text(*body, Join(path, "body")) != kGroundName)
+    p.body = Body(*body, Join(path, "body"));
+  const bool soft = p.body >= 0 && !spec_.bodies[static_cast<std::size_t>(p.body)].rigid;
+  const Node* at = node.Find("at");
+  const Node* s = node.Find("s");
+  if (!soft) {
+    const std::string who = p.body < 0 ? "the ground" : "rigid bodies";
+    NotUsedBy(node, path, {"s", "offset"}, who + " (give the point itself as 'at')");
+    p.at = Point(r_.Require(node, path, "at"), Join(path, "at"));
+    return p;
+  }
+  if (at != nullptr && s != nullptr)
+    r_.Fail(node.location, path, "give either 'at' or 's', not both");
+  if (at == nullptr && s == nullptr)
+    r_.Fail(node.location, path, "missing key 's' (or 'at'): the rod node the point is fixed to");
+  if (at != nullptr) p.at = Point(*at, Join(path, "at"));
+  if (s != nullptr) {
+    p.along_rod = true;
+    p.arc_length = r_.NonNegativeNumber(*s, Join(path, "s"));
+  }
+  if (const Node* o = node.Find("offset")) p.offset = r_.Vector3(*o, Join(path, "offset"));
+  return p;
+}
+
+void SceneReader::ReadTendons(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "tendons", "tendon");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("tendons", entry.key);
+    src_.tendons.push_back({Field(entry.key_location, path), {}});
+    EntitySource& source = src_.tendons.back();
+    r_.ExpectMap(value, path);
+    r_.CheckKeys(value, path, {"eyelets", "tension", "length"});
+    TendonSpec t;
+    t.name = entry.key;
+    const Node& en = r_.Require(value, path, "eyelets");
+    const std::string ep = Join(path, "eyelets");
+    if (!en.IsSequence() || en.items.size() < 2)
+      r_.Fail(en.location, ep,
+              "expected a list of at least two eyelets (a tendon runs between them), got " +
+                  scene_yaml::Describe(en));
+    for (std::size_t i = 0; i < en.items.size(); ++i) {
+      source.parts.emplace_back(Index("eyelets", i), Field(en.items[i].location, Index(ep, i)));
+      t.eyelets.push_back(ReadBodyPoint(en.items[i], Index(ep, i)));
+    }
+    // Drawn by tension or by length (a rheonomic constraint whose multiplier is the tension).
+    const Node* ln = value.Find("length");
+    if (ln != nullptr && value.Find("tension") != nullptr)
+      r_.Fail(ln->location, Join(path, "length"),
+              "give either 'tension' or 'length' (the tendon is drawn by one of them), not both");
+    if (ln != nullptr) {
+      t.by_length = true;
+      t.length = ReadProfile(*ln, Join(path, "length"));
+      source.parts.emplace_back("length", Field(ln->location, Join(path, "length")));
+    } else {
+      const Node& tn = r_.Require(value, path, "tension");
+      t.tension = ReadProfile(tn, Join(path, "tension"));
+      source.parts.emplace_back("tension", Field(tn.location, Join(path, "tension")));
+    }
+    spec_.tendons.push_back(std::move(t));
+  }
+}
+
+void SceneReader::ReadForces(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "forces", "force element");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("forces", entry.key);
+    src_.forces.push_back({Field(entry.key_location, path), {}});
+    EntitySource& source = src_.forces.back();
+    r_.ExpectMap(value, path);
+    r_.CheckKeys(value, path, {"a", "b", "stiffness", "damping", "rest_length", "force"});
+    ForceSpec f;
+    f.name = entry.key;
+    for (const char* end : {"a", "b"}) {
+      const Node& en = r_.Require(value, path, end);
+      source.parts.emplace_back(end, Field(en.location, Join(path, end)));
+      (end[0] == 'a' ? f.a : f.b) = ReadBodyPoint(en, Join(path, end));
+    }
+    if (const Node* k = value.Find("stiffness"))
+      f.stiffness = r_.NonNegativeNumber(*k, Join(path, "stiffness"));
+    if (const Node* c = value.Find("damping"))
+      f.damping = r_.NonNegativeNumber(*c, Join(path, "damping"));
+    if (const Node* l = value.Find("rest_length"))
+      f.rest_length = r_.NonNegativeNumber(*l, Join(path, "rest_length"));
+    if (const Node* p = value.Find("force")) f.actuator = ReadProfile(*p, Join(path, "force"));
+    if (value.Find("stiffness") == nullptr && value.Find("damping") == nullptr &&
+        value.Find("force") == nullptr)
+      r_.Fail(value.location, path, "missing key 'stiffness' (or 'damping', or 'force')");
+    spec_.forces.push_back(std::move(f));
+  }
+}
+
+// actuation: {NAME: {type, rod, from, to, ...}} (docs/numerics.md, "Active stress and rest strain"; docs/scene-format.md).
+void SceneReader::ReadActuation(const Node* node) {
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "actuation", "actuator");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("actuation", entry.key);
+    src_.actuators.push_back({Field(entry.key_location, path), {}});
+    EntitySource& source = src_.actuators.back();
+    r_.ExpectMap(value, path);
+    r_.CheckKeys(value, path,
+                 {"type", "rod", "from", "to", "area", "offset", "pressure", "max_stress",
+                  "activation", "vector", "profile"});
+    ActuatorSpec a;
+    a.name = entry.key;
+    a.type = r_.Enum<ActuatorType>(r_.Require(value, path, "type"), Join(path, "type"));
+    const Node& rod = r_.Require(value, path, "rod");
+    a.body = Body(rod, Join(path, "rod"));
+    if (spec_.bodies[static_cast<std::size_t>(a.body)].rigid)
+      r_.Fail(rod.location, Join(path, "rod"),
+              "'" + spec_.bodies[static_cast<std::size_t>(a.body)].name +
+                  "' is a rigid body; actuation acts on soft bodies (rods)");
+    source.parts.emplace_back("rod", Field(rod.location, Join(path, "rod")));
+    for (const char* key : {"from", "to"}) {
+      if (const Node* v = value.Find(key)) {
+        (key[0] == 'f' ? a.from : a.to) = r_.NonNegativeNumber(*v, Join(path, key));
+        source.parts.emplace_back(key, Field(v->location, Join(path, key)));
+      }
+    }
+    if (a.to >= 0.0 && !(a.to > a.from))
+      r_.Fail(value.Find("to")->location, Join(path, "to"),
+              "expected an arc length greater than 'from' (" + std::to_string(a.from) + " m)");
+    const bool chamber = a.type == ActuatorType::kPressure || a.type == ActuatorType::kMuscle;
+    const char* profile_key = a.type == ActuatorType::kPressure ? "pressure"
+                              : a.type == ActuatorType::kMuscle ? "activation"
+                                                                : "profile";
+    const std::string who = std::string("type '") + NameOf(a.type) + "'";
+    if (chamber) {
+      NotUsedBy(value, path, {"vector", "profile"}, who);
+      if (a.type == ActuatorType::kPressure)
+        NotUsedBy(value, path, {"max_stress", "activation"}, who);
+      else
+        NotUsedBy(value, path, {"pressure"}, who);
+      const Node& area = r_.Require(value, path, "area");
+      a.area = r_.PositiveNumber(area, Join(path, "area"));
+      source.parts.emplace_back("area", Field(area.location, Join(path, "area")));
+      const Node& off = r_.Require(value, path, "offset");
+      const std::vector<double> o = r_.Numbers(off, Join(path, "offset"));
+      if (o.size() != 2 && o.size() != 3)
+        r_.Fail(off.location, Join(path, "offset"),
+                "expected [r2, r3] (or [0, r2, r3]) in the section frame [m], got " +
+                    std::to_string(o.size()) + " numbers");
+      a.offset = o.size() == 2 ? Vec3(0.0, o[0], o[1]) : Vec3(o[0], o[1], o[2]);
+      source.parts.emplace_back("offset", Field(off.location, Join(path, "offset")));
+      if (a.type == ActuatorType::kMuscle)
+        a.max_stress =
+            r_.NonNegativeNumber(r_.Require(value, path, "max_stress"), Join(path, "max_stress"));
+      a.profile = ReadProfile(r_.Require(value, path, profile_key), Join(path, profile_key));
+    } else {
+      NotUsedBy(value, path, {"area", "offset", "pressure", "max_stress", "activation"}, who);
+      a.vector = r_.Vector6(r_.Require(value, path, "vector"), Join(path, "vector"));
+      if (const Node* p = value.Find("profile")) a.profile = ReadProfile(*p, Join(path, "profile"));
+    }
+    spec_.actuators.push_back(std::move(a));
+  }
+}
+
+// --- contact -----------------------------------------------------------------------------------
+
+void SceneReader::ReadGroups(const Node& n, const std::string& path, unsigned* contype,
+                             unsigned* conaffinity) const {
+  if (const Node* c = n.Find("contype"))
+    *contype = static_cast<unsigned>(r_.Integer(*c, Join(path, "contype"), 0, 1 << 30));
+  if (const Node* c = n.Find("conaffinity"))
+    *conaffinity = static_cast<unsigned>(r_.Integer(*c, Join(path, "conaffinity"), 0, 1 << 30));
+}
+
+void SceneReader::ReadShapes(const Node& node, const std::string& path, BodySpec& b) const {
+  if (!node.IsSequence())
+    r_.Fail(node.location, path, "expected a list of shapes, got " + scene_yaml::Describe(node));
+  for (std::size_t i = 0; i < node.items.size(); ++i) {
+    const Node& v = node.items[i];
+    const std::string sp = Index(path, i);
+    r_.ExpectMap(v, sp);
+    r_.CheckKeys(v, sp, {"type", "center", "from", "to", "radius", "half_sizes"});
+    ContactShape shape;
+    shape.type = r_.Enum<ContactShapeType>(r_.Require(v, sp, "type"), Join(sp, "type"));
+    auto point = [&](const char* key) -> Vec3 {
+      const Vec3 world = Point(r_.Require(v, sp, key), Join(sp, key));
+      return Vec3(world - b.origin);
+    };
+    if (shape.type == ContactShapeType::kCapsule) {
+      NotUsedBy(v, sp, {"center", "half_sizes"}, "capsules");
+      shape.from = point("from");
+      shape.to = point("to");
+    } else {
+      NotUsedBy(v, sp, {"from", "to"}, "spheres and boxes");
+      shape.from = shape.to = point("center");
+    }
+    if (shape.type == ContactShapeType::kBox) {
+      NotUsedBy(v, sp, {"radius"}, "boxes");
+      const Node& hn = r_.Require(v, sp, "half_sizes");
+      shape.to = r_.Vector3(hn, Join(sp, "half_sizes"));
+      if (!(shape.to.minCoeff() > 0.0))
+        r_.Fail(hn.location, Join(sp, "half_sizes"), "expected positive half sizes");
+    } else {
+      NotUsedBy(v, sp, {"half_sizes"}, "spheres and capsules");
+      shape.radius = r_.PositiveNumber(r_.Require(v, sp, "radius"), Join(sp, "radius"));
+    }
+    b.shapes.push_back(shape);
+  }
+}
+
+void SceneReader::ReadContact(const Node* node) {
+  // The bodies' shapes and groups are read with the bodies.
+  if (node == nullptr) return;
+  const std::string path = "contact";
+  r_.ExpectMap(*node, path);
+  r_.CheckKeys(*node, path,
+               {"stiffness", "onset", "damping_ratio", "friction", "slip_velocity", "obstacles",
+                "exclude", "self", "self_skip"});
+  ContactSpec& c = spec_.contact;
+  c.present = true;
+  if (const Node* v = node->Find("stiffness"))
+    c.settings.stiffness = r_.PositiveNumber(*v, Join(path, "stiffness"));
+  if (const Node* v = node->Find("onset"))
+    c.settings.onset = r_.PositiveNumber(*v, Join(path, "onset"));
+  if (const Node* v = node->Find("damping_ratio"))
+    c.settings.damping_ratio = r_.NonNegativeNumber(*v, Join(path, "damping_ratio"));
+  if (const Node* v = node->Find("friction"))
+    c.settings.friction = r_.NonNegativeNumber(*v, Join(path, "friction"));
+  if (const Node* v = node->Find("slip_velocity"))
+    c.settings.slip_velocity = r_.PositiveNumber(*v, Join(path, "slip_velocity"));
+  if (const Node* v = node->Find("self")) c.settings.self = r_.Bool(*v, Join(path, "self"));
+  if (const Node* v = node->Find("self_skip"))
+    c.settings.self_skip = r_.PositiveNumber(*v, Join(path, "self_skip"));
+  std::vector<std::string> names;
+  if (const Node* on = node->Find("obstacles")) {
+    const std::string op = Join(path, "obstacles");
+    r_.CheckNames(*on, op, "obstacle");
+    for (const auto& [entry, v] : on->entries) {
+      const std::string p = Join(op, entry.key);
+      r_.ExpectMap(v, p);
+      r_.CheckKeys(
+          v, p,
+          {"type", "point", "normal", "center", "from", "to", "radius", "contype", "conaffinity"});
+      ContactObstacle o;
+      o.name = entry.key;
+      o.type = r_.Enum<ObstacleType>(r_.Require(v, p, "type"), Join(p, "type"));
+      if (o.type == ObstacleType::kPlane) {
+        NotUsedBy(v, p, {"center", "from", "to", "radius"}, "planes");
+        o.point = Point(r_.Require(v, p, "point"), Join(p, "point"));
+        o.normal = UnitAxis(r_.Require(v, p, "normal"), Join(p, "normal"));
+      } else {
+        o.radius = r_.PositiveNumber(r_.Require(v, p, "radius"), Join(p, "radius"));
+        NotUsedBy(v, p, {"point", "normal"}, "spheres and capsules");
+        if (o.type == ObstacleType::kSphere) {
+          NotUsedBy(v, p, {"from", "to"}, "spheres");
+          o.point = Point(r_.Require(v, p, "center"), Join(p, "center"));
+        } else {
+          NotUsedBy(v, p, {"center"}, "capsules");
+          o.point = Point(r_.Require(v, p, "from"), Join(p, "from"));
+          o.to = Point(r_.Require(v, p, "to"), Join(p, "to"));
+        }
+      }
+      ReadGroups(v, p, &o.contype, &o.conaffinity);
+      c.obstacles.push_back(o);
+      names.push_back(entry.key);
+    }
+  }
+  if (const Node* en = node->Find("exclude")) {
+    const std::string ep = Join(path, "exclude");
+    if (!en->IsSequence())
+      r_.Fail(en->location, ep, "expected a list of [body, obstacle] or [body, body] pairs");
+    for (std::size_t i = 0; i < en->items.size(); ++i) {
+      const Node& pair = en->items[i];
+      const std::string pp = Index(ep, i);
+      if (!pair.IsSequence() || pair.items.size() != 2)
+        r_.Fail(pair.location, pp,
+                "expected [body, obstacle] or [body, body], got " + scene_yaml::Describe(pair));
+      const int body = Body(pair.items[0], Index(pp, 0));
+      const std::string other = r_.Text(pair.items[1], Index(pp, 1));
+      const auto it = std::find(names.begin(), names.end(), other);
+      if (it != names.end()) {
+        c.exclude.emplace_back(body, static_cast<int>(it - names.begin()));
+        continue;
+      }
+      // Not an obstacle: a second body (a pair of moving bodies that never touch).
+      std::vector<std::string> known = names;
+      int second = -1;
+      for (std::size_t b = 0; b < spec_.bodies.size(); ++b) {
+        known.push_back(spec_.bodies[b].name);
+        if (spec_.bodies[b].name == other) second = static_cast<int>(b);
+      }
+      if (second < 0)
+        r_.Fail(pair.items[1].location, Index(pp, 1),
+                "undefined obstacle '" + other + "' (nor a body)" +
+                    scene_yaml::DidYouMean(other, known));
+      if (second == body)
+        r_.Fail(pair.items[1].location, Index(pp, 1),
+                "a body cannot be excluded from itself (rod self-contact: 'self: false')");
+      c.exclude_bodies.emplace_back(body, second);
+    }
+  }
+}
+
+}  // namespace screwfem::scene_reading
