@@ -94,6 +94,9 @@ class SceneReader {
   void ReadForces(const Node* node);
   void ReadActuation(const Node* node);
   void ReadContact(const Node* node);
+  ContactObstacle ReadObstacle(const Node& v, const std::string& path,
+                               const std::string& name) const;
+  void ReadContactExclusions(const Node& exclude, const std::vector<std::string>& names);
   void ReadShapes(const Node& node, const std::string& path, BodySpec& b) const;
   void ReadGroups(const Node& node, const std::string& path, unsigned* contype,
                   unsigned* conaffinity) const;

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <sstream>
+#include <string_view>
 #include <unordered_map>
 
 #include "scene_reader_impl.h"
@@ -293,6 +294,36 @@ void SceneReader::ReadShapes(const Node& node, const std::string& path, BodySpec
   }
 }
 
+// One entry of contact.obstacles: a plane, sphere or capsule with its contact groups.
+ContactObstacle SceneReader::ReadObstacle(const Node& v, const std::string& p,
+                                          const std::string& name) const {
+  r_.ExpectMap(v, p);
+  r_.CheckKeys(
+      v, p,
+      {"type", "point", "normal", "center", "from", "to", "radius", "contype", "conaffinity"});
+  ContactObstacle o;
+  o.name = name;
+  o.type = r_.Enum<ObstacleType>(r_.Require(v, p, "type"), Join(p, "type"));
+  if (o.type == ObstacleType::kPlane) {
+    NotUsedBy(v, p, {"center", "from", "to", "radius"}, "planes");
+    o.point = Point(r_.Require(v, p, "point"), Join(p, "point"));
+    o.normal = UnitAxis(r_.Require(v, p, "normal"), Join(p, "normal"));
+  } else {
+    o.radius = r_.PositiveNumber(r_.Require(v, p, "radius"), Join(p, "radius"));
+    NotUsedBy(v, p, {"point", "normal"}, "spheres and capsules");
+    if (o.type == ObstacleType::kSphere) {
+      NotUsedBy(v, p, {"from", "to"}, "spheres");
+      o.point = Point(r_.Require(v, p, "center"), Join(p, "center"));
+    } else {
+      NotUsedBy(v, p, {"center"}, "capsules");
+      o.point = Point(r_.Require(v, p, "from"), Join(p, "from"));
+      o.to = Point(r_.Require(v, p, "to"), Join(p, "to"));
+    }
+  }
+  ReadGroups(v, p, &o.contype, &o.conaffinity);
+  return o;
+}
+
 void SceneReader::ReadContact(const Node* node) {
   // The bodies' shapes and groups are read with the bodies.
   if (node == nullptr) return;
@@ -321,68 +352,49 @@ void SceneReader::ReadContact(const Node* node) {
     const std::string op = Join(path, "obstacles");
     r_.CheckNames(*on, op, "obstacle");
     for (const auto& [entry, v] : on->entries) {
-      const std::string p = Join(op, entry.key);
-      r_.ExpectMap(v, p);
-      r_.CheckKeys(
-          v, p,
-          {"type", "point", "normal", "center", "from", "to", "radius", "contype", "conaffinity"});
-      ContactObstacle o;
-      o.name = entry.key;
-      o.type = r_.Enum<ObstacleType>(r_.Require(v, p, "type"), Join(p, "type"));
-      if (o.type == ObstacleType::kPlane) {
-        NotUsedBy(v, p, {"center", "from", "to", "radius"}, "planes");
-        o.point = Point(r_.Require(v, p, "point"), Join(p, "point"));
-        o.normal = UnitAxis(r_.Require(v, p, "normal"), Join(p, "normal"));
-      } else {
-        o.radius = r_.PositiveNumber(r_.Require(v, p, "radius"), Join(p, "radius"));
-        NotUsedBy(v, p, {"point", "normal"}, "spheres and capsules");
-        if (o.type == ObstacleType::kSphere) {
-          NotUsedBy(v, p, {"from", "to"}, "spheres");
-          o.point = Point(r_.Require(v, p, "center"), Join(p, "center"));
-        } else {
-          NotUsedBy(v, p, {"center"}, "capsules");
-          o.point = Point(r_.Require(v, p, "from"), Join(p, "from"));
-          o.to = Point(r_.Require(v, p, "to"), Join(p, "to"));
-        }
-      }
-      ReadGroups(v, p, &o.contype, &o.conaffinity);
-      c.obstacles.push_back(o);
+      c.obstacles.push_back(ReadObstacle(v, Join(op, entry.key), entry.key));
       names.push_back(entry.key);
     }
   }
-  if (const Node* en = node->Find("exclude")) {
-    const std::string ep = Join(path, "exclude");
-    if (!en->IsSequence())
-      r_.Fail(en->location, ep, "expected a list of [body, obstacle] or [body, body] pairs");
-    for (std::size_t i = 0; i < en->items.size(); ++i) {
-      const Node& pair = en->items[i];
-      const std::string pp = Index(ep, i);
-      if (!pair.IsSequence() || pair.items.size() != 2)
-        r_.Fail(pair.location, pp,
-                "expected [body, obstacle] or [body, body], got " + scene_yaml::Describe(pair));
-      const int body = Body(pair.items[0], Index(pp, 0));
-      const std::string other = r_.Text(pair.items[1], Index(pp, 1));
-      const auto it = std::find(names.begin(), names.end(), other);
-      if (it != names.end()) {
-        c.exclude.emplace_back(body, static_cast<int>(it - names.begin()));
-        continue;
-      }
-      // Not an obstacle: a second body (a pair of moving bodies that never touch).
-      std::vector<std::string> known = names;
-      int second = -1;
-      for (std::size_t b = 0; b < spec_.bodies.size(); ++b) {
-        known.push_back(spec_.bodies[b].name);
-        if (spec_.bodies[b].name == other) second = static_cast<int>(b);
-      }
-      if (second < 0)
-        r_.Fail(pair.items[1].location, Index(pp, 1),
-                "undefined obstacle '" + other + "' (nor a body)" +
-                    scene_yaml::DidYouMean(other, known));
-      if (second == body)
-        r_.Fail(pair.items[1].location, Index(pp, 1),
-                "a body cannot be excluded from itself (rod self-contact: 'self: false')");
-      c.exclude_bodies.emplace_back(body, second);
+  if (const Node* en = node->Find("exclude")) ReadContactExclusions(*en, names);
+}
+
+// contact.exclude: [body, obstacle] or [body, body] pairs that never touch; `names` are the
+// obstacles' names in order. Names are looked up in hash tables: linear in the pairs.
+void SceneReader::ReadContactExclusions(const Node& en, const std::vector<std::string>& names) {
+  const std::string ep = "contact.exclude";
+  if (!en.IsSequence())
+    r_.Fail(en.location, ep, "expected a list of [body, obstacle] or [body, body] pairs");
+  std::unordered_map<std::string_view, int> obstacle_index, body_index;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    obstacle_index.emplace(names[i], static_cast<int>(i));
+  for (std::size_t b = 0; b < spec_.bodies.size(); ++b)
+    body_index.emplace(spec_.bodies[b].name, static_cast<int>(b));
+  for (std::size_t i = 0; i < en.items.size(); ++i) {
+    const Node& pair = en.items[i];
+    const std::string pp = Index(ep, i);
+    if (!pair.IsSequence() || pair.items.size() != 2)
+      r_.Fail(pair.location, pp,
+              "expected [body, obstacle] or [body, body], got " + scene_yaml::Describe(pair));
+    const int body = Body(pair.items[0], Index(pp, 0));
+    const std::string other = r_.Text(pair.items[1], Index(pp, 1));
+    if (const auto it = obstacle_index.find(other); it != obstacle_index.end()) {
+      spec_.contact.exclude.emplace_back(body, it->second);
+      continue;
     }
+    // Not an obstacle: a second body (a pair of moving bodies that never touch).
+    const auto second = body_index.find(other);
+    if (second == body_index.end()) {
+      std::vector<std::string> known = names;
+      for (const BodySpec& b : spec_.bodies) known.push_back(b.name);
+      r_.Fail(
+          pair.items[1].location, Index(pp, 1),
+          "undefined obstacle '" + other + "' (nor a body)" + scene_yaml::DidYouMean(other, known));
+    }
+    if (second->second == body)
+      r_.Fail(pair.items[1].location, Index(pp, 1),
+              "a body cannot be excluded from itself (rod self-contact: 'self: false')");
+    spec_.contact.exclude_bodies.emplace_back(body, second->second);
   }
 }
 
