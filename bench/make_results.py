@@ -33,6 +33,8 @@ import os
 import re
 import sys
 
+from bench_common import cpu_model
+
 TO_SECONDS = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
 NAME = re.compile(r"BM_(\w+)/([\w.]+)")
 GRM_CASES = {
@@ -45,17 +47,6 @@ GRM_TARGET = 10.0  # real-time factor the issue asks of the rigid-joint case (on
 # Issue 14: the rigid case solver-only at least this factor, fixed or auto step, at the accuracy
 # of h = 1e-3 s (P8 error against the reference at most the fixed step's).
 GRM_ACCURATE_TARGET = 25.0
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown"
 
 
 def nproc():

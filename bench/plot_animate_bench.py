@@ -29,6 +29,8 @@ import subprocess
 import sys
 import tempfile
 
+from bench_common import revision
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "bench" / "RESULTS.md"
 SECTION = "## Animation of `screwfem plot`"
@@ -48,14 +50,6 @@ paths = screwfem_plot.animate(sys.argv[2], sys.argv[3])
 print(json.dumps({"wall": time.perf_counter() - t0, "cpu": time.process_time() - c0,
                   "paths": paths}))
 """
-
-
-def revision():
-    try:
-        return subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT, text=True,
-                              capture_output=True, timeout=10).stdout.strip() or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
 
 
 def gif_timing(path):

@@ -28,7 +28,6 @@ import datetime
 import os
 import pathlib
 import statistics
-import subprocess
 import sys
 import time
 
@@ -36,6 +35,7 @@ import numpy as np
 
 import screwfem as sf
 from screwfem import _screwfem
+from bench_common import cpu_model, revision
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "bench" / "RESULTS.md"
@@ -91,25 +91,6 @@ class Physics:
             steps -= chunk
             self.done += chunk
         return wall, cpu, main
-
-
-def revision():
-    try:
-        return subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT, text=True,
-                              capture_output=True, timeout=10).stdout.strip() or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown CPU"
 
 
 def scheduling():
@@ -220,7 +201,7 @@ def main():
         "raised priority (as root: `setsid bash -c 'echo -10 > /proc/self/autogroup; exec",
         "nice -n -10 ...'`) competes for more of them.",
         "",
-        f"Run {stamp}, revision {revision()}, {cpu_model()}, {os.cpu_count()} cores, "
+        f"Run {stamp}, revision {revision()}, {cpu_model('unknown CPU')}, {os.cpu_count()} cores, "
         f"{scheduling()}; load average before {', '.join(f'{x:.2f}' for x in load_before)}, "
         f"after {', '.join(f'{x:.2f}' for x in load_after)}.",
         "",

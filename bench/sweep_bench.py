@@ -27,7 +27,6 @@ import datetime
 import os
 import pathlib
 import statistics
-import subprocess
 import sys
 import time
 
@@ -35,6 +34,7 @@ import numpy as np
 
 import screwfem as sf
 from screwfem import _sweep
+from bench_common import revision
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "bench" / "RESULTS.md"
@@ -99,14 +99,6 @@ def interleaved(scene, grid, metrics, client, rounds):
         pairs.append((ts, tp, (serial["wall_seconds"].sum(), serial["cpu_seconds"].sum()),
                       (parallel["wall_seconds"].sum(), parallel["cpu_seconds"].sum()), cs, cp))
     return pairs, identical
-
-
-def revision():
-    try:
-        return subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT, text=True,
-                              capture_output=True, timeout=10).stdout.strip() or "unknown"
-    except (OSError, subprocess.SubprocessError):
-        return "unknown"
 
 
 def main():
