@@ -42,8 +42,9 @@ def file_size_limit(nbytes):
 CLOCK_FIELDS = {"wall_seconds", "real_time_factor"}
 
 
-def read_files(folder):
-    """Every file of a run folder, the summary without its clock fields."""
+def read_files(folder, without_source=False):
+    """Every file of a run folder, the summary without its clock fields (and, with
+    `without_source`, without the scene's source: runs of one scene given two ways)."""
     out = {}
     for path in sorted(pathlib.Path(folder).rglob("*")):
         if path.is_dir() or path.name == ".screwfem.lock":
@@ -53,6 +54,9 @@ def read_files(folder):
             summary = json.loads(path.read_text())
             for key in CLOCK_FIELDS:
                 summary.pop(key, None)
+            if without_source:
+                summary.pop("source", None)
+                summary.get("scene", {}).pop("source", None)
             out[rel] = summary
         else:
             out[rel] = path.read_bytes()

@@ -9,7 +9,6 @@ InputError naming the entity and the field.
     cd tests/python && PYTHONPATH=<build>/python /usr/bin/python3 -m unittest -v test_spec
 """
 
-import json
 import math
 import pathlib
 import sys
@@ -21,13 +20,12 @@ from screwfem import _screwfem
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "python"))
 import grm_in_code  # noqa: E402  (the GRM built in code)
+from test_recording import read_files  # noqa: E402  (a run folder's files)
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 GRM = ROOT / "examples" / "grm"
 ARM = ROOT / "examples" / "python" / "soft_arm_control.yaml"
 TABLES = ("points.csv", "joints.csv", "reactions.csv", "energy.csv", "joints.json")
-# summary.json names the scene's source and the clock; everything else is the run's.
-SUMMARY_FIELDS_OF_THE_SOURCE = {"source", "wall_seconds", "real_time_factor"}
 
 
 def grm_spec(case):
@@ -40,20 +38,7 @@ def run_files(scene, folder):
     """Runs a scene into `folder`; returns its files (summary.json without the source and the
     clock), and the result."""
     result = sf.run_scene(scene, str(folder))
-    out = {}
-    for path in sorted(pathlib.Path(folder).rglob("*")):
-        if path.is_dir() or path.name == ".screwfem.lock":
-            continue
-        rel = str(path.relative_to(folder))
-        if rel == "summary.json":
-            summary = json.loads(path.read_text())
-            for key in SUMMARY_FIELDS_OF_THE_SOURCE:
-                summary.pop(key, None)
-            summary.get("scene", {}).pop("source", None)
-            out[rel] = summary
-        else:
-            out[rel] = path.read_bytes()
-    return out, result
+    return read_files(folder, without_source=True), result
 
 
 class SpecTestCase(unittest.TestCase):
