@@ -512,7 +512,12 @@ class Recording::Impl {
   // time is the load factor, Record).
   bool RecordStaticStep(double t, double load_factor) {
     load_factor_ = load_factor;
-    return finished_ || Record(t, true, true);
+    if (finished_) return true;
+    // The converged step's residual and rotation: what the summary reports when a write error
+    // ends the path before its solution (RecordStaticSolution sets them otherwise).
+    max_constraint_ = CalcMaxJointConstraint(model_, data_, t);
+    max_rotation_ = MaxElementRotation(data_);
+    return Record(t, true, true);
   }
   void SetStaticResult(const StaticResult& result) {
     static_ = result;

@@ -352,6 +352,11 @@ TEST(WriteError, StaticPathStopsAtTheNextNewtonIterationAndNamesTheLoadFactor) {
   EXPECT_GT(steps, static_cast<double>(points.rows.size()));
   EXPECT_LT(steps, 1000.0);  // of 2000
   EXPECT_EQ(static_cast<double>(r.steps), steps);
+  // The rotation of the last converged load step, not 0: the flexor curls the finger, each
+  // load step by about 1/2000 of the full curl.
+  const double rotation = summary->Find("max_element_rotation")->number;
+  EXPECT_EQ(rotation, r.max_element_rotation);
+  EXPECT_GT(rotation, 1e-4);
   const double failed_at = 0.0005 * steps, kept = points.rows.back()[1];
   EXPECT_NEAR(kept, 0.0005 * static_cast<double>(points.rows.size()), 1e-12);
   // The file that met the limit first (the largest batch).
