@@ -13,6 +13,7 @@
 
 #include "bind.h"
 #include "screwfem/build/model_builder.h"
+#include "screwfem/build/routing.h"
 #include "screwfem/model/errors.h"
 
 namespace py = pybind11;
@@ -265,6 +266,35 @@ void BindValues(py::module_& m) {
       .def_readonly("element", &BodyPoint::element,
                     "Set by build for a point between nodes: its element (-1: on a node).")
       .def_readonly("xi", &BodyPoint::xi, "Set by build: its place in the element, in (0, 1).");
+
+  py::class_<RodRoute>(m, "RodRoute",
+                       "A tendon's eyelets on the nodes of a rod by rule (build/routing.h; the "
+                       "scene's 'route' eyelet item): from arc length 'from' to 'to', every "
+                       "'every'-th node and the last one, at 'offset' in the section frame, plus "
+                       "a helical offset helix_radius (0, cos a, sin a), a = helix_phase + 2 pi "
+                       "(s - from) / helix_pitch.")
+      .def(py::init([](int rod, int every, double from, double to, const Vec3& offset,
+                       double helix_radius, double helix_pitch, double helix_phase) {
+             return RodRoute{rod, every, from, to, offset, helix_radius, helix_pitch, helix_phase};
+           }),
+           py::arg("rod") = -1, py::arg("every") = 1, py::arg("from_") = 0.0, py::arg("to") = -1.0,
+           py::arg("offset") = Vec3::Zero(), py::arg("helix_radius") = 0.0,
+           py::arg("helix_pitch") = 0.0, py::arg("helix_phase") = 0.0)
+      .def_readwrite("rod", &RodRoute::rod, "The rod (builder index; -1 in a spec: its body).")
+      .def_readwrite("every", &RodRoute::every, "Every k-th node (k >= 1).")
+      .def_readwrite("from_", &RodRoute::from, "Arc length where the route starts [m].")
+      .def_readwrite("to", &RodRoute::to, "Arc length where it ends [m]; negative: the end.")
+      .def_readwrite("offset", &RodRoute::offset, "Section-frame offset [m].")
+      .def_readwrite("helix_radius", &RodRoute::helix_radius, "Helix radius [m]; 0: none.")
+      .def_readwrite("helix_pitch", &RodRoute::helix_pitch,
+                     "Arc length per turn [m] (negative: the other hand).")
+      .def_readwrite("helix_phase", &RodRoute::helix_phase,
+                     "Angle of the helical offset at 'from' [rad], from section axis 2.");
+  m.def("route_along_rod", &RouteAlongRod, py::arg("builder"), py::arg("route"),
+        "The eyelets (BodyPoint list, in order along the rod) of a RodRoute on a builder's rod, "
+        "for add_tendon; the scene's 'route' items expand through the same function.");
+  m.def("rod_node_arc_lengths", &RodNodeArcLengths, py::arg("builder"), py::arg("rod"),
+        "Reference arc length of each node of a builder's rod [m].");
 
   py::class_<ForceElement>(m, "ForceElement",
                            "A spring-damper-actuator between two body points (model.h): force "

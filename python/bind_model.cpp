@@ -82,6 +82,14 @@ void BindModel(py::module_& m) {
       .def_readonly("length", &Rod::length, "Reference length: sum of the element lengths [m].")
       .def("__repr__", [](const Rod& r) { return "<screwfem.Rod '" + r.name + "'>"; });
 
+  py::class_<Tendon>(m, "Tendon", "A tendon through eyelets (model.h). Read-only.")
+      .def_readonly("name", &Tendon::name, "Unique name (the scene's tendons: key).")
+      .def_readonly("eyelets", &Tendon::eyelets,
+                    "Its eyelets in routing order, as Build placed them (BodyPoint list; a copy).")
+      .def_readonly("reference_length", &Tendon::reference_length,
+                    "Length in the reference configuration [m].")
+      .def("__repr__", [](const Tendon& t) { return "<screwfem.Tendon '" + t.name + "'>"; });
+
   py::class_<RigidBody>(m, "RigidBody",
                         "A rigid body carried by one node's frame (model.h). "
                         "Read-only.")
@@ -194,6 +202,10 @@ void BindModel(py::module_& m) {
           "rods",
           [](py::object self) { return ReferenceList(self.cast<const Model&>().rods, self); },
           "List of Rod (copies).")
+      .def_property_readonly(
+          "tendons",
+          [](py::object self) { return ReferenceList(self.cast<const Model&>().tendons, self); },
+          "List of Tendon (copies).")
       .def_property_readonly(
           "bodies",
           [](py::object self) { return ReferenceList(self.cast<const Model&>().bodies, self); },

@@ -409,6 +409,15 @@ BodyPointSpec SpecReader::ReadBodyPoint(py::handle obj, const std::string& path)
   p.at = Vector3(get("at"), f("at"));
   p.arc_length = NonNegative(get("arc_length"), f("arc_length"));
   p.offset = Vector3(get("offset"), f("offset"));
+  p.routed = Bool(get("routed"), f("routed"));
+  if (p.routed) {
+    if (!Soft(p.body)) Fail(f("body"), "a route runs along a soft body");
+    const py::handle route = get("route");
+    if (!py::isinstance<RodRoute>(route))
+      Fail(f("route"), "expected a RodRoute, got " + py::repr(route).cast<std::string>());
+    p.route = route.cast<RodRoute>();
+    return p;
+  }
   if (!Soft(p.body)) {
     const std::string who = p.body < 0 ? "the ground" : "rigid bodies";
     if (p.along_rod) Fail(f("along_rod"), "'s' is not used by " + who + " (give the point 'at')");
@@ -421,7 +430,10 @@ TendonSpec SpecReader::ReadTendon(py::handle obj, const std::string& path) const
   TendonSpec t;
   t.name = Text(Attr(obj, "name", path), Key(path, "name"));
   const py::list eyelets = List(Attr(obj, "eyelets", path), Key(path, "eyelets"));
-  if (eyelets.size() < 2)
+  const bool routed = std::any_of(eyelets.begin(), eyelets.end(), [](py::handle e) {
+    return py::hasattr(e, "routed") && py::bool_(e.attr("routed"));
+  });
+  if (eyelets.empty() || (eyelets.size() < 2 && !routed))
     Fail(Key(path, "eyelets"), "expected at least two eyelets (a tendon runs between them), got " +
                                    std::to_string(eyelets.size()));
   for (std::size_t i = 0; i < eyelets.size(); ++i)
@@ -715,7 +727,9 @@ py::object ToPython(const LoadSpec& l) {
 py::object ToPython(const BodyPointSpec& p) {
   return SpecClass("BodyPointSpec")(
       py::arg("body") = p.body, py::arg("along_rod") = p.along_rod, py::arg("at") = Tuple(p.at),
-      py::arg("arc_length") = p.arc_length, py::arg("offset") = Tuple(p.offset));
+      py::arg("arc_length") = p.arc_length, py::arg("offset") = Tuple(p.offset),
+      py::arg("routed") = p.routed,
+      py::arg("route") = p.routed ? py::cast(p.route) : py::object(py::none()));
 }
 
 py::object ToPython(const TendonSpec& t) {

@@ -170,6 +170,11 @@ class BodyPointSpec:
     arc_length: float = _f(0.0, doc="[m].", scene="s")
     offset: Any = _f(_ZERO3, doc="Soft bodies: offset from the section's centre, section-frame "
                      "components [m] (x along the rod).")
+    routed: bool = _f(False, doc="Tendon eyelets: this item stands for the eyelets of `route` "
+                      "along the soft body `body`.", scene="route given")
+    route: Any = _f(None, doc="A RodRoute (every, from_, to, offset, helix_radius, helix_pitch, "
+                    "helix_phase) when routed; its rod is set from `body` when compiled.",
+                    scene="route")
 
 
 @_documented
@@ -735,6 +740,8 @@ class SceneSpec:
         if isinstance(p, BodyPointSpec):
             return dataclasses.replace(p, body=self.body_index(p.body, f"{where}.body",
                                                                ground=True))
+        if isinstance(p, dict) and "route" in p:
+            return self._route(p, where)
         if not isinstance(p, dict) or set(p) - {"body", "at", "s", "offset"}:
             raise _error(where, f"expected {{'body': NAME, 'at': POINT}} or {{'body': NAME, "
                          f"'s': S, 'offset': [x, y, z]}}, got {p!r}")
@@ -759,6 +766,43 @@ class SceneSpec:
         if "offset" in p:
             point.offset = _vector(p["offset"], 3, f"{where}.offset")
         return point
+
+    def _route(self, p, where):
+        """The scene's {'route': {'body': SOFT, 'every': K, 'from': S0, 'to': S1, 'offset':
+        [x, y, z], 'helix': {'radius': R, 'pitch': P, 'phase': A}}} as a routed BodyPointSpec."""
+        if set(p) != {"route"} or not isinstance(p["route"], dict):
+            raise _error(where, f"expected {{'route': {{'body': NAME, ...}}}}, got {p!r}")
+        r, rp = p["route"], f"{where}.route"
+        unknown = set(r) - {"body", "every", "from", "to", "offset", "helix"}
+        if unknown:
+            raise _error(f"{rp}.{sorted(unknown)[0]}", "unknown key (expected body, every, from, "
+                         "to, offset, helix)")
+        if "body" not in r:
+            raise _error(rp, "missing key 'body'")
+        body = self.body_index(r["body"], f"{rp}.body")
+        if self.bodies[body].rigid:
+            raise _error(f"{rp}.body", "a route runs along a soft body")
+        route = _m.RodRoute()
+        if "every" in r:
+            every = _number(r["every"], f"{rp}.every")
+            if every != int(every) or every < 1:
+                raise _error(f"{rp}.every", f"expected an integer of at least 1, got {every!r}")
+            route.every = int(every)
+        if "from" in r:
+            route.from_ = _number(r["from"], f"{rp}.from")
+        if "to" in r:
+            route.to = _number(r["to"], f"{rp}.to")
+        if "offset" in r:
+            route.offset = _vector(r["offset"], 3, f"{rp}.offset")
+        if "helix" in r:
+            h, hp = r["helix"], f"{rp}.helix"
+            if not isinstance(h, dict) or set(h) - {"radius", "pitch", "phase"} or \
+                    not {"radius", "pitch"} <= set(h):
+                raise _error(hp, f"expected {{'radius': R, 'pitch': P, 'phase': A}}, got {h!r}")
+            route.helix_radius = _number(h["radius"], f"{hp}.radius")
+            route.helix_pitch = _number(h["pitch"], f"{hp}.pitch")
+            route.helix_phase = _number(h.get("phase", 0.0), f"{hp}.phase")
+        return BodyPointSpec(body=body, routed=True, route=route)
 
     def add_tendon(self, name, *, eyelets, tension=None, length=None):
         """A tendon (the scene's ``tendons:``); returns its TendonSpec.

@@ -4,6 +4,7 @@
 // including the builder's (InputError::entity()), to the place in the file that defined the
 // entity (SceneSources).
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -98,6 +99,7 @@ class SceneCompiler {
   }
   // Maps an error of ModelBuilder::Build to the spec entity that made the builder's entity.
   [[noreturn]] void RethrowBuildError(const InputError& e) const;
+  void RethrowRoutedEyeletError(const EntitySource& source, const InputError& e) const;
   const EntitySource& BodySource(int b) const {
     return SourceOf(src_.bodies, static_cast<std::size_t>(b));
   }
@@ -112,6 +114,8 @@ class SceneCompiler {
   // Per spec body: the builder's rigid body or rod index, and a rigid body's node.
   std::vector<int> body_index_, body_node_;
   mutable std::vector<std::vector<double>> rod_arcs_;  // RodArcs
+  // Per tendon, per eyelet given to the builder: the index of its item in the spec's list.
+  std::vector<std::vector<int>> tendon_eyelet_items_;
   std::vector<char> connected_;
   std::vector<int> node_body_, rod_body_, rigid_body_, point_load_, rod_load_;
   std::vector<int> contact_rod_body_, contact_shape_body_;  // spec body of each contact rod, shape
@@ -157,6 +161,7 @@ void SceneCompiler::RethrowBuildError(const InputError& e) const {
       break;
     case EntityKind::kTendon:
       pick(src_.tendons, entity.index);
+      if (source != nullptr) RethrowRoutedEyeletError(*source, e);
       break;
     case EntityKind::kForceElement:
       pick(src_.forces, entity.index);
@@ -177,6 +182,30 @@ void SceneCompiler::RethrowBuildError(const InputError& e) const {
   }
   if (source != nullptr) Fail(*source, e);
   throw InputError(src_.file + ": " + e.what());
+}
+
+// A builder error on a tendon's eyelet i: the spec item that made it (a route makes several).
+void SceneCompiler::RethrowRoutedEyeletError(const EntitySource& source,
+                                             const InputError& e) const {
+  const EntityRef& entity = e.entity();
+  const std::string prefix = "eyelets[";
+  if (entity.index < 0 || entity.index >= static_cast<int>(tendon_eyelet_items_.size()) ||
+      entity.part.rfind(prefix, 0) != 0)
+    return;
+  const std::vector<int>& items = tendon_eyelet_items_[static_cast<std::size_t>(entity.index)];
+  std::size_t i = 0;
+  const char* first = entity.part.data() + prefix.size();
+  const auto r = std::from_chars(first, entity.part.data() + entity.part.size(), i);
+  if (r.ec != std::errc() || i >= items.size()) return;
+  const int item = items[i];
+  const std::size_t first_of_item =
+      static_cast<std::size_t>(std::find(items.begin(), items.end(), item) - items.begin());
+  if (static_cast<std::size_t>(item) == i && std::count(items.begin(), items.end(), item) == 1)
+    return;  // an eyelet of its own, at its own index: the part names it already
+  const std::string what = e.detail().empty() ? e.what() : e.detail();
+  Fail(PartOf(source, prefix + std::to_string(item) + "]"),
+       what + " (eyelet " + std::to_string(i - first_of_item) + " of this item, eyelet " +
+           std::to_string(i) + " of the tendon)");
 }
 
 int SceneCompiler::NodeAt(int b, const Vec3& p, const FieldSource& at,
@@ -369,20 +398,7 @@ const std::vector<double>& SceneCompiler::RodArcs(int rod) const {
   if (rod_arcs_.size() <= static_cast<std::size_t>(rod))
     rod_arcs_.resize(static_cast<std::size_t>(rod) + 1);
   std::vector<double>& arcs = rod_arcs_[static_cast<std::size_t>(rod)];
-  if (!arcs.empty()) return arcs;
-  builder_.RodLength(rod);  // validates the rod and its nodes
-  const Model& m = builder_.model();
-  const Rod& r = m.rods[static_cast<std::size_t>(rod)];
-  double arc = 0.0;
-  for (std::size_t i = 0; i < r.nodes.size(); ++i) {
-    if (i > 0)
-      arc += LogSE3(m.nodes[static_cast<std::size_t>(r.nodes[i - 1])].reference.Inverse() *
-                    m.nodes[static_cast<std::size_t>(r.nodes[i])].reference)
-                 .head<3>()
-                 .norm();
-    arcs.push_back(arc);
-  }
-  if (arcs.empty()) arcs.push_back(0.0);
+  if (arcs.empty()) arcs = RodNodeArcLengths(builder_, rod);
   return arcs;
 }
 
@@ -407,9 +423,28 @@ void SceneCompiler::AddTendonsAndForces() {
     const TendonSpec& t = spec_.tendons[i];
     const EntitySource& source = SourceOf(src_.tendons, i);
     std::vector<BodyPoint> eyelets;
-    for (std::size_t k = 0; k < t.eyelets.size(); ++k)
-      eyelets.push_back(ResolveBodyPoint(
-          t.eyelets[k], PartOf(source, "eyelets[" + std::to_string(k) + "]"), "eyelet"));
+    std::vector<int> items;  // per eyelet: the spec item it comes from (routes give several)
+    for (std::size_t k = 0; k < t.eyelets.size(); ++k) {
+      const BodyPointSpec& p = t.eyelets[k];
+      const FieldSource& at = PartOf(source, "eyelets[" + std::to_string(k) + "]");
+      if (!p.routed) {
+        eyelets.push_back(ResolveBodyPoint(p, at, "eyelet"));
+        items.push_back(static_cast<int>(k));
+        continue;
+      }
+      RodRoute route = p.route;
+      route.rod = body_index_[static_cast<std::size_t>(p.body)];
+      try {
+        for (const BodyPoint& e : RouteAlongRod(builder_, route)) {
+          eyelets.push_back(e);
+          items.push_back(static_cast<int>(k));
+        }
+      } catch (const InputError& e) {
+        Fail(at, std::string("route along '") +
+                     spec_.bodies[static_cast<std::size_t>(p.body)].name + "': " + e.what());
+      }
+    }
+    tendon_eyelet_items_.push_back(std::move(items));
     if (t.by_length)
       builder_.AddLengthDrivenTendon(t.name, eyelets, t.length);
     else
@@ -536,8 +571,11 @@ void SceneCompiler::CheckReferences() const {
       Fail(SourceOf(src_.output_points, i).self, "a point along a rod needs a soft body");
   }
   for (std::size_t i = 0; i < spec_.tendons.size(); ++i)
-    for (const BodyPointSpec& p : spec_.tendons[i].eyelets)
-      check(p.body, true, SourceOf(src_.tendons, i), "eyelet");
+    for (const BodyPointSpec& p : spec_.tendons[i].eyelets) {
+      check(p.body, !p.routed, SourceOf(src_.tendons, i), "eyelet");
+      if (p.routed && spec_.bodies[static_cast<std::size_t>(p.body)].rigid)
+        Fail(SourceOf(src_.tendons, i).self, "a route runs along a soft body");
+    }
   for (std::size_t i = 0; i < spec_.forces.size(); ++i) {
     check(spec_.forces[i].a.body, true, SourceOf(src_.forces, i), "end a");
     check(spec_.forces[i].b.body, true, SourceOf(src_.forces, i), "end b");

@@ -216,6 +216,36 @@ void SceneReader::NotUsedBy(const Node& map, const std::string& path,
 
 // --- sections of the file ----------------------------------------------------------------------
 
+// parameters: {NAME: NUMBER or EXPRESSION, ...}: named values every number of the scene may use;
+// each may use the parameters above it. `--set parameters.NAME=VALUE` changes one; an override
+// cannot add one (a misspelt name would otherwise change nothing).
+void SceneReader::ReadParameters(const Node* node) {
+  r_.SetParameters(&parameters_);
+  if (node == nullptr || node->IsNull()) return;
+  r_.CheckNames(*node, "parameters", "parameter");
+  for (const auto& [entry, value] : node->entries) {
+    const std::string path = Join("parameters", entry.key);
+    if (!(std::isalpha(static_cast<unsigned char>(entry.key[0])) || entry.key[0] == '_') ||
+        entry.key.find('-') != std::string::npos)
+      r_.Fail(entry.key_location, path,
+              "a parameter name starts with a letter or '_' and holds only letters, digits and "
+              "'_' (it is used in expressions)");
+    if (scene_yaml::IsReservedExpressionName(entry.key))
+      r_.Fail(entry.key_location, path,
+              "'" + entry.key + "' is a constant or function of expressions; choose another name");
+    if (entry.key_location.override_text != nullptr) {
+      std::vector<std::string> known;
+      for (const auto& [e, v] : node->entries)
+        if (e.key_location.override_text == nullptr) known.push_back(e.key);
+      r_.Fail(entry.key_location, path,
+              "the scene has no parameter '" + entry.key + "'" +
+                  scene_yaml::UnknownNameHint(entry.key, known) +
+                  " (an override can change a parameter, not add one)");
+    }
+    parameters_.emplace_back(entry.key, r_.Number(value, path));
+  }
+}
+
 void SceneReader::ReadUnits(const Node& root) {
   const Node* units = root.Find("units");
   if (units == nullptr) return;
@@ -661,9 +691,10 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
             "a scene is a map of sections (points:, sections:, bodies:, joints:, ...), got " +
                 scene_yaml::Describe(root));
   r_.CheckKeys(root, "",
-               {"name", "description", "units", "gravity", "defaults", "points", "materials",
-                "sections", "bodies", "joints", "loads", "tendons", "forces", "analysis", "outputs",
-                "inputs", "actuation", "contact"});
+               {"name", "description", "parameters", "units", "gravity", "defaults", "points",
+                "materials", "sections", "bodies", "joints", "loads", "tendons", "forces",
+                "analysis", "outputs", "inputs", "actuation", "contact"});
+  ReadParameters(root.Find("parameters"));
   spec_.name = default_name;
   if (const Node* n = root.Find("name")) spec_.name = r_.Text(*n, "name");
   if (const Node* d = root.Find("description"))

@@ -69,6 +69,7 @@ class SceneReader {
 
  private:
   // Sections of the file.
+  void ReadParameters(const Node* node);
   void ReadUnits(const Node& root);
   void ReadDefaults(const Node* node);
   void ReadPoints(const Node* node);
@@ -101,6 +102,7 @@ class SceneReader {
   void ReadGroups(const Node& node, const std::string& path, unsigned* contype,
                   unsigned* conaffinity) const;
   BodyPointSpec ReadBodyPoint(const Node& node, const std::string& path) const;
+  BodyPointSpec ReadRoute(const Node& node, const std::string& path) const;
   void ReadAnalysis(const Node* node);
   void ReadTimes(const Node& node, const std::string& path);
   void ReadStepControl(const Node& node, const std::string& path);
@@ -125,6 +127,7 @@ class SceneReader {
                  const std::string& who) const;
 
   Reader r_;
+  scene_yaml::ParameterTable parameters_;  // the `parameters:` block, in file order
   SceneSpec& spec_;
   SceneSources& src_;
   int default_elements_ = 8;

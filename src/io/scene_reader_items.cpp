@@ -82,6 +82,43 @@ void SceneReader::ReadLoad(const Node& value, const std::string& path, LoadSpec&
   }
 }
 
+// {route: {body: SOFT BODY, every: K, from: S0, to: S1, offset: [x, y, z],
+//          helix: {radius: R, pitch: P, phase: A}}}: the eyelets of a route along a rod
+// (build/routing.h; checked against the rod by the compiler).
+BodyPointSpec SceneReader::ReadRoute(const Node& node, const std::string& path) const {
+  r_.CheckKeys(node, path, {"route"});
+  const Node& route = *node.Find("route");
+  const std::string rp = Join(path, "route");
+  r_.CheckKeys(route, rp, {"body", "every", "from", "to", "offset", "helix"});
+  BodyPointSpec p;
+  p.routed = true;
+  const Node& body = r_.Require(route, rp, "body");
+  p.body = Body(body, Join(rp, "body"));
+  if (spec_.bodies[static_cast<std::size_t>(p.body)].rigid)
+    r_.Fail(body.location, Join(rp, "body"),
+            "a route runs along a soft body; '" + body.scalar + "' is rigid (list its eyelets)");
+  RodRoute& r = p.route;
+  if (const Node* e = route.Find("every"))
+    r.every = r_.Integer(*e, Join(rp, "every"), 1, kMaxElements);
+  if (const Node* f = route.Find("from")) r.from = r_.NonNegativeNumber(*f, Join(rp, "from"));
+  if (const Node* t = route.Find("to")) r.to = r_.NonNegativeNumber(*t, Join(rp, "to"));
+  if (route.Find("to") != nullptr && !(r.to > r.from))
+    r_.Fail(route.Find("to")->location, Join(rp, "to"), "expected an arc length beyond 'from'");
+  if (const Node* o = route.Find("offset")) r.offset = r_.Vector3(*o, Join(rp, "offset"));
+  if (const Node* h = route.Find("helix")) {
+    const std::string hp = Join(rp, "helix");
+    r_.CheckKeys(*h, hp, {"radius", "pitch", "phase"});
+    r.helix_radius = r_.PositiveNumber(r_.Require(*h, hp, "radius"), Join(hp, "radius"));
+    const Node& pitch = r_.Require(*h, hp, "pitch");
+    r.helix_pitch = r_.Number(pitch, Join(hp, "pitch"));
+    if (r.helix_pitch == 0.0)
+      r_.Fail(pitch.location, Join(hp, "pitch"),
+              "expected a non-zero arc length per turn [m] (negative: the other hand)");
+    if (const Node* a = h->Find("phase")) r.helix_phase = r_.Number(*a, Join(hp, "phase"));
+  }
+  return p;
+}
+
 // {body: NAME or ground, at: POINT} or, on a soft body, {body, s: ARC_LENGTH, offset: [x, y, z]}
 // (the node at `at` or at arc length s, and the offset in its section frame).
 BodyPointSpec SceneReader::ReadBodyPoint(const Node& node, const std::string& path) const {
@@ -126,13 +163,20 @@ void SceneReader::ReadTendons(const Node* node) {
     t.name = entry.key;
     const Node& en = r_.Require(value, path, "eyelets");
     const std::string ep = Join(path, "eyelets");
-    if (!en.IsSequence() || en.items.size() < 2)
+    const bool routed =
+        en.IsSequence() && std::any_of(en.items.begin(), en.items.end(), [](const Node& item) {
+          return item.IsMap() && item.Find("route");
+        });
+    if (!en.IsSequence() || en.items.empty() || (en.items.size() < 2 && !routed))
       r_.Fail(en.location, ep,
               "expected a list of at least two eyelets (a tendon runs between them), got " +
                   scene_yaml::Describe(en));
     for (std::size_t i = 0; i < en.items.size(); ++i) {
       source.parts.emplace_back(Index("eyelets", i), Field(en.items[i].location, Index(ep, i)));
-      t.eyelets.push_back(ReadBodyPoint(en.items[i], Index(ep, i)));
+      const Node& item = en.items[i];
+      t.eyelets.push_back(item.IsMap() && item.Find("route") != nullptr
+                              ? ReadRoute(item, Index(ep, i))
+                              : ReadBodyPoint(item, Index(ep, i)));
     }
     // Drawn by tension or by length (a rheonomic constraint whose multiplier is the tension).
     const Node* ln = value.Find("length");
@@ -233,6 +277,12 @@ void SceneReader::ReadActuation(const Node* node) {
         r_.Fail(off.location, Join(path, "offset"),
                 "expected [r2, r3] (or [0, r2, r3]) in the section frame [m], got " +
                     std::to_string(o.size()) + " numbers");
+      if (o.size() == 3 && o[0] != 0.0)
+        r_.Fail(off.location, Join(path, "offset"),
+                "the first (axial) component must be 0: a " +
+                    std::string(a.type == ActuatorType::kMuscle ? "muscle" : "chamber") +
+                    " runs along the rod, its offset lies in the section plane (got " + "'" +
+                    off.items[0].scalar + "')");
       a.offset = o.size() == 2 ? Vec3(0.0, o[0], o[1]) : Vec3(o[0], o[1], o[2]);
       source.parts.emplace_back("offset", Field(off.location, Join(path, "offset")));
       if (a.type == ActuatorType::kMuscle)

@@ -10,6 +10,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <map>
 #include <numbers>
 #include <sstream>
@@ -247,7 +248,8 @@ std::size_t EditDistance(const std::string& a, const std::string& b) {
 // --- numeric expressions -----------------------------------------------------------------------
 class ExpressionParser {
  public:
-  explicit ExpressionParser(const std::string& text) : s_(text) {}
+  ExpressionParser(const std::string& text, const ParameterTable* parameters)
+      : s_(text), parameters_(parameters) {}
 
   bool Run(double* value, std::string* error) {
     double v = 0.0;
@@ -303,10 +305,24 @@ class ExpressionParser {
       ok = Unary(v);
       if (ok && op == '-') *v = -*v;
     } else {
-      ok = Primary(v);
+      ok = Power(v);
     }
     --depth_;
     return ok;
+  }
+  // primary [(^ | **) unary]: right-associative (2^3^2 = 2^9), the exponent may carry a sign.
+  bool Power(double* v) {
+    if (!Primary(v)) return false;
+    SkipSpace();
+    std::size_t op = 0;
+    if (pos_ < s_.size() && s_[pos_] == '^') op = 1;
+    if (pos_ + 1 < s_.size() && s_[pos_] == '*' && s_[pos_ + 1] == '*') op = 2;
+    if (op == 0) return true;
+    pos_ += op;
+    double exponent = 0.0;
+    if (!Unary(&exponent)) return false;
+    *v = std::pow(*v, exponent);
+    return true;
   }
   bool Primary(double* v) {
     SkipSpace();
@@ -336,7 +352,7 @@ class ExpressionParser {
         return true;
       }
       SkipSpace();
-      if (pos_ >= s_.size() || s_[pos_] != '(') return Fail("unknown name '" + name + "'");
+      if (pos_ >= s_.size() || s_[pos_] != '(') return Name(name, v);
       ++pos_;
       std::vector<double> args;
       for (;;) {
@@ -357,6 +373,20 @@ class ExpressionParser {
       return Call(name, args, v);
     }
     return Fail("unexpected '" + s_.substr(pos_, 1) + "'");
+  }
+  // A parameter's value.
+  bool Name(const std::string& name, double* v) {
+    std::vector<std::string> known = {"pi", "deg"};
+    if (parameters_ != nullptr) {
+      for (const auto& [key, value] : *parameters_) {
+        if (key == name) {
+          *v = value;
+          return true;
+        }
+      }
+      for (const auto& entry : *parameters_) known.push_back(entry.first);
+    }
+    return Fail("unknown name '" + name + "'" + UnknownNameHint(name, known));
   }
   bool Call(const std::string& name, const std::vector<double>& a, double* v) {
     using F = double (*)(double);
@@ -405,6 +435,7 @@ class ExpressionParser {
   }
 
   const std::string& s_;
+  const ParameterTable* parameters_;
   std::size_t pos_ = 0;
   int depth_ = 0;
   std::string error_;
@@ -550,6 +581,36 @@ Node* Descend(Node* cur, const std::string& part, std::string_view cur_path, boo
   return &cur->entries.back().second;
 }
 
+// "a.b.c=": removes c from a.b when both are there (the reader then takes c's default).
+void RemoveKey(Node& root, const std::string& path,
+               const std::vector<std::pair<std::size_t, std::size_t>>& parts,
+               const std::string& where) {
+  Node* cur = &root;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const std::string part = path.substr(parts[i].first, parts[i].second - parts[i].first);
+    if (cur->IsSequence()) {
+      if (i + 1 == parts.size())
+        throw InputError(where + ": an item of a list cannot be removed (give the whole list)");
+      std::size_t index = 0;
+      const auto r = std::from_chars(part.data(), part.data() + part.size(), index);
+      if (r.ec != std::errc() || r.ptr != part.data() + part.size() || index >= cur->items.size())
+        return;  // no such item: nothing to remove
+      cur = &cur->items[index];
+      continue;
+    }
+    if (!cur->IsMap()) return;
+    if (i + 1 == parts.size()) {
+      auto& entries = cur->entries;
+      entries.erase(std::remove_if(entries.begin(), entries.end(),
+                                   [&](const auto& e) { return e.first.key == part; }),
+                    entries.end());
+      return;
+    }
+    cur = cur->Find(part);
+    if (cur == nullptr) return;
+  }
+}
+
 }  // namespace
 
 void ApplyOverride(Node& root, const std::string& override_text, const std::string& source,
@@ -562,6 +623,10 @@ void ApplyOverride(Node& root, const std::string& override_text, const std::stri
   const std::string value_text = override_text.substr(eq + 1);
   const std::vector<std::pair<std::size_t, std::size_t>> parts = SplitKeyPath(path, where);
 
+  if (value_text.find_first_not_of(" \t") == std::string::npos) {
+    RemoveKey(root, path, parts, where);
+    return;
+  }
   const auto text = std::make_shared<const std::string>(override_text);
   Node value;
   try {
@@ -614,13 +679,21 @@ std::string UnknownNameHint(const std::string& word, const std::vector<std::stri
   return hint + (candidates.size() > 8 ? ", ...)" : ")");
 }
 
-bool EvaluateExpression(const std::string& text, double* value, std::string* error) {
+bool EvaluateExpression(const std::string& text, double* value, std::string* error,
+                        const ParameterTable* parameters) {
   if (text.size() > kMaxExpression) {
     *error = "expression too long";
     return false;
   }
-  ExpressionParser p(text);
+  ExpressionParser p(text, parameters);
   return p.Run(value, error);
+}
+
+bool IsReservedExpressionName(const std::string& name) {
+  static const char* const kReserved[] = {"pi",   "deg",  "sqrt", "sin", "cos",   "tan",
+                                          "asin", "acos", "atan", "exp", "atan2", "log"};
+  return std::any_of(std::begin(kReserved), std::end(kReserved),
+                     [&](const char* r) { return name == r; });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -695,7 +768,7 @@ double Reader::Number(const Node& node, const std::string& path) const {
   if (!node.IsScalar()) Fail(node.location, path, "expected a number, got " + Describe(node));
   double v = 0.0;
   std::string error;
-  if (!EvaluateExpression(node.scalar, &v, &error))
+  if (!EvaluateExpression(node.scalar, &v, &error, parameters_))
     Fail(node.location, path, "expected a number, got " + Quote(node.scalar) + " (" + error + ")");
   if (!std::isfinite(v))
     Fail(node.location, path, "expected a finite number, got " + Quote(node.scalar));
@@ -720,7 +793,10 @@ int Reader::Integer(const Node& node, const std::string& path, int min, int max)
   if (!node.IsScalar()) Fail(node.location, path, "expected an integer, got " + Describe(node));
   double v = 0.0;
   std::string error;
-  if (!EvaluateExpression(node.scalar, &v, &error) || !std::isfinite(v) || v != std::floor(v))
+  if (!EvaluateExpression(node.scalar, &v, &error, parameters_))
+    Fail(node.location, path,
+         "expected an integer, got " + Quote(node.scalar) + " (" + error + ")");
+  if (!std::isfinite(v) || v != std::floor(v))
     Fail(node.location, path, "expected an integer, got " + Quote(node.scalar));
   if (v < min || v > max)
     Fail(node.location, path,

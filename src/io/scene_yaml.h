@@ -23,6 +23,10 @@ namespace screwfem::scene_yaml {
 // (shared by all the nodes it wrote, so that an override costs memory linear in its length).
 using Location = SourceLocation;
 
+// Named values of a scene's `parameters:` block, in file order (docs/scene-format.md,
+// "Parameters and expressions").
+using ParameterTable = std::vector<std::pair<std::string, double>>;
+
 struct MapEntry {
   std::string key;
   Location key_location;
@@ -76,7 +80,9 @@ Node Parse(const std::string& text, const std::string& source, bool allow_empty 
 
 // Applies "a.b.c=value" to the tree (value parsed as a YAML scalar or flow collection).
 // Missing keys are created, except entries of the named collections in `collections` (dotted
-// paths such as "bodies"), which must exist unless they are the last component. Time and
+// paths such as "bodies"), which must exist unless they are the last component. An empty value
+// ("a.b.c=") removes the key, so that the reader takes its default (nothing happens when the
+// key is not there; an item of a list cannot be removed). Time and
 // memory are linear in the override's length; the key path has at most kMaxOverrideDepth
 // components.
 inline constexpr std::size_t kMaxOverrideDepth = 16;
@@ -133,8 +139,12 @@ class Reader {
   Vec3 Vector3(const Node& node, const std::string& path) const;
   Vec6 Vector6(const Node& node, const std::string& path) const;
 
+  // The parameters every number read from now on may name (nullptr: none). Not owned.
+  void SetParameters(const ParameterTable* parameters) { parameters_ = parameters; }
+
  private:
   std::string source_;
+  const ParameterTable* parameters_ = nullptr;
 };
 
 // The scene reference test (tests/io/scene_reference_test.cpp) holds docs/scene-format.md and
@@ -152,9 +162,14 @@ using KeyCheckObserver = void (*)(const KeyCheck& check, void* context);
 void SetKeyCheckObserver(KeyCheckObserver observer, void* context);
 
 // Evaluates a number written as a decimal literal or a small arithmetic expression
-// (+ - * / parentheses, the constants pi and deg = pi/180, the functions sqrt sin cos tan asin
-// acos atan atan2 exp log).
+// (+ - * / and powers ^ or ** (right-associative, binding tighter than a sign: -2^2 = -4),
+// parentheses, the constants pi and deg = pi/180, the functions sqrt sin cos tan asin acos atan
+// atan2 exp log, and the names of `parameters`, when given).
 // Returns false (and an explanation) when the text is not such an expression.
-bool EvaluateExpression(const std::string& text, double* value, std::string* error);
+bool EvaluateExpression(const std::string& text, double* value, std::string* error,
+                        const ParameterTable* parameters = nullptr);
+// True for the names an expression gives a meaning of its own (pi, deg, the functions): no
+// parameter may take them.
+bool IsReservedExpressionName(const std::string& name);
 
 }  // namespace screwfem::scene_yaml

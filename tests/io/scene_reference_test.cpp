@@ -81,6 +81,7 @@ const std::vector<SectionRule> kSections = {
     {"ReadProfile", "", {"Profiles"}},
     {"ReadProfileTerm", "", {"Profiles"}},
     {"ReadBodyPoint", "", {"Body points (eyelets and force-element ends)"}},
+    {"ReadRoute", "", {"Routing helpers"}},
     {"", "", {"Top-level keys"}},
     {"", "defaults", {"`defaults`"}},
     {"", "sections.*", {"`sections`"}},

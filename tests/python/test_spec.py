@@ -240,6 +240,57 @@ class Tendons(SpecTestCase):
         # A length instead of the BodySpec's path.
         self.assertEqual(sf.route_helical("arm", s, 0.008, 1.5, 0.25, length=0.3), route)
 
+    def test_route_rule_equals_the_long_form_file_and_builder(self):
+        """The scene's route item ({'route': {...}}, docs/scene-format.md 'Routing helpers')
+        from Python gives the eyelets of the long form, of the same route in a YAML file and of
+        route_along_rod on a ModelBuilder, bit for bit."""
+        def eyelets(scene):
+            model = scene.model
+            return [(p.node, tuple(p.offset)) for p in model.tendons[0].eyelets]
+
+        long_form = self.arm_spec()
+        rule = self.arm_spec()
+        rule.tendons.clear()
+        t = rule.add_tendon("lifter", eyelets=[{"route": {"body": "arm", "offset": (0, 0, 0.009)}}],
+                            tension=rule.input("u"))
+        self.assertTrue(t.eyelets[0].routed)
+        self.assertEqual(t.eyelets[0].route.every, 1)
+        self.assertEqual(eyelets(rule.compile()), eyelets(long_form.compile()))
+        self.assertEqual(len(eyelets(rule.compile())), 9)
+        # The same route in the file.
+        file_scene = sf.load_scene(str(ARM), [
+            "tendons.lifter.eyelets=[{route: {body: arm, offset: [0, 0, 0.009]}}]"])
+        self.assertEqual(eyelets(file_scene), eyelets(long_form.compile()))
+        # A helical rule, every 2nd node from 0.075 m: the builder function on the same rod.
+        helix = {"route": {"body": "arm", "every": 2, "from": 0.075,
+                           "helix": {"radius": 0.008, "pitch": 0.2, "phase": 0.25}}}
+        rule.tendons.clear()
+        rule.add_tendon("lifter", eyelets=[helix], tension=1.0)
+        b = sf.ModelBuilder()
+        rod = b.add_straight_rod("arm", (0, 0, 0), (0.3, 0, 0), 8,
+                                 sf.Section.circle(0.01, sf.Material(E=1e7, nu=0.45,
+                                                                     density=1100)))
+        route = sf.RodRoute(rod=rod, every=2, from_=0.075, helix_radius=0.008, helix_pitch=0.2,
+                            helix_phase=0.25)
+        points = sf.route_along_rod(b, route)
+        arcs = sf.rod_node_arc_lengths(b, rod)
+        self.assertEqual([round(a, 12) for a in arcs], [round(0.0375 * i, 12) for i in range(9)])
+        compiled = eyelets(rule.compile())
+        self.assertEqual([o for _, o in compiled], [tuple(p.offset) for p in points])
+        self.assertEqual(len(points), 4)  # nodes 2, 4, 6, 8
+        for (_, offset), i in zip(compiled, (2, 4, 6, 8)):
+            a = 0.25 + 2 * math.pi * (arcs[i] - 0.075) / 0.2
+            self.assertAlmostEqual(offset[1], 0.008 * math.cos(a), places=15)
+            self.assertAlmostEqual(offset[2], 0.008 * math.sin(a), places=15)
+        # Bad rules name the field.
+        with self.assertRaisesRegex(sf.InputError, r"tendons.t.eyelets\[0\].route.every"):
+            rule.add_tendon("t", eyelets=[{"route": {"body": "arm", "every": 0}}], tension=1)
+        with self.assertRaisesRegex(sf.InputError, "route along 'arm': no node lies from 0.1 m to 0.11 m"):
+            rule.tendons.clear()
+            rule.add_tendon("t", eyelets=[{"route": {"body": "arm", "from": 0.1, "to": 0.11}}],
+                            tension=1)
+            rule.compile()
+
 
 # A scene using the adders the GRM does not: sections by shape, contact (shapes, an obstacle,
 # exclusions), force elements, actuation, inputs, step: auto, rod output points, listed joints.

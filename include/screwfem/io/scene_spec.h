@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "screwfem/build/model_builder.h"
+#include "screwfem/build/routing.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/solve/stop.h"
 
@@ -85,6 +86,11 @@ struct BodyPointSpec {
   Vec3 at = Vec3::Zero();      // [m], world
   double arc_length = 0.0;     // [m]
   Vec3 offset = Vec3::Zero();  // soft bodies: section-frame components [m]
+  // Tendon eyelets only: this item stands for the eyelets of a route along the soft body
+  // `body` (build/routing.h; route.rod is set by the compiler, `at`, `arc_length` and `offset`
+  // are not used).
+  bool routed = false;
+  RodRoute route;
 };
 
 // A tendon (ModelBuilder::AddTendon): eyelets in routing order and the tension profile [N];
