@@ -37,12 +37,15 @@ from ._spec import (  # noqa: F401  (the scene spec: python/screwfem/_spec.py)
 from ._env import Box, Env, VectorEnv  # noqa: F401  (environments: python/screwfem/_env.py)
 from ._live import LiveView  # noqa: F401  (Simulation.view: python/screwfem/_live.py)
 from ._sweep import (  # noqa: F401  (sweeps: python/screwfem/_sweep.py)
-    DEFAULT_METRICS, Counters, MaxConstraintResidual, PeakJointEffort, PointPosition, Run,
-    WallTime, format_overrides, run_variant, sweep, variant_id, variants)
+    DEFAULT_METRICS, ColumnMetric, Counters, MaxConstraintResidual, PeakJointEffort,
+    PointPosition, Run, WallTime, format_overrides, format_summary, notable_variants,
+    run_variant, short_names, summary_table, sweep, variant_id, variants, write_figures)
 
 __all__ = [name for name in dir(_screwfem) if not name.startswith("_")] + [
     "sweep", "variants", "format_overrides", "variant_id", "run_variant", "Run", "PointPosition",
-    "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort", "DEFAULT_METRICS"] + [
+    "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort", "DEFAULT_METRICS",
+    "ColumnMetric", "short_names", "summary_table", "format_summary", "notable_variants",
+    "write_figures"] + [
     "SceneSpec", "BodySpec", "JointEntrySpec", "LoadSpec", "BodyPointSpec", "TendonSpec",
     "ForceSpec", "ActuatorSpec", "OutputPointSpec", "ContactSpec", "OutputsSpec",
     "read_scene_spec", "route_offset", "route_helical", "Box", "Env", "VectorEnv", "LiveView"]

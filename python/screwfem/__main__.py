@@ -5,8 +5,10 @@
                               [--scheduler ADDR | --workers N] -o DIR [--resume]
                               [--metric point:P8@0.5,1] [--keep-outputs] [--quiet]
 
-A thin front end to screwfem.sweep: prints one summary line, writes DIR/results.csv (and
-DIR/rows.jsonl, DIR/sweep.json). A grid key may name several override paths joined with '+'
+A thin front end to screwfem.sweep: prints the summary table (short parameter names, status,
+metrics) and one line, writes DIR/summary.csv, DIR/figures/METRIC.png, DIR/results.csv (and
+DIR/rows.jsonl, DIR/sweep.json), and keeps the files of the variants that did not complete and
+of each metric's smallest and largest value in DIR/runs/. A grid key may name several override paths joined with '+'
 (all set to the same value). Values are YAML scalars; a value holding commas goes in
 brackets: --grid 'gravity=[0,0,-9.81],[0,0,-1.62]'.
 Exit codes: 0 every variant completed, 1 some did not (failed, invalid or error rows), 2
@@ -53,7 +55,14 @@ def _key_value(text, option):
 
 
 def _metric(text, sf):
-    """--metric point:NAME@t1,t2 | effort[:J0,J2] | constraint | counters | wall."""
+    """--metric point:NAME@t1,t2 | effort[:J0,J2] | constraint | counters | wall, or an
+    expression over a recorded column: max(C) min(C) absmax(C) initial(C) final(C) mean(C)
+    rms(C) at(C,T) (screwfem.ColumnMetric)."""
+    if "(" in text:
+        try:
+            return sf.ColumnMetric(text)
+        except ValueError as e:
+            raise SystemExit(f"screwfem sweep: {e}") from None
     kind, _, arg = text.partition(":")
     if kind == "point":
         name, _, times = arg.partition("@")
@@ -64,7 +73,8 @@ def _metric(text, sf):
     if kind in simple and not arg:
         return simple[kind]()
     raise SystemExit(f"screwfem sweep: unknown metric '{text}' "
-                     "(point:NAME@T1,T2 | effort[:J1,J2] | constraint | counters | wall)")
+                     "(point:NAME@T1,T2 | effort[:J1,J2] | constraint | counters | wall | "
+                     "max(COLUMN) | min | absmax | initial | final | mean | rms | at(COLUMN,T))")
 
 
 def main(argv=None):
@@ -81,12 +91,16 @@ def main(argv=None):
     p.add_argument("--scheduler", help="Dask scheduler address tcp://HOST:PORT, or 'serial'")
     p.add_argument("--workers", type=int, help="local worker processes (default: all cores)")
     p.add_argument("--metric", action="append", default=[],
-                   help="point:NAME@T1,T2 | effort[:J1,J2] | constraint | counters | wall "
-                        "(repeatable; default: constraint, counters, wall)")
+                   help="point:NAME@T1,T2 | effort[:J1,J2] | constraint | counters | wall | "
+                        "max(COLUMN) | min(C) | absmax(C) | initial(C) | final(C) | mean(C) | "
+                        "rms(C) | at(C,T), C a column of any table of the run, e.g. "
+                        "'max(tip.z)' (repeatable; default: constraint, counters, wall)")
     p.add_argument("-o", "--output", required=True, help="output directory")
     p.add_argument("--resume", action="store_true", help="run only the variants missing in -o")
     p.add_argument("--keep-outputs", action="store_true",
-                   help="keep each variant's files in OUTPUT/runs/VARIANT_ID/")
+                   help="keep every variant's files in OUTPUT/runs/VARIANT_ID/ (default: only "
+                        "those of the variants that did not complete and of the smallest and "
+                        "largest value of each metric)")
     p.add_argument("--max-memory", metavar="SIZE",
                    help="refuse variants whose model and solver would need more memory than "
                         "SIZE, e.g. 8G (default: half the physical memory; docs/limits.md)")
@@ -116,8 +130,10 @@ def main(argv=None):
     try:
         df = sf.sweep(args.scene, parameters, metrics=metrics, scheduler=args.scheduler,
                       workers=args.workers, outdir=args.output, samples=args.samples,
-                      seed=args.seed, resume=args.resume, keep_outputs=args.keep_outputs,
-                      progress=False if args.quiet else None, max_memory=args.max_memory)
+                      seed=args.seed, resume=args.resume,
+                      keep_outputs=True if args.keep_outputs else "notable",
+                      progress=False if args.quiet else None, max_memory=args.max_memory,
+                      summary=True)
     except KeyboardInterrupt:
         print(f"\nscrewfem sweep: interrupted; finished rows kept in {args.output} "
               "(--resume runs the missing variants)", file=sys.stderr)
@@ -127,7 +143,14 @@ def main(argv=None):
         return 2
     counts = df["status"].value_counts().to_dict() if len(df) else {}
     summary = ", ".join(f"{n} {s}" for s, n in sorted(counts.items()))
-    print(f"sweep: {len(df)} variants ({summary}) -> {args.output}/results.csv")
+    if len(df):
+        print(sf.format_summary(sf.summary_table(df, list(parameters))))
+    print(f"sweep: {len(df)} variants ({summary}) -> {args.output}/summary.csv, results.csv, "
+          "figures/")
+    notable = df.attrs.get("notable", {})
+    if notable:
+        print(f"kept in {args.output}/runs/: " +
+              "; ".join(f"{vid} ({why})" for vid, why in notable.items()))
     for _, row in df[df["status"] != "completed"].iterrows():
         print(f"  {row['variant_id']} {row['status']}: {row['message']}", file=sys.stderr)
     return 0 if counts.get("completed", 0) == len(df) else 1

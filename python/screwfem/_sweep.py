@@ -32,11 +32,14 @@ from ._screwfem import InputError, parse_memory_size, parse_scene, run_scene
 __all__ = [
     "sweep", "variants", "format_overrides", "variant_id", "run_variant", "Run",
     "PointPosition", "MaxConstraintResidual", "WallTime", "Counters", "PeakJointEffort",
-    "DEFAULT_METRICS", "ROWS_FILE", "TABLE_FILE",
+    "ColumnMetric", "DEFAULT_METRICS", "ROWS_FILE", "TABLE_FILE", "SUMMARY_FILE", "short_names",
+    "summary_table", "format_summary", "notable_variants", "write_figures",
 ]
 
 ROWS_FILE = "rows.jsonl"      # the journal: one JSON row per finished variant
 TABLE_FILE = "results.csv"    # the table, rewritten from the journal at the end of a sweep
+SUMMARY_FILE = "summary.csv"  # the tidy table: short parameter names, status and metrics
+FIGURES_DIR = "figures"       # a figure of each metric against the parameters
 MANIFEST_FILE = "sweep.json"  # scene file, its hash and the variant list of the sweep
 
 
@@ -66,6 +69,33 @@ def _key_paths(key):
 
 def _key_name(key):
     return "+".join(_key_paths(key))
+
+
+def short_names(keys):
+    """{key name: short name} for the parameter keys of a sweep: the last component of each
+    override path ('parameters.length' -> 'length', 'joints.J0.damping' -> 'damping'), with
+    more components from the end where two keys would share a name ('J0.damping',
+    'J1.damping'); a key of several paths joins the distinct ones with '+'."""
+    paths = {_key_name(k): [p.split(".") for p in _key_paths(k)] for k in keys}
+    depth = {name: 1 for name in paths}
+
+    def short(name):
+        parts = []
+        for p in paths[name]:
+            text = ".".join(p[-depth[name]:])
+            if text not in parts:
+                parts.append(text)
+        return "+".join(parts)
+
+    for _ in range(64):
+        names = {n: short(n) for n in paths}
+        clash = {n for n in paths if list(names.values()).count(names[n]) > 1}
+        grow = {n for n in clash if any(depth[n] < len(p) for p in paths[n])}
+        if not grow:
+            return names
+        for n in grow:
+            depth[n] += 1
+    return {n: n for n in paths}
 
 
 def format_overrides(assignment):
@@ -156,8 +186,9 @@ class Run:
         self._tables = {}
 
     def table(self, name):
-        """(columns, rows) of points.csv or joints.csv ('points' or 'joints'): a list of column
-        names and a 2-D NumPy array (one row per recorded time; the values as simulated)."""
+        """(columns, rows) of one of the run's tables, by file stem ('points', 'joints',
+        'tendons', 'energy', ...): a list of column names and a 2-D NumPy array (one row per
+        recorded time; the values as simulated)."""
         if name not in self._tables:
             import numpy as np
 
@@ -171,13 +202,21 @@ class Run:
             self._tables[name] = (header, data.reshape(-1, len(header)))
         return self._tables[name]
 
+    def tables(self):
+        """The stems of the run's tables (points and joints first, then the others by name)."""
+        found = sorted(p.stem for p in self.outdir.glob("*.csv"))
+        return [t for t in ("points", "joints") if t in found] + \
+            [t for t in found if t not in ("points", "joints")]
+
     def column(self, name):
-        """One recorded column by name ('t', 'P8.x', 'J0.effort', ...) as a 1-D array."""
-        for table in ("points", "joints"):
+        """One recorded column by name ('t', 'P8.x', 'J0.effort', 'flexor.tension', ...) as a
+        1-D array, from the first table (points, joints, then the others) that has it."""
+        for table in self.tables():
             header, data = self.table(table)
             if name in header:
                 return data[:, header.index(name)]
-        raise KeyError(f"no recorded column '{name}' (outputs.points / outputs.joints)")
+        raise KeyError(f"no recorded column '{name}' in " +
+                       ", ".join(f"{t}.csv" for t in self.tables()))
 
     def point_position(self, point, t):
         """World position [m] of a recorded point at the recorded time nearest to t [s].
@@ -246,6 +285,54 @@ class PeakJointEffort:
         if not cols:
             raise KeyError("no recorded joint effort among " + str(self.joints))
         return {self.name: float(abs(data[:, cols]).max()) if len(data) else math.nan}
+
+
+class ColumnMetric:
+    """A metric written as a small expression over one recorded column of any of the run's
+    tables (Run.column): max(C), min(C), absmax(C), initial(C), final(C), mean(C) (over the
+    recorded rows), rms(C) (root mean square over the rows) or at(C, T) (the row nearest to
+    time T [s]). Column 'name' or the expression without spaces, e.g. 'max(tip.z)',
+    'final(flexor.tension)', 'at(P8.x,0.5)', 'rms(J1.q)'. NaN when the run recorded no row
+    (or, for at, when T is outside the recorded times)."""
+
+    FUNCTIONS = ("max", "min", "absmax", "initial", "final", "mean", "rms", "at")
+
+    def __init__(self, expression, name=None):
+        import re
+
+        m = re.fullmatch(r"\s*([a-z]+)\s*\(\s*([^,()\s]+)\s*(?:,\s*([^,()\s]+)\s*)?\)\s*",
+                         expression)
+        if not m or m.group(1) not in self.FUNCTIONS:
+            raise ValueError(f"metric '{expression}': expected FUNCTION(COLUMN) or at(COLUMN, T) "
+                             f"with FUNCTION one of {', '.join(self.FUNCTIONS)}")
+        self.function, self.column, t = m.group(1), m.group(2), m.group(3)
+        if (self.function == "at") != (t is not None):
+            raise ValueError(f"metric '{expression}': " +
+                             ("at(COLUMN, T) needs a time" if t is None else
+                              f"{self.function}(COLUMN) takes no time"))
+        self.time = float(t) if t is not None else None
+        self.name = name or "".join(expression.split())
+
+    def __call__(self, run):
+        import numpy as np
+
+        values = run.column(self.column)
+        if len(values) == 0:
+            return {self.name: math.nan}
+        f = self.function
+        if f == "at":
+            times = run.column("t")
+            tol = 1e-9 * max(1.0, abs(self.time))
+            if self.time < times[0] - tol or self.time > times[-1] + tol:
+                return {self.name: math.nan}
+            value = values[int(np.argmin(np.abs(times - self.time)))]
+        elif f == "rms":
+            value = math.sqrt(float(np.mean(values * values)))
+        else:
+            value = {"max": np.max, "min": np.min, "absmax": lambda v: np.max(np.abs(v)),
+                     "initial": lambda v: v[0], "final": lambda v: v[-1],
+                     "mean": np.mean}[f](values)
+        return {self.name: float(value)}
 
 
 DEFAULT_METRICS = (MaxConstraintResidual(), Counters(), WallTime())
@@ -486,9 +573,122 @@ def _write_table(df, outdir):
     df.to_parquet(outdir / "results.parquet", index=False)
 
 
+# ---------------------------------------------------------------------------------------------
+# Summaries: the tidy table, its text and figures, the notable variants
+
+NOT_METRICS = ("variant", "variant_id", "overrides", "status", "message")
+UNREPRODUCIBLE = ("wall_seconds", "cpu_seconds")
+
+
+def summary_table(df, names):
+    """The tidy table of a sweep's DataFrame: variant, one column per parameter (short names,
+    short_names), status, then one column per metric. `names`: the parameter key names (the
+    columns of df that hold parameters)."""
+    params = [n for n in names if n in df.columns]
+    metrics = [c for c in df.columns if c not in NOT_METRICS and c not in params]
+    short = short_names(params)
+    taken = set(metrics) | {"variant", "status"}
+    short = {n: (n if short[n] in taken else short[n]) for n in params}  # a metric's name: long
+    return df[["variant", *params, "status", *metrics]].rename(columns=short)
+
+
+def format_summary(table, max_rows=20):
+    """The tidy table as aligned text: numbers with 6 significant digits, at most `max_rows`
+    rows (the first and last halves, '...' between)."""
+    def cell(v):
+        if isinstance(v, float):
+            return "nan" if math.isnan(v) else f"{v:.6g}"
+        return str(v)
+
+    cols = list(table.columns)
+    rows = [[cell(v) for v in r] for r in table.itertuples(index=False)]
+    if len(rows) > max_rows:
+        half = max_rows // 2
+        rows = rows[:half] + [["..."] * len(cols)] + rows[-half:]
+    widths = [max([len(c)] + [len(r[i]) for r in rows]) for i, c in enumerate(cols)]
+    lines = ["  ".join(c.rjust(w) for c, w in zip(cols, widths))]
+    lines += ["  ".join(v.rjust(w) for v, w in zip(r, widths)) for r in rows]
+    return "\n".join(lines)
+
+
+def notable_variants(df, names):
+    """{variant_id: why} of the variants worth keeping: every one that did not complete, and
+    among the completed ones those with the smallest and largest value of each reproducible
+    metric (not wall or CPU time)."""
+    out = {}
+    for _, row in df[df["status"] != "completed"].iterrows():
+        out[row["variant_id"]] = row["status"]
+    done = df[df["status"] == "completed"]
+    for c in df.columns:
+        if c in NOT_METRICS or c in names or c in UNREPRODUCIBLE:
+            continue
+        values = __import__("pandas").to_numeric(done[c], errors="coerce")
+        if values.notna().sum() < 2 or values.min() == values.max():
+            continue
+        for what, i in (("min", values.idxmin()), ("max", values.idxmax())):
+            vid = done.loc[i, "variant_id"]
+            out[vid] = (out[vid] + ", " if vid in out else "") + f"{what} {c}"
+    return out
+
+
+def write_figures(table, params, outdir):
+    """One PNG per metric of the tidy table in OUTDIR/figures/ (metrics that vary): the metric
+    against the first parameter that takes several numeric values, a line per combination of
+    the others (at most 12; points otherwise), failed variants left out. Returns the files written (none without
+    matplotlib or a numeric parameter)."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return []
+    import pandas as pd
+
+    done = table[table["status"] == "completed"]
+    numeric = [p for p in params
+               if pd.to_numeric(done[p], errors="coerce").notna().all() and done[p].nunique() > 1]
+    if not numeric:
+        return []
+    x = numeric[0]
+    others = [p for p in params if p != x and table[p].nunique() > 1]
+    metrics = [c for c in table.columns if c not in ("variant", "status", *params)]
+    folder = pathlib.Path(outdir) / FIGURES_DIR
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    groups = [((), done)]
+    if len(others) == 1:
+        groups = [((k,), g) for k, g in done.groupby(others[0])]
+    elif others:
+        groups = list(done.groupby(others))
+    for m in metrics:
+        y = pd.to_numeric(done[m], errors="coerce")
+        if y.isna().all() or y.nunique() < 2:
+            continue  # nothing to see: no number, or the same for every variant
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for key, g in groups[:12]:
+            key = key if isinstance(key, tuple) else (key,)
+            label = ", ".join(f"{o} = {v}" for o, v in zip(others, key)) or None
+            g = g.sort_values(x)
+            ax.plot(pd.to_numeric(g[x]), pd.to_numeric(g[m], errors="coerce"),
+                    "o-" if len(groups) <= 12 else "o", label=label)
+        ax.set_xlabel(x)
+        ax.set_ylabel(m)
+        ax.grid(True, alpha=0.3)
+        if others and len(groups) <= 12:
+            ax.legend(fontsize=8)
+        fig.tight_layout()
+        name = "".join(ch if ch.isalnum() or ch in "._-" else "_" for ch in m).strip("_")
+        path = folder / f"{name}.png"
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        written.append(path)
+    return written
+
+
 def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=None, workers=None,
           outdir=None, samples=None, seed=0, resume=False, keep_outputs=False, vtk=False,
-          progress=None, timeout=None, max_memory=None):
+          progress=None, timeout=None, max_memory=None, summary=False):
     """Runs every variant of `scene` and returns a pandas DataFrame, one row per variant.
 
     scene       scene file (YAML); workers receive its text, so they need no shared files.
@@ -512,7 +712,12 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
                 variants and those whose row has status 'error' (e.g. a task lost with too
                 many workers); the scene file must be unchanged. `keep_outputs` keeps each
                 variant's files in OUTDIR/runs/<variant_id>/ on the worker's file system
-                (ParaView files only with `vtk`).
+                (ParaView files only with `vtk`); keep_outputs='notable' keeps only those of
+                the variants that did not complete and of the smallest and largest value of
+                each metric (notable_variants; the others are removed at the end; on a
+                remote cluster only those the workers wrote on this file system).
+    summary     with `outdir`: also writes OUTDIR/summary.csv (summary_table: short parameter
+                names, status, metrics) and OUTDIR/figures/METRIC.png (write_figures).
     timeout     seconds to wait for the whole sweep (None: no limit); raises TimeoutError.
     max_memory  bytes, or a size such as '8G': variants whose model and solver would need more
                 are 'invalid' (parse_scene's max_memory; default: half the physical memory of
@@ -572,6 +777,10 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
     def keep_dir(i):
         return str(outdir / "runs" / ids[i]) if (keep_outputs and outdir is not None) else None
 
+    if keep_outputs not in (False, True, None, "notable"):
+        raise ValueError(f"sweep: keep_outputs must be True, False or 'notable', got "
+                         f"{keep_outputs!r}")
+
     def finish(i, row):
         row = {**params_of[ids[i]], **row}
         rows[ids[i]] = row
@@ -596,6 +805,17 @@ def sweep(scene, parameters, metrics=DEFAULT_METRICS, client=None, scheduler=Non
         df = _table(rows, names, ids)
         if outdir is not None:
             _write_table(df, outdir)
+    if outdir is not None and summary:  # a whole sweep (not interrupted)
+        table = summary_table(df, names)
+        table.to_csv(outdir / SUMMARY_FILE, index=False)
+        write_figures(table, list(table.columns[1:1 + len([n for n in names if n in df.columns])]),
+                      outdir)
+    if outdir is not None and keep_outputs == "notable" and (outdir / "runs").is_dir():
+        keep = notable_variants(df, names)
+        for d in (outdir / "runs").iterdir():
+            if d.is_dir() and d.name not in keep:
+                shutil.rmtree(d, ignore_errors=True)
+        df.attrs["notable"] = keep
     return df
 
 

@@ -99,22 +99,25 @@ TEST(SceneParameters, AnOverrideChangesAParameterEverywhereItIsUsed) {
   EXPECT_NEAR(p.model.rods[0].section.stiffness(0) / base.model.rods[0].section.stiffness(0), 4.0,
               1e-12);
   // An expression in the override may use the other parameters.
-  EXPECT_EQ(
-      ParseScene(kWithParameters, "p.yaml", {"parameters.n=length * 10"}).model.rods[0].num_elements,
-      4);
+  EXPECT_EQ(ParseScene(kWithParameters, "p.yaml", {"parameters.n=length * 10"})
+                .model.rods[0]
+                .num_elements,
+            4);
 }
 
 TEST(SceneParameters, ErrorsNameTheFileLineColumnAndField) {
   // An unknown name, with the closest parameter.
-  ExpectError("parameters: {length: 1}\npoints: {A: [0, 0, 0], B: [lenght, 0, 0]}\n",
-              "p.yaml:2:28", "points.B[0]: expected a number, got 'lenght' (unknown name 'lenght' "
-                             "(did you mean 'length'?))");
+  ExpectError("parameters: {length: 1}\npoints: {A: [0, 0, 0], B: [lenght, 0, 0]}\n", "p.yaml:2:28",
+              "points.B[0]: expected a number, got 'lenght' (unknown name 'lenght' "
+              "(did you mean 'length'?))");
   // A parameter may use only the parameters above it.
   ExpectError("parameters: {a: b * 2, b: 1}\n", "p.yaml:1:17",
               "parameters.a: expected a number, got 'b * 2' (unknown name 'b'");
   // Names: identifiers, not a constant or function of expressions.
-  ExpectError("parameters: {pi: 3}\n", "p.yaml:1:14", "parameters.pi: 'pi' is a constant or function");
-  ExpectError("parameters: {tip-mass: 3}\n", "p.yaml:1:14", "parameters.tip-mass: a parameter name");
+  ExpectError("parameters: {pi: 3}\n", "p.yaml:1:14",
+              "parameters.pi: 'pi' is a constant or function");
+  ExpectError("parameters: {tip-mass: 3}\n", "p.yaml:1:14",
+              "parameters.tip-mass: a parameter name");
   ExpectError("parameters: {2r: 3}\n", "p.yaml:1:14", "parameters.2r: a parameter name");
   ExpectError("parameters: {a: 1, a: 2}\n", "p.yaml:1:20", "duplicate parameter name 'a'");
   ExpectError("parameters: {a: [1, 2]}\n", "p.yaml:1:17", "parameters.a: expected a number");
@@ -166,8 +169,9 @@ TEST(SceneActuation, AnAxialChamberOffsetIsAnError) {
         << e.what();
   }
   // Zero is accepted and means the two-number form.
-  EXPECT_EQ(LoadScene(finger, {"actuation.chamber.offset=[0, -0.005, 0]"}).model.actuators[0].offset,
-            LoadScene(finger).model.actuators[0].offset);
+  EXPECT_EQ(
+      LoadScene(finger, {"actuation.chamber.offset=[0, -0.005, 0]"}).model.actuators[0].offset,
+      LoadScene(finger).model.actuators[0].offset);
 }
 
 }  // namespace

@@ -46,12 +46,12 @@ void ExpectSameEyelets(const Scene& a, const Scene& b) {
 TEST(Routing, EveryNodeEqualsTheLongFormBitForBit) {
   std::string long_form = "  flexor:\n    tension: 50\n    eyelets:\n";
   for (int i = 0; i <= 8; ++i)
-    long_form += "      - {body: finger, s: " + std::to_string(0.125 * i) + ", offset: [0, 0.02, 0]}\n";
+    long_form +=
+        "      - {body: finger, s: " + std::to_string(0.125 * i) + ", offset: [0, 0.02, 0]}\n";
   const Scene a = ParseScene(Finger(long_form), "long.yaml");
-  const Scene b = ParseScene(
-      Finger("  flexor:\n    tension: 50\n    eyelets:\n"
-             "      - route: {body: finger, offset: [0, 0.02, 0]}\n"),
-      "route.yaml");
+  const Scene b = ParseScene(Finger("  flexor:\n    tension: 50\n    eyelets:\n"
+                                    "      - route: {body: finger, offset: [0, 0.02, 0]}\n"),
+                             "route.yaml");
   ExpectSameEyelets(a, b);
   ASSERT_EQ(b.model.tendons[0].eyelets.size(), 9u);
   // The clamped base node carries the first eyelet, the tip the last.
@@ -115,7 +115,8 @@ TEST(Routing, HelixTurnsTheOffsetOncePerPitch) {
   EXPECT_NEAR((e.front().offset - e.back().offset).norm(), 0.0, 1e-15);
   EXPECT_NEAR(e[1].offset.y(), -0.02, 1e-15);
   // The tendon's reference length: 8 chords of the helix r = 0.02 around the axis.
-  const double chord = std::sqrt(0.125 * 0.125 + 2 * 0.02 * 0.02 * (1 - std::cos(std::numbers::pi / 2)));
+  const double chord =
+      std::sqrt(0.125 * 0.125 + 2 * 0.02 * 0.02 * (1 - std::cos(std::numbers::pi / 2)));
   EXPECT_NEAR(s.model.tendons[0].reference_length, 8 * chord, 1e-12);
 }
 

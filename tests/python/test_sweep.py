@@ -147,6 +147,91 @@ class BoundedInputsTest(unittest.TestCase):
         self.assertEqual(list(df["status"]), ["completed"])
 
 
+FINGER = str(pathlib.Path(__file__).resolve().parents[2] / "examples" / "tendon" / "finger.yaml")
+
+
+class SummaryTest(unittest.TestCase):
+    """The sweep summary: short parameter names, column metrics, the tidy table, its text and
+    figures, and the variants kept (serial: no cluster)."""
+
+    def test_short_names_are_the_last_components_that_tell_keys_apart(self):
+        self.assertEqual(
+            sf.short_names(["parameters.length", "joints.J0.damping", "joints.J1.damping",
+                            "bodies.a.elements+bodies.b.elements", "gravity"]),
+            {"parameters.length": "length", "joints.J0.damping": "J0.damping",
+             "joints.J1.damping": "J1.damping", "bodies.a.elements+bodies.b.elements": "elements",
+             "gravity": "gravity"})
+
+    def test_column_metric_expressions_and_their_errors(self):
+        m = sf.ColumnMetric("at( tip.y , 0.1 )")
+        self.assertEqual((m.function, m.column, m.time, m.name), ("at", "tip.y", 0.1,
+                                                                  "at(tip.y,0.1)"))
+        for bad in ("median(tip.y)", "at(tip.y)", "max(tip.y, 1)", "max tip.y"):
+            with self.assertRaises(ValueError):
+                sf.ColumnMetric(bad)
+
+    def test_a_two_by_three_grid_gives_its_table_figures_and_notable_runs(self):
+        grid = {"parameters.tension": [20, 50], "parameters.offset": [0.01, 0.02, 0.03],
+                "analysis.end_time": [0.2]}
+        metrics = [sf.ColumnMetric("max(tip.y)"), sf.ColumnMetric("at(tip.y, 0.1)"),
+                   sf.ColumnMetric("final(flexor.tension)"), sf.ColumnMetric("rms(tip.x)")]
+        with tempfile.TemporaryDirectory() as tmp:
+            out = pathlib.Path(tmp)
+            df = sf.sweep(FINGER, grid, metrics=metrics, scheduler="serial", outdir=out,
+                          keep_outputs="notable", summary=True, timeout=TIMEOUT)
+            table = __import__("pandas").read_csv(out / _sweep.SUMMARY_FILE,
+                                                  float_precision="round_trip")
+            # One column per parameter with its short name (a constant one too), one per metric.
+            self.assertEqual(list(table.columns),
+                             ["variant", "tension", "offset", "end_time", "status", "max(tip.y)",
+                              "at(tip.y,0.1)", "final(flexor.tension)", "rms(tip.x)"])
+            self.assertEqual(list(table["tension"]), [20, 20, 20, 50, 50, 50])
+            self.assertEqual(list(table["offset"]), [0.01, 0.02, 0.03] * 2)
+            # Physics: while the curl is small the tip moves with the moment tension x offset
+            # (the finger's bending is linear there): 5x from (20 N, 1 cm) to (50 N, 2 cm).
+            y = table["at(tip.y,0.1)"]
+            self.assertAlmostEqual(y[4] / y[0], 5.0, delta=5e-3)
+            self.assertAlmostEqual(y[2] / y[0], 3.0, delta=3e-3)
+            # The tension is the profile's, whatever the offset: smooth step to 50 N over 1 s.
+            self.assertEqual(table["final(flexor.tension)"][0], table["final(flexor.tension)"][2])
+            # Kept: the smallest and largest of each metric, with their files; the metric equals
+            # the column of the kept points.csv, bit for bit.
+            kept = {d.name for d in (out / "runs").iterdir()}
+            self.assertEqual(kept, set(df.attrs["notable"]))
+            self.assertIn(df["variant_id"][0], kept)  # min max(tip.y): 20 N, 1 cm
+            self.assertIn(df["variant_id"][5], kept)  # max max(tip.y): 50 N, 3 cm
+            self.assertLess(len(kept), 6)
+            for i in (0, 5):
+                with open(out / "runs" / df["variant_id"][i] / "points.csv") as f:
+                    rows = list(csv.DictReader(f))
+                self.assertEqual(max(float(r["tip.y"]) for r in rows), table["max(tip.y)"][i])
+            # A figure of each metric that varies, against the tension, a line per offset.
+            figures = sorted(p.name for p in (out / "figures").iterdir())
+            self.assertEqual(figures, ["at_tip.y_0.1.png", "final_flexor.tension.png",
+                                       "max_tip.y.png", "rms_tip.x.png"])
+            for name in figures:
+                self.assertEqual((out / "figures" / name).read_bytes()[:8], b"\x89PNG\r\n\x1a\n")
+            # The printed table.
+            text = sf.format_summary(sf.summary_table(df, list(grid)))
+            self.assertRegex(text.splitlines()[0], r"^variant +tension +offset +end_time +status "
+                             r"+max\(tip\.y\)")
+            self.assertEqual(len(text.splitlines()), 7)
+
+    def test_a_failed_variant_keeps_its_files(self):
+        parameters = [{"analysis.end_time": 0.05},
+                      {"analysis.end_time": 0.05, "analysis.max_iterations": 1,
+                       "analysis.max_halvings": 0}]
+        with tempfile.TemporaryDirectory() as tmp:
+            out = pathlib.Path(tmp)
+            df = sf.sweep(PENDULUM, parameters, metrics=[sf.ColumnMetric("final(tip.z)")],
+                          scheduler="serial", outdir=out, keep_outputs="notable", summary=True,
+                          timeout=TIMEOUT)
+            self.assertEqual(list(df["status"]), ["completed", "failed"])
+            self.assertEqual(df.attrs["notable"], {df["variant_id"][1]: "failed"})
+            self.assertEqual([d.name for d in (out / "runs").iterdir()], [df["variant_id"][1]])
+            self.assertTrue((out / "runs" / df["variant_id"][1] / "summary.json").exists())
+
+
 class ClusterSweepTest(unittest.TestCase):
     """Sweeps on one LocalCluster of 2 worker processes, shared by the tests of this class."""
 
