@@ -307,11 +307,19 @@ int MaxSteps(const StaticOptions& o) {
   return o.max_steps > 0 ? o.max_steps : 2 * o.load_steps + 1000;
 }
 
-std::string StepCapMessage(int steps, double s) {
+// The message of a solve that reached max_steps, naming the settings that make steps longer:
+// the arc-length controller's cap (its value given), or the load steps.
+std::string StepCapMessage(int steps, double s, double arc_length_max = 0.0) {
+  const std::string longer =
+      arc_length_max > 0.0
+          ? FormatNumbers("take longer steps (analysis.statics.arc_length_max, now %.3g)",
+                          arc_length_max)
+          : "take longer steps (fewer analysis.load_steps)";
   return FormatNumbers(
-      "static solve stopped after %g steps (max_steps) at load factor %.9g, before "
-      "reaching the end load factor; raise analysis.statics.max_steps or the step size",
-      steps, s);
+             "static solve stopped after %g steps (max_steps) at load factor %.9g, before "
+             "reaching the end load factor; raise analysis.statics.max_steps or ",
+             steps, s) +
+         longer;
 }
 
 // Load stepping (docs/architecture.md, "One time step") with a bounded increment and step count.
@@ -527,7 +535,7 @@ class ArcLengthPath {
     std::string last_cause;
     while (true) {
       if (result_.load_steps >= max_steps) {
-        result_.message = StepCapMessage(result_.load_steps, s_);
+        result_.message = StepCapMessage(result_.load_steps, s_, dl_max_);
         return result_;
       }
       StaticStep step;
@@ -598,8 +606,20 @@ class ArcLengthPath {
     c2_ = o.psi * o.psi * speed * speed;
     dl0_ = o.arc_length > 0.0 ? o.arc_length : speed * std::abs(span) / o.load_steps;
     dl_min_ = o.arc_length_min > 0.0 ? o.arc_length_min : dl0_ * std::ldexp(1.0, -o.max_halvings);
-    dl_max_ = o.arc_length_max > 0.0 ? o.arc_length_max : 10.0 * dl0_;
+    dl_max_ = o.arc_length_max > 0.0 ? o.arc_length_max
+                                     : std::max(10.0 * dl0_, ResolutionArcLength(model));
     return true;
+  }
+
+  // The default cap's floor: the arc of every moving node displaced by
+  // kArcLengthMaxResolution length scales (the metric sums squares over the nodes, so a
+  // motion of the whole model by d length scales has length d sqrt(nodes)). 10 x the first
+  // arc alone was no cap for a path that starts slow: a column before buckling shortens by
+  // P / EA, and its arcs stayed 1e-4 of the buckled path's (859 steps to 2 P_cr).
+  static double ResolutionArcLength(const Model& model) {
+    int moving = 0;
+    for (const Node& n : model.nodes) moving += n.dof >= 0 ? 1 : 0;
+    return kArcLengthMaxResolution * std::sqrt(static_cast<double>(std::max(moving, 1)));
   }
 
   // The step of ds crossed the end load factor: Newton at exactly that load factor from the

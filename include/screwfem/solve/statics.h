@@ -50,7 +50,8 @@ struct StaticOptions {
   // node and joint unknowns (joint coordinates by the kind of their axis).
   double arc_length = 0.0;      // first arc length; 0: |dx/ds| (end - start) / load_steps
   double arc_length_min = 0.0;  // 0: the first / 2^max_halvings
-  double arc_length_max = 0.0;  // 0: 10 x the first
+  double arc_length_max = 0.0;  // 0: the larger of 10 x the first and the motion of every
+                                // moving node by kArcLengthMaxResolution length scales
   int desired_iterations = 5;   // Newton solves per step the step-length controller aims
                                 // at (at most max_iterations)
   double psi = 0.0;             // 0: cylindrical constraint, 1: spherical
@@ -72,6 +73,9 @@ struct StaticOptions {
 // Range of StaticOptions::load_steps (scene files: analysis.load_steps); max_iterations and
 // max_halvings have the ranges of the dynamic solver (kMaxNewtonIterations, kMaxHalvings;
 // common.h).
+// The default largest arc length lets every moving node move this many length scales per
+// step (StaticOptions::arc_length_max = 0; docs/scene-format.md, `analysis.statics`).
+inline constexpr double kArcLengthMaxResolution = 0.05;
 inline constexpr int kMaxLoadSteps = 1000000;
 
 inline constexpr int kMaxStaticSteps = 10000000;
