@@ -318,8 +318,13 @@ void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<i
   for (const SparseLU::Block& b : m.sparse_pattern)
     entries += static_cast<double>(b.rows) * static_cast<double>(b.cols);
   const double n = m.num_unknowns();
-  const bool dense = m.linear_solver == LinearSolver::kAuto && entries > 0.25 * n * n && n > 64;
-  if (m.linear_solver != LinearSolver::kBanded && m.num_unknowns() > 0 && !dense) {
+  // Nor a band so narrow that the sparse LU's least cost (its fixed cost per unknown, and the
+  // LU of the 6 x 6 diagonal blocks alone, 24 flops per unknown) exceeds the band's: rods and
+  // chains need no analysis (a rod of 100,000 elements: 600,000 unknowns).
+  const bool narrow = m.banded_flops < (kSparseFixedCost + kSparseFlopCost * 24.0) * n;
+  const bool skip =
+      m.linear_solver == LinearSolver::kAuto && ((entries > 0.25 * n * n && n > 64) || narrow);
+  if (m.linear_solver != LinearSolver::kBanded && m.num_unknowns() > 0 && !skip) {
     SparseLU lu;
     lu.SetPattern(m.num_unknowns(), m.sparse_pattern);
     m.sparse_flops = lu.predicted_flops();
@@ -327,7 +332,7 @@ void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<i
   }
   m.sparse_solver =
       m.linear_solver == LinearSolver::kSparse ||
-      (m.linear_solver == LinearSolver::kAuto && !dense &&
+      (m.linear_solver == LinearSolver::kAuto && !skip &&
        kSparseFlopCost * m.sparse_flops + kSparseFixedCost * m.num_unknowns() < m.banded_flops);
   if (!m.sparse_solver) std::vector<SparseLU::Block>().swap(m.sparse_pattern);
 }
