@@ -15,6 +15,8 @@ skipped. One table per benchmark family:
   tendons          BM_RodTendonStep/<tendons>                (tendons_bench.cpp)
   contact          BM_RodContactStep/<variant>               (contact_bench.cpp)
   gripper          BM_GripperSolver/gripper                  (contact_bench.cpp)
+  solver           screwfem_bench_solver's own JSON (format "screwfem solver bench 1",
+                   bench/results_solver.json; solver_bench.cpp): banded, sparse and auto LU
 Each JSON's revision comes from its context (the script passes --benchmark_context=revision=...),
 else from REVISION. Uses the median over repetitions when the JSON holds aggregates, else the
 single run. Times are real time (wall clock; manual time where the benchmark times itself).
@@ -106,6 +108,9 @@ def load(paths, default_revision):
             continue  # not run (an empty file: the benchmark filter matched nothing)
         with open(path, encoding="utf-8") as f:
             data = json.load(f)
+        if data.get("format") == SOLVER_FORMAT:  # screwfem_bench_solver's own JSON
+            SOLVER_RESULTS.append((path, data))
+            continue
         context = data.get("context", {})
         benchmarks = data.get("benchmarks", [])
         if not benchmarks:
@@ -142,6 +147,106 @@ def load(paths, default_revision):
         if key in entries and not entries[key].error:
             entries[key].best_real = seconds
     return entries, sources, errors
+
+
+SOLVER_FORMAT = "screwfem solver bench 1"
+SOLVER_RESULTS = []  # (path, data) of screwfem_bench_solver's JSON files
+SOLVER_TARGETS = {"hand": 1.5, "tendon": 1.5, "auto": 1.05}
+
+
+def solver_section():
+    """The section of screwfem_bench_solver (bench/solver_bench.cpp): banded, sparse and auto
+    per case, and the ratios the issue asks for."""
+    if not SOLVER_RESULTS:
+        return []
+    path, data = SOLVER_RESULTS[-1]
+    cases = {(c["case"], c["solver"]): c for c in data["cases"]}
+    order = []
+    for c in data["cases"]:
+        if c["case"] not in order:
+            order.append(c["case"])
+    rows = []
+    for name in order:
+        for solver in ("banded", "sparse", "auto"):
+            c = cases.get((name, solver))
+            if c is None:
+                continue
+            if c["failed"]:
+                rows.append(f"| {name} | {solver} | failed |||||||")
+                continue
+            rows.append(
+                f"| {name} | {solver} | {c['chosen']} | {c['unknowns']} | {c['bandwidth']} "
+                f"| {format_time(c['cpu_per_step'])} | {format_number(c['newton_per_step'])} "
+                f"| {format_time(c['cpu_per_element_iteration'])} "
+                f"| {format_number(c['banded_flops'])} | {format_number(c['sparse_flops'])} |")
+
+    def per_step(name, solver):
+        c = cases.get((name, solver))
+        return c["cpu_per_step"] if c and not c["failed"] else float("nan")
+
+    def per_element(name, solver):
+        c = cases.get((name, solver))
+        return c["cpu_per_element_iteration"] if c and not c["failed"] else float("nan")
+
+    def verdict(x, target):
+        return f"**{x:.3f}×** (target at most {target}×: {'met' if x <= target else 'NOT met'})"
+
+    hand = per_element("hand/40x8", "auto") / per_element("rod/320", "auto")
+    hand_banded = per_element("hand/40x8", "banded") / per_element("rod/320", "auto")
+    tendon = per_step("finger/256+tendon", "auto") / per_step("finger/256", "auto")
+    tendon_banded = per_step("finger/256+tendon", "banded") / per_step("finger/256", "auto")
+    newton = {name: cases[(name, "auto")]["newton_per_step"]
+              for name in ("finger/256+tendon", "finger/256") if (name, "auto") in cases}
+    tendon_newton = (newton.get("finger/256+tendon", float("nan")),
+                     newton.get("finger/256", float("nan")))
+    tendon_iteration = tendon * tendon_newton[1] / tendon_newton[0]
+    notes = [
+        f"- Hand of 40 fingers × 8 elements against the 320-element rod, CPU time per element "
+        f"and Newton iteration, both `auto`: {verdict(hand, SOLVER_TARGETS['hand'])}; banded "
+        f"hand {hand_banded:.2f}×.",
+        f"- 256-element finger with a tendon drawn by length through every node against the "
+        f"same finger without it, CPU time per step, both `auto`: "
+        f"{verdict(tendon, SOLVER_TARGETS['tendon'])}; banded {tendon_banded:.2f}×. Per "
+        f"Newton iteration {tendon_iteration:.3f}×: the tendon's constraint (its length "
+        f"shortened from the start) takes {tendon_newton[0]:.3g} iterations per step against "
+        f"{tendon_newton[1]:.3g} without it, with either solver.",
+    ]
+    for name in ("rod/320", "finger/256", "chain/64", "grm_rigid"):
+        x = per_step(name, "auto") / per_step(name, "banded")
+        y = per_step(name, "sparse") / per_step(name, "banded")
+        notes.append(f"- {name}: `auto` / banded {verdict(x, SOLVER_TARGETS['auto'])}; "
+                     f"sparse / banded {y:.2f}×.")
+    factor_rows = []
+    for f in data.get("factorisations", []):
+        factor_rows.append(
+            f"| {f['case']} | {format_time(f['klu_refactor'])} | {format_time(f['klu_full'])} "
+            f"| {format_time(f['eigen_sparselu'])} | {f['solution_difference']:.1e} |")
+    return [
+        "## Sparse direct solve",
+        "",
+        "`screwfem_bench_solver` (bench/solver_bench.cpp; docs/numerics.md, \"Sparse direct "
+        "solve\"): every case with `linear_solver` banded, sparse and auto, h = 1e-3 s, ρ∞ = 0.8,",
+        f"20 timed steps after 5 warm-up steps; the variants of all cases interleaved, "
+        f"{data['rounds']} rounds, median CPU time of the process (`{path}`). Per element and "
+        "iteration: CPU time per step / (elements × Newton iterations per step).",
+        "",
+        "| Case | Asked | Chosen | Unknowns | Bandwidth | CPU per step | Newton per step "
+        "| CPU per element and iteration | Banded flops | Sparse flops |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        *rows,
+        "",
+        *notes,
+        "",
+        "One factorisation of the same iteration matrix (after two steps), CPU time: KLU's "
+        "refactorisation (the steps' path), KLU's first factorisation with pivoting, and "
+        "Eigen's `SparseLU::factorize` (COLAMD, pattern analysed once; it allocates at every "
+        "call); the relative difference of the two solutions.",
+        "",
+        "| Matrix | KLU refactor | KLU factor | Eigen SparseLU | Difference |",
+        "|---|---:|---:|---:|---:|",
+        *factor_rows,
+        "",
+    ]
 
 
 def family(entries, name):
@@ -658,6 +763,7 @@ def main():
         *tendon_section(entries),
         *contact_section(entries),
         *gripper_section(entries),
+        *solver_section(),
         "## Machine and run",
         "",
         f"- CPU: {cpu_model()} ({nproc()} cores available, `nproc`)",

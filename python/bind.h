@@ -140,6 +140,7 @@ struct screwfem_checked_enum : type_caster_base<E> {
   struct type_caster<E> : screwfem_checked_enum<E> {}
 SCREWFEM_CHECKED_ENUM(screwfem::JointType);
 SCREWFEM_CHECKED_ENUM(screwfem::DriveKind);
+SCREWFEM_CHECKED_ENUM(screwfem::LinearSolver);
 SCREWFEM_CHECKED_ENUM(screwfem::RodInertia);
 SCREWFEM_CHECKED_ENUM(screwfem::LoadFrame);
 SCREWFEM_CHECKED_ENUM(screwfem::ActuatorType);

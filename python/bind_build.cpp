@@ -477,6 +477,9 @@ void BindBuild(py::module_& m) {
           "The memory the model and its solver may need: bytes or a size such as '8G' (None: "
           "the process default, screwfem.set_memory_limit). build() raises InputError naming "
           "the part beyond it (docs/limits.md).")
+      .def("set_linear_solver", &B::SetLinearSolver, py::arg("solver"),
+           "The direct solver of the Newton systems (LinearSolver; scene: "
+           "analysis.linear_solver): AUTO picks the lower predicted factorisation cost.")
       .def("build", &B::Build, "The validated Model.");
 }
 

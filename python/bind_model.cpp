@@ -43,6 +43,9 @@ void BindModel(py::module_& m) {
   CheckEnumConstructor(joint_type, "JointType");
   BindEnum<DriveKind>(m, "DriveKind", "Drive on one joint coordinate (model.h).");
   BindEnum<RodInertia>(m, "RodInertia", "Rod inertia model (docs/numerics.md, 'Rod inertia').");
+  BindEnum<LinearSolver>(m, "LinearSolver",
+                         "Direct solver of the Newton systems (docs/numerics.md, 'Sparse direct "
+                         "solve').");
   BindEnum<LoadFrame>(m, "LoadFrame", "Frame of an applied load's components (model.h).");
   BindEnum<ActuatorType>(m, "ActuatorType", "Kind of a rod actuator (model.h, Actuator).");
   BindEnum<ContactShapeType>(m, "ContactShapeType", "A rigid body's collision shape (model.h).");
@@ -165,6 +168,17 @@ void BindModel(py::module_& m) {
       .def_readonly("rod_inertia", &Model::rod_inertia,
                     "RodInertia of the rods: EXACT (the exact helical velocity field) or CONSTANT "
                     "(linear velocity field, constant mass matrix).")
+      .def_readonly("linear_solver", &Model::linear_solver,
+                    "LinearSolver asked for (AUTO, BANDED or SPARSE; scene: "
+                    "analysis.linear_solver).")
+      .def_readonly("sparse_solver", &Model::sparse_solver,
+                    "True when Build chose the sparse LU (KLU) for the Newton systems, False "
+                    "for the banded LU.")
+      .def_readonly("banded_flops", &Model::banded_flops,
+                    "Predicted flops of one banded factorisation (the choice of AUTO).")
+      .def_readonly("sparse_flops", &Model::sparse_flops,
+                    "Predicted flops of one sparse factorisation, from KLU's symbolic analysis "
+                    "(0 when BANDED was asked for).")
       .def_readonly("redundant_rows", &Model::redundant_rows,
                     "Constraint rows found linearly dependent at build time (their multipliers "
                     "are held at zero).")

@@ -342,6 +342,16 @@ and indices out of range IndexError.)doc")
           "factorizations", [](const S& s) { return s.integrator().factorizations; },
           "Factorisations of the iteration matrix.")
       .def_property_readonly(
+          "symbolic_analyses", [](S& s) { return s.data().sparse.analyses(); },
+          "Symbolic analyses of the sparse LU (Model.sparse_solver; 0 for the banded LU): one "
+          "per sparsity pattern.")
+      .def_property_readonly(
+          "sparse_factorizations", [](S& s) { return s.data().sparse.factorizations(); },
+          "Numerical factorisations by the sparse LU (refactorisations included).")
+      .def_property_readonly(
+          "sparse_fallbacks", [](S& s) { return s.data().sparse.fallbacks(); },
+          "Refactorisations of the sparse LU whose pivots were poor, redone with new pivots.")
+      .def_property_readonly(
           "retries", [](const S& s) { return s.integrator().retries; },
           "Steps redone with full Newton from the zero-acceleration start.")
       .def_property_readonly(

@@ -594,6 +594,7 @@ SceneSpec SpecReader::Read() {
   s.name = Text(Attr(spec_, "name", ""), "name");
   s.gravity = Vector3(Attr(spec_, "gravity", ""), "gravity");
   s.rod_inertia = Enum<RodInertia>(Attr(spec_, "rod_inertia", ""), "rod_inertia");
+  s.linear_solver = Enum<LinearSolver>(Attr(spec_, "linear_solver", ""), "linear_solver");
   for (const auto& [name, p] : NamedValues(Attr(spec_, "points", ""), "points"))
     s.points.emplace_back(name, Vector3(p, Key("points", name.c_str())));
   for (const auto& [name, v] : NamedValues(Attr(spec_, "inputs", ""), "inputs"))
@@ -793,8 +794,8 @@ py::object ToPython(const SceneSpec& s) {
       py::arg("rod_fields_interval") = o.rod_fields_interval, py::arg("max_rows") = o.max_rows);
   return SpecClass("SceneSpec")(
       py::arg("name") = s.name, py::arg("gravity") = Tuple(s.gravity),
-      py::arg("rod_inertia") = s.rod_inertia, py::arg("points") = points,
-      py::arg("inputs") = inputs, py::arg("bodies") = ListOf(s.bodies),
+      py::arg("rod_inertia") = s.rod_inertia, py::arg("linear_solver") = s.linear_solver,
+      py::arg("points") = points, py::arg("inputs") = inputs, py::arg("bodies") = ListOf(s.bodies),
       py::arg("joints") = ListOf(s.joints), py::arg("loads") = ListOf(s.loads),
       py::arg("tendons") = ListOf(s.tendons), py::arg("forces") = ListOf(s.forces),
       py::arg("actuators") = ListOf(s.actuators), py::arg("contact") = contact,

@@ -6,6 +6,8 @@
 #   screwfem_bench_outputs   -> bench/results_outputs.json   (cost of a run's outputs)
 #   screwfem_bench_tendons   -> bench/results_tendons.json   (cost of tendons on a rod)
 #   screwfem_bench_contact   -> bench/results_contact.json   (cost of contact along a rod)
+#   screwfem_bench_solver    -> bench/results_solver.json    (banded against sparse LU; its own
+#                               JSON and interleaving, not Google Benchmark; about 1 minute)
 #   vector_env               -> its own section of bench/RESULTS.md (bench/python_vector_env.py:
 #                               screwfem.VectorEnv's steps per second at 1, 2, 4 copies; builds
 #                               the Python module; not in the default set)
@@ -21,10 +23,10 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 build_dir=build/release
 jobs=$(nproc 2> /dev/null || echo 2)
-programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons contact}
+programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons contact solver}
 for p in $programs; do
   case $p in
-    statics | dynamics | outputs | tendons | contact | vector_env) ;;
+    statics | dynamics | outputs | tendons | contact | solver | vector_env) ;;
     *) echo "run-bench.sh: unknown benchmark program '$p' in SCREWFEM_BENCH" >&2; exit 2 ;;
   esac
 done
@@ -60,6 +62,10 @@ for p in "${benchmarks[@]}"; do
   out=bench/results_$p.json
   tmp=bench/results_$p.json.tmp
   rm -f "$tmp"
+  if [[ $p == solver ]]; then
+    "$build_dir/bench/screwfem_bench_solver" "$tmp" && mv "$tmp" "$out"
+    continue
+  fi
   # statics: median of 5 repetitions, so the numbers stay stable on a machine with other
   # load. dynamics: each benchmark sets its own iterations and repetitions (fewer for the
   # slow cases: a GRM run takes seconds, a 10000-element rod step about half a second).
@@ -80,8 +86,8 @@ done
 
 /usr/bin/python3 bench/make_results.py bench/RESULTS.md "bash scripts/run-bench.sh" "$revision" \
   bench/results_statics.json bench/results_dynamics.json bench/results_outputs.json \
-  bench/results_tendons.json bench/results_contact.json
-echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact}.json"
+  bench/results_tendons.json bench/results_contact.json bench/results_solver.json
+echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact,solver}.json"
 # After make_results.py, which keeps the section the Python benchmark replaces. It exits 1 when
 # its target is missed (on a loaded machine); the table is written either way.
 if [[ " $programs " == *" vector_env "* ]]; then

@@ -352,6 +352,8 @@ class SceneSpec:
     gravity: Any = _f(_ZERO3, doc="[m/s^2], world.")
     rod_inertia: Any = _f(_m.RodInertia.EXACT, doc="RodInertia (or its name).",
                           scene="analysis.rod_inertia")
+    linear_solver: Any = _f(_m.LinearSolver.AUTO, doc="LinearSolver (or its name).",
+                            scene="analysis.linear_solver")
     points: dict = _f(factory=dict, doc="Named points: name -> (x, y, z) [m], world "
                       "(Scene.named_points).")
     inputs: dict = _f(factory=dict, doc="Run-time inputs: name -> default value, in order "
@@ -959,8 +961,8 @@ class SceneSpec:
         ('dynamic' | 'static'), start_time, end_time [s], step [s] or 'auto' (with tolerance,
         min_step, max_step, initial_step), rho_inf, tolerances ({increment, constraint,
         residual}), max_iterations, max_halvings, load_steps, align_steps, static_preload,
-        rod_inertia, newton, predictor, convergence, restart_at_breakpoints, perturbed_start,
-        constraints, statics ({method, end_load_factor, max_steps, arc_length, arc_length_min,
+        rod_inertia, linear_solver, newton, predictor, convergence, restart_at_breakpoints,
+        perturbed_start, constraints, statics ({method, end_load_factor, max_steps, arc_length, arc_length_min,
         arc_length_max, desired_iterations, psi, rotation_weight, exact_tangent})."""
         a, d, st = self.analysis, self.analysis.dynamic, self.analysis.statics
         auto = {}
@@ -1008,6 +1010,8 @@ class SceneSpec:
                 setattr(d, key, _bool(value, where))
             elif key == "rod_inertia":
                 self.rod_inertia = _enum(_m.RodInertia, value, where)
+            elif key == "linear_solver":
+                self.linear_solver = _enum(_m.LinearSolver, value, where)
             elif key in ("tolerance", "min_step", "max_step", "initial_step"):
                 auto[key] = value
             elif key == "statics":

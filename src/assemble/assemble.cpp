@@ -44,6 +44,24 @@ class Scatter {
     if (gi < 0 || gj < 0 || !o_.assemble_matrix) return;
     const int pi = m_.permutation[static_cast<std::size_t>(gi)];
     const int pj = m_.permutation[static_cast<std::size_t>(gj)];
+    if (m_.sparse_solver) {
+      // The sparse pattern holds whole blocks: a column search per column of the block.
+      const int rows = static_cast<int>(block.rows());
+      double* const values = d_.sparse.values();
+      int p = d_.sparse.FindRun(pi, pj, rows);
+      if (p < 0) {
+        SCREWFEM_CHECK(off_band_ && block.rows() == 6 && block.cols() == 6);
+        d_.coupling.Add(pi, pj, block, scale);
+        return;
+      }
+      for (Eigen::Index j = 0; j < block.cols(); ++j) {
+        if (j > 0) p = d_.sparse.FindRun(pi, pj + static_cast<int>(j), rows);
+        SCREWFEM_CHECK(p >= 0);
+        double* const col = values + p;
+        for (Eigen::Index i = 0; i < block.rows(); ++i) col[i] += scale * block(i, j);
+      }
+      return;
+    }
     // The factorisation relies on the model's sparsity pattern (pattern_last is constant over
     // a block of unknowns, so the first row and column stand for all).
     const std::vector<int>& pattern = o_.pattern_last ? *o_.pattern_last : m_.pattern_last;
@@ -269,6 +287,20 @@ std::vector<int> ConstraintForceTangentPattern(const Model& model, int* bandwidt
   return last;
 }
 
+void AddConstraintForceTangentBlocks(const Model& model, std::vector<SparseLU::Block>* blocks) {
+  JointConstraintKind::ForEach(model, [&](int ji) {
+    int first[3], size[3], n = 0;
+    JointConstraintKind::ForEachColumn(model, ji, [&](int g, int s) {
+      if (s > 0) {
+        first[n] = model.permutation[static_cast<std::size_t>(g)];
+        size[n++] = s;
+      }
+    });
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b) blocks->push_back({first[a], size[a], first[b], size[b]});
+  });
+}
+
 Energy CalcEnergy(const Model& model, const Data& data) {
   Energy E;
   AddKindEnergies(model, data, &E, kElementKinds);
@@ -327,7 +359,10 @@ void UpdateBranchReferences(const Model& model, Data& data) {
 bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   data.residual.setZero();
   if (options.assemble_matrix) {
-    data.matrix.SetZero();
+    if (model.sparse_solver)
+      data.sparse.SetZero();
+    else
+      data.matrix.SetZero();
     // The off-band coupling: doubled when the last assembly overflowed it, up to
     // kMaxCoupledNodes (beyond, the blocks that do not fit are left out of the matrix).
     if (data.coupling.overflowed() && data.coupling.max_blocks() < kMaxCoupledNodes)
@@ -352,6 +387,10 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
     data.residual(g) = data.lambda(r) / options.s_multipliers;
     if (!options.assemble_matrix) return;
     const int p = model.permutation[static_cast<std::size_t>(g)];
+    if (model.sparse_solver) {
+      data.sparse.SetRow(p, 1.0);
+      return;
+    }
     const int lo = std::max(0, p - data.matrix.lower_bandwidth());
     const int hi = std::min(data.matrix.size() - 1, p + data.matrix.upper_bandwidth());
     for (int c = lo; c <= hi; ++c) data.matrix.At(p, c) = 0.0;

@@ -290,6 +290,53 @@ void SetBandPattern(Model& m, const BlockGraph& g, const std::vector<std::vector
   }
 }
 
+// The sparse pattern (Model::sparse_pattern: every block with itself and with each neighbour)
+// and the choice of the solver: the predicted flops of one factorisation by each. The banded
+// LU eliminates inside the envelope of pattern_last (row interchanges may widen it; not
+// counted): column j updates (last_j - j)^2 entries, a multiply and a subtraction each. KLU's
+// estimate comes from its symbolic analysis (AMD's count of the LU on its ordering).
+void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<int>>& adj,
+                  const std::vector<int>& block_pos) {
+  m.sparse_pattern.clear();
+  for (std::size_t b = 0; b < g.blocks.size(); ++b) {
+    const int pb = block_pos[b], sb = g.blocks[b].size;
+    m.sparse_pattern.push_back({pb, sb, pb, sb});
+    for (int c : adj[b])
+      m.sparse_pattern.push_back({pb, sb, block_pos[static_cast<std::size_t>(c)],
+                                  g.blocks[static_cast<std::size_t>(c)].size});
+  }
+  m.banded_flops = 0.0;
+  for (int j = 0; j < m.num_unknowns(); ++j) {
+    const double r = m.pattern_last[static_cast<std::size_t>(j)] - j;
+    m.banded_flops += 2.0 * r * r + r;
+  }
+  m.sparse_flops = m.sparse_factor_nonzeros = 0.0;
+  // A pattern that fills a quarter of the matrix or more (hundreds of bodies that may all
+  // touch each other, linked in the pattern) gains nothing from a sparse LU: auto does not
+  // analyse it (an analysis of tens of millions of entries).
+  double entries = 0.0;
+  for (const SparseLU::Block& b : m.sparse_pattern)
+    entries += static_cast<double>(b.rows) * static_cast<double>(b.cols);
+  const double n = m.num_unknowns();
+  // Nor a band so narrow that the sparse LU's least cost (its fixed cost per unknown, and the
+  // LU of the 6 x 6 diagonal blocks alone, 24 flops per unknown) exceeds the band's: rods and
+  // chains need no analysis (a rod of 100,000 elements: 600,000 unknowns).
+  const bool narrow = m.banded_flops < (kSparseFixedCost + kSparseFlopCost * 24.0) * n;
+  const bool skip =
+      m.linear_solver == LinearSolver::kAuto && ((entries > 0.25 * n * n && n > 64) || narrow);
+  if (m.linear_solver != LinearSolver::kBanded && m.num_unknowns() > 0 && !skip) {
+    SparseLU lu;
+    lu.SetPattern(m.num_unknowns(), m.sparse_pattern);
+    m.sparse_flops = lu.predicted_flops();
+    m.sparse_factor_nonzeros = lu.predicted_factor_nonzeros();
+  }
+  m.sparse_solver =
+      m.linear_solver == LinearSolver::kSparse ||
+      (m.linear_solver == LinearSolver::kAuto && !skip &&
+       kSparseFlopCost * m.sparse_flops + kSparseFixedCost * m.num_unknowns() < m.banded_flops);
+  if (!m.sparse_solver) std::vector<SparseLU::Block>().swap(m.sparse_pattern);
+}
+
 }  // namespace
 
 // The solver ordering: the block graph of the iteration matrix (BlockGraph: nodes, the
@@ -303,6 +350,7 @@ void OrderUnknowns(Model& m) {
   const std::vector<std::vector<int>> adj = BlockAdjacency(g);
   const std::vector<int> block_pos = PermuteBlocks(m, g, adj);
   SetBandPattern(m, g, adj, block_pos);
+  ChooseSolver(m, g, adj, block_pos);
 }
 
 }  // namespace screwfem::build_steps

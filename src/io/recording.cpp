@@ -818,6 +818,16 @@ class Recording::Impl {
     j.Field("max_iterations_per_step", integ_.max_iterations_in_step);
     j.Field("step_halvings", integ_.halvings);
     j.Field("matrix_factorizations", integ_.factorizations);
+    // The direct solver of the Newton systems (docs/numerics.md, "Sparse direct solve").
+    j.Key("linear_solver").BeginObject();
+    j.Field("requested", NameOf(model_.linear_solver));
+    j.Field("chosen", model_.sparse_solver ? "sparse" : "banded");
+    j.Field("banded_flops", model_.banded_flops).Field("sparse_flops", model_.sparse_flops);
+    j.Field("symbolic_analyses", static_cast<long>(data_.sparse.analyses()));
+    j.Field("factorizations", static_cast<long>(data_.sparse.factorizations()));
+    j.Field("full_factorizations", static_cast<long>(data_.sparse.full_factorizations()));
+    j.Field("refactorization_fallbacks", static_cast<long>(data_.sparse.fallbacks()));
+    j.EndObject();
     j.Field("step_retries", integ_.retries);
     j.Field("estimated_convergences", integ_.estimated_convergences);
     j.Field("restarts", integ_.restarts);

@@ -634,6 +634,7 @@ Scene SceneCompiler::Compile() {
   builder_.SetGravity(spec_.gravity);
   for (const auto& [name, default_value] : spec_.inputs) builder_.AddInput(name, default_value);
   builder_.model().rod_inertia = spec_.rod_inertia;
+  builder_.model().linear_solver = spec_.linear_solver;
   AddBodies();
   AddJoints();
   AddLoads();

@@ -33,6 +33,7 @@ void SceneReader::ReadAnalysis(const Node* node) {
                 "static_preload",
                 "load_steps",
                 "rod_inertia",
+                "linear_solver",
                 "newton",
                 "predictor",
                 "convergence",
@@ -60,6 +61,8 @@ void SceneReader::ReadAnalysis(const Node* node) {
     a->static_preload = r_.Bool(*t, Join(path, "static_preload"));
   if (const Node* t = node->Find("rod_inertia"))
     spec_.rod_inertia = r_.Enum<RodInertia>(*t, Join(path, "rod_inertia"));
+  if (const Node* t = node->Find("linear_solver"))
+    spec_.linear_solver = r_.Enum<LinearSolver>(*t, Join(path, "linear_solver"));
   // analysis.statics.time follows from the kind; the compiler sets it (SceneSpec::analysis).
 }
 

@@ -79,7 +79,8 @@ int BandCoupling::ReservePair(int p_i, int p_j) {
   return pair;
 }
 
-bool BandCoupling::Factorize(const BandedLU& A) {
+template <class LU>
+bool BandCoupling::FactorizeWith(const LU& A) {
   assert(A.size() == n_);
   determinant_sign_ = 1;
   factorized_ = false;
@@ -146,7 +147,8 @@ bool BandCoupling::Factorize(const BandedLU& A) {
   return true;
 }
 
-void BandCoupling::Correct(const BandedLU& A, Eigen::Ref<Eigen::VectorXd> x) {
+template <class LU>
+void BandCoupling::CorrectWith(const LU& A, Eigen::Ref<Eigen::VectorXd> x) {
   if (pairs_ == 0) return;
   assert(factorized_ && A.size() == n_ && x.size() == n_);
   const int bs = block_size_;
@@ -190,5 +192,10 @@ void BandCoupling::Correct(const BandedLU& A, Eigen::Ref<Eigen::VectorXd> x) {
   A.Solve(work_n_);
   x -= work_n_;
 }
+
+bool BandCoupling::Factorize(const BandedLU& A) { return FactorizeWith(A); }
+bool BandCoupling::Factorize(const SparseLU& A) { return FactorizeWith(A); }
+void BandCoupling::Correct(const BandedLU& A, Eigen::Ref<Eigen::VectorXd> x) { CorrectWith(A, x); }
+void BandCoupling::Correct(const SparseLU& A, Eigen::Ref<Eigen::VectorXd> x) { CorrectWith(A, x); }
 
 }  // namespace screwfem

@@ -69,9 +69,14 @@ Data MakeData(const Model& model) {
     coupled_nodes = std::min(distinct, 32);
   }
   d.coupling.Resize(model.num_unknowns(), 6, coupled_nodes);
-  d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
-  if (static_cast<int>(model.pattern_last.size()) == model.num_unknowns())
-    d.matrix.SetPattern(model.pattern_last, model.pattern_last);
+  if (model.sparse_solver) {
+    d.matrix.Resize(0, 0, 0);
+    d.sparse.SetPattern(model.num_unknowns(), model.sparse_pattern);
+  } else {
+    d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
+    if (static_cast<int>(model.pattern_last.size()) == model.num_unknowns())
+      d.matrix.SetPattern(model.pattern_last, model.pattern_last);
+  }
   return d;
 }
 

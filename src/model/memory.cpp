@@ -112,13 +112,29 @@ std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
   const double n = std::max(m.num_unknowns(), 1);
   const double kl = m.bandwidth;
   char why[256];
-  // BandedLU::Resize: ldab = 2 kl + ku + 1 doubles per column; per unknown 9 ints/doubles more.
-  std::snprintf(why, sizeof why,
-                "%d unknowns (nv = %d, nc = %d) x %d band entries (bandwidth %d: 3 x %d + 1) x "
-                "8 bytes",
-                m.num_unknowns(), m.nv, m.nc, 3 * m.bandwidth + 1, m.bandwidth, m.bandwidth);
-  parts.push_back(
-      {"banded LU factors of the iteration matrix", n * (3.0 * kl + 1.0) * 8.0 + n * 52.0, why});
+  if (m.sparse_solver) {
+    // SparseLU: the matrix in compressed columns (12 bytes an entry, at most the blocks of the
+    // pattern), KLU's factors (about 12 bytes an entry of L + U, its estimate, for each of the
+    // up to eight pivot sequences it keeps) and about 15 ints/doubles per unknown of workspace.
+    double entries = 0.0;
+    for (const SparseLU::Block& b : m.sparse_pattern)
+      entries += static_cast<double>(b.rows) * static_cast<double>(b.cols);
+    std::snprintf(why, sizeof why,
+                  "%d unknowns (nv = %d, nc = %d): at most %.0f matrix entries and 8 x %.0f "
+                  "entries of L + U (KLU's estimate) x 12 bytes",
+                  m.num_unknowns(), m.nv, m.nc, entries, m.sparse_factor_nonzeros);
+    parts.push_back({"sparse LU factors of the iteration matrix",
+                     (entries + 8.0 * m.sparse_factor_nonzeros) * 12.0 + n * 120.0, why});
+  } else {
+    // BandedLU::Resize: ldab = 2 kl + ku + 1 doubles per column; per unknown 9 ints/doubles
+    // more.
+    std::snprintf(why, sizeof why,
+                  "%d unknowns (nv = %d, nc = %d) x %d band entries (bandwidth %d: 3 x %d + 1) "
+                  "x 8 bytes",
+                  m.num_unknowns(), m.nv, m.nc, 3 * m.bandwidth + 1, m.bandwidth, m.bandwidth);
+    parts.push_back(
+        {"banded LU factors of the iteration matrix", n * (3.0 * kl + 1.0) * 8.0 + n * 52.0, why});
+  }
   // The state and the Newton workspaces: vectors of n, node frames and tangents, element
   // branch references.
   const double nodes = static_cast<double>(m.nodes.size());

@@ -3,6 +3,11 @@
 namespace screwfem {
 
 bool SolveAssembledSystem(const Model& model, Data& data) {
+  if (model.sparse_solver) {
+    if (data.sparse.Factorize() >= 0) return false;
+    if (!data.coupling.Factorize(data.sparse)) return false;
+    return SolveFactorizedSystem(model, data);
+  }
   if (data.matrix.Factorize() >= 0) return false;
   if (!data.coupling.Factorize(data.matrix)) return false;  // the off-band blocks (Woodbury)
   return SolveFactorizedSystem(model, data);
@@ -12,8 +17,13 @@ bool SolveFactorizedSystem(const Model& model, Data& data) {
   const int n = model.num_unknowns();
   for (int i = 0; i < n; ++i)
     data.rhs(model.permutation[static_cast<std::size_t>(i)]) = -data.residual(i);
-  data.matrix.Solve(data.rhs);
-  data.coupling.Correct(data.matrix, data.rhs);
+  if (model.sparse_solver) {
+    data.sparse.Solve(data.rhs);
+    data.coupling.Correct(data.sparse, data.rhs);
+  } else {
+    data.matrix.Solve(data.rhs);
+    data.coupling.Correct(data.matrix, data.rhs);
+  }
   for (int i = 0; i < n; ++i)
     data.increment(i) = data.rhs(model.permutation[static_cast<std::size_t>(i)]);
   return data.increment.allFinite();

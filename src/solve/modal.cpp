@@ -25,8 +25,17 @@ void ReadAssembledMatrix(const Model& model, const Data& data, Eigen::MatrixXd* 
     global[static_cast<std::size_t>(model.permutation[static_cast<std::size_t>(g)])] = g;
   top_left->setZero(nv, nv);
   if (B) B->setZero(model.nc, nv);
+  const auto store = [&](int pi, int pj, double value) {
+    const int gi = global[static_cast<std::size_t>(pi)], gj = global[static_cast<std::size_t>(pj)];
+    if (gj >= nv) return;
+    if (gi < nv)
+      (*top_left)(gi, gj) = value;
+    else if (B)
+      (*B)(gi - nv, gj) = value;
+  };
+  if (model.sparse_solver) data.sparse.ForEachEntry(store);
   const BandedLU& A = data.matrix;
-  for (int pj = 0; pj < n; ++pj) {
+  for (int pj = 0; pj < (model.sparse_solver ? 0 : n); ++pj) {
     const int gj = global[static_cast<std::size_t>(pj)];
     if (gj >= nv) continue;
     const int lo = std::max(0, pj - A.upper_bandwidth());

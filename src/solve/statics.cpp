@@ -118,7 +118,13 @@ struct StaticSolver {
     step_dx.resize(m.nv);
     // The exact tangent's blocks may lie outside the model's band pattern: the matrix gets
     // the wider pattern (and band) for the solve, and the model's back at its end.
-    if (o.constraint_force_tangent && static_cast<int>(m.pattern_last.size()) == n) {
+    if (o.constraint_force_tangent && m.sparse_solver) {
+      // The sparse pattern gets the blocks of d(B^T lambda)/dq (a new symbolic analysis).
+      std::vector<SparseLU::Block> blocks = m.sparse_pattern;
+      AddConstraintForceTangentBlocks(m, &blocks);
+      d.sparse.SetPattern(n, blocks);
+      opt.constraint_force_tangent = true;
+    } else if (o.constraint_force_tangent && static_cast<int>(m.pattern_last.size()) == n) {
       int bandwidth = 0;
       pattern = ConstraintForceTangentPattern(m, &bandwidth);
       if (bandwidth > d.matrix.lower_bandwidth() || bandwidth > d.matrix.upper_bandwidth()) {
@@ -132,6 +138,10 @@ struct StaticSolver {
   }
   ~StaticSolver() {
     if (!opt.constraint_force_tangent) return;
+    if (model.sparse_solver) {
+      data.sparse.SetPattern(model.num_unknowns(), model.sparse_pattern);
+      return;
+    }
     if (resized) data.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
     data.matrix.SetPattern(model.pattern_last, model.pattern_last);
   }

@@ -89,9 +89,10 @@ namespace {
 // A model with every kind of contribution: a rod with inertia, damping and gravity clamped to
 // a rigid body, rigid bodies, revolute/prismatic/spherical/universal joints, prescribed,
 // series-elastic and force drives, dead and follower point loads with profiles, a tendon and a
-// force element.
-Model MixedModel() {
+// force element. `solver`: the direct solver of its Newton systems.
+Model MixedModel(LinearSolver solver = LinearSolver::kAuto) {
   ModelBuilder b;
+  b.SetLinearSolver(solver);
   const int base = b.AddNode(SE3::Translation(Vec3(0, 0, 0)), "base");
   b.AddRigidBody("base", base, 0.15, Vec3(0.1, 0, 0), 1e-4 * Mat3::Identity());
   const int link = b.AddNode(SE3::Translation(Vec3(0.2, 0, 0)), "link");
@@ -222,102 +223,131 @@ Model MixedModel() {
 
 // Both constraint formulations; the counted steps pass the load
 // ramp's end at 0.02 s, so they include a restart at a breakpoint.
+// Both direct solvers: the banded LU and the sparse LU (KLU's refactorisation).
 TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
-  for (ConstraintFormulation constraints :
-       {ConstraintFormulation::kIndex3, ConstraintFormulation::kGgl}) {
-    SCOPED_TRACE(NameOf(constraints));
-    const Model model = MixedModel();
-    int span_segments = 0;  // the eyelet between rod nodes makes 4-node tendon items
-    TendonSpanSegmentKind::ForEach(model, [&](int, const int(&)[4]) { ++span_segments; });
-    ASSERT_EQ(span_segments, 2);
-    int span_forces = 0;  // the force element with an end between rod nodes
-    ForceElementSpanKind::ForEach(model, [&](int, const int(&)[4]) { ++span_forces; });
-    ASSERT_EQ(span_forces, 1);
-    Data data = MakeData(model);
-    Integrator integ;
-    DynamicOptions options;
-    options.rho_inf = 0.8;
-    options.constraints = constraints;
-    // The perturbed start is asked for, and left out at every start and restart: on this model
-    // (stiff rod, penalty contacts, a tendon going slack at the ramp's end) the acceleration
-    // changes over a step by 60 to 1000 times itself, modes the step does not resolve; applied
-    // anyway, the perturbation made both formulations diverge after the restart at 0.02 s
-    // (docs/numerics.md, "Stabilised index 2").
-    options.perturbed_start = true;
-    std::string message;
-    ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
-    for (int i = 0; i < 3; ++i) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
-    // Set-up of the between-step work: an input table, a saved state, the output rows.
-    const InputTable table = ParseInputTable("t,u\n0,0\n0.02,1\n0.04,-1\n", "u.csv", model);
-    SimulationState saved;
-    SaveSimulationState(data, integ, &saved);
-    std::vector<double> reactions, energy, contact_row;
-    CalcEnergyRow(model, data, &energy);
-    CalcReactionRow(model, data, &reactions);
-    CalcContactRow(model, data, 0, &contact_row);
-    int active_steps = 0;  // steps that end with a contact active
-    int pair_steps = 0;    // ... with a pair of moving shapes active
-    ASSERT_FALSE(AllShapePairs(model).empty());
-    g_allocations = 0;
-    g_counting = true;
-    bool ok = true;
-    for (int i = 0; i < 50; ++i) {
-      if (i < 25)
-        SetInputsAt(table, data.time + 1e-3, data);  // the CLI's --inputs
-      else
-        data.inputs(0) = 0.02 * i;  // Python's sim.inputs["u"] = ...
-      {
-        const StepResult r = Step(model, data, integ, 1e-3);
-        if (!r.ok)
-          std::fprintf(stderr, "step failed at t = %g s: %s\n", data.time, r.message.c_str());
-        ok = r.ok && ok;
-      }
+  for (LinearSolver solver : {LinearSolver::kBanded, LinearSolver::kSparse})
+    for (ConstraintFormulation constraints :
+         {ConstraintFormulation::kIndex3, ConstraintFormulation::kGgl}) {
+      SCOPED_TRACE(NameOf(constraints));
+      SCOPED_TRACE(NameOf(solver));
+      const Model model = MixedModel(solver);
+      ASSERT_EQ(model.sparse_solver, solver == LinearSolver::kSparse);
+      int span_segments = 0;  // the eyelet between rod nodes makes 4-node tendon items
+      TendonSpanSegmentKind::ForEach(model, [&](int, const int(&)[4]) { ++span_segments; });
+      ASSERT_EQ(span_segments, 2);
+      int span_forces = 0;  // the force element with an end between rod nodes
+      ForceElementSpanKind::ForEach(model, [&](int, const int(&)[4]) { ++span_forces; });
+      ASSERT_EQ(span_forces, 1);
+      Data data = MakeData(model);
+      Integrator integ;
+      DynamicOptions options;
+      options.rho_inf = 0.8;
+      options.constraints = constraints;
+      // The perturbed start is asked for, and left out at every start and restart: on this model
+      // (stiff rod, penalty contacts, a tendon going slack at the ramp's end) the acceleration
+      // changes over a step by 60 to 1000 times itself, modes the step does not resolve; applied
+      // anyway, the perturbation made both formulations diverge after the restart at 0.02 s
+      // (docs/numerics.md, "Stabilised index 2").
+      options.perturbed_start = true;
+      std::string message;
+      ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
+      for (int i = 0; i < 3; ++i) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
+      // Set-up of the between-step work: an input table, a saved state, the output rows.
+      const InputTable table = ParseInputTable("t,u\n0,0\n0.02,1\n0.04,-1\n", "u.csv", model);
+      SimulationState saved;
+      SaveSimulationState(data, integ, &saved);
+      std::vector<double> reactions, energy, contact_row;
       CalcEnergyRow(model, data, &energy);
       CalcReactionRow(model, data, &reactions);
-      bool any = false;
-      for (int c = 0; c < static_cast<int>(model.contact_pairs.size()); ++c)
-        any = CalcContactRow(model, data, c, &contact_row) || any;
-      active_steps += any ? 1 : 0;
-      bool pair = false;
-      for (int c = 0; c < data.num_shape_pairs; ++c)
-        pair = CalcShapePairState(model, data, c).active || pair;
-      pair_steps += pair ? 1 : 0;
+      CalcContactRow(model, data, 0, &contact_row);
+      int active_steps = 0;  // steps that end with a contact active
+      int pair_steps = 0;    // ... with a pair of moving shapes active
+      ASSERT_FALSE(AllShapePairs(model).empty());
+      bool ok = true;
+      // The 50 steps: inputs from the table, then set directly; the output rows after each.
+      const auto steps = [&](bool counted) {
+        for (int i = 0; i < 50; ++i) {
+          if (i < 25)
+            SetInputsAt(table, data.time + 1e-3, data);  // the CLI's --inputs
+          else
+            data.inputs(0) = 0.02 * i;  // Python's sim.inputs["u"] = ...
+          {
+            const StepResult r = Step(model, data, integ, 1e-3);
+            if (!r.ok)
+              std::fprintf(stderr, "step failed at t = %g s: %s\n", data.time, r.message.c_str());
+            ok = r.ok && ok;
+          }
+          CalcEnergyRow(model, data, &energy);
+          CalcReactionRow(model, data, &reactions);
+          bool any = false;
+          for (int c = 0; c < static_cast<int>(model.contact_pairs.size()); ++c)
+            any = CalcContactRow(model, data, c, &contact_row) || any;
+          active_steps += any && counted ? 1 : 0;
+          bool pair = false;
+          for (int c = 0; c < data.num_shape_pairs; ++c)
+            pair = CalcShapePairState(model, data, c).active || pair;
+          pair_steps += pair && counted ? 1 : 0;
+        }
+      };
+      if (model.sparse_solver) {
+        // The sparse LU keeps a pivot sequence per kind of matrix it met (docs/numerics.md,
+        // "Sparse direct solve"): the first restart, tendon catch or contact change needs a
+        // new one (a full factorisation, which allocates, counted). The same 50 steps once
+        // before, from the same state: the counted ones then meet no new kind of matrix.
+        SaveSimulationState(data, integ, &saved);
+        steps(false);
+        RestoreSimulationState(saved, data, integ);
+      }
+      const std::int64_t full = data.sparse.full_factorizations();
+      g_allocations = 0;
+      g_counting = true;
+      steps(true);
+      SaveSimulationState(data, integ, &saved);
+      RestoreSimulationState(saved, data, integ);
+      g_counting = false;
+      EXPECT_TRUE(ok);
+      EXPECT_NE(data.inputs(0), 0.0);
+      EXPECT_GT(integ.iterations, 50);            // the steps really iterated
+      EXPECT_GE(integ.tendon_catches, 1);         // the length-driven tendon's catch ran in them
+      EXPECT_GE(integ.restarts, 1);               // and restarted at the ramp's end
+      EXPECT_GE(integ.perturbed_start_skips, 2);  // at the start and at the restarts
+      EXPECT_EQ(g_allocations.load(), 0)
+          << "heap allocations inside 50 time steps (sparse LU: " << data.sparse.factorizations()
+          << " factorisations, " << data.sparse.full_factorizations() << " full, "
+          << data.sparse.fallbacks() << " fallbacks)";
+      EXPECT_EQ(data.sparse.full_factorizations(), full);  // no new pivot sequence
+      if (model.sparse_solver) {
+        // One symbolic analysis for all the steps; a full factorisation per pivot sequence
+        // kept, refactorisations otherwise.
+        EXPECT_EQ(data.sparse.analyses(), 1);
+        EXPECT_GT(data.sparse.factorizations(), 50);
+        EXPECT_EQ(data.sparse.full_factorizations(), 1 + data.sparse.fallbacks());
+      }
+      EXPECT_GT(active_steps, 10);  // with contacts active
+      EXPECT_GT(pair_steps, 10);    // and the pair of moving shapes
+      // The rows of tendons.csv, forces.csv, actuators.csv, points.csv (a node point and a rod
+      // point, with their orientations) and rod_fields.csv (with the actuators), once sized.
+      std::vector<double> tendons, forces, actuators, points, fields;
+      const std::vector<OutputPoint> recorded = {
+          {.name = "ball", .node = model.rods[0].nodes.front(), .offset = Vec3(0.1, 0, 0)},
+          {.name = "arm", .rod = 0, .arc_length = 0.33}};
+      CalcTendonRow(model, data, &tendons);
+      CalcForceRow(model, data, &forces);
+      CalcActuatorRow(model, data, data.time, &actuators);
+      CalcPointRow(model, data, recorded, &points);
+      CalcRodFieldRows(model, data, -1, 1.0, &fields);
+      g_counting = true;
+      CalcTendonRow(model, data, &tendons);
+      CalcForceRow(model, data, &forces);
+      CalcActuatorRow(model, data, data.time, &actuators);
+      CalcPointRow(model, data, recorded, &points);
+      CalcRodFieldRows(model, data, -1, 1.0, &fields);
+      g_counting = false;
+      EXPECT_EQ(fields.size(), kRodFieldValues * model.elements.size());
+      EXPECT_GT(actuators[1], 0.0);  // the muscle is active
+      EXPECT_GT(tendons[2], 0.0);    // the tendon pulls
+      EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the tendon and force rows";
     }
-    SaveSimulationState(data, integ, &saved);
-    RestoreSimulationState(saved, data, integ);
-    g_counting = false;
-    EXPECT_TRUE(ok);
-    EXPECT_NE(data.inputs(0), 0.0);
-    EXPECT_GT(integ.iterations, 50);            // the steps really iterated
-    EXPECT_GE(integ.tendon_catches, 1);         // the length-driven tendon's catch ran in them
-    EXPECT_GE(integ.restarts, 1);               // and restarted at the ramp's end
-    EXPECT_GE(integ.perturbed_start_skips, 2);  // at the start and at the restarts
-    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 50 time steps";
-    EXPECT_GT(active_steps, 10);  // with contacts active
-    EXPECT_GT(pair_steps, 10);    // and the pair of moving shapes
-    // The rows of tendons.csv, forces.csv, actuators.csv, points.csv (a node point and a rod
-    // point, with their orientations) and rod_fields.csv (with the actuators), once sized.
-    std::vector<double> tendons, forces, actuators, points, fields;
-    const std::vector<OutputPoint> recorded = {
-        {.name = "ball", .node = model.rods[0].nodes.front(), .offset = Vec3(0.1, 0, 0)},
-        {.name = "arm", .rod = 0, .arc_length = 0.33}};
-    CalcTendonRow(model, data, &tendons);
-    CalcForceRow(model, data, &forces);
-    CalcActuatorRow(model, data, data.time, &actuators);
-    CalcPointRow(model, data, recorded, &points);
-    CalcRodFieldRows(model, data, -1, 1.0, &fields);
-    g_counting = true;
-    CalcTendonRow(model, data, &tendons);
-    CalcForceRow(model, data, &forces);
-    CalcActuatorRow(model, data, data.time, &actuators);
-    CalcPointRow(model, data, recorded, &points);
-    CalcRodFieldRows(model, data, -1, 1.0, &fields);
-    g_counting = false;
-    EXPECT_EQ(fields.size(), kRodFieldValues * model.elements.size());
-    EXPECT_GT(actuators[1], 0.0);  // the muscle is active
-    EXPECT_GT(tendons[2], 0.0);    // the tendon pulls
-    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the tendon and force rows";
-  }
 }
 
 // Error-controlled steps (AdaptiveStep) with dense output (InterpolateStep) after each, through

@@ -202,6 +202,36 @@ class InputErrorTest(unittest.TestCase):
                 sf.InputError, re.escape(f"{PENDULUM}: override 'analysis.stepp=1e-3': analysis.stepp")):
             sf.load_scene(PENDULUM, ["analysis.stepp=1e-3"])
 
+    def test_linear_solver_choice_and_counters(self):
+        # The scene key and its counters (docs/numerics.md, "Sparse direct solve"): the
+        # pendulum stays banded under auto; sparse gives the same motion, one symbolic
+        # analysis and a factorisation per simplified-Newton step.
+        runs = {}
+        for solver in ("auto", "banded", "sparse"):
+            scene = sf.load_scene(PENDULUM, [f"analysis.linear_solver={solver}"])
+            self.assertEqual(scene.model.linear_solver, getattr(sf.LinearSolver, solver.upper()))
+            self.assertEqual(scene.model.sparse_solver, solver == "sparse")
+            self.assertGreater(scene.model.banded_flops, 0.0)
+            sim = sf.Simulation(scene)
+            sim.initialize(sf.DynamicOptions())
+            for _ in range(20):
+                sim.step(1e-3)
+            runs[solver] = (sim.joint_coordinate("hinge"), sim.symbolic_analyses,
+                            sim.sparse_factorizations, sim.factorizations, sim.sparse_fallbacks)
+        self.assertEqual(runs["auto"][1:3], (0, 0))
+        self.assertAlmostEqual(runs["sparse"][0], runs["banded"][0], delta=1e-12)
+        self.assertEqual(runs["sparse"][1], 1)
+        self.assertGreaterEqual(runs["sparse"][2], runs["sparse"][3])
+        self.assertGreater(runs["sparse"][3], 0)
+        self.assertEqual(runs["sparse"][4], 0)
+        spec = sf.SceneSpec()
+        spec.set_analysis(linear_solver="sparse")
+        self.assertEqual(spec.linear_solver, sf.LinearSolver.SPARSE)
+        with self.assertRaisesRegex(sf.InputError, "analysis.linear_solver"):
+            spec.set_analysis(linear_solver="dense")
+        builder = sf.ModelBuilder()
+        builder.set_linear_solver(sf.LinearSolver.BANDED)
+
     def test_newton_variants_reach_the_same_state(self):
         # Full Newton from vdot = 0 against the defaults (simplified Newton, adaptive start):
         # the same solution, with fewer factorisations than iterations for the defaults.
@@ -1157,7 +1187,7 @@ class EnumValidationTest(unittest.TestCase):
     """Enum values from Python: an integer outside an enum is a ValueError, never a value that
     reaches C++ (JointType(99) aborted the interpreter in joint_type_name and add_joint)."""
 
-    ENUMS = ["JointType", "DriveKind", "RodInertia", "LoadFrame", "ActuatorType",
+    ENUMS = ["JointType", "DriveKind", "RodInertia", "LinearSolver", "LoadFrame", "ActuatorType",
              "ContactShapeType", "ObstacleType", "NewtonMatrix", "Predictor", "ConvergenceTest",
              "ConstraintFormulation", "StaticMethod", "AnalysisKind", "VtkFormat"]
 

@@ -49,8 +49,10 @@ struct Truss {
 // The truss under a dead apex load P_ref (s = 1), or, with `displacement_control`, with the
 // apex moved down by a prescribed prismatic drive (alpha = s w_max) through a small slider body
 // pinned to the apex (the prismatic joint also holds the apex on the symmetry axis).
-Truss MakeTruss(double p_ref, bool displacement_control, double w_max = 1.1) {
+Truss MakeTruss(double p_ref, bool displacement_control, double w_max = 1.1,
+                LinearSolver solver = LinearSolver::kAuto) {
   ModelBuilder b;
+  b.SetLinearSolver(solver);
   const Section bar = Section::FromDiagonals((Vec6() << kEA, kEA, kEA, 1.0, 1.0, 1.0).finished());
   const Vec3 left(-kA, 0.0, 0.0), right(kA, 0.0, 0.0), top(0.0, kH, 0.0);
   const int r0 = b.AddStraightRod("left", left, top, 1, bar);
@@ -210,6 +212,47 @@ TEST(PathFollowingStatics, ArcLengthTracesTheVonMisesTrussThroughBothLimitPoints
   ASSERT_EQ(r2.limit_points.size(), 2u);
   EXPECT_NEAR(p_ref * r2.limit_points[0], p_star, 5e-6 * p_star);
   EXPECT_NEAR(p_ref * r2.limit_points[1], -p_star, 5e-6 * p_star);
+}
+
+// The arc-length path with the sparse LU (docs/numerics.md, "Sparse direct solve"): the same
+// load factors and limit points as with the banded LU, and at every converged step the same
+// sign of the determinant of the last factorised matrix, which changes sign along the path.
+TEST(PathFollowingStatics, SparseLUFollowsTheBandedPathWithTheSameDeterminantSigns) {
+  const double p_ref = 0.08;
+  struct Path {
+    std::vector<double> load;
+    std::vector<int> sign;
+    StaticResult result;
+  };
+  Path paths[2];
+  for (int k = 0; k < 2; ++k) {
+    const Truss t =
+        MakeTruss(p_ref, false, 1.1, k == 0 ? LinearSolver::kBanded : LinearSolver::kSparse);
+    ASSERT_EQ(t.model.sparse_solver, k == 1);
+    Data d = MakeData(t.model);
+    StaticOptions opt;
+    opt.method = StaticMethod::kArcLength;
+    paths[k].result = SolveStatic(t.model, d, opt, {}, [&](const StaticStep& step) {
+      paths[k].load.push_back(step.load_factor);
+      paths[k].sign.push_back(k == 0 ? d.matrix.determinant_sign() : d.sparse.determinant_sign());
+    });
+    ASSERT_TRUE(paths[k].result.converged) << paths[k].result.message;
+    // The exact tangent's pattern (a second analysis) and the model's back at the end.
+    if (k == 1) {
+      EXPECT_EQ(d.sparse.analyses(), 3);
+    }
+  }
+  ASSERT_EQ(paths[1].load.size(), paths[0].load.size());
+  for (std::size_t i = 0; i < paths[0].load.size(); ++i)
+    EXPECT_NEAR(paths[1].load[i], paths[0].load[i], 1e-9) << i;
+  EXPECT_EQ(paths[1].sign, paths[0].sign);
+  int changes = 0;
+  for (std::size_t i = 1; i < paths[0].sign.size(); ++i)
+    changes += paths[0].sign[i] != paths[0].sign[i - 1] ? 1 : 0;
+  EXPECT_GE(changes, 2);  // past both limit points
+  ASSERT_EQ(paths[1].result.limit_points.size(), 2u);
+  EXPECT_NEAR(paths[1].result.limit_points[0], paths[0].result.limit_points[0], 1e-9);
+  EXPECT_NEAR(paths[1].result.limit_points[1], paths[0].result.limit_points[1], 1e-9);
 }
 
 // Displacement control (docs/numerics.md, "Path-following statics"): the apex pushed down by a prescribed

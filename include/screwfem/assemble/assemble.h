@@ -26,6 +26,9 @@ namespace screwfem {
 // model.pattern_last widened by the blocks of d(B^T lambda)/dq (each constrained joint couples
 // its nodes and coordinates with each other), and the half-bandwidth it needs.
 std::vector<int> ConstraintForceTangentPattern(const Model& model, int* bandwidth);
+// The same blocks for the sparse LU (Model::sparse_solver): every pair of column blocks of each
+// joint's rows, appended to `blocks` (permuted positions).
+void AddConstraintForceTangentBlocks(const Model& model, std::vector<SparseLU::Block>* blocks);
 
 // Evaluates residual (and matrix). Returns false if an element's relative rotation left the
 // admissible range (data.failed_element, data.failed_rotation say which and how far).

@@ -163,6 +163,8 @@ class ModelBuilder {
   // contact entities, the contact couplings of the ordering and the workspace of MakeData (the
   // banded LU above all), and throws InputError naming the part that exceeds it.
   void SetMemoryLimit(std::size_t bytes) { model_.memory_limit = bytes; }
+  // The direct solver of the Newton systems (Model::linear_solver; kAuto by default).
+  void SetLinearSolver(LinearSolver solver) { model_.linear_solver = solver; }
 
   // Validates and computes sizes and the ordering. Throws InputError.
   Model Build() const;

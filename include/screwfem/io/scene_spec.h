@@ -173,6 +173,7 @@ struct SceneSpec {
   std::string name;
   Vec3 gravity = Vec3::Zero();  // [m/s^2]
   RodInertia rod_inertia = RodInertia::kExact;
+  LinearSolver linear_solver = LinearSolver::kAuto;    // analysis.linear_solver
   std::vector<std::pair<std::string, Vec3>> points;    // named points [m], world
   std::vector<std::pair<std::string, double>> inputs;  // run-time inputs and their defaults
   std::vector<BodySpec> bodies;

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "screwfem/linalg/banded_lu.h"
+#include "screwfem/linalg/sparse_lu.h"
 
 namespace screwfem {
 
@@ -63,10 +64,12 @@ class BandCoupling {
   // the preallocated storage). false when G has an exact zero pivot (singular) or a value
   // that is not finite. Nothing to do (true) when empty.
   bool Factorize(const BandedLU& A);
+  bool Factorize(const SparseLU& A);  // the same with the sparse LU as A
   // x holds A^-1 b (A.Solve already applied): overwrites it with (A + P E P^T)^-1 b.
   // Precondition: Factorize(A) returned true and no entry was added since. Nothing to do when
   // empty.
   void Correct(const BandedLU& A, Eigen::Ref<Eigen::VectorXd> x);
+  void Correct(const SparseLU& A, Eigen::Ref<Eigen::VectorXd> x);
   // Sign of det(G) of the last successful Factorize (+1 or -1; +1 when empty), so that
   // det(A + P E P^T) has the sign A.determinant_sign() * determinant_sign().
   int determinant_sign() const { return determinant_sign_; }
@@ -91,6 +94,10 @@ class BandCoupling {
   // The index of the block pair (p_i, p_j), new if needed; -1 (nothing added, overflowed_
   // set) when the blocks do not fit.
   int ReservePair(int p_i, int p_j);
+  template <class LU>
+  bool FactorizeWith(const LU& A);
+  template <class LU>
+  void CorrectWith(const LU& A, Eigen::Ref<Eigen::VectorXd> x);
 
   int n_ = 0, block_size_ = 0, max_blocks_ = 0;
   int blocks_ = 0;  // slots in use: slot s holds unknowns block_start_[s] + [0, block_size)

@@ -8,6 +8,7 @@
 
 #include "screwfem/linalg/band_coupling.h"
 #include "screwfem/linalg/banded_lu.h"
+#include "screwfem/linalg/sparse_lu.h"
 #include "screwfem/model/model.h"
 
 namespace screwfem {
@@ -66,6 +67,9 @@ struct Data {
   Eigen::VectorXd increment;       // global order, size nv + nc
   std::vector<Mat6> node_tangent;  // T(h dq_i) per node for the dynamic iteration matrix
   BandedLU matrix;                 // permuted, banded iteration matrix
+  // The same matrix in the sparse LU (Model::sparse_solver; the banded one is then empty):
+  // pattern Model::sparse_pattern, analysed once by MakeData.
+  SparseLU sparse;
   // Its node blocks outside the band pattern (pairs of moving shapes between entities not
   // linked in the band, ContactSettings::band_pair_nodes): a low-rank update solved with the
   // Woodbury identity (SolveAssembledSystem). Room for 32 nodes from MakeData, doubled at the

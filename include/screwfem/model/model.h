@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "screwfem/lie/se3.h"
+#include "screwfem/linalg/sparse_lu.h"
 #include "screwfem/model/enum_names.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/model/profile.h"
@@ -282,6 +283,25 @@ struct EnumNames<RodInertia> {
   }};
 };
 
+// The direct solver of the Newton systems (docs/numerics.md, "Sparse direct solve"): the
+// banded LU on the bandwidth-reducing order, or the general sparse LU (KLU); kAuto picks the
+// one whose predicted factorisation cost is lower (Model::sparse_solver).
+enum class LinearSolver { kAuto, kBanded, kSparse };
+template <>
+struct EnumNames<LinearSolver> {
+  static constexpr std::array<EnumName<LinearSolver>, 3> kValues = {{
+      {LinearSolver::kAuto, "auto", "the lower predicted factorisation cost"},
+      {LinearSolver::kBanded, "banded", "banded LU on the bandwidth-reducing order"},
+      {LinearSolver::kSparse, "sparse", "general sparse LU (SuiteSparse KLU)"},
+  }};
+};
+// The choice of LinearSolver::kAuto: the sparse LU when kSparseFlopCost x its predicted flops
+// + kSparseFixedCost x the unknowns is below the banded LU's predicted flops (a flop of KLU's
+// indexed columns costs more than one of the band's contiguous ones, and each column has a
+// fixed cost; measured on bench/solver_bench.cpp, docs/numerics.md, "Sparse direct solve").
+inline constexpr double kSparseFlopCost = 4.0;
+inline constexpr double kSparseFixedCost = 200.0;
+
 // A run-time input (MuJoCo's ctrl): a named value that any profile can take (ProfileTerm::kInput),
 // set between steps (Data::inputs; Python sim.inputs["name"], the CLI's --inputs table).
 struct ModelInput {
@@ -474,6 +494,17 @@ struct Model {
   // Sparsity pattern of the permuted iteration matrix (symmetric): position i couples with
   // positions up to pattern_last[i] (the last unknown of any block adjacent to its own).
   std::vector<int> pattern_last;
+  // The solver asked for (scene: analysis.linear_solver) and the one Build chose: the sparse
+  // LU (Data::sparse) when sparse_solver, else the banded one (Data::matrix).
+  LinearSolver linear_solver = LinearSolver::kAuto;
+  bool sparse_solver = false;
+  // The same pattern as dense blocks of the permuted matrix (row, rows, col, cols; every
+  // block with itself and each pair of coupled blocks both ways): the sparse LU's pattern.
+  std::vector<SparseLU::Block> sparse_pattern;
+  // Predicted flops of one factorisation by each solver (the choice of kAuto): the banded
+  // LU's from the band pattern, the sparse LU's from KLU's symbolic analysis (0 when not
+  // analysed), and KLU's predicted nonzeros of L + U.
+  double banded_flops = 0.0, sparse_flops = 0.0, sparse_factor_nonzeros = 0.0;
   double length_scale = 1.0;  // characteristic length (bounding box diagonal) [m]
 
   // Constraint rows found linearly dependent at build time (redundant constraints, e.g. a
