@@ -1130,6 +1130,23 @@ class MemoryLimitTest(unittest.TestCase):
             with self.assertRaises(ValueError):
                 sf.load_scene(PENDULUM, max_memory=bad)
 
+    def test_reactions_and_energy_tables_can_be_turned_off(self):
+        scene = sf.load_scene(PENDULUM, ["analysis.end_time=0.01", "outputs.vtk=false"])
+        self.assertTrue(scene.outputs.reactions)
+        self.assertTrue(scene.outputs.energy)
+        scene.outputs.reactions = False
+        with tempfile.TemporaryDirectory() as outdir:
+            self.assertTrue(sf.run_scene(scene, outdir).ok)
+            self.assertFalse(os.path.exists(os.path.join(outdir, "reactions.csv")))
+            self.assertTrue(os.path.exists(os.path.join(outdir, "energy.csv")))
+        scene = sf.load_scene(PENDULUM, ["analysis.end_time=0.01", "outputs.vtk=false",
+                                         "outputs.energy=false"])
+        self.assertFalse(scene.outputs.energy)
+        with tempfile.TemporaryDirectory() as outdir:
+            self.assertTrue(sf.run_scene(scene, outdir).ok)
+            self.assertTrue(os.path.exists(os.path.join(outdir, "reactions.csv")))
+            self.assertFalse(os.path.exists(os.path.join(outdir, "energy.csv")))
+
     def test_run_memory_lists_the_model_and_the_integrator(self):
         scene = sf.load_scene(PENDULUM)
         m = scene.model
