@@ -7,11 +7,12 @@
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/solve/dynamics.h"
+#include "step_stages.h"
 
 namespace screwfem {
 
 void InterpolateStep(const Model& model, const Data& data, Integrator& integ, double t, Data& out) {
-  if (integ.dense_v0.size() != model.nv) {  // no AdaptiveStep yet (PrepareAdaptiveSteps)
+  if (!generalized_alpha::AdaptiveStepsPrepared(model, data, integ)) {  // no AdaptiveStep yet
     out.H = data.H;
     out.HJ = data.HJ;
     out.q_joint = data.q_joint;

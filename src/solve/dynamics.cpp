@@ -257,10 +257,17 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   return true;
 }
 
+namespace generalized_alpha {
+bool AdaptiveStepsPrepared(const Model& model, const Data& data, const Integrator& integ) {
+  return integ.dense_v0.size() == model.nv && integ.dense_lambda0.size() == model.nc &&
+         integ.error.size() == model.nv && integ.dense_q0.H.size() == data.H.size() &&
+         integ.dense_q0.HJ.size() == data.HJ.size();
+}
+}  // namespace generalized_alpha
+
 void PrepareAdaptiveSteps(const Model& model, const Data& data, Integrator& integ) {
   const Eigen::Index nv = model.nv, nc = model.nc;
-  if (integ.dense_v0.size() == nv && integ.dense_lambda0.size() == nc && integ.error.size() == nv)
-    return;
+  if (generalized_alpha::AdaptiveStepsPrepared(model, data, integ)) return;
   integ.error = integ.a_accepted = integ.dense_v0 = integ.dense_vdot0 = integ.dense_v1 =
       integ.dense_vdot1 = integ.dense_d = integ.dense_psi = integ.dense_dpsi =
           Eigen::VectorXd::Zero(nv);

@@ -115,6 +115,13 @@ TEST(MemoryPerElement, AdaptiveWorkspaceOnlyForErrorControlledSteps) {
   EXPECT_EQ(integ.error.size(), 0);
   EXPECT_EQ(integ.perturb_v.size(), 0);  // perturbed_start is off
   EXPECT_TRUE(integ.dense_q0.H.empty());
+  // Dense output before any error-controlled step: the current state.
+  Data dense = data;
+  dense.v.setConstant(1.0);
+  InterpolateStep(model, data, integ, 0.0, dense);
+  ASSERT_EQ(dense.H.size(), data.H.size());
+  EXPECT_EQ(dense.H.back().x, data.H.back().x);
+  EXPECT_EQ(dense.v, data.v);
   PrepareAdaptiveSteps(model, data, integ);
   EXPECT_EQ(integ.dense_v0.size(), model.nv);
   EXPECT_EQ(integ.error.size(), model.nv);
