@@ -158,11 +158,20 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
                 m.nv, m.nc, m.redundant_rows.size(), m.bandwidth);
     std::printf("  recorded: %zu points, %zu joints\n", scene.outputs.points.size(),
                 scene.outputs.joints.size());
+    // The memory of the run, part by part (model/memory.h, EstimateRunMemory).
+    screwfem::IntegratorMemoryOptions mo;
+    mo.statics = a.kind == screwfem::AnalysisKind::kStatic;
+    mo.adaptive = a.adaptive_steps;
+    mo.perturbed_start = a.dynamic.perturbed_start;
+    mo.ggl = a.dynamic.constraints == screwfem::ConstraintFormulation::kGgl;
+    const std::vector<screwfem::MemoryPart> parts = screwfem::EstimateRunMemory(m, mo);
     std::printf(
-        "  memory: about %s for the solver's workspace (limit %s)\n",
-        screwfem::FormatBytes(screwfem::TotalBytes(screwfem::EstimateDataMemory(m))).c_str(),
+        "  memory: about %s for the model and the solver's workspace (limit %s)\n",
+        screwfem::FormatBytes(screwfem::TotalBytes(parts)).c_str(),
         screwfem::FormatBytes(static_cast<double>(screwfem::ResolveMemoryLimit(m.memory_limit)))
             .c_str());
+    for (const screwfem::MemoryPart& p : parts)
+      std::printf("    %s: %s\n", p.part.c_str(), screwfem::FormatBytes(p.bytes).c_str());
     // The output times the run will record, against outputs.max_rows (refused above it).
     const screwfem::OutputEstimate e = screwfem::EstimateOutputs(scene, scene.outputs);
     const auto count = [](double n) {

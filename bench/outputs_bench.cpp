@@ -16,6 +16,7 @@
 // cpu_time_ratio (the same with the thread's CPU time, user + system: the cost without the
 // waits for a processor that other load causes), solver_seconds and run_seconds (medians),
 // written_bytes, final_bytes, bytes_ratio, rounds, frames (vtk files).
+// The case grm_rigid_lean: the same with outputs.reactions and outputs.energy false.
 // Run with scripts/run-bench.sh (SCREWFEM_BENCH=outputs), which writes bench/RESULTS.md.
 #include <benchmark/benchmark.h>
 
@@ -117,11 +118,16 @@ bool RunSolver(const Scene& scene, double* seconds, double* cpu_seconds, std::st
 
 constexpr int kRounds = 12;
 
-void BM_GrmOutputCost(benchmark::State& state, const char* name) {
+// `lean`: the same run without reactions.csv and energy.csv (outputs.reactions and
+// outputs.energy false), the case grm_rigid_lean.
+void BM_GrmOutputCost(benchmark::State& state, const char* name, bool lean) {
   Scene scene;
   try {
-    scene = LoadScene(std::string(SCREWFEM_SOURCE_DIR) + "/examples/grm/" + name + ".yaml",
-                      {"defaults.elements=4", "analysis.step=1e-3"});
+    std::vector<std::string> overrides = {"defaults.elements=4", "analysis.step=1e-3"};
+    if (lean)
+      overrides.insert(overrides.end(), {"outputs.reactions=false", "outputs.energy=false"});
+    scene =
+        LoadScene(std::string(SCREWFEM_SOURCE_DIR) + "/examples/grm/" + name + ".yaml", overrides);
   } catch (const std::exception& e) {
     state.SkipWithError((std::string("LoadScene failed: ") + e.what()).c_str());
     return;
@@ -189,7 +195,12 @@ void BM_GrmOutputCost(benchmark::State& state, const char* name) {
 }
 
 const bool kRegistered = [] {
-  benchmark::RegisterBenchmark("BM_GrmOutputCost/grm_rigid", BM_GrmOutputCost, "grm_rigid")
+  benchmark::RegisterBenchmark("BM_GrmOutputCost/grm_rigid", BM_GrmOutputCost, "grm_rigid", false)
+      ->Iterations(1)
+      ->UseManualTime()
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("BM_GrmOutputCost/grm_rigid_lean", BM_GrmOutputCost, "grm_rigid",
+                               true)
       ->Iterations(1)
       ->UseManualTime()
       ->Unit(benchmark::kMillisecond);

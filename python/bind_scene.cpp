@@ -308,7 +308,13 @@ void BindScenesAndRuns(py::module_& m) {
       .def_readwrite("max_rows", &OutputSpec::max_rows,
                      "Most output times a run records (rows of each table, rod_fields.csv "
                      "times, ParaView frames; default 1000000): run_scene and record refuse a "
-                     "scene estimated above it (estimate_outputs), and a run reaching it fails.");
+                     "scene estimated above it (estimate_outputs), and a run reaching it fails.")
+      .def_readwrite("reactions", &OutputSpec::reactions,
+                     "Write reactions.csv (the joints' force and moment on side B; default "
+                     "True); False: neither written nor computed.")
+      .def_readwrite("energy", &OutputSpec::energy,
+                     "Write energy.csv (energies and momenta; default True); False: neither "
+                     "written nor computed.");
 
   py::class_<Scene>(m, "Scene",
                     "A compiled scene (scene.h): the model plus what to do with it (analysis) and "
@@ -395,6 +401,26 @@ void BindScenesAndRuns(py::module_& m) {
       "estimate_memory(model) -> list of (part, bytes, why)\n\n"
       "What a Simulation of `model` allocates (MakeData): the banded LU factors, the state,\n"
       "the off-band coupling and the broad phase of pairs of moving shapes.");
+  m.def(
+      "estimate_run_memory",
+      [](const Model& model, bool statics, bool adaptive, bool perturbed_start, bool ggl) {
+        IntegratorMemoryOptions o;
+        o.statics = statics;
+        o.adaptive = adaptive;
+        o.perturbed_start = perturbed_start;
+        o.ggl = ggl;
+        py::list out;
+        for (const MemoryPart& p : EstimateRunMemory(model, o))
+          out.append(py::make_tuple(p.part, p.bytes, p.why));
+        return out;
+      },
+      py::arg("model"), py::arg("statics") = false, py::arg("adaptive") = false,
+      py::arg("perturbed_start") = false, py::arg("ggl") = false,
+      "estimate_run_memory(model, statics=False, adaptive=False, perturbed_start=False, "
+      "ggl=False) -> list of (part, bytes, why)\n\n"
+      "The memory of a run, as `screwfem check` prints it (EstimateRunMemory): the model, the\n"
+      "parts of estimate_memory and the time integrator's workspace (adaptive: step auto;\n"
+      "statics: the static solver's instead).");
 
   py::class_<RunResult>(m, "RunResult", "Outcome of run_scene (run.h).")
       .def_readonly("ok", &RunResult::ok, "The analysis completed.")

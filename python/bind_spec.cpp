@@ -564,6 +564,8 @@ OutputsSpec SpecReader::ReadOutputs(py::handle obj, const std::string& path) con
   o.rod_fields = Bool(get("rod_fields"), f("rod_fields"));
   o.rod_fields_interval = Number(get("rod_fields_interval"), f("rod_fields_interval"));
   o.max_rows = Integer(get("max_rows"), f("max_rows"), 1, kMaxMaxRows);
+  o.reactions = Bool(get("reactions"), f("reactions"));
+  o.energy = Bool(get("energy"), f("energy"));
   return o;
 }
 
@@ -791,7 +793,8 @@ py::object ToPython(const SceneSpec& s) {
       py::arg("joints") = py::cast(o.joints), py::arg("interval") = o.interval,
       py::arg("vtk") = o.vtk, py::arg("vtk_format") = o.vtk_format,
       py::arg("vtk_interval") = o.vtk_interval, py::arg("rod_fields") = o.rod_fields,
-      py::arg("rod_fields_interval") = o.rod_fields_interval, py::arg("max_rows") = o.max_rows);
+      py::arg("rod_fields_interval") = o.rod_fields_interval, py::arg("max_rows") = o.max_rows,
+      py::arg("reactions") = o.reactions, py::arg("energy") = o.energy);
   return SpecClass("SceneSpec")(
       py::arg("name") = s.name, py::arg("gravity") = Tuple(s.gravity),
       py::arg("rod_inertia") = s.rod_inertia, py::arg("linear_solver") = s.linear_solver,

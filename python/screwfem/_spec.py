@@ -280,6 +280,8 @@ class OutputsSpec:
     max_rows: int = _f(1000000, doc="Most output times a run records (rows per table, "
                        "rod_fields times, ParaView frames); check and run refuse a scene "
                        "estimated above it.")
+    reactions: bool = _f(True, doc="Write reactions.csv; False: neither written nor computed.")
+    energy: bool = _f(True, doc="Write energy.csv; False: neither written nor computed.")
 
 
 # ---- value checks of the adders ----------------------------------------------------------------
@@ -1085,11 +1087,13 @@ class SceneSpec:
         return self._add("outputs.points", p, self.outputs.points)
 
     def set_outputs(self, *, joints=None, interval=None, vtk=None, vtk_interval=None,
-                    vtk_format=None, rod_fields=None, max_rows=None):
+                    vtk_format=None, rod_fields=None, max_rows=None, reactions=None,
+                    energy=None):
         """The scene's ``outputs:`` keys: joints ('all', 'none' or a list of joint names),
         interval [s] (0: every step), vtk (bool), vtk_interval [s], vtk_format ('binary' or
         'ascii'), rod_fields (True, False or the interval between its rows [s]), max_rows
-        (the most output times a run records, a whole number from 1 to 1e9)."""
+        (the most output times a run records, a whole number from 1 to 1e9), reactions and
+        energy (bool: write reactions.csv, energy.csv)."""
         o = self.outputs
         if joints is not None:
             if joints in ("all", "none"):
@@ -1124,6 +1128,10 @@ class SceneSpec:
                 raise _error("outputs.max_rows", "expected a whole number from 1 to "
                              f"1000000000, got {max_rows!r}")
             o.max_rows = int(v)
+        if reactions is not None:
+            o.reactions = _bool(reactions, "outputs.reactions")
+        if energy is not None:
+            o.energy = _bool(energy, "outputs.energy")
         return o
 
 

@@ -308,8 +308,15 @@ class Recording::Impl {
     try {
       points_.Open(folder_, kPointsFile, StaticColumns(PointColumns(outputs_.points)));
       joints_.Open(folder_, kJointsFile, StaticColumns(JointColumns(model_, outputs_.joints)));
-      reactions_.Open(folder_, kReactionsFile, StaticColumns(ReactionColumns(model_)));
-      energy_.Open(folder_, kEnergyFile, StaticColumns(EnergyColumns()));
+      // reactions.csv and energy.csv unless the outputs turn them off (then not computed).
+      if (outputs_.reactions) {
+        reactions_.Open(folder_, kReactionsFile, StaticColumns(ReactionColumns(model_)));
+        tables_[num_tables_++] = &reactions_;
+      }
+      if (outputs_.energy) {
+        energy_.Open(folder_, kEnergyFile, StaticColumns(EnergyColumns()));
+        tables_[num_tables_++] = &energy_;
+      }
       // Tendons and force elements: their tables only when the model has them.
       if (!model_.tendons.empty()) {
         tendons_.Open(folder_, kTendonsFile, StaticColumns(TendonColumns(model_)));
@@ -629,10 +636,14 @@ class Recording::Impl {
         points_.WriteRow(t, WithLoadFactor(row_), key);
         CalcJointRow(model_, data, outputs_.joints, &row_);
         joints_.WriteRow(t, WithLoadFactor(row_), key);
-        CalcReactionRow(model_, data, &row_);
-        reactions_.WriteRow(t, WithLoadFactor(row_), key);
-        CalcEnergyRow(model_, data, &row_);
-        energy_.WriteRow(t, WithLoadFactor(row_), key);
+        if (outputs_.reactions) {
+          CalcReactionRow(model_, data, &row_);
+          reactions_.WriteRow(t, WithLoadFactor(row_), key);
+        }
+        if (outputs_.energy) {
+          CalcEnergyRow(model_, data, &row_);
+          energy_.WriteRow(t, WithLoadFactor(row_), key);
+        }
         if (tendons_.path().size() > 0) {
           CalcTendonRow(model_, data, &row_, lf);
           tendons_.WriteRow(t, WithLoadFactor(row_), key);
@@ -772,6 +783,9 @@ class Recording::Impl {
     j.Field("output_interval", outputs_.interval);
     j.Field("vtk", outputs_.vtk).Field("vtk_interval", outputs_.vtk_interval);
     j.Field("vtk_format", NameOf(outputs_.vtk_format));
+    // (only when off, so that other runs' summaries keep their text)
+    if (!outputs_.reactions) j.Field("reactions", false);
+    if (!outputs_.energy) j.Field("energy", false);
     if (outputs_.rod_fields) {  // (only then, so that other runs' summaries keep their text)
       j.Field("rod_fields", true);
       if (FieldsApart())
@@ -883,12 +897,12 @@ class Recording::Impl {
                               // in static analyses, none otherwise
   CsvWriter contacts_;        // long format (one row per active pair)
   CsvWriter pair_contacts_;   // the same for pairs of moving shapes (pair_contacts.csv)
-  // The open tables, flushed together (points, joints, reactions and energy always), their
+  // The open tables, flushed together (points and joints always), their
   // rows keyed by the output event (events_), so that a write error cuts every one of them
   // at the same output time.
-  std::array<CsvWriter*, 10> tables_ = {&points_, &joints_, &reactions_, &energy_, nullptr,
-                                        nullptr,  nullptr,  nullptr,     nullptr,  nullptr};
-  std::size_t num_tables_ = 4;
+  std::array<CsvWriter*, 10> tables_ = {&points_, &joints_, nullptr, nullptr, nullptr,
+                                        nullptr,  nullptr,  nullptr, nullptr, nullptr};
+  std::size_t num_tables_ = 2;
   std::optional<VtkWriter> vtk_;
   std::optional<ProgressBar> progress_;
   std::vector<double> row_;

@@ -528,6 +528,8 @@ void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
   out->rod_fields = o.rod_fields;
   out->rod_fields_interval = o.rod_fields_interval;
   out->max_rows = o.max_rows;
+  out->reactions = o.reactions;
+  out->energy = o.energy;
 }
 
 void SceneCompiler::CheckReferences() const {

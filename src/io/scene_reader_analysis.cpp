@@ -217,7 +217,7 @@ void SceneReader::ReadOutputs(const Node* node) {
   const std::string path = "outputs";
   r_.CheckKeys(*node, path,
                {"points", "joints", "interval", "vtk", "vtk_format", "vtk_interval", "rod_fields",
-                "max_rows"});
+                "max_rows", "reactions", "energy"});
   if (const Node* pts = node->Find("points")) {
     const std::string pp = Join(path, "points");
     r_.CheckNames(*pts, pp, "output point");
@@ -240,6 +240,9 @@ void SceneReader::ReadOutputs(const Node* node) {
   if (const Node* v = node->Find("rod_fields")) ReadRodFields(*v, Join(path, "rod_fields"));
   if (const Node* v = node->Find("max_rows"))
     out->max_rows = r_.Integer(*v, Join(path, "max_rows"), 1, static_cast<int>(kMaxMaxRows));
+  if (const Node* v = node->Find("reactions"))
+    out->reactions = r_.Bool(*v, Join(path, "reactions"));
+  if (const Node* v = node->Find("energy")) out->energy = r_.Bool(*v, Join(path, "energy"));
 }
 
 // true (at the rows of points.csv), false, or the interval between rows [s] (>= 0).

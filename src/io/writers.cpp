@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -390,15 +391,56 @@ void CsvWriter::Open(const OutputFolder& folder, const char* name,
   file_bytes_ = static_cast<long long>(header.size());
 }
 
+namespace {
+
+// The longest text std::to_chars gives a double without a precision
+// ("-2.2250738585072014e-308"), and a comma.
+constexpr std::size_t kMaxNumberChars = 25;
+
+// The text of a row's time, kept for the next table's row at the same time (the tables of one
+// output event share t): formatted once per event instead of once per table.
+struct TimeText {
+  std::uint64_t bits = 0;
+  bool valid = false;
+  std::size_t size = 0;
+  char text[kMaxNumberChars] = {};
+};
+thread_local TimeText g_time_text;
+
+// Writes t as AppendShortest would at `out`; returns the end.
+char* WriteTime(char* out, double t) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &t, sizeof bits);
+  TimeText& c = g_time_text;
+  if (!c.valid || c.bits != bits) {
+    c.size =
+        static_cast<std::size_t>(std::to_chars(c.text, c.text + sizeof c.text, t).ptr - c.text);
+    c.bits = bits;
+    c.valid = true;
+  }
+  std::memcpy(out, c.text, c.size);
+  return out + c.size;
+}
+
+}  // namespace
+
 bool CsvWriter::WriteRow(double t, const std::vector<double>& values, long long key) {
   if (fd_ < 0 || failed_) return false;
   row_keys_.push_back(NextKey(key));
-  AppendShortest(&batch_, t);
+  // The row is formatted in place, at the batch's end (room made first: no std::string
+  // append per value), then the batch is cut to what was written: the same text as
+  // AppendShortest value by value.
+  const std::size_t start = batch_.size();
+  batch_.resize(start + kMaxNumberChars * (values.size() + 1) + 1);
+  char* const begin = batch_.data() + start;
+  char* const end = batch_.data() + batch_.size();
+  char* out = WriteTime(begin, t);
   for (double v : values) {
-    batch_ += ',';
-    AppendShortest(&batch_, v);
+    *out++ = ',';
+    out = std::to_chars(out, end, v).ptr;
   }
-  batch_ += '\n';
+  *out++ = '\n';
+  batch_.resize(start + static_cast<std::size_t>(out - begin));
   row_ends_.push_back(batch_.size());
   row_times_.push_back(t);
   return true;

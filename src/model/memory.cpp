@@ -166,6 +166,63 @@ std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
   return parts;
 }
 
+namespace {
+
+template <class T>
+double VectorBytes(const std::vector<T>& v) {
+  return static_cast<double>(v.capacity() * sizeof(T));
+}
+
+}  // namespace
+
+MemoryPart EstimateModelMemory(const Model& m) {
+  double bytes =
+      sizeof(Model) + VectorBytes(m.nodes) + VectorBytes(m.rods) + VectorBytes(m.elements) +
+      VectorBytes(m.bodies) + VectorBytes(m.joints) + VectorBytes(m.point_loads) +
+      VectorBytes(m.rod_loads) + VectorBytes(m.tendons) + VectorBytes(m.tendon_segments) +
+      VectorBytes(m.force_elements) + VectorBytes(m.actuators) + VectorBytes(m.element_actuators) +
+      VectorBytes(m.contact_shapes) + VectorBytes(m.contact_rods) + VectorBytes(m.obstacles) +
+      VectorBytes(m.contact_pairs) + VectorBytes(m.contact_segments) +
+      VectorBytes(m.contact_entity_pairs) + VectorBytes(m.contact_entity_self_skip) +
+      VectorBytes(m.permutation) + VectorBytes(m.pattern_last) + VectorBytes(m.redundant_rows);
+  for (const Rod& rod : m.rods) bytes += VectorBytes(rod.nodes);
+  char why[160];
+  std::snprintf(why, sizeof why,
+                "%zu nodes of %zu bytes, %zu rod elements of %zu bytes, %zu joints", m.nodes.size(),
+                sizeof(Node), m.elements.size(), sizeof(RodElement), m.joints.size());
+  return {"model (nodes, elements, joints, ordering)", bytes, why};
+}
+
+MemoryPart EstimateIntegratorMemory(const Model& m, const IntegratorMemoryOptions& o) {
+  const double nv = m.nv, nc = m.nc, n = m.num_unknowns();
+  if (o.statics)
+    return {"static solver's workspace", (4.0 * n + nv) * 8.0,
+            "4 vectors of the unknowns and 1 of the velocities"};
+  // A copy of the configuration (State: node and joint frames, joint coordinates).
+  const double state =
+      static_cast<double>(m.nodes.size() + m.joints.size()) * sizeof(SE3) + (nv - m.nv_nodes) * 8.0;
+  double vectors_nv = 7.0, vectors_nc = 6.0, states = 1.0;
+  if (o.adaptive) vectors_nv += 9.0, vectors_nc += 2.0, states += 1.0;
+  if (o.perturbed_start) vectors_nv += 2.0, vectors_nc += 1.0, states += 1.0;
+  double bytes = (vectors_nv * nv + vectors_nc * nc) * 8.0 + states * state;
+  if (o.ggl) bytes += (2.0 * nc * nv + nc * nc * 2.0 + 6.0 * nc + nv) * 8.0;
+  char why[160];
+  std::snprintf(why, sizeof why, "%.0f vectors of nv = %d, %.0f of nc = %d, %.0f configurations%s",
+                vectors_nv, m.nv, vectors_nc, m.nc, states,
+                o.ggl ? ", the index-2 constraint matrices" : "");
+  return {o.adaptive ? "time integrator's workspace (error-controlled steps)"
+                     : "time integrator's workspace",
+          bytes, why};
+}
+
+std::vector<MemoryPart> EstimateRunMemory(const Model& m, const IntegratorMemoryOptions& o) {
+  std::vector<MemoryPart> parts;
+  parts.push_back(EstimateModelMemory(m));
+  for (MemoryPart& p : EstimateDataMemory(m)) parts.push_back(std::move(p));
+  parts.push_back(EstimateIntegratorMemory(m, o));
+  return parts;
+}
+
 double TotalBytes(const std::vector<MemoryPart>& parts) {
   double total = 0.0;
   for (const MemoryPart& p : parts) total += p.bytes;

@@ -41,6 +41,9 @@ AdvanceResult Advance(const Model& model, Data& data, Integrator& integ, const S
   result.substeps = 0;
   const double tolerance = 1e-9 * policy.step;
   const auto reached = [&](double t) { return t >= t_until - tolerance; };
+  // The workspace of error-controlled steps, before the first (a step allocates nothing).
+  if (policy.kind == StepKind::kErrorControlled && !reached(data.time))
+    PrepareAdaptiveSteps(model, data, integ);
   while (!reached(data.time)) {
     if (stop.Requested()) {
       result.interrupted = true;

@@ -7,10 +7,23 @@
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/solve/dynamics.h"
+#include "step_stages.h"
 
 namespace screwfem {
 
 void InterpolateStep(const Model& model, const Data& data, Integrator& integ, double t, Data& out) {
+  if (!generalized_alpha::AdaptiveStepsPrepared(model, data, integ)) {  // no AdaptiveStep yet
+    out.H = data.H;
+    out.HJ = data.HJ;
+    out.q_joint = data.q_joint;
+    out.v = data.v;
+    out.vdot = data.vdot;
+    out.lambda = data.lambda;
+    out.w_ref = data.w_ref;
+    UpdateShapePairs(model, out);
+    out.time = t;
+    return;
+  }
   const double h = integ.dense_h;
   const double th = h > 0.0 ? std::clamp((t - integ.dense_t0) / h, 0.0, 1.0) : 1.0;
   const double th2 = th * th, th3 = th2 * th;

@@ -219,15 +219,19 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   integ.lambda_start = integ.phi_plus = integ.phi_minus = integ.phi_zero = integ.bdot_v =
       Eigen::VectorXd::Zero(nc);
   if (options.constraints == ConstraintFormulation::kGgl) AllocateGglWorkspace(model, integ);
-  integ.error = integ.a_accepted = integ.dense_v0 = integ.dense_vdot0 = integ.dense_v1 =
-      integ.dense_vdot1 = integ.dense_d = integ.dense_psi = integ.dense_dpsi =
-          Eigen::VectorXd::Zero(nv);
-  integ.dense_lambda0 = integ.dense_lambda1 = Eigen::VectorXd::Zero(nc);
-  integ.perturb_v = integ.perturb_vdot = Eigen::VectorXd::Zero(nv);
-  integ.perturb_lambda = Eigen::VectorXd::Zero(nc);
-  SaveState(data, &integ.perturb_q);
+  // The workspaces of error-controlled steps and of the perturbed start only for the runs
+  // that use them (PrepareAdaptiveSteps; options.perturbed_start): 12 vectors of nv and two
+  // copies of the configuration, 0.75 kB per rod element that fixed steps never touch.
+  ReleaseAdaptiveSteps(integ);
+  if (options.perturbed_start) {
+    integ.perturb_v = integ.perturb_vdot = Eigen::VectorXd::Zero(nv);
+    integ.perturb_lambda = Eigen::VectorXd::Zero(nc);
+    SaveState(data, &integ.perturb_q);
+  } else {
+    integ.perturb_v = integ.perturb_vdot = integ.perturb_lambda = Eigen::VectorXd();
+    integ.perturb_q = State();
+  }
   integ.perturb_pending = false;
-  SaveState(data, &integ.dense_q0);
   integ.dense_t0 = data.time;
   integ.dense_h = 0.0;
   integ.h_control = integ.err_last = integ.h_last = integ.error_norm = 0.0;
@@ -251,6 +255,35 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
     return false;
   }
   return true;
+}
+
+namespace generalized_alpha {
+bool AdaptiveStepsPrepared(const Model& model, const Data& data, const Integrator& integ) {
+  return integ.dense_v0.size() == model.nv && integ.dense_lambda0.size() == model.nc &&
+         integ.error.size() == model.nv && integ.dense_q0.H.size() == data.H.size() &&
+         integ.dense_q0.HJ.size() == data.HJ.size();
+}
+}  // namespace generalized_alpha
+
+void PrepareAdaptiveSteps(const Model& model, const Data& data, Integrator& integ) {
+  const Eigen::Index nv = model.nv, nc = model.nc;
+  if (generalized_alpha::AdaptiveStepsPrepared(model, data, integ)) return;
+  integ.error = integ.a_accepted = integ.dense_v0 = integ.dense_vdot0 = integ.dense_v1 =
+      integ.dense_vdot1 = integ.dense_d = integ.dense_psi = integ.dense_dpsi =
+          Eigen::VectorXd::Zero(nv);
+  integ.dense_lambda0 = integ.dense_lambda1 = Eigen::VectorXd::Zero(nc);
+  SaveState(data, &integ.dense_q0);
+  integ.dense_t0 = data.time;
+  integ.dense_h = 0.0;
+}
+
+void ReleaseAdaptiveSteps(Integrator& integ) {
+  for (Eigen::VectorXd* v : {&integ.error, &integ.a_accepted, &integ.dense_v0, &integ.dense_vdot0,
+                             &integ.dense_v1, &integ.dense_vdot1, &integ.dense_d, &integ.dense_psi,
+                             &integ.dense_dpsi, &integ.dense_lambda0, &integ.dense_lambda1})
+    *v = Eigen::VectorXd();
+  integ.dense_q0 = State();
+  integ.dense_h = 0.0;
 }
 
 bool RestartDynamics(const Model& model, Data& data, Integrator& integ, std::string* message) {

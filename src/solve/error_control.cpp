@@ -177,6 +177,7 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
     result.ok = true;
     return result;
   }
+  PrepareAdaptiveSteps(model, data, integ);  // (sized already after the first call)
   double h = integ.h_control;
   if (h <= 0.0) h = opt.initial_step > 0.0 ? opt.initial_step : 1e-3 * (t_limit - t0);
   const double c_err = LocalErrorConstant(integ.params);

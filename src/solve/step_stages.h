@@ -10,6 +10,10 @@
 
 namespace screwfem::generalized_alpha {
 
+// Whether the workspace of error-controlled steps (PrepareAdaptiveSteps) is sized for `model`
+// and `data`: the vectors and the saved configuration (also for a model without unknowns).
+bool AdaptiveStepsPrepared(const Model& model, const Data& data, const Integrator& integ);
+
 // The dynamic assembly at `time` whose matrix is the mass matrix alone (c_M = 1, c_C = c_K = 0):
 // the saddle-point solves for accelerations and multipliers at a fixed state (the consistent
 // start, ConsistentStart; a tendon caught taut, CatchTendons).

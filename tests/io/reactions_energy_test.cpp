@@ -3,6 +3,7 @@
 // rows are constant and equal to their closed forms.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 
 #include "run_test_util.h"
@@ -10,6 +11,7 @@
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
+#include "screwfem/model/errors.h"
 #include "screwfem/solve/statics.h"
 
 namespace screwfem::reactions_energy_test {
@@ -107,6 +109,62 @@ TEST(ReactionsCsv, HasSixColumnsPerConstrainedJoint) {
   const double m = 0.2, d = 0.2, g = 9.81, io = 2.7e-3 + m * d * d;
   EXPECT_NEAR(t.rows[0][t.Column("hinge.Fz")], m * g * (1.0 - m * d * d / io), 1e-9);
   EXPECT_NEAR(t.rows[0][t.Column("hinge.Fx")], 0.0, 1e-12);
+}
+
+// outputs.reactions and outputs.energy false: neither table is written, the other tables are
+// the same bytes as with them, and the summary's settings say which are off.
+TEST(ReactionsCsv, TablesTurnedOffAreNotWritten) {
+  ScopedDir dir("reactions_off");
+  const std::string pendulum = std::string(SCREWFEM_TEST_DATA_DIR) + "/pendulum.yaml";
+  const Scene both = LoadScene(pendulum, {"analysis.end_time=0.01", "outputs.vtk=false"});
+  EXPECT_TRUE(both.outputs.reactions);
+  EXPECT_TRUE(both.outputs.energy);
+  ASSERT_TRUE(RunScene(both, dir.path() + "/both").ok);
+  for (const char* off : {"outputs.reactions=false", "outputs.energy=false"}) {
+    SCOPED_TRACE(off);
+    const Scene scene = LoadScene(pendulum, {"analysis.end_time=0.01", "outputs.vtk=false", off});
+    const bool reactions = std::string(off).find("reactions") == std::string::npos;
+    EXPECT_EQ(scene.outputs.reactions, reactions);
+    EXPECT_EQ(scene.outputs.energy, !reactions);
+    const std::string out = dir.path() + (reactions ? "/no_energy" : "/no_reactions");
+    ASSERT_TRUE(RunScene(scene, out).ok);
+    EXPECT_EQ(std::filesystem::exists(out + "/reactions.csv"), reactions);
+    EXPECT_EQ(std::filesystem::exists(out + "/energy.csv"), !reactions);
+    const char* kept = reactions ? "/reactions.csv" : "/energy.csv";
+    EXPECT_EQ(test::ReadFile(out + kept), test::ReadFile(dir.path() + "/both" + kept));
+    EXPECT_EQ(test::ReadFile(out + "/points.csv"), test::ReadFile(dir.path() + "/both/points.csv"));
+    EXPECT_EQ(test::ReadFile(out + "/joints.csv"), test::ReadFile(dir.path() + "/both/joints.csv"));
+    const std::string summary = test::ReadFile(out + "/summary.json");
+    EXPECT_NE(summary.find(reactions ? "\"energy\": false" : "\"reactions\": false"),
+              std::string::npos)
+        << summary;
+  }
+  const std::string summary = test::ReadFile(dir.path() + "/both/summary.json");
+  EXPECT_EQ(summary.find("\"reactions\""), std::string::npos) << summary;
+  EXPECT_EQ(summary.find("\"energy\""), std::string::npos) << summary;
+}
+
+TEST(ReactionsCsv, SwitchMustBeABool) {
+  const std::string text =
+      "bodies: {b: {type: rigid, at: [0, 0, 0], mass: 1, inertia: [1, 1, 1]}}\n"
+      "outputs: {reactions: 2}\n";
+  try {
+    ParseScene(text, "bad.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "bad.yaml:2:22: outputs.reactions: expected true or false, got '2'");
+  }
+  try {
+    ParseScene(
+        "bodies: {b: {type: rigid, at: [0, 0, 0], mass: 1, inertia: [1, 1, 1]}}\noutputs: {energy: "
+        "yes}\n",
+        "bad.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "bad.yaml:2:19: outputs.energy: expected true or false, got 'yes'");
+  }
 }
 
 }  // namespace

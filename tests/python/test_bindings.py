@@ -1160,6 +1160,39 @@ class MemoryLimitTest(unittest.TestCase):
             with self.assertRaises(ValueError):
                 sf.load_scene(PENDULUM, max_memory=bad)
 
+    def test_reactions_and_energy_tables_can_be_turned_off(self):
+        scene = sf.load_scene(PENDULUM, ["analysis.end_time=0.01", "outputs.vtk=false"])
+        self.assertTrue(scene.outputs.reactions)
+        self.assertTrue(scene.outputs.energy)
+        scene.outputs.reactions = False
+        with tempfile.TemporaryDirectory() as outdir:
+            self.assertTrue(sf.run_scene(scene, outdir).ok)
+            self.assertFalse(os.path.exists(os.path.join(outdir, "reactions.csv")))
+            self.assertTrue(os.path.exists(os.path.join(outdir, "energy.csv")))
+        scene = sf.load_scene(PENDULUM, ["analysis.end_time=0.01", "outputs.vtk=false",
+                                         "outputs.energy=false"])
+        self.assertFalse(scene.outputs.energy)
+        with tempfile.TemporaryDirectory() as outdir:
+            self.assertTrue(sf.run_scene(scene, outdir).ok)
+            self.assertTrue(os.path.exists(os.path.join(outdir, "reactions.csv")))
+            self.assertFalse(os.path.exists(os.path.join(outdir, "energy.csv")))
+
+    def test_run_memory_lists_the_model_and_the_integrator(self):
+        scene = sf.load_scene(PENDULUM)
+        m = scene.model
+        fixed = sf.estimate_run_memory(m)
+        self.assertEqual([p[0] for p in fixed],
+                         ["model (nodes, elements, joints, ordering)"] +
+                         [p[0] for p in sf.estimate_memory(m)] + ["time integrator's workspace"])
+        auto = sf.estimate_run_memory(m, adaptive=True)
+        self.assertEqual(auto[-1][0], "time integrator's workspace (error-controlled steps)")
+        # 9 vectors of nv, 2 of nc and a configuration (node and joint frames of 96 bytes, the
+        # joint coordinates) more.
+        state = (len(m.nodes) + len(m.joints)) * 96 + (m.nv - m.nv_nodes) * 8
+        self.assertEqual(auto[-1][1] - fixed[-1][1], (9 * m.nv + 2 * m.nc) * 8 + state)
+        self.assertEqual(sf.estimate_run_memory(m, statics=True)[-1][1],
+                         (4 * (m.nv + m.nc) + m.nv) * 8)
+
     def test_process_and_builder_limits(self):
         before = sf.memory_limit()
         sf.set_memory_limit("2G")

@@ -7,8 +7,10 @@
 // OUTDIR/joints.csv   t, then per joint J (per coordinate i for multi-DOF joints: J.i.q ...):
 //                     J.q J.qd J.qdd J.effort
 // OUTDIR/reactions.csv t, then per joint with constraint rows: J.Fx J.Fy J.Fz J.Mx J.My J.Mz
-//                     (CalcJointReaction: on side B, world, about the joint point)
-// OUTDIR/energy.csv   t, kinetic strain spring gravity total, px py pz, Lx Ly Lz (world)
+//                     (CalcJointReaction: on side B, world, about the joint point); not with
+//                     outputs.reactions false
+// OUTDIR/energy.csv   t, kinetic strain spring gravity total, px py pz, Lx Ly Lz (world); not
+//                     with outputs.energy false
 // OUTDIR/rod_fields.csv (outputs.rod_fields) t, then per rod element, one row each: rod s
 //                     gamma1 gamma2 gamma3 kappa1 kappa2 kappa3 n1 n2 n3 m1 m2 m3 (section
 //                     strain and stress at the element's midpoint, CalcRodFieldRows)
@@ -26,7 +28,7 @@
 // Files are written as the run goes, in whole rows: the CSV rows are collected and written
 // when 64 KiB have accumulated, at least every 2 s of wall time (with the summary), before
 // every on_step callback and at the end of the run; points.csv, joints.csv, reactions.csv,
-// energy.csv (and rod_fields.csv when it has their rows: it then ends at the same time) always
+// energy.csv (those written; and rod_fields.csv when it has their rows: it then ends at the same time) always
 // hold the same rows. An interrupted run (stop request) leaves valid files up to the last
 // completed output step; the files of a killed process end with a complete row; a write
 // error (a full disk, a file size limit) cuts a torn row off, every table (contacts.csv,

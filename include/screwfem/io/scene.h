@@ -91,6 +91,11 @@ struct OutputSpec {
   // frames, each. `check` and `run` refuse a scene estimated to record more (EstimateOutputs,
   // run.h), and a run that reaches it ends as failed. In [1, kMaxMaxRows].
   long max_rows = kDefaultMaxRows;
+  // reactions.csv and energy.csv (writers.h, ReactionColumns and EnergyColumns), at the rows of
+  // points.csv; off, the table is neither written nor computed (the energy row is about 8 %
+  // of a rigid GRM step, the reactions 2 %: docs/benchmarks.md, "Cost of the outputs").
+  bool reactions = true;
+  bool energy = true;
 };
 
 struct Scene {

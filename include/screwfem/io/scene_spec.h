@@ -167,6 +167,8 @@ struct OutputsSpec {
   bool rod_fields = false;            // see OutputSpec
   double rod_fields_interval = -1.0;  // [s]; < 0: at the rows of points.csv
   long max_rows = kDefaultMaxRows;    // see OutputSpec
+  bool reactions = true;              // see OutputSpec
+  bool energy = true;                 // see OutputSpec
 };
 
 struct SceneSpec {

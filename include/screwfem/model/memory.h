@@ -56,6 +56,28 @@ struct MemoryPart {
 std::vector<MemoryPart> EstimateDataMemory(const Model& model);
 double TotalBytes(const std::vector<MemoryPart>& parts);
 
+// The Model itself: its arrays as allocated (capacities), nodes, rod elements, joints, the
+// solver ordering and the contact tables.
+MemoryPart EstimateModelMemory(const Model& model);
+// The time integrator's workspace (Integrator, solve/dynamics.h) as InitializeDynamics sizes it:
+// 7 vectors of nv, 6 of nc and a copy of the configuration; with `adaptive` (step: auto) the
+// error control and dense output (PrepareAdaptiveSteps: 9 of nv, 2 of nc, a configuration),
+// with `perturbed_start` its saved state, with `ggl` the stabilised index-2 workspace (two
+// dense nc x nv matrices). Static analyses: the static solver's 4 vectors of the unknowns and
+// one of nv (`statics`).
+struct IntegratorMemoryOptions {
+  bool statics = false;
+  bool adaptive = false;
+  bool perturbed_start = false;
+  bool ggl = false;
+};
+MemoryPart EstimateIntegratorMemory(const Model& model, const IntegratorMemoryOptions& options);
+// A run's memory: the model, MakeData's parts (EstimateDataMemory) and the integrator's, as
+// `screwfem check` prints them. For a dynamic rod (a cantilever of 10^4 elements) it is within
+// a few percent of the heap the run allocates (tests/build/memory_test.cpp measures it).
+std::vector<MemoryPart> EstimateRunMemory(const Model& model,
+                                          const IntegratorMemoryOptions& options);
+
 // Throws InputError when the parts together exceed the model's limit (ResolveMemoryLimit):
 // "WHAT needs about 86 GiB, more than the memory limit of 3.9 GiB (50 % of the physical
 // memory; --max-memory or max_memory raise it): the largest part is the banded LU factors of

@@ -280,13 +280,23 @@ StepResult Step(const Model& model, Data& data, Integrator& integrator, double h
 // beta - 1/6 + (alpha_m - alpha_f) / 2.
 double LocalErrorConstant(const GeneralizedAlpha& p);
 
+// Sizes the workspace of error-controlled steps and of their dense output (Integrator::error,
+// a_accepted and the dense_* members: 11 vectors of nv or nc and a copy of the configuration;
+// for a rod, 0.55 kB per element) after InitializeDynamics, which leaves it empty so that runs
+// with fixed steps do not carry it (docs/limits.md, "Memory"). Allocates once; does nothing
+// when it is sized already. Advance calls it for error-controlled steps; a caller of
+// AdaptiveStep calls it before the first step, or that step allocates it.
+void PrepareAdaptiveSteps(const Model& model, const Data& data, Integrator& integrator);
+// Frees that workspace (InitializeDynamics does).
+void ReleaseAdaptiveSteps(Integrator& integrator);
+
 // One accepted error-controlled step from data.time, ending at or before t_limit (exactly on
 // t_limit when it is within reach, and exactly on the next profile breakpoint, where the
 // integrator restarts as Step does). Rejected attempts (estimated error above the tolerance,
 // or Newton failure) are retried with a smaller step chosen by the PI controller; below
 // options.min_step the step fails with a message naming the time and the worst component.
 // After it, InterpolateStep gives the state anywhere inside the step. No allocation unless it
-// fails or is interrupted.
+// fails or is interrupted, or its workspace is not sized yet (PrepareAdaptiveSteps).
 StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integrator, double t_limit,
                         const StopRequest& stop = {});
 
@@ -295,7 +305,8 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integrator, 
 // H_n exp(psi(theta)) with the cubic Hermite increment psi in the Lie algebra that matches
 // H, v at both ends (joint coordinates the same way), velocities T(psi) psi' / h, and
 // accelerations and multipliers linear between the step's ends. Pose error O(h^4), velocity
-// O(h^3). Branch references are copied from `data` (the step's end). No allocation.
+// O(h^3). Branch references are copied from `data` (the step's end). No allocation. Before
+// any AdaptiveStep (no workspace, PrepareAdaptiveSteps), `out` gets data's state.
 void InterpolateStep(const Model& model, const Data& data, Integrator& integrator, double t,
                      Data& out);
 
