@@ -137,8 +137,8 @@ void BindSettings(py::module_& m) {
   BindEnum<ConvergenceTest>(m, "ConvergenceTest",
                             "Where the residual and constraint tests of a step are applied.");
   BindEnum<ConstraintFormulation>(m, "ConstraintFormulation",
-                                  "How joint constraints enter a step: index 3 or stabilised "
-                                  "index 2 (GGL).");
+                                  "How joint constraints enter a step: index 3, stabilised "
+                                  "index 2 (GGL) or auto (GGL without rods).");
 
   py::class_<DynamicOptions>(m, "DynamicOptions",
                              "Settings of the generalized-alpha integrator (dynamics.h). Checked "
@@ -176,11 +176,13 @@ void BindSettings(py::module_& m) {
       .def_readwrite("perturbed_start", &DynamicOptions::perturbed_start,
                      "After the start and each restart, the auxiliary acceleration "
                      "a = vdot + (alpha_m - alpha_f) (vdot one step ahead - vdot) instead of "
-                     "a = vdot (fixed steps; second-order efforts with rho_inf < 1 under GGL).")
+                     "a = vdot (fixed steps; second-order efforts with rho_inf < 1 under GGL). "
+                     "Default True.")
       .def_readwrite("constraints", &DynamicOptions::constraints,
-                     "INDEX3 (position constraints) or GGL (also the velocity constraints, "
+                     "INDEX3 (position constraints), GGL (also the velocity constraints, "
                      "stabilised index 2: round-off velocity constraints, second-order "
-                     "multipliers and efforts).")
+                     "multipliers and efforts) or AUTO (the default: GGL for a model without "
+                     "rods, INDEX3 for one with rods).")
       .def_readwrite("absolute_tolerance", &DynamicOptions::absolute_tolerance,
                      "Error-controlled steps (Simulation.advance_to): absolute local error per "
                      "step (translations relative to the model's length scale, rotations and "

@@ -165,26 +165,61 @@ bool ApplyPerturbedStart(const Model& model, Data& data, Integrator& integ, doub
   return ok;
 }
 
-// ConstraintFormulation::kGgl: the workspace of the stabilised index-2 iteration, and the
-// column blocks where the constraint gradient B has entries (Integrator::ggl_blocks).
+// ConstraintFormulation::kGgl: the workspace of the stabilised index-2 iteration, and where the
+// constraint gradient B has entries (Integrator::ggl_pattern, ggl_pairs).
 void AllocateGglWorkspace(const Model& model, Integrator& integ) {
   const int nv = model.nv, nc = model.nc;
+  const int num_nodes = static_cast<int>(model.nodes.size());
   integ.ggl_b = Eigen::MatrixXd::Zero(nc, nv);
-  std::vector<char> touched(static_cast<std::size_t>(nv), 0);
-  const auto touch = [&](int first, int size) {
-    for (int i = first; i < first + size; ++i) touched[static_cast<std::size_t>(i)] = 1;
+  // Column groups: a node's 6 dofs, a joint's k coordinates (with their tangent operators).
+  std::vector<Integrator::GglBlock> groups;
+  std::vector<int> group_of(static_cast<std::size_t>(nv), -1);
+  const auto add_group = [&](int col, int cols, int tangent) {
+    for (int c = col; c < col + cols; ++c)
+      group_of[static_cast<std::size_t>(c)] = static_cast<int>(groups.size());
+    groups.push_back({0, 0, col, cols, tangent});
   };
-  ForEachConstraintColumn(model, touch);  // the constraint kinds' columns (registry.h)
-  integ.ggl_blocks.clear();
-  for (int i = 0; i < nv; ++i) {
-    if (!touched[static_cast<std::size_t>(i)]) continue;
-    if (!integ.ggl_blocks.empty() &&
-        integ.ggl_blocks.back().first + integ.ggl_blocks.back().second == i)
-      ++integ.ggl_blocks.back().second;
-    else
-      integ.ggl_blocks.emplace_back(i, 1);
+  const bool tangent = integ.options.use_tangent_operator;
+  for (int i = 0; i < num_nodes; ++i)
+    if (model.nodes[static_cast<std::size_t>(i)].dof >= 0)
+      add_group(model.nodes[static_cast<std::size_t>(i)].dof, 6, tangent ? i : -1);
+  for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
+    const Joint& j = model.joints[jj];
+    if (j.k() > 0)
+      add_group(
+          j.coord, j.k(),
+          tangent && !JointHasGlobalCoordinates(j.type) ? num_nodes + static_cast<int>(jj) : -1);
   }
-  integ.ggl_bv = integ.ggl_phi = integ.ggl_nu = integ.ggl_dnu = Eigen::VectorXd::Zero(nc);
+  // The blocks: each item's rows (in chunks of at most 6) over each group its columns touch.
+  integ.ggl_pattern.clear();
+  ForEachKind<ConstraintKinds>([&]<class Kind>() {
+    Kind::ForEach(model, [&](const typename Kind::Item& item) {
+      const int rows = Kind::RowCount(model, item);
+      if (rows <= 0) return;
+      std::vector<int> touched;
+      Kind::ForEachColumn(model, item, [&](int first, int size) {
+        for (int c = first; c < first + size; ++c) {
+          const int g = group_of[static_cast<std::size_t>(c)];
+          if (g >= 0 && std::find(touched.begin(), touched.end(), g) == touched.end())
+            touched.push_back(g);
+        }
+      });
+      const int first_row = Kind::FirstRow(model, item);
+      for (int r = 0; r < rows; r += 6)
+        for (int g : touched) {
+          const Integrator::GglBlock& col = groups[static_cast<std::size_t>(g)];
+          integ.ggl_pattern.push_back(
+              {first_row + r, std::min(6, rows - r), col.col, col.cols, col.tangent});
+        }
+    });
+  });
+  integ.ggl_pairs.clear();
+  for (std::size_t a = 0; a < integ.ggl_pattern.size(); ++a)
+    for (std::size_t b = 0; b < integ.ggl_pattern.size(); ++b)
+      if (integ.ggl_pattern[a].col == integ.ggl_pattern[b].col)
+        integ.ggl_pairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
+  integ.ggl_bv = integ.ggl_phi = integ.ggl_nu = integ.ggl_dnu = integ.ggl_nu_last =
+      integ.ggl_nu_before = Eigen::VectorXd::Zero(nc);
   integ.ggl_y = Eigen::VectorXd::Zero(nv);
   integ.ggl_bt = Eigen::MatrixXd::Zero(nc, nv);
   integ.ggl_cross = Eigen::MatrixXd::Identity(nc, nc);
@@ -211,6 +246,9 @@ void SetInitialTendonSlack(const Model& model, Data& data) {
 bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
                         const DynamicOptions& options, std::string* message) {
   integ.options = options;
+  if (options.constraints == ConstraintFormulation::kAuto)
+    integ.options.constraints =
+        model.rods.empty() ? ConstraintFormulation::kGgl : ConstraintFormulation::kIndex3;
   integ.params = GeneralizedAlpha::FromSpectralRadius(options.rho_inf);
   const int nv = model.nv, nc = model.nc;
   integ.a = Eigen::VectorXd::Zero(nv);
@@ -218,12 +256,13 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
       Eigen::VectorXd::Zero(nv);
   integ.lambda_start = integ.phi_plus = integ.phi_minus = integ.phi_zero = integ.bdot_v =
       Eigen::VectorXd::Zero(nc);
-  if (options.constraints == ConstraintFormulation::kGgl) AllocateGglWorkspace(model, integ);
+  if (integ.options.constraints == ConstraintFormulation::kGgl)
+    AllocateGglWorkspace(model, integ);
   // The workspaces of error-controlled steps and of the perturbed start only for the runs
   // that use them (PrepareAdaptiveSteps; options.perturbed_start): 12 vectors of nv and two
   // copies of the configuration, 0.75 kB per rod element that fixed steps never touch.
   ReleaseAdaptiveSteps(integ);
-  if (options.perturbed_start) {
+  if (options.perturbed_start && integ.params.alpha_m != integ.params.alpha_f) {  // acts
     integ.perturb_v = integ.perturb_vdot = Eigen::VectorXd::Zero(nv);
     integ.perturb_lambda = Eigen::VectorXd::Zero(nc);
     SaveState(data, &integ.perturb_q);
@@ -390,6 +429,8 @@ void SaveSimulationState(const Data& data, const Integrator& integ, SimulationSt
   state->inputs = data.inputs;
   state->tendon_slack = data.tendon_slack;
   state->a = integ.a;
+  state->nu_last = integ.ggl_nu_last;
+  state->nu_before = integ.ggl_nu_before;
   state->use_last_acceleration = integ.use_last_acceleration;
 }
 
@@ -408,6 +449,10 @@ void RestoreSimulationState(const SimulationState& state, Data& data, Integrator
   data.inputs = state.inputs;
   if (state.tendon_slack.size() == data.tendon_slack.size()) data.tendon_slack = state.tendon_slack;
   if (state.a.size() == integ.a.size()) integ.a = state.a;
+  if (state.nu_last.size() == integ.ggl_nu_last.size()) {
+    integ.ggl_nu_last = state.nu_last;
+    integ.ggl_nu_before = state.nu_before;
+  }
   integ.use_last_acceleration = state.use_last_acceleration;
 }
 

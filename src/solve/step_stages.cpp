@@ -51,54 +51,61 @@ void Predict(Data& data, Integrator& integ, const StepConstants& c, bool from_la
   data.time += h;
 }
 
-// ConstraintFormulation::kGgl (docs/numerics.md, "Stabilised index 2"): the gradient B_n = B(q_n) of the step's
-// start, which multiplies nu in the configuration update. Data holds q_n. The rows of slack
-// length-driven tendons hold their gradient too (their route's dL/dq at q_n): a tendon caught
-// taut during the step then corrects along it (its row of B T B_n^T is not zero).
-void PrepareGglStep(const Model& model, Data& data, Integrator& integ) {
+// ConstraintFormulation::kGgl (docs/numerics.md, "Stabilised index 2"): the gradient B_n = B(q_n)
+// of the step's start, which multiplies nu in the configuration update. Data holds q_n. The rows
+// of slack length-driven tendons hold their gradient too (their route's dL/dq at q_n): a tendon
+// caught taut during the step then corrects along it (its row of B T B_n^T is not zero).
+// nu starts from the linear extrapolation of the last two steps' (zero in held rows, and for a
+// conservative retry), applied to the predicted configuration: the iteration matrix leaves out
+// the effect of a nu correction on the elastic forces (K T B_n^T dnu), so its first correction
+// must be small (docs/numerics.md, "Stabilised index 2", the nu predictor).
+void PrepareGglStep(const Model& model, Data& data, Integrator& integ, double h,
+                    bool conservative) {
   if (integ.options.constraints != ConstraintFormulation::kGgl || model.nc == 0) return;
   std::copy(data.tendon_slack.begin(), data.tendon_slack.end(), integ.ggl_slack.begin());
   std::fill(data.tendon_slack.begin(), data.tendon_slack.end(), char{0});
   CalcConstraintGradient(model, data, integ.ggl_b);
   std::copy(integ.ggl_slack.begin(), integ.ggl_slack.end(), data.tendon_slack.begin());
-  integ.ggl_nu.setZero();
+  if (conservative) {
+    integ.ggl_nu.setZero();
+    return;
+  }
+  integ.ggl_nu = 2.0 * integ.ggl_nu_last - integ.ggl_nu_before;
+  ForEachHeldRow(model, data, [&](int r) { integ.ggl_nu(r) = 0.0; });
+  for (const Integrator::GglBlock& b : integ.ggl_pattern)
+    integ.dq.segment(b.col, b.cols).noalias() -=
+        (1.0 / h) * integ.ggl_b.block(b.row, b.col, b.rows, b.cols)
+                        .transpose()
+                        .lazyProduct(integ.ggl_nu.segment(b.row, b.rows));
 }
 
 // ConstraintFormulation::kGgl: the position-constraint rows of the iteration at the current
-// iterate, B(q) T with the tangent operators the matrix was assembled with (docs/numerics.md, "Stabilised index 2"; Delta x enters q as q_n o exp(h dq + Delta x)), and the factorised B T B_n^T that
-// gives the nu correction (held rows and columns, ForEachHeldRow: the identity). False if it is singular
-// (redundant constraints the build did not find).
+// iterate, B(q) T with the tangent operators the matrix was assembled with (docs/numerics.md,
+// "Stabilised index 2"; Delta x enters q as q_n o exp(h dq + Delta x)), and the factorised
+// B T B_n^T that gives the nu correction (held rows and columns, ForEachHeldRow: the
+// identity), over the blocks where B has entries (Integrator::ggl_pattern). False if it is
+// singular (redundant constraints the build did not find).
 bool FactorizeGglCross(const Model& model, const Data& data, Integrator& integ) {
   Eigen::MatrixXd& bt = integ.ggl_bt;
   CalcConstraintGradient(model, data, bt);
-  if (integ.options.use_tangent_operator) {
-    for (std::size_t i = 0; i < model.nodes.size(); ++i) {
-      const int dof = model.nodes[i].dof;
-      if (dof < 0) continue;
-      const Mat6& T = data.node_tangent[i];
-      for (int r = 0; r < model.nc; ++r) {
-        const Vec6 row = bt.block<1, 6>(r, dof).transpose();
-        bt.block<1, 6>(r, dof) = (T.transpose() * row).transpose();
-      }
-    }
-    for (std::size_t jj = 0; jj < model.joints.size(); ++jj) {
-      const Joint& j = model.joints[jj];
-      const int k = j.k();
-      if (k == 0 || JointHasGlobalCoordinates(j.type)) continue;
-      const Mat6& T = data.node_tangent[model.nodes.size() + jj];
-      for (int r = 0; r < model.nc; ++r) {
-        Vec6 row = Vec6::Zero();
-        row.head(k) = bt.block(r, j.coord, 1, k).transpose();
-        const Vec6 out = T.transpose() * row;  // T_J is A_J^T T A_J, zero outside k x k
-        bt.block(r, j.coord, 1, k) = out.head(k).transpose();
-      }
-    }
+  using Block = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;
+  for (const Integrator::GglBlock& b : integ.ggl_pattern) {
+    if (b.tangent < 0) continue;
+    // T_J of a joint is A_J^T T A_J, zero outside k x k.
+    const Mat6& T = data.node_tangent[static_cast<std::size_t>(b.tangent)];
+    const Block out =
+        bt.block(b.row, b.col, b.rows, b.cols).lazyProduct(T.topLeftCorner(b.cols, b.cols));
+    bt.block(b.row, b.col, b.rows, b.cols) = out;
   }
-  // B T B_n^T over the column blocks where B has entries.
+  // B T B_n^T over the pairs of blocks that share a column group.
   integ.ggl_cross.setZero();
-  for (const auto& [first, size] : integ.ggl_blocks)
-    integ.ggl_cross.noalias() +=
-        bt.middleCols(first, size).lazyProduct(integ.ggl_b.middleCols(first, size).transpose());
+  for (const auto& [ia, ib] : integ.ggl_pairs) {
+    const Integrator::GglBlock& a = integ.ggl_pattern[static_cast<std::size_t>(ia)];
+    const Integrator::GglBlock& b = integ.ggl_pattern[static_cast<std::size_t>(ib)];
+    integ.ggl_cross.block(a.row, b.row, a.rows, b.rows).noalias() +=
+        bt.block(a.row, a.col, a.rows, a.cols)
+            .lazyProduct(integ.ggl_b.block(b.row, b.col, b.rows, b.cols).transpose());
+  }
   ForEachHeldRow(model, data, [&](int r) {
     integ.ggl_cross.row(r).setZero();
     integ.ggl_cross.col(r).setZero();
@@ -240,12 +247,19 @@ bool Correct(const Model& model, Data& data, Integrator& integ, const StepConsta
   if (ggl) {
     if (factorize && !FactorizeGglCross(model, data, integ)) return false;
     integ.ggl_y = data.increment.head(model.nv);
-    integ.ggl_rhs.noalias() = integ.ggl_bt * integ.ggl_y;
-    integ.ggl_rhs += integ.ggl_phi;
+    integ.ggl_rhs = integ.ggl_phi;
+    for (const Integrator::GglBlock& b : integ.ggl_pattern)
+      integ.ggl_rhs.segment(b.row, b.rows).noalias() +=
+          integ.ggl_bt.block(b.row, b.col, b.rows, b.cols)
+              .lazyProduct(integ.ggl_y.segment(b.col, b.cols));
     ForEachHeldRow(model, data, [&](int r) { integ.ggl_rhs(r) = 0.0; });
     integ.ggl_dnu.noalias() = integ.ggl_cross_lu.solve(integ.ggl_rhs);
     integ.ggl_nu += integ.ggl_dnu;
-    data.increment.head(model.nv).noalias() -= integ.ggl_b.transpose() * integ.ggl_dnu;
+    for (const Integrator::GglBlock& b : integ.ggl_pattern)
+      data.increment.segment(b.col, b.cols).noalias() -=
+          integ.ggl_b.block(b.row, b.col, b.rows, b.cols)
+              .transpose()
+              .lazyProduct(integ.ggl_dnu.segment(b.row, b.rows));
     const auto dx = data.increment.head(model.nv);
     integ.dq += dx / c.h;
     data.v += c.gamma_p * integ.ggl_y;
@@ -266,8 +280,11 @@ bool Correct(const Model& model, Data& data, Integrator& integ, const StepConsta
 // (undamped high-frequency content, which flips the sign of vdot from step to step).
 void Accept(Data& data, Integrator& integ, const StepConstants& c) {
   integ.a = integ.a_base + c.c_a * data.vdot;
-  if (integ.options.constraints == ConstraintFormulation::kGgl && integ.ggl_nu.size() > 0)
+  if (integ.options.constraints == ConstraintFormulation::kGgl && integ.ggl_nu.size() > 0) {
     integ.max_nu = std::max(integ.max_nu, integ.ggl_nu.cwiseAbs().maxCoeff());
+    integ.ggl_nu_before = integ.ggl_nu_last;
+    integ.ggl_nu_last = integ.ggl_nu;
+  }
   if (integ.options.predictor == Predictor::kAdaptive)
     integ.use_last_acceleration =
         (data.vdot - integ.vdot_start).squaredNorm() <= data.vdot.squaredNorm();
@@ -387,7 +404,7 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
       opt, c, left_limit ? std::nextafter(t_end, -std::numeric_limits<double>::infinity()) : t_end);
 
   const bool ggl = opt.constraints == ConstraintFormulation::kGgl && model.nc > 0;
-  if (ggl) PrepareGglStep(model, data, integ);
+  if (ggl) PrepareGglStep(model, data, integ, h, conservative);
   for (int it = 0; it <= opt.max_iterations; ++it) {
     UpdateConfiguration(model, data, integ, h);
     const bool need_matrix = n.full_newton || !n.factorized;

@@ -381,7 +381,8 @@ TEST(BadInput, UnknownNewtonVariantOrPredictor) {
   ExpectError(kHead +
                   "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n"
                   "analysis:\n  constraints: index2\n",
-              "bad.yaml:6:16", "analysis.constraints: expected one of index3 or ggl, got 'index2'");
+              "bad.yaml:6:16",
+              "analysis.constraints: expected one of index3, ggl or auto, got 'index2'");
 }
 
 // analysis.statics (statics.h, StaticOptions): each bad value at its line and column.

@@ -47,6 +47,9 @@ void MakeOscillator(Oscillator* o, JointType type, double damping, double rho_in
   o->coord = o->model.joints[0].coord;
   DynamicOptions opt;
   opt.rho_inf = rho_inf;
+  // The plain start a_0 = vdot_0 of the scalar recursion below (the default perturbed start
+  // moves a_0 by (alpha_m - alpha_f) h vddot_0 when rho_inf < 1).
+  opt.perturbed_start = false;
   ASSERT_TRUE(InitializeDynamics(o->model, o->data, o->integ, opt));
 }
 

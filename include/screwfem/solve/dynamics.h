@@ -34,7 +34,7 @@ struct GeneralizedAlpha {
 enum class NewtonMatrix { kSimplified, kFull };
 enum class Predictor { kAdaptive, kLast, kZero };
 enum class ConvergenceTest { kEstimated, kMeasured };
-enum class ConstraintFormulation { kIndex3, kGgl };
+enum class ConstraintFormulation { kIndex3, kGgl, kAuto };
 template <>
 struct EnumNames<NewtonMatrix> {
   static constexpr std::array<EnumName<NewtonMatrix>, 2> kValues = {{
@@ -63,10 +63,12 @@ struct EnumNames<ConvergenceTest> {
 
 template <>
 struct EnumNames<ConstraintFormulation> {
-  static constexpr std::array<EnumName<ConstraintFormulation>, 2> kValues = {{
+  static constexpr std::array<EnumName<ConstraintFormulation>, 3> kValues = {{
       {ConstraintFormulation::kIndex3, "index3", "position constraints only (index 3)"},
       {ConstraintFormulation::kGgl, "ggl",
        "stabilised index 2: position and velocity constraints (Gear-Gupta-Leimkuhler)"},
+      {ConstraintFormulation::kAuto, "auto",
+       "ggl for models without rods (rigid mechanisms), index3 for models with rods"},
   }};
 };
 
@@ -134,14 +136,20 @@ struct DynamicOptions {
   // increments) the perturbation is a finite difference across modes the step does not
   // resolve (stiff contacts, axial modes of a rod, a tendon going slack), and the step starts
   // from a = vdot instead (counted in Integrator::perturbed_start_skips).
-  bool perturbed_start = false;
+  bool perturbed_start = true;
   // How the joints' constraints enter the step (docs/numerics.md, "Stabilised index 2"):
   //   kIndex3: phi(q) = 0 at the end of each step (docs/architecture.md, "One time step");
   //   kGgl:    also the velocity constraint B(q) v + d phi/dt = 0, with a second multiplier nu
   //            acting on the configuration update only (docs/numerics.md, "Stabilised index 2", Arnold & Hante
   //            2017): velocities satisfy the constraints to round-off and multipliers
   //            (actuator efforts) are second-order accurate.
-  ConstraintFormulation constraints = ConstraintFormulation::kIndex3;
+  //   kAuto:   (the default) kGgl for a model without rods, kIndex3 for one with rods, decided
+  //            by InitializeDynamics (Integrator::options holds the choice): on rigid
+  //            mechanisms GGL makes the efforts exact and costs little; on the GRM, dominated
+  //            by its soft bodies, it costs 1.5 times the CPU time and moves nothing beyond
+  //            the time-discretisation error (docs/numerics.md, "Which formulation is the
+  //            default").
+  ConstraintFormulation constraints = ConstraintFormulation::kAuto;
   // Error-controlled steps (AdaptiveStep, AdvanceTo; docs/numerics.md, "Adaptive time steps";
   // docs/numerics.md, "Adaptive time steps"). A step is accepted when the weighted RMS of its local position error
   // estimate C h^2 (a_{n+1} - a_n) is at most 1, each component weighted by
@@ -196,18 +204,28 @@ struct Integrator {
   bool perturb_pending = false;
   State perturb_q;
   Eigen::VectorXd perturb_v, perturb_vdot, perturb_lambda;
+  // nu of the last two accepted steps: the next step starts from their linear extrapolation
+  // (PrepareGglStep), so that its first correction of nu, whose effect on the elastic forces the
+  // iteration matrix leaves out, is small.
   Eigen::MatrixXd ggl_b;
-  Eigen::VectorXd ggl_bv, ggl_phi, ggl_y, ggl_nu, ggl_dnu;
+  Eigen::VectorXd ggl_bv, ggl_phi, ggl_y, ggl_nu, ggl_dnu, ggl_nu_last, ggl_nu_before;
   // The position-constraint rows of the iteration, B(q) T at the iterate where the matrix was
   // last factorised (dense, nc x nv), and the factorised B T B_n^T of the nu correction.
   Eigen::MatrixXd ggl_bt, ggl_cross;
   Eigen::PartialPivLU<Eigen::MatrixXd> ggl_cross_lu;
   Eigen::VectorXd ggl_rhs;
-  // The column blocks (first unknown, size) where B has entries: the dofs of the nodes joints
-  // attach to and the joints' coordinates.
   std::string why;              // why the last attempt failed (reserved at set-up; Step, AdvanceTo)
   std::vector<char> ggl_slack;  // Data::tendon_slack while B_n is computed (PrepareGglStep)
-  std::vector<std::pair<int, int>> ggl_blocks;
+  // Where B has entries (docs/numerics.md, "Stabilised index 2"): blocks of at most 6 rows of one
+  // constraint item over one column group (a node's 6 dofs or a joint's k coordinates), with the
+  // tangent operator of that group (an index into Data::node_tangent; -1: none). Every product
+  // of the iteration with B_n or B T runs over these blocks only, and B T B_n^T over the pairs
+  // of blocks that share a column group (indices into ggl_pattern).
+  struct GglBlock {
+    int row, rows, col, cols, tangent;
+  };
+  std::vector<GglBlock> ggl_pattern;
+  std::vector<std::pair<int, int>> ggl_pairs;
   double max_nu = 0.0;
   bool use_last_acceleration = true;  // predictor of the next step (DynamicOptions::predictor)
   // Statistics.
@@ -320,6 +338,7 @@ struct SimulationState {
   State q;
   std::vector<Vec3> w_ref;
   Eigen::VectorXd v, vdot, lambda, inputs, a;
+  Eigen::VectorXd nu_last, nu_before;  // ConstraintFormulation::kGgl: the nu predictor's history
   std::vector<char> tendon_slack;
   bool use_last_acceleration = true;
 };
