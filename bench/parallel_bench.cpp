@@ -12,6 +12,10 @@
 //                                                matrix (dynamics, node tangents) at the
 //                                                state after the warm-up: the part that runs
 //                                                on the threads.
+// Counter main_thread_cpu: the CPU time of the calling thread per iteration [s], which runs
+// the serial parts (the scatter, the solves) and its share of the kernels: on two idle cores
+// the wall time of two threads approaches it, so CPU time at 1 thread / main_thread_cpu at 2
+// threads estimates the speed-up when the machine is too loaded for the wall time to say.
 // GRM: the scene's whole 2 s (examples/grm, 4 elements per soft body, h = 1e-3 s, the solver
 // alone as BM_GrmSolver): 'auto' gives these models one thread; two threads show why.
 //   BM_ParallelGrm/<case>/<threads>              threads 0 = auto.
@@ -19,6 +23,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -37,6 +42,12 @@ namespace screwfem {
 namespace {
 
 constexpr double kStep = 1e-3;
+
+double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 constexpr int kWarmup = 3;
 
 Model Cantilever(int n) {
@@ -82,6 +93,7 @@ void BM_ParallelRodStep(benchmark::State& state) {
   Integrator integ;
   if (!StartRod(state, model, threads, &data, &integ)) return;
   const long before = integ.iterations;
+  const double cpu0 = ThreadCpuSeconds();
   for (auto _ : state) {
     if (!Step(model, data, integ, kStep).ok) {
       state.SkipWithError("step failed");
@@ -90,6 +102,8 @@ void BM_ParallelRodStep(benchmark::State& state) {
     data.time += kStep;
     benchmark::DoNotOptimize(data.v.data());
   }
+  state.counters["main_thread_cpu"] =
+      (ThreadCpuSeconds() - cpu0) / static_cast<double>(state.iterations());
   state.counters["threads"] = data.parallel.threads();
   state.counters["elements"] = n;
   state.counters["newton_per_step"] =
@@ -113,6 +127,7 @@ void BM_ParallelRodAssemble(benchmark::State& state) {
   o.c_mass = 1e6;
   o.c_damping = 1e3;
   o.s_rows = 1e-6;
+  const double cpu0 = ThreadCpuSeconds();
   for (auto _ : state) {
     if (!Assemble(model, data, o)) {
       state.SkipWithError("assembly failed");
@@ -120,6 +135,8 @@ void BM_ParallelRodAssemble(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(data.residual.data());
   }
+  state.counters["main_thread_cpu"] =
+      (ThreadCpuSeconds() - cpu0) / static_cast<double>(state.iterations());
   state.counters["threads"] = data.parallel.threads();
   state.counters["elements"] = n;
   double load[1];
