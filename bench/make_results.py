@@ -449,9 +449,10 @@ def parallel_section(entries):
         "doubles on any number of threads (tests/io/parallel_assembly_test.cpp). The wall-time",
         "speed-up needs two idle cores: the load average (1 min, at the end of the run) says how",
         "busy the machine was. The calling thread's own CPU time at 2 threads (it runs the",
-        "scatter, the solves and its share of the kernels) is what the wall time approaches on",
-        "two idle cores: CPU at 1 thread over it estimates the speed-up when the machine is too",
-        "loaded for the wall time to say.",
+        "scatter, the solves and the kernels' blocks no other thread has claimed) is what the",
+        "wall time approaches on two idle cores; on a loaded machine the other thread gets",
+        "little of a core and the calling thread computes most blocks itself, so CPU at 1",
+        "thread over it (the estimate) then understates the speed-up as well.",
         "",
         "| Part | Elements | Wall, 1 thread | Wall, 2 threads | Speed-up (wall) "
         "| CPU, 1 thread | CPU, 2 threads | CPU ratio | Calling thread's CPU, 2 threads "
@@ -464,7 +465,7 @@ def parallel_section(entries):
         lines += [
             "The GRM (its whole 2 s, the solver alone, 4 elements per soft body): `auto` gives",
             "its few rod elements one thread, the serial assembly; two threads forced on them",
-            "cost more than they save (a hand-over per assembly for a few elements).",
+            "cost more CPU than they save (a hand-over per assembly for a few elements).",
             "",
             "| Case | Rod elements | Threads (`auto`) | Wall, `auto` | Wall, 2 threads "
             "| Ratio | CPU, `auto` | CPU, 2 threads | Load average |",
