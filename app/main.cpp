@@ -319,7 +319,8 @@ int Main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("screwfem ") + SCREWFEM_VERSION);
 
-  std::string scene_path, outdir, figdir, points, times, html, inputs, fps, speed, max_memory;
+  std::string scene_path, outdir, figdir, points, times, html, inputs, fps, speed, max_memory,
+      threads;
   std::vector<std::string> overrides, outdirs;
   bool quiet = false, force = false, animate = false;
   const auto add_overrides = [&](CLI::App* cmd) {
@@ -344,6 +345,10 @@ int Main(int argc, char** argv) {
                   "(linear between rows, held outside; docs/scene-format.md)")
       ->type_name("TABLE.csv");
   add_max_memory(run);
+  run->add_option("--threads", threads,
+                  "threads of the assembly: auto or N >= 1 (same as --set analysis.threads=N; "
+                  "docs/scene-format.md)")
+      ->type_name("N");
   run->add_flag("-q,--quiet", quiet, "no progress bar");
   run->add_flag("-f,--force", force,
                 "replace the results of an earlier run in OUTDIR (removes screwfem's files only)");
@@ -387,6 +392,8 @@ int Main(int argc, char** argv) {
   }
   if (run->parsed()) {
     InstallStopHandlers();
+    // --threads N is the last override, so it wins over a --set of the same key.
+    if (!threads.empty()) overrides.push_back("analysis.threads=" + threads);
     return Run(scene_path, outdir, overrides, inputs, quiet, force, max_memory);
   }
   if (check->parsed()) return Check(scene_path, overrides, max_memory);

@@ -17,6 +17,8 @@ skipped. One table per benchmark family:
   gripper          BM_GripperSolver/gripper                  (contact_bench.cpp)
   solver           screwfem_bench_solver's own JSON (format "screwfem solver bench 1",
                    bench/results_solver.json; solver_bench.cpp): banded, sparse and auto LU
+  parallel         BM_ParallelRodStep/<elements>/<threads>, BM_ParallelRodAssemble/...,
+                   BM_ParallelGrm/<case>/<threads>           (parallel_bench.cpp)
 Each JSON's revision comes from its context (the script passes --benchmark_context=revision=...),
 else from REVISION. Uses the median over repetitions when the JSON holds aggregates, else the
 single run. Times are real time (wall clock; manual time where the benchmark times itself).
@@ -39,6 +41,8 @@ from bench_common import cpu_model
 
 TO_SECONDS = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}
 NAME = re.compile(r"BM_(\w+)/([\w.]+)")
+# The parallel assembly's benchmarks take two arguments (size or case, threads).
+PARALLEL_NAME = re.compile(r"BM_(Parallel\w+)/(\d+/\d+)")
 GRM_CASES = {
     "grm_rigid": "rigid joints (case 1)",
     "grm_soft_k": "soft joints, K (case 2)",
@@ -127,7 +131,8 @@ def load(paths, default_revision):
         sources.append(source)
         has_aggregates = any(b.get("run_type") == "aggregate" for b in benchmarks)
         for b in benchmarks:
-            m = NAME.match(b.get("run_name", b.get("name", "")))
+            run_name = b.get("run_name", b.get("name", ""))
+            m = PARALLEL_NAME.match(run_name) or NAME.match(run_name)
             if not m:
                 continue
             key = (m.group(1), m.group(2))
@@ -494,6 +499,93 @@ def rod_dynamics_section(entries):
     ]
 
 
+PARALLEL_GRM_CASES = ["grm_rigid", "grm_soft_kd"]
+
+
+def parallel_section(entries):
+    """One thread against two (parallel_bench.cpp): wall and process CPU time, their ratios."""
+    steps, assemble = family(entries, "ParallelRodStep"), family(entries, "ParallelRodAssemble")
+    grm = family(entries, "ParallelGrm")
+    if not (steps or assemble or grm):
+        return []
+
+    def split(arg):
+        a, t = arg.split("/")
+        return int(a), int(t)
+
+    def rows_for(fam, label, unit_per_element):
+        rows = []
+        sizes = sorted({split(a)[0] for a in fam})
+        for n in sizes:
+            one, two = fam.get(f"{n}/1"), fam.get(f"{n}/2")
+            for e in (one, two):
+                if e is not None and e.error:
+                    rows.append(failed_row(11, f"{label} {n}", e))
+            if one is None or two is None or one.error or two.error:
+                continue
+            load = two.counter("load_avg_1min")
+            main = two.counter("main_thread_cpu")
+            rows.append(
+                f"| {label} | {n} | {format_time(one.real)} | {format_time(two.real)} "
+                f"| {one.real / two.real:.2f} | {format_time(one.cpu)} | {format_time(two.cpu)} "
+                f"| {two.cpu / one.cpu:.2f} | {format_time(main)} | {one.cpu / main:.2f} "
+                f"| {load:.1f} |"
+            )
+        return rows
+
+    rows = rows_for(assemble, "assembly", False) + rows_for(steps, "step", False)
+    grm_rows = []
+    for case, name in enumerate(PARALLEL_GRM_CASES):
+        auto, two = grm.get(f"{case}/0"), grm.get(f"{case}/2")
+        if auto is None or two is None or auto.error or two.error:
+            continue
+        grm_rows.append(
+            f"| {name} | {format_number(auto.counter('elements'))} "
+            f"| {format_number(auto.counter('threads'))} | {format_time(auto.real)} "
+            f"| {format_time(two.real)} | {two.real / auto.real:.2f} | {format_time(auto.cpu)} "
+            f"| {format_time(two.cpu)} | {two.counter('load_avg_1min'):.1f} |"
+        )
+    lines = [
+        "## Parallel assembly",
+        "",
+        "`bench/parallel_bench.cpp`: the rod elements' kernels on one thread against two",
+        "(`SetAssemblyThreads`; docs/architecture.md, \"Parallel assembly\"), the repetitions",
+        "interleaved at random (`--benchmark_enable_random_interleaving`), so that a change of the",
+        "machine's load falls on both. The cantilever of \"Cantilever rod dynamics\" (h = 1e-3 s,",
+        "3 warm-up steps): one `Assemble` of residual and iteration matrix (the part on the",
+        "threads), and one `Step` (its assemblies and the banded solves, serial). Wall time and",
+        "the CPU time of the whole process (all threads);",
+        f"{statistic(list(steps.values()) + list(assemble.values()))}. The results are the same",
+        "doubles on any number of threads (tests/io/parallel_assembly_test.cpp). The wall-time",
+        "speed-up needs two idle cores: the load average (1 min, at the end of the run) says how",
+        "busy the machine was. The calling thread's own CPU time at 2 threads (it runs the",
+        "scatter, the solves and the kernels' blocks no other thread has claimed) is what the",
+        "wall time approaches on two idle cores; on a loaded machine the other thread gets",
+        "little of a core and the calling thread computes most blocks itself, so CPU at 1",
+        "thread over it (the estimate) then understates the speed-up as well.",
+        "",
+        "| Part | Elements | Wall, 1 thread | Wall, 2 threads | Speed-up (wall) "
+        "| CPU, 1 thread | CPU, 2 threads | CPU ratio | Calling thread's CPU, 2 threads "
+        "| Speed-up (estimate) | Load average |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        *rows,
+        "",
+    ]
+    if grm_rows:
+        lines += [
+            "The GRM (its whole 2 s, the solver alone, 4 elements per soft body): `auto` gives",
+            "its few rod elements one thread, the serial assembly; two threads forced on them",
+            "cost more CPU than they save (a hand-over per assembly for a few elements).",
+            "",
+            "| Case | Rod elements | Threads (`auto`) | Wall, `auto` | Wall, 2 threads "
+            "| Ratio | CPU, `auto` | CPU, 2 threads | Load average |",
+            "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+            *grm_rows,
+            "",
+        ]
+    return lines
+
+
 def tendon_section(entries):
     runs = family(entries, "RodTendonStep")
     if not runs:
@@ -769,6 +861,7 @@ def main():
         *contact_section(entries),
         *gripper_section(entries),
         *solver_section(),
+        *parallel_section(entries),
         "## Machine and run",
         "",
         f"- CPU: {cpu_model()} ({nproc()} cores available, `nproc`)",

@@ -266,6 +266,30 @@ void BindSettings(py::module_& m) {
                      "Dynamic analyses start from a static equilibrium of the loads at "
                      "start_time.")
       .def_property(
+          "threads",
+          [](const AnalysisSettings& a) -> py::object {
+            if (a.threads == kAutoThreads) return py::str("auto");
+            return py::int_(a.threads);
+          },
+          [](AnalysisSettings& a, const py::object& value) {
+            const std::string expected =
+                "AnalysisSettings.threads: expected 'auto' or an "
+                "integer from 1 to " +
+                std::to_string(kMaxAssemblyThreads);
+            if (py::isinstance<py::str>(value)) {
+              if (value.cast<std::string>() != "auto") throw InputError(expected);
+              a.threads = kAutoThreads;
+              return;
+            }
+            if (!py::isinstance<py::int_>(value) || py::isinstance<py::bool_>(value))
+              throw InputError(expected);
+            const long n = value.cast<long>();
+            if (n < 1 || n > kMaxAssemblyThreads) throw InputError(expected);
+            a.threads = static_cast<int>(n);
+          },
+          "Threads of the assembly: 'auto' (every core for a model of at least "
+          "kParallelMinElements rod elements) or an integer >= 1 (analysis.threads).")
+      .def_property(
           "rho_inf", [](const AnalysisSettings& a) { return a.dynamic.rho_inf; },
           [](AnalysisSettings& a, double rho) { a.dynamic.rho_inf = rho; },
           "Shorthand for dynamic.rho_inf: spectral radius at infinity in [0, 1].");

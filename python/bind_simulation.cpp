@@ -328,6 +328,18 @@ and indices out of range IndexError.)doc")
           "q_joint", [](S& s) -> const Vector& { return s.data().q_joint; },
           "Joint coordinates (nv - nv_nodes; read-only view) [m or rad], in velocity order "
           "offset by Model.nv_nodes; exact for abelian joints.")
+      .def_property(
+          "threads", [](S& s) { return s.data().parallel.threads(); },
+          [](S& s, int n) {
+            if (n < 1 || n > kMaxAssemblyThreads)
+              throw InputError("Simulation.threads: expected an integer from 1 to " +
+                               std::to_string(kMaxAssemblyThreads) + ", got " + std::to_string(n));
+            SetAssemblyThreads(s.data(), n);
+          },
+          "Threads of the assembly (the scene's analysis.threads, 'auto' resolved at "
+          "construction): the rod elements' kernels run on them, the results are the same "
+          "doubles with any number (docs/architecture.md, 'Parallel assembly'). Assigning "
+          "starts a new pool of threads (not during a step).")
       .def_property_readonly("initialized", &S::initialized,
                              "initialize() has succeeded since construction or the last "
                              "solve_static().")

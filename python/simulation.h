@@ -36,6 +36,7 @@ namespace py = pybind11;
 class Simulation {
  public:
   explicit Simulation(const Scene& scene) : scene_(scene), data_(MakeData(scene_.model)) {
+    SetAssemblyThreads(data_, ResolveAssemblyThreads(scene_.model, scene_.analysis.threads));
     data_.time = scene_.analysis.kind == AnalysisKind::kStatic ? scene_.analysis.statics.time
                                                                : scene_.analysis.start_time;
     std::string why;

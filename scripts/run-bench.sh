@@ -8,12 +8,13 @@
 #   screwfem_bench_contact   -> bench/results_contact.json   (cost of contact along a rod)
 #   screwfem_bench_solver    -> bench/results_solver.json    (banded against sparse LU; its own
 #                               JSON and interleaving, not Google Benchmark; about 1 minute)
+#   screwfem_bench_parallel  -> bench/results_parallel.json  (one thread against two)
 #   vector_env               -> its own section of bench/RESULTS.md (bench/python_vector_env.py:
 #                               screwfem.VectorEnv's steps per second at 1, 2, 4 copies; builds
 #                               the Python module; not in the default set)
-# SCREWFEM_BENCH selects the programs (default "statics dynamics outputs tendons contact"); the
-# results file of a program not run (or whose benchmarks a filter left out entirely) is kept
-# and reported with its own date and revision. Extra arguments go to every Google Benchmark
+# SCREWFEM_BENCH selects the programs (default "statics dynamics outputs tendons contact
+# parallel"); the results file of a program not run (or whose benchmarks a filter left out
+# entirely) is kept and reported with its own date and revision. Extra arguments go to every Google Benchmark
 # program run, e.g.
 # SCREWFEM_BENCH=dynamics bash scripts/run-bench.sh --benchmark_filter=Rod.
 # Run as root if dependencies may be missing.
@@ -23,10 +24,10 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 build_dir=build/release
 jobs=$(nproc 2> /dev/null || echo 2)
-programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons contact solver}
+programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons contact solver parallel}
 for p in $programs; do
   case $p in
-    statics | dynamics | outputs | tendons | contact | solver | vector_env) ;;
+    statics | dynamics | outputs | tendons | contact | solver | parallel | vector_env) ;;
     *) echo "run-bench.sh: unknown benchmark program '$p' in SCREWFEM_BENCH" >&2; exit 2 ;;
   esac
 done
@@ -73,7 +74,8 @@ for p in "${benchmarks[@]}"; do
   if [[ $p == statics ]]; then repetitions=(--benchmark_repetitions=5); fi
   # tendons, contact, dynamics: the variants' repetitions alternate (the same machine load for
   # all; dynamics: the fixed and the error-controlled rigid GRM).
-  if [[ $p == tendons || $p == contact || $p == dynamics ]]; then
+  # parallel: threads = 1 and 2 alternate.
+  if [[ $p == tendons || $p == contact || $p == dynamics || $p == parallel ]]; then
     repetitions=(--benchmark_enable_random_interleaving=true)
   fi
   "$build_dir/bench/screwfem_bench_$p" --benchmark_format=console \
@@ -86,8 +88,9 @@ done
 
 /usr/bin/python3 bench/make_results.py bench/RESULTS.md "bash scripts/run-bench.sh" "$revision" \
   bench/results_statics.json bench/results_dynamics.json bench/results_outputs.json \
-  bench/results_tendons.json bench/results_contact.json bench/results_solver.json
-echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact,solver}.json"
+  bench/results_tendons.json bench/results_contact.json bench/results_solver.json \
+  bench/results_parallel.json
+echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact,solver,parallel}.json"
 # After make_results.py, which keeps the section the Python benchmark replaces. It exits 1 when
 # its target is missed (on a loaded machine); the table is written either way.
 if [[ " $programs " == *" vector_env "* ]]; then

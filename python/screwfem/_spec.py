@@ -965,7 +965,8 @@ class SceneSpec:
         residual}), max_iterations, max_halvings, load_steps, align_steps, static_preload,
         rod_inertia, linear_solver, newton, predictor, convergence, restart_at_breakpoints,
         perturbed_start, constraints, statics ({method, end_load_factor, max_steps, arc_length, arc_length_min,
-        arc_length_max, desired_iterations, psi, rotation_weight, exact_tangent})."""
+        arc_length_max, desired_iterations, psi, rotation_weight, exact_tangent}), threads
+        ('auto' or an integer from 1 to 256)."""
         a, d, st = self.analysis, self.analysis.dynamic, self.analysis.statics
         auto = {}
         for key, value in keys.items():
@@ -1018,6 +1019,12 @@ class SceneSpec:
                 auto[key] = value
             elif key == "statics":
                 self._set_statics(value, where)
+            elif key == "threads":
+                if value != "auto" and (not isinstance(value, int) or isinstance(value, bool)
+                                        or not 1 <= value <= 256):
+                    raise _error(where, f"expected 'auto' or an integer from 1 to 256, got "
+                                        f"{value!r}")
+                a.threads = value
             else:
                 raise _error(where, "unknown key (docs/scene-format.md, 'analysis')")
         if not a.end_time > a.start_time:

@@ -1,6 +1,8 @@
 #include "screwfem/assemble/assemble.h"
 
 #include <algorithm>
+#include <atomic>
+#include <thread>
 #include <cmath>
 #include <tuple>
 #include <type_traits>
@@ -91,17 +93,26 @@ class Scatter {
                   const Eigen::Matrix<double, 6 * N, 6 * N>* M,
                   const Eigen::Matrix<double, 6 * N, 6 * N>* C) {
     ForEachNodeBlock(dofs, [&](int a, int b, int gi, int gj) {
-      Mat6 S = Mat6::Zero();
-      if (K) {
-        if (o_.use_node_tangent && !kHasNodeTangent)
-          S.noalias() += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b) * *T[b];
-        else
-          S += o_.c_stiffness * K->template block<6, 6>(6 * a, 6 * b);
-      }
-      if (M) S += o_.c_mass * M->template block<6, 6>(6 * a, 6 * b);
-      if (C) S += o_.c_damping * C->template block<6, 6>(6 * a, 6 * b);
-      Block(gi, gj, S, o_.s_rows);
+      Block(gi, gj, CombineNodeBlock<N, kHasNodeTangent>(o_, a, b, T, K, M, C), o_.s_rows);
     });
+  }
+  // The node block (a, b) of S / s_R = c_K K T + c_M M + c_C C (NodeMatrix; the threads of
+  // the parallel assembly form it the same way).
+  template <int N, bool kHasNodeTangent>
+  static Mat6 CombineNodeBlock(const AssemblyOptions& o, int a, int b, const Mat6* const (&T)[N],
+                               const Eigen::Matrix<double, 6 * N, 6 * N>* K,
+                               const Eigen::Matrix<double, 6 * N, 6 * N>* M,
+                               const Eigen::Matrix<double, 6 * N, 6 * N>* C) {
+    Mat6 S = Mat6::Zero();
+    if (K) {
+      if (o.use_node_tangent && !kHasNodeTangent)
+        S.noalias() += o.c_stiffness * K->template block<6, 6>(6 * a, 6 * b) * *T[b];
+      else
+        S += o.c_stiffness * K->template block<6, 6>(6 * a, 6 * b);
+    }
+    if (M) S += o.c_mass * M->template block<6, 6>(6 * a, 6 * b);
+    if (C) S += o.c_damping * C->template block<6, 6>(6 * a, 6 * b);
+    return S;
   }
   // An element matrix already combined (S = c_K K T + c_M M + c_C C): adds s_R S.
   template <int N>
@@ -147,6 +158,18 @@ class Scatter {
     else
       NodeMatrix<N, false>(dofs, x.T, K, Ms, C);
   }
+  // An item computed by a thread of the parallel assembly (ParallelItemTerms): the same
+  // Force, Term, Rows and Block calls, with the same values, as Add.
+  void AddComputed(const ParallelItemTerms& p) {
+    if (!p.active) return;
+    Force(p.force_scale);
+    Term(p.term_scale);
+    for (int i = 0; i < 2; ++i) Rows(p.dofs[i], p.residual.segment<6>(6 * i));
+    ForEachNodeBlock(p.dofs, [&](int a, int b, int gi, int gj) {
+      Block(gi, gj, p.matrix.block<6, 6>(6 * a, 6 * b), o_.s_rows);
+    });
+  }
+  const AssemblyOptions& options() const { return o_; }
   // Constraint gradient block B (rows: constraint rows starting at `row`, cols: unknowns
   // starting at gj): adds s_C B T to the constraint rows and s_R s_L B^T to the equilibrium
   // rows, and B^T lambda to the residual.
@@ -230,11 +253,203 @@ bool AddKind(const Model& m, Data& d, const AssemblyOptions& o, const KernelOpti
   return ok;
 }
 
+// The parallel assembly of a kind with kParallel (docs/architecture.md, "Parallel
+// assembly"). Its items are taken in blocks of kParallelClaim in item order; the pool's threads
+// claim blocks one after the other and compute their items into a ring buffer of blocks
+// (ParallelItemTerms), while the calling thread scatters the blocks in item order as they
+// become ready (computing blocks itself while it waits), so that every sum is formed in the
+// order of AddKind, bit for bit. A block is claimed only when its place in the ring has been
+// scattered, so the buffer stays Data::parallel's size whatever the model's.
+struct ParallelRun {
+  const Model* model;
+  Data* data;  // the threads read it; the calling thread writes only after Calc (scatter)
+  const AssemblyOptions* options;
+  const KernelOptions* kernel;
+  Scatter* scatter;
+  ParallelItemTerms* items;       // ring_blocks * kParallelClaim items
+  std::atomic<long>* ready;       // per place in the ring: 1 + the block it holds, when computed
+  int count = 0;                  // items
+  int blocks = 0;                 // blocks of items
+  int ring_blocks = 0;            // places in the ring
+  std::atomic<int> next{0};       // the first block not yet claimed
+  std::atomic<int> scattered{0};  // blocks scattered: their places are free
+  std::atomic<bool> stop{false};  // an item failed: claim nothing more
+  bool failed = false;
+};
+
+// Items a thread claims at once.
+constexpr int kParallelClaim = 8;
+
+// Waiting for a block: a pause, then yielding the processor after a while.
+void ParallelBackoff(int* spins) {
+  if (++*spins < 2000) {
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+  } else {
+    std::this_thread::yield();
+  }
+}
+
+template <class Kind>
+void ComputeParallelItem(const ParallelRun& r, ParallelItemTerms& p) {
+  NodeMotion<2> x;
+  GatherItem<2>(*r.scatter, *r.data, *r.options, p.nodes, p.dofs, &x);
+  ElementTerms<2> t;
+  p.ok = Kind::Calc(*r.model, *r.data, p.item, x, *r.kernel, &t);
+  p.active = t.active;
+  if (!p.ok) {
+    p.failure = t.failure;
+    return;
+  }
+  if (!t.active) return;
+  p.force_scale = t.force_scale;
+  p.term_scale = t.term_scale;
+  p.residual = t.residual;
+  const AssemblyOptions& o = *r.options;
+  if (!o.assemble_matrix) return;
+  using M = typename ElementTerms<2>::Matrix;
+  const M* K = t.has_stiffness ? &t.stiffness : nullptr;
+  const M* Ms = t.has_mass ? &t.mass : nullptr;
+  const M* C = t.has_damping ? &t.damping : nullptr;
+  for (int b = 0; b < 2; ++b) {
+    if (p.dofs[b] < 0) continue;
+    for (int a = 0; a < 2; ++a) {
+      if (p.dofs[a] < 0) continue;
+      auto S = p.matrix.block<6, 6>(6 * a, 6 * b);
+      if (t.combined)
+        S = t.matrix.block<6, 6>(6 * a, 6 * b);
+      else if (t.stiffness_has_node_tangent)
+        S = Scatter::CombineNodeBlock<2, true>(o, a, b, x.T, K, Ms, C);
+      else
+        S = Scatter::CombineNodeBlock<2, false>(o, a, b, x.T, K, Ms, C);
+    }
+  }
+}
+
+// The next block whose place in the ring is free: its index, -1 when the ring is full for now,
+// -2 when every block is claimed (or an item failed).
+int ClaimParallelBlock(ParallelRun& r) {
+  int b = r.next.load(std::memory_order_relaxed);
+  for (;;) {
+    if (b >= r.blocks || r.stop.load(std::memory_order_relaxed)) return -2;
+    if (b >= r.scattered.load(std::memory_order_acquire) + r.ring_blocks) return -1;
+    if (r.next.compare_exchange_weak(b, b + 1, std::memory_order_acq_rel,
+                                     std::memory_order_relaxed))
+      return b;
+  }
+}
+
+template <class Kind>
+void ComputeParallelBlock(ParallelRun& r, int b) {
+  ParallelItemTerms* place =
+      r.items + static_cast<std::ptrdiff_t>(b % r.ring_blocks) * kParallelClaim;
+  const int first = b * kParallelClaim;
+  const int last = std::min(r.count, first + kParallelClaim);
+  for (int i = first; i < last; ++i) {
+    ParallelItemTerms& p = place[i - first];
+    p.item = i;
+    Kind::ItemNodes(*r.model, i, p.nodes);
+    ComputeParallelItem<Kind>(r, p);
+  }
+  r.ready[b % r.ring_blocks].store(b + 1, std::memory_order_release);
+}
+
+// The calling thread (worker 0) scatters the blocks in order; the others compute.
+template <class Kind>
+void ScatterParallelBlocks(ParallelRun& r) {
+  for (int b = 0; b < r.blocks; ++b) {
+    int spins = 0;
+    while (r.ready[b % r.ring_blocks].load(std::memory_order_acquire) != b + 1) {
+      const int c = ClaimParallelBlock(r);
+      if (c >= 0) {
+        ComputeParallelBlock<Kind>(r, c);
+        spins = 0;
+      } else {
+        ParallelBackoff(&spins);
+      }
+    }
+    const ParallelItemTerms* place =
+        r.items + static_cast<std::ptrdiff_t>(b % r.ring_blocks) * kParallelClaim;
+    const int n = std::min(kParallelClaim, r.count - b * kParallelClaim);
+    for (int i = 0; i < n; ++i) {
+      const ParallelItemTerms& p = place[i];
+      if (!p.ok) {
+        r.data->failed_element = p.item;
+        r.data->failed_rotation = p.failure;
+        r.failed = true;
+        r.stop.store(true, std::memory_order_relaxed);
+        return;
+      }
+      r.scatter->AddComputed(p);
+    }
+    r.scattered.store(b + 1, std::memory_order_release);
+  }
+}
+
+template <class Kind>
+void RunParallelBlocks(void* context, int worker) {
+  ParallelRun& r = *static_cast<ParallelRun*>(context);
+  if (worker == 0) {
+    try {
+      ScatterParallelBlocks<Kind>(r);
+    } catch (...) {
+      r.stop.store(true, std::memory_order_relaxed);
+      throw;
+    }
+    return;
+  }
+  int spins = 0;
+  for (;;) {
+    const int b = ClaimParallelBlock(r);
+    if (b == -2) return;
+    if (b == -1) {
+      ParallelBackoff(&spins);
+      continue;
+    }
+    spins = 0;
+    ComputeParallelBlock<Kind>(r, b);
+  }
+}
+
+template <class Kind>
+bool AddKindParallel(const Model& m, Data& d, const AssemblyOptions& o, const KernelOptions& ko,
+                     Scatter& s) {
+  static_assert(Kind::kNodes == 2 && std::is_same_v<typename Kind::Item, int>,
+                "the parallel assembly holds items of two nodes with an index");
+  ParallelAssembly& par = d.parallel;
+  ParallelRun r;
+  r.model = &m;
+  r.data = &d;
+  r.options = &o;
+  r.kernel = &ko;
+  r.scatter = &s;
+  r.items = par.items().data();
+  r.ready = par.ready();
+  r.count = Kind::ItemCount(m);
+  r.blocks = (r.count + kParallelClaim - 1) / kParallelClaim;
+  r.ring_blocks = static_cast<int>(par.items().size()) / kParallelClaim;
+  if (r.blocks == 0) return true;
+  for (int i = 0; i < r.ring_blocks; ++i) r.ready[i].store(0, std::memory_order_relaxed);
+  s.AllowOffBand(false);
+  par.pool()->Run(&RunParallelBlocks<Kind>, &r);
+  return !r.failed;
+}
+
+template <class Kind>
+bool AddKindAny(const Model& m, Data& d, const AssemblyOptions& o, const KernelOptions& ko,
+                Scatter& s) {
+  if constexpr (requires { Kind::kParallel; })
+    if (d.parallel.threads() > 1 && d.parallel.pool() != nullptr)
+      return AddKindParallel<Kind>(m, d, o, ko, s);
+  return AddKind<Kind>(m, d, o, ko, s);
+}
+
 template <class... Kinds>
 bool AddKinds(const Model& m, Data& d, const AssemblyOptions& o, Scatter& s,
               std::tuple<Kinds...>*) {
   const KernelOptions ko = MakeKernelOptions(o);
-  return (AddKind<Kinds>(m, d, o, ko, s) && ...);
+  return (AddKindAny<Kinds>(m, d, o, ko, s) && ...);
 }
 
 template <class... Kinds>
@@ -354,6 +569,16 @@ void UpdateBranchReferences(const Model& model, Data& data) {
     const Mat3 RAt = data.H[static_cast<std::size_t>(el.node_a)].R.transpose();
     data.w_ref[e] = LogSO3Near(RAt * data.H[static_cast<std::size_t>(el.node_b)].R, data.w_ref[e]);
   }
+}
+
+int ResolveAssemblyThreads(const Model& model, int requested) {
+  if (requested >= 1) return std::min(requested, kMaxAssemblyThreads);
+  if (static_cast<long>(model.elements.size()) < kParallelMinElements) return 1;
+  return std::min(AvailableCores(), kMaxAssemblyThreads);
+}
+
+void SetAssemblyThreads(Data& data, int threads) {
+  data.parallel.Set(std::clamp(threads, 1, kMaxAssemblyThreads), 2 * kParallelChunk);
 }
 
 bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {

@@ -738,6 +738,8 @@ class Recording::Impl {
 
     j.Key("settings").BeginObject();
     j.Field("analysis", NameOf(a.kind));
+    // The threads the assembly ran on (analysis.threads resolved; assemble.h).
+    j.Field("threads", data_.parallel.threads());
     if (!statics) {
       j.Field("start_time", start_time_).Field("end_time", a.end_time).Field("step", a.step);
       j.Field("align_steps", a.align_steps).Field("static_preload", a.static_preload);

@@ -181,6 +181,8 @@ RunResult RunScene(const Scene& scene, Data& data, Integrator& integrator,
     throw InputError("output directory '" + std::string(outdir.c_str()) +
                      "...': contains a NUL character (not a directory name)");
   ValidateSettings(scene);
+  // The assembly's threads (analysis.threads; assemble.h): started here, before any step.
+  SetAssemblyThreads(data, ResolveAssemblyThreads(scene.model, scene.analysis.threads));
   Run run(scene, data, integrator, outdir, options);
   try {
     run.Execute();

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -44,7 +45,8 @@ void SceneReader::ReadAnalysis(const Node* node) {
                 "min_step",
                 "max_step",
                 "initial_step",
-                "statics"});
+                "statics",
+                "threads"});
   if (const Node* t = node->Find("type")) a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
   ReadTimes(*node, path);
   ReadSolverOptions(*node, path);
@@ -63,7 +65,26 @@ void SceneReader::ReadAnalysis(const Node* node) {
     spec_.rod_inertia = r_.Enum<RodInertia>(*t, Join(path, "rod_inertia"));
   if (const Node* t = node->Find("linear_solver"))
     spec_.linear_solver = r_.Enum<LinearSolver>(*t, Join(path, "linear_solver"));
+  if (const Node* t = node->Find("threads")) ReadThreads(*t, Join(path, "threads"));
   // analysis.statics.time follows from the kind; the compiler sets it (SceneSpec::analysis).
+}
+
+// analysis.threads: 'auto' or an integer from 1 to kMaxAssemblyThreads.
+void SceneReader::ReadThreads(const Node& node, const std::string& path) {
+  AnalysisSettings* a = &spec_.analysis;
+  const std::string expected =
+      "expected 'auto' or an integer from 1 to " + std::to_string(kMaxAssemblyThreads);
+  if (!node.IsScalar()) r_.Fail(node.location, path, expected);
+  if (!node.quoted && node.scalar == "auto") {
+    a->threads = kAutoThreads;
+    return;
+  }
+  char* end = nullptr;
+  const double v = std::strtod(node.scalar.c_str(), &end);
+  if (node.quoted || node.scalar.empty() || *end != '\0' || !(v >= 1.0) ||
+      !(v <= kMaxAssemblyThreads) || v != std::floor(v))
+    r_.Fail(node.location, path, expected + ", got '" + node.scalar + "'");
+  a->threads = static_cast<int>(v);
 }
 
 // start_time, end_time, step: a time grid that a dynamic analysis can step through.

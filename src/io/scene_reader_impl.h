@@ -105,6 +105,7 @@ class SceneReader {
   BodyPointSpec ReadRoute(const Node& node, const std::string& path) const;
   void ReadAnalysis(const Node* node);
   void ReadTimes(const Node& node, const std::string& path);
+  void ReadThreads(const Node& node, const std::string& path);
   void ReadStepControl(const Node& node, const std::string& path);
   void ReadSolverOptions(const Node& node, const std::string& path);
   void ReadStatics(const Node& node, const std::string& path);

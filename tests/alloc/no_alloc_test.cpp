@@ -21,6 +21,7 @@
 
 #include <unistd.h>
 
+#include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/input_table.h"
@@ -348,6 +349,42 @@ TEST(NoAllocation, TimeStepsAfterSetUpAllocateNothing) {
       EXPECT_GT(tendons[2], 0.0);    // the tendon pulls
       EXPECT_EQ(g_allocations.load(), 0) << "heap allocations in the tendon and force rows";
     }
+}
+
+// The parallel assembly (assemble.h, SetAssemblyThreads): with two threads, the steps of the
+// mixed model (its rod elements on the pool) and of a 600-element rod (three chunks, the last
+// partial) start jobs and fill the chunk buffers without allocating, on any thread.
+TEST(NoAllocation, ParallelAssemblyAllocatesNothing) {
+  Vec6 K, M;
+  K << 1e6, 1e6, 1e6, 1, 1, 1;
+  M << 0.1, 0.1, 0.1, 0.5, 0.5, 0.5;
+  ModelBuilder b;
+  const int rod =
+      b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), 600, Section::FromDiagonals(K, M));
+  b.FixNode(b.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  b.SetGravity(Vec3(0, 0, -9.81));
+  const Model models[] = {MixedModel(), b.Build()};
+  for (const Model& model : models) {
+    SCOPED_TRACE(model.elements.size());
+    Data data = MakeData(model);
+    SetAssemblyThreads(data, 2);
+    ASSERT_EQ(data.parallel.threads(), 2);
+    Integrator integ;
+    DynamicOptions options;
+    options.rho_inf = 0.8;
+    std::string message;
+    ASSERT_TRUE(InitializeDynamics(model, data, integ, options, &message)) << message;
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(Step(model, data, integ, 1e-3).ok);
+    const long before = integ.iterations;
+    g_allocations = 0;
+    g_counting = true;
+    bool ok = true;
+    for (int i = 0; i < 10; ++i) ok = Step(model, data, integ, 1e-3).ok && ok;
+    g_counting = false;
+    EXPECT_TRUE(ok);
+    EXPECT_GT(integ.iterations, before + 10);  // the steps really iterated
+    EXPECT_EQ(g_allocations.load(), 0) << "heap allocations inside 10 time steps on 2 threads";
+  }
 }
 
 // Error-controlled steps (AdaptiveStep) with dense output (InterpolateStep) after each, through

@@ -404,6 +404,23 @@ TEST(BadInput, StaticPathSettings) {
               "analysis.statics.desired_iterations: expected an integer from 1 to 1000, got '0'");
 }
 
+// analysis.threads: 'auto' or an integer from 1 to 256, each bad value at its line and column.
+TEST(BadInput, Threads) {
+  const std::string head =
+      kHead + "bodies:\n  r: {type: soft, from: A, to: B, section: s, free: true}\n";
+  const std::string expected = "analysis.threads: expected 'auto' or an integer from 1 to 256";
+  ExpectError(head + "analysis:\n  threads: 0\n", "bad.yaml:6:12", expected + ", got '0'");
+  ExpectError(head + "analysis:\n  threads: 2.5\n", "bad.yaml:6:12", expected + ", got '2.5'");
+  ExpectError(head + "analysis:\n  threads: 257\n", "bad.yaml:6:12", expected + ", got '257'");
+  ExpectError(head + "analysis:\n  threads: many\n", "bad.yaml:6:12", expected + ", got 'many'");
+  ExpectError(head + "analysis:\n  threads: 'auto'\n", "bad.yaml:6:12", expected + ", got 'auto'");
+  ExpectError(head + "analysis:\n  threads: [2]\n", "bad.yaml:6:12", expected);
+  EXPECT_EQ(ParseScene(head + "analysis:\n  threads: 3\n", "ok.yaml").analysis.threads, 3);
+  EXPECT_EQ(ParseScene(head + "analysis:\n  threads: auto\n", "ok.yaml").analysis.threads,
+            kAutoThreads);
+  EXPECT_EQ(ParseScene(head, "ok.yaml").analysis.threads, kAutoThreads);
+}
+
 TEST(BadInput, NonScalarMapKey) {
   ExpectError("points:\n  [1, 2]: [0, 0, 0]\n", "bad.yaml:2:3", "map keys must be plain names");
 }

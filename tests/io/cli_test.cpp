@@ -147,6 +147,24 @@ TEST(Cli, OverridesApplyInOrder) {
   EXPECT_EQ(ReadCsv(out + "/points.csv").rows.size(), 3u);  // t = 0, 0.05, 0.1
 }
 
+// --threads N is analysis.threads=N after every --set: summary.json reports it; a bad value
+// is an input error naming the key.
+TEST(Cli, ThreadsFlagSetsTheAssemblyThreads) {
+  REQUIRE_CLI();
+  const ScopedDir tmp("cli_threads");
+  const std::string out = tmp.path() + "/out";
+  Outcome o = RunCli({"run", kPendulum, "-o", out, "-q", "--threads", "2", "--set",
+                      "analysis.threads=1", "--set", "analysis.end_time=0.01"},
+                     tmp.path());
+  ASSERT_EQ(o.code, 0) << o.err;
+  EXPECT_NE(ReadFile(out + "/summary.json").find("\"threads\": 2,"), std::string::npos);
+  o = RunCli({"run", kPendulum, "-o", tmp.path() + "/bad", "--threads", "0"}, tmp.path());
+  EXPECT_EQ(o.code, 2);
+  EXPECT_NE(o.err.find("analysis.threads: expected 'auto' or an integer from 1 to 256, got '0'"),
+            std::string::npos)
+      << o.err;
+}
+
 TEST(Cli, InputErrorsExitTwoWithAPrefixedMessage) {
   REQUIRE_CLI();
   const ScopedDir tmp("cli_input");

@@ -1364,5 +1364,44 @@ class InputsAndStateTest(unittest.TestCase):
         self.assertAlmostEqual(p[0], -m * d * 0.5, delta=1e-14)
 
 
+class ThreadsTest(unittest.TestCase):
+    """The parallel assembly from Python (docs/architecture.md, "Parallel assembly")."""
+
+    SCENE = """
+points: {A: [0, 0, 0], B: [1, 0, 0]}
+sections: {s: {stiffness: [1e6, 1e6, 1e6, 1, 1, 1], inertia: [0.1, 0.1, 0.1, 0.5, 0.5, 0.5]}}
+gravity: [0, 0, -9.81]
+bodies: {rod: {type: soft, from: A, to: B, section: s, elements: 300}}
+joints: {clamp: {type: fixed, at: A, between: [ground, rod]}}
+analysis: {end_time: 0.01, step: 1e-3}
+"""
+
+    def test_two_threads_reach_the_serial_state_bit_for_bit(self):
+        scene = sf.parse_scene(self.SCENE, "rod.yaml")
+        self.assertEqual(scene.analysis.threads, "auto")
+        states = []
+        for threads in (1, 2):
+            sim = sf.Simulation(scene)
+            self.assertEqual(sim.threads, 1)  # auto: 300 elements stay on one thread
+            sim.threads = threads
+            self.assertEqual(sim.threads, threads)
+            sim.initialize()
+            for _ in range(10):
+                sim.step(1e-3)
+            states.append((sim.v.copy(), sim.vdot.copy()))
+        self.assertTrue(np.array_equal(states[0][0], states[1][0]))
+        self.assertTrue(np.array_equal(states[0][1], states[1][1]))
+        self.assertGreater(np.abs(states[0][0]).max(), 0.0)  # it moved
+
+    def test_scene_setting_reaches_the_simulation(self):
+        scene = sf.parse_scene(self.SCENE, "rod.yaml", ["analysis.threads=2"])
+        self.assertEqual(scene.analysis.threads, 2)
+        self.assertEqual(sf.Simulation(scene).threads, 2)
+        with self.assertRaisesRegex(sf.InputError, "expected an integer from 1 to 256"):
+            sf.Simulation(scene).threads = 0
+        with self.assertRaisesRegex(sf.InputError, "expected 'auto' or an integer"):
+            scene.analysis.threads = "many"
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -34,6 +34,21 @@ void AddConstraintForceTangentBlocks(const Model& model, std::vector<SparseLU::B
 // admissible range (data.failed_element, data.failed_rotation say which and how far).
 bool Assemble(const Model& model, Data& data, const AssemblyOptions& options);
 
+// The threads of the assembly (docs/architecture.md, "Parallel assembly"): the rod elements'
+// kernels run on a pool of threads in chunks of kParallelChunk elements, scattered in element
+// order, so that the results are the same doubles with any number of threads.
+// kAutoThreads: every available core for a model of at least kParallelMinElements rod
+// elements, one thread below (where the threads do not pay; bench/RESULTS.md).
+inline constexpr int kAutoThreads = 0;
+inline constexpr int kParallelMinElements = 1000;
+inline constexpr int kParallelChunk = 256;
+inline constexpr int kMaxAssemblyThreads = 256;
+// The threads to use for a request (>= 1, or kAutoThreads); at most kMaxAssemblyThreads.
+int ResolveAssemblyThreads(const Model& model, int requested);
+// Starts data's pool of threads (1: the serial assembly, no pool). Allocates: call at set-up,
+// not inside a step. A copy of the Data starts a pool of its own.
+void SetAssemblyThreads(Data& data, int threads);
+
 // Snapshot of the configuration (for restoring after a failed step).
 struct State {
   std::vector<SE3> H, HJ;

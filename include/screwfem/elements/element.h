@@ -26,6 +26,12 @@
 // `template <class F> static void ForEachProfile(const Model&, F&& f)` calls f(profile) for
 // every profile its items evaluate: the steps of a run end on their breakpoints.
 //
+// `static constexpr bool kParallel = true;` (two nodes, an int item 0 .. ItemCount(model) - 1
+// in ForEach's order, `static int ItemCount(const Model&)` and `static void ItemNodes(const
+// Model&, int item, int (&nodes)[2])`) lets the assembly run the kind's Calc on several
+// threads at once (SetAssemblyThreads): Calc must then only read the Model and the Data (no
+// static state). The rod element has it.
+//
 // The assembly (assemble/assemble.cpp) loops over the registered kinds, gathers the node
 // motion, calls Calc and scatters ElementTerms into the global residual and the banded
 // iteration matrix; CalcEnergy sums AddEnergy. A kind never touches global arrays.

@@ -249,6 +249,14 @@ void CalcRodConservative(const RodElement& element, const Section& section,
 struct RodElementKind {
   static constexpr int kNodes = 2;
   using Item = int;  // global element index
+  // Calc runs on the threads of the parallel assembly (element.h, kParallel), which takes the
+  // items by index.
+  static constexpr bool kParallel = true;
+  static int ItemCount(const Model& model) { return static_cast<int>(model.elements.size()); }
+  static void ItemNodes(const Model& model, int e, int (&nodes)[2]) {
+    nodes[0] = model.elements[static_cast<std::size_t>(e)].node_a;
+    nodes[1] = model.elements[static_cast<std::size_t>(e)].node_b;
+  }
   // The actuators' profiles (pressure, activation, strain: CalcRodActuation).
   template <class F>
   static void ForEachProfile(const Model& model, F&& f) {

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "screwfem/assemble/assemble.h"
 #include "screwfem/model/data.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/statics.h"
@@ -35,6 +36,9 @@ struct AnalysisSettings {
   StaticOptions statics;
   // Dynamic analyses may start from a static equilibrium of the loads at start_time.
   bool static_preload = false;
+  // analysis.threads: the threads of the assembly (assemble.h, SetAssemblyThreads), >= 1 or
+  // kAutoThreads (every core for a model of at least kParallelMinElements rod elements).
+  int threads = kAutoThreads;
 };
 
 // A recorded point: a point fixed in a node frame (rigid body, joint side or rod node), or a

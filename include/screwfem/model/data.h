@@ -10,6 +10,7 @@
 #include "screwfem/linalg/banded_lu.h"
 #include "screwfem/linalg/sparse_lu.h"
 #include "screwfem/model/model.h"
+#include "screwfem/model/thread_pool.h"
 
 namespace screwfem {
 
@@ -82,6 +83,10 @@ struct Data {
   double term_scale = 0.0;   // largest term cancelling inside one (e.g. K d/L in sigma)
   int failed_element = -1;   // element whose rotation left the admissible range
   double failed_rotation = 0.0;
+
+  // The threads of the assembly (SetAssemblyThreads, assemble/assemble.h): serial until set;
+  // the pool is shut down with the Data.
+  ParallelAssembly parallel;
 };
 
 // Allocates Data for a model and sets the reference state (at rest).
