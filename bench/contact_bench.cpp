@@ -51,8 +51,8 @@ Model RodOnPlane(int variant) {
   inertia << 0.1, 0.1, 0.1, 0.5, 0.5, 0.5;
   const double onset = 0.01 * kRadius;
   const double z = kRadius + onset * (1.0 - std::sqrt(0.02));
-  const int rod = builder.AddStraightRod("rod", Vec3(0, 0, z), Vec3(1.0, 0, z), kElements,
-                                         Section::FromDiagonals(stiffness, inertia));
+  const RodId rod = builder.AddStraightRod("rod", Vec3(0, 0, z), Vec3(1.0, 0, z), kElements,
+                                           Section::FromDiagonals(stiffness, inertia));
   builder.SetGravity(Vec3(0, 0, -9.81));
   if (variant > 0) {
     builder.AddContactRod(rod, kRadius);
@@ -65,7 +65,7 @@ Model RodOnPlane(int variant) {
     builder.SetContactSettings(law);
   }
   if (variant == 2)
-    for (int n : builder.model().rods[static_cast<std::size_t>(rod)].nodes)
+    for (NodeId n : builder.RodNodes(rod))
       builder.SetInitialVelocity(n, (Vec6() << 0.5, 0, 0, 0, 0, 0).finished());
   return builder.Build();
 }

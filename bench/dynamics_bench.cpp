@@ -373,9 +373,10 @@ Model CantileverModel(int num_elements) {
   stiffness << 1e6, 1e6, 1e6, 1.0, 1.0, 1.0;  // EA, GA2, GA3, GJ, EI2, EI3
   inertia << 0.1, 0.1, 0.1, 0.5, 0.5, 0.5;    // rho A (x3) [kg/m], rotational [kg m]
   ModelBuilder builder;
-  const int rod = builder.AddStraightRod("rod", Vec3::Zero(), Vec3(kRodLength, 0, 0), num_elements,
-                                         Section::FromDiagonals(stiffness, inertia));
-  builder.FixNode(builder.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  const RodId rod =
+      builder.AddStraightRod("rod", Vec3::Zero(), Vec3(kRodLength, 0, 0), num_elements,
+                             Section::FromDiagonals(stiffness, inertia));
+  builder.FixNode(builder.RodNodes(rod).front());
   builder.SetGravity(Vec3(0, 0, -9.81));
   builder.model().rod_inertia = RodInertia::kExact;
   return builder.Build();

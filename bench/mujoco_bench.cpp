@@ -163,7 +163,7 @@ struct MujocoRun {
 Model BuildChain() {
   ModelBuilder b;
   const Mat3 J = Vec3(1e-4, 2e-4, 3e-4).asDiagonal();
-  int nodes[3];
+  NodeId nodes[3];
   const char* node_names[3] = {"n0", "n1", "n2"};
   const char* link_names[3] = {"link0", "link1", "link2"};
   for (int i = 0; i < 3; ++i) {
@@ -174,16 +174,16 @@ Model BuildChain() {
       g_revolute_base
           ? b.AddJointAt("s", JointType::kRevolute, kGround, nodes[0], Vec3::Zero(), Vec3::UnitY())
           : b.AddJointAt("s", JointType::kSpherical, kGround, nodes[0], Vec3::Zero());
-  const int u = b.AddJointAt("u", JointType::kUniversal, nodes[0], nodes[1], Vec3(0.5, 0, 0),
-                             Vec3::UnitZ(), Vec3::UnitY());
-  const int r = b.AddJointAt("r", JointType::kRevolute, nodes[1], nodes[2], Vec3(1.0, 0, 0),
-                             Vec3(0.0, 1.0, 1.0).normalized());
+  const JointId u = b.AddJointAt("u", JointType::kUniversal, nodes[0], nodes[1], Vec3(0.5, 0, 0),
+                                 Vec3::UnitZ(), Vec3::UnitY());
+  const JointId r = b.AddJointAt("r", JointType::kRevolute, nodes[1], nodes[2], Vec3(1.0, 0, 0),
+                                 Vec3(0.0, 1.0, 1.0).normalized());
   Joint& js = b.model().joints[static_cast<std::size_t>(s)];
   js.stiffness.head(js.k()).setConstant(g_no_base_spring ? 0.0 : 2.0);
-  Joint& ju = b.model().joints[static_cast<std::size_t>(u)];
+  Joint& ju = b.model().joints[u];
   ju.stiffness.head<2>().setConstant(3.0);
   ju.rest.head<2>() << 0.4, -0.3;
-  Joint& jr = b.model().joints[static_cast<std::size_t>(r)];
+  Joint& jr = b.model().joints[r];
   jr.stiffness(0) = 1.0;
   jr.rest(0) = 0.5;
   b.SetGravity(Vec3(0.0, 0.0, -9.81));

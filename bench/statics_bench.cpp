@@ -26,9 +26,9 @@ Model CantileverModel(int num_elements) {
   Vec6 stiffness;
   stiffness << 1e6, 1e6, 1e6, 1.0, 1.0, 1.0;  // EA, GA2, GA3, GJ, EI2, EI3
   ModelBuilder builder;
-  const int rod = builder.AddStraightRod("rod", Vec3::Zero(), Vec3(kLength, 0, 0), num_elements,
-                                         Section::FromDiagonals(stiffness));
-  builder.FixNode(builder.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  const RodId rod = builder.AddStraightRod("rod", Vec3::Zero(), Vec3(kLength, 0, 0), num_elements,
+                                           Section::FromDiagonals(stiffness));
+  builder.FixNode(builder.RodNodes(rod).front());
   return builder.Build();
 }
 

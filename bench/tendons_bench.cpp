@@ -28,9 +28,9 @@ Model CantileverWithTendons(int tendons) {
   Vec6 stiffness, inertia;
   stiffness << 1e6, 1e6, 1e6, 1.0, 1.0, 1.0;
   inertia << 0.1, 0.1, 0.1, 0.5, 0.5, 0.5;
-  const int rod = builder.AddStraightRod("rod", Vec3::Zero(), Vec3(1.0, 0, 0), 10,
-                                         Section::FromDiagonals(stiffness, inertia));
-  const std::vector<int> nodes = builder.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const RodId rod = builder.AddStraightRod("rod", Vec3::Zero(), Vec3(1.0, 0, 0), 10,
+                                           Section::FromDiagonals(stiffness, inertia));
+  const std::vector<NodeId> nodes = builder.RodNodes(rod);
   builder.FixNode(nodes.front());
   builder.SetGravity(Vec3(0, 0, -9.81));
   const Vec3 offsets[2] = {Vec3(0, 0.02, 0), Vec3(0, 0, -0.02)};

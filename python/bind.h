@@ -17,6 +17,23 @@
 #include "screwfem/solve/statics.h"
 #include "screwfem/solve/stop.h"
 
+// Typed ids (model/ids.h) are Python ints: scripts pass and receive plain indices.
+namespace pybind11::detail {
+template <typename Tag>
+struct type_caster<screwfem::Id<Tag>> {
+  PYBIND11_TYPE_CASTER(screwfem::Id<Tag>, const_name("int"));
+  bool load(handle src, bool convert) {
+    make_caster<int> index;
+    if (!index.load(src, convert)) return false;
+    value = screwfem::Id<Tag>(cast_op<int>(index));
+    return true;
+  }
+  static handle cast(screwfem::Id<Tag> id, return_value_policy /*policy*/, handle /*parent*/) {
+    return PyLong_FromLong(id.value());
+  }
+};
+}  // namespace pybind11::detail
+
 namespace screwfem::python {
 
 // bind_model.cpp: Model and its entities (read-only), SE3 conversions.

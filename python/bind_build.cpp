@@ -42,6 +42,11 @@ py::object ShapedSection(Section s, double radius, const std::optional<Vec6>& da
   return out;
 }
 
+// A contact entity from Python's (rod, index) pair.
+ContactEntity Entity(bool rod, int index) {
+  return rod ? ContactEntity(RodId(index)) : ContactEntity(BodyId(index));
+}
+
 double PositiveSize(double x, const char* what) {
   if (!(x > 0.0) || !std::isfinite(x))
     throw InputError(std::string("Section: ") + what + " must be a positive number, got " +
@@ -397,7 +402,7 @@ void BindValues(py::module_& m) {
 }  // namespace
 
 void BindBuild(py::module_& m) {
-  m.attr("GROUND") = kGround;
+  m.attr("GROUND") = static_cast<int>(kGround);
   BindValues(m);
   using B = ModelBuilder;
   py::class_<B>(m, "ModelBuilder",
@@ -458,14 +463,27 @@ void BindBuild(py::module_& m) {
            "A ContactShape on a rigid body; returns its index.")
       .def("add_obstacle", &B::AddObstacle, py::arg("obstacle"),
            "A ContactObstacle fixed in the world; returns its index.")
-      .def("set_contact_group", &B::SetContactGroup, py::arg("rod"), py::arg("index"),
-           py::arg("contype"), py::arg("conaffinity"),
-           "Group bitmasks of a rod (rod=True) or rigid body (MuJoCo's contype/conaffinity).")
-      .def("exclude_contact", &B::ExcludeContact, py::arg("rod"), py::arg("index"),
-           py::arg("obstacle"), "No contact between a rod or rigid body and an obstacle.")
-      .def("exclude_contact_pair", &B::ExcludeContactPair, py::arg("rod_a"), py::arg("index_a"),
-           py::arg("rod_b"), py::arg("index_b"),
-           "No contact between two moving entities (each a rod or a rigid body, by index).")
+      .def(
+          "set_contact_group",
+          [](B& b, bool rod, int index, unsigned contype, unsigned conaffinity) {
+            b.SetContactGroup(Entity(rod, index), contype, conaffinity);
+          },
+          py::arg("rod"), py::arg("index"), py::arg("contype"), py::arg("conaffinity"),
+          "Group bitmasks of a rod (rod=True) or rigid body (MuJoCo's contype/conaffinity).")
+      .def(
+          "exclude_contact",
+          [](B& b, bool rod, int index, ObstacleId obstacle) {
+            b.ExcludeContact(Entity(rod, index), obstacle);
+          },
+          py::arg("rod"), py::arg("index"), py::arg("obstacle"),
+          "No contact between a rod or rigid body and an obstacle.")
+      .def(
+          "exclude_contact_pair",
+          [](B& b, bool rod_a, int index_a, bool rod_b, int index_b) {
+            b.ExcludeContactPair(Entity(rod_a, index_a), Entity(rod_b, index_b));
+          },
+          py::arg("rod_a"), py::arg("index_a"), py::arg("rod_b"), py::arg("index_b"),
+          "No contact between two moving entities (each a rod or a rigid body, by index).")
       .def("set_contact_settings", &B::SetContactSettings, py::arg("settings"),
            "The contact law's settings (ContactSettings) for every pair.")
       .def(

@@ -235,7 +235,7 @@ void BindModel(py::module_& m) {
       .def("find_joint", &Model::FindJoint, py::arg("name"),
            "Index of the named joint, -1 if absent.");
 
-  m.attr("kGround") = kGround;
+  m.attr("kGround") = static_cast<int>(kGround);
 }
 
 }  // namespace screwfem::python

@@ -29,7 +29,9 @@ using screwfem::Data;
 using screwfem::LoadFrame;
 using screwfem::Model;
 using screwfem::ModelBuilder;
+using screwfem::NodeId;
 using screwfem::PointLoad;
+using screwfem::RodId;
 using screwfem::Section;
 using screwfem::StaticResult;
 using screwfem::Vec3;
@@ -46,9 +48,9 @@ struct Cantilever {
 Cantilever MakeCantilever(double length, const Vec6& stiffness, int num_elements,
                           const PointLoad& tip_load) {
   ModelBuilder b;
-  const int rod = b.AddStraightRod("cantilever", Vec3::Zero(), Vec3(length, 0.0, 0.0), num_elements,
-                                   Section::FromDiagonals(stiffness));
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const RodId rod = b.AddStraightRod("cantilever", Vec3::Zero(), Vec3(length, 0.0, 0.0),
+                                     num_elements, Section::FromDiagonals(stiffness));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   PointLoad load = tip_load;
   load.node = nodes.back();

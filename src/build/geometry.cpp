@@ -66,9 +66,9 @@ std::vector<SE3> PathNodeFrames(const std::string& name, const EntityRef& rod,
 
 }  // namespace
 
-int ModelBuilder::AddStraightRod(std::string name, const Vec3& p0, const Vec3& p1, int num_elements,
-                                 const Section& section, const Vec3& up, int start_node,
-                                 int end_node) {
+RodId ModelBuilder::AddStraightRod(std::string name, const Vec3& p0, const Vec3& p1,
+                                   int num_elements, const Section& section, const Vec3& up,
+                                   NodeId start_node, NodeId end_node) {
   const double length = (p1 - p0).norm();
   if (!(length > 0.0) || !std::isfinite(length))
     throw InputError("rod '" + name + "': zero length (its end points coincide)", NextRod());
@@ -79,22 +79,22 @@ int ModelBuilder::AddStraightRod(std::string name, const Vec3& p0, const Vec3& p
                                  end_node);
 }
 
-int ModelBuilder::AddStraightRodFromFrame(std::string name, const SE3& root, double length,
-                                          int num_elements, const Section& section, int start_node,
-                                          int end_node) {
+RodId ModelBuilder::AddStraightRodFromFrame(std::string name, const SE3& root, double length,
+                                            int num_elements, const Section& section,
+                                            NodeId start_node, NodeId end_node) {
   if (num_elements < 1)
     throw InputError(
         "rod '" + name + "': needs at least one element, got " + std::to_string(num_elements),
         NextRod());
   if (!(length > 0.0) || !std::isfinite(length))
     throw InputError("rod '" + name + "': length must be positive", NextRod());
-  std::vector<int> nodes;
+  std::vector<NodeId> nodes;
   for (int i = 0; i <= num_elements; ++i) {
     SE3 H = root;
     H.x = root.x + root.R.col(0) * (length * i / num_elements);
-    if (i == 0 && start_node >= 0) {
+    if (i == 0 && start_node.valid()) {
       nodes.push_back(start_node);
-    } else if (i == num_elements && end_node >= 0) {
+    } else if (i == num_elements && end_node.valid()) {
       nodes.push_back(end_node);
     } else {
       nodes.push_back(AddNode(H, name.empty() ? std::string{} : name + "." + std::to_string(i)));
@@ -103,20 +103,20 @@ int ModelBuilder::AddStraightRodFromFrame(std::string name, const SE3& root, dou
   return AddRodThroughNodes(std::move(name), nodes, section);
 }
 
-int ModelBuilder::AddRodThroughNodes(std::string name, const std::vector<int>& nodes,
-                                     const Section& section) {
+RodId ModelBuilder::AddRodThroughNodes(std::string name, const std::vector<NodeId>& nodes,
+                                       const Section& section) {
   Rod rod;
   rod.name = std::move(name);
   rod.section = section;
-  rod.nodes = nodes;
+  rod.nodes.assign(nodes.begin(), nodes.end());
   rod.num_elements = static_cast<int>(nodes.size()) - 1;
   model_.rods.push_back(rod);
-  return static_cast<int>(model_.rods.size()) - 1;
+  return RodId(static_cast<int>(model_.rods.size()) - 1);
 }
 
-int ModelBuilder::AddRodAlongPath(std::string name, const std::vector<Vec3>& path,
-                                  int elements_per_segment, const Section& section, const Vec3& up,
-                                  int start_node, int end_node) {
+RodId ModelBuilder::AddRodAlongPath(std::string name, const std::vector<Vec3>& path,
+                                    int elements_per_segment, const Section& section,
+                                    const Vec3& up, NodeId start_node, NodeId end_node) {
   const EntityRef rod = NextRod();
   const std::string label = "rod '" + name + "'";
   if (path.size() < 2) throw InputError(label + ": a path needs at least two points", rod);
@@ -129,13 +129,13 @@ int ModelBuilder::AddRodAlongPath(std::string name, const std::vector<Vec3>& pat
   const std::vector<SE3> frames = PathNodeFrames(name, rod, path, elements_per_segment, up);
   // A shared end node must sit at the path's end with the same section frame (else the rod
   // would start with a kink that no element carries).
-  auto check_shared = [&](int node, const SE3& H, const char* part) {
-    if (node < 0) return;
+  auto check_shared = [&](NodeId node, const SE3& H, const char* part) {
+    if (!node.valid()) return;
     std::string detail;
-    if (node >= static_cast<int>(model_.nodes.size())) {
+    if (node.index() >= model_.nodes.size()) {
       detail = "no node " + std::to_string(node);
     } else {
-      const SE3& Ho = model_.nodes[static_cast<std::size_t>(node)].reference;
+      const SE3& Ho = model_.nodes[node.index()].reference;
       const double tol = 1e-8 * std::max({1.0, H.x.norm(), (path.back() - path.front()).norm()});
       if ((Ho.x - H.x).norm() > tol)
         detail = build_steps::NodeLabel(model_, node) + " is not at the path's end";
@@ -153,12 +153,12 @@ int ModelBuilder::AddRodAlongPath(std::string name, const std::vector<Vec3>& pat
   if (path.size() == 2)
     return AddStraightRod(std::move(name), path[0], path[1], elements_per_segment, section, up,
                           start_node, end_node);
-  std::vector<int> nodes;
+  std::vector<NodeId> nodes;
   nodes.reserve(frames.size());
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    if (i == 0 && start_node >= 0) {
+    if (i == 0 && start_node.valid()) {
       nodes.push_back(start_node);
-    } else if (i + 1 == frames.size() && end_node >= 0) {
+    } else if (i + 1 == frames.size() && end_node.valid()) {
       nodes.push_back(end_node);
     } else {
       nodes.push_back(
@@ -168,9 +168,9 @@ int ModelBuilder::AddRodAlongPath(std::string name, const std::vector<Vec3>& pat
   return AddRodThroughNodes(std::move(name), nodes, section);
 }
 
-NodeMatch ModelBuilder::FindNodeAt(const Vec3& p, int rod, double tolerance) const {
+NodeMatch ModelBuilder::FindNodeAt(const Vec3& p, RodId rod, double tolerance) const {
   const Model& m = model_;
-  if (rod >= static_cast<int>(m.rods.size()))
+  if (rod.valid() && rod.index() >= m.rods.size())
     throw InputError("FindNodeAt: no rod " + std::to_string(rod));
   NodeMatch match;
   match.distance = std::numeric_limits<double>::infinity();
@@ -180,12 +180,12 @@ NodeMatch ModelBuilder::FindNodeAt(const Vec3& p, int rod, double tolerance) con
     const double d = (m.nodes[static_cast<std::size_t>(n)].reference.x - p).norm();
     if (d < match.distance) {
       match.distance = d;
-      match.nearest = n;
+      match.nearest = NodeId(n);
     }
   };
   double extent = 0.0;
-  if (rod >= 0) {
-    const Rod& r = m.rods[static_cast<std::size_t>(rod)];
+  if (rod.valid()) {
+    const Rod& r = m.rods[rod.index()];
     for (int n : r.nodes) consider(n);
     if (!r.nodes.empty() && valid(r.nodes.front()) && valid(r.nodes.back()))
       extent = (m.nodes[static_cast<std::size_t>(r.nodes.front())].reference.x -
@@ -199,11 +199,11 @@ NodeMatch ModelBuilder::FindNodeAt(const Vec3& p, int rod, double tolerance) con
   return match;
 }
 
-double ModelBuilder::RodLength(int rod) const {
+double ModelBuilder::RodLength(RodId rod) const {
   const Model& m = model_;
-  if (rod < 0 || rod >= static_cast<int>(m.rods.size()))
+  if (!rod.valid() || rod.index() >= m.rods.size())
     throw InputError("RodLength: no rod " + std::to_string(rod));
-  const Rod& r = m.rods[static_cast<std::size_t>(rod)];
+  const Rod& r = m.rods[rod.index()];
   const int num_nodes = static_cast<int>(m.nodes.size());
   for (int n : r.nodes)
     if (n < 0 || n >= num_nodes)
@@ -217,9 +217,19 @@ double ModelBuilder::RodLength(int rod) const {
   return length;
 }
 
-NodeMatch ModelBuilder::FindRodNodeAtArcLength(int rod, double s, double tolerance) const {
+std::vector<NodeId> ModelBuilder::RodNodes(RodId rod) const {
+  if (!rod.valid() || rod.index() >= model_.rods.size())
+    throw InputError("RodNodes: no rod " + std::to_string(rod));
+  const std::vector<int>& nodes = model_.rods[rod.index()].nodes;
+  std::vector<NodeId> out;
+  out.reserve(nodes.size());
+  for (int n : nodes) out.push_back(NodeId(n));
+  return out;
+}
+
+NodeMatch ModelBuilder::FindRodNodeAtArcLength(RodId rod, double s, double tolerance) const {
   const double length = RodLength(rod);  // validates the rod and its nodes
-  const Rod& r = model_.rods[static_cast<std::size_t>(rod)];
+  const Rod& r = model_.rods[rod.index()];
   if (tolerance < 0.0) tolerance = 1e-8 * std::max(1.0, length);
   NodeMatch match;
   match.distance = std::numeric_limits<double>::infinity();
@@ -233,7 +243,7 @@ NodeMatch ModelBuilder::FindRodNodeAtArcLength(int rod, double s, double toleran
     const double distance = std::abs(arc - s);
     if (distance < match.distance) {
       match.distance = distance;
-      match.nearest = r.nodes[i];
+      match.nearest = NodeId(r.nodes[i]);
     }
   }
   if (match.distance <= tolerance) match.node = match.nearest;

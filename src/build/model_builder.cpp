@@ -16,22 +16,32 @@
 
 namespace screwfem {
 
-int ModelBuilder::AddNode(const SE3& frame, std::string name) {
+namespace {
+
+// The id of the item just appended to `items`.
+template <typename IdType, typename T>
+IdType LastId(const std::vector<T>& items) {
+  return IdType(static_cast<int>(items.size()) - 1);
+}
+
+}  // namespace
+
+NodeId ModelBuilder::AddNode(const SE3& frame, std::string name) {
   Node n;
   n.name = std::move(name);
   n.reference = frame;
   model_.nodes.push_back(n);
-  return static_cast<int>(model_.nodes.size()) - 1;
+  return LastId<NodeId>(model_.nodes);
 }
 
-void ModelBuilder::FixNode(int node) {
-  if (node < 0 || node >= static_cast<int>(model_.nodes.size()))
+void ModelBuilder::FixNode(NodeId node) {
+  if (!node.valid() || node.index() >= model_.nodes.size())
     throw InputError("FixNode: no node " + std::to_string(node));
-  model_.nodes[static_cast<std::size_t>(node)].fixed = true;
+  model_.nodes[node.index()].fixed = true;
 }
 
-int ModelBuilder::AddRigidBody(std::string name, int node, double mass, const Vec3& com,
-                               const Mat3& inertia) {
+BodyId ModelBuilder::AddRigidBody(std::string name, NodeId node, double mass, const Vec3& com,
+                                  const Mat3& inertia) {
   RigidBody b;
   b.name = std::move(name);
   b.node = node;
@@ -39,16 +49,17 @@ int ModelBuilder::AddRigidBody(std::string name, int node, double mass, const Ve
   b.com = com;
   b.inertia = inertia;
   model_.bodies.push_back(b);
-  return static_cast<int>(model_.bodies.size()) - 1;
+  return LastId<BodyId>(model_.bodies);
 }
 
-int ModelBuilder::AddJoint(const Joint& joint) {
+JointId ModelBuilder::AddJoint(const Joint& joint) {
   model_.joints.push_back(joint);
-  return static_cast<int>(model_.joints.size()) - 1;
+  return LastId<JointId>(model_.joints);
 }
 
-int ModelBuilder::AddJointAt(std::string name, JointType type, int node_a, int node_b,
-                             const Vec3& point, const Vec3& axis, const Vec3& axis2, double pitch) {
+JointId ModelBuilder::AddJointAt(std::string name, JointType type, NodeId node_a, NodeId node_b,
+                                 const Vec3& point, const Vec3& axis, const Vec3& axis2,
+                                 double pitch) {
   const int n = static_cast<int>(model_.nodes.size());
   const int index = static_cast<int>(model_.joints.size());
   const std::string label = "joint '" + name + "'";
@@ -81,10 +92,10 @@ int ModelBuilder::AddJointAt(std::string name, JointType type, int node_a, int n
   return AddJoint(j);
 }
 
-int ModelBuilder::AddJoint(const JointSpec& spec) {
-  const int index = AddJointAt(spec.name, spec.type, spec.node_a, spec.node_b, spec.point,
-                               spec.axis, spec.axis2, spec.pitch);
-  Joint& j = model_.joints[static_cast<std::size_t>(index)];
+JointId ModelBuilder::AddJoint(const JointSpec& spec) {
+  const JointId index = AddJointAt(spec.name, spec.type, spec.node_a, spec.node_b, spec.point,
+                                   spec.axis, spec.axis2, spec.pitch);
+  Joint& j = model_.joints[index.index()];
   j.stiffness = spec.stiffness;
   j.damping = spec.damping;
   j.rest = spec.rest;
@@ -98,84 +109,84 @@ int ModelBuilder::AddJoint(const JointSpec& spec) {
   return index;
 }
 
-int ModelBuilder::AddTendon(std::string name, std::vector<BodyPoint> eyelets,
-                            const Profile& tension) {
+TendonId ModelBuilder::AddTendon(std::string name, std::vector<BodyPoint> eyelets,
+                                 const Profile& tension) {
   Tendon t;
   t.name = std::move(name);
   t.eyelets = std::move(eyelets);
   t.tension = tension;
   model_.tendons.push_back(std::move(t));
-  return static_cast<int>(model_.tendons.size()) - 1;
+  return LastId<TendonId>(model_.tendons);
 }
 
-int ModelBuilder::AddLengthDrivenTendon(std::string name, std::vector<BodyPoint> eyelets,
-                                        const Profile& length) {
-  const int index = AddTendon(std::move(name), std::move(eyelets), Profile::Constant(0.0));
-  Tendon& t = model_.tendons[static_cast<std::size_t>(index)];
+TendonId ModelBuilder::AddLengthDrivenTendon(std::string name, std::vector<BodyPoint> eyelets,
+                                             const Profile& length) {
+  const TendonId index = AddTendon(std::move(name), std::move(eyelets), Profile::Constant(0.0));
+  Tendon& t = model_.tendons[index.index()];
   t.drive = TendonDrive::kLength;
   t.length = length;
   return index;
 }
 
-int ModelBuilder::AddForceElement(const ForceElement& element) {
+ForceElementId ModelBuilder::AddForceElement(const ForceElement& element) {
   model_.force_elements.push_back(element);
-  return static_cast<int>(model_.force_elements.size()) - 1;
+  return LastId<ForceElementId>(model_.force_elements);
 }
 
-int ModelBuilder::AddActuator(const Actuator& actuator) {
+ActuatorId ModelBuilder::AddActuator(const Actuator& actuator) {
   model_.actuators.push_back(actuator);
-  return static_cast<int>(model_.actuators.size()) - 1;
+  return LastId<ActuatorId>(model_.actuators);
 }
 
-int ModelBuilder::AddPointLoad(const PointLoad& load) {
+PointLoadId ModelBuilder::AddPointLoad(const PointLoad& load) {
   model_.point_loads.push_back(load);
-  return static_cast<int>(model_.point_loads.size()) - 1;
+  return LastId<PointLoadId>(model_.point_loads);
 }
 
-int ModelBuilder::AddRodLoad(const RodLoad& load) {
+RodLoadId ModelBuilder::AddRodLoad(const RodLoad& load) {
   model_.rod_loads.push_back(load);
-  return static_cast<int>(model_.rod_loads.size()) - 1;
+  return LastId<RodLoadId>(model_.rod_loads);
 }
 
 void ModelBuilder::SetGravity(const Vec3& g) { model_.gravity = g; }
 
-void ModelBuilder::SetInitialVelocity(int node, const Vec6& velocity) {
-  if (node < 0 || node >= static_cast<int>(model_.nodes.size()))
+void ModelBuilder::SetInitialVelocity(NodeId node, const Vec6& velocity) {
+  if (!node.valid() || node.index() >= model_.nodes.size())
     throw InputError("initial velocity: invalid node " + std::to_string(node));
-  model_.nodes[static_cast<std::size_t>(node)].has_initial_velocity = true;
-  model_.nodes[static_cast<std::size_t>(node)].initial_velocity = velocity;
+  model_.nodes[node.index()].has_initial_velocity = true;
+  model_.nodes[node.index()].initial_velocity = velocity;
 }
 
-int ModelBuilder::AddInput(std::string name, double default_value) {
+InputId ModelBuilder::AddInput(std::string name, double default_value) {
   model_.inputs.push_back(ModelInput{std::move(name), default_value});
-  return static_cast<int>(model_.inputs.size()) - 1;
+  return LastId<InputId>(model_.inputs);
 }
 
-int ModelBuilder::AddContactRod(int rod, double radius) {
+ContactRodId ModelBuilder::AddContactRod(RodId rod, double radius) {
   model_.contact_rods.push_back({rod, radius});
-  return static_cast<int>(model_.contact_rods.size()) - 1;
+  return LastId<ContactRodId>(model_.contact_rods);
 }
 
-int ModelBuilder::AddContactShape(const ContactShape& shape) {
+ContactShapeId ModelBuilder::AddContactShape(const ContactShape& shape) {
   model_.contact_shapes.push_back(shape);
-  return static_cast<int>(model_.contact_shapes.size()) - 1;
+  return LastId<ContactShapeId>(model_.contact_shapes);
 }
 
-int ModelBuilder::AddObstacle(const ContactObstacle& obstacle) {
+ObstacleId ModelBuilder::AddObstacle(const ContactObstacle& obstacle) {
   model_.obstacles.push_back(obstacle);
-  return static_cast<int>(model_.obstacles.size()) - 1;
+  return LastId<ObstacleId>(model_.obstacles);
 }
 
-void ModelBuilder::SetContactGroup(bool rod, int index, unsigned contype, unsigned conaffinity) {
-  model_.contact_groups.push_back({rod, index, contype, conaffinity});
+void ModelBuilder::SetContactGroup(ContactEntity entity, unsigned contype, unsigned conaffinity) {
+  model_.contact_groups.push_back({entity.rod, entity.index, contype, conaffinity});
 }
 
-void ModelBuilder::ExcludeContact(bool rod, int index, int obstacle) {
-  model_.contact_exclusions.push_back({rod, index, obstacle});
+void ModelBuilder::ExcludeContact(ContactEntity entity, ObstacleId obstacle) {
+  model_.contact_exclusions.push_back({entity.rod, entity.index, obstacle});
 }
 
-void ModelBuilder::ExcludeContactPair(bool rod_a, int index_a, bool rod_b, int index_b) {
-  model_.contact_pair_exclusions.push_back({{rod_a, rod_b}, {index_a, index_b}});
+void ModelBuilder::ExcludeContactPair(ContactEntity a, ContactEntity b) {
+  model_.contact_pair_exclusions.push_back({{a.rod, b.rod}, {a.index, b.index}});
 }
 
 void ModelBuilder::SetContactSettings(const ContactSettings& settings) {

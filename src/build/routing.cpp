@@ -9,10 +9,10 @@
 
 namespace screwfem {
 
-std::vector<double> RodNodeArcLengths(const ModelBuilder& builder, int rod) {
+std::vector<double> RodNodeArcLengths(const ModelBuilder& builder, RodId rod) {
   builder.RodLength(rod);  // validates the rod and its nodes
   const Model& m = builder.model();
-  const Rod& r = m.rods[static_cast<std::size_t>(rod)];
+  const Rod& r = m.rods[rod.index()];
   std::vector<double> arcs;
   arcs.reserve(r.nodes.size());
   double arc = 0.0;
@@ -29,7 +29,7 @@ std::vector<double> RodNodeArcLengths(const ModelBuilder& builder, int rod) {
 }
 
 std::vector<BodyPoint> RouteAlongRod(const ModelBuilder& builder, const RodRoute& route) {
-  const std::vector<double> arcs = RodNodeArcLengths(builder, route.rod);
+  const std::vector<double> arcs = RodNodeArcLengths(builder, RodId(route.rod));
   const Rod& rod = builder.model().rods[static_cast<std::size_t>(route.rod)];
   const double length = arcs.back();
   const double to = route.to < 0.0 ? length : route.to;

@@ -89,9 +89,17 @@ class SceneCompiler {
 
   // The node of body b at world point p: the rigid body's node, or the rod node there (an
   // error at `at` otherwise; `what` names the attachment in the message).
-  int NodeAt(int b, const Vec3& p, const FieldSource& at, const std::string& what) const;
-  const std::vector<double>& RodArcs(int rod) const;
-  NodeMatch RodNodeAtArcLength(int rod, const std::vector<double>& arcs, double s) const;
+  NodeId NodeAt(int b, const Vec3& p, const FieldSource& at, const std::string& what) const;
+  const std::vector<double>& RodArcs(RodId rod) const;
+  NodeMatch RodNodeAtArcLength(RodId rod, const std::vector<double>& arcs, double s) const;
+  // The builder's entities of spec body b: its rod (a soft body), its rigid body and node (a
+  // rigid body), as a contact entity.
+  RodId RodOf(int b) const { return rod_of_[static_cast<std::size_t>(b)]; }
+  NodeId NodeOf(int b) const { return body_node_[static_cast<std::size_t>(b)]; }
+  ContactEntity EntityOf(int b) const {
+    const std::size_t i = static_cast<std::size_t>(b);
+    return spec_.bodies[i].rigid ? ContactEntity(rigid_of_[i]) : ContactEntity(rod_of_[i]);
+  }
   // Fails at an entity's source, or at its part that `e` names.
   [[noreturn]] void Fail(const EntitySource& source, const InputError& e) const;
   [[noreturn]] void Fail(const FieldSource& field, const std::string& what) const {
@@ -111,8 +119,11 @@ class SceneCompiler {
   const SceneSources& src_;
   scene_yaml::Reader r_;  // for messages
   ModelBuilder builder_;
-  // Per spec body: the builder's rigid body or rod index, and a rigid body's node.
-  std::vector<int> body_index_, body_node_;
+  // Per spec body (spec bodies are indexed by int): the builder's rod or rigid body and a
+  // rigid body's node.
+  std::vector<RodId> rod_of_;
+  std::vector<BodyId> rigid_of_;
+  std::vector<NodeId> body_node_;
   mutable std::vector<std::vector<double>> rod_arcs_;  // RodArcs
   // Per tendon, per eyelet given to the builder: the index of its item in the spec's list.
   std::vector<std::vector<int>> tendon_eyelet_items_;
@@ -208,12 +219,12 @@ void SceneCompiler::RethrowRoutedEyeletError(const EntitySource& source,
            std::to_string(i) + " of the tendon)");
 }
 
-int SceneCompiler::NodeAt(int b, const Vec3& p, const FieldSource& at,
-                          const std::string& what) const {
+NodeId SceneCompiler::NodeAt(int b, const Vec3& p, const FieldSource& at,
+                             const std::string& what) const {
   const BodySpec& body = spec_.bodies[static_cast<std::size_t>(b)];
-  if (body.rigid) return body_node_[static_cast<std::size_t>(b)];
-  const NodeMatch match = builder_.FindNodeAt(p, body_index_[static_cast<std::size_t>(b)]);
-  if (match.node < 0) {
+  if (body.rigid) return NodeOf(b);
+  const NodeMatch match = builder_.FindNodeAt(p, RodOf(b));
+  if (!match.node.valid()) {
     std::ostringstream s;
     s.precision(6);
     s << what << ": soft body '" << body.name << "' has no node at " << FormatVec(p)
@@ -228,8 +239,9 @@ int SceneCompiler::NodeAt(int b, const Vec3& p, const FieldSource& at,
 
 void SceneCompiler::AddBodies() {
   const std::size_t n = spec_.bodies.size();
-  body_index_.assign(n, -1);
-  body_node_.assign(n, -1);
+  rod_of_.assign(n, RodId());
+  rigid_of_.assign(n, BodyId());
+  body_node_.assign(n, NodeId());
   connected_.assign(n, 0);
   // In file order (node and rod numbering follows the file).
   for (std::size_t b = 0; b < n; ++b) {
@@ -246,10 +258,10 @@ void SceneCompiler::AddBodies() {
 
 void SceneCompiler::AddRigidBody(int b) {
   const BodySpec& s = spec_.bodies[static_cast<std::size_t>(b)];
-  const int node = builder_.AddNode(SE3::Translation(s.origin), s.name);
+  const NodeId node = builder_.AddNode(SE3::Translation(s.origin), s.name);
   if (s.fixed) builder_.FixNode(node);
   body_node_[static_cast<std::size_t>(b)] = node;
-  body_index_[static_cast<std::size_t>(b)] =
+  rigid_of_[static_cast<std::size_t>(b)] =
       builder_.AddRigidBody(s.name, node, s.mass, s.com - s.origin, s.inertia);
   if (s.has_initial_velocity) {
     // The body frame is world-aligned at the origin in the reference configuration: its body
@@ -271,15 +283,15 @@ void SceneCompiler::AddSoftBody(int b) {
   // Welds: the node of the earlier soft body at the path's end (its frame is checked by
   // AddRodAlongPath).
   auto weld = [&](int other, const Vec3& p, const char* part) {
-    if (other < 0) return -1;
-    const int node = NodeAt(other, p, PartOf(source, part), "weld");
+    if (other < 0) return NodeId();
+    const NodeId node = NodeAt(other, p, PartOf(source, part), "weld");
     connected_[static_cast<std::size_t>(other)] = connected_[static_cast<std::size_t>(b)] = 1;
     return node;
   };
-  const int start = weld(s.weld_start, s.path.front(), "start_node");
-  const int end = weld(s.weld_end, s.path.back(), "end_node");
+  const NodeId start = weld(s.weld_start, s.path.front(), "start_node");
+  const NodeId end = weld(s.weld_end, s.path.back(), "end_node");
   try {
-    body_index_[static_cast<std::size_t>(b)] =
+    rod_of_[static_cast<std::size_t>(b)] =
         builder_.AddRodAlongPath(s.name, s.path, s.elements, DrawnSection(s), s.up, start, end);
   } catch (const InputError& e) {
     Fail(source, e);
@@ -306,7 +318,7 @@ void SceneCompiler::AddJoints() {
     const JointEntrySpec& entry = spec_.joints[i];
     const EntitySource& source = SourceOf(src_.joints, i);
     JointSpec j = entry.joint;
-    int* nodes[2] = {&j.node_a, &j.node_b};
+    NodeId* nodes[2] = {&j.node_a, &j.node_b};
     const int bodies[2] = {entry.body_a, entry.body_b};
     for (int s = 0; s < 2; ++s) {
       if (bodies[s] < 0) continue;
@@ -327,11 +339,10 @@ void SceneCompiler::AddLoads() {
     const LoadSpec& l = spec_.loads[i];
     const EntitySource& source = SourceOf(src_.loads, i);
     const BodySpec& body = spec_.bodies[static_cast<std::size_t>(l.body)];
-    const int index = body_index_[static_cast<std::size_t>(l.body)];
     if (l.where == LoadSpec::Where::kAt) {
       PointLoad load;
       if (body.rigid) {
-        load.node = body_node_[static_cast<std::size_t>(l.body)];
+        load.node = NodeOf(l.body);
         load.point = l.at - body.origin;  // the body frame is world-aligned in the reference
       } else {
         load.node = NodeAt(l.body, l.at, PartOf(source, "at"), "load point");
@@ -341,12 +352,13 @@ void SceneCompiler::AddLoads() {
       point_load_.push_back(static_cast<int>(i));
       continue;
     }
+    const RodId rod = RodOf(l.body);
     RodLoad load;
-    load.rod = index;
+    load.rod = rod;
     load.distributed = l.where == LoadSpec::Where::kDistributed;
     if (!load.distributed) {
       load.arc_length = l.arc_length;
-      const double length = builder_.RodLength(index);
+      const double length = builder_.RodLength(rod);
       if (load.arc_length > length * (1.0 + 1e-12)) {
         std::ostringstream msg;
         msg.precision(9);
@@ -367,13 +379,13 @@ BodyPoint SceneCompiler::ResolveBodyPoint(const BodyPointSpec& p, const FieldSou
   if (p.body < 0) return {kGround, p.at};
   const BodySpec& body = spec_.bodies[static_cast<std::size_t>(p.body)];
   if (body.rigid)  // the body frame is world-aligned in the reference configuration
-    return {body_node_[static_cast<std::size_t>(p.body)], p.at - body.origin};
+    return {NodeOf(p.body), p.at - body.origin};
   if (!p.along_rod) return {NodeAt(p.body, p.at, at, what), p.offset};
-  const int rod = body_index_[static_cast<std::size_t>(p.body)];
+  const RodId rod = RodOf(p.body);
   const std::vector<double>& arcs = RodArcs(rod);
   const NodeMatch match = RodNodeAtArcLength(rod, arcs, p.arc_length);
   const double length = arcs.back();
-  if (match.node < 0) {
+  if (!match.node.valid()) {
     // A point between nodes: on the section of the element there (Build places it).
     if (!(p.arc_length >= 0.0 && p.arc_length <= length * (1.0 + 1e-12))) {
       std::ostringstream s;
@@ -394,18 +406,17 @@ BodyPoint SceneCompiler::ResolveBodyPoint(const BodyPointSpec& p, const FieldSou
 // sum them (in order, the same doubles), once per rod: eyelets and force-element ends at an
 // arc length are placed by a binary search (a walk along the rod per eyelet took 19.6 s for
 // a tendon of 1e4 eyelets).
-const std::vector<double>& SceneCompiler::RodArcs(int rod) const {
-  if (rod_arcs_.size() <= static_cast<std::size_t>(rod))
-    rod_arcs_.resize(static_cast<std::size_t>(rod) + 1);
-  std::vector<double>& arcs = rod_arcs_[static_cast<std::size_t>(rod)];
+const std::vector<double>& SceneCompiler::RodArcs(RodId rod) const {
+  if (rod_arcs_.size() <= rod.index()) rod_arcs_.resize(rod.index() + 1);
+  std::vector<double>& arcs = rod_arcs_[rod.index()];
   if (arcs.empty()) arcs = RodNodeArcLengths(builder_, rod);
   return arcs;
 }
 
 // ModelBuilder::FindRodNodeAtArcLength on RodArcs: the first node nearest to s.
-NodeMatch SceneCompiler::RodNodeAtArcLength(int rod, const std::vector<double>& arcs,
+NodeMatch SceneCompiler::RodNodeAtArcLength(RodId rod, const std::vector<double>& arcs,
                                             double s) const {
-  const Rod& r = builder_.model().rods[static_cast<std::size_t>(rod)];
+  const Rod& r = builder_.model().rods[rod.index()];
   NodeMatch match;
   match.distance = std::numeric_limits<double>::infinity();
   if (r.nodes.empty() || arcs.size() != r.nodes.size()) return match;
@@ -413,7 +424,7 @@ NodeMatch SceneCompiler::RodNodeAtArcLength(int rod, const std::vector<double>& 
   std::size_t i = static_cast<std::size_t>(at - arcs.begin());
   if (i == arcs.size() || (i > 0 && std::abs(arcs[i - 1] - s) <= std::abs(arcs[i] - s))) --i;
   match.distance = std::abs(arcs[i] - s);
-  match.nearest = r.nodes[i];
+  match.nearest = NodeId(r.nodes[i]);
   if (match.distance <= 1e-8 * std::max(1.0, arcs.back())) match.node = match.nearest;
   return match;
 }
@@ -433,7 +444,7 @@ void SceneCompiler::AddTendonsAndForces() {
         continue;
       }
       RodRoute route = p.route;
-      route.rod = body_index_[static_cast<std::size_t>(p.body)];
+      route.rod = RodOf(p.body).value();
       try {
         for (const BodyPoint& e : RouteAlongRod(builder_, route)) {
           eyelets.push_back(e);
@@ -471,7 +482,7 @@ void SceneCompiler::AddActuators() {
     Actuator a;
     a.name = s.name;
     a.type = s.type;
-    a.rod = body_index_[static_cast<std::size_t>(s.body)];
+    a.rod = RodOf(s.body);
     a.from = s.from;
     a.to = s.to;
     a.area = s.area;
@@ -497,7 +508,7 @@ void SceneCompiler::AddOutputs(const Model& model, OutputSpec* out) const {
       op.node = NodeAt(p.body, p.at, PartOf(source, "at"), "output point");
       if (body.rigid) op.offset = p.at - body.origin;
     } else {
-      op.rod = body_index_[static_cast<std::size_t>(p.body)];
+      op.rod = RodOf(p.body);
       op.arc_length = p.arc_length;
       const double length = model.rods[static_cast<std::size_t>(op.rod)].length;
       if (op.arc_length > length * (1.0 + 1e-12)) {
@@ -601,10 +612,9 @@ void SceneCompiler::AddContacts() {
   for (const ContactObstacle& o : c.obstacles) builder_.AddObstacle(o);
   for (std::size_t b = 0; b < spec_.bodies.size(); ++b) {
     const BodySpec& s = spec_.bodies[b];
-    const int index = body_index_[b];
     if (s.rigid) {
       for (ContactShape shape : s.shapes) {
-        shape.body = index;
+        shape.body = rigid_of_[b];
         builder_.AddContactShape(shape);
         contact_shape_body_.push_back(static_cast<int>(b));
       }
@@ -613,19 +623,16 @@ void SceneCompiler::AddContacts() {
         Fail(BodySource(static_cast<int>(b)).self,
              "a soft body in a scene with contact needs 'contact_radius' (its section has no "
              "radius)");
-      builder_.AddContactRod(index, s.contact_radius);
+      builder_.AddContactRod(rod_of_[b], s.contact_radius);
       contact_rod_body_.push_back(static_cast<int>(b));
     }
     if (s.contype != 1u || s.conaffinity != 1u)
-      builder_.SetContactGroup(!s.rigid, index, s.contype, s.conaffinity);
+      builder_.SetContactGroup(EntityOf(static_cast<int>(b)), s.contype, s.conaffinity);
   }
   for (const auto& [b, obstacle] : c.exclude)
-    builder_.ExcludeContact(!spec_.bodies[static_cast<std::size_t>(b)].rigid,
-                            body_index_[static_cast<std::size_t>(b)], obstacle);
-  for (const auto& [a, b] : c.exclude_bodies)
-    builder_.ExcludeContactPair(
-        !spec_.bodies[static_cast<std::size_t>(a)].rigid, body_index_[static_cast<std::size_t>(a)],
-        !spec_.bodies[static_cast<std::size_t>(b)].rigid, body_index_[static_cast<std::size_t>(b)]);
+    // Obstacles are added in spec order (an index out of range is Build's error).
+    builder_.ExcludeContact(EntityOf(b), ObstacleId(obstacle));
+  for (const auto& [a, b] : c.exclude_bodies) builder_.ExcludeContactPair(EntityOf(a), EntityOf(b));
 }
 
 Scene SceneCompiler::Compile() {

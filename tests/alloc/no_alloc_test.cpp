@@ -94,37 +94,36 @@ namespace {
 Model MixedModel(LinearSolver solver = LinearSolver::kAuto) {
   ModelBuilder b;
   b.SetLinearSolver(solver);
-  const int base = b.AddNode(SE3::Translation(Vec3(0, 0, 0)), "base");
+  const NodeId base = b.AddNode(SE3::Translation(Vec3(0, 0, 0)), "base");
   b.AddRigidBody("base", base, 0.15, Vec3(0.1, 0, 0), 1e-4 * Mat3::Identity());
-  const int link = b.AddNode(SE3::Translation(Vec3(0.2, 0, 0)), "link");
+  const NodeId link = b.AddNode(SE3::Translation(Vec3(0.2, 0, 0)), "link");
   b.AddRigidBody("link", link, 0.15, Vec3(0.1, 0, 0), 1e-4 * Mat3::Identity());
-  const int ball = b.AddNode(SE3::Translation(Vec3(0.4, 0, 0)), "ball");
+  const NodeId ball = b.AddNode(SE3::Translation(Vec3(0.4, 0, 0)), "ball");
   b.AddRigidBody("ball", ball, 0.1, Vec3(0.05, 0, 0), 1e-4 * Mat3::Identity());
   Vec6 K, M;
   K << 1e6, 1e6, 1e6, 1, 1, 1;
   M << 0.1, 0.1, 0.1, 0.01, 0.01, 0.01;
   Section sec = Section::FromDiagonals(K, M);
   sec.damping << 0, 0, 0, 0.01, 0.01, 0.01;
-  const int rod =
+  const RodId rod =
       b.AddStraightRod("arm", Vec3(0.4, 0, 0), Vec3(1.0, 0, 0), 4, sec, Vec3::UnitZ(), ball);
-  const int j0 = b.AddJointAt("J0", JointType::kRevolute, kGround, base, Vec3::Zero());
-  b.model().joints[static_cast<std::size_t>(j0)].drive = DriveKind::kPrescribed;
-  b.model().joints[static_cast<std::size_t>(j0)].drive_profile = Profile::BangBang(0, 1, 0.5);
-  const int j1 =
+  const JointId j0 = b.AddJointAt("J0", JointType::kRevolute, kGround, base, Vec3::Zero());
+  b.model().joints[j0].drive = DriveKind::kPrescribed;
+  b.model().joints[j0].drive_profile = Profile::BangBang(0, 1, 0.5);
+  const JointId j1 =
       b.AddJointAt("J1", JointType::kPrismatic, base, link, Vec3(0.2, 0, 0), Vec3::UnitX());
-  b.model().joints[static_cast<std::size_t>(j1)].stiffness(0) = 10;
-  b.model().joints[static_cast<std::size_t>(j1)].damping(0) = 5;
-  b.model().joints[static_cast<std::size_t>(j1)].drive = DriveKind::kSeriesElastic;
-  b.model().joints[static_cast<std::size_t>(j1)].drive_profile = Profile::SmoothStep(0, 1, 0.1);
-  const int j2 = b.AddJointAt("J2", JointType::kUniversal, link, ball, Vec3(0.4, 0, 0),
-                              Vec3::UnitZ(), Vec3::UnitY());
-  b.model().joints[static_cast<std::size_t>(j2)].drive = DriveKind::kForce;
-  b.model().joints[static_cast<std::size_t>(j2)].drive_profile = Profile::Sine(0.01, 2.0);
-  b.AddJointAt("J3", JointType::kSpherical, kGround, b.model().rods[0].nodes.back(),
-               Vec3(1.0, 0, 0));
+  b.model().joints[j1].stiffness(0) = 10;
+  b.model().joints[j1].damping(0) = 5;
+  b.model().joints[j1].drive = DriveKind::kSeriesElastic;
+  b.model().joints[j1].drive_profile = Profile::SmoothStep(0, 1, 0.1);
+  const JointId j2 = b.AddJointAt("J2", JointType::kUniversal, link, ball, Vec3(0.4, 0, 0),
+                                  Vec3::UnitZ(), Vec3::UnitY());
+  b.model().joints[j2].drive = DriveKind::kForce;
+  b.model().joints[j2].drive_profile = Profile::Sine(0.01, 2.0);
+  b.AddJointAt("J3", JointType::kSpherical, kGround, b.RodNodes(RodId(0)).back(), Vec3(1.0, 0, 0));
   b.model().joints.back().stiffness.head<3>().setConstant(0.5);
   PointLoad dead;
-  dead.node = b.model().rods[0].nodes[2];
+  dead.node = b.RodNodes(RodId(0))[2];
   dead.force = Vec3(0, 0, 1);
   dead.profile = Profile::Ramp(0, 0.02);  // a breakpoint inside the counted steps (a restart)
   b.AddPointLoad(dead);
@@ -135,9 +134,9 @@ Model MixedModel(LinearSolver solver = LinearSolver::kAuto) {
   // A tendon from the ground through eyelets on a rigid body and along the rod (a ramped
   // tension), and a spring-damper-actuator between a body and a rod node.
   std::vector<BodyPoint> eyelets = {{kGround, Vec3(0, 0.05, 0)}, {link, Vec3(0.1, 0.02, 0)}};
-  const std::size_t rod_nodes = b.model().rods[0].nodes.size();
+  const std::size_t rod_nodes = b.RodNodes(RodId(0)).size();
   for (std::size_t i = 1; i < rod_nodes; ++i) {
-    eyelets.push_back({b.model().rods[0].nodes[i], Vec3(0, 0.01, 0.01)});
+    eyelets.push_back({b.RodNodes(RodId(0))[i], Vec3(0, 0.01, 0.01)});
     if (i == 1) {  // and one between nodes 1 and 2 (TendonSpanSegmentKind)
       BodyPoint mid{kGround, Vec3(0, 0.01, -0.01)};
       mid.rod = rod;
@@ -149,13 +148,13 @@ Model MixedModel(LinearSolver solver = LinearSolver::kAuto) {
   // A tendon drawn by length from a ground point 0.3 m below the rod's middle node (which the
   // dead load lifts), shortened by 2 mm until 0.02 s: a constraint row, and at the ramp's end
   // an inelastic catch (its rate jumps).
-  const int held = b.model().rods[0].nodes[2];
-  const Vec3 below = b.model().nodes[static_cast<std::size_t>(held)].reference.x - Vec3(0, 0, 0.3);
+  const NodeId held = b.RodNodes(RodId(0))[2];
+  const Vec3 below = b.model().nodes[held].reference.x - Vec3(0, 0, 0.3);
   b.AddLengthDrivenTendon("winch", {{kGround, below}, {held, Vec3::Zero()}},
                           Profile::Constant(0.3).Add(Profile::Ramp(0, 0.02, -0.002)));
   ForceElement spring;
   spring.a = {base, Vec3(0, 0.05, 0)};
-  spring.b = {b.model().rods[0].nodes[3], Vec3::Zero()};
+  spring.b = {b.RodNodes(RodId(0))[3], Vec3::Zero()};
   spring.stiffness = 20;
   spring.damping = 0.5;
   spring.actuator = Profile::Sine(0.2, 3.0);
@@ -172,7 +171,7 @@ Model MixedModel(LinearSolver solver = LinearSolver::kAuto) {
   b.AddForceElement(span);
   // A load that takes a run-time input (changed between the counted steps).
   PointLoad driven = dead;
-  driven.node = b.model().rods[0].nodes[3];
+  driven.node = b.RodNodes(RodId(0))[3];
   driven.profile = Profile::Input(b.AddInput("u", 0.0), 0.5).Add(Profile::Constant(0.1));
   b.AddPointLoad(driven);
   // Rod actuation: a pressure chamber on part of the rod driven by the input, a muscle and a
@@ -210,8 +209,8 @@ Model MixedModel(LinearSolver solver = LinearSolver::kAuto) {
                  Vec3::Zero(), 0.01});
   // A pair of moving shapes (elements/shape_pair.h): a free puck's sphere resting on the rod's
   // capsule at its pinned end, at the resting gap.
-  const int puck = b.AddNode(SE3::Translation(Vec3(0.99, 0, 0.03056)), "puck");
-  const int puck_body = b.AddRigidBody("puck", puck, 0.1, Vec3::Zero(), 1e-5 * Mat3::Identity());
+  const NodeId puck = b.AddNode(SE3::Translation(Vec3(0.99, 0, 0.03056)), "puck");
+  const BodyId puck_body = b.AddRigidBody("puck", puck, 0.1, Vec3::Zero(), 1e-5 * Mat3::Identity());
   b.AddContactShape({puck_body, ContactShapeType::kSphere, Vec3::Zero(), Vec3::Zero(), 0.02});
   ContactSettings law;
   law.stiffness = 1e4;
@@ -564,16 +563,16 @@ TEST(NoAllocation, BroadPhaseAndOffBandCouplingAllocateNothing) {
   const double r = 0.005;
   const Section section = Section::Circle(r, mat);
   ModelBuilder b;
-  const int a = b.AddStraightRod("a", Vec3(-0.1, 0, 0), Vec3(0.1, 0, 0), 20, section);
+  const RodId a = b.AddStraightRod("a", Vec3(-0.1, 0, 0), Vec3(0.1, 0, 0), 20, section);
   const double z = 2 * r + 0.002;
-  const int c = b.AddStraightRod("b", Vec3(0.03, -0.1, z), Vec3(0.03, 0.1, z), 20, section);
+  const RodId c = b.AddStraightRod("b", Vec3(0.03, -0.1, z), Vec3(0.03, 0.1, z), 20, section);
   b.AddContactRod(a, r);
   b.AddContactRod(c, r);
   ContactSettings law;
   law.stiffness = 100.0;
   law.onset = 1e-3;
   b.SetContactSettings(law);
-  for (int node : b.model().rods[1].nodes) {
+  for (NodeId node : b.RodNodes(RodId(1))) {
     const Mat3& R = b.model().nodes[static_cast<std::size_t>(node)].reference.R;
     Vec6 eta = Vec6::Zero();
     eta.head<3>() = R.transpose() * Vec3(0, 0, -0.1);

@@ -34,9 +34,9 @@ Section ArmSection() {
 
 Model Mechanism() {
   ModelBuilder b;
-  const int rod = b.AddStraightRod("arm", Vec3::Zero(), Vec3::UnitX(), 4, ArmSection());
-  const std::vector<int>& nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
-  const int root = nodes.front(), tip = nodes.back();
+  const RodId rod = b.AddStraightRod("arm", Vec3::Zero(), Vec3::UnitX(), 4, ArmSection());
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
+  const NodeId root = nodes.front(), tip = nodes.back();
   JointSpec shoulder;
   shoulder.name = "shoulder";
   shoulder.type = JointType::kRevolute;
@@ -47,7 +47,7 @@ Model Mechanism() {
   shoulder.drive = DriveKind::kPrescribed;
   shoulder.drive_profile = Profile::Sine(0.4, 1.3, 0.2);
   b.AddJoint(shoulder);
-  const int hand = b.AddNode(SE3::Translation(Vec3(1.2, 0.0, 0.0)), "hand");
+  const NodeId hand = b.AddNode(SE3::Translation(Vec3(1.2, 0.0, 0.0)), "hand");
   b.AddRigidBody("hand", hand, 0.5, Vec3::Zero(), 0.01 * Mat3::Identity());
   b.AddJointAt("wrist", JointType::kSpherical, tip, hand, Vec3::UnitX());
   std::vector<BodyPoint> eyelets = {{kGround, Vec3(0.0, 0.05, 0.2)}};

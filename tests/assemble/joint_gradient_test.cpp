@@ -42,7 +42,7 @@ SE3 RandomFrame(std::mt19937& rng) {
 // Entry (i, j) of the assembled matrix in global order; zero outside the band.
 double MatrixEntry(const Model& m, const Data& d, int i, int j) {
   const int pi = m.permutation[static_cast<std::size_t>(i)];
-  const int pj = m.permutation[static_cast<std::size_t>(j)];
+  const int pj = m.permutation[j];
   return d.matrix.InBand(pi, pj) ? d.matrix.At(pi, pj) : 0.0;
 }
 
@@ -108,7 +108,7 @@ const Vec3 kAxis = Vec3(1.0, 2.0, 2.0).normalized();
 const Vec3 kAxis2 = Vec3(2.0, -1.0, 0.0).normalized();  // orthogonal to kAxis
 constexpr double kPitch = 0.3;
 
-void AddBody(ModelBuilder& b, int node, const std::string& name) {
+void AddBody(ModelBuilder& b, NodeId node, const std::string& name) {
   Mat3 J;
   J << 0.3, 0.01, -0.02, 0.01, 0.2, 0.03, -0.02, 0.03, 0.25;
   b.AddRigidBody(name, node, 1.7, Vec3(0.2, -0.3, 0.1), J);
@@ -120,8 +120,8 @@ void AddBody(ModelBuilder& b, int node, const std::string& name) {
 Model MakeJointModel(JointType type, bool reverse_ground) {
   auto rng = Rng(static_cast<unsigned>(type));
   ModelBuilder b;
-  const int na = b.AddNode(RandomFrame(rng), "A");
-  const int nb = b.AddNode(RandomFrame(rng), "B");
+  const NodeId na = b.AddNode(RandomFrame(rng), "A");
+  const NodeId nb = b.AddNode(RandomFrame(rng), "B");
   AddBody(b, na, "body A");
   AddBody(b, nb, "body B");
   if (reverse_ground)
@@ -275,8 +275,8 @@ void ExpectStiffnessMatchesFiniteDifference(const Model& m, Data& d, double tol 
 TEST(EquilibriumTangent, GravityOnRigidBodiesWithOffsetCentreOfMass) {
   ModelBuilder b;
   auto rng = Rng(1);
-  const int na = b.AddNode(RandomFrame(rng));
-  const int nb = b.AddNode(RandomFrame(rng));
+  const NodeId na = b.AddNode(RandomFrame(rng));
+  const NodeId nb = b.AddNode(RandomFrame(rng));
   AddBody(b, na, "A");
   AddBody(b, nb, "B");
   b.AddJointAt("g", JointType::kSpherical, kGround, na, Vec3(0.1, 0.2, 0.3));
@@ -293,7 +293,7 @@ TEST(EquilibriumTangent, WorldAndFollowerPointLoadsAtBodyPoints) {
     SCOPED_TRACE(frame == LoadFrame::kWorld ? "world (dead) load" : "follower load");
     ModelBuilder b;
     auto rng = Rng(2);
-    const int n = b.AddNode(RandomFrame(rng));
+    const NodeId n = b.AddNode(RandomFrame(rng));
     AddBody(b, n, "A");
     b.AddJointAt("g", JointType::kCylindrical, kGround, n, Vec3(0.1, 0.2, 0.3), kAxis);
     PointLoad load;
@@ -320,7 +320,7 @@ TEST(EquilibriumTangent, WorldAndFollowerPointLoadsAtBodyPoints) {
       EXPECT_GT(K_fd.cwiseAbs().maxCoeff(), 1.0);
     }
     // The generalised force itself: world force F at body point p and world moment.
-    const SE3& H = d.H[static_cast<std::size_t>(n)];
+    const SE3& H = d.H[n];
     const Vec3 f = frame == LoadFrame::kWorld ? Vec3(H.R.transpose() * load.force) : load.force;
     const Vec3 mom = frame == LoadFrame::kWorld ? Vec3(H.R.transpose() * load.moment) : load.moment;
     Vec6 g;
@@ -337,15 +337,16 @@ TEST(EquilibriumTangent, SoftJointSpringsOnCoordinatesOfEveryJointType) {
     SCOPED_TRACE(JointTypeName(type));
     ModelBuilder b;
     auto rng = Rng(30 + static_cast<unsigned>(type));
-    const int na = b.AddNode(RandomFrame(rng));
-    const int nb = b.AddNode(RandomFrame(rng));
+    const NodeId na = b.AddNode(RandomFrame(rng));
+    const NodeId nb = b.AddNode(RandomFrame(rng));
     AddBody(b, na, "A");
     AddBody(b, nb, "B");
-    const int jg =
+    const JointId jg =
         b.AddJointAt("g", type, kGround, na, Vec3(0.3, -0.4, 0.5), kAxis, kAxis2, kPitch);
-    const int jab = b.AddJointAt("ab", type, na, nb, Vec3(-0.2, 0.6, 0.1), kAxis, kAxis2, kPitch);
-    for (int j : {jg, jab}) {
-      Joint& jt = b.model().joints[static_cast<std::size_t>(j)];
+    const JointId jab =
+        b.AddJointAt("ab", type, na, nb, Vec3(-0.2, 0.6, 0.1), kAxis, kAxis2, kPitch);
+    for (JointId j : {jg, jab}) {
+      Joint& jt = b.model().joints[j];
       jt.stiffness << 3.0, 5.0, 7.0, 11.0, 13.0, 17.0;
       jt.rest << 0.1, -0.2, 0.3, -0.1, 0.2, 0.05;
     }
@@ -401,10 +402,11 @@ TEST(EquilibriumTangent, JointSpringForceIsTheGradientOfTheSpringEnergy) {
     SCOPED_TRACE(JointTypeName(type));
     ModelBuilder b;
     auto rng = Rng(50 + static_cast<unsigned>(type));
-    const int n = b.AddNode(RandomFrame(rng));
+    const NodeId n = b.AddNode(RandomFrame(rng));
     AddBody(b, n, "A");
-    const int j = b.AddJointAt("g", type, kGround, n, Vec3(0.3, -0.4, 0.5), kAxis, kAxis2, kPitch);
-    Joint& jt = b.model().joints[static_cast<std::size_t>(j)];
+    const JointId j =
+        b.AddJointAt("g", type, kGround, n, Vec3(0.3, -0.4, 0.5), kAxis, kAxis2, kPitch);
+    Joint& jt = b.model().joints[j];
     jt.stiffness << 3.0, 5.0, 7.0, 11.0, 13.0, 17.0;
     if (JointHasGlobalCoordinates(type)) jt.rest << 0.1, -0.2, 0.3, -0.1, 0.2, 0.05;
     const Model m = b.Build();
@@ -437,21 +439,20 @@ TEST(EquilibriumTangent, JointSpringForceIsTheGradientOfTheSpringEnergy) {
 TEST(EquilibriumTangent, FreeJointSpringForceIsTheEnergyGradientAndItsTangentMatches) {
   ModelBuilder b;
   auto rng = Rng(60);
-  const int na = b.AddNode(RandomFrame(rng));
-  const int nb = b.AddNode(RandomFrame(rng));
+  const NodeId na = b.AddNode(RandomFrame(rng));
+  const NodeId nb = b.AddNode(RandomFrame(rng));
   AddBody(b, na, "A");
   AddBody(b, nb, "B");
-  const int j1 = b.AddJointAt("g", JointType::kFree, kGround, na, Vec3(0.3, -0.4, 0.5));
-  const int j2 = b.AddJointAt("ab", JointType::kFree, na, nb, Vec3(-0.2, 0.6, 0.1));
-  const int j3 = b.AddJointAt("bg", JointType::kFree, nb, kGround, Vec3(0.1, 0.1, -0.3));
-  for (int j : {j1, j2, j3})
-    b.model().joints[static_cast<std::size_t>(j)].stiffness << 3.0, 5.0, 7.0, 11.0, 13.0, 17.0;
+  const JointId j1 = b.AddJointAt("g", JointType::kFree, kGround, na, Vec3(0.3, -0.4, 0.5));
+  const JointId j2 = b.AddJointAt("ab", JointType::kFree, na, nb, Vec3(-0.2, 0.6, 0.1));
+  const JointId j3 = b.AddJointAt("bg", JointType::kFree, nb, kGround, Vec3(0.1, 0.1, -0.3));
+  for (JointId j : {j1, j2, j3}) b.model().joints[j].stiffness << 3.0, 5.0, 7.0, 11.0, 13.0, 17.0;
   const Model m = b.Build();
   EXPECT_EQ(m.nc, 0);
   EXPECT_EQ(m.nv, 12);
   Data d = MakeData(m);
   Disturb(m, d, 61);
-  for (int j : {j1, j2, j3}) EXPECT_GT(CalcFreeJointDeflection(m, d, j).norm(), 0.3);
+  for (JointId j : {j1, j2, j3}) EXPECT_GT(CalcFreeJointDeflection(m, d, j).norm(), 0.3);
   ExpectStiffnessMatchesFiniteDifference(m, d);
   ASSERT_TRUE(Assemble(m, d, StaticsOptions()));
   const Eigen::VectorXd f = d.residual.head(m.nv);
@@ -474,16 +475,17 @@ TEST(EquilibriumTangent, FreeJointSpringForceIsTheEnergyGradientAndItsTangentMat
 Model MakeMovingModel() {
   ModelBuilder b;
   auto rng = Rng(3);
-  const int na = b.AddNode(RandomFrame(rng));
-  const int nb = b.AddNode(RandomFrame(rng));
+  const NodeId na = b.AddNode(RandomFrame(rng));
+  const NodeId nb = b.AddNode(RandomFrame(rng));
   AddBody(b, na, "A");
   AddBody(b, nb, "B");
-  const int j1 =
+  const JointId j1 =
       b.AddJointAt("g", JointType::kCylindrical, kGround, na, Vec3(0.1, 0.2, 0.3), kAxis);
-  const int j2 = b.AddJointAt("ab", JointType::kSpherical, na, nb, Vec3(0.4, -0.2, 0.3));
-  const int j3 = b.AddJointAt("bg", JointType::kPlanar, nb, kGround, Vec3(0.0, 0.5, -0.3), kAxis2);
-  for (int j : {j1, j2, j3}) {
-    Joint& jt = b.model().joints[static_cast<std::size_t>(j)];
+  const JointId j2 = b.AddJointAt("ab", JointType::kSpherical, na, nb, Vec3(0.4, -0.2, 0.3));
+  const JointId j3 =
+      b.AddJointAt("bg", JointType::kPlanar, nb, kGround, Vec3(0.0, 0.5, -0.3), kAxis2);
+  for (JointId j : {j1, j2, j3}) {
+    Joint& jt = b.model().joints[j];
     jt.damping << 0.3, 0.5, 0.7, 0.0, 0.0, 0.0;
     jt.stiffness << 2.0, 3.0, 4.0, 0.0, 0.0, 0.0;
   }
@@ -546,15 +548,15 @@ TEST(DynamicTangent, DampingBlockIsTheDerivativeOfTheResidualWithRespectToVeloci
 TEST(DynamicTangent, FreeJointDamperBlockIsTheDerivativeOfTheResidualWithRespectToVelocity) {
   ModelBuilder b;
   auto rng = Rng(4);
-  const int na = b.AddNode(RandomFrame(rng));
-  const int nb = b.AddNode(RandomFrame(rng));
+  const NodeId na = b.AddNode(RandomFrame(rng));
+  const NodeId nb = b.AddNode(RandomFrame(rng));
   AddBody(b, na, "A");
   AddBody(b, nb, "B");
-  const int j1 = b.AddJointAt("g", JointType::kFree, kGround, na, Vec3(0.1, 0.2, 0.3));
-  const int j2 = b.AddJointAt("ab", JointType::kFree, na, nb, Vec3(0.4, -0.2, 0.3));
-  for (int j : {j1, j2}) {
-    b.model().joints[static_cast<std::size_t>(j)].damping << 0.3, 0.5, 0.7, 1.1, 1.3, 1.7;
-    b.model().joints[static_cast<std::size_t>(j)].stiffness << 2.0, 3.0, 4.0, 5.0, 6.0, 7.0;
+  const JointId j1 = b.AddJointAt("g", JointType::kFree, kGround, na, Vec3(0.1, 0.2, 0.3));
+  const JointId j2 = b.AddJointAt("ab", JointType::kFree, na, nb, Vec3(0.4, -0.2, 0.3));
+  for (JointId j : {j1, j2}) {
+    b.model().joints[j].damping << 0.3, 0.5, 0.7, 1.1, 1.3, 1.7;
+    b.model().joints[j].stiffness << 2.0, 3.0, 4.0, 5.0, 6.0, 7.0;
   }
   const Model m = b.Build();
   Data d = MakeData(m);

@@ -65,7 +65,7 @@ Solved SolveCantilever(const Vec3& force, const Vec3& moment, int steps = 4,
   Vec6 K;
   K << kEA, kGA2, kGA3, kGJ, kEI2, kEI3;
   b.AddStraightRod("rod", Vec3::Zero(), Vec3(kLength, 0, 0), kElements, Section::FromDiagonals(K));
-  const std::vector<int> nodes = b.model().rods[0].nodes;
+  const std::vector<NodeId> nodes = b.RodNodes(RodId(0));
   b.FixNode(nodes.front());
   PointLoad tip;
   tip.node = nodes.back();

@@ -38,8 +38,8 @@ Section RodSection() {
 // A rod of n elements along x, clamped at its start.
 ModelBuilder ClampedRod(int n, double length = 1.0) {
   ModelBuilder b;
-  const int rod = b.AddStraightRod("arm", Vec3::Zero(), Vec3(length, 0, 0), n, RodSection());
-  b.FixNode(b.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  const RodId rod = b.AddStraightRod("arm", Vec3::Zero(), Vec3(length, 0, 0), n, RodSection());
+  b.FixNode(b.RodNodes(rod).front());
   return b;
 }
 
@@ -116,7 +116,7 @@ TEST(MemoryEstimate, BuildRefusesAModelBeyondItsLimitNamingTheLargestPart) {
 // A rod of `elements` against `obstacles` sphere obstacles beside it.
 ModelBuilder RodAndSphereObstacles(int elements, int obstacles) {
   ModelBuilder b = ClampedRod(elements, 100.0);
-  b.AddContactRod(0, 0.01);
+  b.AddContactRod(RodId(0), 0.01);
   for (int i = 0; i < obstacles; ++i) {
     ContactObstacle o;
     o.type = ObstacleType::kSphere;
@@ -159,7 +159,7 @@ ModelBuilder OverlappingSpheres(int count) {
   ModelBuilder b;
   for (int i = 0; i < count; ++i) {
     const Vec3 c(1e-3 * std::cos(i), 1e-3 * std::sin(i), 0.0);
-    const int node = b.AddNode(SE3::Translation(c), "s" + std::to_string(i));
+    const NodeId node = b.AddNode(SE3::Translation(c), "s" + std::to_string(i));
     b.AddRigidBody("s" + std::to_string(i), node, 0.1, Vec3::Zero(), 1e-4 * Mat3::Identity());
     ContactShape shape;
     shape.body = i;

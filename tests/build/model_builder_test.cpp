@@ -41,9 +41,9 @@ const std::vector<Vec3> kCorner = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(2, 1, 0)};
 
 TEST(AddRodAlongPath, NodesFollowTheSegmentsWithBisectorFramesAtThePathPoints) {
   ModelBuilder b;
-  const int rod = b.AddRodAlongPath("L", kCorner, 2, UnitSection());
+  const RodId rod = b.AddRodAlongPath("L", kCorner, 2, UnitSection());
   const Model& m = b.model();
-  const std::vector<int>& nodes = m.rods[static_cast<std::size_t>(rod)].nodes;
+  const std::vector<int>& nodes = m.rods[rod].nodes;
   ASSERT_EQ(nodes.size(), 5u);
   const Vec3 positions[] = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {2, 0.5, 0}, {2, 1, 0}};
   // Section x axis: +x on the first segment, the bisector (x + y)/sqrt 2 at the corner, +y on
@@ -93,8 +93,8 @@ TEST(AddRodAlongPath, ErrorsNameThePathPointOrTheSharedNode) {
   EXPECT_EQ(zero.entity().part, "path[2]");
   EXPECT_EQ(zero.detail(), "zero-length segment (its end points coincide)");
   // A weld onto a node whose section frame differs (the second rod leaves at a right angle).
-  const int first = b.AddRodAlongPath("a", {Vec3(0, 0, 0), Vec3(1, 0, 0)}, 2, UnitSection());
-  const int end = b.model().rods[static_cast<std::size_t>(first)].nodes.back();
+  const RodId first = b.AddRodAlongPath("a", {Vec3(0, 0, 0), Vec3(1, 0, 0)}, 2, UnitSection());
+  const NodeId end = b.RodNodes(first).back();
   const InputError kink = ErrorOf([&] {
     b.AddRodAlongPath("b", {Vec3(1, 0, 0), Vec3(1, 1, 0)}, 2, UnitSection(), Vec3::UnitZ(), end);
   });
@@ -105,18 +105,18 @@ TEST(AddRodAlongPath, ErrorsNameThePathPointOrTheSharedNode) {
 
 TEST(FindNodeAt, FindsTheNodeThatTwoWeldedRodsShare) {
   ModelBuilder b;
-  const int a = b.AddRodAlongPath("a", {Vec3(0, 0, 0), Vec3(1, 0, 0)}, 4, UnitSection());
-  const int shared = b.model().rods[static_cast<std::size_t>(a)].nodes.back();
-  const int c = b.AddRodAlongPath("c", {Vec3(1, 0, 0), Vec3(2, 0, 0), Vec3(2, 1, 0)}, 3,
-                                  UnitSection(), Vec3::UnitZ(), shared);
-  EXPECT_EQ(b.model().rods[static_cast<std::size_t>(c)].nodes.front(), shared);
+  const RodId a = b.AddRodAlongPath("a", {Vec3(0, 0, 0), Vec3(1, 0, 0)}, 4, UnitSection());
+  const NodeId shared = b.RodNodes(a).back();
+  const RodId c = b.AddRodAlongPath("c", {Vec3(1, 0, 0), Vec3(2, 0, 0), Vec3(2, 1, 0)}, 3,
+                                    UnitSection(), Vec3::UnitZ(), shared);
+  EXPECT_EQ(b.RodNodes(c).front(), shared);
   EXPECT_EQ(b.FindNodeAt(Vec3(1, 0, 0)).node, shared);
   EXPECT_EQ(b.FindNodeAt(Vec3(1, 0, 0), c).node, shared);
   EXPECT_EQ(b.FindNodeAt(Vec3(1, 0, 0) + Vec3::Constant(1e-9), a).node, shared);
   // Between nodes: none within the tolerance; the nearest and its distance are reported.
   const NodeMatch miss = b.FindNodeAt(Vec3(0.1, 0, 0), a);
   EXPECT_EQ(miss.node, -1);
-  EXPECT_EQ(miss.nearest, b.model().rods[static_cast<std::size_t>(a)].nodes.front());
+  EXPECT_EQ(miss.nearest, b.RodNodes(a).front());
   EXPECT_NEAR(miss.distance, 0.1, 1e-15);
   EXPECT_EQ(b.FindNodeAt(Vec3(0.1, 0, 0), a, 0.2).node, miss.nearest);
   // The welded rods form one piece: the model builds and uses one node less.
@@ -130,7 +130,7 @@ TEST(FindNodeAt, FindsTheNodeThatTwoWeldedRodsShare) {
 TEST(JointSpec, PendulumHasTheSmallAnglePeriod) {
   constexpr double kG = 9.81, kL = 0.5, kTheta0 = 0.02;
   ModelBuilder b;
-  const int pivot = b.AddNode(SE3::Identity(), "pivot");
+  const NodeId pivot = b.AddNode(SE3::Identity(), "pivot");
   const Vec3 com(kL * std::sin(kTheta0), -kL * std::cos(kTheta0), 0.0);
   b.AddRigidBody("bob", pivot, 2.0, com, 1e-10 * Mat3::Identity());
   JointSpec pin;
@@ -138,16 +138,16 @@ TEST(JointSpec, PendulumHasTheSmallAnglePeriod) {
   pin.type = JointType::kRevolute;
   pin.node_b = pivot;
   pin.axis = Vec3::UnitZ();
-  const int joint = b.AddJoint(pin);
+  const JointId joint = b.AddJoint(pin);
   b.SetGravity(Vec3(0.0, -kG, 0.0));
   const Model model = b.Build();
-  ASSERT_EQ(model.joints[static_cast<std::size_t>(joint)].k(), 1);
+  ASSERT_EQ(model.joints[joint].k(), 1);
   Data data = MakeData(model);
   Integrator integ;
   DynamicOptions opt;
   opt.rho_inf = 1.0;
   ASSERT_TRUE(InitializeDynamics(model, data, integ, opt));
-  const int coord = model.joints[static_cast<std::size_t>(joint)].coord;
+  const int coord = model.joints[joint].coord;
   // The angle swings to -2 theta0 and back; a period is two zero crossings of the velocity
   // after the start (linear interpolation within the step).
   const double h = 1e-3;
@@ -171,7 +171,7 @@ TEST(JointSpec, PendulumHasTheSmallAnglePeriod) {
 
 TEST(JointSpec, SetsSpringsDamperRestAndDriveInOneCall) {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Translation(Vec3(1, 0, 0)), "n");
+  const NodeId node = b.AddNode(SE3::Translation(Vec3(1, 0, 0)), "n");
   b.AddRigidBody("body", node, 1.0, Vec3::Zero(), Mat3::Identity());
   JointSpec s;
   s.name = "slide";
@@ -205,8 +205,8 @@ TEST(JointSpec, SetsSpringsDamperRestAndDriveInOneCall) {
 TEST(BuildErrors, CarryTheEntityTheyAreAbout) {
   {  // a joint whose frames do not coincide in the reference configuration
     ModelBuilder b;
-    const int n0 = b.AddNode(SE3::Identity());
-    const int n1 = b.AddNode(SE3::Translation(Vec3(1, 0, 0)));
+    const NodeId n0 = b.AddNode(SE3::Identity());
+    const NodeId n1 = b.AddNode(SE3::Translation(Vec3(1, 0, 0)));
     b.AddRigidBody("b0", n0, 1.0, Vec3::Zero(), Mat3::Identity());
     b.AddRigidBody("b1", n1, 1.0, Vec3::Zero(), Mat3::Identity());
     b.AddJointAt("ok", JointType::kRevolute, kGround, n0, Vec3::Zero());
@@ -226,8 +226,8 @@ TEST(BuildErrors, CarryTheEntityTheyAreAbout) {
     ModelBuilder b;
     b.AddNode(SE3::Identity(), "used");
     b.AddNode(SE3::Identity(), "lonely");
-    b.AddRigidBody("body", 0, 1.0, Vec3::Zero(), Mat3::Identity());
-    b.FixNode(0);
+    b.AddRigidBody("body", NodeId(0), 1.0, Vec3::Zero(), Mat3::Identity());
+    b.FixNode(NodeId(0));
     const InputError e = ErrorOf([&] { b.Build(); });
     EXPECT_EQ(e.entity().kind, EntityKind::kNode);
     EXPECT_EQ(e.entity().index, 1);
@@ -237,7 +237,7 @@ TEST(BuildErrors, CarryTheEntityTheyAreAbout) {
     b.AddNode(SE3::Identity());
     JointSpec s;
     s.name = "j";
-    s.node_b = 7;
+    s.node_b = NodeId(7);
     const InputError e = ErrorOf([&] { b.AddJoint(s); });
     EXPECT_EQ(e.entity().kind, EntityKind::kJoint);
     EXPECT_EQ(e.entity().index, 0);
@@ -246,7 +246,7 @@ TEST(BuildErrors, CarryTheEntityTheyAreAbout) {
   }
   {  // a rigid body without mass
     ModelBuilder b;
-    const int n = b.AddNode(SE3::Identity());
+    const NodeId n = b.AddNode(SE3::Identity());
     b.AddRigidBody("first", n, 1.0, Vec3::Zero(), Mat3::Identity());
     b.AddRigidBody("second", n, -1.0, Vec3::Zero(), Mat3::Identity());
     b.FixNode(n);

@@ -53,8 +53,8 @@ std::string Warning(const Model& m) {
   return {};
 }
 
-int AddBody(ModelBuilder& b, const SE3& frame, const std::string& name) {
-  const int node = b.AddNode(frame, name);
+NodeId AddBody(ModelBuilder& b, const SE3& frame, const std::string& name) {
+  const NodeId node = b.AddNode(frame, name);
   b.AddRigidBody(name, node, 0.15, Vec3(0.1, 0.0, 0.0), 1e-4 * Mat3::Identity());
   return node;
 }
@@ -64,22 +64,22 @@ int AddBody(ModelBuilder& b, const SE3& frame, const std::string& name) {
 Model PlanarFourBar(bool with_chain, bool drive) {
   ModelBuilder b;
   const Vec3 O(0, 0, 0), A(0.2, 0.6, 0), B(1, 1, 0), D(1.2, 0, 0), z = Vec3::UnitZ();
-  const int crank = AddBody(b, SE3::Translation(O), "crank");
-  const int coupler = AddBody(b, SE3::Translation(A), "coupler");
-  const int rocker = AddBody(b, SE3::Translation(D), "rocker");
-  const int o = b.AddJointAt("O", JointType::kRevolute, kGround, crank, O, z);
+  const NodeId crank = AddBody(b, SE3::Translation(O), "crank");
+  const NodeId coupler = AddBody(b, SE3::Translation(A), "coupler");
+  const NodeId rocker = AddBody(b, SE3::Translation(D), "rocker");
+  const JointId o = b.AddJointAt("O", JointType::kRevolute, kGround, crank, O, z);
   b.AddJointAt("A", JointType::kRevolute, crank, coupler, A, z);
   b.AddJointAt("B", JointType::kRevolute, coupler, rocker, B, z);
   b.AddJointAt("D", JointType::kRevolute, rocker, kGround, D, z);
   if (drive) {
-    b.model().joints[static_cast<std::size_t>(o)].drive = DriveKind::kPrescribed;
-    b.model().joints[static_cast<std::size_t>(o)].drive_profile = Profile::Constant(0.0);
+    b.model().joints[o].drive = DriveKind::kPrescribed;
+    b.model().joints[o].drive_profile = Profile::Constant(0.0);
   }
   if (with_chain) {
-    int prev = coupler;
+    NodeId prev = coupler;
     for (int i = 0; i < 3; ++i) {
       const Vec3 p(0.2 + 0.3 * (i + 1), 0.6, 0.5);
-      const int node = AddBody(b, SE3::Translation(p), Name("link", i));
+      const NodeId node = AddBody(b, SE3::Translation(p), Name("link", i));
       b.AddJointAt(Name("chain", i), JointType::kRevolute, prev, node, p, Vec3(0, 1, 0));
       prev = node;
     }
@@ -124,7 +124,7 @@ TEST(Redundancy, BricardLinkageHasOneRedundantRowNamingAllSixJoints) {
   std::vector<SE3> F(1, SE3::Identity());
   for (int i = 0; i < 6; ++i) F.push_back(F.back() * dh(t[i % 2], 1.0, alpha[i % 2]));
   ASSERT_LT((F[6].x).norm() + (F[6].R - Mat3::Identity()).norm(), 1e-12);
-  std::vector<int> node(7, kGround);
+  std::vector<NodeId> node(7, kGround);
   for (int i = 1; i < 6; ++i)
     node[static_cast<std::size_t>(i)] = AddBody(b, F[static_cast<std::size_t>(i)], Name("link", i));
   for (int i = 1; i <= 6; ++i) {
@@ -144,10 +144,10 @@ TEST(Redundancy, BricardLinkageHasOneRedundantRowNamingAllSixJoints) {
 
 TEST(Redundancy, ParallelWeldsAndJointsBetweenFixedNodesAreRedundant) {
   ModelBuilder b;
-  const int a = AddBody(b, SE3::Translation(Vec3(0, 0, 0)), "a");
-  const int c = AddBody(b, SE3::Translation(Vec3(1, 0, 0)), "c");
-  const int f1 = b.AddNode(SE3::Translation(Vec3(0, 2, 0)), "f1");
-  const int f2 = b.AddNode(SE3::Translation(Vec3(1, 2, 0)), "f2");
+  const NodeId a = AddBody(b, SE3::Translation(Vec3(0, 0, 0)), "a");
+  const NodeId c = AddBody(b, SE3::Translation(Vec3(1, 0, 0)), "c");
+  const NodeId f1 = b.AddNode(SE3::Translation(Vec3(0, 2, 0)), "f1");
+  const NodeId f2 = b.AddNode(SE3::Translation(Vec3(1, 2, 0)), "f2");
   b.FixNode(f1);
   b.FixNode(f2);
   b.AddJointAt("ground", JointType::kRevolute, kGround, a, Vec3::Zero(), Vec3::UnitZ());
@@ -168,7 +168,7 @@ TEST(Redundancy, ParallelWeldsAndJointsBetweenFixedNodesAreRedundant) {
 TEST(Redundancy, LadderOfLoopsMatchesTheDenseRank) {
   ModelBuilder b;
   const int n = 6;
-  std::vector<int> top, bottom;
+  std::vector<NodeId> top, bottom;
   for (int i = 0; i < n; ++i) {
     top.push_back(AddBody(b, SE3::Translation(Vec3(i, 1, 0)), Name("t", i)));
     bottom.push_back(AddBody(b, SE3::Translation(Vec3(i, 0, 0)), Name("b", i)));
@@ -198,12 +198,12 @@ TEST(Redundancy, FiveHundredWeldsOnALongRodBuildQuicklyWithoutDenseGradient) {
   Section s;
   s.stiffness = Vec6::Constant(1e3);
   s.inertia = Vec6::Constant(1e-3);
-  const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(100, 0, 0), 100000, s);
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(100, 0, 0), 100000, s);
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   for (int i = 0; i < 499; ++i) {
     const Vec3 p(0.2 * i + 0.1, 0.5, 0.0);
-    const int body = AddBody(b, SE3::Translation(p), Name("b", i));
-    const int rod_node = nodes[static_cast<std::size_t>(200 * i + 100)];
+    const NodeId body = AddBody(b, SE3::Translation(p), Name("b", i));
+    const NodeId rod_node = nodes[static_cast<std::size_t>(200 * i + 100)];
     b.AddJointAt(Name("w", i), JointType::kFixed, body, rod_node,
                  b.model().nodes[static_cast<std::size_t>(rod_node)].reference.x);
   }

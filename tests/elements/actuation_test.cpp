@@ -169,9 +169,9 @@ Model ActuatedModel() {
   const Section s = Section::FromDiagonals(V6(1e5, 1e5, 1e5, 1.0, 1.0, 1.0));
   b.AddStraightRod("a", Vec3::Zero(), Vec3::UnitX(), 4, s);
   b.AddStraightRod("b", Vec3(0, 1, 0), Vec3(1, 1, 0), 2, s);
-  b.FixNode(0);
-  b.FixNode(5);
-  const int input = b.AddInput("p", 2.0);
+  b.FixNode(NodeId(0));
+  b.FixNode(NodeId(5));
+  const InputId input = b.AddInput("p", 2.0);
   Actuator chamber;
   chamber.name = "chamber";
   chamber.type = ActuatorType::kPressure;

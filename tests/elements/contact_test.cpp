@@ -81,13 +81,13 @@ Scene MakeTouchingScene(double friction, unsigned seed) {
   const Mat3 R0 = ExpSO3(Vec3(u(rng), u(rng), u(rng)));
   const Vec3 c0(0.03, -0.02, 0.01);
   const Vec3 x0 = Vec3(0.1, 0.2, 0.0) - R0 * c0 + (r + 0.5 * delta * u(rng)) * normal;
-  const int n0 = b.AddNode(SE3{R0, x0});
+  const NodeId n0 = b.AddNode(SE3{R0, x0});
   b.AddRigidBody("ball", n0, 2.0, Vec3::Zero(), 0.01 * Mat3::Identity());
   b.AddContactShape({0, ContactShapeType::kSphere, c0, c0, r});
   const Mat3 R1 = ExpSO3(Vec3(u(rng), u(rng), u(rng)));
   const Vec3 c1a(0.05, 0.0, 0.02), c1b(-0.05, 0.01, 0.0);
   const Vec3 x1 = Vec3(-0.3, 0.1, 0.0) - R1 * c1a + (r + 0.5 * delta * u(rng)) * normal;
-  const int n1 = b.AddNode(SE3{R1, x1});
+  const NodeId n1 = b.AddNode(SE3{R1, x1});
   b.AddRigidBody("pill", n1, 1.0, Vec3::Zero(), 0.01 * Mat3::Identity());
   b.AddContactShape({1, ContactShapeType::kCapsule, c1a, c1b, r});
   // A rod of two elements lying just into the plane (its node spheres).
@@ -97,7 +97,7 @@ Scene MakeTouchingScene(double friction, unsigned seed) {
   steel.density = 1000.0;
   const Vec3 t = normal.cross(Vec3::UnitX()).normalized();
   const Vec3 p0 = Vec3(0.5, 0.0, 0.0) + 0.02 * t.cross(normal) + (0.01 - 0.4 * delta) * normal;
-  const int rod = b.AddStraightRod("rod", p0, p0 + 0.2 * t, 2, Section::Circle(0.01, steel));
+  const RodId rod = b.AddStraightRod("rod", p0, p0 + 0.2 * t, 2, Section::Circle(0.01, steel));
   b.AddContactRod(rod, 0.01);
   ContactSettings law;
   law.stiffness = 1e5;
@@ -294,7 +294,7 @@ void MakePuck(Puck* p, ContactShapeType type, double mu, double eps_v, const Vec
               const Vec3& v0, double height, double rho_inf = 0.8, double zeta = 1.0) {
   ModelBuilder b;
   const Mat3 R = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), normal).toRotationMatrix();
-  const int n = b.AddNode(SE3{R, height * normal});
+  const NodeId n = b.AddNode(SE3{R, height * normal});
   b.AddRigidBody("puck", n, 1.0, Vec3::Zero(), 0.004 * Mat3::Identity());
   if (type == ContactShapeType::kSphere)
     b.AddContactShape({0, type, Vec3::Zero(), Vec3::Zero(), 0.1});
@@ -445,10 +445,10 @@ TEST(ContactValidation, CantileverPressedOntoAPlaneOrASphereCarriesThePointSuppo
   for (ObstacleType obstacle : {ObstacleType::kPlane, ObstacleType::kSphere}) {
     auto solve = [&](bool contact, double* tip_z, double* reaction) {
       ModelBuilder b;
-      const int rod = b.AddStraightRod("beam", Vec3::Zero(), Vec3(L, 0.0, 0.0), 16, section);
-      b.FixNode(b.model().rods[0].nodes.front());
+      const RodId rod = b.AddStraightRod("beam", Vec3::Zero(), Vec3(L, 0.0, 0.0), 16, section);
+      b.FixNode(b.RodNodes(RodId(0)).front());
       PointLoad load;
-      load.node = b.model().rods[0].nodes.back();
+      load.node = b.RodNodes(RodId(0)).back();
       load.force = Vec3(0.0, 0.0, -P);
       b.AddPointLoad(load);
       if (contact) {

@@ -61,8 +61,8 @@ Scene MakeScene(std::mt19937& rng, double damping, double actuator) {
   std::vector<Vec3> p0, p1;
   for (int i = 0; i <= 4; ++i) p0.emplace_back(0.3 * i, 0.1 * std::sin(1.1 * i), 0.05 * i * i);
   for (int i = 0; i <= 3; ++i) p1.emplace_back(0.2 + 0.25 * i, 0.4, 0.1 * std::cos(0.7 * i));
-  const int r0 = b.AddRodAlongPath("r0", p0, 1, RodSection());
-  const int r1 = b.AddRodAlongPath("r1", p1, 1, RodSection());
+  const RodId r0 = b.AddRodAlongPath("r0", p0, 1, RodSection());
+  const RodId r1 = b.AddRodAlongPath("r1", p1, 1, RodSection());
   const double L0 = b.RodLength(r0), L1 = b.RodLength(r1);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   auto offset = [&] { return Vec3(0.02 * u(rng), 0.05 * u(rng), 0.05 * u(rng)); };
@@ -71,7 +71,7 @@ Scene MakeScene(std::mt19937& rng, double damping, double actuator) {
       {OnRod(r0, 0.13 * L0, offset()), OnRod(r0, 0.86 * L0, offset())},
       {OnRod(r1, 0.05 * L1, offset()), OnRod(r1, 0.27 * L1, offset())},
       {{kGround, Vec3(0.1, -0.3, 0.2)}, OnRod(r1, 0.45 * L1, offset())},
-      {{b.model().rods[0].nodes[2], offset()}, OnRod(r1, 0.9 * L1, offset())}};
+      {{b.RodNodes(RodId(0))[2], offset()}, OnRod(r1, 0.9 * L1, offset())}};
   for (int i = 0; i < 5; ++i) {
     ForceElement f;
     f.name = "f" + std::to_string(i);
@@ -114,7 +114,7 @@ TEST(ForceSpan, EndsArePlacedAsEyeletsAndEachElementHasOneKind) {
 
   // An arc length off the rod: the error of the end, as for an eyelet.
   ModelBuilder b;
-  const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 2, RodSection());
+  const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 2, RodSection());
   ForceElement f;
   f.name = "spring";
   f.a = {kGround, Vec3(0, 1, 0)};
@@ -207,7 +207,7 @@ TEST(ForceSpan, SpringWithinOneFreeRodHasNoNetForceOrMoment) {
   std::mt19937 rng(23);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   ModelBuilder b;
-  const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0.2, 0.1), 5, RodSection());
+  const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0.2, 0.1), 5, RodSection());
   const double L = b.RodLength(rod);
   // Between two elements, within one element, and from a node to a point between nodes.
   const double s[3][2] = {{0.13, 0.71}, {0.42, 0.47}, {0.0, 0.55}};
@@ -277,9 +277,9 @@ struct Pulled {
 Pulled PullCantilever(int elements, double s) {
   ModelBuilder b;
   // Axial and shear stiffness 1e9 EI: shear adds F s / GA to the tip, ~1e-9 of the bending.
-  const int rod =
+  const RodId rod =
       b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements, RodSection(1e9 * kEI));
-  b.FixNode(b.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  b.FixNode(b.RodNodes(rod).front());
   ForceElement f;
   f.name = "spring";
   f.a = {kGround, Vec3(s, 1.0, 0.0)};

@@ -62,11 +62,11 @@ Collision Collide(double h, double cross_x, double cross_y, double slide, double
   mat.density = 1000.0;
   const Section section = Section::Circle(r, mat);
   ModelBuilder b;
-  const int a =
+  const RodId a =
       b.AddStraightRod("a", Vec3(-0.5 * L, 0.0, 0.0), Vec3(0.5 * L, 0.0, 0.0), 6, section);
   const double z = 2.0 * r + 1e-3 + clearance;
-  const int c = b.AddStraightRod("b", Vec3(cross_x, -0.5 * L - cross_y, z),
-                                 Vec3(cross_x, 0.5 * L - cross_y, z), 6, section);
+  const RodId c = b.AddStraightRod("b", Vec3(cross_x, -0.5 * L - cross_y, z),
+                                   Vec3(cross_x, 0.5 * L - cross_y, z), 6, section);
   b.AddContactRod(a, r);
   b.AddContactRod(c, r);
   ContactSettings law;
@@ -77,9 +77,9 @@ Collision Collide(double h, double cross_x, double cross_y, double slide, double
   law.damping_ratio = zeta;
   law.band_pair_nodes = band_pair_nodes;
   b.SetContactSettings(law);
-  for (int rod : {a, c}) {
+  for (RodId rod : {a, c}) {
     const Vec3 world = rod == a ? Vec3(0.0, 0.0, v) : Vec3(slide, 0.0, -v);
-    for (int node : b.model().rods[static_cast<std::size_t>(rod)].nodes) {
+    for (NodeId node : b.RodNodes(rod)) {
       const Mat3& R = b.model().nodes[static_cast<std::size_t>(node)].reference.R;
       Vec6 eta = Vec6::Zero();
       eta.head<3>() = R.transpose() * world;

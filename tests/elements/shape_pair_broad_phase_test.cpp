@@ -41,17 +41,17 @@ Model MakeScene(double self_skip) {
   ModelBuilder b;
   for (int k = 0; k < 4; ++k) {
     const double y = 0.1 * k;
-    const int rod =
+    const RodId rod =
         b.AddStraightRod("rod" + std::to_string(k), Vec3(0.0, y, 0.0),
                          Vec3(k < 3 ? 0.36 : 0.2, y, 0.0), k < 3 ? 12 : 40, RodSection(r));
     b.AddContactRod(rod, r);
   }
   const Mat3 J = 1e-4 * Mat3::Identity();
-  const int sphere = b.AddRigidBody("sphere", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 1)}), 0.1,
-                                    Vec3::Zero(), J);
-  const int capsule = b.AddRigidBody("capsule", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 2)}),
-                                     0.1, Vec3::Zero(), J);
-  const int box =
+  const BodyId sphere = b.AddRigidBody("sphere", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 1)}),
+                                       0.1, Vec3::Zero(), J);
+  const BodyId capsule = b.AddRigidBody("capsule", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 2)}),
+                                        0.1, Vec3::Zero(), J);
+  const BodyId box =
       b.AddRigidBody("box", b.AddNode(SE3{Mat3::Identity(), Vec3(0, 0, 3)}), 0.1, Vec3::Zero(), J);
   b.AddContactShape({sphere, ContactShapeType::kSphere, Vec3::Zero(), Vec3::Zero(), 0.04});
   b.AddContactShape(
@@ -134,7 +134,7 @@ TEST(ShapePairBroadPhaseCost, GrowsLinearlyWithTheElements) {
   const int sizes[3] = {250, 500, 1000};
   for (int n : sizes) {
     ModelBuilder b;
-    const int rod = b.AddStraightRod("coil", Vec3::Zero(), Vec3(n * ds, 0, 0), n, RodSection(r));
+    const RodId rod = b.AddStraightRod("coil", Vec3::Zero(), Vec3(n * ds, 0, 0), n, RodSection(r));
     b.AddContactRod(rod, r);
     ContactSettings law;
     law.stiffness = 1e3;

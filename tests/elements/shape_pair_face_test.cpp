@@ -27,11 +27,11 @@ namespace {
 // axis along its x from -0.1 to 0.1 about its node): k_n = 1e5, onset 1e-4.
 Model MakeCapsuleOnBox(const SE3& capsule, double mu, double gravity) {
   ModelBuilder b;
-  const int box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+  const NodeId box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
   b.FixNode(box);
   b.AddRigidBody("table", box, 1.0, Vec3::Zero(), Mat3::Identity());
   b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.15, 0.1, 0.05), 0.0});
-  const int bar = b.AddNode(capsule);
+  const NodeId bar = b.AddNode(capsule);
   b.AddRigidBody("bar", bar, 1.0, Vec3::Zero(), Vec3(1e-4, 4e-3, 4e-3).asDiagonal());
   b.AddContactShape(
       {1, ContactShapeType::kCapsule, Vec3(-0.1, 0.0, 0.0), Vec3(0.1, 0.0, 0.0), 0.02});

@@ -381,8 +381,8 @@ void StartDynamics(TwoSpheres* s, const DynamicOptions& opt) {
 void MakeTwoSpheres(TwoSpheres* s, double mu, double zeta, double offset, double rho_inf) {
   ModelBuilder b;
   const double r = 0.05;
-  const int n1 = b.AddNode(SE3{Mat3::Identity(), Vec3(-0.06, 0.0, 0.0)});
-  const int n2 = b.AddNode(SE3{Mat3::Identity(), Vec3(0.06, offset, 0.0)});
+  const NodeId n1 = b.AddNode(SE3{Mat3::Identity(), Vec3(-0.06, 0.0, 0.0)});
+  const NodeId n2 = b.AddNode(SE3{Mat3::Identity(), Vec3(0.06, offset, 0.0)});
   b.AddRigidBody("a", n1, 1.0, Vec3::Zero(), 0.001 * Mat3::Identity());
   b.AddRigidBody("b", n2, 2.0, Vec3::Zero(), 0.002 * Mat3::Identity());
   b.AddContactShape({0, ContactShapeType::kSphere, Vec3::Zero(), Vec3::Zero(), r});
@@ -520,11 +520,11 @@ TEST(ShapePairKind, ReportedForceIsTheForceInTheKernelsResidual) {
 TEST(ShapePairValidation, SphereRestsOnTheMiddleOfABoxFace) {
   const double gap = 0.5e-4 - 9.81 / 1e5;
   ModelBuilder b;
-  const int box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+  const NodeId box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
   b.FixNode(box);
   b.AddRigidBody("table", box, 1.0, Vec3::Zero(), Mat3::Identity());
   b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.5, 0.4, 0.05), 0.0});
-  const int ball = b.AddNode(SE3{Mat3::Identity(), Vec3(0.1, -0.05, 0.1 + gap)});
+  const NodeId ball = b.AddNode(SE3{Mat3::Identity(), Vec3(0.1, -0.05, 0.1 + gap)});
   b.AddRigidBody("ball", ball, 1.0, Vec3::Zero(), 0.004 * Mat3::Identity());
   b.AddContactShape({1, ContactShapeType::kSphere, Vec3::Zero(), Vec3::Zero(), 0.1});
   ContactSettings law;
@@ -558,11 +558,11 @@ TEST(ShapePairValidation, SphereRestsOnTheMiddleOfABoxFace) {
 TEST(ShapePairValidation, CapsuleRestsFlatOnABoxFace) {
   const double gap = 1e-4 - std::sqrt(2e-4 * 0.5 * 9.81 / 1e5), r = 0.02;
   ModelBuilder b;
-  const int box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+  const NodeId box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
   b.FixNode(box);
   b.AddRigidBody("table", box, 1.0, Vec3::Zero(), Mat3::Identity());
   b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.5, 0.4, 0.05), 0.0});
-  const int bar = b.AddNode(SE3{Mat3::Identity(), Vec3(0.1, -0.05, r + gap)});
+  const NodeId bar = b.AddNode(SE3{Mat3::Identity(), Vec3(0.1, -0.05, r + gap)});
   b.AddRigidBody("bar", bar, 1.0, Vec3::Zero(), Vec3(1e-4, 4e-3, 4e-3).asDiagonal());
   b.AddContactShape({1, ContactShapeType::kCapsule, Vec3(-0.1, 0.0, 0.0), Vec3(0.1, 0.0, 0.0), r});
   ContactSettings law;
@@ -644,15 +644,15 @@ TEST(ShapePairValidation, CantileverRestsOnABoxEdge) {
   const double h = L / ne, x_e = L - 0.5 * h, top = -radius - clearance;
   const Section section = CantileverSection(radius);
   ModelBuilder b;
-  const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(L, 0.0, 0.0), ne, section);
-  b.FixNode(b.model().rods[0].nodes.front());
+  const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(L, 0.0, 0.0), ne, section);
+  b.FixNode(b.RodNodes(RodId(0)).front());
   PointLoad load;
-  load.node = b.model().rods[0].nodes.back();
+  load.node = b.RodNodes(RodId(0)).back();
   load.force = Vec3(0.0, 0.0, -P);
   b.AddPointLoad(load);
-  const int box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+  const NodeId box = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
   b.FixNode(box);
-  const int table = b.AddRigidBody("table", box, 1.0, Vec3::Zero(), Mat3::Identity());
+  const BodyId table = b.AddRigidBody("table", box, 1.0, Vec3::Zero(), Mat3::Identity());
   b.AddContactShape({table, ContactShapeType::kBox, Vec3(x_e - 0.01, 0.0, top - 0.025),
                      Vec3(0.01, 0.05, 0.025), 0.0});
   b.AddContactRod(rod, radius);
@@ -698,13 +698,13 @@ TEST(ShapePairValidation, BoxDroppedOnABoxComesToRestOnItsEdgesAndCorners) {
   double rise[2] = {0.0, 0.0};
   for (int run = 0; run < 2; ++run) {
     ModelBuilder b;
-    const int base = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+    const NodeId base = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
     b.FixNode(base);
     b.AddRigidBody("table", base, 1.0, Vec3::Zero(), Mat3::Identity());
     b.AddContactShape(
         {0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.3, 0.3, 0.05), 0.0});
     const Vec3 half(0.05, 0.04, 0.03);
-    const int node = b.AddNode(SE3{Mat3::Identity(), Vec3(0.02, -0.01, half.z() + drop)});
+    const NodeId node = b.AddNode(SE3{Mat3::Identity(), Vec3(0.02, -0.01, half.z() + drop)});
     const Vec3 J =
         m_box / 3.0 *
         Vec3(half.y() * half.y() + half.z() * half.z(), half.x() * half.x() + half.z() * half.z(),
@@ -765,14 +765,14 @@ TEST(ShapePairValidation, CrossingCantileversPressedTogetherShareTheLoadByTheirC
   const double h = L / ne;
   const Section section = CantileverSection(radius);
   ModelBuilder b;
-  const int upper = b.AddStraightRod("upper", Vec3(-L, 0.0, 0.0), Vec3::Zero(), ne, section);
+  const RodId upper = b.AddStraightRod("upper", Vec3(-L, 0.0, 0.0), Vec3::Zero(), ne, section);
   const double z = -2.0 * radius - clearance;
-  const int lower =
+  const RodId lower =
       b.AddStraightRod("lower", Vec3(0.0, -L + 0.5 * h, z), Vec3(0.0, 0.5 * h, z), ne, section);
-  b.FixNode(b.model().rods[0].nodes.front());
-  b.FixNode(b.model().rods[1].nodes.front());
+  b.FixNode(b.RodNodes(RodId(0)).front());
+  b.FixNode(b.RodNodes(RodId(1)).front());
   PointLoad load;
-  load.node = b.model().rods[0].nodes.back();
+  load.node = b.RodNodes(RodId(0)).back();
   load.force = Vec3(0.0, 0.0, -P);
   b.AddPointLoad(load);
   b.AddContactRod(upper, radius);
@@ -816,11 +816,11 @@ TEST(ShapePairValidation, RodFoldedOntoItselfCarriesTheTipLoadByItsFlexibility) 
   const int ne = 8;
   const Section section = CantileverSection(radius);
   ModelBuilder b;
-  const int rod = b.AddRodAlongPath(
+  const RodId rod = b.AddRodAlongPath(
       "fold",
       {Vec3::Zero(), Vec3(a, 0, 0), Vec3(a, 0, H), Vec3(a - e, 0, H), Vec3(a - e - L, 0, H)}, ne,
       section, Vec3::UnitY());
-  const std::vector<int> nodes = b.model().rods[0].nodes;
+  const std::vector<NodeId> nodes = b.RodNodes(RodId(0));
   ASSERT_EQ(nodes.size(), static_cast<std::size_t>(4 * ne + 1));
   for (int k = 0; k <= 3 * ne; ++k) b.FixNode(nodes[static_cast<std::size_t>(k)]);
   PointLoad load;

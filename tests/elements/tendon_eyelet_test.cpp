@@ -47,7 +47,7 @@ Scene MakeScene(std::mt19937& rng, double tension) {
   ModelBuilder b;
   std::vector<Vec3> path;
   for (int i = 0; i <= 4; ++i) path.emplace_back(0.3 * i, 0.1 * std::sin(1.1 * i), 0.05 * i * i);
-  const int rod = b.AddRodAlongPath("rod", path, 1, RodSection());
+  const RodId rod = b.AddRodAlongPath("rod", path, 1, RodSection());
   const double length = b.RodLength(rod);
   std::vector<BodyPoint> eyelets;
   eyelets.push_back({kGround, Vec3(-0.3, 0.2, 0.1)});
@@ -90,7 +90,7 @@ TEST(TendonEyelets, PlacedOnNodesOrBetweenThemAtTheirArcLength) {
   }
   // Off the rod: an error naming the eyelet.
   ModelBuilder b;
-  const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 2, RodSection());
+  const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 2, RodSection());
   BodyPoint off{kGround, Vec3::Zero()};
   off.rod = rod;
   off.arc_length = 1.5;
@@ -158,8 +158,8 @@ struct Cantilever {
 
 Cantilever SolveCantilever(int elements, double tension, bool by_length = false) {
   ModelBuilder b;
-  const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements, RodSection());
-  b.FixNode(b.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements, RodSection());
+  b.FixNode(b.RodNodes(rod).front());
   std::vector<BodyPoint> eyelets;
   auto add = [&](double s) {
     BodyPoint p{kGround, Vec3(0.0, kOffset, 0.0)};

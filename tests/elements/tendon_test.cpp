@@ -77,7 +77,7 @@ Chain MakeChain(std::mt19937& rng, double tension, double second_tension = 0.0) 
   std::vector<BodyPoint> eyelets;
   eyelets.push_back({kGround, Vec3(-0.5, 0.1, 0.0)});
   for (int i = 0; i < 4; ++i) {
-    const int n = b.AddNode(SE3::Translation(Vec3(0.4 * i, 0.0, 0.0)));
+    const NodeId n = b.AddNode(SE3::Translation(Vec3(0.4 * i, 0.0, 0.0)));
     b.AddRigidBody("b" + std::to_string(i), n, 1.0, Vec3::Zero(), Mat3::Identity());
     eyelets.push_back({n, RandomVec3(rng, 0.1)});
   }
@@ -257,7 +257,7 @@ TEST(TendonSegmentKind, StatesTensionNeverNegativeAndLoadFactorScalesIt) {
 TEST(TendonSegmentKind, TensionAndActuatorProfilesAreBreakpointsOfTheModel) {
   // Steps end and the integrator restarts at their breakpoints, as at drives' and loads'.
   ModelBuilder b;
-  const int n = b.AddNode(SE3::Identity());
+  const NodeId n = b.AddNode(SE3::Identity());
   b.AddRigidBody("b", n, 1.0, Vec3::Zero(), Mat3::Identity());
   b.AddTendon("t", {{kGround, Vec3(1, 0, 0)}, {n, Vec3::Zero()}}, Profile::Ramp(0.25, 0.5, 2.0));
   ForceElement fe;

@@ -16,12 +16,13 @@ inline const Vec3 kHalf(0.05, 0.04, 0.03);
 // `inertia`: the box's principal moments about its centre [kg m^2].
 inline Model MakeTiltedBoxDrop(double theta, double drop, const Vec3& inertia) {
   ModelBuilder b;
-  const int base = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
+  const NodeId base = b.AddNode(SE3{Mat3::Identity(), Vec3::Zero()});
   b.FixNode(base);
   b.AddRigidBody("table", base, 1.0, Vec3::Zero(), Mat3::Identity());
   b.AddContactShape({0, ContactShapeType::kBox, Vec3(0.0, 0.0, -0.05), Vec3(0.3, 0.3, 0.05), 0.0});
   const double lowest = kHalf.y() * std::sin(theta) + kHalf.z() * std::cos(theta);
-  const int node = b.AddNode(SE3{ExpSO3(Vec3(theta, 0.0, 0.0)), Vec3(0.02, -0.01, lowest + drop)});
+  const NodeId node =
+      b.AddNode(SE3{ExpSO3(Vec3(theta, 0.0, 0.0)), Vec3(0.02, -0.01, lowest + drop)});
   b.AddRigidBody("block", node, kMass, Vec3::Zero(), inertia.asDiagonal());
   b.AddContactShape({1, ContactShapeType::kBox, Vec3::Zero(), kHalf, 0.0});
   ContactSettings law;

@@ -30,11 +30,11 @@ using test::Table;
 // prescribed acceleration jumps.
 Scene DrivenLink(double step) {
   ModelBuilder b;
-  const int link = b.AddNode(SE3::Identity(), "link");
+  const NodeId link = b.AddNode(SE3::Identity(), "link");
   b.AddRigidBody("link", link, 0.3, Vec3(0.25, 0, 0), Vec3(1e-4, 2e-3, 2e-3).asDiagonal());
-  const int j =
+  const JointId j =
       b.AddJointAt("motor", JointType::kRevolute, kGround, link, Vec3::Zero(), Vec3::UnitZ());
-  Joint& motor = b.model().joints[static_cast<std::size_t>(j)];
+  Joint& motor = b.model().joints[j];
   motor.drive = DriveKind::kPrescribed;
   motor.drive_profile = Profile::BangBang(0.0, 1.0, std::numbers::pi / 3);
   b.SetGravity(Vec3(0, 0, -9.81));

@@ -45,10 +45,10 @@ TEST(ForceSpanScene, EndsBetweenNodesSitOnTheElementSections) {
   ASSERT_TRUE(r.converged) << r.message;
 
   ModelBuilder b;
-  const int rod =
+  const RodId rod =
       b.AddStraightRod("r", Vec3::Zero(), Vec3::UnitX(), 4,
                        Section::FromDiagonals((Vec6() << 1e5, 1e5, 1e5, 1, 1, 1).finished()));
-  b.FixNode(b.model().rods[0].nodes.front());
+  b.FixNode(b.RodNodes(RodId(0)).front());
   ForceElement fe;
   fe.name = "brace";
   fe.a = {kGround, Vec3(0, 0.05, 0)};

@@ -46,9 +46,9 @@ TEST(PointOrientation, ColumnsAreTheNodeAndSectionFrames) {
   ModelBuilder b;
   Vec6 K;
   K << 1e3, 1e3, 1e3, 0.5, 0.8, 1.0;
-  const int rod = b.AddRodAlongPath("arm", {Vec3::Zero(), Vec3(0.6, 0, 0), Vec3(0.6, 0.5, 0.2)}, 3,
-                                    Section::FromDiagonals(K));
-  const std::vector<int> nodes = b.model().rods[0].nodes;
+  const RodId rod = b.AddRodAlongPath("arm", {Vec3::Zero(), Vec3(0.6, 0, 0), Vec3(0.6, 0.5, 0.2)},
+                                      3, Section::FromDiagonals(K));
+  const std::vector<NodeId> nodes = b.RodNodes(RodId(0));
   b.FixNode(nodes.front());
   b.AddRigidBody("hand", nodes.back(), 0.1, Vec3(0.05, 0, 0), 1e-4 * Mat3::Identity());
   PointLoad tip;

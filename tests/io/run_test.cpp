@@ -37,7 +37,7 @@ using test::Table;
 // A 0.4 m rigid link on a revolute joint about world y, released from the horizontal.
 Scene Pendulum(double step = 1e-3, double end = 0.5) {
   ModelBuilder b;
-  const int link = b.AddNode(SE3::Identity(), "link");
+  const NodeId link = b.AddNode(SE3::Identity(), "link");
   b.AddRigidBody("link", link, 0.2, Vec3(0.2, 0, 0), Vec3(1e-4, 2.7e-3, 2.7e-3).asDiagonal());
   b.AddJointAt("hinge", JointType::kRevolute, kGround, link, Vec3::Zero(), Vec3::UnitY());
   b.SetGravity(Vec3(0, 0, -9.81));
@@ -61,9 +61,9 @@ Scene Cantilever(double step = 1e-3, double end = 0.3) {
   Vec6 K, M;
   K << 1e4, 1e4, 1e4, 2, 2, 2;
   M << 0.1, 0.1, 0.1, 1e-3, 1e-3, 1e-3;
-  const int rod =
+  const RodId rod =
       b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), 8, Section::FromDiagonals(K, M));
-  const std::vector<int> nodes = b.model().rods[0].nodes;
+  const std::vector<NodeId> nodes = b.RodNodes(RodId(0));
   b.FixNode(nodes.front());
   PointLoad tip;
   tip.node = nodes.back();
@@ -87,11 +87,11 @@ Scene Cantilever(double step = 1e-3, double end = 0.3) {
 // bang-bang profile from 0 to pi/3 over [0, 1] s: breakpoints at 0, 0.5 and 1 s.
 Scene DrivenLink(double step) {
   ModelBuilder b;
-  const int link = b.AddNode(SE3::Identity(), "link");
+  const NodeId link = b.AddNode(SE3::Identity(), "link");
   b.AddRigidBody("link", link, 0.3, Vec3(0.25, 0, 0), Vec3(1e-4, 2e-3, 2e-3).asDiagonal());
-  const int j =
+  const JointId j =
       b.AddJointAt("motor", JointType::kRevolute, kGround, link, Vec3::Zero(), Vec3::UnitZ());
-  Joint& motor = b.model().joints[static_cast<std::size_t>(j)];
+  Joint& motor = b.model().joints[j];
   motor.drive = DriveKind::kPrescribed;
   motor.drive_profile = Profile::BangBang(0.0, 1.0, std::numbers::pi / 3);
   b.SetGravity(Vec3(0, 0, -9.81));
@@ -191,10 +191,10 @@ TEST(RunScene, WritesTheDocumentedColumnsAndOneRowPerInterval) {
 
 TEST(RunScene, MultiDofJointsGetOneGroupOfColumnsPerCoordinate) {
   ModelBuilder b;
-  const int n = b.AddNode(SE3::Translation(Vec3(0.1, 0, 0)), "ball");
+  const NodeId n = b.AddNode(SE3::Translation(Vec3(0.1, 0, 0)), "ball");
   b.AddRigidBody("ball", n, 0.1, Vec3(0.1, 0, 0), 1e-4 * Mat3::Identity());
   b.AddJointAt("sph", JointType::kSpherical, kGround, n, Vec3(0.1, 0, 0));
-  const int m = b.AddNode(SE3::Translation(Vec3(0.3, 0, 0)), "stub");
+  const NodeId m = b.AddNode(SE3::Translation(Vec3(0.3, 0, 0)), "stub");
   b.AddRigidBody("stub", m, 0.1, Vec3::Zero(), 1e-4 * Mat3::Identity());
   b.AddJointAt("weld", JointType::kFixed, n, m, Vec3(0.3, 0, 0));
   Model model = b.Build();
@@ -331,11 +331,11 @@ TEST(RunScene, PrescribedJointFollowsItsProfileWithStepsAlignedToTheAcceleration
 
 TEST(JointCoordinateEffort, SpringsAndDampersPushTowardsRest) {
   ModelBuilder b;
-  const int n = b.AddNode(SE3::Identity(), "ball");
+  const NodeId n = b.AddNode(SE3::Identity(), "ball");
   b.AddRigidBody("ball", n, 0.1, Vec3(0.1, 0, 0), 1e-4 * Mat3::Identity());
   b.AddJointAt("sph", JointType::kSpherical, kGround, n, Vec3::Zero());
   b.model().joints[0].stiffness.head<3>().setConstant(0.5);
-  const int m = b.AddNode(SE3::Translation(Vec3(1, 0, 0)), "slider");
+  const NodeId m = b.AddNode(SE3::Translation(Vec3(1, 0, 0)), "slider");
   b.AddRigidBody("slider", m, 0.1, Vec3::Zero(), 1e-4 * Mat3::Identity());
   b.AddJointAt("slide", JointType::kPrismatic, kGround, m, Vec3(1, 0, 0), Vec3::UnitX());
   b.model().joints[1].stiffness(0) = 10.0;

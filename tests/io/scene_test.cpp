@@ -92,19 +92,19 @@ Model EquivalenceModelByApi() {
   M << 0.1, 0.1, 0.1, 1e-3, 1e-3, 2e-3;
   Section soft = Section::FromDiagonals(K, M);
   soft.damping << 0, 0, 0, 1e-3, 1e-3, 1e-3;
-  const int base = b.AddNode(SE3::Translation(A), "base");
+  const NodeId base = b.AddNode(SE3::Translation(A), "base");
   b.AddRigidBody("base", base, 0.2, 0.5 * (B - A), Vec3(1e-3, 2e-3, 3e-3).asDiagonal());
-  const int link = b.AddNode(SE3::Translation(B), "link");
+  const NodeId link = b.AddNode(SE3::Translation(B), "link");
   Mat3 J;
   J << 1e-3, 1e-4, 0, 1e-4, 2e-3, 0, 0, 0, 3e-3;
   b.AddRigidBody("link", link, 0.1, Vec3(0.3, 0.25, 0) - B, J);
-  const int arm = b.AddStraightRod("arm", C, D, 4, soft, Vec3::UnitX());
-  const int arm_end = b.model().rods[static_cast<std::size_t>(arm)].nodes.back();
+  const RodId arm = b.AddStraightRod("arm", C, D, 4, soft, Vec3::UnitX());
+  const NodeId arm_end = b.RodNodes(arm).back();
   b.AddStraightRod("arm2", D, F, 2, soft, Vec3::UnitX(), arm_end);
-  const int tip = b.AddStraightRod("tip", D, E, 3, soft);
-  const int tip_start = b.model().rods[static_cast<std::size_t>(tip)].nodes.front();
-  const int tip_end = b.model().rods[static_cast<std::size_t>(tip)].nodes.back();
-  const int knob = b.AddNode(SE3::Translation(E), "knob");
+  const RodId tip = b.AddStraightRod("tip", D, E, 3, soft);
+  const NodeId tip_start = b.RodNodes(tip).front();
+  const NodeId tip_end = b.RodNodes(tip).back();
+  const NodeId knob = b.AddNode(SE3::Translation(E), "knob");
   b.AddRigidBody("knob", knob, 0.05, Vec3(0.02, 0, 0), 1e-5 * Mat3::Identity());
 
   Joint* j = nullptr;
@@ -118,7 +118,7 @@ Model EquivalenceModelByApi() {
   j->rest(0) = 0.01;
   j->drive = DriveKind::kSeriesElastic;
   j->drive_profile = Profile::SmoothStep(0, 0.2, 0.05);
-  const int arm_start = b.model().rods[static_cast<std::size_t>(arm)].nodes.front();
+  const NodeId arm_start = b.RodNodes(arm).front();
   j = joint(
       b.AddJointAt("J2", JointType::kUniversal, link, arm_start, C, Vec3::UnitX(), Vec3::UnitY()));
   j->stiffness.head<2>() << 0.5, 0.7;

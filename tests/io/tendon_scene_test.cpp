@@ -171,10 +171,10 @@ TEST(TendonScene, EyeletsAtArcLengthsBetweenNodesSitOnTheElementSections) {
   ASSERT_TRUE(r.converged) << r.message;
 
   ModelBuilder b;
-  const int rod =
+  const RodId rod =
       b.AddStraightRod("r", Vec3::Zero(), Vec3::UnitX(), 4,
                        Section::FromDiagonals((Vec6() << 1e5, 1e5, 1e5, 1, 1, 1).finished()));
-  b.FixNode(b.model().rods[0].nodes.front());
+  b.FixNode(b.RodNodes(RodId(0)).front());
   std::vector<BodyPoint> eyelets;
   for (double a : {0.0, 0.125, 0.375, 0.625, 0.875, 1.0}) {
     BodyPoint p{kGround, Vec3(0, 0.02, 0)};

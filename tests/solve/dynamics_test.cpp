@@ -53,7 +53,7 @@ struct Spinner {
 
 void MakeSpinner(Spinner* s, JointType type, bool tangent) {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "body");
+  const NodeId node = b.AddNode(SE3::Identity(), "body");
   Mat3 J;
   J << 0.2, 0.01, 0.0, 0.01, 0.3, 0.02, 0.0, 0.02, 0.4;
   b.AddRigidBody("body", node, 2.0, Vec3(0.3, 0.1, -0.05), J);
@@ -129,7 +129,7 @@ TEST(GeneralizedAlpha, ConsistentStartGivesAccelerationsThatSatisfyTheConstraint
 // and gravity, clamped to a spinning body on a spherical joint, in a moving state.
 Model SpinningArm() {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "body");
+  const NodeId node = b.AddNode(SE3::Identity(), "body");
   b.AddRigidBody("body", node, 0.5, Vec3(0.1, 0.0, 0.0), 1e-3 * Mat3::Identity());
   b.AddJointAt("j", JointType::kSpherical, kGround, node, Vec3::Zero());
   Vec6 K, M;
@@ -192,7 +192,7 @@ Model TwoBodiesOnRevoluteJoints() {
   SE3 f1 = SE3::Identity(), f2 = SE3::Identity();
   f1.x = Vec3(0.3, 0.1, 0.0);
   f2.x = Vec3(0.8, -0.1, 0.05);
-  const int n1 = b.AddNode(f1, "b1"), n2 = b.AddNode(f2, "b2");
+  const NodeId n1 = b.AddNode(f1, "b1"), n2 = b.AddNode(f2, "b2");
   b.AddRigidBody("b1", n1, 0.7, Vec3(0.05, 0.0, 0.0), 2e-3 * Mat3::Identity());
   b.AddRigidBody("b2", n2, 0.4, Vec3(0.0, 0.02, 0.0), 1e-3 * Mat3::Identity());
   b.AddJointAt("j1", JointType::kRevolute, kGround, n1, Vec3(0.0, 0.0, 0.0), Vec3::UnitY());
@@ -419,7 +419,7 @@ TEST(GeneralizedAlpha, AStepTheSimplifiedIterationCannotDoIsRetriedWithFullNewto
   K << 1e6, 1e6, 1e6, 1.0, 1.0, 1.0;
   M << 0.1, 0.1, 0.1, 5e-4, 5e-4, 1e-3;
   const Section sec = Section::FromDiagonals(K, M);
-  const int root = b.AddNode(SE3::Identity(), "root");
+  const NodeId root = b.AddNode(SE3::Identity(), "root");
   b.FixNode(root);
   b.AddStraightRod("rod", Vec3::Zero(), Vec3(1.0, 0.0, 0.0), 8, sec, Vec3::UnitZ(), root);
   b.SetGravity(Vec3(0.0, 0.0, -9.81));

@@ -19,10 +19,10 @@ Cantilever MakeCantilever(int elements) {
   Cantilever c;
   Vec6 K;
   K << 1e7, 1e7, 1e7, 3.0, 3.0, 3.0;
-  const int rod = c.builder.AddStraightRod("beam", Vec3::Zero(), Vec3(2.0, 0, 0), elements,
-                                           Section::FromDiagonals(K));
-  c.builder.FixNode(c.builder.model().rods[static_cast<std::size_t>(rod)].nodes.front());
-  c.tip = c.builder.model().rods[static_cast<std::size_t>(rod)].nodes.back();
+  const RodId rod = c.builder.AddStraightRod("beam", Vec3::Zero(), Vec3(2.0, 0, 0), elements,
+                                             Section::FromDiagonals(K));
+  c.builder.FixNode(c.builder.RodNodes(rod).front());
+  c.tip = c.builder.RodNodes(rod).back();
   return c;
 }
 

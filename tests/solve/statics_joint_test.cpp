@@ -24,7 +24,7 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kMass = 1.3, kL = 0.8, kG = 9.81;
 
 int AddPendulum(ModelBuilder& b, double com_sign) {
-  const int node = b.AddNode(SE3::Identity(), "pivot");
+  const NodeId node = b.AddNode(SE3::Identity(), "pivot");
   b.AddRigidBody("bob", node, kMass, Vec3(com_sign * kL, 0.0, 0.0), 1e-3 * Mat3::Identity());
   b.SetGravity(Vec3(0.0, -kG, 0.0));
   return b.AddJointAt("pin", JointType::kRevolute, kGround, node, Vec3::Zero(), Vec3::UnitZ());
@@ -45,7 +45,7 @@ TEST(StaticsWithJoints, SoftRevolutePendulumSettlesWhereTheSpringBalancesGravity
     SCOPED_TRACE("K = " + std::to_string(K));
     ModelBuilder b;
     const int j = AddPendulum(b, -1.0);
-    b.model().joints[static_cast<std::size_t>(j)].stiffness(0) = K;
+    b.model().joints[j].stiffness(0) = K;
     const Model m = b.Build();
     Data d = MakeData(m);
     const StaticResult r = SolveStatic(m, d);
@@ -65,7 +65,7 @@ TEST(StaticsWithJoints, SoftRevolutePendulumSettlesWhereTheSpringBalancesGravity
 TEST(StaticsWithJoints, NonConvergenceMessageNamesEveryCriterion) {
   ModelBuilder b;
   const int j = AddPendulum(b, -1.0);
-  b.model().joints[static_cast<std::size_t>(j)].stiffness(0) = 3.0;  // swings to 1.208 rad
+  b.model().joints[j].stiffness(0) = 3.0;  // swings to 1.208 rad
   const Model m = b.Build();
   Data d = MakeData(m);
   StaticOptions opt;
@@ -85,7 +85,7 @@ TEST(StaticsWithJoints, NonConvergenceMessageNamesEveryCriterion) {
 TEST(StaticsWithJoints, PrescribedDriveMovesTheJointToTheProfileValueAtTheGivenTime) {
   ModelBuilder b;
   const int j = AddPendulum(b, 1.0);
-  Joint& joint = b.model().joints[static_cast<std::size_t>(j)];
+  Joint& joint = b.model().joints[j];
   joint.drive = DriveKind::kPrescribed;
   joint.drive_profile = Profile::BangBang(0.0, 1.0, kPi / 6);
   const Model m = b.Build();
@@ -106,11 +106,11 @@ TEST(StaticsWithJoints, PrescribedDriveMovesTheJointToTheProfileValueAtTheGivenT
 // A force drive adds -f(t) to the coordinate equation: with a spring, K a = f (+ gravity).
 TEST(StaticsWithJoints, ForceDriveIsBalancedByTheJointSpring) {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "slider");
+  const NodeId node = b.AddNode(SE3::Identity(), "slider");
   b.AddRigidBody("slider", node, 2.0, Vec3(0.1, 0.2, 0.0), 1e-2 * Mat3::Identity());
   const Vec3 e = Vec3(1.0, 1.0, 0.0).normalized();
-  const int j = b.AddJointAt("slide", JointType::kPrismatic, kGround, node, Vec3::Zero(), e);
-  Joint& joint = b.model().joints[static_cast<std::size_t>(j)];
+  const JointId j = b.AddJointAt("slide", JointType::kPrismatic, kGround, node, Vec3::Zero(), e);
+  Joint& joint = b.model().joints[j];
   joint.stiffness(0) = 40.0;
   joint.drive = DriveKind::kForce;
   joint.drive_profile = Profile::Ramp(0.0, 1.0, 12.0);
@@ -131,7 +131,7 @@ TEST(StaticsWithJoints, ForceDriveIsBalancedByTheJointSpring) {
 TEST(StaticsWithJoints, SeriesElasticDriveSettlesWithSpringDeflectionCarryingTheWeight) {
   ModelBuilder b;
   const int j = AddPendulum(b, 1.0);
-  Joint& joint = b.model().joints[static_cast<std::size_t>(j)];
+  Joint& joint = b.model().joints[j];
   joint.stiffness(0) = 20.0;
   joint.drive = DriveKind::kSeriesElastic;
   joint.drive_profile = Profile::BangBang(0.0, 1.0, kPi / 3);

@@ -42,7 +42,7 @@ double TrussLimitLoad() {
 
 struct Truss {
   Model model;
-  int apex = -1;   // node of the apex (end node of the left bar)
+  NodeId apex;     // node of the apex (end node of the left bar)
   int drive = -1;  // joint index of the prismatic drive (displacement control)
 };
 
@@ -55,8 +55,8 @@ Truss MakeTruss(double p_ref, bool displacement_control, double w_max = 1.1,
   b.SetLinearSolver(solver);
   const Section bar = Section::FromDiagonals((Vec6() << kEA, kEA, kEA, 1.0, 1.0, 1.0).finished());
   const Vec3 left(-kA, 0.0, 0.0), right(kA, 0.0, 0.0), top(0.0, kH, 0.0);
-  const int r0 = b.AddStraightRod("left", left, top, 1, bar);
-  const int r1 = b.AddStraightRod("right", right, top, 1, bar);
+  const RodId r0 = b.AddStraightRod("left", left, top, 1, bar);
+  const RodId r1 = b.AddStraightRod("right", right, top, 1, bar);
   Truss t;
   const NodeMatch l0 = b.FindNodeAt(left, r0), l1 = b.FindNodeAt(top, r0);
   const NodeMatch m0 = b.FindNodeAt(right, r1), m1 = b.FindNodeAt(top, r1);
@@ -65,7 +65,7 @@ Truss MakeTruss(double p_ref, bool displacement_control, double w_max = 1.1,
   b.AddJointAt("apex", JointType::kRevolute, l1.node, m1.node, top, Vec3::UnitZ());
   t.apex = l1.node;
   if (displacement_control) {
-    const int slider = b.AddNode(SE3::Translation(top), "slider");
+    const NodeId slider = b.AddNode(SE3::Translation(top), "slider");
     b.AddRigidBody("slider", slider, 1e-3, Vec3::Zero(), 1e-6 * Mat3::Identity());
     b.AddJointAt("pin", JointType::kRevolute, slider, t.apex, top, Vec3::UnitZ());
     t.drive = b.AddJointAt("push", JointType::kPrismatic, kGround, slider, top, -Vec3::UnitY());
@@ -113,17 +113,18 @@ TEST(PathFollowingStatics, DisplacementControlPastATurningPointStopsWithALimitPo
   ModelBuilder b;
   const Vec3 O(0, 0, 0), A(0.1, 0.1, 0), B(0.3, 0, 0);
   const Mat3 I = 1e-4 * Mat3::Identity();
-  const int crank = b.AddNode(SE3::Translation(O), "crank");
-  const int coupler = b.AddNode(SE3::Translation(A), "coupler");
-  const int slider = b.AddNode(SE3::Translation(B), "slider");
+  const NodeId crank = b.AddNode(SE3::Translation(O), "crank");
+  const NodeId coupler = b.AddNode(SE3::Translation(A), "coupler");
+  const NodeId slider = b.AddNode(SE3::Translation(B), "slider");
   b.AddRigidBody("crank", crank, 0.1, 0.5 * A, I);
   b.AddRigidBody("coupler", coupler, 0.1, 0.5 * (B - A), I);
   b.AddRigidBody("slider", slider, 0.1, Vec3::Zero(), I);
   b.AddJointAt("pivot", JointType::kRevolute, kGround, crank, O);
   b.AddJointAt("elbow", JointType::kRevolute, crank, coupler, A);
   b.AddJointAt("wrist", JointType::kRevolute, coupler, slider, B);
-  const int guide = b.AddJointAt("guide", JointType::kPrismatic, kGround, slider, B, Vec3::UnitX());
-  Joint& g = b.model().joints[static_cast<std::size_t>(guide)];
+  const JointId guide =
+      b.AddJointAt("guide", JointType::kPrismatic, kGround, slider, B, Vec3::UnitX());
+  Joint& g = b.model().joints[guide];
   g.drive = DriveKind::kPrescribed;
   g.drive_profile = Profile::Constant(0.2);  // x_B = 0.3 + 0.2 s
   const Model m = b.Build();
@@ -140,7 +141,7 @@ TEST(PathFollowingStatics, DisplacementControlPastATurningPointStopsWithALimitPo
   EXPECT_LT(r.load_factor, s_dead);
   EXPECT_GT(r.load_factor, s_dead - 0.1 * std::ldexp(1.0, -opt.max_halvings));
   EXPECT_NE(r.message.find("limit point at load factor 0.3251"), std::string::npos) << r.message;
-  EXPECT_NEAR(d.H[static_cast<std::size_t>(slider)].x.x(), 0.3 + 0.2 * r.load_factor, 1e-12);
+  EXPECT_NEAR(d.H[slider].x.x(), 0.3 + 0.2 * r.load_factor, 1e-12);
 
   // The step cap: with 3 steps allowed the solve stops after 3 accepted steps, saying so.
   Data d3 = MakeData(m);

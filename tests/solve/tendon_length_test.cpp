@@ -31,7 +31,7 @@ constexpr double kPi = 3.14159265358979323846;
 // z = 2 - L_p while taut (reference length 2).
 Model HangingMass(const Profile& length) {
   ModelBuilder b;
-  const int n = b.AddNode(SE3::Identity(), "mass");
+  const NodeId n = b.AddNode(SE3::Identity(), "mass");
   b.AddRigidBody("mass", n, kMass, Vec3::Zero(), 0.01 * Mat3::Identity());
   b.AddJointAt("slide", JointType::kPrismatic, kGround, n, Vec3::Zero(), Vec3::UnitZ());
   b.SetGravity(Vec3(0.0, 0.0, -kG));
@@ -65,11 +65,11 @@ TEST(LengthDrivenTendon, StaticSlackRuleOnASpringSupportedMass) {
   for (const double k : {200.0, 20.0}) {
     SCOPED_TRACE("k = " + std::to_string(k));
     ModelBuilder b;
-    const int n = b.AddNode(SE3::Identity(), "mass");
+    const NodeId n = b.AddNode(SE3::Identity(), "mass");
     b.AddRigidBody("mass", n, kMass, Vec3::Zero(), 0.01 * Mat3::Identity());
-    const int j =
+    const JointId j =
         b.AddJointAt("slide", JointType::kPrismatic, kGround, n, Vec3::Zero(), Vec3::UnitZ());
-    b.model().joints[static_cast<std::size_t>(j)].stiffness(0) = k;
+    b.model().joints[j].stiffness(0) = k;
     b.SetGravity(Vec3(0.0, 0.0, -kG));
     b.AddLengthDrivenTendon(
         "cable",
@@ -94,7 +94,7 @@ TEST(LengthDrivenTendon, GradientRowIsTheLengthGradient) {
   const Vec3 offsets[3] = {Vec3(0.03, -0.05, 0.02), Vec3(-0.04, 0.06, 0.01),
                            Vec3(0.02, 0.0, -0.07)};
   for (int i = 0; i < 3; ++i) {
-    const int n = b.AddNode(SE3::Translation(Vec3(0.5 * i, 0.1 * i, 0.0)));
+    const NodeId n = b.AddNode(SE3::Translation(Vec3(0.5 * i, 0.1 * i, 0.0)));
     b.AddRigidBody("b" + std::to_string(i), n, 1.0, Vec3::Zero(), Mat3::Identity());
     eyelets.push_back({n, offsets[i]});
   }
@@ -131,9 +131,9 @@ TEST(LengthDrivenTendon, StraightCantileverEffortIsTheTensionThatGivesTheLength)
     Vec6 stiffness, inertia;
     stiffness << 1e5, 1e5, 1e5, 1.0, 1.0, 1.0;
     inertia << 1.0, 1.0, 1.0, 1.0, 1.0, 1.0;
-    const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 4,
-                                     Section::FromDiagonals(stiffness, inertia));
-    const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+    const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 4,
+                                       Section::FromDiagonals(stiffness, inertia));
+    const std::vector<NodeId> nodes = b.RodNodes(rod);
     b.FixNode(nodes.front());
     std::vector<BodyPoint> eyelets;
     for (int n : nodes) eyelets.push_back({n, Vec3(0.0, 0.02, 0.0)});

@@ -53,7 +53,7 @@ struct Link {
 
 void MakeLink(Link* l, const Drive& drive, double rho_inf, bool restart = true) {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "link");
+  const NodeId node = b.AddNode(SE3::Identity(), "link");
   b.AddRigidBody("link", node, kMass, Vec3(kLc, 0.0, 0.0), kJc * Mat3::Identity());
   l->joint = b.AddJointAt("q", drive.type, kGround, node, Vec3::Zero(), drive.axis);
   Joint& j = b.model().joints[static_cast<std::size_t>(l->joint)];
@@ -191,11 +191,11 @@ TEST(ActuatedJointJ2, EffortOscillationAfterAJumpIsUndampedWithRhoInfOne) {
 TEST(ActuatedJointJ2, SeriesElasticEffortIsTheKernelsSpringForceAndMovesTheLink) {
   const double K = 2.0, D = 0.05, rest = 0.1;
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "link");
+  const NodeId node = b.AddNode(SE3::Identity(), "link");
   b.AddRigidBody("link", node, kMass, Vec3(kLc, 0.0, 0.0), kJc * Mat3::Identity());
-  const int joint =
+  const JointId joint =
       b.AddJointAt("q", JointType::kRevolute, kGround, node, Vec3::Zero(), Vec3::UnitZ());
-  Joint& j = b.model().joints[static_cast<std::size_t>(joint)];
+  Joint& j = b.model().joints[joint];
   j.stiffness(0) = K;
   j.damping(0) = D;
   j.rest(0) = rest;

@@ -43,7 +43,7 @@ struct Pendulum {
 
 void MakePendulum(Pendulum* p, const DynamicOptions& opt) {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "pivot");
+  const NodeId node = b.AddNode(SE3::Identity(), "pivot");
   b.AddRigidBody("bob", node, 1.0, Vec3(-1.0, 0.0, 0.0), 1e-10 * Mat3::Identity());
   b.AddJointAt("pin", JointType::kRevolute, kGround, node, Vec3::Zero(), Vec3::UnitZ());
   b.SetGravity(Vec3(0.0, -kG, 0.0));
@@ -199,7 +199,7 @@ TEST(AdaptiveSteps, DenseOutputInsideStepsIsAsAccurateAsTheStepEnds) {
 // (psi = theta D when v_n = v_{n+1} = D / h), also the velocity.
 TEST(AdaptiveSteps, DenseOutputIsExactForAConstantTwist) {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "body");
+  const NodeId node = b.AddNode(SE3::Identity(), "body");
   b.AddRigidBody("body", node, 2.0, Vec3::Zero(), Vec3(0.1, 0.1, 0.3).asDiagonal());
   b.SetGravity(Vec3::Zero());
   const Model model = b.Build();
@@ -230,7 +230,7 @@ TEST(AdaptiveSteps, HeavyTopKeepsTheValidationTolerances) {
   constexpr double kMass = 15.0;
   const Vec3 com(0.0, 1.0, 0.0), omega0(0.0, 150.0, -4.61538);
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "top");
+  const NodeId node = b.AddNode(SE3::Identity(), "top");
   b.AddRigidBody("top", node, kMass, com, Vec3(0.234375, 0.46875, 0.234375).asDiagonal());
   b.AddJointAt("fixed point", JointType::kSpherical, kGround, node, Vec3::Zero());
   b.SetGravity(Vec3(0.0, 0.0, -9.81));

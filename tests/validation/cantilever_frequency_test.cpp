@@ -53,9 +53,9 @@ struct Cantilever {
 // Rod along x, clamped at x = 0; with tip_force != 0 a dead tip load along z.
 Cantilever MakeCantilever(int num_elements, double tip_force = 0.0) {
   ModelBuilder b;
-  const int rod = b.AddStraightRod("cantilever", Vec3::Zero(), Vec3(kL, 0.0, 0.0), num_elements,
-                                   SlenderSection());
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const RodId rod = b.AddStraightRod("cantilever", Vec3::Zero(), Vec3(kL, 0.0, 0.0), num_elements,
+                                     SlenderSection());
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   if (tip_force != 0.0) {
     PointLoad load;
@@ -141,10 +141,9 @@ TEST(CantileverFrequency, ConstraintsRestrictTheModesToTheNullSpaceOfB) {
   ASSERT_TRUE(reference.ok);
   for (const JointType type : {JointType::kFixed, JointType::kRevolute}) {
     ModelBuilder b;
-    const int rod =
+    const RodId rod =
         b.AddStraightRod("rod", Vec3::Zero(), Vec3(kL, 0.0, 0.0), kElements, SlenderSection());
-    b.AddJointAt("root", type, kGround, b.model().rods[static_cast<std::size_t>(rod)].nodes[0],
-                 Vec3::Zero(), Vec3::UnitY());
+    b.AddJointAt("root", type, kGround, b.RodNodes(rod)[0], Vec3::Zero(), Vec3::UnitY());
     const Model model = b.Build();
     Data data = MakeData(model);
     const ModalResult r = CalcModes(model, data);

@@ -76,9 +76,9 @@ void MakeCapstan(double theta, double ratio, Capstan* c, double pull_speed = 0.0
   stiffness << 1e4, 1e4, 1e4, EI, EI, EI;
   inertia << 0.1, 0.1, 0.1, 1e-5, 1e-5, 1e-5;
   ModelBuilder b;
-  const int rod =
+  const RodId rod =
       b.AddRodAlongPath("cord", path, 1, Section::FromDiagonals(stiffness, inertia), Vec3::UnitY());
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   PointLoad load1;
   load1.node = nodes.front();
   load1.force = -kT1 * Travel(phi0);

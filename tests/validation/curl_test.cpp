@@ -31,9 +31,9 @@ Model MakeCurl() {
   Vec6 k, m;
   k << 1e3, 1e3, 1e3, 1.0, 1.0, 1.0;
   m << 1.0, 1.0, 1.0, 1e-2, 1e-2, 1e-2;
-  const int rod =
+  const RodId rod =
       b.AddStraightRod("soft", Vec3::Zero(), Vec3(1.0, 0.0, 0.0), 3, Section::FromDiagonals(k, m));
-  const std::vector<int>& nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   PointLoad load;
   load.node = nodes.back();

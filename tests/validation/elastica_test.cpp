@@ -52,9 +52,9 @@ TEST_P(Elastica, TipDisplacementAndRotationMatchMattiassonToFourDigits) {
   ModelBuilder b;
   Vec6 k;
   k << kAxialStiffness, kAxialStiffness, kAxialStiffness, 1.0, 1.0, 1.0;
-  const int rod = b.AddStraightRod("cantilever", Vec3::Zero(), Vec3::UnitX(), kElements,
-                                   Section::FromDiagonals(k));
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const RodId rod = b.AddStraightRod("cantilever", Vec3::Zero(), Vec3::UnitX(), kElements,
+                                     Section::FromDiagonals(k));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   PointLoad load;
   load.node = nodes.back();

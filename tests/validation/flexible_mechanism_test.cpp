@@ -68,25 +68,25 @@ struct Mechanism {
 Mechanism MakeMechanism(RodInertia inertia, int num_elements, Gravity gravity) {
   ModelBuilder b;
   const Mat3 J = 1e-4 * Mat3::Identity();
-  const int link1 = b.AddNode(SE3::Identity(), "link1");
+  const NodeId link1 = b.AddNode(SE3::Identity(), "link1");
   b.AddRigidBody("link1", link1, 0.15, Vec3(0.25, 0.0, 0.0), J);
-  const int link2 = b.AddNode(SE3::Translation(Vec3(0.5, 0.0, 0.0)), "link2");
+  const NodeId link2 = b.AddNode(SE3::Translation(Vec3(0.5, 0.0, 0.0)), "link2");
   b.AddRigidBody("link2", link2, 0.15, Vec3(0.25, 0.0, 0.0), J);
   Vec6 k, m;
   k << 1e6, 1e6, 1e6, 1.0, 1.0, 1.0;
   m << 0.1, 0.1, 0.1, 0.5, 0.5, 0.5;
-  const int rod = b.AddStraightRod("arm", Vec3(0.7, 0.0, 0.0), Vec3(1.3, 0.0, 0.0), num_elements,
-                                   Section::FromDiagonals(k, m));
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
-  const int drive =
+  const RodId rod = b.AddStraightRod("arm", Vec3(0.7, 0.0, 0.0), Vec3(1.3, 0.0, 0.0), num_elements,
+                                     Section::FromDiagonals(k, m));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
+  const JointId drive =
       b.AddJointAt("actuated", JointType::kRevolute, kGround, link1, Vec3::Zero(), Vec3::UnitZ());
-  Joint& j0 = b.model().joints[static_cast<std::size_t>(drive)];
+  Joint& j0 = b.model().joints[drive];
   j0.drive = DriveKind::kPrescribed;
   j0.drive_profile = Profile::BangBang(0.0, 1.0, kPi / 6.0);
-  const int soft =
+  const JointId soft =
       b.AddJointAt("soft", JointType::kRevolute, link1, link2, Vec3(0.5, 0.0, 0.0), Vec3::UnitZ());
-  b.model().joints[static_cast<std::size_t>(soft)].stiffness(0) = 10.0;
-  b.model().joints[static_cast<std::size_t>(soft)].damping(0) = 5.0;
+  b.model().joints[soft].stiffness(0) = 10.0;
+  b.model().joints[soft].damping(0) = 5.0;
   b.AddJointAt("weld", JointType::kFixed, link2, nodes.front(), Vec3(0.7, 0.0, 0.0));
   if (gravity == Gravity::kConsistent) {
     b.SetGravity(kGravity);

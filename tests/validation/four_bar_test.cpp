@@ -39,11 +39,12 @@ struct FourBar {
   Model model;
   Data data;
   Integrator integ;
-  int crank = 0, coupler = 0, rocker = 0;  // nodes
+  NodeId crank, coupler, rocker;
   int drive_joint = 0;
 };
 
-void AddLink(ModelBuilder& b, int node, const Vec3& from, const Vec3& to, const std::string& name) {
+void AddLink(ModelBuilder& b, NodeId node, const Vec3& from, const Vec3& to,
+             const std::string& name) {
   b.AddRigidBody(name, node, kMass, 0.5 * (to - from), kJc * Mat3::Identity());
 }
 

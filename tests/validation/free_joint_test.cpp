@@ -41,13 +41,13 @@ Vec6 Relative(const Pair& p) {
 
 void MakePair(Pair* p, const Vec6& damping, double slide_rate, double twist_rate, double rho_inf) {
   ModelBuilder b;
-  const int n1 = b.AddNode(SE3::Translation(Vec3(-0.1, 0, 0)), "one");
-  const int n2 = b.AddNode(SE3::Translation(Vec3(0.2, 0, 0)), "two");
+  const NodeId n1 = b.AddNode(SE3::Translation(Vec3(-0.1, 0, 0)), "one");
+  const NodeId n2 = b.AddNode(SE3::Translation(Vec3(0.2, 0, 0)), "two");
   b.AddRigidBody("one", n1, kM1, Vec3::Zero(), Mat3(kJ1.asDiagonal()));
   b.AddRigidBody("two", n2, kM2, Vec3::Zero(), Mat3(kJ2.asDiagonal()));
-  const int j = b.AddJointAt("spring", JointType::kFree, n1, n2, Vec3::Zero());
-  b.model().joints[static_cast<std::size_t>(j)].stiffness = kStiffness;
-  b.model().joints[static_cast<std::size_t>(j)].damping = damping;
+  const JointId j = b.AddJointAt("spring", JointType::kFree, n1, n2, Vec3::Zero());
+  b.model().joints[j].stiffness = kStiffness;
+  b.model().joints[j].damping = damping;
   p->model = b.Build();
   p->data = MakeData(p->model);
   // Opposite velocities with zero total momentum: u' = slide_rate, t' = twist_rate.

@@ -44,7 +44,7 @@ struct Top {
 
 void MakeTop(Top* t, double rho_inf = 1.0) {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "top");
+  const NodeId node = b.AddNode(SE3::Identity(), "top");
   b.AddRigidBody("top", node, kMass, kCom, InertiaAboutCom());
   b.AddJointAt("fixed point", JointType::kSpherical, kGround, node, Vec3::Zero());
   b.SetGravity(kGravity);

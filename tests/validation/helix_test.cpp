@@ -54,9 +54,9 @@ HelixResult SolveHelix(int num_elements, int load_steps) {
   const Section section = Section::Circle(kLength / 10.0, Material{1.0, 0.5, -1.0, 0.0, 0.0});
   EXPECT_EQ(section.stiffness(3), section.stiffness(5));  // G Ip == E I exactly
   ModelBuilder b;
-  const int rod =
+  const RodId rod =
       b.AddStraightRodFromFrame("helix", HelixFrame(0.0), kLength, num_elements, section);
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   const double kappa_h = 1.0 / (kR0 * (1.0 + kC * kC));
   PointLoad load;

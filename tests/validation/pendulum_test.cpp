@@ -37,7 +37,7 @@ struct Pendulum {
 
 void MakePendulum(Pendulum* p) {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "pivot");
+  const NodeId node = b.AddNode(SE3::Identity(), "pivot");
   b.AddRigidBody("bob", node, 1.0, Vec3(-1.0, 0.0, 0.0), 1e-10 * Mat3::Identity());
   b.AddJointAt("pin", JointType::kRevolute, kGround, node, Vec3::Zero(), Vec3::UnitZ());
   b.SetGravity(Vec3(0.0, -kG, 0.0));

@@ -44,7 +44,7 @@ Cantilever SolveCantilever(int elements, const std::vector<Actuator>& actuators,
   ModelBuilder b;
   b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements,
                    Section::FromDiagonals(V6(kEA, kEA, kEA, kEI, kEI, kEI)));
-  b.FixNode(0);
+  b.FixNode(NodeId(0));
   for (Actuator a : actuators) {
     a.rod = 0;
     b.AddActuator(a);
@@ -259,7 +259,7 @@ TEST(ActuationValidation, DampedDynamicCurlEndsAtTheStaticShape) {
       Section::FromDiagonals(V6(kEA, kEA, kEA, kEI, kEI, kEI), V6(1, 1, 1, 1e-3, 1e-3, 1e-3));
   s.damping = V6(10, 10, 10, 0.5, 0.5, 0.5);
   b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 1, s);
-  b.FixNode(0);
+  b.FixNode(NodeId(0));
   Actuator a = RestCurvature(3.0);
   a.rod = 0;
   a.profile = Profile::SmoothStep(0.0, 1.0);

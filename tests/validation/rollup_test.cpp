@@ -25,16 +25,16 @@ constexpr double kL = 10.0, kEI = 100.0;
 
 struct RollUpModel {
   Model model;
-  std::vector<int> nodes;  // along the rod, root first
+  std::vector<NodeId> nodes;  // along the rod, root first
 };
 
 RollUpModel MakeRollUp(int num_elements, double lambda) {
   ModelBuilder b;
   Vec6 k;
   k << 1e4, 1e4, 1e4, 100.0, kEI, kEI;
-  const int rod = b.AddStraightRod("rollup", Vec3::Zero(), Vec3(kL, 0.0, 0.0), num_elements,
-                                   Section::FromDiagonals(k));
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const RodId rod = b.AddStraightRod("rollup", Vec3::Zero(), Vec3(kL, 0.0, 0.0), num_elements,
+                                     Section::FromDiagonals(k));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   PointLoad load;
   load.node = nodes.back();

@@ -34,11 +34,11 @@ struct Oscillator {
 
 void MakeOscillator(Oscillator* o, JointType type, double damping, double rho_inf = 1.0) {
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "link");
+  const NodeId node = b.AddNode(SE3::Identity(), "link");
   b.AddRigidBody("link", node, kMass, Vec3(kLc, 0.0, 0.0), kJc * Mat3::Identity());
   const Vec3 axis = type == JointType::kRevolute ? Vec3::UnitZ() : Vec3::UnitX();
-  const int j = b.AddJointAt("soft", type, kGround, node, Vec3::Zero(), axis);
-  Joint& joint = b.model().joints[static_cast<std::size_t>(j)];
+  const JointId j = b.AddJointAt("soft", type, kGround, node, Vec3::Zero(), axis);
+  Joint& joint = b.model().joints[j];
   joint.stiffness(0) = kK;
   joint.damping(0) = damping;
   joint.rest(0) = -kA0;

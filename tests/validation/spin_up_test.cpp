@@ -30,19 +30,18 @@ struct SpinUp {
 
 SpinUp MakeSpinUp() {
   ModelBuilder b;
-  const int hub = b.AddNode(SE3::Identity(), "hub");
+  const NodeId hub = b.AddNode(SE3::Identity(), "hub");
   b.AddRigidBody("hub", hub, 1.0, Vec3::Zero(), 1e-2 * Mat3::Identity());
   Vec6 k, m;
   k << 1e4, 1e4, 1e4, 2.0, 2.0, 2.0;
   m << 0.5, 0.5, 0.5, 1e-3, 1e-3, 1e-3;
-  const int rod = b.AddStraightRod("arm", Vec3(0.1, 0.0, 0.0), Vec3(1.1, 0.0, 0.0), 6,
-                                   Section::FromDiagonals(k, m));
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
-  const int drive =
+  const RodId rod = b.AddStraightRod("arm", Vec3(0.1, 0.0, 0.0), Vec3(1.1, 0.0, 0.0), 6,
+                                     Section::FromDiagonals(k, m));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
+  const JointId drive =
       b.AddJointAt("motor", JointType::kRevolute, kGround, hub, Vec3::Zero(), Vec3::UnitZ());
-  b.model().joints[static_cast<std::size_t>(drive)].drive = DriveKind::kPrescribed;
-  b.model().joints[static_cast<std::size_t>(drive)].drive_profile =
-      Profile::SmoothStep(0.0, 1.0, 0.5 * kPi);
+  b.model().joints[drive].drive = DriveKind::kPrescribed;
+  b.model().joints[drive].drive_profile = Profile::SmoothStep(0.0, 1.0, 0.5 * kPi);
   b.AddJointAt("clamp", JointType::kFixed, hub, nodes.front(), Vec3(0.1, 0.0, 0.0));
   return {b.Build(), hub, nodes.back(), drive};
 }

@@ -35,22 +35,22 @@ struct ChainRun {
 Model BuildChain() {
   ModelBuilder b;
   const Mat3 J = Vec3(1e-4, 2e-4, 3e-4).asDiagonal();
-  int nodes[3];
+  NodeId nodes[3];
   for (int i = 0; i < 3; ++i) {
     nodes[i] = b.AddNode(SE3::Translation(Vec3(0.5 * i, 0.0, 0.0)), "n" + std::to_string(i));
     b.AddRigidBody("link" + std::to_string(i), nodes[i], 0.15, Vec3(0.25, 0.0, 0.0), J);
   }
-  const int s = b.AddJointAt("s", JointType::kSpherical, kGround, nodes[0], Vec3::Zero());
-  const int u = b.AddJointAt("u", JointType::kUniversal, nodes[0], nodes[1], Vec3(0.5, 0, 0),
-                             Vec3::UnitZ(), Vec3::UnitY());
-  const int r = b.AddJointAt("r", JointType::kRevolute, nodes[1], nodes[2], Vec3(1.0, 0, 0),
-                             Vec3(0.0, 1.0, 1.0).normalized());
-  Joint& js = b.model().joints[static_cast<std::size_t>(s)];
+  const JointId s = b.AddJointAt("s", JointType::kSpherical, kGround, nodes[0], Vec3::Zero());
+  const JointId u = b.AddJointAt("u", JointType::kUniversal, nodes[0], nodes[1], Vec3(0.5, 0, 0),
+                                 Vec3::UnitZ(), Vec3::UnitY());
+  const JointId r = b.AddJointAt("r", JointType::kRevolute, nodes[1], nodes[2], Vec3(1.0, 0, 0),
+                                 Vec3(0.0, 1.0, 1.0).normalized());
+  Joint& js = b.model().joints[s];
   js.stiffness.head<3>().setConstant(2.0);
-  Joint& ju = b.model().joints[static_cast<std::size_t>(u)];
+  Joint& ju = b.model().joints[u];
   ju.stiffness.head<2>().setConstant(3.0);
   ju.rest.head<2>() << 0.4, -0.3;
-  Joint& jr = b.model().joints[static_cast<std::size_t>(r)];
+  Joint& jr = b.model().joints[r];
   jr.stiffness(0) = 1.0;
   jr.rest(0) = 0.5;
   b.SetGravity(Vec3(0.0, 0.0, -9.81));

@@ -15,7 +15,7 @@ namespace {
 
 struct Cantilever {
   Model model;
-  std::vector<int> nodes;
+  std::vector<NodeId> nodes;
 };
 
 // Cantilever of length 1 along x from `origin`, EI = 1, EA = GA = axial, dead tip force
@@ -25,9 +25,9 @@ Cantilever MakeCantilever(int num_elements, double alpha, double axial,
   ModelBuilder b;
   Vec6 k;
   k << axial, axial, axial, 1.0, 1.0, 1.0;
-  const int rod = b.AddStraightRod("cantilever", origin, origin + Vec3::UnitX(), num_elements,
-                                   Section::FromDiagonals(k));
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const RodId rod = b.AddStraightRod("cantilever", origin, origin + Vec3::UnitX(), num_elements,
+                                     Section::FromDiagonals(k));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   if (clamped) b.FixNode(nodes.front());
   PointLoad load;
   load.node = nodes.back();

@@ -33,10 +33,10 @@ struct Cantilever {
 
 Cantilever SolveCantilever(int elements, double tension) {
   ModelBuilder b;
-  const int rod =
+  const RodId rod =
       b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements,
                        Section::FromDiagonals((Vec6() << kEA, kEA, kEA, kEI, kEI, kEI).finished()));
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   std::vector<BodyPoint> eyelets;
   for (int n : nodes) eyelets.push_back({n, Vec3(0.0, kOffset, 0.0)});
@@ -131,7 +131,7 @@ TEST(TendonValidation, StrainEnergyChangesByMinusTensionTimesTendonLength) {
 double OscillatorError(double h, double duration) {
   const double m = 2.0, k = 50.0, c = 1.0;
   ModelBuilder b;
-  const int n = b.AddNode(SE3::Identity(), "mass");
+  const NodeId n = b.AddNode(SE3::Identity(), "mass");
   b.AddRigidBody("mass", n, m, Vec3::Zero(), Mat3::Identity());
   ForceElement fe;
   fe.name = "spring";
@@ -193,8 +193,8 @@ struct MomentumDrift {
 };
 MomentumDrift TumblingPair(double h) {
   ModelBuilder b;
-  const int n1 = b.AddNode(SE3::Identity(), "one");
-  const int n2 = b.AddNode(SE3::Translation(Vec3(1, 0, 0)), "two");
+  const NodeId n1 = b.AddNode(SE3::Identity(), "one");
+  const NodeId n2 = b.AddNode(SE3::Translation(Vec3(1, 0, 0)), "two");
   b.AddRigidBody("one", n1, 0.7, Vec3::Zero(), Vec3(0.02, 0.03, 0.04).asDiagonal().toDenseMatrix());
   b.AddRigidBody("two", n2, 1.3, Vec3::Zero(), Vec3(0.05, 0.02, 0.03).asDiagonal().toDenseMatrix());
   ForceElement fe;
@@ -245,8 +245,8 @@ TEST(ForceElementValidation, SpringAlongTheLineOfCentresConservesMomentumToRound
   // Without rotation the body-frame and world velocities coincide: the momentum of two bodies
   // sliding on a spring along the line through their centres is exact to round-off.
   ModelBuilder b;
-  const int n1 = b.AddNode(SE3::Identity(), "one");
-  const int n2 = b.AddNode(SE3::Translation(Vec3(1, 0, 0)), "two");
+  const NodeId n1 = b.AddNode(SE3::Identity(), "one");
+  const NodeId n2 = b.AddNode(SE3::Translation(Vec3(1, 0, 0)), "two");
   b.AddRigidBody("one", n1, 0.7, Vec3::Zero(), Mat3::Identity());
   b.AddRigidBody("two", n2, 1.3, Vec3::Zero(), Mat3::Identity());
   ForceElement fe;

@@ -39,9 +39,9 @@ double TipDeflection(double F, int num_elements) {
   ModelBuilder b;
   const Section section =
       Section::Circle(kRadius, Material{kE, kG, -1.0, 5000.0, kShearCoefficient});
-  const int rod =
+  const RodId rod =
       b.AddStraightRod("timoshenko", Vec3::Zero(), Vec3(kL, 0.0, 0.0), num_elements, section);
-  const std::vector<int> nodes = b.model().rods[static_cast<std::size_t>(rod)].nodes;
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   PointLoad load;
   load.node = nodes.back();

@@ -65,7 +65,7 @@ struct FreeBody {
 
 void MakeFreeBody(FreeBody* b) {
   ModelBuilder mb;
-  const int node = mb.AddNode(SE3::Identity(), "body");
+  const NodeId node = mb.AddNode(SE3::Identity(), "body");
   mb.AddRigidBody("body", node, 1.0, Vec3::Zero(), kI.asDiagonal());
   b->model = mb.Build();
   b->data = MakeData(b->model);

@@ -18,8 +18,8 @@ namespace screwfem {
 struct JointSpec {
   std::string name;
   JointType type = JointType::kRevolute;
-  int node_a = kGround;  // the two sides: node indices or kGround (not both the same)
-  int node_b = kGround;
+  NodeId node_a = kGround;  // the two sides: nodes or kGround (not both the same)
+  NodeId node_b = kGround;
   Vec3 point = Vec3::Zero();  // [m], world
   // Unit axis of the joint type (plane normal of a planar joint); axis2 is the universal
   // joint's second axis (orthogonal to axis); pitch [m/rad] of a helical joint. Used as the
@@ -44,33 +44,45 @@ struct JointSpec {
   Vec6 initial_coordinate = Vec6::Zero(), initial_rate = Vec6::Zero();
 };
 
-// The result of ModelBuilder::FindNodeAt: the nearest node and its distance; node is -1 when
-// the nearest one is farther than the tolerance (or there is none).
+// The result of ModelBuilder::FindNodeAt: the nearest node and its distance; node is invalid
+// (-1) when the nearest one is farther than the tolerance (or there is none).
 struct NodeMatch {
-  int node = -1;
-  int nearest = -1;       // the nearest node, even when out of tolerance
+  NodeId node;
+  NodeId nearest;         // the nearest node, even when out of tolerance
   double distance = 0.0;  // [m] to the nearest node (infinity when there is none)
 };
 
+// A contact entity: a rod or a rigid body (ModelBuilder's contact groups and exclusions).
+struct ContactEntity {
+  ContactEntity(RodId r) : rod(true), index(r) {}    // NOLINT(google-explicit-constructor)
+  ContactEntity(BodyId b) : rod(false), index(b) {}  // NOLINT(google-explicit-constructor)
+  bool rod;
+  int index;
+};
+
 // Builds a Model through a small C++ API; Build() validates everything and computes the layout.
+// It hands out and takes typed ids (model/ids.h): a NodeId where a RodId or BodyId is expected
+// does not compile.
 class ModelBuilder {
  public:
   // A node with a frame. Names must be unique when given.
-  int AddNode(const SE3& frame, std::string name = {});
-  void FixNode(int node);
+  NodeId AddNode(const SE3& frame, std::string name = {});
+  void FixNode(NodeId node);
   // A straight rod from p0 to p1 with n elements. Node frames have x along the rod and z as
   // close as possible to `up` (any vector not parallel to the rod). Optional existing end
   // nodes are shared (their positions must coincide with p0/p1; the rod is then rigidly joined
   // there).
-  int AddStraightRod(std::string name, const Vec3& p0, const Vec3& p1, int num_elements,
-                     const Section& section, const Vec3& up = Vec3::UnitZ(), int start_node = -1,
-                     int end_node = -1);
+  RodId AddStraightRod(std::string name, const Vec3& p0, const Vec3& p1, int num_elements,
+                       const Section& section, const Vec3& up = Vec3::UnitZ(),
+                       NodeId start_node = {}, NodeId end_node = {});
   // A straight rod of given length along the x axis of `root` (root.R gives all node frames).
-  int AddStraightRodFromFrame(std::string name, const SE3& root, double length, int num_elements,
-                              const Section& section, int start_node = -1, int end_node = -1);
+  RodId AddStraightRodFromFrame(std::string name, const SE3& root, double length, int num_elements,
+                                const Section& section, NodeId start_node = {},
+                                NodeId end_node = {});
   // A rod through existing nodes (curved references allowed: element references are
   // log(H_a^-1 H_b) of the nodes' reference frames).
-  int AddRodThroughNodes(std::string name, const std::vector<int>& nodes, const Section& section);
+  RodId AddRodThroughNodes(std::string name, const std::vector<NodeId>& nodes,
+                           const Section& section);
   // A rod along the polyline `path` (at least two points [m], world) with
   // `elements_per_segment` elements on each segment. Node frames have x along the segment and z
   // as close as possible to `up`; at interior path points x is along the bisector of the two
@@ -79,29 +91,32 @@ class ModelBuilder {
   // reference frames must equal the path's frames there. Throws InputError (entity: the rod,
   // part "path[i]" for a segment of zero length or a point where the path turns back on itself,
   // "start_node"/"end_node" for a shared node that does not fit).
-  int AddRodAlongPath(std::string name, const std::vector<Vec3>& path, int elements_per_segment,
-                      const Section& section, const Vec3& up = Vec3::UnitZ(), int start_node = -1,
-                      int end_node = -1);
+  RodId AddRodAlongPath(std::string name, const std::vector<Vec3>& path, int elements_per_segment,
+                        const Section& section, const Vec3& up = Vec3::UnitZ(),
+                        NodeId start_node = {}, NodeId end_node = {});
   // The node nearest to world point p in the reference configuration, among the nodes of rod
-  // `rod` (all nodes when rod < 0), within `tolerance` [m]. A negative tolerance means
+  // `rod` (all nodes when rod is invalid), within `tolerance` [m]. A negative tolerance means
   // 1e-8 max(1, |p|, the distance between the rod's end nodes).
-  NodeMatch FindNodeAt(const Vec3& p, int rod = -1, double tolerance = -1.0) const;
+  NodeMatch FindNodeAt(const Vec3& p, RodId rod = {}, double tolerance = -1.0) const;
   // Reference arc length [m] of a rod added so far (the sum of its elements' lengths, as Build
   // computes them).
-  double RodLength(int rod) const;
-  int AddRigidBody(std::string name, int node, double mass, const Vec3& com, const Mat3& inertia);
-  int AddJoint(const Joint& joint);  // offsets, basis and names filled by the caller
+  double RodLength(RodId rod) const;
+  // The nodes of a rod added so far, in order along it.
+  std::vector<NodeId> RodNodes(RodId rod) const;
+  BodyId AddRigidBody(std::string name, NodeId node, double mass, const Vec3& com,
+                      const Mat3& inertia);
+  JointId AddJoint(const Joint& joint);  // offsets, basis and names filled by the caller
   // A joint from its spec (AddJointAt plus springs, dampers and drive). Throws InputError
   // (entity: the joint, part "node_a"/"node_b" for an invalid side).
-  int AddJoint(const JointSpec& spec);
+  JointId AddJoint(const JointSpec& spec);
   // A joint at world point `point` with world axis `axis` (plane normal for planar joints;
   // `axis2` is the second axis of a universal joint), between node_a and node_b (either may be
   // kGround). The joint frame is world-aligned in the reference configuration, so H_J = I and
-  // the coordinates are 0 there (elements/joint.h). Returns the joint index; AddJoint(JointSpec)
+  // the coordinates are 0 there (elements/joint.h). Returns the joint; AddJoint(JointSpec)
   // also sets stiffness, damping and a drive.
-  int AddJointAt(std::string name, JointType type, int node_a, int node_b, const Vec3& point,
-                 const Vec3& axis = Vec3::UnitZ(), const Vec3& axis2 = Vec3::Zero(),
-                 double pitch = 0.0);
+  JointId AddJointAt(std::string name, JointType type, NodeId node_a, NodeId node_b,
+                     const Vec3& point, const Vec3& axis = Vec3::UnitZ(),
+                     const Vec3& axis2 = Vec3::Zero(), double pitch = 0.0);
   // A tendon through `eyelets` (at least two body points, in routing order: node frames with
   // node-frame offsets, or world points on kGround) pulling with tension tau(t) [N]
   // (docs/numerics.md, "Tendons and force elements"). Eyelets sit on nodes: an eyelet on a rod is a section frame's node
@@ -109,35 +124,35 @@ class ModelBuilder {
   // two eyelets, valid nodes, finite offsets, consecutive eyelets apart in the reference
   // configuration, and a tension profile that cannot become negative (each term's lower bound
   // summed). Errors carry EntityKind::kTendon, part "eyelets[i]" for an eyelet.
-  int AddTendon(std::string name, std::vector<BodyPoint> eyelets, const Profile& tension);
+  TendonId AddTendon(std::string name, std::vector<BodyPoint> eyelets, const Profile& tension);
   // A tendon drawn by length (model.h, TendonDrive::kLength): the constraint L(q) = L_p(t) [m]
   // with the tension as its multiplier, slack while the route is shorter than L_p.
-  int AddLengthDrivenTendon(std::string name, std::vector<BodyPoint> eyelets,
-                            const Profile& length);
+  TendonId AddLengthDrivenTendon(std::string name, std::vector<BodyPoint> eyelets,
+                                 const Profile& length);
   // A spring-damper-actuator between two body points (model.h, ForceElement); a negative
   // rest_length means the reference distance. An end may give a rod and an arc length: Build
   // places it as a tendon eyelet (on the node there or between nodes: ForceElementSpanKind,
   // elements/force_span.h). Build checks: valid ends, not both on one node (or the ground),
   // finite values, non-negative stiffness and damping, ends apart in the reference
   // configuration. Errors carry EntityKind::kForceElement, part "a" or "b" for an end.
-  int AddForceElement(const ForceElement& element);
+  ForceElementId AddForceElement(const ForceElement& element);
   // The node of rod `rod` at reference arc length s [m] (from its first node), within
   // `tolerance` [m] (negative: 1e-8 max(1, rod length)); node -1 and the nearest node and its
   // arc-length distance otherwise.
-  NodeMatch FindRodNodeAtArcLength(int rod, double s, double tolerance = -1.0) const;
+  NodeMatch FindRodNodeAtArcLength(RodId rod, double s, double tolerance = -1.0) const;
   // Internal actuation of a rod (model.h, Actuator; docs/numerics.md, "Active stress and rest strain"). Build checks: a valid
   // rod, [from, to] inside it and at nodes (an error names the nearest node's arc length),
   // positive area for pressure and muscle, non-negative max_stress, finite offset and vector,
   // the profile's inputs, unique names. Errors carry EntityKind::kActuator.
-  int AddActuator(const Actuator& actuator);
-  int AddPointLoad(const PointLoad& load);
-  int AddRodLoad(const RodLoad& load);
+  ActuatorId AddActuator(const Actuator& actuator);
+  PointLoadId AddPointLoad(const PointLoad& load);
+  RodLoadId AddRodLoad(const RodLoad& load);
   void SetGravity(const Vec3& g);
   // The initial body velocity of a node [v; w] in its frame (AssembleInitialState).
-  void SetInitialVelocity(int node, const Vec6& velocity);
+  void SetInitialVelocity(NodeId node, const Vec6& velocity);
   // A run-time input (Model::inputs) that profiles take with Profile::Input(index); returns
   // the index. Names are unique.
-  int AddInput(std::string name, double default_value = 0.0);
+  InputId AddInput(std::string name, double default_value = 0.0);
   // Contact (docs/numerics.md, "Contact", elements/contact.h). A rod in contact is a chain of capsules
   // of `radius` around its element chords (its nodes' spheres against planes); a rigid body
   // carries shapes in its frame (model.h, ContactShape); obstacles are fixed in the world.
@@ -145,17 +160,17 @@ class ModelBuilder {
   // and pairs whose group bitmasks do not match (model.h, ContactGroup), and resolves the
   // law's defaults (ContactSettings). Errors carry EntityKind::kContactRod, kContactShape or
   // kObstacle: non-positive sizes, unknown rods or bodies, mu < 0, a zero plane normal.
-  int AddContactRod(int rod, double radius);
-  int AddContactShape(const ContactShape& shape);
-  int AddObstacle(const ContactObstacle& obstacle);
-  void SetContactGroup(bool rod, int index, unsigned contype, unsigned conaffinity);
-  void ExcludeContact(bool rod, int index, int obstacle);
+  ContactRodId AddContactRod(RodId rod, double radius);
+  ContactShapeId AddContactShape(const ContactShape& shape);
+  ObstacleId AddObstacle(const ContactObstacle& obstacle);
+  void SetContactGroup(ContactEntity entity, unsigned contype, unsigned conaffinity);
+  void ExcludeContact(ContactEntity entity, ObstacleId obstacle);
   void SetContactSettings(const ContactSettings& settings);
   // Pairs between moving shapes (elements/shape_pair.h): Build also pairs every two contact
   // entities (rods, bodies with shapes; a box only against spheres) whose bitmasks match,
   // unless excluded here or joined (a shared node or a joint between their nodes); a rod with
   // itself when ContactSettings::self.
-  void ExcludeContactPair(bool rod_a, int index_a, bool rod_b, int index_b);
+  void ExcludeContactPair(ContactEntity a, ContactEntity b);
   Model& model() { return model_; }
   const Model& model() const { return model_; }
   // The memory the model may need [bytes] (0: the process default; model/memory.h). Build()

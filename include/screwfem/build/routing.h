@@ -18,7 +18,7 @@ namespace screwfem {
 // (a helix of that radius and pitch around the rod's axis; a negative pitch turns the other
 // way).
 struct RodRoute {
-  int rod = -1;
+  int rod = -1;                // the rod (a RodId's value; -1 in a scene spec: its body)
   int every = 1;               // every k-th node (k >= 1)
   double from = 0.0;           // [m] reference arc length where the route starts
   double to = -1.0;            // [m] where it ends; negative: the rod's end
@@ -30,7 +30,7 @@ struct RodRoute {
 
 // The reference arc length at each node of rod `rod` of the builder's model, summed in order
 // as ModelBuilder::RodLength sums it (the same doubles). Throws InputError for an invalid rod.
-std::vector<double> RodNodeArcLengths(const ModelBuilder& builder, int rod);
+std::vector<double> RodNodeArcLengths(const ModelBuilder& builder, RodId rod);
 
 // The eyelets of a route, in order along the rod (node body points: BodyPoint{node, offset}).
 // Throws InputError (plain message, no entity) for an invalid rod, every < 1, a range that is

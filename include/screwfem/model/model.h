@@ -17,6 +17,7 @@
 #include "screwfem/linalg/sparse_lu.h"
 #include "screwfem/model/enum_names.h"
 #include "screwfem/model/errors.h"
+#include "screwfem/model/ids.h"
 #include "screwfem/model/profile.h"
 #include "screwfem/model/section.h"
 
@@ -26,7 +27,7 @@ using Vec12 = Eigen::Matrix<double, 12, 1>;
 using Mat12 = Eigen::Matrix<double, 12, 12>;
 using Mat6X = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, 6>;
 
-constexpr int kGround = -1;  // node index standing for the world frame
+// kGround (model/ids.h): the node index -1 standing for the world frame.
 
 struct Node {
   std::string name;

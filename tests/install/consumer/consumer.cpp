@@ -12,7 +12,7 @@ int main(int argc, char** argv) {
   using namespace screwfem;
   constexpr double kL = 0.4, kMass = 0.2, kG = 9.81, kJ = 1e-6;
   ModelBuilder b;
-  const int node = b.AddNode(SE3::Identity(), "link");
+  const NodeId node = b.AddNode(SE3::Identity(), "link");
   b.AddRigidBody("link", node, kMass, Vec3(kL, 0, 0), kJ * Mat3::Identity());
   b.AddJointAt("hinge", JointType::kRevolute, kGround, node, Vec3::Zero(), Vec3::UnitY());
   b.SetGravity(Vec3(0, 0, -kG));
