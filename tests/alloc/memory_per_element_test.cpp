@@ -51,7 +51,7 @@ Model Cantilever(int elements) {
   ModelBuilder b;
   const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(1.0, 0, 0), elements,
                                    Section::FromDiagonals(stiffness, inertia));
-  b.FixNode(b.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  b.FixNode(NodeId(b.model().rods[static_cast<std::size_t>(rod)].nodes.front()));
   b.SetGravity(Vec3(0, 0, -9.81));
   b.model().rod_inertia = RodInertia::kExact;
   return b.Build();

@@ -360,7 +360,7 @@ TEST(NoAllocation, ParallelAssemblyAllocatesNothing) {
   ModelBuilder b;
   const int rod =
       b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), 600, Section::FromDiagonals(K, M));
-  b.FixNode(b.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  b.FixNode(NodeId(b.model().rods[static_cast<std::size_t>(rod)].nodes.front()));
   b.SetGravity(Vec3(0, 0, -9.81));
   const Model models[] = {MixedModel(), b.Build()};
   for (const Model& model : models) {

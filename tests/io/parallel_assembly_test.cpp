@@ -35,7 +35,7 @@ Model Cantilever(int n) {
   section.damping << 0, 0, 0, 0.01, 0.01, 0.01;
   ModelBuilder b;
   const int rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), n, section);
-  b.FixNode(b.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  b.FixNode(NodeId(b.model().rods[static_cast<std::size_t>(rod)].nodes.front()));
   b.SetGravity(Vec3(0, 0, -9.81));
   return b.Build();
 }

@@ -45,7 +45,7 @@ Column MakeColumn(double p_ref, double imperfection) {
   const Section s =
       Section::FromDiagonals((Vec6() << kEA, kEA, kEA, kEI, kEI, kEI).finished());
   const int rod = b.AddStraightRod("column", Vec3::Zero(), Vec3(kL, 0, 0), kElements, s);
-  b.FixNode(b.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  b.FixNode(NodeId(b.model().rods[static_cast<std::size_t>(rod)].nodes.front()));
   Column c;
   c.tip = b.model().rods[static_cast<std::size_t>(rod)].nodes.back();
   PointLoad load;
