@@ -246,9 +246,15 @@ void SetInitialTendonSlack(const Model& model, Data& data) {
 bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
                         const DynamicOptions& options, std::string* message) {
   integ.options = options;
-  if (options.constraints == ConstraintFormulation::kAuto)
+  if (options.constraints == ConstraintFormulation::kAuto) {
+    // Rigid mechanisms: GGL with the perturbed start (exact efforts at every step); models
+    // with rods: index 3 with the plain start (the perturbation is skipped at a rod model's
+    // starts anyway, its axial modes unresolved, and its workspace would cost 0.2 kB per
+    // element).
     integ.options.constraints =
         model.rods.empty() ? ConstraintFormulation::kGgl : ConstraintFormulation::kIndex3;
+    integ.options.perturbed_start = options.perturbed_start && model.rods.empty();
+  }
   integ.params = GeneralizedAlpha::FromSpectralRadius(options.rho_inf);
   const int nv = model.nv, nc = model.nc;
   integ.a = Eigen::VectorXd::Zero(nv);
@@ -256,13 +262,12 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
       Eigen::VectorXd::Zero(nv);
   integ.lambda_start = integ.phi_plus = integ.phi_minus = integ.phi_zero = integ.bdot_v =
       Eigen::VectorXd::Zero(nc);
-  if (integ.options.constraints == ConstraintFormulation::kGgl)
-    AllocateGglWorkspace(model, integ);
+  if (integ.options.constraints == ConstraintFormulation::kGgl) AllocateGglWorkspace(model, integ);
   // The workspaces of error-controlled steps and of the perturbed start only for the runs
   // that use them (PrepareAdaptiveSteps; options.perturbed_start): 12 vectors of nv and two
   // copies of the configuration, 0.75 kB per rod element that fixed steps never touch.
   ReleaseAdaptiveSteps(integ);
-  if (options.perturbed_start && integ.params.alpha_m != integ.params.alpha_f) {  // acts
+  if (integ.options.perturbed_start && integ.params.alpha_m != integ.params.alpha_f) {
     integ.perturb_v = integ.perturb_vdot = Eigen::VectorXd::Zero(nv);
     integ.perturb_lambda = Eigen::VectorXd::Zero(nc);
     SaveState(data, &integ.perturb_q);

@@ -42,8 +42,7 @@ struct Column {
 
 Column MakeColumn(double p_ref, double imperfection) {
   ModelBuilder b;
-  const Section s =
-      Section::FromDiagonals((Vec6() << kEA, kEA, kEA, kEI, kEI, kEI).finished());
+  const Section s = Section::FromDiagonals((Vec6() << kEA, kEA, kEA, kEI, kEI, kEI).finished());
   const int rod = b.AddStraightRod("column", Vec3::Zero(), Vec3(kL, 0, 0), kElements, s);
   b.FixNode(NodeId(b.model().rods[static_cast<std::size_t>(rod)].nodes.front()));
   Column c;
@@ -69,8 +68,8 @@ TEST(EulerColumn, ArcLengthWithDefaultSettingsTracesThePostBucklingElastica) {
     if (p < 1.2 * kCritical) return;  // near P_cr the imperfection decides the deflection
     const double k = Modulus(p), K = std::comp_ellint_1(k), E = std::comp_ellint_2(k);
     const Vec3 tip = d.H[static_cast<std::size_t>(c.tip)].x;
-    worst = std::max(worst, std::hypot(tip.x() - kL * (2.0 * E / K - 1.0),
-                                       tip.y() - 2.0 * k * kL / K));
+    worst =
+        std::max(worst, std::hypot(tip.x() - kL * (2.0 * E / K - 1.0), tip.y() - 2.0 * k * kL / K));
     ++checked;
   });
   ASSERT_TRUE(r.converged) << r.message;

@@ -135,7 +135,8 @@ struct DynamicOptions {
   // |vdot_s - vdot| > kPerturbedStartMaxChange |vdot| (scaled infinity norms, as for Newton's
   // increments) the perturbation is a finite difference across modes the step does not
   // resolve (stiff contacts, axial modes of a rod, a tendon going slack), and the step starts
-  // from a = vdot instead (counted in Integrator::perturbed_start_skips).
+  // from a = vdot instead (counted in Integrator::perturbed_start_skips). Under
+  // constraints kAuto it applies to models without rods only (see kAuto).
   bool perturbed_start = true;
   // How the joints' constraints enter the step (docs/numerics.md, "Stabilised index 2"):
   //   kIndex3: phi(q) = 0 at the end of each step (docs/architecture.md, "One time step");
