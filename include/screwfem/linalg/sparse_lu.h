@@ -7,10 +7,14 @@
 // BandedLU it replaces (the permuted unknowns of Model::permutation). SetPattern allocates and
 // runs KLU's symbolic analysis (its fill-reducing ordering, AMD on the block-triangular
 // blocks) once per pattern; Factorize() factorises numerically the first time (klu_factor)
-// and refactorises with the same pivot sequence afterwards (klu_refactor, which allocates
-// nothing), falling back to a full factorisation with new pivots when the refactorised pivots
-// are poor (a zero pivot, or a reciprocal pivot growth below kMinPivotGrowth): counted in
-// fallbacks(). Factorize() after the first, Solve() and the entry writes never allocate.
+// and refactorises afterwards (klu_refactor, which allocates nothing) with one of up to 8
+// kept pivot sequences, the most recently successful first: matrices of different kinds on
+// one pattern (a step's iteration matrix, the mass matrix [M B^T; B 0] of restarts, held and
+// acting tendon rows) each find a sequence that suits them. When none does (a zero pivot, or
+// a reciprocal pivot growth below kMinPivotGrowth) it factorises with new pivots, kept as
+// another sequence (this allocates; counted in fallbacks()). KLU's diagonal preference is 0.1
+// (its default 0.001), so one sequence suits more matrices. Refactorisations, Solve() and the
+// entry writes never allocate.
 #pragma once
 
 #include <Eigen/Core>
