@@ -298,8 +298,10 @@ void BindValues(py::module_& m) {
   m.def("route_along_rod", &RouteAlongRod, py::arg("builder"), py::arg("route"),
         "The eyelets (BodyPoint list, in order along the rod) of a RodRoute on a builder's rod, "
         "for add_tendon; the scene's 'route' items expand through the same function.");
-  m.def("rod_node_arc_lengths", &RodNodeArcLengths, py::arg("builder"), py::arg("rod"),
-        "Reference arc length of each node of a builder's rod [m].");
+  m.def(
+      "rod_node_arc_lengths", [](const ModelBuilder& b, RodId rod) { return b.RodArcLengths(rod); },
+      py::arg("builder"), py::arg("rod"),
+      "Reference arc length of each node of a builder's rod [m].");
 
   py::class_<ForceElement>(m, "ForceElement",
                            "A spring-damper-actuator between two body points (model.h): force "

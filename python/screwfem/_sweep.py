@@ -615,6 +615,8 @@ def notable_variants(df, names):
     """{variant_id: why} of the variants worth keeping: every one that did not complete, and
     among the completed ones those with the smallest and largest value of each reproducible
     metric (not wall or CPU time)."""
+    import pandas as pd
+
     out = {}
     for _, row in df[df["status"] != "completed"].iterrows():
         out[row["variant_id"]] = row["status"]
@@ -622,7 +624,7 @@ def notable_variants(df, names):
     for c in df.columns:
         if c in NOT_METRICS or c in names or c in UNREPRODUCIBLE:
             continue
-        values = __import__("pandas").to_numeric(done[c], errors="coerce")
+        values = pd.to_numeric(done[c], errors="coerce")
         if values.notna().sum() < 2 or values.min() == values.max():
             continue
         for what, i in (("min", values.idxmin()), ("max", values.idxmax())):

@@ -199,7 +199,7 @@ NodeMatch ModelBuilder::FindNodeAt(const Vec3& p, RodId rod, double tolerance) c
   return match;
 }
 
-double ModelBuilder::RodLength(RodId rod) const {
+std::vector<double> ModelBuilder::RodArcLengths(RodId rod) const {
   const Model& m = model_;
   if (!rod.valid() || rod.index() >= m.rods.size())
     throw InputError("RodLength: no rod " + std::to_string(rod));
@@ -208,14 +208,17 @@ double ModelBuilder::RodLength(RodId rod) const {
   for (int n : r.nodes)
     if (n < 0 || n >= num_nodes)
       throw InputError("RodLength: rod " + std::to_string(rod) + " has an invalid node");
-  double length = 0.0;
-  for (std::size_t i = 0; i + 1 < r.nodes.size(); ++i)
-    length += LogSE3(m.nodes[static_cast<std::size_t>(r.nodes[i])].reference.Inverse() *
-                     m.nodes[static_cast<std::size_t>(r.nodes[i + 1])].reference)
-                  .head<3>()
-                  .norm();
-  return length;
+  std::vector<double> arcs(std::max<std::size_t>(r.nodes.size(), 1), 0.0);
+  for (std::size_t i = 1; i < r.nodes.size(); ++i)
+    arcs[i] =
+        arcs[i - 1] + LogSE3(m.nodes[static_cast<std::size_t>(r.nodes[i - 1])].reference.Inverse() *
+                             m.nodes[static_cast<std::size_t>(r.nodes[i])].reference)
+                          .head<3>()
+                          .norm();
+  return arcs;
 }
+
+double ModelBuilder::RodLength(RodId rod) const { return RodArcLengths(rod).back(); }
 
 std::vector<NodeId> ModelBuilder::RodNodes(RodId rod) const {
   if (!rod.valid() || rod.index() >= model_.rods.size())
@@ -228,19 +231,13 @@ std::vector<NodeId> ModelBuilder::RodNodes(RodId rod) const {
 }
 
 NodeMatch ModelBuilder::FindRodNodeAtArcLength(RodId rod, double s, double tolerance) const {
-  const double length = RodLength(rod);  // validates the rod and its nodes
+  const std::vector<double> arcs = RodArcLengths(rod);  // validates the rod and its nodes
   const Rod& r = model_.rods[rod.index()];
-  if (tolerance < 0.0) tolerance = 1e-8 * std::max(1.0, length);
+  if (tolerance < 0.0) tolerance = 1e-8 * std::max(1.0, arcs.back());
   NodeMatch match;
   match.distance = std::numeric_limits<double>::infinity();
-  double arc = 0.0;
   for (std::size_t i = 0; i < r.nodes.size(); ++i) {
-    if (i > 0)
-      arc += LogSE3(model_.nodes[static_cast<std::size_t>(r.nodes[i - 1])].reference.Inverse() *
-                    model_.nodes[static_cast<std::size_t>(r.nodes[i])].reference)
-                 .head<3>()
-                 .norm();
-    const double distance = std::abs(arc - s);
+    const double distance = std::abs(arcs[i] - s);
     if (distance < match.distance) {
       match.distance = distance;
       match.nearest = NodeId(r.nodes[i]);

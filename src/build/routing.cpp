@@ -5,31 +5,10 @@
 #include <sstream>
 #include <string>
 
-#include "screwfem/lie/se3.h"
-
 namespace screwfem {
 
-std::vector<double> RodNodeArcLengths(const ModelBuilder& builder, RodId rod) {
-  builder.RodLength(rod);  // validates the rod and its nodes
-  const Model& m = builder.model();
-  const Rod& r = m.rods[rod.index()];
-  std::vector<double> arcs;
-  arcs.reserve(r.nodes.size());
-  double arc = 0.0;
-  for (std::size_t i = 0; i < r.nodes.size(); ++i) {
-    if (i > 0)
-      arc += LogSE3(m.nodes[static_cast<std::size_t>(r.nodes[i - 1])].reference.Inverse() *
-                    m.nodes[static_cast<std::size_t>(r.nodes[i])].reference)
-                 .head<3>()
-                 .norm();
-    arcs.push_back(arc);
-  }
-  if (arcs.empty()) arcs.push_back(0.0);
-  return arcs;
-}
-
 std::vector<BodyPoint> RouteAlongRod(const ModelBuilder& builder, const RodRoute& route) {
-  const std::vector<double> arcs = RodNodeArcLengths(builder, RodId(route.rod));
+  const std::vector<double> arcs = builder.RodArcLengths(RodId(route.rod));
   const Rod& rod = builder.model().rods[static_cast<std::size_t>(route.rod)];
   const double length = arcs.back();
   const double to = route.to < 0.0 ? length : route.to;

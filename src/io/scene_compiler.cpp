@@ -409,7 +409,7 @@ BodyPoint SceneCompiler::ResolveBodyPoint(const BodyPointSpec& p, const FieldSou
 const std::vector<double>& SceneCompiler::RodArcs(RodId rod) const {
   if (rod_arcs_.size() <= rod.index()) rod_arcs_.resize(rod.index() + 1);
   std::vector<double>& arcs = rod_arcs_[rod.index()];
-  if (arcs.empty()) arcs = RodNodeArcLengths(builder_, rod);
+  if (arcs.empty()) arcs = builder_.RodArcLengths(rod);
   return arcs;
 }
 

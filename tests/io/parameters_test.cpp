@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "scene_error_util.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/model/errors.h"
 
@@ -16,20 +17,13 @@ namespace screwfem::parameters_test {
 namespace {
 
 std::string Error(const std::string& text, const std::vector<std::string>& overrides = {}) {
-  try {
-    ParseScene(text, "p.yaml", overrides);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
+  return test::SceneError(text, "p.yaml", overrides);
 }
 
 // Asserts the location prefix exactly and that the message contains `what`.
 void ExpectError(const std::string& text, const std::string& location, const std::string& what,
                  const std::vector<std::string>& overrides = {}) {
-  const std::string message = Error(text, overrides);
-  EXPECT_EQ(message.rfind(location + ": ", 0), 0u) << "message: " << message;
-  EXPECT_NE(message.find(what), std::string::npos) << "message: " << message;
+  test::ExpectErrorAt(Error(text, overrides), location, what);
 }
 
 // A cantilever written with parameters, and the same scene with the numbers written out.

@@ -11,6 +11,7 @@
 
 #include "screwfem/build/model_builder.h"
 #include "screwfem/build/routing.h"
+#include "scene_error_util.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/model/errors.h"
 
@@ -166,14 +167,7 @@ TEST(Routing, TheBuilderFunctionGivesTheSceneEyelets) {
   EXPECT_NE(message(bad).find("no rod 7"), std::string::npos) << message(bad);
 }
 
-std::string Error(const std::string& text) {
-  try {
-    ParseScene(text, "r.yaml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+std::string Error(const std::string& text) { return test::SceneError(text, "r.yaml"); }
 
 TEST(Routing, BadRoutesAreErrorsAtTheirLine) {
   // Line 11 is the route's eyelet item (the scene's tendons: section starts at line 7).

@@ -101,6 +101,10 @@ class ModelBuilder {
   // Reference arc length [m] of a rod added so far (the sum of its elements' lengths, as Build
   // computes them).
   double RodLength(RodId rod) const;
+  // The reference arc length at each node of a rod added so far, from its first node [m]
+  // (RodLength is the last; FindRodNodeAtArcLength, the scene compiler and RouteAlongRod place
+  // points on these same doubles).
+  std::vector<double> RodArcLengths(RodId rod) const;
   // The nodes of a rod added so far, in order along it.
   std::vector<NodeId> RodNodes(RodId rod) const;
   BodyId AddRigidBody(std::string name, NodeId node, double mass, const Vec3& com,

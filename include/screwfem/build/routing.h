@@ -28,10 +28,6 @@ struct RodRoute {
   double helix_phase = 0.0;    // [rad] angle of the helical offset at `from`, from section axis 2
 };
 
-// The reference arc length at each node of rod `rod` of the builder's model, summed in order
-// as ModelBuilder::RodLength sums it (the same doubles). Throws InputError for an invalid rod.
-std::vector<double> RodNodeArcLengths(const ModelBuilder& builder, RodId rod);
-
 // The eyelets of a route, in order along the rod (node body points: BodyPoint{node, offset}).
 // Throws InputError (plain message, no entity) for an invalid rod, every < 1, a range that is
 // off the rod or empty, a range holding no node, non-finite values, or a helix without pitch.
