@@ -363,8 +363,8 @@ TEST(Urdf, TheExampleRunsAndItsFlangeFollowsTheForwardKinematics) {
     worst_position = std::max(worst_position, (frame(4).x - p).norm());
     if (n == 0) tip0 = d.H[static_cast<std::size_t>(s.model.rods[0].nodes.back())].x;
   }
-  EXPECT_LT(worst_rotation, 1e-8);
-  EXPECT_LT(worst_position, 1e-8);
+  EXPECT_LT(worst_rotation, 1e-12);
+  EXPECT_LT(worst_position, 1e-12);
   // After 1.5 s the waist has turned by pi/4 and the fingers have closed: the left finger's tip
   // moved towards the right one's.
   const Vec3 left = d.H[static_cast<std::size_t>(s.model.rods[0].nodes.back())].x;
