@@ -20,6 +20,7 @@
 #include "bind.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/io/scene_spec.h"
+#include "screwfem/io/urdf.h"
 #include "screwfem/model/errors.h"
 
 namespace py = pybind11;
@@ -831,9 +832,64 @@ Vec3 SecondAxis(const Vec3& axis, const Vec3& axis2, const std::string& field) {
   return (axis2 - axis.dot(axis2) * axis).normalized();
 }
 
+// A robot base's orientation as the scene writes it (docs/scene-format.md, "robots"): {} (the
+// identity), {'quaternion': [w, x, y, z]}, {'axis': [x, y, z], 'angle': rad} or
+// {'rpy': [roll, pitch, yaw]}; the same functions as the scene reader (io/urdf.h).
+Mat3 Orientation(const py::dict& o, const std::string& field) {
+  for (const auto& item : o) {
+    const std::string key = py::str(item.first);
+    if (key != "quaternion" && key != "axis" && key != "angle" && key != "rpy")
+      throw InputError(field + ": unknown key '" + key +
+                       "' (expected 'quaternion', 'axis' with 'angle', or 'rpy')");
+  }
+  const bool q = o.contains("quaternion"), aa = o.contains("axis") || o.contains("angle"),
+             rpy = o.contains("rpy");
+  if (!q && !aa && !rpy) return Mat3::Identity();
+  if (q + aa + rpy != 1)
+    throw InputError(field +
+                     ": give one of 'quaternion': [w, x, y, z], 'axis' with 'angle', or 'rpy'");
+  if (q) {
+    const auto v = o["quaternion"].cast<std::vector<double>>();
+    if (v.size() != 4)
+      throw InputError(field + ".quaternion: expected 4 numbers [w, x, y, z], got " +
+                       std::to_string(v.size()));
+    const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+    if (!(std::abs(n - 1.0) <= 1e-6))
+      throw InputError(field + ".quaternion: expected a unit quaternion [w, x, y, z], got norm " +
+                       std::to_string(n));
+    return RotationFromQuaternion(v[0], v[1], v[2], v[3]);
+  }
+  if (rpy) return RotationFromRpy(o["rpy"].cast<Vec3>());
+  if (!o.contains("axis")) throw InputError(field + ": missing 'axis' (with 'angle')");
+  if (!o.contains("angle")) throw InputError(field + ": missing 'angle' (with 'axis')");
+  return RotationFromAxisAngle(UnitAxis(o["axis"].cast<Vec3>(), field + ".axis"),
+                               o["angle"].cast<double>());
+}
+
 }  // namespace
 
 void BindSpec(py::module_& m) {
+  m.def(
+      "_read_urdf",
+      [](const std::string& path, const std::string& name, const Vec3& base, const Mat3& rotation,
+         bool fixed_base, unsigned contype, unsigned conaffinity) {
+        UrdfImport import;
+        import.name = name;
+        import.base_position = base;
+        import.base_rotation = rotation;
+        import.fixed_base = fixed_base;
+        import.contype = contype;
+        import.conaffinity = conaffinity;
+        SceneSpec s;
+        AppendUrdf(path, import, &s);
+        return ToPython(s);
+      },
+      py::arg("path"), py::arg("name"), py::arg("base"), py::arg("rotation"), py::arg("fixed_base"),
+      py::arg("contype"), py::arg("conaffinity"),
+      "AppendUrdf into an empty spec: a URDF robot's bodies and joints as a screwfem.SceneSpec "
+      "(use SceneSpec.add_urdf).");
+  m.def("_orientation", &Orientation, py::arg("orientation"), py::arg("field"),
+        "A robot base's rotation matrix from its scene form (use SceneSpec.add_urdf).");
   m.def(
       "_read_scene_spec",
       [](const std::string& text, const std::string& source_name,

@@ -663,6 +663,19 @@ class SceneSpec:
             j.pitch = _number(pitch, f"{path}.pitch")
         else:
             not_used("pitch", pitch)
+        self._joint_options(j, info, path, stiffness, damping, rest, drive, initial_position,
+                            initial_velocity)
+        return self._add("joints", JointEntrySpec(body_a=body_a, body_b=body_b, joint=j))
+
+    def _joint_options(self, j, info, path, stiffness, damping, rest, drive, initial_position,
+                       initial_velocity):
+        """Sets the springs, drive and initial state of JointSpec j (add_joint, add_urdf)."""
+        who = f"{info['name']} joints"
+
+        def not_used(key, value, by=who):
+            if value is not None:
+                raise _error(f"{path}.{key}", f"'{key}' is not used by {by}")
+
         k, springs = info["dof"], info["springs"]
         if springs == 0:
             for key, value in (("stiffness", stiffness), ("damping", damping), ("rest", rest),
@@ -705,7 +718,67 @@ class SceneSpec:
             if j.drive == _m.DriveKind.SERIES_ELASTIC and not j.stiffness[coordinate] > 0:
                 raise _error(where, "a series_elastic drive needs a positive stiffness on "
                              f"coordinate {coordinate} (the spring it drives)")
-        return self._add("joints", JointEntrySpec(body_a=body_a, body_b=body_b, joint=j))
+
+    def add_urdf(self, name, urdf, *, at=(0.0, 0.0, 0.0), orientation=None, fixed_base=True,
+                 contype=1, conaffinity=1, joints=None):
+        """A URDF robot (the scene's ``robots:``; docs/urdf.md): the links of the file `urdf`
+        become rigid bodies 'NAME/LINK' and its joints joints 'NAME/JOINT', appended in the
+        file's order (C++ AppendUrdf, include/screwfem/io/urdf.h, as the scene reader does).
+        Returns the list of the JointEntrySpec objects added.
+
+        at: the root link's origin [m] (a point or a name of `points`); orientation: the root
+        link's rotation, {'quaternion': [w, x, y, z]}, {'axis': [x, y, z], 'angle': rad} or
+        {'rpy': [roll, pitch, yaw]} (default: the identity); fixed_base: the root link is welded
+        to the ground (else it floats); contype, conaffinity: the links' contact bitmasks;
+        joints: {URDF joint name: {'stiffness', 'damping', 'rest', 'drive',
+        'initial_position', 'initial_velocity'}} as add_joint takes them.
+        Raises InputError naming the URDF element (see docs/urdf.md, "Errors")."""
+        path = self._name(name, "robots", "robot")
+        base = self.point(at, f"{path}.base.at")
+        fixed_base = _bool(fixed_base, f"{path}.fixed_base")
+        groups = []
+        for key, value in (("contype", contype), ("conaffinity", conaffinity)):
+            if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= 2**30:
+                raise _error(f"{path}.{key}", f"expected an integer from 0 to 1073741824, got "
+                             f"{value!r}")
+            groups.append(value)
+        rotation = _m._orientation(orientation or {}, f"{SOURCE_NAME}: {path}.base.orientation")
+        try:
+            part = _m._read_urdf(os.fspath(urdf), name, base, rotation, fixed_base, *groups)
+        except _m.InputError as e:
+            raise _error(f"{path}.urdf", str(e)) from None
+        known = {b.name for b in self.bodies}
+        for b in part.bodies:
+            if b.name in known:
+                raise _error(f"{path}", f"the spec already has a body {b.name!r}")
+        known = {j.joint.name for j in self.joints}
+        for j in part.joints:
+            if j.joint.name in known:
+                raise _error(f"{path}", f"the spec already has a joint {j.joint.name!r}")
+        prefix = name + "/"
+        options = dict(joints or {})
+        by_name = {j.joint.name[len(prefix):]: j for j in part.joints}
+        for joint_name, keys in options.items():
+            where = f"{path}.joints.{joint_name}"
+            if joint_name not in by_name:
+                raise _error(where, f"the URDF has no joint {joint_name!r} (known: "
+                             f"{', '.join(by_name) or 'none'})")
+            allowed = {"stiffness", "damping", "rest", "drive", "initial_position",
+                       "initial_velocity"}
+            if not isinstance(keys, dict) or set(keys) - allowed:
+                raise _error(where, f"expected a dict with keys from {sorted(allowed)}, got "
+                             f"{keys!r}")
+            entry = by_name[joint_name]
+            info = _m._joint_type_info(entry.joint.type)
+            args = {k: keys.get(k) for k in sorted(allowed)}
+            self._joint_options(entry.joint, info, where, **args)
+        offset = len(self.bodies)
+        self.bodies.extend(part.bodies)
+        for j in part.joints:
+            j.body_a = j.body_a + offset if j.body_a >= 0 else -1
+            j.body_b = j.body_b + offset if j.body_b >= 0 else -1
+        self.joints.extend(part.joints)
+        return list(part.joints)
 
     # -- loads, tendons, force elements, actuation
 

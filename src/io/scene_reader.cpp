@@ -391,9 +391,11 @@ void SceneReader::ReadBodies(const Node* node) {
     values.push_back(&value);
   }
   // Then each body in file order (node and rod numbering follows the file).
+  // (After the robots' links: robots: is read first.)
+  const std::size_t first = spec_.bodies.size() - values.size();
   for (std::size_t i = 0; i < values.size(); ++i) {
-    BodySpec& b = spec_.bodies[i];
-    EntitySource& source = src_.bodies[i];
+    BodySpec& b = spec_.bodies[first + i];
+    EntitySource& source = src_.bodies[first + i];
     if (b.rigid)
       ReadRigidBody(*values[i], source.self.field, b);
     else
@@ -690,10 +692,10 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
     r_.Fail(root.location, "",
             "a scene is a map of sections (points:, sections:, bodies:, joints:, ...), got " +
                 scene_yaml::Describe(root));
-  r_.CheckKeys(root, "",
-               {"name", "description", "parameters", "units", "gravity", "defaults", "points",
-                "materials", "sections", "bodies", "joints", "loads", "tendons", "forces",
-                "analysis", "outputs", "inputs", "actuation", "contact"});
+  r_.CheckKeys(root, "", {"name",     "description", "parameters", "units",    "gravity",
+                          "defaults", "points",      "materials",  "sections", "bodies",
+                          "joints",   "loads",       "tendons",    "forces",   "analysis",
+                          "outputs",  "inputs",      "actuation",  "contact",  "robots"});
   ReadParameters(root.Find("parameters"));
   spec_.name = default_name;
   if (const Node* n = root.Find("name")) spec_.name = r_.Text(*n, "name");
@@ -707,6 +709,7 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
   ReadMaterials(root.Find("materials"));
   ReadSections(root.Find("sections"));
   ReadInputs(root.Find("inputs"));
+  ReadRobots(root.Find("robots"));
   ReadBodies(root.Find("bodies"));
   if (spec_.bodies.empty()) r_.Fail(root.location, "bodies", "the scene has no bodies");
   ReadJoints(root.Find("joints"));
@@ -724,9 +727,9 @@ void SceneReader::Read(const Node& root, const std::string& default_name) {
 namespace {
 
 // Maps of named entries: an override may not walk through an entry that does not exist.
-const std::vector<std::string> kCollections = {"points",         "materials", "sections", "bodies",
-                                               "joints",         "loads",     "tendons",  "forces",
-                                               "outputs.points", "inputs",    "actuation"};
+const std::vector<std::string> kCollections = {
+    "points",  "materials", "sections",       "bodies", "joints",    "loads",
+    "tendons", "forces",    "outputs.points", "inputs", "actuation", "robots"};
 
 std::string Stem(const std::string& source) {
   const std::string stem = std::filesystem::path(source).stem().string();

@@ -1,5 +1,6 @@
 // The scene reader's class, shared by its three source files (internal to src/io): the file's
-// core sections, bodies and joints in scene_reader.cpp; inputs, loads, tendons, forces,
+// core sections, bodies and joints in scene_reader.cpp; URDF robots in
+// scene_reader_robots.cpp; inputs, loads, tendons, forces,
 // actuation and contact in scene_reader_items.cpp; analysis and outputs in
 // scene_reader_analysis.cpp. docs/architecture.md, "Scenes".
 #pragma once
@@ -76,6 +77,8 @@ class SceneReader {
   void ReadMaterials(const Node* node);
   void ReadSections(const Node* node);
   void ReadInputs(const Node* node);
+  void ReadRobots(const Node* node);  // scene_reader_robots.cpp
+  Mat3 ReadOrientation(const Node& node, const std::string& path) const;
   void ReadBodies(const Node* node);
   void ReadRigidBody(const Node& n, const std::string& path, BodySpec& b);
   void ReadSoftBody(const Node& n, const std::string& path, BodySpec& b, EntitySource& source);

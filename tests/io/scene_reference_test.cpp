@@ -56,11 +56,12 @@ std::string Pattern(const std::string& path) {
   }
   static const std::set<std::string> kNamed = {"points",    "materials", "sections", "bodies",
                                                "joints",    "loads",     "tendons",  "forces",
-                                               "actuation", "inputs"};
+                                               "actuation", "inputs",    "robots"};
   if (parts.size() > 1 && kNamed.count(parts[0])) parts[1] = "*";
   if (parts.size() > 2 && ((parts[0] == "contact" && parts[1] == "obstacles") ||
                            (parts[0] == "outputs" && parts[1] == "points")))
     parts[2] = "*";
+  if (parts.size() > 3 && parts[0] == "robots" && parts[2] == "joints") parts[3] = "*";
   std::string out;
   for (std::size_t i = 0; i < parts.size(); ++i) {
     out += (i ? "." : "") + std::regex_replace(parts[i], std::regex(R"(\[[0-9]+\])"), "[]");
@@ -90,6 +91,11 @@ const std::vector<SectionRule> kSections = {
     {"", "bodies.*.shapes[]", {"`contact`"}},
     {"", "joints.*", {"`joints`"}},
     {"", "joints.*.drive", {"Drives"}},
+    {"ReadOrientation", "", {"Orientations"}},
+    {"", "robots.*", {"`robots`"}},
+    {"", "robots.*.base", {"`robots`"}},
+    {"", "robots.*.joints.*", {"`robots`"}},
+    {"", "robots.*.joints.*.drive", {"Drives"}},
     {"", "loads.*", {"`loads`"}},
     {"", "tendons.*", {"`tendons`"}},
     {"", "forces.*", {"`forces`"}},
@@ -204,8 +210,8 @@ class SceneReference : public ::testing::Test {
       }
     }
     scene_yaml::SetKeyCheckObserver(nullptr, nullptr);
-    for (const char* name :
-         {"scene_reader.cpp", "scene_reader_items.cpp", "scene_reader_analysis.cpp"})
+    for (const char* name : {"scene_reader.cpp", "scene_reader_items.cpp",
+                             "scene_reader_analysis.cpp", "scene_reader_robots.cpp"})
       reader_sources_[name] = ReadFile(root / "src" / "io" / name);
     docs_ = DocumentedKeys(ReadFile(root / "docs" / "scene-format.md"));
   }

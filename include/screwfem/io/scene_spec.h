@@ -42,8 +42,8 @@ struct BodySpec {
   int weld_end = -1;
   // Contact (used when the scene has a contact: section). Soft bodies: the capsule radius [m]
   // (contact_radius, or the section's radius: circle radius, tube outer radius, half the
-  // smaller side of a rectangle). Rigid bodies: shapes, points in the world at the reference
-  // configuration (ContactShape::body is set by the compiler). Group bitmasks of both.
+  // smaller side of a rectangle). Rigid bodies: shapes, points relative to `origin` (world axes;
+  // ContactShape::body is set by the compiler). Group bitmasks of both.
   double contact_radius = 0.0;
   // Soft bodies: the radius the rod is drawn with [m] (the VTK frames' radius, the viewer's
   // tube), for drawing only; 0: the section's own outline (Section::width, height), else the
