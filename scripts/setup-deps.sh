@@ -22,7 +22,7 @@ build_packages=(
   build-essential cmake
   libeigen3-dev libyaml-cpp-dev libcli11-dev
   googletest libgtest-dev libbenchmark-dev
-  pybind11-dev python3-dev python3-numpy libsuitesparse-dev
+  pybind11-dev python3-dev python3-numpy libsuitesparse-dev libceres-dev
 )
 view_packages=(python3-matplotlib python3-pil libjs-three)
 bench_packages=(libmujoco-dev)
