@@ -161,13 +161,15 @@ struct InverseStaticsResult {
 // Finds the values of `parameters` within [lower, upper] (one per parameter) that bring the
 // effector points to their targets: min 1/2 sum |x_k(p) - target_k|^2 by Ceres' bounded
 // trust region (Levenberg-Marquardt) with the exact Jacobian (CalcStaticSensitivity,
-// forward). `start` holds the parameters' offsets from the model's values to start from (the
-// last solution, for a moving target: the warm start); each evaluation brings data from its
+// forward). `start` holds the parameters' values to start from (the last solution, for a
+// moving target: the warm start); each evaluation brings data from its
 // last equilibrium to the one of the new values by Newton (load stepping from the reference
 // state when that fails). On return model is the original, data the equilibrium at the
 // values found (the nearest reachable configuration when the target is not reachable: then
 // converged is false and distance says how far). Parameter values are offsets from the
-// model's own: OffsetParameter(model, data, p, values[i]) reproduces the equilibrium.
+// model's own (OffsetParameter(model, data, p, values[i]) reproduces the equilibrium), except
+// for kInput parameters, whose values are the inputs' values (data.inputs holds them on
+// return, so a model whose tensions are inputs agrees with data afterwards).
 InverseStaticsResult SolveInverseStatics(const Model& model, Data& data,
                                          const std::vector<Parameter>& parameters,
                                          const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
