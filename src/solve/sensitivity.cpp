@@ -247,6 +247,11 @@ StaticSensitivity CalcStaticSensitivity(const Model& model, Data& data,
   // The workspace's copy carries the model's current parameter values.
   for (const Parameter& p : parameters) ResetParameter(ws.model, model, p);
   StaticSensitivity out;
+  if (!options.constraint_force_tangent) {
+    out.message =
+        "options.constraint_force_tangent is false: the derivatives need the exact tangent";
+    return out;
+  }
   const int n = model.num_unknowns(), np = static_cast<int>(parameters.size());
   const int no = static_cast<int>(outputs.size());
   const double k_scale = StaticConstraintScale(model);

@@ -285,6 +285,13 @@ TEST(StaticSensitivity, InvalidParametersAndOutputsAreNamed) {
     EXPECT_STREQ(e.what(),
                  "CalcStaticSensitivity: parameter point_load 0 (component 1): no such point load");
   }
+  StaticOptions inexact;
+  inexact.constraint_force_tangent = false;
+  const StaticSensitivity s =
+      CalcStaticSensitivity(f.model, d, {}, {}, SensitivityMode::kForward, inexact);
+  EXPECT_FALSE(s.ok);
+  EXPECT_EQ(s.message,
+            "options.constraint_force_tangent is false: the derivatives need the exact tangent");
   try {
     CalcStaticSensitivity(f.model, d, {}, {{OutputKind::kMultiplier, 0, 0, Vec3::Zero()}});
     FAIL();

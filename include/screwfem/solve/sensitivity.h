@@ -119,7 +119,7 @@ void ResetParameter(Model& model, const Model& original, const Parameter& p);
 
 // The sensitivities at data's state, an equilibrium of SolveStatic(model, data, options) (at
 // its end load factor and time; options.constraint_force_tangent must be true, the default:
-// the exact tangent). Assembles and factorises the tangent once, assembles two residuals per
+// the exact tangent; else ok = false). Assembles and factorises the tangent once, assembles two residuals per
 // parameter, and solves once per parameter (forward) or per output (adjoint). data's state is
 // unchanged; its workspaces are overwritten. Adjoint mode needs a matrix without off-band
 // coupling (no pairs of moving shapes outside the band; else ok = false with the reason).
