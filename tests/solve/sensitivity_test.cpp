@@ -114,8 +114,8 @@ std::vector<SensitivityOutput> TipOutputs(int node, const Vec3& offset, bool rot
   return out;
 }
 
-// A 1 m cantilever (EA 1e4 N, EI 1 N m^2, 10 elements) with a tip load that bends it by about
-// 20 degrees: load components, stiffness factors and the rest curvature.
+// A 1 m cantilever (EA 1e4 N, EI 1 N m^2, 10 elements) with a tip load that turns its tip by
+// about 0.2 rad: load components, stiffness factors and the rest curvature.
 TEST(StaticSensitivity, CantileverLoadStiffnessAndRestCurvatureMatchFiniteDifferences) {
   ModelBuilder b;
   const RodId rod = b.AddStraightRod("beam", Vec3::Zero(), Vec3::UnitX(), 10, RodSection(1e4, 1.0));
