@@ -48,6 +48,8 @@ void BindSimulation(pybind11::module_& m);
 void BindSpec(pybind11::module_& m);
 // bind_env.cpp: _step_many, the threaded stepping behind screwfem.Env and VectorEnv.
 void BindEnv(pybind11::module_& m);
+// bind_inverse.cpp: static sensitivities and inverse statics (solve/sensitivity.h).
+void BindInverse(pybind11::module_& m);
 
 // Whether an enum value from Python is one of the enum's values (pybind11's enums make a member
 // from any integer: JointType(99)).

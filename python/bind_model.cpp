@@ -233,7 +233,11 @@ void BindModel(py::module_& m) {
       .def("find_body", &Model::FindBody, py::arg("name"),
            "Index of the named rigid body, -1 if absent.")
       .def("find_joint", &Model::FindJoint, py::arg("name"),
-           "Index of the named joint, -1 if absent.");
+           "Index of the named joint, -1 if absent.")
+      .def("find_tendon", &Model::FindTendon, py::arg("name"),
+           "Index of the named tendon, -1 if absent.")
+      .def("find_input", &Model::FindInput, py::arg("name"),
+           "Index of the named run-time input, -1 if absent.");
 
   m.attr("kGround") = static_cast<int>(kGround);
 }

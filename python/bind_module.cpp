@@ -56,4 +56,5 @@ PYBIND11_MODULE(_screwfem, m) {
   screwfem::python::BindSimulation(m);
   screwfem::python::BindSpec(m);
   screwfem::python::BindEnv(m);
+  screwfem::python::BindInverse(m);
 }

@@ -15,17 +15,18 @@ set -euo pipefail
 #          documentation site of the test docs_site);
 #   bench  build + what only the benchmarks use: MuJoCo, which screwfem_bench_mujoco runs side
 #          by side with screwfem on the same model (bench/RESULTS.md, "Spring chain against
-#          MuJoCo"; the bench builds only when it is found, the tests never need it);
+#          MuJoCo"; the bench builds only when it is found, the tests never need it), and
+#          NLopt, which screwfem_bench_inverse compares with Ceres (docs/inverse.md);
 #   all    everything (the default).
 # Usage: setup-deps.sh [build|main|rest|bench|all]
 build_packages=(
   build-essential cmake
   libeigen3-dev libyaml-cpp-dev libcli11-dev
   googletest libgtest-dev libbenchmark-dev
-  pybind11-dev python3-dev python3-numpy libsuitesparse-dev liburdfdom-dev
+  pybind11-dev python3-dev python3-numpy libsuitesparse-dev liburdfdom-dev libceres-dev
 )
 view_packages=(python3-matplotlib python3-pil libjs-three)
-bench_packages=(libmujoco-dev)
+bench_packages=(libmujoco-dev libnlopt-dev)
 test_packages=(
   clang clang-format python3-venv python3-pip
   python3-dask python3-distributed python3-pandas

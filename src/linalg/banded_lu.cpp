@@ -212,6 +212,34 @@ void BandedLU::Solve(Eigen::Ref<Eigen::VectorXd> b) const {
   }
 }
 
+void BandedLU::SolveTransposed(Eigen::Ref<Eigen::VectorXd> b) const {
+  assert(b.size() == n_);
+  double* const x = b.data();
+  // A = P_0 L_0 ... P_{n-2} L_{n-2} U (Solve applies the inverse factors left to right), so
+  // A^-T applies U^-T first, then (L_j^-1 P_j)^T = P_j (I - e_j l_j^T) for j = n-2 .. 0.
+  for (int j = 0; j < n_; ++j) {
+    const std::size_t sj = static_cast<std::size_t>(j);
+    const int first = u_first_[sj];
+    const double* const u = &ab_[Index(first, j)];
+    double s = x[j];
+    for (int i = 0; i < j - first; ++i) s -= u[i] * x[first + i];
+    x[j] = s * inv_pivot_[sj];
+  }
+  for (int j = n_ - 2; j >= 0; --j) {
+    const std::size_t sj = static_cast<std::size_t>(j);
+    const int first = l_first_[sj];
+    const int count = l_last_[sj] - first + 1;
+    if (count > 0) {
+      const double* const l = &ab_[Index(first, j)];
+      double s = 0.0;
+      for (int i = 0; i < count; ++i) s += l[i] * x[first + i];
+      x[j] -= s;
+    }
+    const int p = ipiv_[sj];
+    if (p != j) std::swap(x[p], x[j]);
+  }
+}
+
 std::vector<int> ReverseCuthillMcKee(const std::vector<std::vector<int>>& adjacency) {
   const int n = static_cast<int>(adjacency.size());
   std::vector<int> degree(static_cast<std::size_t>(n));

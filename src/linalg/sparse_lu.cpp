@@ -296,4 +296,10 @@ void SparseLU::Solve(Eigen::Ref<Eigen::VectorXd> b) const {
   klu_solve(Symbolic(symbolic_), Sequences(numeric_)->Current(), n_, 1, b.data(), Common(common_));
 }
 
+void SparseLU::SolveTransposed(Eigen::Ref<Eigen::VectorXd> b) const {
+  assert(Sequences(numeric_)->current && b.size() == n_);
+  if (n_ == 0) return;
+  klu_tsolve(Symbolic(symbolic_), Sequences(numeric_)->Current(), n_, 1, b.data(), Common(common_));
+}
+
 }  // namespace screwfem

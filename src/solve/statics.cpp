@@ -10,6 +10,7 @@
 #include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/common.h"
+#include "exact_tangent.h"
 
 namespace screwfem {
 
@@ -55,16 +56,16 @@ void ValidateStaticOptions(const StaticOptions& o, const std::string& owner) {
     require(std::isfinite(value) && value > 0.0, field, "must be finite and > 0");
 }
 
-namespace {
-
 // Scale of the constraint rows: the largest stiffness of the model (docs/architecture.md, "One time step").
-double ConstraintScale(const Model& model) {
+double StaticConstraintScale(const Model& model) {
   double k_scale = 1.0;
   for (const Rod& r : model.rods)
     k_scale = std::max(k_scale, r.section.stiffness.maxCoeff() / std::max(r.length, 1e-12));
   for (const Joint& j : model.joints) k_scale = std::max(k_scale, j.stiffness.maxCoeff());
   return k_scale;
 }
+
+namespace {
 
 // Weights of the arc-length metric (docs/numerics.md, "Path-following statics"), velocity layout: translations (node
 // translations, joint coordinates whose axis has no rotation part) 1 / length_scale^2,
@@ -98,16 +99,16 @@ struct StaticSolver {
   Eigen::VectorXd r_s, load, x_r, x_f;  // nv + nc: residual at s, F = -dR/ds, the two solves
   Eigen::VectorXd step_dx;              // nv: the sum of a load step's Newton corrections
 
-  std::vector<int> pattern;  // the band pattern with d(B^T lambda)/dq
-  bool resized = false;
+  ExactTangentPattern exact_tangent;  // the matrix's pattern with d(B^T lambda)/dq
 
   StaticSolver(const Model& m, Data& d, const StaticOptions& o, const StopRequest& st)
       : model(m),
         data(d),
         options(o),
         stop(st),
-        k_scale(ConstraintScale(m)),
-        weights(MetricWeights(m, o.rotation_weight)) {
+        k_scale(StaticConstraintScale(m)),
+        weights(MetricWeights(m, o.rotation_weight)),
+        exact_tangent(m, d, o.constraint_force_tangent, &opt) {
     opt.time = o.time;
     opt.s_constraints = opt.s_multipliers = k_scale;
     const int n = m.num_unknowns();
@@ -116,34 +117,6 @@ struct StaticSolver {
     x_r.resize(n);
     x_f.resize(n);
     step_dx.resize(m.nv);
-    // The exact tangent's blocks may lie outside the model's band pattern: the matrix gets
-    // the wider pattern (and band) for the solve, and the model's back at its end.
-    if (o.constraint_force_tangent && m.sparse_solver) {
-      // The sparse pattern gets the blocks of d(B^T lambda)/dq (a new symbolic analysis).
-      std::vector<SparseLU::Block> blocks = m.sparse_pattern;
-      AddConstraintForceTangentBlocks(m, &blocks);
-      d.sparse.SetPattern(n, blocks);
-      opt.constraint_force_tangent = true;
-    } else if (o.constraint_force_tangent && static_cast<int>(m.pattern_last.size()) == n) {
-      int bandwidth = 0;
-      pattern = ConstraintForceTangentPattern(m, &bandwidth);
-      if (bandwidth > d.matrix.lower_bandwidth() || bandwidth > d.matrix.upper_bandwidth()) {
-        d.matrix.Resize(n, bandwidth, bandwidth);
-        resized = true;
-      }
-      d.matrix.SetPattern(pattern, pattern);
-      opt.constraint_force_tangent = true;
-      opt.pattern_last = &pattern;
-    }
-  }
-  ~StaticSolver() {
-    if (!opt.constraint_force_tangent) return;
-    if (model.sparse_solver) {
-      data.sparse.SetPattern(model.num_unknowns(), model.sparse_pattern);
-      return;
-    }
-    if (resized) data.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);
-    data.matrix.SetPattern(model.pattern_last, model.pattern_last);
   }
   StaticSolver(const StaticSolver&) = delete;
   StaticSolver& operator=(const StaticSolver&) = delete;

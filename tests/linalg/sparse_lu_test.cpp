@@ -102,6 +102,27 @@ TEST(SparseLU, MatchesDenseLUOnSaddlePointSystems) {
   }
 }
 
+// SolveTransposed (klu_tsolve): A^T x = b against the dense LU of A^T.
+TEST(SparseLU, TransposedSolveMatchesDenseLUOfTheTranspose) {
+  std::mt19937 rng(23);
+  for (int nodes : {1, 5, 20}) {
+    std::vector<std::vector<int>> acts;
+    for (int a = 0; a + 1 < nodes; a += 2) acts.push_back({a, a + 1});
+    std::vector<Block> blocks;
+    const Eigen::MatrixXd A = SaddleMatrix(rng, nodes, acts, &blocks);
+    SparseLU lu;
+    lu.SetPattern(static_cast<int>(A.rows()), blocks);
+    Load(A, &lu);
+    ASSERT_EQ(lu.Factorize(), -1) << nodes;
+    Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(A.rows(), 2.0, -1.0);
+    const Eigen::VectorXd b = x;
+    lu.SolveTransposed(x);
+    const Eigen::VectorXd ref = A.transpose().partialPivLu().solve(b);
+    EXPECT_LT((x - ref).norm(), 1e-11 * ref.norm()) << nodes;
+    EXPECT_LT((A.transpose() * x - b).norm(), 1e-13 * A.norm() * x.norm()) << nodes;
+  }
+}
+
 TEST(SparseLU, DeterminantSignMatchesTheDenseAndTheBandedLU) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -51,6 +51,10 @@ class BandedLU {
   int Factorize();
   // Solves A x = b in place (b <- x) after a successful Factorize().
   void Solve(Eigen::Ref<Eigen::VectorXd> b) const;
+  // Solves A^T x = b in place (b <- x) after a successful Factorize(): U^T, then L^T and the
+  // interchanges in reverse order (LAPACK dgbtrs with 'T'); for adjoint sensitivities
+  // (solve/sensitivity.h). Never allocates.
+  void SolveTransposed(Eigen::Ref<Eigen::VectorXd> b) const;
   // Largest and smallest |U_jj| of the last factorisation (a cheap conditioning indicator).
   double max_pivot() const { return max_pivot_; }
   double min_pivot() const { return min_pivot_; }

@@ -83,6 +83,9 @@ class SparseLU {
   int Factorize();
   // Solves A x = b in place (b <- x) after a successful Factorize().
   void Solve(Eigen::Ref<Eigen::VectorXd> b) const;
+  // Solves A^T x = b in place (klu_tsolve) after a successful Factorize(): for adjoint
+  // sensitivities (solve/sensitivity.h). Never allocates.
+  void SolveTransposed(Eigen::Ref<Eigen::VectorXd> b) const;
   // Largest and smallest |U_jj| of the last factorisation (of the row-scaled matrix KLU
   // factorises: each row divided by its largest entry).
   double max_pivot() const { return max_pivot_; }

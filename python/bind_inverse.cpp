@@ -1,0 +1,211 @@
+// Sensitivities of static equilibria and inverse statics (solve/sensitivity.h, docs/inverse.md):
+// screwfem.static_sensitivity and screwfem.inverse_statics on a Simulation.
+#include <pybind11/eigen.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bind.h"
+#include "screwfem/solve/sensitivity.h"
+#include "simulation.h"
+
+namespace py = pybind11;
+
+namespace screwfem::python {
+
+namespace {
+
+StaticOptions SimulationStatics(Simulation& s, const std::optional<StaticOptions>& options) {
+  StaticOptions o = s.scene().analysis.statics;
+  o.time = s.data().time;
+  if (options) o = *options;
+  ValidateStaticOptions(o, "StaticOptions");
+  return o;
+}
+
+}  // namespace
+
+void BindInverse(py::module_& m) {
+  BindEnum<ParameterKind>(m, "ParameterKind",
+                          "What a sensitivity or inverse-statics parameter is (sensitivity.h).");
+  BindEnum<OutputKind>(m, "OutputKind", "What a sensitivity output is (sensitivity.h).");
+  BindEnum<SensitivityMode>(m, "SensitivityMode",
+                            "Forward (a solve per parameter) or adjoint (a solve per output).");
+
+  py::class_<Parameter>(m, "Parameter",
+                        "A parameter of a static equilibrium (docs/inverse.md): kind, index of "
+                        "the tendon, point load, joint, rod or input, and component (point "
+                        "loads 0-5; rod stiffness -1 for all six or 0-5; rod rest strain 0-5).")
+      .def(py::init([](ParameterKind kind, int index, int component) {
+             return Parameter{kind, index, component};
+           }),
+           py::arg("kind"), py::arg("index"), py::arg("component") = -1)
+      .def_readwrite("kind", &Parameter::kind, "What the parameter is (ParameterKind).")
+      .def_readwrite("index", &Parameter::index,
+                     "The tendon, point load, joint, rod or input (the model's index).")
+      .def_readwrite(
+          "component", &Parameter::component,
+          "Point loads 0-5 (force, moment); rod stiffness -1 (all) or 0-5; rest strain 0-5.")
+      .def("__repr__", [](const Parameter& p) {
+        return "Parameter(" + std::string(NameOf(p.kind)) + ", " + std::to_string(p.index) + ", " +
+               std::to_string(p.component) + ")";
+      });
+
+  py::class_<SensitivityOutput>(m, "SensitivityOutput",
+                                "An output of a static sensitivity: a world coordinate of a point "
+                                "in a node's frame (offset), a node's rotation component, a joint "
+                                "coordinate or a multiplier row.")
+      .def(py::init([](OutputKind kind, int index, int component, const Vec3& offset) {
+             return SensitivityOutput{kind, index, component, offset};
+           }),
+           py::arg("kind"), py::arg("index"), py::arg("component") = 0,
+           py::arg("offset") = Vec3::Zero())
+      .def_readwrite("kind", &SensitivityOutput::kind, "What the output is (OutputKind).")
+      .def_readwrite("index", &SensitivityOutput::index,
+                     "The node (points, rotations), joint or multiplier row.")
+      .def_readwrite("component", &SensitivityOutput::component,
+                     "0-2 for points and rotations; the joint coordinate.")
+      .def_readwrite("offset", &SensitivityOutput::offset,
+                     "POINT_POSITION: the point in the node's frame [m].");
+
+  py::class_<StaticSensitivity>(m, "StaticSensitivity",
+                                "Result of static_sensitivity: outputs (outputs x parameters), "
+                                "and in forward mode dx (nv x parameters: node twists in the "
+                                "node frames, joint coordinates) and dlambda (nc x parameters).")
+      .def_readonly("ok", &StaticSensitivity::ok, "True when the derivatives were computed.")
+      .def_readonly("message", &StaticSensitivity::message, "Why not (empty when ok).")
+      .def_readonly("outputs", &StaticSensitivity::outputs,
+                    "d(outputs)/d(parameters), outputs x parameters.")
+      .def_readonly("dx", &StaticSensitivity::dx,
+                    "Forward mode: nv x parameters (node twists in the node frames, translation "
+                    "first; joint coordinates).")
+      .def_readonly("dlambda", &StaticSensitivity::dlambda,
+                    "Forward mode: nc x parameters, the multipliers' derivatives.")
+      .def_readonly(
+          "equilibrium_error", &StaticSensitivity::equilibrium_error,
+          "Scaled size of the Newton correction at the state: how far it is from the equilibrium.");
+
+  py::class_<InverseTarget>(m, "InverseTarget",
+                            "An effector point (node, offset in its frame [m]) and its world "
+                            "target [m].")
+      .def(py::init([](int node, const Vec3& offset, const Vec3& target) {
+             return InverseTarget{node, offset, target};
+           }),
+           py::arg("node"), py::arg("offset"), py::arg("target"))
+      .def_readwrite("node", &InverseTarget::node, "The node carrying the effector point.")
+      .def_readwrite("offset", &InverseTarget::offset,
+                     "The effector point in the node's frame [m].")
+      .def_readwrite("target", &InverseTarget::target, "The target in the world [m].");
+
+  py::class_<InverseStaticsOptions>(m, "InverseStaticsOptions",
+                                    "Settings of inverse_statics (sensitivity.h).")
+      .def(py::init<>())
+      .def_readwrite("statics", &InverseStaticsOptions::statics,
+                     "StaticOptions of the equilibrium solves (and their time).")
+      .def_readwrite("max_iterations", &InverseStaticsOptions::max_iterations,
+                     "Iterations of the optimiser at most (default 100).")
+      .def_readwrite("tolerance", &InverseStaticsOptions::tolerance,
+                     "Stop when the effectors are this close to their targets [m] (default 1e-10).")
+      .def_readwrite("parameter_tolerance", &InverseStaticsOptions::parameter_tolerance,
+                     "Relative parameter step below which the optimiser stops (default 1e-14).");
+
+  py::class_<InverseStaticsResult>(m, "InverseStaticsResult", "Result of inverse_statics.")
+      .def_readonly("converged", &InverseStaticsResult::converged,
+                    "Every target met within the tolerance.")
+      .def_readonly("message", &InverseStaticsResult::message,
+                    "Why not: an unreachable target (the distance left), a failed equilibrium.")
+      .def_readonly("values", &InverseStaticsResult::values,
+                    "The parameters' values found, within their bounds.")
+      .def_readonly("distance", &InverseStaticsResult::distance,
+                    "|effector - target| over all targets [m].")
+      .def_readonly("residual", &InverseStaticsResult::residual,
+                    "effector - target, three per target [m].")
+      .def_readonly("iterations", &InverseStaticsResult::iterations, "Iterations of the optimiser.")
+      .def_readonly("equilibrium_solves", &InverseStaticsResult::equilibrium_solves,
+                    "Static solves made (Newton re-solves and load-stepping fallbacks).")
+      .def_readonly("at_bound", &InverseStaticsResult::at_bound,
+                    "A parameter ended on one of its bounds.")
+      .def("__repr__", [](const InverseStaticsResult& r) {
+        return FormatNumbers("InverseStaticsResult(converged=%g, distance=%.3g m, ",
+                             r.converged ? 1.0 : 0.0, r.distance) +
+               FormatNumbers("iterations=%g)", r.iterations);
+      });
+
+  m.def(
+      "inverse_target",
+      [](Simulation& s, const std::string& point, const Vec3& target) {
+        const OutputPoint& p = s.OutputPointNamed(point);
+        if (p.rod < 0) return InverseTarget{p.node, p.offset, target};
+        // A point on a rod: the node at its arc length.
+        const Rod& rod = s.model().rods[static_cast<std::size_t>(p.rod)];
+        double arc = 0.0;
+        for (int e = 0; e <= rod.num_elements; ++e) {
+          if (std::abs(arc - p.arc_length) <= 1e-9 * std::max(1.0, rod.length))
+            return InverseTarget{rod.nodes[static_cast<std::size_t>(e)], Vec3::Zero(), target};
+          if (e < rod.num_elements)
+            arc += s.model().elements[static_cast<std::size_t>(rod.first_element + e)].length;
+        }
+        throw InputError("inverse_target: output point '" + point +
+                         "' lies between the nodes of its rod (an effector must be on a node)");
+      },
+      py::arg("simulation"), py::arg("point"), py::arg("target"),
+      "inverse_target(simulation, point, target) -> InverseTarget\n\nAn effector at the scene's "
+      "output point `point` (outputs.points; on a node) with its world target [m].");
+
+  m.def(
+      "static_sensitivity",
+      [](Simulation& s, const std::vector<Parameter>& parameters,
+         const std::vector<SensitivityOutput>& outputs, SensitivityMode mode,
+         const std::optional<StaticOptions>& options) {
+        const StaticOptions o = SimulationStatics(s, options);
+        StaticSensitivity r =
+            CalcStaticSensitivity(s.model(), s.data(), parameters, outputs, mode, o);
+        if (!r.ok) RaiseSolverError("static_sensitivity: " + r.message, py::none());
+        return r;
+      },
+      py::arg("simulation"), py::arg("parameters"), py::arg("outputs"),
+      py::arg("mode") = SensitivityMode::kForward, py::arg("options") = py::none(),
+      R"doc(static_sensitivity(simulation, parameters, outputs, mode=SensitivityMode.FORWARD, options=None) -> StaticSensitivity
+
+The exact derivatives d(outputs)/d(parameters) at the simulation's static equilibrium (call
+solve_static first), by the implicit function theorem with the factored exact tangent
+(docs/inverse.md). options: the StaticOptions of the solve (default: the scene's, at the current
+time). Raises SolverError when the tangent is singular.)doc");
+
+  m.def(
+      "inverse_statics",
+      [](Simulation& s, const std::vector<Parameter>& parameters, const Eigen::VectorXd& lower,
+         const Eigen::VectorXd& upper, const std::vector<InverseTarget>& targets,
+         const std::optional<Eigen::VectorXd>& start,
+         const std::optional<InverseStaticsOptions>& options) {
+        InverseStaticsOptions o = options ? *options : InverseStaticsOptions{};
+        if (!options) o.statics = SimulationStatics(s, std::nullopt);
+        // By default: zero offsets, and the inputs' current values.
+        Eigen::VectorXd x0 = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(parameters.size()));
+        for (std::size_t i = 0; i < parameters.size(); ++i)
+          if (parameters[i].kind == ParameterKind::kInput && parameters[i].index >= 0 &&
+              parameters[i].index < s.data().inputs.size())
+            x0(static_cast<Eigen::Index>(i)) = s.data().inputs(parameters[i].index);
+        if (start) x0 = *start;
+        return SolveInverseStatics(s.model(), s.data(), parameters, lower, upper, targets, x0, o);
+      },
+      py::arg("simulation"), py::arg("parameters"), py::arg("lower"), py::arg("upper"),
+      py::arg("targets"), py::arg("start") = py::none(), py::arg("options") = py::none(),
+      R"doc(inverse_statics(simulation, parameters, lower, upper, targets, start=None, options=None) -> InverseStaticsResult
+
+The parameter values within [lower, upper] that bring the effector points to their targets
+(bounded least squares by Ceres with the exact Jacobian; docs/inverse.md). Values are offsets
+from the model's own (a tendon's tension added to its profile), except that an INPUT parameter's
+value is the input's value (the simulation's inputs hold the values found). start: the values to
+start from (the last solution for a moving target; default: zero offsets, the inputs' current
+values). The simulation ends in the equilibrium at
+the values found; when the targets are out of reach, converged is False and distance gives how
+far the nearest equilibrium within the bounds is.)doc");
+}
+
+}  // namespace screwfem::python
