@@ -55,9 +55,9 @@ Model Cantilever(int n) {
   stiffness << 1e6, 1e6, 1e6, 1.0, 1.0, 1.0;
   inertia << 0.1, 0.1, 0.1, 0.5, 0.5, 0.5;
   ModelBuilder builder;
-  const int rod = builder.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), n,
-                                         Section::FromDiagonals(stiffness, inertia));
-  builder.FixNode(builder.model().rods[static_cast<std::size_t>(rod)].nodes.front());
+  const RodId rod = builder.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), n,
+                                           Section::FromDiagonals(stiffness, inertia));
+  builder.FixNode(builder.RodNodes(rod).front());
   builder.SetGravity(Vec3(0, 0, -9.81));
   builder.model().rod_inertia = RodInertia::kExact;
   return builder.Build();

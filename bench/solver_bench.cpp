@@ -71,8 +71,8 @@ Section ArmSection() {
 Model RodModel(int elements, LinearSolver solver) {
   ModelBuilder b;
   b.SetLinearSolver(solver);
-  b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), elements, ArmSection());
-  b.FixNode(b.model().rods[0].nodes.front());
+  const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), elements, ArmSection());
+  b.FixNode(b.RodNodes(rod).front());
   b.SetGravity(Vec3(0, 0, -9.81));
   return b.Build();
 }
@@ -80,7 +80,7 @@ Model RodModel(int elements, LinearSolver solver) {
 Model HandModel(int fingers, int elements, LinearSolver solver) {
   ModelBuilder b;
   b.SetLinearSolver(solver);
-  const int palm = b.AddNode(SE3::Identity(), "palm");
+  const NodeId palm = b.AddNode(SE3::Identity(), "palm");
   b.AddRigidBody("palm", palm, 0.2, Vec3::Zero(), 1e-4 * Mat3::Identity());
   b.AddJointAt("wrist", JointType::kSpherical, kGround, palm, Vec3(0, 0, 0.02));
   Vec6 K, M;
@@ -102,12 +102,12 @@ Model HandModel(int fingers, int elements, LinearSolver solver) {
 Model FingerModel(int elements, bool tendon, LinearSolver solver) {
   ModelBuilder b;
   b.SetLinearSolver(solver);
-  b.AddStraightRod("finger", Vec3::Zero(), Vec3(1, 0, 0), elements, ArmSection());
-  const std::vector<int> nodes = b.model().rods[0].nodes;
+  const RodId rod = b.AddStraightRod("finger", Vec3::Zero(), Vec3(1, 0, 0), elements, ArmSection());
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   if (tendon) {
     std::vector<BodyPoint> eyelets;
-    for (int n : nodes) eyelets.push_back({n, Vec3(0, 0.02, 0)});
+    for (const NodeId n : nodes) eyelets.push_back({n, Vec3(0, 0.02, 0)});
     b.AddLengthDrivenTendon("flexor", eyelets,
                             Profile::Constant(1.0).Add(Profile::Ramp(0, 0.1, -0.002)));
   }
@@ -118,10 +118,10 @@ Model FingerModel(int elements, bool tendon, LinearSolver solver) {
 Model ChainModel(int links, LinearSolver solver) {
   ModelBuilder b;
   b.SetLinearSolver(solver);
-  int prev = kGround;
+  NodeId prev = kGround;
   for (int i = 0; i < links; ++i) {
     const Vec3 at(0.05 * (i + 1), 0, 0);
-    const int node = b.AddNode(SE3::Translation(at), Name("l", i));
+    const NodeId node = b.AddNode(SE3::Translation(at), Name("l", i));
     b.AddRigidBody(Name("l", i), node, 0.01, Vec3(-0.025, 0, 0), 1e-6 * Mat3::Identity());
     b.AddJointAt(Name("j", i), JointType::kSpherical, prev, node, Vec3(0.05 * i, 0, 0));
     prev = node;
@@ -158,16 +158,13 @@ void RunOnce(Variant& v) {
     v.failed = true;
     return;
   }
-  for (int i = 0; i < v.warmup; ++i) {
+  // Step advances data.time by h itself.
+  for (int i = 0; i < v.warmup; ++i)
     if (!Step(v.model, data, integ, h).ok) v.failed = true;
-    data.time += h;
-  }
   const long before = integ.iterations;
   const double t0 = CpuSeconds();
-  for (int i = 0; i < v.steps; ++i) {
+  for (int i = 0; i < v.steps; ++i)
     if (!Step(v.model, data, integ, h).ok) v.failed = true;
-    data.time += h;
-  }
   const double t1 = CpuSeconds();
   v.seconds.push_back((t1 - t0) / v.steps);
   v.iterations += integ.iterations - before;

@@ -26,22 +26,34 @@ Mat6x12 CalcRodN(double xi, const Vec6& d) {
 
 void CalcRodGaussVelocities(const Vec6& d, const Vec12& eta_ab, Vec6 (&eta)[kRodGaussPoints],
                             SE3 (*G)[kRodGaussPoints]) {
+  // The tangent operators applied to vectors through the powers of A = ad(d) (lie/se3.h,
+  // TSeries), not formed as 6 x 6 matrices: a quarter of the instructions of the energy row.
   const double phi = d.tail<3>().norm();
-  TSeries scaled[kRodGaussPoints];
-  for (int i = 0; i < kRodGaussPoints; ++i) scaled[i] = CalcTSeries(kRodGaussXi[i] * phi);
-  Mat6 Ti, T[kRodGaussPoints];
-  TSE3InvAndScaledTSE3(d, CalcTSeries(phi), kRodGaussPoints, kRodGaussXi, scaled, &Ti, T);
+  const TSeries c = CalcTSeries(phi);
   const Vec6 eta_a = eta_ab.head<6>();
-  // d_dot = P eta_AB = T^-1(d) (eta_B - eta_A) + ad(d) eta_A   (T^-1(-d) = T^-1(d) - ad(d)).
+  // d_dot = P eta_AB = T^-1(d) z + ad(d) eta_A, z = eta_B - eta_A (T^-1(-d) = T^-1(d) - ad(d)),
+  // T^-1(d) = I + A / 2 + s2 A^2 + s4 A^4.
+  const Vec6 z = eta_ab.tail<6>() - eta_a;
+  const Vec6 z1 = Bracket(d, z);
+  const Vec6 z2 = Bracket(d, z1);
+  const Vec6 z4 = Bracket(d, Bracket(d, z2));
   Vec6 d_dot = Bracket(d, eta_a);
-  d_dot.noalias() += Ti * (eta_ab.tail<6>() - eta_a);
+  d_dot += z + 0.5 * z1 + c.s2 * z2 + c.s4 * z4;
+  // T(xi d) d_dot = d_dot + t1 xi A d_dot + t2 xi^2 A^2 d_dot + t3 xi^3 A^3 d_dot
+  //                 + t4 xi^4 A^4 d_dot, the series at xi |w|.
+  Vec6 y[5];
+  y[0] = d_dot;
+  for (int k = 1; k < 5; ++k) y[k] = Bracket(d, y[k - 1]);
   for (int i = 0; i < kRodGaussPoints; ++i) {
     const double xi = kRodGaussXi[i];
+    const TSeries s = CalcTSeries(xi * phi);
     const SE3 g = ExpSE3(xi * d);
     // Ad(g^-1) eta_A = [R^T (u - x x w); R^T w] (translation first).
     eta[i].head<3>().noalias() = g.R.transpose() * (eta_a.head<3>() - g.x.cross(eta_a.tail<3>()));
     eta[i].tail<3>().noalias() = g.R.transpose() * eta_a.tail<3>();
-    eta[i].noalias() += xi * (T[i] * d_dot);
+    const double x2 = xi * xi;
+    eta[i] += xi * (y[0] + (s.t1 * xi) * y[1] + (s.t2 * x2) * y[2] + (s.t3 * x2 * xi) * y[3] +
+                    (s.t4 * x2 * x2) * y[4]);
     if (G) (*G)[i] = g;
   }
 }
