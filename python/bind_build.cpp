@@ -388,8 +388,14 @@ void BindValues(py::module_& m) {
       .def_readwrite("onset", &ContactSettings::onset, "delta [m]")
       .def_readwrite("damping_ratio", &ContactSettings::damping_ratio,
                      "zeta [-]: the normal damping c_n = 2 zeta sqrt(k_n m_eff).")
-      .def_readwrite("friction", &ContactSettings::friction, "mu")
-      .def_readwrite("slip_velocity", &ContactSettings::slip_velocity, "eps_v [m/s]")
+      .def_readwrite("friction", &ContactSettings::friction, "mu (mu_k of the stick law)")
+      .def_readwrite("slip_velocity", &ContactSettings::slip_velocity, "eps_v [m/s] (smooth law)")
+      .def_readwrite("friction_law", &ContactSettings::friction_law,
+                     "FrictionLaw: STICK (elastic anchor, statics and dynamics) or SMOOTH.")
+      .def_readwrite("static_friction", &ContactSettings::static_friction,
+                     "mu_s >= mu_k (stick law; default: friction)")
+      .def_readwrite("tangential_stiffness", &ContactSettings::tangential_stiffness,
+                     "k_t [N/m] of the stick law's anchor (default: the normal stiffness)")
       .def_readwrite("self", &ContactSettings::self, "Rod self-contact.")
       .def_readwrite("self_skip", &ContactSettings::self_skip,
                      "Self-contact skips element pairs whose nearest ends are closer along the "

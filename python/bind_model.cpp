@@ -46,6 +46,8 @@ void BindModel(py::module_& m) {
   BindEnum<LinearSolver>(m, "LinearSolver",
                          "Direct solver of the Newton systems (docs/numerics.md, 'Sparse direct "
                          "solve').");
+  BindEnum<FrictionLaw>(m, "FrictionLaw",
+                        "Friction law of contact (docs/numerics.md, 'Stick friction').");
   BindEnum<LoadFrame>(m, "LoadFrame", "Frame of an applied load's components (model.h).");
   BindEnum<ActuatorType>(m, "ActuatorType", "Kind of a rod actuator (model.h, Actuator).");
   BindEnum<ContactShapeType>(m, "ContactShapeType", "A rigid body's collision shape (model.h).");

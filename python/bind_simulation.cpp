@@ -655,12 +655,16 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
               out.append(
                   py::dict(py::arg("pair") = i, py::arg("point") = c.point,
                            py::arg("normal") = c.normal, py::arg("normal_force") = c.normal_force,
-                           py::arg("friction_force") = c.friction_force, py::arg("gap") = c.gap));
+                           py::arg("friction_force") = c.friction_force, py::arg("gap") = c.gap,
+                           py::arg("slipping") = c.slipping, py::arg("deflection") = c.deflection,
+                           py::arg("friction_share") = c.friction_share));
             }
             return out;
           },
           "The active contacts as contacts.csv records them: a list of dicts with pair, point "
-          "[m], normal, normal_force [N], friction_force [N] (world) and gap [m].")
+          "[m], normal, normal_force [N], friction_force [N] (world), gap [m], slipping (stick "
+          "law), deflection [m] (the anchor's elastic deflection) and friction_share (|f_t| / "
+          "(mu_s f_n)).")
       .def(
           "pair_contact_states",
           [](S& s) {
@@ -677,15 +681,18 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
                            py::arg("point_a") = c.point[0], py::arg("point_b") = c.point[1],
                            py::arg("normal") = c.normal, py::arg("normal_force") = c.normal_force,
                            py::arg("friction_force") = c.friction_force, py::arg("gap") = c.gap,
-                           py::arg("part") = p.part));
+                           py::arg("part") = p.part, py::arg("slipping") = c.slipping,
+                           py::arg("deflection") = c.deflection,
+                           py::arg("friction_share") = c.friction_share));
             }
             return out;
           },
           "The active contacts between moving shapes as pair_contacts.csv records them: dicts "
           "with pair (the key of its two contact segments), rod_a/owner_a, rod_b/owner_b, "
           "point_a and point_b [m], normal (from B to "
-          "A), normal_force [N], friction_force [N] (on A, world), gap [m] and part (0 or 1: "
-          "the two ends of a segment clipped to a box face; -1: a pair's single point).")
+          "A), normal_force [N], friction_force [N] (on A, world), gap [m], part (0 or 1: "
+          "the two ends of a segment clipped to a box face; -1: a pair's single point), and "
+          "as contact_states slipping, deflection [m] and friction_share.")
       .def(
           "joint_coordinate",
           [](S& s, long j, int c) {

@@ -251,7 +251,8 @@ class ContactSpec:
 
     present: bool = _f(False, doc="The scene has contact.", scene="a contact: section")
     settings: Any = _f(factory=lambda: _m.ContactSettings(), doc="ContactSettings (stiffness, "
-                       "onset, damping_ratio, friction, slip_velocity, self, self_skip).")
+                       "onset, damping_ratio, friction, slip_velocity, friction_law, "
+                       "static_friction, tangential_stiffness, self, self_skip).")
     obstacles: list = _f(factory=list, doc="ContactObstacle objects.")
     exclude: list = _f(factory=list, doc="(body, obstacle) index pairs that never touch.")
     exclude_bodies: list = _f(factory=list, doc="(body, body) index pairs that never touch.",
@@ -976,18 +977,22 @@ class SceneSpec:
 
     def set_contact(self, **settings):
         """Turns contact on (the scene's ``contact:``) with its settings: stiffness [N/m], onset
-        [m], damping_ratio, friction, slip_velocity [m/s], self (bool), self_skip [m]."""
+        [m], damping_ratio, friction, slip_velocity [m/s], friction_law ('stick' or 'smooth'),
+        static_friction, tangential_stiffness [N/m], self (bool), self_skip [m]."""
         c = self.contact
         for key, value in settings.items():
             where = f"contact.{key}"
             if key == "self":
                 c.settings.self = _bool(value, where)
+            elif key == "friction_law":
+                c.settings.friction_law = _enum(_m.FrictionLaw, value, where)
             elif key in ("stiffness", "onset", "damping_ratio", "friction", "slip_velocity",
-                         "self_skip"):
+                         "static_friction", "tangential_stiffness", "self_skip"):
                 setattr(c.settings, key, _number(value, where))
             else:
                 raise _error(where, "unknown key (stiffness, onset, damping_ratio, friction, "
-                             "slip_velocity, self, self_skip)")
+                             "slip_velocity, friction_law, static_friction, "
+                             "tangential_stiffness, self, self_skip)")
         c.present = True
         return c
 

@@ -367,11 +367,19 @@ void ValidateContactLaw(const Model& m) {
                      std::to_string(law.friction));
   if (!(law.damping_ratio >= 0.0) || !std::isfinite(law.damping_ratio))
     throw InputError("contact: the damping ratio must be finite and >= 0");
-  for (double v : {law.stiffness, law.onset, law.slip_velocity})
+  for (double v : {law.stiffness, law.onset, law.slip_velocity, law.tangential_stiffness})
     if (!std::isfinite(v) || v == 0.0)
       throw InputError(
-          "contact: stiffness, onset and slip velocity must be positive (or left "
-          "to their defaults)");
+          "contact: stiffness, onset, slip velocity and tangential stiffness must be positive "
+          "(or left to their defaults)");
+  if (!IsEnumValue(law.friction_law))
+    throw InputError("contact: the friction law must be 'stick' or 'smooth'");
+  if (!std::isfinite(law.static_friction) ||
+      (law.static_friction >= 0.0 && law.static_friction < law.friction))
+    throw InputError(
+        "contact: the static friction coefficient must be >= the friction (mu_s >= "
+        "mu_k), got " +
+        std::to_string(law.static_friction) + " < " + std::to_string(law.friction));
 }
 
 // ---- Pairs of a moving shape and an obstacle ------------------------------------------------

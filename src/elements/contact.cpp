@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "screwfem/elements/shape_pair.h"
+
 namespace screwfem {
 
 namespace {
@@ -35,8 +37,20 @@ ContactLawParameters ContactLawFor(const ContactSettings& settings, double dampi
   p.stiffness = settings.stiffness;
   p.onset = settings.onset;
   p.damping = dynamics ? damping : 0.0;
-  p.friction = dynamics ? settings.friction : 0.0;
+  p.law = settings.friction_law;
   p.slip_velocity = settings.slip_velocity;
+  if (p.law == FrictionLaw::kStick) {
+    // Stick law: friction in statics too; the anchor damped in proportion to the normal.
+    p.friction = settings.friction;
+    p.static_friction = std::max(settings.static_friction, settings.friction);
+    p.tangential_stiffness =
+        settings.tangential_stiffness > 0.0 ? settings.tangential_stiffness : settings.stiffness;
+    p.tangential_damping =
+        dynamics ? damping * std::sqrt(p.tangential_stiffness / settings.stiffness) : 0.0;
+  } else {
+    p.friction = dynamics ? settings.friction : 0.0;
+    p.static_friction = p.friction;
+  }
   return p;
 }
 
@@ -52,8 +66,52 @@ ContactNormal ContactNormalLaw(double gap, double gap_rate, const ContactLawPara
   return out;
 }
 
+namespace {
+
+// The stick law's friction (docs/numerics.md, "Stick friction"): the return mapping of the
+// elastic anchor, into out (whose normal force is set).
+void StickFriction(const Vec3& n, const Vec3& v_c, const ContactLawParameters& law,
+                   const AnchorTrial* anchor, bool tangent, ContactForce* out) {
+  out->direction = n;
+  const double f_n = out->normal.force;
+  if (anchor == nullptr || !(law.friction > 0.0)) {
+    out->force = f_n * n;
+    return;
+  }
+  const Mat3 P = Mat3::Identity() - n * n.transpose();
+  const Vec3 u = P * (anchor->deflection + anchor->slip);
+  // The trial force of the damped anchor, returned onto the cone when it leaves it.
+  const Vec3 f_trial = -law.tangential_stiffness * u - law.tangential_damping * (P * v_c);
+  const double norm = f_trial.norm();
+  const double mu = anchor->slipping ? law.friction : law.static_friction;
+  if (norm <= mu * f_n) {
+    out->friction = f_trial;
+    out->deflection = u;
+    if (tangent) {
+      out->slip_tangent = law.tangential_damping * P;
+      out->anchor_tangent = law.tangential_stiffness * P;
+    }
+  } else {
+    const Vec3 t = f_trial / norm;
+    const double f_t = law.friction * f_n;
+    out->slipping = true;
+    out->friction = f_t * t;
+    out->deflection = (f_t / norm) * u;
+    out->direction = n + law.friction * t;
+    if (tangent) {
+      const Mat3 DP = (f_t / norm) * (Mat3::Identity() - t * t.transpose()) * P;
+      out->slip_tangent = law.tangential_damping * DP;
+      out->anchor_tangent = law.tangential_stiffness * DP;
+    }
+  }
+  out->force = f_n * n + out->friction;
+}
+
+}  // namespace
+
 ContactForce ContactForceLaw(double gap, const Vec3& n, const Vec3& v_c,
-                             const ContactLawParameters& law, bool tangent) {
+                             const ContactLawParameters& law, bool tangent,
+                             const AnchorTrial* anchor) {
   ContactForce out;
   if (gap >= law.onset) return out;
   // Normal force (docs/numerics.md, "Contact"): f_n = max(0, f_e - c_n w(g) dg/dt).
@@ -61,6 +119,10 @@ ContactForce ContactForceLaw(double gap, const Vec3& n, const Vec3& v_c,
   const double f_n = out.normal.force;
   if (!(f_n > 0.0)) return out;
   out.active = true;
+  if (law.law == FrictionLaw::kStick) {
+    StickFriction(n, v_c, law, anchor, tangent, &out);
+    return out;
+  }
   // Regularised Coulomb friction at the surface point.
   const double mu = law.friction;
   const Mat3 P = Mat3::Identity() - n * n.transpose();
@@ -75,6 +137,11 @@ ContactForce ContactForceLaw(double gap, const Vec3& n, const Vec3& v_c,
     out.slip_tangent =
         mu * f_n * (Mat3::Identity() / sv - v_t * v_t.transpose() / (sv * sv * sv)) * P;
   return out;
+}
+
+double FrictionShare(const ContactForce& c, const ContactLawParameters& law) {
+  const double limit = law.static_friction * c.normal.force;
+  return c.active && limit > 0.0 ? c.friction.norm() / limit : 0.0;
 }
 
 bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3& H_0,
@@ -147,10 +214,36 @@ void CalcSurfaceVelocityMap(const ContactGeometry& G, const NodeMotion<2>& x,
   }
 }
 
+// The stick law's trial at the current frames from the pair's history (none without it), and
+// the slip's derivative in the item nodes' increments, dd/dh = [W_k R_k  -W_k R_k Skew(l_k)].
+const AnchorTrial* PairAnchorTrial(const Data& data, int item, const SE3* const (&H)[2],
+                                   AnchorTrial* trial, Eigen::Matrix<double, 3, 12>* dslip) {
+  if (data.contact_anchors.empty()) return nullptr;
+  const ContactAnchor& a = data.contact_anchors[static_cast<std::size_t>(item)];
+  if (dslip) dslip->setZero();
+  if (!a.valid) {
+    *trial = AnchorTrial{};
+    return trial;
+  }
+  Vec3 p = Vec3::Zero();
+  for (int k = 0; k < 2; ++k) {
+    if (a.weight[k] == 0.0) continue;
+    p += a.weight[k] * (H[k]->x + H[k]->R * a.lever[k]);
+    if (dslip) {
+      dslip->block<3, 3>(0, 6 * k) = a.weight[k] * H[k]->R;
+      dslip->block<3, 3>(0, 6 * k + 3) = -a.weight[k] * H[k]->R * Skew(a.lever[k]);
+    }
+  }
+  trial->deflection = a.deflection;
+  trial->slip = p - a.point;
+  trial->slipping = a.slipping;
+  return trial;
+}
+
 }  // namespace
 
-bool ContactKind::Calc(const Model& model, const Data&, const Item& item, const NodeMotion<2>& x,
-                       const KernelOptions& o, ElementTerms<2>* t) {
+bool ContactKind::Calc(const Model& model, const Data& data, const Item& item,
+                       const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
   const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
   ContactGeometry G;
   if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G) || G.gap >= model.contact.onset) {
@@ -165,7 +258,11 @@ bool ContactKind::Calc(const Model& model, const Data&, const Item& item, const 
   const Vec3 v_c = dyn ? Vec3(J * x.eta) : Vec3::Zero();
   // The law (ContactForceLaw): friction and damping in dynamics only.
   const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dyn);
-  const ContactForce c = ContactForceLaw(G.gap, n, v_c, law, o.tangent);
+  AnchorTrial trial;
+  Eigen::Matrix<double, 3, 12> dslip;
+  const AnchorTrial* anchor =
+      PairAnchorTrial(data, item, x.H, &trial, o.tangent ? &dslip : nullptr);
+  const ContactForce c = ContactForceLaw(G.gap, n, v_c, law, o.tangent, anchor);
   if (!c.active) {
     t->active = false;
     return true;
@@ -204,6 +301,7 @@ bool ContactKind::Calc(const Model& model, const Data&, const Item& item, const 
   const bool friction = law.friction > 0.0;
   Eigen::Matrix<double, 3, 12> dF_dh = c.direction * dfn_dh;
   if (friction) dF_dh.noalias() -= c.slip_tangent * dV;
+  if (friction && anchor) dF_dh.noalias() -= c.anchor_tangent * dslip;
   Mat12& K = t->stiffness;
   K.noalias() = -J.transpose() * dF_dh;
   // The rotation of the frames at fixed world F: -W_k [0 Skew(f_k); 0 Skew(l_k) Skew(f_k) +
@@ -232,9 +330,17 @@ void ContactKind::AddEnergy(const Model& model, const Data& data, const Item& it
                            NodeFrame(data, pair.node[1]), &G))
     return;
   E->spring += ContactPotential(G.gap, model.contact.onset, model.contact.stiffness);
+  // The stick law's anchor: its elastic energy 1/2 k_t |u|^2 after the return mapping.
+  AnchorTrial trial;
+  const SE3* H[2] = {&NodeFrame(data, pair.node[0]), &NodeFrame(data, pair.node[1])};
+  const AnchorTrial* anchor = PairAnchorTrial(data, item, H, &trial, nullptr);
+  if (anchor == nullptr || G.gap >= model.contact.onset) return;
+  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, false);
+  const ContactForce c = ContactForceLaw(G.gap, G.normal, Vec3::Zero(), law, false, anchor);
+  if (c.active) E->spring += 0.5 * law.tangential_stiffness * c.deflection.squaredNorm();
 }
 
-ContactState CalcContactState(const Model& model, const Data& data, int item) {
+ContactState CalcContactState(const Model& model, const Data& data, int item, bool dynamics) {
   const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
   ContactState out;
   NodeMotion<2> x;
@@ -254,14 +360,61 @@ ContactState CalcContactState(const Model& model, const Data& data, int item) {
   Eigen::Matrix<double, 3, 12> J;
   Vec3 m[2];
   CalcSurfaceVelocityMap(G, x, &J, m);
-  const Vec3 v_c = J * x.eta;
-  const ContactForce c = ContactForceLaw(G.gap, G.normal, v_c,
-                                         ContactLawFor(model.contact, pair.damping, true), false);
+  const Vec3 v_c = dynamics ? Vec3(J * x.eta) : Vec3::Zero();
+  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dynamics);
+  AnchorTrial trial;
+  const AnchorTrial* anchor = PairAnchorTrial(data, item, x.H, &trial, nullptr);
+  const ContactForce c = ContactForceLaw(G.gap, G.normal, v_c, law, false, anchor);
   if (!c.active) return out;
   out.active = true;
   out.normal_force = c.normal.force;
   out.friction_force = c.friction;
+  out.slipping = c.slipping;
+  out.deflection = c.deflection.norm();
+  out.friction_share = FrictionShare(c, law);
   return out;
+}
+
+void AcceptContactHistory(const Model& model, Data& data, bool dynamics) {
+  AcceptShapePairHistory(model, data, dynamics);
+  if (data.contact_anchors.empty()) return;
+  for (std::size_t i = 0; i < model.contact_pairs.size(); ++i) {
+    const ContactPair& pair = model.contact_pairs[i];
+    ContactAnchor& a = data.contact_anchors[i];
+    NodeMotion<2> x;
+    Mat6 identity = Mat6::Identity();
+    for (int k = 0; k < 2; ++k) {
+      x.H[k] = &NodeFrame(data, pair.node[k]);
+      x.T[k] = &identity;
+    }
+    ContactGeometry G;
+    if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G)) {
+      a = ContactAnchor{};
+      continue;
+    }
+    // The law at this state from the history so far: the anchor's deflection after the return
+    // mapping is the new history (zero when the pair does not touch).
+    ContactForce c;
+    if (G.gap < model.contact.onset) {
+      GatherNodeMotion<2>(model, data, pair.node, &x.eta, nullptr);
+      Eigen::Matrix<double, 3, 12> J;
+      Vec3 m[2];
+      CalcSurfaceVelocityMap(G, x, &J, m);
+      const Vec3 v_c = dynamics ? Vec3(J * x.eta) : Vec3::Zero();
+      AnchorTrial trial;
+      const AnchorTrial* anchor = PairAnchorTrial(data, static_cast<int>(i), x.H, &trial, nullptr);
+      c = ContactForceLaw(G.gap, G.normal, v_c,
+                          ContactLawFor(model.contact, pair.damping, dynamics), false, anchor);
+    }
+    a.deflection = c.active ? c.deflection : Vec3::Zero();
+    a.slipping = c.active && c.slipping;
+    a.point = G.point;
+    for (int k = 0; k < 2; ++k) {
+      a.weight[k] = G.weight[k];
+      a.lever[k] = G.lever[k];
+    }
+    a.valid = true;
+  }
 }
 
 void ClosestSegmentParameters(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1,

@@ -246,10 +246,57 @@ void CalcRelativeVelocityMap(const ShapePairGeometry& G, const NodeMotion<4>& x,
   }
 }
 
+// The stick law's slip of a pair since its last acceptance: the change of the offset p_A - p_B
+// of its material points then, and its derivative [sign_k W_k R_k  -sign_k W_k R_k Skew(l_k)].
+Vec3 AnchorSlip(const ShapePairAnchor& a, const SE3* const (&H)[4],
+                Eigen::Matrix<double, 3, 24>* dslip) {
+  const double sign[4] = {1.0, 1.0, -1.0, -1.0};
+  Vec3 p = Vec3::Zero();
+  if (dslip) dslip->setZero();
+  for (int k = 0; k < 4; ++k) {
+    if (a.weight[k] == 0.0) continue;
+    const double w = sign[k] * a.weight[k];
+    p += w * (H[k]->x + H[k]->R * a.lever[k]);
+    if (dslip) {
+      dslip->block<3, 3>(0, 6 * k) = w * H[k]->R;
+      dslip->block<3, 3>(0, 6 * k + 3) = -w * H[k]->R * Skew(a.lever[k]);
+    }
+  }
+  return p - a.point;
+}
+
+// The trial of the stick law (nullptr: no stick history is kept).
+const AnchorTrial* MakeAnchorTrial(const ShapePairAnchor* anchor, bool stick,
+                                   const SE3* const (&H)[4], AnchorTrial* trial,
+                                   Eigen::Matrix<double, 3, 24>* dslip) {
+  if (!stick) return nullptr;
+  *trial = AnchorTrial{};
+  if (anchor) {
+    trial->deflection = anchor->deflection;
+    trial->slip = AnchorSlip(*anchor, H, dslip);
+    trial->slipping = anchor->slipping;
+  } else if (dslip) {
+    dslip->setZero();
+  }
+  return trial;
+}
+
 }  // namespace
 
+const ShapePairAnchor* FindShapePairAnchor(const Model& model, const Data& data,
+                                           const ShapePair& pair) {
+  if (data.num_shape_pair_anchors == 0) return nullptr;
+  const double key = ShapePairAnchorKey(model, pair);
+  const auto begin = data.shape_pair_anchors.begin();
+  const auto end = begin + data.num_shape_pair_anchors;
+  const auto it = std::lower_bound(begin, end, key,
+                                   [](const ShapePairAnchor& a, double k) { return a.key < k; });
+  return it != end && it->key == key ? &*it : nullptr;
+}
+
 bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePairGeometry& G,
-                        const NodeMotion<4>& x, const KernelOptions& o, ElementTerms<4>* t) {
+                        const NodeMotion<4>& x, const KernelOptions& o, ElementTerms<4>* t,
+                        const ShapePairAnchor* anchor_history, bool stick) {
   if (G.gap >= model.contact.onset) {
     t->active = false;
     return true;
@@ -265,7 +312,11 @@ bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePa
   const Vec3 v_c = dyn ? Vec3(J * x.eta) : Vec3::Zero();
   // The law (ContactForceLaw): friction and damping in dynamics only.
   const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dyn);
-  const ContactForce c = ContactForceLaw(G.gap, n, v_c, law, o.tangent);
+  AnchorTrial trial;
+  Eigen::Matrix<double, 3, 24> dslip;
+  const AnchorTrial* anchor =
+      MakeAnchorTrial(anchor_history, stick, x.H, &trial, o.tangent ? &dslip : nullptr);
+  const ContactForce c = ContactForceLaw(G.gap, n, v_c, law, o.tangent, anchor);
   if (!c.active) {
     t->active = false;
     return true;
@@ -300,6 +351,7 @@ bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePa
   const bool friction = law.friction > 0.0;
   Eigen::Matrix<double, 3, 24> dF_dh = c.direction * dfn_dh;
   if (friction) dF_dh.noalias() -= c.slip_tangent * dV;
+  if (friction && anchor) dF_dh.noalias() -= c.anchor_tangent * dslip;
   auto& K = t->stiffness;
   K.noalias() = -J.transpose() * dF_dh;
   // The rotation of the frames at fixed world F.
@@ -371,6 +423,7 @@ class PairWriter {
         2.0 * m_.contact.damping_ratio * std::sqrt(m_.contact.stiffness * std::max(reduced, 0.0));
     const bool box_a = IsBox(a.side), box_b = IsBox(b.side);
     if (box_a && box_b) {
+      edge_ = 0;
       // Box-box: the 12 edges of each box (segments of radius 0) against the other box.
       for (int first = 0; first < 2; ++first) {
         const ContactSegment& edges = first == 0 ? a : b;
@@ -385,8 +438,10 @@ class PairWriter {
             edge.offset[0] = BoxCorner(edges.side.offset[0], h, k);
             edge.offset[1] = BoxCorner(edges.side.offset[0], h, k | bit);
             Push(edge, box.side, first == 0 ? i : j, first == 0 ? j : i);
+            ++edge_;
           }
       }
+      edge_ = -1;
     } else if (box_a) {
       Push(b.side, a.side, j, i);  // the box is side B
     } else {
@@ -417,12 +472,14 @@ class PairWriter {
     p.segment[1] = seg_b;
     p.damping = damping_;
     p.part = part;
+    p.edge = edge_;
     sink_(p);
   }
 
   const Model& m_;
   Sink& sink_;
   double damping_ = 0.0;
+  int edge_ = -1;
 };
 
 std::uint32_t CellHash(const Eigen::Vector3i& c) {
@@ -662,7 +719,8 @@ bool ShapePairKind::Calc(const Model& model, const Data& data, const Item& item,
     t->active = false;
     return true;
   }
-  return CalcShapePairTerms(model, pair, G, x, o, t);
+  return CalcShapePairTerms(model, pair, G, x, o, t, FindShapePairAnchor(model, data, pair),
+                            !data.shape_pair_anchors.empty());
 }
 
 void ShapePairKind::AddEnergy(const Model& model, const Data& data, const Item& item, Energy* E) {
@@ -673,9 +731,17 @@ void ShapePairKind::AddEnergy(const Model& model, const Data& data, const Item& 
   ShapePairGeometry G;
   if (!CalcShapePairGeometry(pair, H, model.contact.onset, &G)) return;
   E->spring += ContactPotential(G.gap, model.contact.onset, model.contact.stiffness);
+  // The stick law's anchor: its elastic energy 1/2 k_t |u|^2 after the return mapping.
+  AnchorTrial trial;
+  const AnchorTrial* anchor = MakeAnchorTrial(FindShapePairAnchor(model, data, pair),
+                                              !data.shape_pair_anchors.empty(), H, &trial, nullptr);
+  if (anchor == nullptr || G.gap >= model.contact.onset) return;
+  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, false);
+  const ContactForce c = ContactForceLaw(G.gap, G.normal, Vec3::Zero(), law, false, anchor);
+  if (c.active) E->spring += 0.5 * law.tangential_stiffness * c.deflection.squaredNorm();
 }
 
-ShapePairState CalcShapePairState(const Model& model, const Data& data, int item) {
+ShapePairState CalcShapePairState(const Model& model, const Data& data, int item, bool dynamics) {
   const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(item)];
   ShapePairState out;
   const int nodes[4] = {pair.side[0].node[0], pair.side[0].node[1], pair.side[1].node[0],
@@ -698,14 +764,69 @@ ShapePairState CalcShapePairState(const Model& model, const Data& data, int item
   Eigen::Matrix<double, 3, 24> J;
   Vec3 m[4];
   CalcRelativeVelocityMap(G, x, &J, m);
-  const Vec3 v_c = J * x.eta;
-  const ContactForce c = ContactForceLaw(G.gap, G.normal, v_c,
-                                         ContactLawFor(model.contact, pair.damping, true), false);
+  const Vec3 v_c = dynamics ? Vec3(J * x.eta) : Vec3::Zero();
+  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dynamics);
+  AnchorTrial trial;
+  const AnchorTrial* anchor =
+      MakeAnchorTrial(FindShapePairAnchor(model, data, pair), !data.shape_pair_anchors.empty(), x.H,
+                      &trial, nullptr);
+  const ContactForce c = ContactForceLaw(G.gap, G.normal, v_c, law, false, anchor);
   if (!c.active) return out;
   out.active = true;
   out.normal_force = c.normal.force;
   out.friction_force = c.friction;
+  out.slipping = c.slipping;
+  out.deflection = c.deflection.norm();
+  out.friction_share = FrictionShare(c, law);
   return out;
+}
+
+void AcceptShapePairHistory(const Model& model, Data& data, bool dynamics) {
+  if (data.shape_pair_anchors.empty()) return;
+  UpdateShapePairs(model, data);  // the pairs near each other in the accepted state
+  const double sign[4] = {1.0, 1.0, -1.0, -1.0};
+  int count = 0;
+  for (int i = 0; i < data.num_shape_pairs; ++i) {
+    const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(i)];
+    const int nodes[4] = {pair.side[0].node[0], pair.side[0].node[1], pair.side[1].node[0],
+                          pair.side[1].node[1]};
+    NodeMotion<4> x;
+    const Mat6 identity = Mat6::Identity();
+    for (int k = 0; k < 4; ++k) {
+      x.H[k] = &NodeFrame(data, nodes[k]);
+      x.T[k] = &identity;
+    }
+    ShapePairGeometry G;
+    if (!CalcShapePairGeometry(pair, x.H, model.contact.onset, &G)) continue;
+    ContactForce c;
+    if (G.gap < model.contact.onset) {
+      GatherNodeMotion<4>(model, data, nodes, &x.eta, nullptr);
+      Eigen::Matrix<double, 3, 24> J;
+      Vec3 m[4];
+      CalcRelativeVelocityMap(G, x, &J, m);
+      const Vec3 v_c = dynamics ? Vec3(J * x.eta) : Vec3::Zero();
+      AnchorTrial trial;
+      const AnchorTrial* anchor =
+          MakeAnchorTrial(FindShapePairAnchor(model, data, pair), true, x.H, &trial, nullptr);
+      c = ContactForceLaw(G.gap, G.normal, v_c,
+                          ContactLawFor(model.contact, pair.damping, dynamics), false, anchor);
+    }
+    ShapePairAnchor& a = data.shape_pair_anchors_next[static_cast<std::size_t>(count++)];
+    a.key = ShapePairAnchorKey(model, pair);
+    a.deflection = c.active ? c.deflection : Vec3::Zero();
+    a.slipping = c.active && c.slipping;
+    a.point.setZero();
+    for (int k = 0; k < 4; ++k) {
+      a.weight[k] = G.weight[k];
+      a.lever[k] = G.lever[k];
+      if (G.weight[k] != 0.0)
+        a.point += sign[k] * G.weight[k] * (x.H[k]->x + x.H[k]->R * G.lever[k]);
+    }
+  }
+  std::sort(data.shape_pair_anchors_next.begin(), data.shape_pair_anchors_next.begin() + count,
+            [](const ShapePairAnchor& a, const ShapePairAnchor& b) { return a.key < b.key; });
+  std::swap(data.shape_pair_anchors, data.shape_pair_anchors_next);
+  data.num_shape_pair_anchors = count;
 }
 
 }  // namespace screwfem

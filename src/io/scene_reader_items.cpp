@@ -379,9 +379,10 @@ void SceneReader::ReadContact(const Node* node) {
   if (node == nullptr) return;
   const std::string path = "contact";
   r_.ExpectMap(*node, path);
-  r_.CheckKeys(*node, path,
-               {"stiffness", "onset", "damping_ratio", "friction", "slip_velocity", "obstacles",
-                "exclude", "self", "self_skip"});
+  r_.CheckKeys(
+      *node, path,
+      {"stiffness", "onset", "damping_ratio", "friction", "slip_velocity", "friction_law",
+       "static_friction", "tangential_stiffness", "obstacles", "exclude", "self", "self_skip"});
   ContactSpec& c = spec_.contact;
   c.present = true;
   if (const Node* v = node->Find("stiffness"))
@@ -394,6 +395,16 @@ void SceneReader::ReadContact(const Node* node) {
     c.settings.friction = r_.NonNegativeNumber(*v, Join(path, "friction"));
   if (const Node* v = node->Find("slip_velocity"))
     c.settings.slip_velocity = r_.PositiveNumber(*v, Join(path, "slip_velocity"));
+  if (const Node* v = node->Find("friction_law"))
+    c.settings.friction_law = r_.Enum<FrictionLaw>(*v, Join(path, "friction_law"));
+  if (const Node* v = node->Find("static_friction")) {
+    c.settings.static_friction = r_.NonNegativeNumber(*v, Join(path, "static_friction"));
+    if (c.settings.static_friction < c.settings.friction)
+      r_.Fail(v->location, Join(path, "static_friction"),
+              "expected a value >= contact.friction (mu_s >= mu_k)");
+  }
+  if (const Node* v = node->Find("tangential_stiffness"))
+    c.settings.tangential_stiffness = r_.PositiveNumber(*v, Join(path, "tangential_stiffness"));
   if (const Node* v = node->Find("self")) c.settings.self = r_.Bool(*v, Join(path, "self"));
   if (const Node* v = node->Find("self_skip"))
     c.settings.self_skip = r_.PositiveNumber(*v, Join(path, "self_skip"));

@@ -272,12 +272,12 @@ void CalcActuatorRow(const Model& model, const Data& data, double t, std::vector
 }
 
 std::vector<std::string> ContactColumns() {
-  return {"pair", "rod", "owner", "obstacle", "px",  "py",  "pz", "nx",
-          "ny",   "nz",  "fn",    "ftx",      "fty", "ftz", "gap"};
+  return {"pair", "rod", "owner", "obstacle", "px",  "py",  "pz",   "nx",         "ny",
+          "nz",   "fn",  "ftx",   "fty",      "ftz", "gap", "slip", "deflection", "share"};
 }
 
 bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row) {
-  row->resize(15);
+  row->resize(18);
   const ContactState c = CalcContactState(model, data, pair);
   if (!c.active) return false;
   const ContactPair& p = model.contact_pairs[static_cast<std::size_t>(pair)];
@@ -293,17 +293,20 @@ bool CalcContactRow(const Model& model, const Data& data, int pair, std::vector<
   }
   r[10] = c.normal_force;
   r[14] = c.gap;
+  r[15] = c.slipping ? 1.0 : 0.0;  // stick law: 1 slipping, 0 sticking (smooth law: 0)
+  r[16] = c.deflection;            // the anchor's elastic deflection [m] (stick law)
+  r[17] = c.friction_share;        // |f_t| / (mu_s f_n)
   return true;
 }
 
 std::vector<std::string> PairContactColumns() {
-  return {"pair", "rod_a", "owner_a", "element_a", "rod_b", "owner_b", "element_b", "pax",
-          "pay",  "paz",   "pbx",     "pby",       "pbz",   "nx",      "ny",        "nz",
-          "fn",   "ftx",   "fty",     "ftz",       "gap",   "part"};
+  return {"pair", "rod_a", "owner_a", "element_a", "rod_b", "owner_b",    "element_b", "pax", "pay",
+          "paz",  "pbx",   "pby",     "pbz",       "nx",    "ny",         "nz",        "fn",  "ftx",
+          "fty",  "ftz",   "gap",     "part",      "slip",  "deflection", "share"};
 }
 
 bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vector<double>* row) {
-  row->resize(22);
+  row->resize(25);
   const ShapePairState c = CalcShapePairState(model, data, pair);
   if (!c.active) return false;
   const ShapePair& p = data.shape_pairs[static_cast<std::size_t>(pair)];
@@ -323,6 +326,9 @@ bool CalcPairContactRow(const Model& model, const Data& data, int pair, std::vec
   r[16] = c.normal_force;
   r[20] = c.gap;
   r[21] = p.part;  // 0, 1: the clipped ends of a segment on a box; -1: one point
+  r[22] = c.slipping ? 1.0 : 0.0;
+  r[23] = c.deflection;
+  r[24] = c.friction_share;
   return true;
 }
 

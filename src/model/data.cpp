@@ -23,6 +23,8 @@ Data MakeData(const Model& model) {
   for (std::size_t i = 0; i < model.inputs.size(); ++i)
     d.inputs(static_cast<Eigen::Index>(i)) = model.inputs[i].default_value;
   d.tendon_slack.assign(model.tendons.size(), 0);
+  if (model.contact.friction_law == FrictionLaw::kStick && model.contact.friction > 0.0)
+    d.contact_anchors.assign(model.contact_pairs.size(), ContactAnchor{});
   d.residual = Eigen::VectorXd::Zero(model.num_unknowns());
   d.rhs = Eigen::VectorXd::Zero(model.num_unknowns());
   d.increment = Eigen::VectorXd::Zero(model.num_unknowns());
@@ -60,6 +62,10 @@ Data MakeData(const Model& model) {
     g.bucket_start.resize(buckets + 1);
     g.large_chunks.resize(segments);
     d.shape_pairs.resize(4 * segments + 64);
+    if (model.contact.friction_law == FrictionLaw::kStick && model.contact.friction > 0.0) {
+      d.shape_pair_anchors.resize(d.shape_pairs.size());
+      d.shape_pair_anchors_next.resize(d.shape_pairs.size());
+    }
     std::vector<int> nodes;
     for (const ContactSegment& segment : model.contact_segments)
       for (int k : segment.side.node)
@@ -83,6 +89,10 @@ Data MakeData(const Model& model) {
 void GrowShapePairPool(Data& data, std::size_t limit) {
   data.shape_pairs.resize(std::max<std::size_t>(64, std::min(limit, 2 * data.shape_pairs.size())));
   data.shape_pair_overflow = false;
+  if (!data.shape_pair_anchors.empty()) {
+    data.shape_pair_anchors.resize(data.shape_pairs.size());
+    data.shape_pair_anchors_next.resize(data.shape_pairs.size());
+  }
 }
 
 std::size_t ShapePairPoolLimit(const Model& model) {

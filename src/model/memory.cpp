@@ -163,6 +163,15 @@ std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
                          (buckets + 1) * 4 + (4 * segments + 64) * sizeof(ShapePair),
                      why});
   }
+  // The stick law's history (Data::contact_anchors, shape_pair_anchors).
+  if (m.contact.friction_law == FrictionLaw::kStick && m.contact.friction > 0.0) {
+    double bytes = static_cast<double>(m.contact_pairs.size()) * sizeof(ContactAnchor);
+    if (segments > 0 && MayHaveShapePairs(m))
+      bytes += 2.0 * (4 * segments + 64) * sizeof(ShapePairAnchor);
+    parts.push_back({"stick friction's anchors", bytes,
+                     "the history of each pair of a shape and an obstacle, and two per pair of "
+                     "moving shapes in the pool"});
+  }
   return parts;
 }
 

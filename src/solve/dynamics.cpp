@@ -8,6 +8,7 @@
 
 #include <Eigen/LU>
 
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/registry.h"
 #include "screwfem/elements/tendon.h"
@@ -293,6 +294,7 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   integ.tendon_switches = integ.tendon_catches = 0;
   integ.tendon_rate_error = Eigen::VectorXd::Zero(nc);
   SetInitialTendonSlack(model, data);
+  AcceptContactHistory(model, data, true);  // the stick law's anchors at the start
   std::string why;
   if (!ConsistentStart(model, data, integ, &why)) {
     if (message) *message = "at the start time: " + why;
@@ -400,6 +402,7 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
       result.iterations += its;
       ++result.substeps;
       CountAcceptedStep(integ, sub.h, its);
+      AcceptContactHistory(model, data, true);
       hs = std::min(h, 2.0 * hs);
       bool restarted;
       if (!RestartAfterStep(model, data, integ, sub.at_breakpoint, &restarted, &result.message))
@@ -433,6 +436,7 @@ void SaveSimulationState(const Data& data, const Integrator& integ, SimulationSt
   state->lambda = data.lambda;
   state->inputs = data.inputs;
   state->tendon_slack = data.tendon_slack;
+  state->contact_anchors = data.contact_anchors;
   state->a = integ.a;
   state->nu_last = integ.ggl_nu_last;
   state->nu_before = integ.ggl_nu_before;
@@ -453,6 +457,8 @@ void RestoreSimulationState(const SimulationState& state, Data& data, Integrator
   data.lambda = state.lambda;
   data.inputs = state.inputs;
   if (state.tendon_slack.size() == data.tendon_slack.size()) data.tendon_slack = state.tendon_slack;
+  if (state.contact_anchors.size() == data.contact_anchors.size())
+    data.contact_anchors = state.contact_anchors;
   if (state.a.size() == integ.a.size()) integ.a = state.a;
   if (state.nu_last.size() == integ.ggl_nu_last.size()) {
     integ.ggl_nu_last = state.nu_last;

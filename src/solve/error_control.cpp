@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <string>
 
+#include "screwfem/elements/contact.h"
 #include "screwfem/solve/dynamics.h"
 #include "step_stages.h"
 
@@ -210,6 +211,7 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
       result.iterations += its;
       result.substeps = 1;
       CountAcceptedStep(integ, hs, its);
+      AcceptContactHistory(model, data, true);
       ++integ.steps;
       ControlAfterAcceptedStep(integ, h, hs, err, end.truncated);
       data.time = end.t_end;

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "screwfem/assemble/assemble.h"
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/common.h"
@@ -401,6 +402,7 @@ class LoadStepPath {
     path_speed_ =
         S_.PathTangentAfterStep() ? ScaledIncrementSize(model, S_.x_f.head(model.nv)) : NAN;
     UpdateBranchReferences(model, S_.data);
+    AcceptContactHistory(model, S_.data, false);
     saved_.Save(S_.data);
     p_ = target;
     result_.load_factor = s_target;
@@ -715,6 +717,7 @@ class ArcLengthPath {
       const double b = (s2 - s1) / l2 - c * l2;
       result_.limit_points.push_back(c != 0.0 ? s1 - b * b / (4.0 * c) : s1);
     }
+    AcceptContactHistory(S_.model, S_.data, false);
     saved_.Save(S_.data);
     s_ = s_new;
     result_.load_factor = s_;
@@ -749,6 +752,7 @@ class ArcLengthPath {
 
 StaticResult SolveStatic(const Model& model, Data& data, const StaticOptions& options,
                          const StopRequest& stop, const StaticStepCallback& on_step) {
+  AcceptContactHistory(model, data, false);  // the stick law's anchors at the start
   StaticSolver solver(model, data, options, stop);
   if (options.method == StaticMethod::kArcLength) return ArcLengthPath(solver, on_step).Run();
   return LoadStepPath(solver, on_step).Run();

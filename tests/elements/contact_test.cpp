@@ -9,8 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/build/model_builder.h"
@@ -66,7 +68,8 @@ struct Scene {
   Data data;
 };
 
-Scene MakeTouchingScene(double friction, unsigned seed) {
+Scene MakeTouchingScene(double friction, unsigned seed,
+                        FrictionLaw friction_law = FrictionLaw::kSmooth) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   ModelBuilder b;
@@ -104,6 +107,8 @@ Scene MakeTouchingScene(double friction, unsigned seed) {
   law.onset = delta;
   law.friction = friction;
   law.slip_velocity = 0.05;
+  law.friction_law = friction_law;
+  law.static_friction = 1.25 * friction;
   b.SetContactSettings(law);
   Scene s{b.Build(), {}};
   s.data = MakeData(s.model);
@@ -291,7 +296,8 @@ struct Puck {
 };
 
 void MakePuck(Puck* p, ContactShapeType type, double mu, double eps_v, const Vec3& normal,
-              const Vec3& v0, double height, double rho_inf = 0.8, double zeta = 1.0) {
+              const Vec3& v0, double height, double rho_inf = 0.8, double zeta = 1.0,
+              FrictionLaw friction_law = FrictionLaw::kSmooth, double mu_s = -1.0) {
   ModelBuilder b;
   const Mat3 R = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), normal).toRotationMatrix();
   const NodeId n = b.AddNode(SE3{R, height * normal});
@@ -307,6 +313,8 @@ void MakePuck(Puck* p, ContactShapeType type, double mu, double eps_v, const Vec
   law.friction = mu;
   law.slip_velocity = eps_v;
   law.damping_ratio = zeta;
+  law.friction_law = friction_law;
+  law.static_friction = mu_s;
   b.SetContactSettings(law);
   b.SetGravity(Vec3(0.0, 0.0, -kG));
   b.SetInitialVelocity(n, (Vec6() << R.transpose() * v0, Vec3::Zero()).finished());
@@ -403,6 +411,337 @@ TEST(ContactValidation, BoxOnAnInclineStaysBelowTheFrictionAngleAndSlidesAboveIt
       EXPECT_NEAR((v_end - v_mid) / 0.25, acc, 1e-5 * acc);
       EXPECT_NEAR(s, 0.5 * acc * T * T, 0.01 * 0.5 * acc * T * T);
     }
+  }
+}
+
+// ---- The stick law (docs/numerics.md, "Stick friction") ------------------------------------
+
+ContactLawParameters StickLaw(double mu_k, double mu_s, double k_t, double c_t) {
+  ContactLawParameters law;
+  law.stiffness = 1e5;
+  law.onset = 1e-3;
+  law.damping = 40.0;
+  law.friction = mu_k;
+  law.law = FrictionLaw::kStick;
+  law.static_friction = mu_s;
+  law.tangential_stiffness = k_t;
+  law.tangential_damping = c_t;
+  return law;
+}
+
+// Inside the cone the force is the anchor's spring, f_t = -k_t P (u_e + d) - c_t P v_c; outside
+// it is mu_k f_n along the trial; the threshold is mu_s after a stick and mu_k after a slip.
+TEST(StickLaw, SticksInsideTheStaticConeAndSlipsAtTheKineticOne) {
+  const ContactLawParameters law = StickLaw(0.4, 0.6, 2e4, 0.0);
+  const Vec3 n = Vec3(0.1, -0.2, 1.0).normalized();
+  const double gap = -2e-4;
+  const double f_n = CalcNormalLaw(gap, law.onset, law.stiffness).force;  // 60 N
+  const Vec3 t = n.cross(Vec3::UnitX()).normalized();
+  // |f*| = k_t |d|: 0.5 mu_s f_n, between mu_k and mu_s, and 1.5 mu_s f_n.
+  for (const double share : {0.5, 0.8, 1.5}) {
+    for (const bool slipping_before : {false, true}) {
+      AnchorTrial a;
+      a.slip = share * law.static_friction * f_n / law.tangential_stiffness * t + 1e-5 * n;
+      a.slipping = slipping_before;
+      const ContactForce c = ContactForceLaw(gap, n, Vec3::Zero(), law, false, &a);
+      ASSERT_TRUE(c.active);
+      EXPECT_NEAR(c.normal.force, f_n, 1e-12 * f_n);
+      const double limit = (slipping_before ? law.friction : law.static_friction) * f_n;
+      const double trial = share * law.static_friction * f_n;
+      if (trial <= limit) {
+        EXPECT_FALSE(c.slipping);
+        EXPECT_LT((c.friction + trial * t).norm(), 1e-12 * f_n);
+        EXPECT_LT((c.deflection - trial / law.tangential_stiffness * t).norm(), 1e-16);
+      } else {
+        EXPECT_TRUE(c.slipping);
+        EXPECT_LT((c.friction + law.friction * f_n * t).norm(), 1e-12 * f_n);
+        EXPECT_NEAR(c.deflection.norm(), law.friction * f_n / law.tangential_stiffness, 1e-16);
+      }
+      EXPECT_NEAR(FrictionShare(c, law), c.slipping ? law.friction / law.static_friction : share,
+                  1e-12);
+    }
+  }
+}
+
+// dF = direction df_n - slip_tangent dv_c - anchor_tangent dd against central differences of
+// the law in the slip d, the velocity v_c and the gap, sticking and slipping.
+TEST(StickLaw, TangentsMatchFiniteDifferences) {
+  const ContactLawParameters law = StickLaw(0.4, 0.5, 3e4, 25.0);
+  const Vec3 n = Vec3(0.3, 0.1, 1.0).normalized();
+  const double gap = -1e-4;
+  for (const double scale : {0.3, 10.0}) {  // stick, slip
+    AnchorTrial a;
+    a.deflection = scale * Vec3(1e-4, -2e-4, 0.5e-4);
+    a.slip = scale * Vec3(-0.3e-4, 0.7e-4, 0.2e-4);
+    const Vec3 v(0.02, -0.01, 0.004);
+    const ContactForce c = ContactForceLaw(gap, n, v, law, true, &a);
+    ASSERT_TRUE(c.active);
+    EXPECT_EQ(c.slipping, scale > 1.0);
+    const double eps = 1e-9;
+    Mat3 dd, dv;
+    for (int j = 0; j < 3; ++j) {
+      AnchorTrial p = a, m = a;
+      p.slip(j) += eps;
+      m.slip(j) -= eps;
+      dd.col(j) = (ContactForceLaw(gap, n, v, law, false, &p).force -
+                   ContactForceLaw(gap, n, v, law, false, &m).force) /
+                  (2 * eps);
+      const Vec3 e = eps * Vec3::Unit(j);
+      // The velocity's normal part changes f_n: through direction dforce_drate n^T.
+      dv.col(j) = (ContactForceLaw(gap, n, v + e, law, false, &a).force -
+                   ContactForceLaw(gap, n, v - e, law, false, &a).force) /
+                  (2 * eps);
+    }
+    EXPECT_LT(RelativeError(-c.anchor_tangent, dd), 1e-6) << "scale " << scale;
+    const Mat3 dv_exact = c.direction * c.normal.dforce_drate * n.transpose() - c.slip_tangent;
+    EXPECT_LT(RelativeError(dv_exact, dv), 1e-6) << "scale " << scale;
+    const double eg = 1e-10;
+    const Vec3 dg = (ContactForceLaw(gap + eg, n, v, law, false, &a).force -
+                     ContactForceLaw(gap - eg, n, v, law, false, &a).force) /
+                    (2 * eg);
+    EXPECT_LT((c.direction * c.normal.dforce_dgap - dg).norm(), 1e-6 * dg.norm());
+  }
+}
+
+// The kernel's stiffness (through the retraction, with the anchors' slip) and damping against
+// central differences, for rigid shapes and rod nodes sticking and slipping on a tilted plane.
+TEST(ContactKind, StickLawTangentsMatchFiniteDifferences) {
+  int sticking = 0, slipping = 0;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    Scene s = MakeTouchingScene(0.4, seed, FrictionLaw::kStick);
+    ASSERT_EQ(s.data.contact_anchors.size(), s.model.contact_pairs.size());
+    // The anchors of a state displaced along the plane by up to 2 mm (some pairs stick,
+    // some slip from there).
+    const Vec3 normal = s.model.obstacles[0].normal;
+    Data shifted = s.data;
+    std::mt19937 rng(seed + 10);
+    std::uniform_real_distribution<double> u(-2e-3, 2e-3);
+    for (SE3& H : shifted.H) {
+      const Vec3 d(u(rng), u(rng), u(rng));
+      H.x += d - normal * normal.dot(d);
+    }
+    AcceptContactHistory(s.model, shifted, true);
+    s.data.contact_anchors = shifted.contact_anchors;
+    for (int i = 0; i < static_cast<int>(s.model.contact_pairs.size()); ++i) {
+      const ContactState c = CalcContactState(s.model, s.data, i);
+      if (!c.active) continue;
+      ++(c.slipping ? slipping : sticking);
+    }
+    KernelOptions o;
+    o.dynamics = true;
+    Eigen::VectorXd r;
+    Eigen::MatrixXd K, C;
+    AssembleContacts(s.model, s.data, o, &r, &K, &C);
+    const int n = static_cast<int>(s.model.nodes.size());
+    const double eps = 1e-8;
+    Eigen::MatrixXd K_fd(6 * n, 6 * n), C_fd(6 * n, 6 * n);
+    for (int j = 0; j < 6 * n; ++j) {
+      Data p = s.data, m = s.data;
+      const Vec6 dh = eps * Vec6::Unit(j % 6);
+      p.H[static_cast<std::size_t>(j / 6)] = p.H[static_cast<std::size_t>(j / 6)] * ExpSE3(dh);
+      m.H[static_cast<std::size_t>(j / 6)] = m.H[static_cast<std::size_t>(j / 6)] * ExpSE3(-dh);
+      Eigen::VectorXd rp, rm;
+      AssembleContacts(s.model, p, o, &rp, nullptr, nullptr);
+      AssembleContacts(s.model, m, o, &rm, nullptr, nullptr);
+      K_fd.col(j) = (rp - rm) / (2 * eps);
+      Data vp = s.data, vm = s.data;
+      vp.v(j) += eps;
+      vm.v(j) -= eps;
+      AssembleContacts(s.model, vp, o, &rp, nullptr, nullptr);
+      AssembleContacts(s.model, vm, o, &rm, nullptr, nullptr);
+      C_fd.col(j) = (rp - rm) / (2 * eps);
+    }
+    EXPECT_LT(RelativeError(K, K_fd), 1e-6) << "seed " << seed;
+    EXPECT_LT(RelativeError(C, C_fd), 1e-6) << "seed " << seed;
+  }
+  EXPECT_GE(sticking, 1);
+  EXPECT_GE(slipping, 1);
+}
+
+// A box on an incline below the static friction angle does not move beyond its anchors'
+// elastic deflection: after the landing transient its position changes by less than 1e-9 m
+// over 1 s. Between the kinetic and the static angle a box resting there (its equilibrium found
+// by a static solve, which the kinetic coefficient could not hold) stays, while a box launched
+// downhill keeps sliding and speeds up at g (sin a - mu_k cos a); above the static angle it
+// slides from rest at that acceleration. (Put down at rest between the two angles, the box's
+// start, with undeflected anchors, is a jolt that may exceed the static cone: the damped
+// anchor's force overshoots a step load by up to 13.5 % at critical damping.)
+TEST(ContactValidation, StickLawHoldsABoxBelowTheStaticAngleWithoutCreep) {
+  const double mu_k = 0.45, mu_s = 0.6;  // angles 24.23 and 30.96 degrees
+  struct Case {
+    double angle_deg, v0;
+    bool settle;  // start from the static equilibrium
+  };
+  for (const Case& k : {Case{20.0, 0.0, false}, Case{27.0, 0.0, true}, Case{27.0, 0.5, false},
+                        Case{33.0, 0.0, false}}) {
+    const double a = k.angle_deg * M_PI / 180.0;
+    const Vec3 normal(std::sin(a), 0.0, std::cos(a));
+    const Vec3 downhill(std::cos(a), 0.0, -std::sin(a));
+    Puck p;
+    MakePuck(&p, ContactShapeType::kBox, mu_k, 1e-3, normal, k.v0 * downhill,
+             0.1 + RestingGap(kG * std::cos(a) / 4.0), 0.8, 1.0, FrictionLaw::kStick, mu_s);
+    if (k.settle) {
+      StaticOptions so;
+      so.start_load_factor = so.end_load_factor = 1.0;
+      const StaticResult r = SolveStatic(p.model, p.data, so);
+      ASSERT_TRUE(r.converged) << r.message;
+      std::string message;
+      ASSERT_TRUE(InitializeDynamics(p.model, p.data, p.integ, DynamicOptions{}, &message))
+          << message;
+    }
+    const double h = 1e-3;
+    Vec3 x_half = Vec3::Zero();
+    double v_half = 0.0;
+    for (int i = 0; i < 1500; ++i) {
+      ASSERT_TRUE(Step(p.model, p.data, p.integ, h).ok) << k.angle_deg;
+      if (i == 499) {
+        x_half = p.data.H[0].x;
+        v_half = downhill.dot(p.data.H[0].R * p.data.v.head<3>());
+      }
+    }
+    const double v_end = downhill.dot(p.data.H[0].R * p.data.v.head<3>());
+    const bool sticks = std::tan(a) < mu_s && k.v0 == 0.0;
+    if (sticks) {
+      EXPECT_LT((p.data.H[0].x - x_half).norm(), 1e-9) << k.angle_deg;
+      EXPECT_LT(std::abs(v_end), 1e-9) << k.angle_deg;
+      // The friction forces hold the weight's downhill part, each within its cone.
+      Vec3 friction = Vec3::Zero();
+      for (int i = 0; i < static_cast<int>(p.model.contact_pairs.size()); ++i) {
+        const ContactState c = CalcContactState(p.model, p.data, i);
+        if (!c.active) continue;
+        EXPECT_LE(c.friction_share, 1.0 + 1e-12);
+        friction += c.friction_force;
+      }
+      EXPECT_NEAR(friction.dot(downhill), -kG * std::sin(a), 1e-6 * kG);
+    } else {
+      const double acc = kG * (std::sin(a) - mu_k * std::cos(a));
+      EXPECT_NEAR((v_end - v_half) / 1.0, acc, 1e-5 * kG) << k.angle_deg;
+    }
+  }
+}
+
+// A box launched at v0 with mu = 0.3 stops after v0^2 / (2 mu g) and then stays: no creep.
+TEST(ContactValidation, StickLawStopsASlidingBoxAtTheCoulombDistanceAndHoldsIt) {
+  const double mu = 0.3, v0 = 2.0, h = 1e-3;
+  Puck box;
+  MakePuck(&box, ContactShapeType::kBox, mu, 1e-3, Vec3::UnitZ(), Vec3(v0, 0.0, 0.0),
+           0.1 + RestingGap(kG / 4.0), 0.8, 1.0, FrictionLaw::kStick);
+  Vec3 x_stop = Vec3::Zero();
+  for (int i = 0; i < 1500; ++i) {
+    ASSERT_TRUE(Step(box.model, box.data, box.integ, h).ok);
+    if (i == 999) x_stop = box.data.H[0].x;
+  }
+  const double exact = v0 * v0 / (2.0 * mu * kG);
+  EXPECT_NEAR(box.data.H[0].x.x(), exact, 2e-3 * exact);
+  EXPECT_LT((box.data.H[0].x - x_stop).norm(), 1e-9);
+}
+
+// Statics with friction: the box on a 20-degree incline (mu_s = 0.5) rests in one static solve,
+// its friction forces carrying W sin a and its normal forces W cos a, each corner's anchor
+// deflected by its force over k_t; at 30 degrees no equilibrium exists and the solve says so.
+TEST(ContactValidation, StickLawHoldsABoxOnAnInclineInStatics) {
+  for (const double angle_deg : {20.0, 30.0}) {
+    const double a = angle_deg * M_PI / 180.0;
+    const Vec3 normal(std::sin(a), 0.0, std::cos(a));
+    const Vec3 downhill(std::cos(a), 0.0, -std::sin(a));
+    Puck p;
+    MakePuck(&p, ContactShapeType::kBox, 0.5, 1e-3, normal, Vec3::Zero(),
+             0.1 + RestingGap(kG * std::cos(a) / 4.0), 0.8, 1.0, FrictionLaw::kStick);
+    StaticOptions o;
+    o.load_steps = 4;
+    const StaticResult r = SolveStatic(p.model, p.data, o);
+    if (std::tan(a) < 0.5) {
+      ASSERT_TRUE(r.converged) << r.message;
+      Vec3 force = Vec3::Zero();
+      for (int i = 0; i < static_cast<int>(p.model.contact_pairs.size()); ++i) {
+        const ContactState c = CalcContactState(p.model, p.data, i, false);
+        if (!c.active) continue;
+        EXPECT_FALSE(c.slipping);
+        EXPECT_NEAR(c.deflection, c.friction_force.norm() / p.model.contact.stiffness, 1e-15);
+        force += c.normal_force * c.normal + c.friction_force;
+      }
+      EXPECT_NEAR(force.dot(downhill), -kG * std::sin(a), 1e-8 * kG);
+      EXPECT_NEAR(force.dot(normal), kG * std::cos(a), 1e-8 * kG);
+    } else {
+      EXPECT_FALSE(r.converged);
+      EXPECT_FALSE(r.message.empty());
+    }
+  }
+}
+
+// The stick-slip oscillator: a block (mass m_b, a sphere whose rotation is locked) on a plane,
+// pulled by a spring k whose far end moves at V (a series-elastic drive on a prismatic joint
+// to a carriage of mass m_c; a second prismatic joint lets the block move along the normal).
+// It sticks until the spring force reaches mu_s N, slips (harmonic at omega^2 = k / (m_b +
+// m_c) about the kinetic force mu_k N) until it comes to rest again at the force
+// (2 mu_k - mu_s) N, and sticks while the force climbs back: T_stick = 2 Y / V and T_slip =
+// (pi + 2 atan(V / (omega Y))) / omega, Y = (mu_s - mu_k) N / k.
+TEST(ContactValidation, StickSlipOscillatorHasTheClosedFormPeriod) {
+  const double m_b = 1.0, m_c = 0.05, k = 100.0, V = 0.1, mu_s = 0.6, mu_k = 0.4, r = 0.05;
+  const double N = m_b * kG, Y = (mu_s - mu_k) * N / k, omega = std::sqrt(k / (m_b + m_c));
+  const double t_stick = 2.0 * Y / V;
+  const double t_slip = (M_PI + 2.0 * std::atan(V / (omega * Y))) / omega;
+  ModelBuilder b;
+  const double z0 = r + RestingGap(N);
+  const NodeId carriage = b.AddNode(SE3{Mat3::Identity(), Vec3(0.0, 0.0, z0)});
+  b.AddRigidBody("carriage", carriage, m_c, Vec3::Zero(), 1e-4 * Mat3::Identity());
+  const NodeId block = b.AddNode(SE3{Mat3::Identity(), Vec3(0.0, 0.0, z0)});
+  b.AddRigidBody("block", block, m_b, Vec3::Zero(), 1e-3 * Mat3::Identity());
+  JointSpec drive;
+  drive.name = "drive";
+  drive.type = JointType::kPrismatic;
+  drive.node_b = carriage;
+  drive.point = Vec3(0.0, 0.0, z0);
+  drive.axis = Vec3::UnitX();
+  drive.drive = DriveKind::kSeriesElastic;
+  drive.stiffness(0) = k;
+  const double t_end = 4.0;
+  drive.drive_profile = Profile::Ramp(0.0, t_end, V * t_end);
+  b.AddJoint(drive);
+  JointSpec lift;
+  lift.name = "lift";
+  lift.type = JointType::kPrismatic;
+  lift.node_a = carriage;
+  lift.node_b = block;
+  lift.point = Vec3(0.0, 0.0, z0);
+  lift.axis = Vec3::UnitZ();
+  b.AddJoint(lift);
+  b.AddContactShape({1, ContactShapeType::kSphere, Vec3::Zero(), Vec3::Zero(), r});
+  b.AddObstacle({"ground", ObstacleType::kPlane, Vec3::Zero(), Vec3::UnitZ(), Vec3::Zero(), 0.0});
+  ContactSettings law;
+  law.stiffness = 1e6;
+  law.onset = 1e-4;
+  law.friction = mu_k;
+  law.static_friction = mu_s;
+  b.SetContactSettings(law);
+  b.SetGravity(Vec3(0.0, 0.0, -kG));
+  Model model = b.Build();
+  Data data = MakeData(model);
+  Integrator integ;
+  DynamicOptions opt;
+  opt.rho_inf = 0.8;
+  std::string message;
+  ASSERT_TRUE(AssembleInitialState(model, data, &message)) << message;
+  ASSERT_TRUE(InitializeDynamics(model, data, integ, opt, &message)) << message;
+  // The starts of slip and of stick (the contact's state after each step).
+  const double h = 1e-3;
+  std::vector<double> slip_starts, stick_starts;
+  bool slipping = false;
+  for (int i = 0; i < static_cast<int>(t_end / h); ++i) {
+    ASSERT_TRUE(Step(model, data, integ, h).ok) << data.time;
+    const bool now = CalcContactState(model, data, 0).slipping;
+    if (now && !slipping) slip_starts.push_back(data.time);
+    if (!now && slipping) stick_starts.push_back(data.time);
+    slipping = now;
+  }
+  // The first slip when the spring reaches mu_s N from rest; then the cycle.
+  ASSERT_GE(slip_starts.size(), 4u);
+  EXPECT_NEAR(slip_starts[0], mu_s * N / (k * V), 3e-3);
+  for (std::size_t i = 1; i + 1 < slip_starts.size(); ++i) {
+    EXPECT_NEAR(slip_starts[i + 1] - slip_starts[i], t_stick + t_slip, 0.005 * (t_stick + t_slip))
+        << i;
+    ASSERT_GT(stick_starts.size(), i);
+    EXPECT_NEAR(stick_starts[i] - slip_starts[i], t_slip, 0.01 * t_slip) << i;
   }
 }
 

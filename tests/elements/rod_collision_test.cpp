@@ -74,6 +74,7 @@ Collision Collide(double h, double cross_x, double cross_y, double slide, double
   law.onset = 1e-3;
   law.friction = mu;
   law.slip_velocity = 1e-3;
+  law.friction_law = FrictionLaw::kSmooth;  // the convergence order of the smooth law
   law.damping_ratio = zeta;
   law.band_pair_nodes = band_pair_nodes;
   b.SetContactSettings(law);

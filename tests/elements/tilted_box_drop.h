@@ -29,6 +29,7 @@ inline Model MakeTiltedBoxDrop(double theta, double drop, const Vec3& inertia) {
   law.stiffness = 1e5;
   law.onset = 1e-4;
   law.friction = 0.3;
+  law.friction_law = FrictionLaw::kSmooth;  // the smooth law's step halvings are measured
   b.SetContactSettings(law);
   b.SetGravity(Vec3(0.0, 0.0, -9.81));
   return b.Build();

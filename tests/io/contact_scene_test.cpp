@@ -40,15 +40,16 @@ TEST(ContactScene, RunWritesContactsTableTheBoxStopsAndTheRodRestsAtItsRadius) {
   ASSERT_TRUE(r.ok) << r.message;
   const test::Table c = test::ReadCsv(dir.path() + "/contacts.csv");
   ASSERT_TRUE(c.well_formed) << c.problem;
-  EXPECT_EQ(c.columns,
-            (std::vector<std::string>{"t", "pair", "rod", "owner", "obstacle", "px", "py", "pz",
-                                      "nx", "ny", "nz", "fn", "ftx", "fty", "ftz", "gap"}));
+  EXPECT_EQ(c.columns, (std::vector<std::string>{"t", "pair", "rod", "owner", "obstacle", "px",
+                                                 "py", "pz", "nx", "ny", "nz", "fn", "ftx", "fty",
+                                                 "ftz", "gap", "slip", "deflection", "share"}));
   // At the last time (0.8 s, after the stop at 0.68 s): the box's 4 bottom vertices carry its
   // weight with no friction, and every rod node touches the ground and the rod's normal forces
   // sum to its weight (rho A L g).
   const double t_end = c.rows.back()[0];
   EXPECT_NEAR(t_end, 0.8, 1e-12);
-  double box_fn = 0.0, rod_fn = 0.0, box_ft = 0.0, box_x = 0.0;
+  double box_fn = 0.0, rod_fn = 0.0, box_x = 0.0;
+  Vec3 box_ft = Vec3::Zero();
   int box_rows = 0, rod_rows = 0;
   for (const std::vector<double>& row : c.rows) {
     if (row[0] != t_end) continue;
@@ -56,7 +57,7 @@ TEST(ContactScene, RunWritesContactsTableTheBoxStopsAndTheRodRestsAtItsRadius) {
     EXPECT_GT(row[15], -1e-4);  // no penetration beyond the onset
     if (row[2] == 0.0) {
       box_fn += row[11];
-      box_ft += std::hypot(row[12], row[13]);
+      box_ft += Vec3(row[12], row[13], 0.0);
       box_x += 0.25 * row[5];
       ++box_rows;
     } else {
@@ -67,7 +68,7 @@ TEST(ContactScene, RunWritesContactsTableTheBoxStopsAndTheRodRestsAtItsRadius) {
   EXPECT_EQ(box_rows, 4);
   EXPECT_EQ(rod_rows, 11);
   EXPECT_NEAR(box_fn, 9.81, 1e-3);
-  EXPECT_LT(box_ft, 1e-3);
+  EXPECT_LT(box_ft.norm(), 1e-3);  // at rest: the corners' friction forces balance
   const double rod_weight = 1100 * M_PI * 1e-4 * 1.0 * 9.81;
   EXPECT_NEAR(rod_fn, rod_weight, 0.02 * rod_weight);  // still ringing a little after the drop
   // The box stopped after v^2 / (2 mu g) = 0.6796 m (the contact points' mean x).
@@ -124,6 +125,13 @@ TEST(ContactScene, BadInputIsReportedAtFileLineColumnNamingTheField) {
               "bad.yaml:8:20: contact.exclude[0][1]", "undefined obstacle 'floor'");
   ExpectError(kHead + "contact:\n  obstacles:\n    ground: {type: wall}\n",
               "bad.yaml:7:20: contact.obstacles.ground.type", "plane");
+  // The stick law's keys.
+  ExpectError(kHead + "contact:\n  friction_law: sticky\n  obstacles:\n" + ground,
+              "bad.yaml:6:17: contact.friction_law", "stick");
+  ExpectError(kHead + "contact:\n  friction: 0.5\n  static_friction: 0.4\n  obstacles:\n" + ground,
+              "bad.yaml:7:20: contact.static_friction", "mu_s >= mu_k");
+  ExpectError(kHead + "contact:\n  tangential_stiffness: 0\n  obstacles:\n" + ground,
+              "bad.yaml:6:25: contact.tangential_stiffness", "");
 }
 
 }  // namespace

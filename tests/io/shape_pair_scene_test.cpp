@@ -94,9 +94,12 @@ outputs: {interval: 0.01}
 )";
   const test::Table c = RunOnePairScene(text, "shape_pair_scene");
   ASSERT_TRUE(c.well_formed) << c.problem;
-  ASSERT_EQ(c.columns.size(), 23u);
+  ASSERT_EQ(c.columns.size(), 26u);
   EXPECT_EQ(c.columns[14], "nx");
   EXPECT_EQ(c.columns[22], "part");
+  EXPECT_EQ(c.columns[23], "slip");
+  EXPECT_EQ(c.columns[24], "deflection");
+  EXPECT_EQ(c.columns[25], "share");
   ASSERT_GE(c.rows.size(), 5u);
   const std::vector<double>& last = c.rows.back();
   EXPECT_NEAR(last[0], 0.05, 1e-12);

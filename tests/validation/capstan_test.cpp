@@ -28,6 +28,7 @@
 #include "screwfem/elements/joint.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
+#include "screwfem/solve/statics.h"
 
 namespace screwfem::capstan_test {
 namespace {
@@ -56,7 +57,8 @@ struct Capstan {
 // shape is the wrapped one (no bending moment at the start); EI = 1e-4 T1 R^2 (T6.5: bending
 // adds O(EI / (R^2 T))); EA = GA = 1e4 N; 0.1 kg/m and 1e-5 kg m per length. No gravity: dead loads T1, T2
 // along the legs.
-void MakeCapstan(double theta, double ratio, Capstan* c, double pull_speed = 0.0) {
+void MakeCapstan(double theta, double ratio, Capstan* c, double pull_speed = 0.0,
+                 FrictionLaw friction_law = FrictionLaw::kSmooth) {
   const int n = static_cast<int>(std::ceil(theta / (M_PI / 32.0) - 1e-9));
   const double dtheta = theta / n;
   // Start at the resting gap of the mean normal force per element.
@@ -114,6 +116,7 @@ void MakeCapstan(double theta, double ratio, Capstan* c, double pull_speed = 0.0
   law.onset = kOnset;
   law.friction = kMu;
   law.slip_velocity = kSlip;
+  law.friction_law = friction_law;
   b.SetContactSettings(law);
   c->model = b.Build();
   c->data = MakeData(c->model);
@@ -210,6 +213,37 @@ TEST(Capstan, PulledAtConstantSpeedTheDriveCarriesTheEulerEytelweinTension) {
     EXPECT_NEAR(ratio, std::exp(kMu * theta), 0.02 * std::exp(kMu * theta)) << "theta " << theta;
     EXPECT_NEAR(ratio, std::exp(mu_eff * theta), 0.005 * std::exp(mu_eff * theta))
         << "theta " << theta;
+  }
+}
+
+// The stick law (docs/numerics.md, "Stick friction"): below e^{mu theta} the cord holds with no
+// creep (end 2's mean speed below 1e-6 m/s, the smooth law's creep 3.45 mm/s) and a static solve
+// finds the equilibrium; above it the cord slips and no static equilibrium exists.
+TEST(Capstan, StickLawHoldsBelowTheRatioWithoutCreepInDynamicsAndStatics) {
+  for (const double theta : {0.5 * M_PI, M_PI}) {
+    const double limit = std::exp(kMu * theta);
+    Capstan held;
+    MakeCapstan(theta, 0.98 * limit, &held, 0.0, FrictionLaw::kStick);
+    const CapstanRun h = Simulate(&held, 300);
+    EXPECT_EQ(h.active, held.contacts) << "theta " << theta;
+    // The mean speed of end 2 over the last quarter: what is left of the start's ringing on the
+    // anchors (measured 4.4e-7 m/s, changing sign over longer runs), no creep (the smooth law's
+    // is 3.45 mm/s here).
+    EXPECT_LT(std::abs(h.v_late), 1e-6) << "theta " << theta;
+    Capstan slips;
+    MakeCapstan(theta, 1.02 * limit, &slips, 0.0, FrictionLaw::kStick);
+    const CapstanRun s = Simulate(&slips, 200);
+    EXPECT_GT(s.v_late, 0.05) << "theta " << theta;
+    EXPECT_GT(s.v_late, 1.3 * s.v_early) << "theta " << theta;
+    for (const double ratio : {0.98, 1.02}) {
+      Capstan st;
+      MakeCapstan(theta, ratio * limit, &st, 0.0, FrictionLaw::kStick);
+      StaticOptions o;
+      o.load_steps = 4;
+      const StaticResult r = SolveStatic(st.model, st.data, o);
+      EXPECT_EQ(r.converged, ratio < 1.0)
+          << "theta " << theta << " ratio " << ratio << ": " << r.message;
+    }
   }
 }
 

@@ -31,15 +31,29 @@ NormalLaw CalcNormalLaw(double gap, double onset, double stiffness);
 double ContactPotential(double gap, double onset, double stiffness);
 
 // The parameters of the contact law at one pair: the scene's ContactSettings with the pair's
-// damping c_n [N s/m]; ContactLawFor gives no damping and no friction in statics.
+// damping c_n [N s/m]; ContactLawFor gives no damping in statics, and no friction in statics
+// under the smooth law.
 struct ContactLawParameters {
   double stiffness = 0.0;      // k_n [N/m]
   double onset = 0.0;          // delta [m]
   double damping = 0.0;        // c_n [N s/m]
-  double friction = 0.0;       // mu
-  double slip_velocity = 0.0;  // eps_v [m/s]
+  double friction = 0.0;       // mu (mu_k of the stick law)
+  double slip_velocity = 0.0;  // eps_v [m/s] (smooth law)
+  FrictionLaw law = FrictionLaw::kSmooth;
+  double static_friction = 0.0;       // mu_s (stick law)
+  double tangential_stiffness = 0.0;  // k_t [N/m] (stick law)
+  double tangential_damping = 0.0;    // c_t = c_n sqrt(k_t / k_n) [N s/m] (stick law)
 };
 ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping, bool dynamics);
+
+// The stick law's input at one evaluation (docs/numerics.md, "Stick friction"): the anchor's
+// elastic deflection u_e at the last accepted state, the slip since (the displacement of the
+// material point then in contact, relative to the other side) and whether the pair slipped then.
+struct AnchorTrial {
+  Vec3 deflection = Vec3::Zero();  // u_e [m], world
+  Vec3 slip = Vec3::Zero();        // d [m], world
+  bool slipping = false;
+};
 
 // The normal force of the law (docs/numerics.md, "Contact") at gap g closing at rate dg/dt:
 // f_n = f_e(g) - c_n w(g) dg/dt with w(g) = min(1, (delta - g) / delta) (the damping grows in
@@ -57,19 +71,37 @@ ContactNormal ContactNormalLaw(double gap, double gap_rate, const ContactLawPara
 //   F = f_n (n - mu u),  u = v_t / sqrt(|v_t|^2 + eps_v^2),
 // the force on the shape (on side A). The one definition behind the kernels (ContactKind,
 // ShapePairKind) and what the outputs report (CalcContactState, CalcShapePairState).
+//
+// Under the stick law (law.law == kStick, with `anchor`; none: no friction) the friction is the
+// return mapping of an elastic anchor instead: the trial force f* = -k_t P (u_e + d) - c_t P v_c
+// (P = I - n n^T) sticks when |f*| <= mu f_n (mu = mu_k if the pair slipped at the last accepted
+// state, else mu_s), f_t = f*, and slips otherwise, f_t = mu_k f_n f* / |f*|.
 struct ContactForce {
   bool active = false;  // g < delta and f_n > 0
   ContactNormal normal;
   Vec3 force = Vec3::Zero();     // F [N], world
-  Vec3 friction = Vec3::Zero();  // f_t = -mu f_n v_t / sqrt(|v_t|^2 + eps_v^2) [N], world
-  // With the tangent: dF = direction df_n - slip_tangent dv_c, direction = n - mu u and
-  // slip_tangent = mu f_n (I / s - v_t v_t^T / s^3) (I - n n^T), s = sqrt(|v_t|^2 + eps_v^2)
-  // (zero without friction).
+  Vec3 friction = Vec3::Zero();  // f_t [N], world
+  // With the tangent: dF = direction df_n - slip_tangent dv_c - anchor_tangent dd. Smooth law:
+  // direction = n - mu u, slip_tangent = mu f_n (I / s - v_t v_t^T / s^3) P,
+  // s = sqrt(|v_t|^2 + eps_v^2) (zero without friction), anchor_tangent = 0. Stick law, sticking:
+  // direction = n, slip_tangent = c_t P, anchor_tangent = k_t P; slipping, with t = f* / |f*|
+  // and D = mu_k f_n (I - t t^T) / |f*|: direction = n + mu_k t, slip_tangent = c_t D P,
+  // anchor_tangent = k_t D P.
   Vec3 direction = Vec3::Zero();
   Mat3 slip_tangent = Mat3::Zero();
+  Mat3 anchor_tangent = Mat3::Zero();
+  // Stick law: whether it slips, and the anchor's deflection after the return mapping (the
+  // history AcceptContactHistory keeps): the trial deflection P (u_e + d), scaled back onto the
+  // cone when slipping.
+  bool slipping = false;
+  Vec3 deflection = Vec3::Zero();
 };
 ContactForce ContactForceLaw(double gap, const Vec3& normal, const Vec3& velocity,
-                             const ContactLawParameters& law, bool tangent);
+                             const ContactLawParameters& law, bool tangent,
+                             const AnchorTrial* anchor = nullptr);
+
+// The share of static friction a pair uses, |f_t| / (mu_s f_n) (0 without friction).
+double FrictionShare(const ContactForce& force, const ContactLawParameters& law);
 
 // The geometry of a pair at frames H[0], H[1] of its item nodes.
 struct ContactGeometry {
@@ -113,8 +145,19 @@ struct ContactState {
   Vec3 normal = Vec3::UnitZ();         // world, from the obstacle to the shape
   double normal_force = 0.0;           // f_n [N]
   Vec3 friction_force = Vec3::Zero();  // f_t on the shape, world [N]
+  // Stick law: slipping or sticking, the anchor's elastic deflection |u_e| [m]; both laws: the
+  // share of static friction used, |f_t| / (mu_s f_n).
+  bool slipping = false;
+  double deflection = 0.0;
+  double friction_share = 0.0;
 };
-ContactState CalcContactState(const Model& model, const Data& data, int pair);
+// `dynamics`: with damping and the velocities (false: the static law).
+ContactState CalcContactState(const Model& model, const Data& data, int pair, bool dynamics = true);
+
+// The stick law's history (Data::contact_anchors): each pair's anchor deflection after the
+// return mapping at the current state, and the material point in contact now. Call when a step
+// or load step is accepted and at the start of a run (no-op without the stick law's anchors).
+void AcceptContactHistory(const Model& model, Data& data, bool dynamics);
 
 // Closest parameters (s, t) of segments P0 + s (P1 - P0) and Q0 + t (Q1 - Q0), clamped to
 // [0, 1] (Ericson, Real-Time Collision Detection, 2005, section 5.1.9). Parallel segments take

@@ -51,9 +51,13 @@ void FreezeShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4],
                              const ShapePairGeometry& frozen, ShapePairGeometry* out);
 
 // The terms of a pair at a given geometry (the kernel after the narrow phase).
+// `anchor`: the pair's stick-law history (FindShapePairAnchor), if any; `stick`: the stick law
+// is kept for this model (Data::shape_pair_anchors non-empty): then a pair without history has
+// an anchor at its current material points.
 bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePairGeometry& G,
                         const NodeMotion<4>& x, const KernelOptions& options,
-                        ElementTerms<4>* terms);
+                        ElementTerms<4>* terms, const ShapePairAnchor* anchor = nullptr,
+                        bool stick = false);
 
 // Corner k (0..7) of a box with centre c and half sizes h: bit 0, 1, 2 of k select +h_x, +h_y,
 // +h_z (else -h); corners k and k | bit (bit not in k) end an edge.
@@ -84,6 +88,16 @@ inline double ShapePairKey(const Model& model, const ShapePair& pair) {
   return static_cast<double>(pair.segment[0]) * static_cast<double>(model.contact_segments.size()) +
          static_cast<double>(pair.segment[1]);
 }
+
+// The name of a pair in the stick law's history (Data::shape_pair_anchors): its key, box edge
+// and part, unique among the pairs of one broad phase.
+inline double ShapePairAnchorKey(const Model& model, const ShapePair& pair) {
+  return (ShapePairKey(model, pair) * 25.0 + static_cast<double>(pair.edge + 1)) * 3.0 +
+         static_cast<double>(pair.part + 1);
+}
+// The pair's history, or nullptr (none kept, or the pair was not near at the last acceptance).
+const ShapePairAnchor* FindShapePairAnchor(const Model& model, const Data& data,
+                                           const ShapePair& pair);
 
 struct ShapePairKind {
   static constexpr int kNodes = 4;
@@ -122,7 +136,15 @@ struct ShapePairState {
   Vec3 normal = Vec3::UnitZ();
   double normal_force = 0.0;
   Vec3 friction_force = Vec3::Zero();
+  bool slipping = false;        // stick law
+  double deflection = 0.0;      // the anchor's elastic deflection [m] (stick law)
+  double friction_share = 0.0;  // |f_t| / (mu_s f_n)
 };
-ShapePairState CalcShapePairState(const Model& model, const Data& data, int pair);
+ShapePairState CalcShapePairState(const Model& model, const Data& data, int pair,
+                                  bool dynamics = true);
+// The stick law's history of the pairs of moving shapes (Data::shape_pair_anchors), as
+// AcceptContactHistory (elements/contact.h) for the obstacle pairs: runs the broad phase at the
+// current state and keeps each near pair's anchor; allocates nothing unless the pool grows.
+void AcceptShapePairHistory(const Model& model, Data& data, bool dynamics);
 
 }  // namespace screwfem

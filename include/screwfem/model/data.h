@@ -38,6 +38,33 @@ constexpr int kMaxCoupledNodes = 128;
 // The most pairs of moving shapes a broad phase may find at once (ShapePairPoolLimit).
 constexpr std::size_t kMaxShapePairs = 2000000;
 
+// The history of one pair under the stick friction law (docs/numerics.md, "Stick friction"),
+// as of the last accepted step or load step: the elastic tangential deflection u_e of its anchor
+// and the material point of the shape that was in contact, by its weights W_k and node-frame
+// levers l_k on the pair's item nodes and its world position then. A pair's slip since is the
+// displacement of that material point, sum_k W_k (x_k + R_k l_k) - point.
+struct ContactAnchor {
+  Vec3 deflection = Vec3::Zero();  // u_e [m], world, tangential
+  Vec3 point = Vec3::Zero();       // [m], world
+  double weight[2] = {0.0, 0.0};
+  Vec3 lever[2] = {Vec3::Zero(), Vec3::Zero()};
+  bool valid = false;     // a material point is stored (false before the first acceptance)
+  bool slipping = false;  // the pair slipped then: the threshold is mu_k, else mu_s
+};
+
+// The same for a pair of moving shapes (Data::shape_pair_anchors), named by its key
+// (ShapePairAnchorKey: its two contact segments and part): weights and levers on its four item
+// nodes, and `point`, the world offset p_A - p_B of its two material points then; the slip is
+// the change of that offset.
+struct ShapePairAnchor {
+  double key = 0.0;
+  Vec3 deflection = Vec3::Zero();
+  Vec3 point = Vec3::Zero();
+  double weight[4] = {0.0, 0.0, 0.0, 0.0};
+  Vec3 lever[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  bool slipping = false;
+};
+
 struct Data {
   double time = 0.0;
   std::vector<SE3> H;              // node frames
@@ -50,6 +77,14 @@ struct Data {
                                    // steps; profiles read them through EvalProfile
   std::vector<char> tendon_slack;  // per tendon: 1 while a length-driven tendon is slack (its
                                    // row holds the multiplier at zero; docs/numerics.md)
+  // Per Model::contact_pairs under the stick friction law with friction (else empty): updated by
+  // AcceptContactHistory (elements/contact.h) when a step or load step is accepted.
+  std::vector<ContactAnchor> contact_anchors;
+  // The pairs of moving shapes' history under the stick law with friction: the first
+  // num_shape_pair_anchors entries, sorted by key, and a buffer of the same size for the next
+  // acceptance; both as large as the shape-pair pool.
+  std::vector<ShapePairAnchor> shape_pair_anchors, shape_pair_anchors_next;
+  int num_shape_pair_anchors = 0;
 
   // Pairs of moving shapes near each other at the last assembly (UpdateShapePairs,
   // elements/shape_pair.h): the first num_shape_pairs entries of a pool sized by MakeData and

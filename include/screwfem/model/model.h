@@ -371,12 +371,29 @@ struct ContactExclusion {
 // (docs/theory.md §N6.4): onset 0.01 r_min, stiffness 100 W_max / onset (W_max the largest
 // weight one pair carries, with |g| = 9.81 m/s^2 when there is no gravity: the resting gap is
 // 0.86 onset), slip velocity 1e-3 m/s.
+// The friction law of contact (docs/numerics.md, "Stick friction"): an elastic tangential anchor
+// that sticks inside the cone mu_s f_n and slips at mu_k f_n (a history variable of each pair,
+// updated when a step or load step is accepted; friction in statics too), or Coulomb friction
+// smoothed by a slip velocity eps_v (dynamics only; creeps at eps_v x / sqrt(1 - x^2) inside the
+// cone, x the share of friction used).
+enum class FrictionLaw { kStick, kSmooth };
+template <>
+struct EnumNames<FrictionLaw> {
+  static constexpr std::array<EnumName<FrictionLaw>, 2> kValues = {{
+      {FrictionLaw::kStick, "stick",
+       "elastic anchor: sticks inside mu_s f_n, slips at mu_k f_n; statics and dynamics"},
+      {FrictionLaw::kSmooth, "smooth", "Coulomb smoothed by the slip velocity; dynamics only"},
+  }};
+};
 struct ContactSettings {
   double stiffness = -1.0;      // k_n [N/m]
   double onset = -1.0;          // delta [m]: the force starts at gap delta
   double damping_ratio = 1.0;   // zeta: c_n = 2 zeta sqrt(k_n m_eff)
-  double friction = 0.0;        // mu >= 0
-  double slip_velocity = -1.0;  // eps_v [m/s]
+  double friction = 0.0;        // mu (mu_k of the stick law) >= 0
+  double slip_velocity = -1.0;  // eps_v [m/s] (smooth law)
+  FrictionLaw friction_law = FrictionLaw::kStick;
+  double static_friction = -1.0;       // mu_s >= mu_k (stick law; default: friction)
+  double tangential_stiffness = -1.0;  // k_t [N/m] of the anchor (stick law; default: k_n)
   // Pairs between moving shapes (elements/shape_pair.h): rod self-contact on/off, and the arc
   // length between two elements' nearest ends below which they never collide (default 4 r).
   bool self = false;
@@ -426,6 +443,9 @@ struct ShapePair {
   // two points that carry a segment lying on a face; docs/numerics.md, "Box-box"). -1: one
   // point, the segment's nearest point (every other pair).
   int part = -1;
+  // Two boxes: which of the 24 edges (12 of each box against the other) this pair is; -1
+  // otherwise (with the segments and part, the pair's name for the stick law's history).
+  int edge = -1;
 };
 // A shape the broad phase sorts (Build): a rod element's capsule, or a body's sphere, capsule
 // or box, as the side of a pair it would be.

@@ -341,6 +341,7 @@ struct SimulationState {
   Eigen::VectorXd v, vdot, lambda, inputs, a;
   Eigen::VectorXd nu_last, nu_before;  // ConstraintFormulation::kGgl: the nu predictor's history
   std::vector<char> tendon_slack;
+  std::vector<ContactAnchor> contact_anchors;  // the stick law's history
   bool use_last_acceleration = true;
 };
 void SaveSimulationState(const Data& data, const Integrator& integrator, SimulationState* state);
