@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "screwfem/elements/shape_pair.h"
 
@@ -372,6 +373,34 @@ ContactState CalcContactState(const Model& model, const Data& data, int item, bo
   out.slipping = c.slipping;
   out.deflection = c.deflection.norm();
   out.friction_share = FrictionShare(c, law);
+  return out;
+}
+
+std::string ContactFailureHint(const Model& model, const Data& data, double h) {
+  if (model.contact_pairs.empty() && model.contact_segments.empty()) return {};
+  int active = 0;
+  for (int i = 0; i < static_cast<int>(model.contact_pairs.size()); ++i)
+    if (CalcContactState(model, data, i).active) ++active;
+  for (int i = 0; i < data.num_shape_pairs; ++i)
+    if (CalcShapePairState(model, data, i).active) ++active;
+  const ContactSettings& c = model.contact;
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "; %d contacts active at the step's start (contact.stiffness %.4g N/m, "
+                "contact.onset %.4g m, contact.friction %.4g, contact.friction_law %s): an "
+                "impact or a contact stiffer than the step resolves fails Newton; lower "
+                "analysis.step or use step: auto, or soften contact.stiffness",
+                active, c.stiffness, c.onset, c.friction, NameOf(c.friction_law));
+  std::string out = buf;
+  const double g = model.gravity.norm();
+  if (c.friction_law == FrictionLaw::kSmooth && c.friction > 0.0 &&
+      c.slip_velocity < h * c.friction * g) {
+    std::snprintf(buf, sizeof buf,
+                  "; contact.slip_velocity %.4g m/s is below h mu g = %.4g m/s, where the smooth "
+                  "law chatters: raise it or use contact.friction_law: stick",
+                  c.slip_velocity, h * c.friction * g);
+    out += buf;
+  }
   return out;
 }
 

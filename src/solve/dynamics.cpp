@@ -415,7 +415,7 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
       std::snprintf(buf, sizeof buf,
                     "step failed at t = %.9g s (step %.3g s, after %d halvings): ", t0, sub.h,
                     integ.options.max_halvings);
-      result.message = std::string(buf) + why;
+      result.message = std::string(buf) + why + ContactFailureHint(model, data, h);
       return result;
     }
     hs = 0.5 * sub.h;

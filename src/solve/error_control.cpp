@@ -232,6 +232,7 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
     integ.allow_growth = false;
     if (hs <= opt.min_step * (1.0 + 1e-12)) {
       result.message = SmallestStepFailure(model, t0, hs, its, err, worst, why);
+      if (its < 0) result.message += ContactFailureHint(model, data, hs);
       integ.a = integ.a_accepted;
       return result;
     }

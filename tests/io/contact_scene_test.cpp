@@ -100,6 +100,28 @@ void ExpectError(const std::string& text, const std::string& location, const std
   EXPECT_NE(message.find(what), std::string::npos) << "message: " << message;
 }
 
+// A failed step names the contact settings: the smooth law at h = 1e-2 s on the slide example
+// (a rod dropped onto the plane) fails, and the message counts the active contacts, names the
+// keys to change and says that eps_v is below h mu g; the stick law completes the same run.
+TEST(ContactScene, AFailedStepNamesTheContactSettings) {
+  test::ScopedDir dir("contact_failure");
+  const Scene smooth =
+      LoadScene(kSlide, {"contact.friction_law=smooth", "analysis.step=1e-2", "outputs.vtk=false"});
+  const RunResult r = RunScene(smooth, dir.path());
+  ASSERT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("contacts active at the step's start (contact.stiffness"),
+            std::string::npos)
+      << r.message;
+  EXPECT_NE(r.message.find("contact.friction_law smooth"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("contact.slip_velocity 0.001 m/s is below h mu g = 0.02943 m/s"),
+            std::string::npos)
+      << r.message;
+  test::ScopedDir dir2("contact_failure_stick");
+  const Scene stick = LoadScene(kSlide, {"analysis.step=1e-2", "outputs.vtk=false"});
+  const RunResult r2 = RunScene(stick, dir2.path());
+  EXPECT_TRUE(r2.ok) << r2.message;
+}
+
 TEST(ContactScene, BadInputIsReportedAtFileLineColumnNamingTheField) {
   const std::string ground = "    ground: {type: plane, point: [0, 0, 0], normal: [0, 0, 1]}\n";
   EXPECT_EQ(Error(kHead + "contact:\n  friction: 0.3\n  obstacles:\n" + ground), "(no error)");

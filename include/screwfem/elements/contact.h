@@ -16,6 +16,8 @@
 // Friction and damping act in dynamics only (statics: frictionless contact).
 #pragma once
 
+#include <string>
+
 #include "screwfem/elements/element.h"
 #include "screwfem/model/model.h"
 
@@ -153,6 +155,12 @@ struct ContactState {
 };
 // `dynamics`: with damping and the velocities (false: the static law).
 ContactState CalcContactState(const Model& model, const Data& data, int pair, bool dynamics = true);
+
+// What a failed step's message adds when contact may be the cause (empty without contact or
+// without an active or near pair at the state in data): the number of contacts active, the
+// law's stiffness, onset and friction law with the keys that change them, and, under the smooth
+// law with eps_v < h mu g, the slip velocity (docs/numerics.md, "Contact"). Allocates.
+std::string ContactFailureHint(const Model& model, const Data& data, double h);
 
 // The stick law's history (Data::contact_anchors): each pair's anchor deflection after the
 // return mapping at the current state, and the material point in contact now. Call when a step
