@@ -78,8 +78,8 @@ Model SpheresModel(int n, bool touching, LinearSolver solver) {
     const double x = touching ? (2.0 * r - 2e-4) * (i % 100) : 0.2 * (i % 100);
     const double y = 0.2 * (i / 100);
     const NodeId node = b.AddNode(SE3::Translation(Vec3(x, y, r - 1e-4)), Name("s", i));
-    const BodyId body = b.AddRigidBody(Name("s", i), node, 0.1, Vec3::Zero(),
-                                       1e-4 * Mat3::Identity());
+    const BodyId body =
+        b.AddRigidBody(Name("s", i), node, 0.1, Vec3::Zero(), 1e-4 * Mat3::Identity());
     ContactShape shape;
     shape.body = static_cast<int>(body);
     shape.type = ContactShapeType::kSphere;
@@ -107,8 +107,7 @@ Model RodsModel(int k, LinearSolver solver) {
   std::vector<RodId> top;
   for (int i = 0; i < k; ++i) {
     const double y = L * (i + 0.5) / k;
-    const RodId rod =
-        b.AddStraightRod(Name("x", i), Vec3(0, y, 0), Vec3(L, y, 0), 20, section);
+    const RodId rod = b.AddStraightRod(Name("x", i), Vec3(0, y, 0), Vec3(L, y, 0), 20, section);
     b.FixNode(b.RodNodes(rod).front());
     b.FixNode(b.RodNodes(rod).back());
     b.AddContactRod(rod, r);
@@ -218,9 +217,9 @@ int main(int argc, char** argv) {
                                    SpheresModel(n, true, LinearSolver::kAuto), n));
   }
   for (int k : {3, 6})
-    for (const auto& [solver, name] : {std::pair{LinearSolver::kBanded, "banded"},
-                                       std::pair{LinearSolver::kSparse, "sparse"},
-                                       std::pair{LinearSolver::kAuto, "auto"}}) {
+    for (const auto& [solver, name] :
+         {std::pair{LinearSolver::kBanded, "banded"}, std::pair{LinearSolver::kSparse, "sparse"},
+          std::pair{LinearSolver::kAuto, "auto"}}) {
       std::string label = Name("rods/", k);
       label += 'x';
       label += std::to_string(k);
@@ -233,11 +232,10 @@ int main(int argc, char** argv) {
     }
   // A third argument keeps the cases whose name contains it.
   if (argc > 3)
-    variants.erase(std::remove_if(variants.begin(), variants.end(),
-                                  [&](const Variant& v) {
-                                    return v.name.find(argv[3]) == std::string::npos;
-                                  }),
-                   variants.end());
+    variants.erase(
+        std::remove_if(variants.begin(), variants.end(),
+                       [&](const Variant& v) { return v.name.find(argv[3]) == std::string::npos; }),
+        variants.end());
   for (int r = 0; r < rounds; ++r)
     for (Variant& v : variants) RunOnce(v);
   std::FILE* out = argc > 1 ? std::fopen(argv[1], "w") : stdout;
@@ -257,8 +255,8 @@ int main(int argc, char** argv) {
                  "\"pattern_changes\": %ld, \"pattern_hits\": %ld}%s\n",
                  v.name.c_str(), v.solver.c_str(), v.model.sparse_solver ? "sparse" : "banded",
                  v.failed ? "true" : "false", v.count, v.model.num_unknowns(), v.model.bandwidth,
-                 v.pairs, v.most_coupled, Median(v.seconds), newton, v.heap, v.estimate, v.model_bytes,
-                 v.analyses, v.pattern_changes, v.pattern_hits,
+                 v.pairs, v.most_coupled, Median(v.seconds), newton, v.heap, v.estimate,
+                 v.model_bytes, v.analyses, v.pattern_changes, v.pattern_hits,
                  i + 1 < variants.size() ? "," : "");
   }
   std::fprintf(out, "  ]\n}\n");
