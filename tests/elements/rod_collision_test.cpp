@@ -230,7 +230,7 @@ TEST(RodCollision, OffBandCouplingGivesTheMotionOfTheWideBand) {
 // The same collision on the sparse LU, whose pattern takes the pairs' node blocks (no off-band
 // coupling; SelectSparsePattern): the same Newton iterates as the Woodbury solve of the band to
 // round-off (measured 1.6e-16 m), the same iterations in every step; the pattern changes
-// with the pairs the broad phase finds, one analysis per new list (measured: 2 changes, 3
+// with the pairs the broad phase finds, one analysis per new pattern (measured: 1 change, 2
 // analyses in all).
 TEST(RodCollision, SparsePatternOfThePairsGivesTheIteratesOfTheWoodburySolve) {
   const Collision off = Collide(1e-3, 0.04, 0.03, 0.05, 0.4, 1.0, 0.8, 0, LinearSolver::kBanded);
