@@ -17,6 +17,9 @@ skipped. One table per benchmark family:
   gripper          BM_GripperSolver/gripper                  (contact_bench.cpp)
   solver           screwfem_bench_solver's own JSON (format "screwfem solver bench 1",
                    bench/results_solver.json; solver_bench.cpp): banded, sparse and auto LU
+  pairs            screwfem_bench_pairs's own JSON (format "screwfem pairs bench 1",
+                   bench/results_pairs.json; pairs_bench.cpp): spheres on a plane, crossing
+                   rods, contact pairs in the sparse pattern
   parallel         BM_ParallelRodStep/<elements>/<threads>, BM_ParallelRodAssemble/...,
                    BM_ParallelGrm/<case>/<threads>           (parallel_bench.cpp)
 Each JSON's revision comes from its context (the script passes --benchmark_context=revision=...),
@@ -114,6 +117,9 @@ def load(paths, default_revision):
             data = json.load(f)
         if data.get("format") == SOLVER_FORMAT:  # screwfem_bench_solver's own JSON
             SOLVER_RESULTS.append((path, data))
+            continue
+        if data.get("format") == PAIRS_FORMAT:  # screwfem_bench_pairs's own JSON
+            PAIRS_RESULTS.append((path, data))
             continue
         context = data.get("context", {})
         benchmarks = data.get("benchmarks", [])
@@ -250,6 +256,107 @@ def solver_section():
         "| Matrix | KLU refactor | KLU factor | Eigen SparseLU | Difference |",
         "|---|---:|---:|---:|---:|",
         *factor_rows,
+        "",
+    ]
+
+
+PAIRS_FORMAT = "screwfem pairs bench 1"
+PAIRS_RESULTS = []  # (path, data) of screwfem_bench_pairs's JSON files
+
+
+def format_bytes(x):
+    if x != x:
+        return "–"
+    for unit, scale in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if abs(x) >= scale:
+            return f"{x / scale:.3g} {unit}"
+    return f"{x:.0f} B"
+
+
+def pairs_section():
+    """The section of screwfem_bench_pairs (bench/pairs_bench.cpp): spheres on a plane per
+    sphere at three sizes, and crossing rods banded (Woodbury) against sparse."""
+    if not PAIRS_RESULTS:
+        return []
+    path, data = PAIRS_RESULTS[-1]
+    cases = {(c["case"], c["solver"]): c for c in data["cases"]}
+    sphere_rows, notes = [], []
+    for layout in ("apart", "rows"):
+        previous = None
+        first = None
+        for c in data["cases"]:
+            if not c["case"].startswith(f"spheres/{layout}/"):
+                continue
+            n = c["count"]
+            if c["failed"]:
+                sphere_rows.append(f"| {layout} | {n} | failed ||||||||||")
+                continue
+            cpu = c["cpu_per_step"] / n
+            heap = c["heap_bytes"] / n
+            ratio = f"{cpu / previous[0]:.2f}× / {heap / previous[1]:.2f}×" if previous else ""
+            sphere_rows.append(
+                f"| {layout} | {n} | {c['chosen']} | {c['unknowns']} | {c['pairs']} "
+                f"| {format_number(c['newton_per_step'])} | {format_time(c['cpu_per_step'])} "
+                f"| {format_time(cpu)} | {format_bytes(heap)} "
+                f"| {format_bytes(c['estimated_bytes'] / n)} | {ratio} "
+                f"| {c['analyses']} / {c['pattern_changes']} / {c['pattern_hits']} |")
+            previous = (cpu, heap)
+            first = first or (n, cpu, heap)
+        if first and previous and first[0] != n:
+            notes.append(
+                f"- Spheres {layout}: per sphere, N = {n} against N = {first[0]}: CPU per step "
+                f"{previous[0] / first[1]:.2f}×, heap {previous[1] / first[2]:.2f}× "
+                "(1 would be exactly linear).")
+    rod_rows = []
+    order = []
+    for c in data["cases"]:
+        if c["case"].startswith("rods/") and c["case"] not in order:
+            order.append(c["case"])
+    for name in order:
+        banded = cases.get((name, "banded"))
+        for solver in ("banded", "sparse", "auto"):
+            c = cases.get((name, solver))
+            if c is None:
+                continue
+            if c["failed"]:
+                rod_rows.append(f"| {name} | {solver} | failed |||||||")
+                continue
+            ratio = (c["cpu_per_step"] / banded["cpu_per_step"]
+                     if banded and not banded["failed"] else float("nan"))
+            rod_rows.append(
+                f"| {name} | {solver} | {c['chosen']} | {c['bandwidth']} | {c['pairs']} "
+                f"| {c['most_coupled_nodes']} | {format_number(c['newton_per_step'])} "
+                f"| {format_time(c['cpu_per_step'])} | {ratio:.2f}× "
+                f"| {c['analyses']} / {c['pattern_changes']} / {c['pattern_hits']} |")
+    return [
+        "## Contact pairs in the sparse pattern",
+        "",
+        "`screwfem_bench_pairs` (bench/pairs_bench.cpp; docs/numerics.md, \"Pairs and the sparse "
+        "pattern\"): h = 1e-3 s, ρ∞ = 0.8, gravity, μ = 0.3; timed steps after warm-up, the "
+        f"variants interleaved, {data['rounds']} rounds, median CPU time of the process per step "
+        f"(`{path}`). Spheres: r = 5 cm, 0.1 kg, on a plane, `auto`; *apart* 0.2 m in a grid "
+        "(no pairs), *rows* of 100 touching their neighbours (2r − 0.2 mm apart). Heap: the "
+        "bytes in use (glibc `mallinfo2`) that the Data and the integrator hold after the timed "
+        "steps; estimate: `EstimateRunMemory`. Analyses / pattern changes / hits: the sparse "
+        "LU's counters at the end of a run. Ratio: per sphere, to the size before.",
+        "",
+        "| Spheres | N | Chosen | Unknowns | Pairs | Newton per step | CPU per step "
+        "| CPU per step and sphere | Heap per sphere | Estimate per sphere "
+        "| Ratio CPU / heap | Analyses / changes / hits |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        *sphere_rows,
+        "",
+        *notes,
+        "",
+        "Rods: K clamped rods (20 elements, 0.2 m, r = 5 mm) along x under K free rods along y "
+        "laid on them (K² crossings), banded (off-band pairs by the Woodbury coupling, room 128 "
+        "nodes), sparse (pairs in the pattern) and `auto`. Most coupled: the most nodes in the "
+        "Woodbury coupling at the end of a step (banded). Ratio: CPU per step to banded.",
+        "",
+        "| Rods | Asked | Chosen | Bandwidth | Pairs | Most coupled | Newton per step "
+        "| CPU per step | Ratio | Analyses / changes / hits |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        *rod_rows,
         "",
     ]
 
@@ -861,6 +968,7 @@ def main():
         *contact_section(entries),
         *gripper_section(entries),
         *solver_section(),
+        *pairs_section(),
         *parallel_section(entries),
         "## Machine and run",
         "",

@@ -358,6 +358,14 @@ and indices out of range IndexError.)doc")
           "Symbolic analyses of the sparse LU (Model.sparse_solver; 0 for the banded LU): one "
           "per sparsity pattern.")
       .def_property_readonly(
+          "sparse_pattern_changes", [](S& s) { return s.data().sparse.pattern_changes(); },
+          "Changes of the sparse LU's pattern to another list of contact couplings (the node "
+          "blocks of the pairs the broad phase found), analysed or taken from the kept ones.")
+      .def_property_readonly(
+          "sparse_pattern_hits", [](S& s) { return s.data().sparse.pattern_hits(); },
+          "Changes of the sparse LU's pattern that took a kept pattern back (no symbolic "
+          "analysis; the last 4 patterns are kept).")
+      .def_property_readonly(
           "sparse_factorizations", [](S& s) { return s.data().sparse.factorizations(); },
           "Numerical factorisations by the sparse LU (refactorisations included).")
       .def_property_readonly(

@@ -9,11 +9,14 @@
 #   screwfem_bench_solver    -> bench/results_solver.json    (banded against sparse LU; its own
 #                               JSON and interleaving, not Google Benchmark; about 1 minute)
 #   screwfem_bench_parallel  -> bench/results_parallel.json  (one thread against two)
+#   screwfem_bench_pairs     -> bench/results_pairs.json     (spheres on a plane and crossing
+#                               rods: contact pairs in the sparse pattern; its own JSON and
+#                               interleaving; about 2 minutes)
 #   vector_env               -> its own section of bench/RESULTS.md (bench/python_vector_env.py:
 #                               screwfem.VectorEnv's steps per second at 1, 2, 4 copies; builds
 #                               the Python module; not in the default set)
-# SCREWFEM_BENCH selects the programs (default "statics dynamics outputs tendons contact
-# parallel"); the results file of a program not run (or whose benchmarks a filter left out
+# SCREWFEM_BENCH selects the programs (default "statics dynamics outputs tendons contact solver
+# parallel pairs"); the results file of a program not run (or whose benchmarks a filter left out
 # entirely) is kept and reported with its own date and revision. Extra arguments go to every Google Benchmark
 # program run, e.g.
 # SCREWFEM_BENCH=dynamics bash scripts/run-bench.sh --benchmark_filter=Rod.
@@ -24,10 +27,10 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 build_dir=build/release
 jobs=$(nproc 2> /dev/null || echo 2)
-programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons contact solver parallel}
+programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons contact solver parallel pairs}
 for p in $programs; do
   case $p in
-    statics | dynamics | outputs | tendons | contact | solver | parallel | vector_env) ;;
+    statics | dynamics | outputs | tendons | contact | solver | parallel | pairs | vector_env) ;;
     *) echo "run-bench.sh: unknown benchmark program '$p' in SCREWFEM_BENCH" >&2; exit 2 ;;
   esac
 done
@@ -63,8 +66,8 @@ for p in "${benchmarks[@]}"; do
   out=bench/results_$p.json
   tmp=bench/results_$p.json.tmp
   rm -f "$tmp"
-  if [[ $p == solver ]]; then
-    "$build_dir/bench/screwfem_bench_solver" "$tmp" && mv "$tmp" "$out"
+  if [[ $p == solver || $p == pairs ]]; then
+    "$build_dir/bench/screwfem_bench_$p" "$tmp" && mv "$tmp" "$out"
     continue
   fi
   # statics: median of 5 repetitions, so the numbers stay stable on a machine with other
@@ -89,8 +92,8 @@ done
 /usr/bin/python3 bench/make_results.py bench/RESULTS.md "bash scripts/run-bench.sh" "$revision" \
   bench/results_statics.json bench/results_dynamics.json bench/results_outputs.json \
   bench/results_tendons.json bench/results_contact.json bench/results_solver.json \
-  bench/results_parallel.json
-echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact,solver,parallel}.json"
+  bench/results_parallel.json bench/results_pairs.json
+echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact,solver,parallel,pairs}.json"
 # After make_results.py, which keeps the section the Python benchmark replaces. It exits 1 when
 # its target is missed (on a loaded machine); the table is written either way.
 if [[ " $programs " == *" vector_env "* ]]; then

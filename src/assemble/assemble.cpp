@@ -48,16 +48,11 @@ class Scatter {
     const int pj = m_.permutation[static_cast<std::size_t>(gj)];
     if (m_.sparse_solver) {
       // The sparse pattern holds whole blocks: a column search per column of the block.
+      // The node blocks of the contact pairs are in it too (SelectSparsePattern).
       const int rows = static_cast<int>(block.rows());
       double* const values = d_.sparse.values();
-      int p = d_.sparse.FindRun(pi, pj, rows);
-      if (p < 0) {
-        SCREWFEM_CHECK(off_band_ && block.rows() == 6 && block.cols() == 6);
-        d_.coupling.Add(pi, pj, block, scale);
-        return;
-      }
       for (Eigen::Index j = 0; j < block.cols(); ++j) {
-        if (j > 0) p = d_.sparse.FindRun(pi, pj + static_cast<int>(j), rows);
+        const int p = d_.sparse.FindRun(pi, pj + static_cast<int>(j), rows);
         SCREWFEM_CHECK(p >= 0);
         double* const col = values + p;
         for (Eigen::Index i = 0; i < block.rows(); ++i) col[i] += scale * block(i, j);
@@ -581,13 +576,37 @@ void SetAssemblyThreads(Data& data, int threads) {
   data.parallel.Set(std::clamp(threads, 1, kMaxAssemblyThreads), 2 * kParallelChunk);
 }
 
+void SelectSparsePattern(const Model& model, Data& data) {
+  std::vector<std::int64_t>& list = data.sparse_couplings;
+  const std::size_t most = 6 * static_cast<std::size_t>(data.num_shape_pairs);
+  if (list.size() < most) list.resize(most);  // only when the pool grew without it (allocates)
+  const SparseLU& lu = data.sparse;
+  std::size_t count = 0;
+  for (int k = 0; k < data.num_shape_pairs; ++k) {
+    const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(k)];
+    const int nodes[4] = {pair.side[0].node[0], pair.side[0].node[1], pair.side[1].node[0],
+                          pair.side[1].node[1]};
+    int first[4];
+    for (int i = 0; i < 4; ++i) {
+      const int dof = NodeDof(model, nodes[i]);
+      first[i] = dof >= 0 ? model.permutation[static_cast<std::size_t>(dof)] : -1;
+    }
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b)
+        if (first[a] >= 0 && first[b] >= 0 && first[a] != first[b] &&
+            !lu.InBase(first[a], first[b]))
+          list[count++] = lu.PackCoupling(first[a], first[b]);
+  }
+  std::sort(list.begin(), list.begin() + static_cast<std::ptrdiff_t>(count));
+  count = static_cast<std::size_t>(
+      std::unique(list.begin(), list.begin() + static_cast<std::ptrdiff_t>(count)) - list.begin());
+  data.sparse.SetCouplings(list.data(), count, 6);
+}
+
 bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   data.residual.setZero();
   if (options.assemble_matrix) {
-    if (model.sparse_solver)
-      data.sparse.SetZero();
-    else
-      data.matrix.SetZero();
+    if (!model.sparse_solver) data.matrix.SetZero();
     // The off-band coupling: doubled when the last assembly overflowed it, up to
     // kMaxCoupledNodes (beyond, the blocks that do not fit are left out of the matrix).
     if (data.coupling.overflowed() && data.coupling.max_blocks() < kMaxCoupledNodes)
@@ -602,6 +621,11 @@ bool Assemble(const Model& model, Data& data, const AssemblyOptions& options) {
   // The pairs of moving shapes near each other in this state (elements/shape_pair.h).
   UpdateShapePairs(model, data);
   if (data.shape_pair_limit_reached) return false;  // ShapePairLimitMessage says why
+  if (options.assemble_matrix && model.sparse_solver) {
+    // The pattern of this state's contact pairs (analysed once per list of couplings).
+    SelectSparsePattern(model, data);
+    data.sparse.SetZero();
+  }
   if (!AddKinds(model, data, options, s, kElementKinds)) return false;
   ForEachKind<ConstraintKinds>(
       [&]<class Kind>() { AddConstraintKind<Kind>(model, data, options, s); });

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -127,11 +128,22 @@ void LinkElementNodes(const Model& m, BlockGraph& g) {
 // entities that may touch (or a rod that may touch itself) are linked here, every node of one
 // with every node of the other, when the product of their node counts is at most
 // ContactSettings::band_pair_nodes (bodies, short rods: the band has room for the coupling);
-// the couplings of the others that fall outside the band enter the solve as a low-rank
+// the couplings of the others that fall outside the band enter the banded solve as a low-rank
 // update (Data::coupling), so that long rods do not widen the band. When these links number
 // more than kMaxBandContactLinks in all (thousands of bodies that may touch each other), none
-// is made, with a warning.
-void LinkContactEntities(Model& m, BlockGraph& g) {
+// is made. The sparse LU takes none of these links: its pattern gets the blocks of the pairs
+// the broad phase finds (SelectSparsePattern), so the links are the edges [edges_begin,
+// edges_end) of g, left out of its pattern.
+struct ContactLinks {
+  std::size_t edges_begin = 0, edges_end = 0;
+  // Nodes of the entities that may touch one they are not linked with: at most this many
+  // nodes can enter the banded solve's off-band coupling at once.
+  int off_band_nodes = 0;
+  std::string warning;  // for the banded LU: the links were too many to make
+};
+ContactLinks LinkContactEntities(Model& m, BlockGraph& g) {
+  ContactLinks out;
+  out.edges_begin = out.edges_end = g.edges.size();
   const int ne = m.num_contact_entities;
   // Per entity: its nodes with unknowns, sorted and unique.
   std::vector<std::vector<int>> entity_nodes(static_cast<std::size_t>(ne));
@@ -142,14 +154,16 @@ void LinkContactEntities(Model& m, BlockGraph& g) {
     std::sort(list.begin(), list.end());
     list.erase(std::unique(list.begin(), list.end()), list.end());
   }
-  const auto linked = [&](int a, int b) {
-    const bool touch =
-        a == b ? m.contact_entity_self_skip[static_cast<std::size_t>(a)] >= 0.0
+  const auto touch = [&](int a, int b) {
+    return a == b
+               ? m.contact_entity_self_skip[static_cast<std::size_t>(a)] >= 0.0
                : m.contact_entity_pairs[static_cast<std::size_t>(a) * static_cast<std::size_t>(ne) +
                                         static_cast<std::size_t>(b)] != 0;
+  };
+  const auto linked = [&](int a, int b) {
     const double links = static_cast<double>(entity_nodes[static_cast<std::size_t>(a)].size()) *
                          static_cast<double>(entity_nodes[static_cast<std::size_t>(b)].size());
-    return touch && links <= static_cast<double>(m.contact.band_pair_nodes) ? links : 0.0;
+    return touch(a, b) && links <= static_cast<double>(m.contact.band_pair_nodes) ? links : 0.0;
   };
   // The links first: beyond kMaxBandContactLinks in all, none goes in the band.
   double total = 0.0;
@@ -160,7 +174,18 @@ void LinkContactEntities(Model& m, BlockGraph& g) {
       total += links;
       pairs += links > 0.0 ? 1 : 0;
     }
-  if (total > kMaxBandContactLinks) {
+  const bool none = total > kMaxBandContactLinks;
+  // The nodes that may enter the off-band coupling: those of an entity that may touch one it
+  // is not linked with.
+  std::vector<char> off_band(static_cast<std::size_t>(ne), 0);
+  for (int a = 0; a < ne; ++a)
+    for (int b = a; b < ne; ++b)
+      if (touch(a, b) && (none || linked(a, b) == 0.0))
+        off_band[static_cast<std::size_t>(a)] = off_band[static_cast<std::size_t>(b)] = 1;
+  for (int a = 0; a < ne; ++a)
+    if (off_band[static_cast<std::size_t>(a)])
+      out.off_band_nodes += static_cast<int>(entity_nodes[static_cast<std::size_t>(a)].size());
+  if (none) {
     char text[320];
     std::snprintf(text, sizeof text,
                   "the %ld pairs of contact entities that may touch would couple %.0f node "
@@ -168,8 +193,8 @@ void LinkContactEntities(Model& m, BlockGraph& g) {
                   "and those that touch enter the solve as the off-band coupling (at most %d "
                   "nodes at a time)",
                   pairs, total, kMaxBandContactLinks, kMaxCoupledNodes);
-    m.warnings.emplace_back(text);
-    return;
+    out.warning = text;
+    return out;
   }
   for (int a = 0; a < ne; ++a)
     for (int b = a; b < ne; ++b) {
@@ -177,6 +202,8 @@ void LinkContactEntities(Model& m, BlockGraph& g) {
       for (int x : entity_nodes[static_cast<std::size_t>(a)])
         for (int y : entity_nodes[static_cast<std::size_t>(b)]) g.Link(g.OfNode(x), g.OfNode(y));
     }
+  out.edges_end = g.edges.size();
+  return out;
 }
 
 // The constraint kinds (elements/registry.h): per item, a block of its rows, linked with every
@@ -231,10 +258,14 @@ void AddConstraintBlocks(const Model& m, BlockGraph& g) {
       block_of[static_cast<std::size_t>(i)] = g.Add(i, 1);
 }
 
-// The neighbours of every block, sorted and without repeats.
-std::vector<std::vector<int>> BlockAdjacency(const BlockGraph& g) {
+// The neighbours of every block, sorted and without repeats; without the edges [skip_begin,
+// skip_end) of g.
+std::vector<std::vector<int>> BlockAdjacency(const BlockGraph& g, std::size_t skip_begin = 0,
+                                             std::size_t skip_end = 0) {
   std::vector<std::vector<int>> adj(g.blocks.size());
-  for (const auto& [a, b] : g.edges) {
+  for (std::size_t e = 0; e < g.edges.size(); ++e) {
+    if (e >= skip_begin && e < skip_end) continue;
+    const auto& [a, b] = g.edges[e];
     adj[static_cast<std::size_t>(a)].push_back(b);
     adj[static_cast<std::size_t>(b)].push_back(a);
   }
@@ -290,13 +321,17 @@ void SetBandPattern(Model& m, const BlockGraph& g, const std::vector<std::vector
   }
 }
 
-// The sparse pattern (Model::sparse_pattern: every block with itself and with each neighbour)
-// and the choice of the solver: the predicted flops of one factorisation by each. The banded
-// LU eliminates inside the envelope of pattern_last (row interchanges may widen it; not
-// counted): column j updates (last_j - j)^2 entries, a multiply and a subtraction each. KLU's
-// estimate comes from its symbolic analysis (AMD's count of the LU on its ordering).
+// The sparse pattern (Model::sparse_pattern: every block with itself and with each neighbour
+// in `adj`, the graph without the contact links) and the choice of the solver: the predicted
+// flops of one factorisation by each. The banded LU eliminates inside the envelope of
+// pattern_last (row interchanges may widen it; not counted): column j updates (last_j - j)^2
+// entries, a multiply and a subtraction each. KLU's estimate comes from its symbolic analysis
+// (AMD's count of the LU on its ordering). `auto` takes the sparse LU also when more nodes may
+// be coupled off the band than the banded solve's coupling holds (kMaxCoupledNodes): beyond
+// that room its iteration would become quasi-Newton, while the sparse pattern takes every
+// pair.
 void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<int>>& adj,
-                  const std::vector<int>& block_pos) {
+                  const std::vector<int>& block_pos, const ContactLinks& contact) {
   m.sparse_pattern.clear();
   for (std::size_t b = 0; b < g.blocks.size(); ++b) {
     const int pb = block_pos[b], sb = g.blocks[b].size;
@@ -322,8 +357,9 @@ void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<i
   // LU of the 6 x 6 diagonal blocks alone, 24 flops per unknown) exceeds the band's: rods and
   // chains need no analysis (a rod of 100,000 elements: 600,000 unknowns).
   const bool narrow = m.banded_flops < (kSparseFixedCost + kSparseFlopCost * 24.0) * n;
-  const bool skip =
-      m.linear_solver == LinearSolver::kAuto && ((entries > 0.25 * n * n && n > 64) || narrow);
+  const bool contact_room = contact.off_band_nodes > kMaxCoupledNodes;
+  const bool skip = m.linear_solver == LinearSolver::kAuto && !contact_room &&
+                    ((entries > 0.25 * n * n && n > 64) || narrow);
   if (m.linear_solver != LinearSolver::kBanded && m.num_unknowns() > 0 && !skip) {
     SparseLU lu;
     lu.SetPattern(m.num_unknowns(), m.sparse_pattern);
@@ -333,8 +369,10 @@ void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<i
   m.sparse_solver =
       m.linear_solver == LinearSolver::kSparse ||
       (m.linear_solver == LinearSolver::kAuto && !skip &&
-       kSparseFlopCost * m.sparse_flops + kSparseFixedCost * m.num_unknowns() < m.banded_flops);
+       (contact_room ||
+        kSparseFlopCost * m.sparse_flops + kSparseFixedCost * m.num_unknowns() < m.banded_flops));
   if (!m.sparse_solver) std::vector<SparseLU::Block>().swap(m.sparse_pattern);
+  if (!m.sparse_solver && !contact.warning.empty()) m.warnings.push_back(contact.warning);
 }
 
 }  // namespace
@@ -345,12 +383,16 @@ void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<i
 void OrderUnknowns(Model& m) {
   BlockGraph g = NodeBlocks(m);
   LinkElementNodes(m, g);
-  LinkContactEntities(m, g);
+  const ContactLinks contact = LinkContactEntities(m, g);
   AddConstraintBlocks(m, g);
   const std::vector<std::vector<int>> adj = BlockAdjacency(g);
   const std::vector<int> block_pos = PermuteBlocks(m, g, adj);
   SetBandPattern(m, g, adj, block_pos);
-  ChooseSolver(m, g, adj, block_pos);
+  if (contact.edges_end > contact.edges_begin)
+    ChooseSolver(m, g, BlockAdjacency(g, contact.edges_begin, contact.edges_end), block_pos,
+                 contact);
+  else
+    ChooseSolver(m, g, adj, block_pos, contact);
 }
 
 }  // namespace screwfem::build_steps

@@ -840,6 +840,10 @@ class Recording::Impl {
     j.Field("chosen", model_.sparse_solver ? "sparse" : "banded");
     j.Field("banded_flops", model_.banded_flops).Field("sparse_flops", model_.sparse_flops);
     j.Field("symbolic_analyses", static_cast<long>(data_.sparse.analyses()));
+    // Patterns of contact couplings (SelectSparsePattern): changes of the pattern in use, and
+    // those that took a kept pattern back without an analysis.
+    j.Field("pattern_changes", static_cast<long>(data_.sparse.pattern_changes()));
+    j.Field("pattern_cache_hits", static_cast<long>(data_.sparse.pattern_hits()));
     j.Field("factorizations", static_cast<long>(data_.sparse.factorizations()));
     j.Field("full_factorizations", static_cast<long>(data_.sparse.full_factorizations()));
     j.Field("refactorization_fallbacks", static_cast<long>(data_.sparse.fallbacks()));

@@ -76,10 +76,14 @@ SparseLU::SparseLU() {
   c->tol = 0.1;
   common_ = c;
   numeric_ = new PivotSequences;
+  kept_.resize(kCachedPatterns - 1);
+  for (Kept& k : kept_) k.numeric = new PivotSequences;
 }
 
 SparseLU::~SparseLU() {
   Release();
+  ReleaseKept();
+  for (Kept& k : kept_) delete Sequences(k.numeric);
   delete Sequences(numeric_);
   delete Common(common_);
 }
@@ -89,11 +93,15 @@ SparseLU::SparseLU(const SparseLU& other) : SparseLU() { *this = other; }
 SparseLU& SparseLU::operator=(const SparseLU& other) {
   if (this == &other) return *this;
   Release();
+  ReleaseKept();
   n_ = other.n_;
   col_start_ = other.col_start_;
   row_ = other.row_;
   value_ = other.value_;
   symmetric_ = other.symmetric_;
+  base_ = other.base_;
+  key_ = other.key_;
+  block_size_ = other.block_size_;
   if (n_ > 0) {
     const std::int64_t analyses = other.analyses_;
     Analyze();
@@ -102,6 +110,8 @@ SparseLU& SparseLU::operator=(const SparseLU& other) {
   factorizations_ = other.factorizations_;
   full_factorizations_ = other.full_factorizations_;
   fallbacks_ = other.fallbacks_;
+  pattern_hits_ = other.pattern_hits_;
+  pattern_changes_ = other.pattern_changes_;
   return *this;
 }
 
@@ -128,6 +138,13 @@ SparseLU& SparseLU::operator=(SparseLU&& other) noexcept {
   std::swap(factorizations_, other.factorizations_);
   std::swap(full_factorizations_, other.full_factorizations_);
   std::swap(fallbacks_, other.fallbacks_);
+  base_.swap(other.base_);
+  key_.swap(other.key_);
+  std::swap(block_size_, other.block_size_);
+  kept_.swap(other.kept_);
+  std::swap(uses_, other.uses_);
+  std::swap(pattern_hits_, other.pattern_hits_);
+  std::swap(pattern_changes_, other.pattern_changes_);
   return *this;
 }
 
@@ -141,29 +158,84 @@ void SparseLU::Release() {
   }
 }
 
+void SparseLU::ReleaseKept() {
+  klu_common* c = Common(common_);
+  for (Kept& k : kept_) {
+    Sequences(k.numeric)->Clear(c);
+    if (k.symbolic) {
+      klu_symbolic* sym = Symbolic(k.symbolic);
+      klu_free_symbolic(&sym, c);
+      k.symbolic = nullptr;
+    }
+    std::vector<int>().swap(k.col_start);
+    std::vector<int>().swap(k.row);
+    std::vector<double>().swap(k.value);
+    std::vector<std::int64_t>().swap(k.key);
+  }
+}
+
+int SparseLU::cached_patterns() const {
+  int count = 0;
+  for (const Kept& k : kept_) count += k.symbolic != nullptr ? 1 : 0;
+  return count;
+}
+
 void SparseLU::SetPattern(int n, const std::vector<Block>& blocks) {
   Release();
+  ReleaseKept();
   n_ = n;
-  // Per column, the row ranges of the blocks that cover it (and the diagonal), merged.
-  std::vector<std::vector<std::pair<int, int>>> ranges(static_cast<std::size_t>(n));
-  for (int j = 0; j < n; ++j) ranges[static_cast<std::size_t>(j)].emplace_back(j, j + 1);
-  for (const Block& b : blocks) {
+  base_ = blocks;
+  key_.clear();
+  BuildStructure();
+  Analyze();
+}
+
+void SparseLU::BuildStructure() {
+  const int n = n_;
+  // f(block) for the base blocks and the two blocks of each coupling.
+  const auto for_each_block = [&](auto&& f) {
+    for (const Block& b : base_) f(b);
+    for (const std::int64_t c : key_) {
+      const int p = static_cast<int>(c / n), q = static_cast<int>(c % n);
+      f(Block{p, block_size_, q, block_size_});
+      f(Block{q, block_size_, p, block_size_});
+    }
+  };
+  // Per column, the row ranges of the blocks that cover it and the diagonal (a counting sort
+  // by column into one array), then merged.
+  std::vector<int> start(static_cast<std::size_t>(n) + 1, 1);
+  start[static_cast<std::size_t>(n)] = 0;
+  for_each_block([&](const Block& b) {
     assert(b.row >= 0 && b.col >= 0 && b.row + b.rows <= n && b.col + b.cols <= n);
-    for (int j = b.col; j < b.col + b.cols; ++j)
-      ranges[static_cast<std::size_t>(j)].emplace_back(b.row, b.row + b.rows);
+    for (int j = b.col; j < b.col + b.cols; ++j) ++start[static_cast<std::size_t>(j)];
+  });
+  int total = 0;
+  for (int j = 0; j <= n; ++j) {
+    const int count = start[static_cast<std::size_t>(j)];
+    start[static_cast<std::size_t>(j)] = total;
+    total += count;
   }
+  std::vector<std::pair<int, int>> ranges(static_cast<std::size_t>(total));
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (int j = 0; j < n; ++j)
+    ranges[static_cast<std::size_t>(fill[static_cast<std::size_t>(j)]++)] = {j, j + 1};
+  for_each_block([&](const Block& b) {
+    for (int j = b.col; j < b.col + b.cols; ++j)
+      ranges[static_cast<std::size_t>(fill[static_cast<std::size_t>(j)]++)] = {b.row,
+                                                                               b.row + b.rows};
+  });
   col_start_.assign(static_cast<std::size_t>(n) + 1, 0);
   row_.clear();
   for (int j = 0; j < n; ++j) {
-    std::vector<std::pair<int, int>>& r = ranges[static_cast<std::size_t>(j)];
-    std::sort(r.begin(), r.end());
+    const auto first = ranges.begin() + start[static_cast<std::size_t>(j)];
+    const auto last = ranges.begin() + start[static_cast<std::size_t>(j) + 1];
+    std::sort(first, last);
     int next = 0;  // the first row after those already in the column
-    for (const auto& [lo, hi] : r) {
-      for (int i = std::max(lo, next); i < hi; ++i) row_.push_back(i);
-      next = std::max(next, hi);
+    for (auto r = first; r != last; ++r) {
+      for (int i = std::max(r->first, next); i < r->second; ++i) row_.push_back(i);
+      next = std::max(next, r->second);
     }
     col_start_[static_cast<std::size_t>(j) + 1] = static_cast<int>(row_.size());
-    std::vector<std::pair<int, int>>().swap(r);
   }
   value_.assign(row_.size(), 0.0);
   symmetric_ = true;
@@ -171,7 +243,86 @@ void SparseLU::SetPattern(int n, const std::vector<Block>& blocks) {
     for (int q = col_start_[static_cast<std::size_t>(j)];
          q < col_start_[static_cast<std::size_t>(j) + 1] && symmetric_; ++q)
       symmetric_ = Find(j, row_[static_cast<std::size_t>(q)]) >= 0;
+}
+
+void SparseLU::SwapWith(Kept& k) {
+  col_start_.swap(k.col_start);
+  row_.swap(k.row);
+  value_.swap(k.value);
+  std::swap(symmetric_, k.symmetric);
+  std::swap(symbolic_, k.symbolic);
+  std::swap(numeric_, k.numeric);
+  std::swap(column_parity_, k.column_parity);
+  std::swap(predicted_nonzeros_, k.predicted_nonzeros);
+  std::swap(predicted_flops_, k.predicted_flops);
+  key_.swap(k.key);
+  // Neither holds a factorisation of the entries it will have next.
+  Sequences(numeric_)->current = false;
+  Sequences(k.numeric)->current = false;
+  determinant_sign_ = 0;
+}
+
+void SparseLU::SetCouplings(const std::int64_t* pairs, std::size_t count, int block_size) {
+  assert(block_size > 0 && (block_size_ == 0 || block_size_ == block_size || key_.empty()));
+  block_size_ = block_size;
+  const auto same = [&](const std::vector<std::int64_t>& key) {
+    return key.size() == count && std::equal(key.begin(), key.end(), pairs);
+  };
+  // A pattern whose couplings include the list holds its matrix (the other blocks are zero).
+  const auto holds = [&](const std::vector<std::int64_t>& key) {
+    return key.size() >= count && std::includes(key.begin(), key.end(), pairs, pairs + count);
+  };
+  if (same(key_) || holds(key_) || n_ == 0) return;
+  ++uses_;
+  ++pattern_changes_;
+  // A kept pattern of this list (or holding it): it becomes the one in use, the one in use is
+  // kept.
+  for (int exact = 1; exact >= 0; --exact)
+    for (Kept& k : kept_) {
+      if (k.symbolic == nullptr || !(exact ? same(k.key) : holds(k.key))) continue;
+      SwapWith(k);
+      k.last_use = uses_;
+      ++pattern_hits_;
+      return;
+    }
+  // A new pattern, in place of an empty slot or the least recently used: the one in use is kept
+  // there, and the slot's storage is reused for the new pattern.
+  Kept* slot = &kept_.front();
+  for (Kept& k : kept_) {
+    if (k.symbolic == nullptr) {
+      slot = &k;
+      break;
+    }
+    if (k.last_use < slot->last_use) slot = &k;
+  }
+  klu_common* c = Common(common_);
+  Sequences(slot->numeric)->Clear(c);
+  if (slot->symbolic) {
+    klu_symbolic* sym = Symbolic(slot->symbolic);
+    klu_free_symbolic(&sym, c);
+    slot->symbolic = nullptr;
+  }
+  SwapWith(*slot);
+  slot->last_use = uses_;
+  // The new pattern holds the list and, when that stays small, the couplings of the one in use
+  // too: a pair that comes and goes between assemblies (a contact moving along a rod, a
+  // projection at another configuration) then finds its pattern in use.
+  const std::vector<std::int64_t>& previous = slot->key;
+  key_.clear();
+  if (previous.size() <= count + 16) {
+    key_.resize(count + previous.size());
+    key_.erase(std::set_union(pairs, pairs + count, previous.begin(), previous.end(), key_.begin()),
+               key_.end());
+  } else {
+    key_.assign(pairs, pairs + count);
+  }
+  BuildStructure();
   Analyze();
+}
+
+bool SparseLU::InBase(int i, int j) const {
+  if (Find(i, j) < 0) return false;
+  return i == j || !std::binary_search(key_.begin(), key_.end(), PackCoupling(i, j));
 }
 
 void SparseLU::Analyze() {

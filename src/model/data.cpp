@@ -74,6 +74,9 @@ Data MakeData(const Model& model) {
     const int distinct = static_cast<int>(std::unique(nodes.begin(), nodes.end()) - nodes.begin());
     coupled_nodes = std::min(distinct, 32);
   }
+  // The sparse LU holds the pairs' blocks in its pattern (SelectSparsePattern).
+  if (model.sparse_solver) coupled_nodes = 0;
+  if (model.sparse_solver) d.sparse_couplings.resize(6 * d.shape_pairs.size());
   d.coupling.Resize(model.num_unknowns(), 6, coupled_nodes);
   if (model.sparse_solver) {
     d.matrix.Resize(0, 0, 0);
@@ -88,6 +91,7 @@ Data MakeData(const Model& model) {
 
 void GrowShapePairPool(Data& data, std::size_t limit) {
   data.shape_pairs.resize(std::max<std::size_t>(64, std::min(limit, 2 * data.shape_pairs.size())));
+  if (!data.sparse_couplings.empty()) data.sparse_couplings.resize(6 * data.shape_pairs.size());
   data.shape_pair_overflow = false;
   if (!data.shape_pair_anchors.empty()) {
     data.shape_pair_anchors.resize(data.shape_pairs.size());

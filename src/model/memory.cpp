@@ -144,7 +144,29 @@ std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
                        static_cast<double>(m.joints.size()) * sizeof(SE3),
                    "vectors of the unknowns, node frames and tangents"});
   const double segments = static_cast<double>(m.contact_segments.size());
-  if (segments > 0 && MayHaveShapePairs(m)) {
+  if (segments > 0 && MayHaveShapePairs(m) && m.sparse_solver) {
+    // The sparse LU's patterns of contact couplings (SelectSparsePattern): the list of
+    // couplings (6 per pair of the first pool); for each of the kCachedPatterns patterns, the
+    // blocks of one coupling per contact segment (72 entries: a pair per neighbour of a chain
+    // of spheres or elements) in the matrix and twice in L + U (two pivot sequences); and
+    // for each pattern kept besides the one in use, the base pattern with two sequences of its
+    // factors (measured: 7.1 kB per sphere in rows of touching spheres, 4.4 kB apart;
+    // bench/RESULTS.md, "Contact pairs in the sparse pattern").
+    double entries = 0.0;
+    for (const SparseLU::Block& b : m.sparse_pattern)
+      entries += static_cast<double>(b.rows) * static_cast<double>(b.cols);
+    const double pool = 4.0 * segments + 64.0;
+    const double kept = SparseLU::kCachedPatterns;
+    std::snprintf(why, sizeof why,
+                  "%.0f contact segments: %d patterns of one 6 x 6 coupling per segment (x 3 "
+                  "with L + U) and %d copies of the base pattern and its factors",
+                  segments, SparseLU::kCachedPatterns, SparseLU::kCachedPatterns - 1);
+    parts.push_back(
+        {"sparse patterns of pairs of moving shapes",
+         pool * 6.0 * 8.0 + kept * segments * 72.0 * 12.0 * 3.0 +
+             (kept - 1.0) * ((entries + 2.0 * m.sparse_factor_nonzeros) * 12.0 + n * 120.0),
+         why});
+  } else if (segments > 0 && MayHaveShapePairs(m)) {
     // BandCoupling at its largest (kMaxCoupledNodes): 3 k^2 + 2 k + n doubles, k = 6 nodes.
     const double k = 6.0 * kMaxCoupledNodes;
     std::snprintf(why, sizeof why, "at most %d nodes of 6 unknowns: 3 x %.0f^2 doubles",
@@ -153,6 +175,8 @@ std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
         {"off-band coupling of pairs of moving shapes",
          (3.0 * k * k + 2.0 * k + n) * 8.0 + (3.0 * kMaxCoupledNodes * kMaxCoupledNodes + n) * 4.0,
          why});
+  }
+  if (segments > 0 && MayHaveShapePairs(m)) {
     // MakeData: the grid's arrays and the first pool of 4 pairs per segment.
     double buckets = 1;
     while (buckets < 16 * segments) buckets *= 2;

@@ -4,8 +4,8 @@ namespace screwfem {
 
 bool SolveAssembledSystem(const Model& model, Data& data) {
   if (model.sparse_solver) {
+    // The pattern holds every block, the contact pairs' included (SelectSparsePattern).
     if (data.sparse.Factorize() >= 0) return false;
-    if (!data.coupling.Factorize(data.sparse)) return false;
     return SolveFactorizedSystem(model, data);
   }
   if (data.matrix.Factorize() >= 0) return false;
@@ -19,7 +19,6 @@ bool SolveFactorizedSystem(const Model& model, Data& data) {
     data.rhs(model.permutation[static_cast<std::size_t>(i)]) = -data.residual(i);
   if (model.sparse_solver) {
     data.sparse.Solve(data.rhs);
-    data.coupling.Correct(data.sparse, data.rhs);
   } else {
     data.matrix.Solve(data.rhs);
     data.coupling.Correct(data.matrix, data.rhs);

@@ -199,8 +199,13 @@ TEST(BandContactLinks, ManyEntitiesThatMayTouchStayOffTheBand) {
   const Model linked = OverlappingSpheres(1000).Build();
   EXPECT_EQ(linked.bandwidth, 5999);
   EXPECT_TRUE(linked.warnings.empty());
-  // 1500 spheres: 1,124,250, more than 1e6: none is, the band is a body's own.
-  const Model apart = OverlappingSpheres(1500).Build();
+  // 1500 spheres: 1,124,250, more than 1e6: none is, the band is a body's own. The banded LU
+  // warns; auto takes the sparse LU (1500 nodes may be coupled off the band, more than the
+  // Woodbury coupling's 128), whose pattern takes the pairs that touch, without a warning.
+  ModelBuilder banded = OverlappingSpheres(1500);
+  banded.SetLinearSolver(LinearSolver::kBanded);
+  const Model apart = banded.Build();
+  EXPECT_FALSE(apart.sparse_solver);
   EXPECT_EQ(apart.bandwidth, 5);
   ASSERT_EQ(apart.warnings.size(), 1u);
   EXPECT_EQ(apart.warnings[0],
@@ -208,6 +213,11 @@ TEST(BandContactLinks, ManyEntitiesThatMayTouchStayOffTheBand) {
             "pairs in the solver's band (more than 1000000): they are left off the band, and "
             "those that touch enter the solve as the off-band coupling (at most 128 nodes at a "
             "time)");
+  const Model sparse = OverlappingSpheres(1500).Build();
+  EXPECT_TRUE(sparse.sparse_solver);
+  EXPECT_TRUE(sparse.warnings.empty());
+  // Its base pattern is the bodies' own blocks (the contact pairs enter at run time).
+  EXPECT_EQ(sparse.sparse_pattern.size(), 1500u);
 }
 
 }  // namespace

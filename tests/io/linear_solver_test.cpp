@@ -90,8 +90,14 @@ TEST(LinearSolver, BandedAndSparseGiveTheSameIteratesOnEveryExampleScene) {
       const double lam = std::max(banded.data.lambda.cwiseAbs().maxCoeff(), 1e-12);
       EXPECT_LT((banded.data.lambda - sparse.data.lambda).cwiseAbs().maxCoeff(), 1e-9 * lam);
     }
-    // The sparse LU analysed its pattern once and refactorised at every later factorisation.
-    EXPECT_EQ(sparse.data.sparse.analyses(), 1);
+    // The sparse LU analysed its pattern once, and once per list of contact couplings not met
+    // before (the scenes with pairs of moving shapes), and refactorised at every later
+    // factorisation.
+    const SparseLU& lu = sparse.data.sparse;
+    EXPECT_EQ(lu.analyses(), 1 + lu.pattern_changes() - lu.pattern_hits());
+    if (sparse.data.num_shape_pairs == 0 && lu.pattern_changes() == 0) {
+      EXPECT_EQ(lu.analyses(), 1);
+    }
     EXPECT_GT(sparse.data.sparse.factorizations(), 0);
     EXPECT_EQ(banded.data.sparse.analyses(), 0);
     // summary.json: the choice and the counters.
@@ -99,7 +105,12 @@ TEST(LinearSolver, BandedAndSparseGiveTheSameIteratesOnEveryExampleScene) {
     EXPECT_EQ(SummaryText(banded, "linear_solver.chosen"), "banded");
     EXPECT_EQ(SummaryText(sparse, "linear_solver.requested"), "sparse");
     EXPECT_EQ(SummaryText(sparse, "linear_solver.chosen"), "sparse");
-    EXPECT_EQ(SummaryNumber(sparse, "linear_solver.symbolic_analyses"), 1.0);
+    EXPECT_EQ(SummaryNumber(sparse, "linear_solver.symbolic_analyses"),
+              static_cast<double>(lu.analyses()));
+    EXPECT_EQ(SummaryNumber(sparse, "linear_solver.pattern_changes"),
+              static_cast<double>(lu.pattern_changes()));
+    EXPECT_EQ(SummaryNumber(sparse, "linear_solver.pattern_cache_hits"),
+              static_cast<double>(lu.pattern_hits()));
     EXPECT_EQ(SummaryNumber(sparse, "linear_solver.factorizations"),
               static_cast<double>(sparse.data.sparse.factorizations()));
     EXPECT_EQ(SummaryNumber(banded, "linear_solver.symbolic_analyses"), 0.0);
@@ -176,6 +187,38 @@ TEST(LinearSolver, AutoPicksTheBandedLUForARodAndTheSparseLUForAHand) {
   const Scene forced = ParseScene(HandScene(16, 8), "hand.yaml", {"analysis.linear_solver=banded"});
   EXPECT_FALSE(forced.model.sparse_solver);
   EXPECT_EQ(forced.model.sparse_flops, 0.0);
+}
+
+// Two crossing rods that may touch (not linked in the band: 51 x 51 or 101 x 101 nodes >
+// band_pair_nodes): auto keeps the banded LU while their nodes fit the Woodbury coupling's room
+// (102 <= kMaxCoupledNodes = 128), and takes the sparse LU, whose pattern takes every pair,
+// when they may exceed it (202 nodes).
+std::string CrossingRods(int elements) {
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "bodies:\n  a: {type: soft, from: [-0.5, 0, 0], to: [0.5, 0, 0], section: s, "
+                "elements: %d, contact_radius: 0.01}\n  b: {type: soft, from: [0, -0.5, 0.1], "
+                "to: [0, 0.5, 0.1], section: s, elements: %d, contact_radius: 0.01}\n"
+                "joints:\n  ca: {type: fixed, at: [-0.5, 0, 0], between: [ground, a]}\n  cb: "
+                "{type: fixed, at: [0, -0.5, 0.1], between: [ground, b]}\ncontact: {}\n",
+                elements, elements);
+  return Section() + text;
+}
+
+TEST(LinearSolver, AutoPicksTheSparseLUWhenContactPairsMayExceedTheCouplingRoom) {
+  const Scene fits = ParseScene(CrossingRods(50), "rods.yaml");
+  EXPECT_FALSE(fits.model.sparse_solver);
+  const Scene exceeds = ParseScene(CrossingRods(100), "rods.yaml");
+  EXPECT_TRUE(exceeds.model.sparse_solver);
+  EXPECT_GT(exceeds.model.sparse_flops, 0.0);
+  // Its base pattern holds no contact blocks (the pairs enter at run time): the rods' own
+  // blocks and their clamps' only, so a new Data has no couplings and no coupling room.
+  const Data d = MakeData(exceeds.model);
+  EXPECT_TRUE(d.sparse.couplings().empty());
+  EXPECT_EQ(d.coupling.max_blocks(), 0);
+  const Scene forced =
+      ParseScene(CrossingRods(100), "rods.yaml", {"analysis.linear_solver=banded"});
+  EXPECT_FALSE(forced.model.sparse_solver);
 }
 
 }  // namespace

@@ -6,6 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <iterator>
+#include <algorithm>
+#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -229,6 +232,80 @@ TEST(SparseLU, SetRowHoldsOneUnknown) {
   Eigen::MatrixXd back = Eigen::MatrixXd::Zero(n, n);
   lu.ForEachEntry([&](int i, int j, double v) { back(i, j) = v; });
   EXPECT_EQ((back - A).cwiseAbs().maxCoeff(), 0.0);
+}
+
+// Couplings (SetCouplings): a chain of 12 node blocks whose far blocks are coupled (contact
+// pairs between nodes the base pattern does not link). Each list solves its matrix exactly
+// (the dense LU's solution to round-off); a pattern holding the list is kept in use (a pair
+// that comes and goes), a kept pattern holding it is taken back without an analysis, and a new
+// pattern takes the couplings of the one in use along while they are few.
+TEST(SparseLU, CouplingsEnterThePatternAndKeptPatternsAreTakenBack) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Block> blocks;
+  const Eigen::MatrixXd A = SaddleMatrix(rng, 12, {{0, 1}, {5, 6}}, &blocks);
+  const int n = static_cast<int>(A.rows());
+  SparseLU lu;
+  lu.SetPattern(n, blocks);
+  EXPECT_TRUE(lu.InBase(0, 6));  // neighbours in the chain
+  EXPECT_FALSE(lu.InBase(0, 30));
+  const auto list = [&](std::vector<std::pair<int, int>> nodes) {
+    std::vector<std::int64_t> key;
+    for (const auto& [a, b] : nodes) key.push_back(lu.PackCoupling(6 * a, 6 * b));
+    std::sort(key.begin(), key.end());
+    return key;
+  };
+  const std::vector<std::int64_t> a = list({{0, 7}}), b = list({{3, 9}});
+  std::vector<std::pair<int, int>> twenty;  // 20 far pairs, none of a, b or d
+  for (int i = 0; i < 12 && twenty.size() < 20; ++i)
+    for (int k = i + 2; k < 12 && twenty.size() < 20; ++k)
+      if (!(i == 0 && k == 7) && !(i == 3 && k == 9) && !(i == 4 && k == 11))
+        twenty.emplace_back(i, k);
+  const std::vector<std::int64_t> c = list(twenty), d = list({{4, 11}});
+  struct Expect {
+    const std::vector<std::int64_t>* key;
+    std::int64_t changes, hits;
+  };
+  const std::vector<std::int64_t> none;
+  // a: analysed; none, a: held; b: analysed with a; c: analysed with a and b (22 couplings);
+  // d: analysed alone (22 > 1 + 16); c: taken back (the kept pattern of a, b, c holds it).
+  const Expect steps[] = {{&a, 1, 0}, {&none, 1, 0}, {&a, 1, 0}, {&b, 2, 0},
+                          {&a, 2, 0}, {&c, 3, 0},    {&d, 4, 0}, {&c, 5, 1}};
+  for (std::size_t k = 0; k < std::size(steps); ++k) {
+    const std::vector<std::int64_t>& key = *steps[k].key;
+    lu.SetCouplings(key.data(), key.size(), 6);
+    EXPECT_TRUE(std::includes(lu.couplings().begin(), lu.couplings().end(), key.begin(), key.end()))
+        << k;
+    EXPECT_EQ(lu.pattern_changes(), steps[k].changes) << k;
+    EXPECT_EQ(lu.pattern_hits(), steps[k].hits) << k;
+    EXPECT_EQ(lu.analyses(), 1 + lu.pattern_changes() - lu.pattern_hits()) << k;
+    EXPECT_LE(lu.cached_patterns(), SparseLU::kCachedPatterns - 1);
+    // The matrix with these couplings: random blocks (p, q) and (q, p).
+    Eigen::MatrixXd C = A;
+    for (const std::int64_t x : key) {
+      const int p = static_cast<int>(x / n), q = static_cast<int>(x % n);
+      EXPECT_TRUE(lu.Contains(p, q, 6, 6) && lu.Contains(q, p, 6, 6));
+      EXPECT_FALSE(lu.InBase(p, q));
+      for (int j = 0; j < 6; ++j)
+        for (int i = 0; i < 6; ++i) {
+          C(p + i, q + j) = u(rng);
+          C(q + i, p + j) = u(rng);
+        }
+    }
+    Load(C, &lu);
+    ASSERT_EQ(lu.Factorize(), -1) << k;
+    const Eigen::VectorXd rhs = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+    Eigen::VectorXd x = rhs;
+    lu.Solve(x);
+    const Eigen::VectorXd y = C.partialPivLu().solve(rhs);
+    EXPECT_LT((x - y).norm(), 1e-12 * y.norm()) << k;
+    EXPECT_EQ(lu.determinant_sign(), DenseSign(C)) << k;
+  }
+  EXPECT_EQ(lu.couplings().size(), 22u);
+  // A new base drops the kept patterns.
+  lu.SetPattern(n, blocks);
+  EXPECT_EQ(lu.cached_patterns(), 0);
+  EXPECT_TRUE(lu.couplings().empty());
 }
 
 TEST(SparseLU, CopyKeepsThePatternAndTheCounters) {

@@ -218,6 +218,9 @@ class InputErrorTest(unittest.TestCase):
                 sim.step(1e-3)
             runs[solver] = (sim.joint_coordinate("hinge"), sim.symbolic_analyses,
                             sim.sparse_factorizations, sim.factorizations, sim.sparse_fallbacks)
+            # No contact pairs: the pattern never changes (docs/numerics.md, "Pairs and the
+            # sparse pattern").
+            self.assertEqual((sim.sparse_pattern_changes, sim.sparse_pattern_hits), (0, 0))
         self.assertEqual(runs["auto"][1:3], (0, 0))
         self.assertAlmostEqual(runs["sparse"][0], runs["banded"][0], delta=1e-12)
         self.assertEqual(runs["sparse"][1], 1)

@@ -30,6 +30,13 @@ std::vector<int> ConstraintForceTangentPattern(const Model& model, int* bandwidt
 // joint's rows, appended to `blocks` (permuted positions).
 void AddConstraintForceTangentBlocks(const Model& model, std::vector<SparseLU::Block>* blocks);
 
+// The sparse LU's pattern for the contact pairs of data.shape_pairs (Model::sparse_solver):
+// every two nodes of a pair whose blocks the base pattern (Model::sparse_pattern) does not hold
+// make a coupling (SparseLU::SetCouplings), so the iteration matrix is exact for any number of
+// pairs. Allocates nothing while the list of couplings is one met before (the last
+// kCachedPatterns); a new list is analysed (allocates). Called by Assemble with the matrix.
+void SelectSparsePattern(const Model& model, Data& data);
+
 // Evaluates residual (and matrix). Returns false if an element's relative rotation left the
 // admissible range (data.failed_element, data.failed_rotation say which and how far).
 bool Assemble(const Model& model, Data& data, const AssemblyOptions& options);

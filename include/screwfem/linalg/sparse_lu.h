@@ -15,6 +15,15 @@
 // another sequence (this allocates; counted in fallbacks()). KLU's diagonal preference is 0.1
 // (its default 0.001), so one sequence suits more matrices. Refactorisations, Solve() and the
 // entry writes never allocate.
+//
+// Couplings (SetCouplings): pairs of blocks of unknowns whose two off-diagonal blocks are added
+// to the pattern given to SetPattern (the base), for the node blocks of the contact pairs the
+// broad phase finds at run time (docs/numerics.md, "Pairs and the sparse pattern"). Each
+// pattern of couplings is analysed once: up to kCachedPatterns patterns are kept (the one in
+// use and the most recently used others, each with its analysis, entries and pivot sequences),
+// keyed by their sorted list of couplings; a list met before takes its pattern back without
+// analysis or allocation (pattern_hits()); a new one is analysed (allocates) in place of the
+// least recently used.
 #pragma once
 
 #include <Eigen/Core>
@@ -32,6 +41,8 @@ class SparseLU {
   // Refactorised pivots whose reciprocal growth (klu_rgrowth) falls below this are replaced
   // by a factorisation with new pivots.
   static constexpr double kMinPivotGrowth = 1e-8;
+  // Patterns of couplings kept (SetCouplings): the one in use and the most recent others.
+  static constexpr int kCachedPatterns = 4;
 
   SparseLU();
   ~SparseLU();
@@ -42,8 +53,30 @@ class SparseLU {
 
   // n unknowns; the pattern is the union of `blocks` and the diagonal (blocks may overlap and
   // repeat). Allocates, runs the symbolic analysis (analyses() grows by one) and sets every
-  // entry to zero. The next Factorize() is a full one.
+  // entry to zero. The next Factorize() is a full one. This is the base pattern: it has no
+  // couplings, and the patterns of couplings kept so far are dropped.
   void SetPattern(int n, const std::vector<Block>& blocks);
+
+  // Packs the coupling of the blocks starting at unknowns p != q (in either order) as SetCouplings
+  // takes it: min(p, q) n + max(p, q).
+  std::int64_t PackCoupling(int p, int q) const {
+    return static_cast<std::int64_t>(p < q ? p : q) * n_ + (p < q ? q : p);
+  }
+  // Makes the pattern hold the base (SetPattern) plus, for every coupling in pairs[0, count)
+  // (sorted ascending, without repeats, PackCoupling), the blocks (p, q) and (q, p) of
+  // block_size x block_size unknowns. Nothing happens when the pattern in use holds them all; a
+  // kept pattern of that list, else one holding it, is taken back (pattern_hits() grows; no
+  // analysis, no allocation); else a new pattern is analysed (analyses() grows; allocates) in
+  // place of the least recently used kept one: the list, with the couplings of the pattern in
+  // use when those are at most count + 16 (so a pair that comes and goes keeps one pattern).
+  // When the pattern changes, its entries are the values they had when it was last in use
+  // (zero for a new one); set them before Factorize. block_size is the same at every call.
+  void SetCouplings(const std::int64_t* pairs, std::size_t count, int block_size);
+  // The couplings of the pattern in use (SetCouplings), sorted: the last list given, or more.
+  const std::vector<std::int64_t>& couplings() const { return key_; }
+  // True when entry (i, j) lies in the base pattern (SetPattern): in the pattern in use and not
+  // in one of its coupling blocks. For entries (i, j) with i and j the first unknowns of blocks.
+  bool InBase(int i, int j) const;
 
   int size() const { return n_; }
   int nonzeros() const { return static_cast<int>(row_.size()); }
@@ -103,13 +136,36 @@ class SparseLU {
   // (Factorize calls that succeeded or failed), full factorisations with new pivots among
   // them, and refactorisations whose pivots were poor (replaced by a full one).
   std::int64_t analyses() const { return analyses_; }
+  // SetCouplings calls that took a kept pattern back instead of a new analysis.
+  std::int64_t pattern_hits() const { return pattern_hits_; }
+  // SetCouplings calls that changed the pattern in use (analysed or taken back).
+  std::int64_t pattern_changes() const { return pattern_changes_; }
+  // Patterns kept besides the one in use.
+  int cached_patterns() const;
   std::int64_t factorizations() const { return factorizations_; }
   std::int64_t full_factorizations() const { return full_factorizations_; }
   std::int64_t fallbacks() const { return fallbacks_; }
 
  private:
+  // A pattern kept besides the one in use (SetCouplings): the members of the same names.
+  struct Kept {
+    std::vector<int> col_start, row;
+    std::vector<double> value;
+    bool symmetric = true;
+    void* symbolic = nullptr;
+    void* numeric = nullptr;
+    int column_parity = 1;
+    double predicted_nonzeros = 0.0, predicted_flops = 0.0;
+    std::vector<std::int64_t> key;
+    std::int64_t last_use = 0;
+  };
   void Release();
+  void ReleaseKept();
   void Analyze();
+  // The structure of the base blocks plus the coupling blocks of key_ (col_start_, row_,
+  // value_ set to zero, symmetric_).
+  void BuildStructure();
+  void SwapWith(Kept& k);
   bool FullFactorize();
   void ReadPivots();
 
@@ -128,6 +184,14 @@ class SparseLU {
   int determinant_sign_ = 0;
   double predicted_nonzeros_ = 0.0, predicted_flops_ = 0.0;
   std::int64_t analyses_ = 0, factorizations_ = 0, full_factorizations_ = 0, fallbacks_ = 0;
+  // Couplings: the base blocks (SetPattern), the couplings of the pattern in use (sorted), their
+  // block size, the kept patterns and the use counter that orders them.
+  std::vector<Block> base_;
+  std::vector<std::int64_t> key_;
+  int block_size_ = 0;
+  std::vector<Kept> kept_;  // kCachedPatterns - 1 (empty ones have no symbolic)
+  std::int64_t uses_ = 0;
+  std::int64_t pattern_hits_ = 0, pattern_changes_ = 0;
 };
 
 }  // namespace screwfem

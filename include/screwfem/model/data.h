@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -104,13 +105,19 @@ struct Data {
   std::vector<Mat6> node_tangent;  // T(h dq_i) per node for the dynamic iteration matrix
   BandedLU matrix;                 // permuted, banded iteration matrix
   // The same matrix in the sparse LU (Model::sparse_solver; the banded one is then empty):
-  // pattern Model::sparse_pattern, analysed once by MakeData.
+  // pattern Model::sparse_pattern (analysed once by MakeData) plus the node blocks of the
+  // contact pairs of each assembly (SelectSparsePattern: one analysis per list of couplings,
+  // the last SparseLU::kCachedPatterns kept).
   SparseLU sparse;
-  // Its node blocks outside the band pattern (pairs of moving shapes between entities not
-  // linked in the band, ContactSettings::band_pair_nodes): a low-rank update solved with the
-  // Woodbury identity (SolveAssembledSystem). Room for 32 nodes from MakeData, doubled at the
-  // next assembly when an assembly overflowed it, up to kMaxCoupledNodes (blocks that did not
-  // fit are left out of that matrix: a quasi-Newton step, the residual stays exact).
+  // SelectSparsePattern's list of couplings: 6 per pair of the pool (shape_pairs), sized with
+  // it (MakeData, GrowShapePairPool); empty for the banded LU.
+  std::vector<std::int64_t> sparse_couplings;
+  // The banded matrix's node blocks outside the band pattern (pairs of moving shapes between
+  // entities not linked in the band, ContactSettings::band_pair_nodes): a low-rank update
+  // solved with the Woodbury identity (SolveAssembledSystem). Room for 32 nodes from MakeData,
+  // doubled at the next assembly when an assembly overflowed it, up to kMaxCoupledNodes (blocks
+  // that did not fit are left out of that matrix: a quasi-Newton step, the residual stays
+  // exact). Unused by the sparse LU, whose pattern holds those blocks.
   BandCoupling coupling;
 
   // Diagnostics of the last assembly.
