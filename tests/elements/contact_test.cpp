@@ -116,6 +116,31 @@ Scene MakeTouchingScene(double friction, unsigned seed,
   return s;
 }
 
+// Central differences of the assembled contact residual through the retraction (K) and in the
+// velocities (C); nodes are numbered as their unknowns (no fixed nodes).
+void DifferenceTangents(const Scene& s, const KernelOptions& o, double eps, Eigen::MatrixXd* K,
+                        Eigen::MatrixXd* C) {
+  const int n = static_cast<int>(s.model.nodes.size());
+  K->resize(6 * n, 6 * n);
+  C->resize(6 * n, 6 * n);
+  for (int j = 0; j < 6 * n; ++j) {
+    Data p = s.data, m = s.data;
+    const Vec6 dh = eps * Vec6::Unit(j % 6);
+    p.H[static_cast<std::size_t>(j / 6)] = p.H[static_cast<std::size_t>(j / 6)] * ExpSE3(dh);
+    m.H[static_cast<std::size_t>(j / 6)] = m.H[static_cast<std::size_t>(j / 6)] * ExpSE3(-dh);
+    Eigen::VectorXd rp, rm;
+    AssembleContacts(s.model, p, o, &rp, nullptr, nullptr);
+    AssembleContacts(s.model, m, o, &rm, nullptr, nullptr);
+    K->col(j) = (rp - rm) / (2 * eps);
+    Data vp = s.data, vm = s.data;
+    vp.v(j) += eps;
+    vm.v(j) -= eps;
+    AssembleContacts(s.model, vp, o, &rp, nullptr, nullptr);
+    AssembleContacts(s.model, vm, o, &rm, nullptr, nullptr);
+    C->col(j) = (rp - rm) / (2 * eps);
+  }
+}
+
 TEST(ContactKind, TangentsMatchFiniteDifferencesThroughTheRetractionAndInTheVelocities) {
   for (const double mu : {0.0, 0.4}) {
     for (unsigned seed : {1u, 2u, 3u}) {
@@ -127,25 +152,8 @@ TEST(ContactKind, TangentsMatchFiniteDifferencesThroughTheRetractionAndInTheVelo
       Eigen::MatrixXd K, C;
       AssembleContacts(s.model, s.data, o, &r, &K, &C);
       ASSERT_GT(r.norm(), 0.0);
-      const int n = static_cast<int>(s.model.nodes.size());
-      const double eps = 1e-7;
-      Eigen::MatrixXd K_fd(6 * n, 6 * n), C_fd(6 * n, 6 * n);
-      for (int j = 0; j < 6 * n; ++j) {
-        Data p = s.data, m = s.data;
-        const Vec6 dh = eps * Vec6::Unit(j % 6);
-        p.H[static_cast<std::size_t>(j / 6)] = p.H[static_cast<std::size_t>(j / 6)] * ExpSE3(dh);
-        m.H[static_cast<std::size_t>(j / 6)] = m.H[static_cast<std::size_t>(j / 6)] * ExpSE3(-dh);
-        Eigen::VectorXd rp, rm;
-        AssembleContacts(s.model, p, o, &rp, nullptr, nullptr);
-        AssembleContacts(s.model, m, o, &rm, nullptr, nullptr);
-        K_fd.col(j) = (rp - rm) / (2 * eps);
-        Data vp = s.data, vm = s.data;
-        vp.v(j) += eps;  // nodes are numbered as their unknowns (no fixed nodes)
-        vm.v(j) -= eps;
-        AssembleContacts(s.model, vp, o, &rp, nullptr, nullptr);
-        AssembleContacts(s.model, vm, o, &rm, nullptr, nullptr);
-        C_fd.col(j) = (rp - rm) / (2 * eps);
-      }
+      Eigen::MatrixXd K_fd, C_fd;
+      DifferenceTangents(s, o, 1e-7, &K_fd, &C_fd);
       EXPECT_LT(RelativeError(K, K_fd), 1e-6) << "mu " << mu << " seed " << seed;
       EXPECT_LT(RelativeError(C, C_fd), 1e-6) << "mu " << mu << " seed " << seed;
     }
@@ -532,25 +540,8 @@ TEST(ContactKind, StickLawTangentsMatchFiniteDifferences) {
     Eigen::VectorXd r;
     Eigen::MatrixXd K, C;
     AssembleContacts(s.model, s.data, o, &r, &K, &C);
-    const int n = static_cast<int>(s.model.nodes.size());
-    const double eps = 1e-8;
-    Eigen::MatrixXd K_fd(6 * n, 6 * n), C_fd(6 * n, 6 * n);
-    for (int j = 0; j < 6 * n; ++j) {
-      Data p = s.data, m = s.data;
-      const Vec6 dh = eps * Vec6::Unit(j % 6);
-      p.H[static_cast<std::size_t>(j / 6)] = p.H[static_cast<std::size_t>(j / 6)] * ExpSE3(dh);
-      m.H[static_cast<std::size_t>(j / 6)] = m.H[static_cast<std::size_t>(j / 6)] * ExpSE3(-dh);
-      Eigen::VectorXd rp, rm;
-      AssembleContacts(s.model, p, o, &rp, nullptr, nullptr);
-      AssembleContacts(s.model, m, o, &rm, nullptr, nullptr);
-      K_fd.col(j) = (rp - rm) / (2 * eps);
-      Data vp = s.data, vm = s.data;
-      vp.v(j) += eps;
-      vm.v(j) -= eps;
-      AssembleContacts(s.model, vp, o, &rp, nullptr, nullptr);
-      AssembleContacts(s.model, vm, o, &rm, nullptr, nullptr);
-      C_fd.col(j) = (rp - rm) / (2 * eps);
-    }
+    Eigen::MatrixXd K_fd, C_fd;
+    DifferenceTangents(s, o, 1e-8, &K_fd, &C_fd);
     EXPECT_LT(RelativeError(K, K_fd), 1e-6) << "seed " << seed;
     EXPECT_LT(RelativeError(C, C_fd), 1e-6) << "seed " << seed;
   }
