@@ -627,9 +627,10 @@ TEST(ContactValidation, StickLawStopsASlidingBoxAtTheCoulombDistanceAndHoldsIt) 
   EXPECT_LT((box.data.H[0].x - x_stop).norm(), 1e-9);
 }
 
-// Statics with friction: the box on a 20-degree incline (mu_s = 0.5) rests in one static solve,
-// its friction forces carrying W sin a and its normal forces W cos a, each corner's anchor
-// deflected by its force over k_t; at 30 degrees no equilibrium exists and the solve says so.
+// Statics with friction: the box on a 20-degree incline (mu_s = 0.5) rests in a static solve,
+// its friction forces carrying W sin a and its normal forces W cos a, each corner within its
+// cone with its anchor deflected by its force over k_t; at 30 degrees no equilibrium exists
+// and the solve says so.
 TEST(ContactValidation, StickLawHoldsABoxOnAnInclineInStatics) {
   for (const double angle_deg : {20.0, 30.0}) {
     const double a = angle_deg * M_PI / 180.0;
@@ -647,7 +648,10 @@ TEST(ContactValidation, StickLawHoldsABoxOnAnInclineInStatics) {
       for (int i = 0; i < static_cast<int>(p.model.contact_pairs.size()); ++i) {
         const ContactState c = CalcContactState(p.model, p.data, i, false);
         if (!c.active) continue;
-        EXPECT_FALSE(c.slipping);
+        // Within the cone; the uphill corners, unloaded by the friction's moment about the
+        // centre (N = W (cos a -+ sin a) / 4 per corner), may reach it and slip in place
+        // (whether they do depends on the Newton path: the two compilers differ).
+        EXPECT_LE(c.friction_force.norm(), 0.5 * c.normal_force * (1.0 + 1e-12));
         EXPECT_NEAR(c.deflection, c.friction_force.norm() / p.model.contact.stiffness, 1e-15);
         force += c.normal_force * c.normal + c.friction_force;
       }
