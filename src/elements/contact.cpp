@@ -341,31 +341,46 @@ void ContactKind::AddEnergy(const Model& model, const Data& data, const Item& it
   if (c.active) E->spring += 0.5 * law.tangential_stiffness * c.deflection.squaredNorm();
 }
 
-ContactState CalcContactState(const Model& model, const Data& data, int item, bool dynamics) {
+namespace {
+
+// A pair's geometry and its law at the state in data (with damping and the velocities in
+// dynamics), as the kernel evaluates it: false when the normal is undefined; *c stays inactive
+// when the gap is at least the onset.
+bool CalcPairLaw(const Model& model, const Data& data, int item, bool dynamics, ContactGeometry* G,
+                 ContactLawParameters* law, ContactForce* c) {
   const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
-  ContactState out;
   NodeMotion<2> x;
-  Mat6 identity = Mat6::Identity();
+  const Mat6 identity = Mat6::Identity();
   for (int k = 0; k < 2; ++k) {
     x.H[k] = &NodeFrame(data, pair.node[k]);
     x.T[k] = &identity;
   }
-  GatherNodeMotion<2>(model, data, pair.node, &x.eta, &x.eta_dot);
+  if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], G)) return false;
+  *law = ContactLawFor(model.contact, pair.damping, dynamics);
+  *c = ContactForce{};
+  if (G->gap >= model.contact.onset) return true;
+  GatherNodeMotion<2>(model, data, pair.node, &x.eta, nullptr);
+  Eigen::Matrix<double, 3, 12> J;
+  Vec3 m[2];
+  CalcSurfaceVelocityMap(*G, x, &J, m);
+  const Vec3 v_c = dynamics ? Vec3(J * x.eta) : Vec3::Zero();
+  AnchorTrial trial;
+  const AnchorTrial* anchor = PairAnchorTrial(data, item, x.H, &trial, nullptr);
+  *c = ContactForceLaw(G->gap, G->normal, v_c, *law, false, anchor);
+  return true;
+}
+
+}  // namespace
+
+ContactState CalcContactState(const Model& model, const Data& data, int item, bool dynamics) {
+  ContactState out;
   ContactGeometry G;
-  if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G)) return out;
+  ContactLawParameters law;
+  ContactForce c;
+  if (!CalcPairLaw(model, data, item, dynamics, &G, &law, &c)) return out;
   out.gap = G.gap;
   out.point = G.point;
   out.normal = G.normal;
-  if (G.gap >= model.contact.onset) return out;
-  // The kernel's velocity map and law, with damping and friction (dynamics).
-  Eigen::Matrix<double, 3, 12> J;
-  Vec3 m[2];
-  CalcSurfaceVelocityMap(G, x, &J, m);
-  const Vec3 v_c = dynamics ? Vec3(J * x.eta) : Vec3::Zero();
-  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dynamics);
-  AnchorTrial trial;
-  const AnchorTrial* anchor = PairAnchorTrial(data, item, x.H, &trial, nullptr);
-  const ContactForce c = ContactForceLaw(G.gap, G.normal, v_c, law, false, anchor);
   if (!c.active) return out;
   out.active = true;
   out.normal_force = c.normal.force;
@@ -408,32 +423,15 @@ void AcceptContactHistory(const Model& model, Data& data, bool dynamics) {
   AcceptShapePairHistory(model, data, dynamics);
   if (data.contact_anchors.empty()) return;
   for (std::size_t i = 0; i < model.contact_pairs.size(); ++i) {
-    const ContactPair& pair = model.contact_pairs[i];
     ContactAnchor& a = data.contact_anchors[i];
-    NodeMotion<2> x;
-    Mat6 identity = Mat6::Identity();
-    for (int k = 0; k < 2; ++k) {
-      x.H[k] = &NodeFrame(data, pair.node[k]);
-      x.T[k] = &identity;
-    }
-    ContactGeometry G;
-    if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G)) {
-      a = ContactAnchor{};
-      continue;
-    }
     // The law at this state from the history so far: the anchor's deflection after the return
     // mapping is the new history (zero when the pair does not touch).
+    ContactGeometry G;
+    ContactLawParameters law;
     ContactForce c;
-    if (G.gap < model.contact.onset) {
-      GatherNodeMotion<2>(model, data, pair.node, &x.eta, nullptr);
-      Eigen::Matrix<double, 3, 12> J;
-      Vec3 m[2];
-      CalcSurfaceVelocityMap(G, x, &J, m);
-      const Vec3 v_c = dynamics ? Vec3(J * x.eta) : Vec3::Zero();
-      AnchorTrial trial;
-      const AnchorTrial* anchor = PairAnchorTrial(data, static_cast<int>(i), x.H, &trial, nullptr);
-      c = ContactForceLaw(G.gap, G.normal, v_c,
-                          ContactLawFor(model.contact, pair.damping, dynamics), false, anchor);
+    if (!CalcPairLaw(model, data, static_cast<int>(i), dynamics, &G, &law, &c)) {
+      a = ContactAnchor{};
+      continue;
     }
     a.deflection = c.active ? c.deflection : Vec3::Zero();
     a.slipping = c.active && c.slipping;
