@@ -322,9 +322,8 @@ confidence intervals. The simulation's own state is not changed (each case has i
         o.step = step;
         o.steps = steps;
         Data d = s.data();  // the simulation's own state is left as it is
-        DynamicSensitivity r = CalcDynamicSensitivity(s.model(), d, parameters, outputs,
-                                                      weights ? *weights : Eigen::MatrixXd(),
-                                                      mode, o);
+        DynamicSensitivity r = CalcDynamicSensitivity(
+            s.model(), d, parameters, outputs, weights ? *weights : Eigen::MatrixXd(), mode, o);
         if (!r.ok) RaiseSolverError("dynamic_sensitivity: " + r.message, py::none());
         return r;
       },

@@ -202,8 +202,7 @@ void ValidateCalibration(const Model& model, const std::vector<Parameter>& param
 }  // namespace
 
 CalibrationResult Calibrate(const Model& model, const std::vector<Parameter>& parameters,
-                            const Eigen::VectorXd& start,
-                            const std::vector<CalibrationCase>& cases,
+                            const Eigen::VectorXd& start, const std::vector<CalibrationCase>& cases,
                             const CalibrationOptions& options) {
   ValidateCalibration(model, parameters, start, cases, options);
   const int np = static_cast<int>(parameters.size());
@@ -255,16 +254,15 @@ CalibrationResult Calibrate(const Model& model, const std::vector<Parameter>& pa
   // (J^T J)^-1 by the QR of J (R^T R = J^T J): its inverse R^-1 R^-T, without forming J^T J.
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(result.jacobian);
   if (qr.rank() < np) {
-    result.message = "the parameters are not identifiable from these measurements: the "
-                     "Jacobian has rank " +
-                     std::to_string(qr.rank()) + " < " + std::to_string(np);
+    result.message =
+        "the parameters are not identifiable from these measurements: the "
+        "Jacobian has rank " +
+        std::to_string(qr.rank()) + " < " + std::to_string(np);
     return result;
   }
   const Eigen::MatrixXd Rinv =
-      qr.matrixR()
-          .topLeftCorner(np, np)
-          .triangularView<Eigen::Upper>()
-          .solve(Eigen::MatrixXd::Identity(np, np));
+      qr.matrixR().topLeftCorner(np, np).triangularView<Eigen::Upper>().solve(
+          Eigen::MatrixXd::Identity(np, np));
   const Eigen::MatrixXd P = qr.colsPermutation();
   const Eigen::MatrixXd inv = P * (Rinv * Rinv.transpose()) * P.transpose();
   result.covariance = result.sigma * result.sigma * inv;

@@ -28,7 +28,8 @@ MatrixXd DenseMatrix(const Model& m, const Data& d) {
   MatrixXd A = MatrixXd::Zero(n, n);
   if (m.sparse_solver) {
     std::vector<int> global(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) global[static_cast<std::size_t>(m.permutation[static_cast<std::size_t>(i)])] = i;
+    for (int i = 0; i < n; ++i)
+      global[static_cast<std::size_t>(m.permutation[static_cast<std::size_t>(i)])] = i;
     d.sparse.ForEachEntry([&](int i, int j, double v) {
       A(global[static_cast<std::size_t>(i)], global[static_cast<std::size_t>(j)]) = v;
     });
@@ -156,8 +157,8 @@ bool Linearise(const Model& model, Data& data, const std::vector<Parameter>& par
 
 // One step n -> n+1 linearised at its converged solution, and the restart after it.
 struct StepRecord {
-  MatrixXd K, C, Rp;  // of the step's residual at the new state
-  MatrixXd T, Ad;     // block diagonal: T(h dq) and Ad(exp(-h dq)) of the nodes
+  MatrixXd K, C, Rp;                // of the step's residual at the new state
+  MatrixXd T, Ad;                   // block diagonal: T(h dq) and Ad(exp(-h dq)) of the nodes
   Eigen::PartialPivLU<MatrixXd> S;  // beta' M + gamma' C + K T (its transpose: adjoint)
   bool restart = false;
   MatrixXd K2, C2, Rp2;  // of the restart's consistent acceleration
@@ -224,6 +225,12 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
     out.message = "models with multipliers (joints, length-driven tendons) are not supported yet";
     return out;
   }
+  if (model.contact.friction > 0.0 &&
+      !(model.obstacles.empty() && model.contact_pairs.empty() && model.contact_rods.empty() &&
+        model.contact_shapes.empty())) {
+    out.message = "contact with friction (a history of the run) is not supported yet";
+    return out;
+  }
   MatrixXd W = weights;
   if (W.size() == 0) {
     W = MatrixXd::Zero(N + 1, no);
@@ -261,9 +268,8 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
     out.message = "at the start: " + why;
     return out;
   }
-  const Eigen::PartialPivLU<MatrixXd> M0(mode == SensitivityMode::kForward
-                                             ? MatrixXd(lin.M)
-                                             : MatrixXd(lin.M.transpose()));
+  const Eigen::PartialPivLU<MatrixXd> M0(
+      mode == SensitivityMode::kForward ? MatrixXd(lin.M) : MatrixXd(lin.M.transpose()));
   const MatrixXd Rp0 = lin.Rp;
   out.values.resize(N + 1, no);
   out.values.row(0) = OutputValues(data, outputs).transpose();
@@ -390,8 +396,7 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
         vdot.setZero();
         a.setZero();
       }
-      const VectorXd dx = rec.T.transpose() * eta + gamma_p * v + beta_p * vdot +
-                          c_a * beta_p * a;
+      const VectorXd dx = rec.T.transpose() * eta + gamma_p * v + beta_p * vdot + c_a * beta_p * a;
       VectorXd eta0 = eta, v0 = v;
       VectorXd a_base = a;
       const VectorXd r = -rec.S.solve(dx);
@@ -413,7 +418,8 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
     grad += Rp0.transpose() * r;
     out.gradient = grad;
   }
-  if (!out.gradient.allFinite() || (mode == SensitivityMode::kForward && !out.outputs.allFinite())) {
+  if (!out.gradient.allFinite() ||
+      (mode == SensitivityMode::kForward && !out.outputs.allFinite())) {
     out.message = "the sensitivities are not finite (a singular step matrix)";
     return out;
   }

@@ -72,8 +72,8 @@ Eigen::MatrixXd Trajectory(const Model& m, const std::vector<SensitivityOutput>&
   Eigen::MatrixXd y(o.steps + 1, static_cast<Eigen::Index>(outputs.size()));
   const auto record = [&](int n) {
     for (std::size_t k = 0; k < outputs.size(); ++k)
-      y(n, static_cast<Eigen::Index>(k)) =
-          d.H[static_cast<std::size_t>(outputs[k].index)].Act(outputs[k].offset)(outputs[k].component);
+      y(n, static_cast<Eigen::Index>(k)) = d.H[static_cast<std::size_t>(outputs[k].index)].Act(
+          outputs[k].offset)(outputs[k].component);
   };
   record(0);
   for (int n = 0; n < o.steps; ++n) {
@@ -107,9 +107,8 @@ void CheckForwardAgainstFiniteDifferences(RodInertia inertia) {
   const std::vector<Parameter> params = ArmParameters();
   const DynamicSensitivityOptions o = RunOptions();
   Data d = MakeData(arm.model);
-  const DynamicSensitivity s =
-      CalcDynamicSensitivity(arm.model, d, params, outputs, Eigen::MatrixXd(),
-                             SensitivityMode::kForward, o);
+  const DynamicSensitivity s = CalcDynamicSensitivity(
+      arm.model, d, params, outputs, Eigen::MatrixXd(), SensitivityMode::kForward, o);
   ASSERT_TRUE(s.ok) << s.message;
   EXPECT_EQ(s.restarts, 4);  // at 10, 20, 30 and 40 ms (the end)
   // The run is the integrator's: the same trajectory as Step's.
@@ -161,10 +160,10 @@ TEST(DynamicSensitivity, AdjointEqualsForwardForAnObjectiveOverTheRun) {
   Eigen::MatrixXd weights(o.steps + 1, 3);
   for (Eigen::Index i = 0; i < weights.size(); ++i) weights(i) = u(rng);
   Data d1 = MakeData(arm.model), d2 = MakeData(arm.model);
-  const DynamicSensitivity fwd = CalcDynamicSensitivity(arm.model, d1, params, outputs, weights,
-                                                        SensitivityMode::kForward, o);
-  const DynamicSensitivity adj = CalcDynamicSensitivity(arm.model, d2, params, outputs, weights,
-                                                        SensitivityMode::kAdjoint, o);
+  const DynamicSensitivity fwd =
+      CalcDynamicSensitivity(arm.model, d1, params, outputs, weights, SensitivityMode::kForward, o);
+  const DynamicSensitivity adj =
+      CalcDynamicSensitivity(arm.model, d2, params, outputs, weights, SensitivityMode::kAdjoint, o);
   ASSERT_TRUE(fwd.ok && adj.ok) << fwd.message << adj.message;
   EXPECT_EQ(fwd.objective, adj.objective);
   const double scale = fwd.gradient.cwiseAbs().maxCoeff();
@@ -174,10 +173,10 @@ TEST(DynamicSensitivity, AdjointEqualsForwardForAnObjectiveOverTheRun) {
       << adj.gradient.transpose();
   // The final-time objective (no weights) too.
   Data d3 = MakeData(arm.model), d4 = MakeData(arm.model);
-  const DynamicSensitivity f2 = CalcDynamicSensitivity(arm.model, d3, params, outputs, {},
-                                                       SensitivityMode::kForward, o);
-  const DynamicSensitivity a2 = CalcDynamicSensitivity(arm.model, d4, params, outputs, {},
-                                                       SensitivityMode::kAdjoint, o);
+  const DynamicSensitivity f2 =
+      CalcDynamicSensitivity(arm.model, d3, params, outputs, {}, SensitivityMode::kForward, o);
+  const DynamicSensitivity a2 =
+      CalcDynamicSensitivity(arm.model, d4, params, outputs, {}, SensitivityMode::kAdjoint, o);
   ASSERT_TRUE(f2.ok && a2.ok);
   EXPECT_LT((a2.gradient - f2.gradient).cwiseAbs().maxCoeff(),
             1e-10 * f2.gradient.cwiseAbs().maxCoeff());

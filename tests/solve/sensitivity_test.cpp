@@ -244,8 +244,9 @@ TEST(StaticSensitivity, ChamberPressureAndMassMatchFiniteDifferences) {
   ModelBuilder b;
   Vec6 inertia;
   inertia << 0.5, 0.5, 0.5, 1e-4, 1e-4, 2e-4;
-  const RodId rod = b.AddStraightRod("arm", Vec3::Zero(), Vec3::UnitX(), 10,
-                                     Section::FromDiagonals(RodSection(1e4, 1.0).stiffness, inertia));
+  const RodId rod =
+      b.AddStraightRod("arm", Vec3::Zero(), Vec3::UnitX(), 10,
+                       Section::FromDiagonals(RodSection(1e4, 1.0).stiffness, inertia));
   const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   b.SetGravity(Vec3(0.0, 0.0, -9.81));
@@ -281,8 +282,9 @@ TEST(StaticSensitivity, ActiveContactOnAPlaneMatchesFiniteDifferences) {
   ModelBuilder b;
   Vec6 inertia;
   inertia << 0.2, 0.2, 0.2, 1e-5, 1e-5, 2e-5;
-  const RodId rod = b.AddStraightRod("arm", Vec3(0.0, 0.0, 0.1), Vec3(1.0, 0.0, 0.1), 10,
-                                     Section::FromDiagonals(RodSection(1e4, 1.0).stiffness, inertia));
+  const RodId rod =
+      b.AddStraightRod("arm", Vec3(0.0, 0.0, 0.1), Vec3(1.0, 0.0, 0.1), 10,
+                       Section::FromDiagonals(RodSection(1e4, 1.0).stiffness, inertia));
   const std::vector<NodeId> nodes = b.RodNodes(rod);
   b.FixNode(nodes.front());
   b.SetGravity(Vec3(0.0, 0.0, -9.81));
@@ -307,12 +309,13 @@ TEST(StaticSensitivity, ActiveContactOnAPlaneMatchesFiniteDifferences) {
                       {ParameterKind::kPointLoad, 0, 1},
                       {ParameterKind::kRodStiffness, 0, -1},
                       {ParameterKind::kRodMass, 0, -1}},
-                     TipOutputs(nodes.back(), Vec3(0.0, 0.0, 0.01), true), {1e-4, 1e-4, 1e-4, 1e-4});
+                     TipOutputs(nodes.back(), Vec3(0.0, 0.0, 0.01), true),
+                     {1e-4, 1e-4, 1e-4, 1e-4});
   // Without the plane the same load takes the tip far below it: the contact carries load.
   ModelBuilder free_builder;
-  const RodId free_rod = free_builder.AddStraightRod(
-      "arm", Vec3(0.0, 0.0, 0.1), Vec3(1.0, 0.0, 0.1), 10,
-      Section::FromDiagonals(RodSection(1e4, 1.0).stiffness, inertia));
+  const RodId free_rod =
+      free_builder.AddStraightRod("arm", Vec3(0.0, 0.0, 0.1), Vec3(1.0, 0.0, 0.1), 10,
+                                  Section::FromDiagonals(RodSection(1e4, 1.0).stiffness, inertia));
   free_builder.FixNode(free_builder.RodNodes(free_rod).front());
   free_builder.SetGravity(Vec3(0.0, 0.0, -9.81));
   free_builder.AddPointLoad(load);
@@ -465,7 +468,7 @@ CalibrationSetup MakeCalibrationSetup() {
   const std::vector<Parameter> loads = {{ParameterKind::kPointLoad, 0, 1},
                                         {ParameterKind::kPointLoad, 0, 2}};
   for (const Eigen::Vector2d& f : {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.5, 0.0),
-                                  Eigen::Vector2d(1.0, 0.0), Eigen::Vector2d(0.0, 0.5)}) {
+                                   Eigen::Vector2d(1.0, 0.0), Eigen::Vector2d(0.0, 0.5)}) {
     Model m = s.model;
     Data d = MakeData(m);
     for (int i = 0; i < 2; ++i) {

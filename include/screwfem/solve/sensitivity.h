@@ -205,8 +205,8 @@ struct CalibrationCase {
 };
 
 struct CalibrationOptions {
-  StaticOptions statics;            // the equilibrium solves
-  int max_iterations = 100;         // of the optimiser (Ceres' Levenberg-Marquardt)
+  StaticOptions statics;               // the equilibrium solves
+  int max_iterations = 100;            // of the optimiser (Ceres' Levenberg-Marquardt)
   double parameter_tolerance = 1e-12;  // relative parameter step below which it stops
   // The measurement noise's standard deviation per coordinate [m]; 0: estimated from the
   // residual at the fit, s^2 = |r|^2 / (m - n) (m coordinates measured, n parameters).
@@ -215,10 +215,10 @@ struct CalibrationOptions {
 };
 
 struct CalibrationResult {
-  bool converged = false;      // the optimiser converged (a least-squares minimum)
-  std::string message;         // why not
-  Eigen::VectorXd values;      // the parameters' values fitted
-  Eigen::MatrixXd covariance;  // sigma^2 (J^T J)^-1 at the fit (linearised)
+  bool converged = false;          // the optimiser converged (a least-squares minimum)
+  std::string message;             // why not
+  Eigen::VectorXd values;          // the parameters' values fitted
+  Eigen::MatrixXd covariance;      // sigma^2 (J^T J)^-1 at the fit (linearised)
   Eigen::VectorXd standard_error;  // sqrt(diag(covariance))
   Eigen::VectorXd lower, upper;    // values -+ interval_sigmas * standard_error
   double sigma = 0.0;              // the noise level used (given, or estimated)
@@ -237,8 +237,7 @@ struct CalibrationResult {
 // InputError for invalid parameters, cases or options, or fewer measured coordinates than
 // parameters.
 CalibrationResult Calibrate(const Model& model, const std::vector<Parameter>& parameters,
-                            const Eigen::VectorXd& start,
-                            const std::vector<CalibrationCase>& cases,
+                            const Eigen::VectorXd& start, const std::vector<CalibrationCase>& cases,
                             const CalibrationOptions& options = {});
 
 // d(value of the model's item)/d(sensitivity parameter) at an offset `value`: the sensitivity
