@@ -17,9 +17,6 @@ namespace screwfem {
 
 namespace {
 
-
-
-
 constexpr std::size_t kMaxTargetsFileBytes = 64u << 20;
 
 // The node and offset of a scene point (outputs.points) as an effector (a rod point must be on
@@ -53,8 +50,8 @@ InverseFile ParseInverseFile(const std::string& text, const std::string& source,
   // parameters: a list of {input|tendon|actuator|joint: NAME, lower, upper}.
   const scene_yaml::Node& params = r.Require(root, "", "parameters");
   if (!params.IsSequence() || params.items.empty())
-    r.Fail(params.location, "parameters", "expected a list of parameters, got " +
-                                              scene_yaml::Describe(params));
+    r.Fail(params.location, "parameters",
+           "expected a list of parameters, got " + scene_yaml::Describe(params));
   for (std::size_t i = 0; i < params.items.size(); ++i) {
     const scene_yaml::Node& p = params.items[i];
     const std::string path = "parameters[" + std::to_string(i) + "]";
@@ -192,8 +189,7 @@ InverseRunResult RunInverseFile(const Scene& scene, const InverseFile& file,
                             file.solves[k], values, file.options);
     if (r.values.size() == values.size()) values = r.values;
     (r.converged ? out.reached : out.unreachable) += 1;
-    if (!r.converged)
-      out.message += "target " + std::to_string(k) + ": " + r.message + "\n";
+    if (!r.converged) out.message += "target " + std::to_string(k) + ": " + r.message + "\n";
     csv << k << ',' << (r.converged ? 1 : 0);
     std::snprintf(buf, sizeof buf, ",%.17g", r.distance);
     csv << buf;

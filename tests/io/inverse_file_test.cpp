@@ -50,14 +50,19 @@ std::vector<std::vector<double>> ReadCsv(const std::string& path, std::string* h
 TEST(InverseFile, FingerReachesEquilibriumTipsAndReportsAnUnreachableTarget) {
   const Scene scene = LoadScene(kFinger);
   const std::vector<Vec3> tips = {TipAt(scene, 20.0, 0.0, 10.0), TipAt(scene, 5.0, 30.0, 0.0)};
-  const std::string text = "parameters:\n"
-                           "  - {input: t1, lower: 0, upper: 40}\n"
-                           "  - {input: t2, lower: 0, upper: 40}\n"
-                           "  - {input: t3, lower: 0, upper: 40}\n"
-                           "targets:\n"
-                           "  - {tip: " + Point(tips[0]) + "}\n"
-                           "  - {tip: " + Point(tips[1]) + "}\n"
-                           "  - {tip: [0, 0, -1.2]}\n";
+  const std::string text =
+      "parameters:\n"
+      "  - {input: t1, lower: 0, upper: 40}\n"
+      "  - {input: t2, lower: 0, upper: 40}\n"
+      "  - {input: t3, lower: 0, upper: 40}\n"
+      "targets:\n"
+      "  - {tip: " +
+      Point(tips[0]) +
+      "}\n"
+      "  - {tip: " +
+      Point(tips[1]) +
+      "}\n"
+      "  - {tip: [0, 0, -1.2]}\n";
   const InverseFile f = ParseInverseFile(text, "targets.yaml", scene);
   ASSERT_EQ(f.solves.size(), 3u);
   ASSERT_EQ(f.names, (std::vector<std::string>{"input t1", "input t2", "input t3"}));
@@ -107,9 +112,9 @@ TEST(InverseFile, ErrorsNameFileLineAndColumn) {
                     "0, 0]}\n",
                     scene),
             "t.yaml:2:34: parameters[0].upper: must be >= lower");
-  EXPECT_EQ(ErrorOf("parameters:\n  - {input: t1, tendon: a}\ntargets:\n  - {tip: [1, 0, 0]}\n",
-                    scene),
-            "t.yaml:2:5: parameters[0]: give exactly one of input, tendon, actuator or joint");
+  EXPECT_EQ(
+      ErrorOf("parameters:\n  - {input: t1, tendon: a}\ntargets:\n  - {tip: [1, 0, 0]}\n", scene),
+      "t.yaml:2:5: parameters[0]: give exactly one of input, tendon, actuator or joint");
 }
 
 }  // namespace

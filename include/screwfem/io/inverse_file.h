@@ -17,9 +17,9 @@ struct InverseFile {
   std::vector<Parameter> parameters;
   std::vector<std::string> names;  // "input t1", "tendon a", "actuator c", "joint j"
   Eigen::VectorXd lower, upper;
-  std::vector<std::string> points;               // effector names (scene outputs.points)
+  std::vector<std::string> points;                 // effector names (scene outputs.points)
   std::vector<std::vector<InverseTarget>> solves;  // one list (one target per point) per entry
-  InverseStaticsOptions options;                 // the scene's statics, tolerance
+  InverseStaticsOptions options;                   // the scene's statics, tolerance
 };
 
 // Parses the targets file's text (`source` names it in messages) against `scene`. Throws
