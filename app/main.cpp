@@ -3,6 +3,7 @@
 //   screwfem run SCENE.yaml -o OUTDIR [--set key=value]... [--quiet] [--force]
 //                [--inputs TABLE.csv] [--max-memory SIZE]
 //   screwfem check SCENE.yaml [--set key=value]... [--max-memory SIZE]
+//   screwfem inverse SCENE.yaml --targets TARGETS.yaml -o OUTDIR [--set key=value]...
 //   screwfem plot OUTDIR [OUTDIR...] -o FIGDIR [--points P8,P4] [--times 0,0.5,1]
 //                 [--animate [--fps 25] [--speed 1]]
 //   screwfem view OUTDIR [-o FILE.html]
@@ -35,6 +36,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "screwfem/io/inverse_file.h"
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/model/errors.h"
@@ -185,6 +187,25 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
     screwfem::CheckOutputRows(scene, scene.outputs);
     for (const std::string& w : m.warnings) std::printf("  warning: %s\n", w.c_str());
     return 0;
+  } catch (const screwfem::InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitInput;
+  }
+}
+
+// Inverse statics of a targets file (io/inverse_file.h): 0 when every target was reached, 1
+// when one was not (reported with its nearest equilibrium), 2 for invalid input.
+int Inverse(const std::string& scene_path, const std::string& targets_path,
+            const std::string& outdir, const std::vector<std::string>& overrides) {
+  try {
+    const screwfem::Scene scene = screwfem::LoadScene(scene_path, overrides);
+    PrintWarnings(scene.model);
+    const screwfem::InverseFile file = screwfem::LoadInverseFile(targets_path, scene);
+    const screwfem::InverseRunResult r = screwfem::RunInverseFile(scene, file, outdir);
+    std::printf("inverse: %d of %zu targets reached, %d not -> %s/inverse.csv\n", r.reached,
+                file.solves.size(), r.unreachable, outdir.c_str());
+    if (r.unreachable > 0) std::fprintf(stderr, "%s", r.message.c_str());
+    return r.unreachable > 0 ? kExitFailed : 0;
   } catch (const screwfem::InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitInput;
@@ -358,6 +379,18 @@ int Main(int argc, char** argv) {
   add_overrides(check);
   add_max_memory(check);
 
+  std::string targets_path;
+  CLI::App* inverse = app.add_subcommand(
+      "inverse", "inverse statics: the actuator inputs that put scene points on targets");
+  inverse->add_option("scene", scene_path, "scene file (YAML)")->required();
+  inverse
+      ->add_option("--targets", targets_path,
+                   "targets file (YAML: parameters with bounds, targets per point; "
+                   "docs/scene-format.md)")
+      ->required();
+  inverse->add_option("-o,--output", outdir, "output directory (created if needed)")->required();
+  add_overrides(inverse);
+
   CLI::App* plot = app.add_subcommand("plot", "plot results of one or more runs (matplotlib)");
   plot->add_option("outdirs", outdirs, "run output directories")->required();
   plot->add_option("-o,--output", figdir, "figure directory (created if needed)")->required();
@@ -397,6 +430,7 @@ int Main(int argc, char** argv) {
     return Run(scene_path, outdir, overrides, inputs, quiet, force, max_memory);
   }
   if (check->parsed()) return Check(scene_path, overrides, max_memory);
+  if (inverse->parsed()) return Inverse(scene_path, targets_path, outdir, overrides);
   if (sweep->parsed()) return Sweep(sweep->remaining());
   if (view->parsed()) return View(outdir, html);
   return Plot(outdirs, figdir, points, times, animate, fps, speed);

@@ -39,18 +39,27 @@ void BindInverse(py::module_& m) {
 
   py::class_<Parameter>(m, "Parameter",
                         "A parameter of a static equilibrium (docs/inverse.md): kind, index of "
-                        "the tendon, point load, joint, rod or input, and component (point "
-                        "loads 0-5; rod stiffness -1 for all six or 0-5; rod rest strain 0-5).")
-      .def(py::init([](ParameterKind kind, int index, int component) {
-             return Parameter{kind, index, component};
+                        "the tendon, point load, joint, rod, input or actuator, and component "
+                        "(point loads 0-5; rod stiffness -1 for all six or 0-5; rod rest strain "
+                        "0-5).")
+      .def(py::init([](ParameterKind kind, int index, int component,
+                       const std::optional<Profile>& shape) {
+             Parameter p{kind, index, component, {}};
+             if (shape) p.shape = *shape;
+             return p;
            }),
-           py::arg("kind"), py::arg("index"), py::arg("component") = -1)
+           py::arg("kind"), py::arg("index"), py::arg("component") = -1,
+           py::arg("shape") = py::none())
       .def_readwrite("kind", &Parameter::kind, "What the parameter is (ParameterKind).")
       .def_readwrite("index", &Parameter::index,
-                     "The tendon, point load, joint, rod or input (the model's index).")
+                     "The tendon, point load, joint, rod, input or actuator (the model's index).")
       .def_readwrite(
           "component", &Parameter::component,
           "Point loads 0-5 (force, moment); rod stiffness -1 (all) or 0-5; rest strain 0-5.")
+      .def_readwrite("shape", &Parameter::shape,
+                     "TENDON_TENSION, JOINT_DRIVE, ACTUATOR: the profile the value multiplies "
+                     "(none: the constant 1); a hat-shaped Profile.table is a knot of a "
+                     "piecewise-linear input.")
       .def("__repr__", [](const Parameter& p) {
         return "Parameter(" + std::string(NameOf(p.kind)) + ", " + std::to_string(p.index) + ", " +
                std::to_string(p.component) + ")";
@@ -206,6 +215,130 @@ start from (the last solution for a moving target; default: zero offsets, the in
 values). The simulation ends in the equilibrium at
 the values found; when the targets are out of reach, converged is False and distance gives how
 far the nearest equilibrium within the bounds is.)doc");
+
+  py::class_<CalibrationCase>(m, "CalibrationCase",
+                              "A static load case of a calibration: loads (Parameters) with "
+                              "their values, and measured points (InverseTarget: node, offset, "
+                              "the measured world position as target).")
+      .def(py::init([](const std::vector<Parameter>& loads, const Eigen::VectorXd& values,
+                       const std::vector<InverseTarget>& measurements) {
+             return CalibrationCase{loads, values, measurements};
+           }),
+           py::arg("loads"), py::arg("load_values"), py::arg("measurements"))
+      .def_readwrite("loads", &CalibrationCase::loads, "The parameters that make the case.")
+      .def_readwrite("load_values", &CalibrationCase::load_values,
+                     "Their values (offsets; an INPUT's value itself).")
+      .def_readwrite("measurements", &CalibrationCase::measurements,
+                     "Measured points: InverseTarget(node, offset, measured position) [m].");
+
+  py::class_<CalibrationOptions>(m, "CalibrationOptions", "Settings of calibrate (sensitivity.h).")
+      .def(py::init<>())
+      .def_readwrite("statics", &CalibrationOptions::statics,
+                     "StaticOptions of the equilibrium solves.")
+      .def_readwrite("max_iterations", &CalibrationOptions::max_iterations,
+                     "Iterations of the optimiser at most (default 100).")
+      .def_readwrite("parameter_tolerance", &CalibrationOptions::parameter_tolerance,
+                     "Relative parameter step below which the optimiser stops (default 1e-12).")
+      .def_readwrite("sigma", &CalibrationOptions::sigma,
+                     "Measurement noise per coordinate [m]; 0 (default): estimated from the "
+                     "residual, |r|^2 / (m - n).")
+      .def_readwrite("interval_sigmas", &CalibrationOptions::interval_sigmas,
+                     "Half-width of the confidence intervals in standard errors (default 3).");
+
+  py::class_<CalibrationResult>(m, "CalibrationResult", "Result of calibrate.")
+      .def_readonly("converged", &CalibrationResult::converged,
+                    "The optimiser converged to a least-squares minimum.")
+      .def_readonly("message", &CalibrationResult::message, "Why not (empty when converged).")
+      .def_readonly("values", &CalibrationResult::values, "The parameters' fitted values.")
+      .def_readonly("covariance", &CalibrationResult::covariance,
+                    "sigma^2 (J^T J)^-1 at the fit (parameters x parameters).")
+      .def_readonly("standard_error", &CalibrationResult::standard_error,
+                    "The square roots of the covariance's diagonal.")
+      .def_readonly("lower", &CalibrationResult::lower,
+                    "values - interval_sigmas * standard_error.")
+      .def_readonly("upper", &CalibrationResult::upper,
+                    "values + interval_sigmas * standard_error.")
+      .def_readonly("sigma", &CalibrationResult::sigma,
+                    "The noise level used, given or estimated [m].")
+      .def_readonly("residual", &CalibrationResult::residual,
+                    "model - measured, three per measurement, cases in order [m].")
+      .def_readonly("jacobian", &CalibrationResult::jacobian,
+                    "d(residual)/d(values) at the fit (exact).")
+      .def_readonly("rms", &CalibrationResult::rms, "Root mean square of the residual [m].")
+      .def_readonly("iterations", &CalibrationResult::iterations, "Iterations of the optimiser.")
+      .def_readonly("equilibrium_solves", &CalibrationResult::equilibrium_solves,
+                    "Static solves made, all cases.");
+
+  m.def(
+      "calibrate",
+      [](Simulation& s, const std::vector<Parameter>& parameters, const Eigen::VectorXd& start,
+         const std::vector<CalibrationCase>& cases,
+         const std::optional<CalibrationOptions>& options) {
+        CalibrationOptions o = options ? *options : CalibrationOptions{};
+        if (!options) o.statics = SimulationStatics(s, std::nullopt);
+        return Calibrate(s.model(), parameters, start, cases, o);
+      },
+      py::arg("simulation"), py::arg("parameters"), py::arg("start"), py::arg("cases"),
+      py::arg("options") = py::none(),
+      R"doc(calibrate(simulation, parameters, start, cases, options=None) -> CalibrationResult
+
+Fits parameters (stiffness factors, rest strains, masses, ...; values as offsets from the
+model's own) to measured point positions of several static load cases (CalibrationCase) by
+least squares with the exact Jacobian of each equilibrium (Ceres' Levenberg-Marquardt;
+docs/inverse.md, Calibration). Returns the fit, its covariance sigma^2 (J^T J)^-1 and
+confidence intervals. The simulation's own state is not changed (each case has its own).)doc");
+
+  py::class_<DynamicSensitivityOptions>(m, "DynamicSensitivityOptions",
+                                        "Settings of dynamic_sensitivity (sensitivity.h).")
+      .def(py::init<>())
+      .def_readwrite("dynamics", &DynamicSensitivityOptions::dynamics,
+                     "DynamicOptions of the integrator (rho_inf, tolerances).")
+      .def_readwrite("step", &DynamicSensitivityOptions::step,
+                     "The fixed step [s]; profile breakpoints must fall on step ends.")
+      .def_readwrite("steps", &DynamicSensitivityOptions::steps, "Steps of the run.");
+
+  py::class_<DynamicSensitivity>(m, "DynamicSensitivity", "Result of dynamic_sensitivity.")
+      .def_readonly("ok", &DynamicSensitivity::ok, "True when the derivatives were computed.")
+      .def_readonly("message", &DynamicSensitivity::message, "Why not (empty when ok).")
+      .def_readonly("values", &DynamicSensitivity::values,
+                    "(steps + 1) x outputs: the outputs at every step end.")
+      .def_readonly("outputs", &DynamicSensitivity::outputs,
+                    "Forward mode: d y_k(t_n)/dp_j in row n * outputs + k, column j.")
+      .def_readonly("objective", &DynamicSensitivity::objective,
+                    "J = sum of weights times the outputs over the run.")
+      .def_readonly("gradient", &DynamicSensitivity::gradient, "dJ/dp, one per parameter.")
+      .def_readonly("restarts", &DynamicSensitivity::restarts,
+                    "Restarts at profile breakpoints along the run.");
+
+  m.def(
+      "dynamic_sensitivity",
+      [](Simulation& s, const std::vector<Parameter>& parameters,
+         const std::vector<SensitivityOutput>& outputs, double step, int steps,
+         const std::optional<Eigen::MatrixXd>& weights, SensitivityMode mode,
+         const std::optional<DynamicOptions>& dynamics) {
+        DynamicSensitivityOptions o;
+        o.dynamics = dynamics ? *dynamics : s.scene().analysis.dynamic;
+        o.dynamics.newton_matrix = NewtonMatrix::kFull;
+        o.step = step;
+        o.steps = steps;
+        Data d = s.data();  // the simulation's own state is left as it is
+        DynamicSensitivity r = CalcDynamicSensitivity(
+            s.model(), d, parameters, outputs, weights ? *weights : Eigen::MatrixXd(), mode, o);
+        if (!r.ok) RaiseSolverError("dynamic_sensitivity: " + r.message, py::none());
+        return r;
+      },
+      py::arg("simulation"), py::arg("parameters"), py::arg("outputs"), py::arg("step"),
+      py::arg("steps"), py::arg("weights") = py::none(),
+      py::arg("mode") = SensitivityMode::kForward, py::arg("dynamics") = py::none(),
+      R"doc(dynamic_sensitivity(simulation, parameters, outputs, step, steps, weights=None, mode=SensitivityMode.FORWARD, dynamics=None) -> DynamicSensitivity
+
+Runs `steps` generalized-alpha steps of size `step` from the simulation's current state (on a
+copy: the simulation is not advanced) and differentiates the discrete trajectory of the
+outputs (point positions) with respect to the parameters: forward (every output at every step)
+or adjoint (the gradient of J = sum of weights[n, k] * y_k(t_n); weights (steps + 1) x outputs,
+default: the final outputs summed). Restarts at profile breakpoints are differentiated too.
+Models without multipliers (no joints or length-driven tendons); docs/inverse.md, Dynamic
+sensitivities. Raises SolverError when it cannot.)doc");
 }
 
 }  // namespace screwfem::python

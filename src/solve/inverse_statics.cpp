@@ -9,6 +9,7 @@
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/errors.h"
+#include "reequilibrate.h"
 #include "screwfem/solve/sensitivity.h"
 
 namespace screwfem {
@@ -51,52 +52,19 @@ class InverseProblem {
     for (int i = 0; same && i < np; ++i) same = current_(i) == values[i];
     if (same) return true;
     data_.inputs = inputs0_;
+    // Every item back to the model's own first, then the offsets (two parameters may touch
+    // one item, e.g. two components of a point load).
+    for (const Parameter& p : params_) ResetParameter(work_, original_, p);
     for (int i = 0; i < np; ++i) {
       const Parameter& p = params_[static_cast<std::size_t>(i)];
-      if (p.kind == ParameterKind::kInput) {
+      if (p.kind == ParameterKind::kInput)
         data_.inputs(p.index) = values[i];  // an input's value itself
-        continue;
-      }
-      ResetParameter(work_, original_, p);
-      OffsetParameter(work_, data_, p, values[i]);
+      else
+        OffsetParameter(work_, data_, p, values[i]);
     }
     current_ = Eigen::Map<const Eigen::VectorXd>(values, np);
     have_state_ = false;
-    // Newton from the last equilibrium at the end load factor (the warm start) ...
-    // It fails fast (no halvings: at one load factor they would retry the same Newton; at most
-    // 12 iterations, quadratic convergence needs fewer from a start that suits it): a trust-
-    // region step far from the last equilibrium costs 13 Newton iterations before the load
-    // stepping, not 13 x 30 (measured: 1.27 s against 0.38 s of CPU for the 20 targets of
-    // bench/inverse_bench.cpp at 100 elements).
-    StaticOptions warm = options_.statics;
-    warm.start_load_factor = warm.end_load_factor;
-    warm.load_steps = 1;
-    warm.max_halvings = 0;
-    warm.max_iterations = std::min(warm.max_iterations, 12);
-    State saved;
-    SaveState(data_, &saved);
-    const Eigen::VectorXd lambda = data_.lambda;
-    ++solves_;
-    StaticResult r = SolveStatic(work_, data_, warm);
-    if (!r.converged) {
-      // ... else load stepping from the reference state.
-      const Data fresh = MakeData(work_);
-      RestoreState(State{fresh.H, fresh.HJ, fresh.q_joint}, data_);
-      data_.lambda = fresh.lambda;
-      data_.w_ref = fresh.w_ref;
-      data_.tendon_slack = fresh.tendon_slack;
-      StaticOptions cold = options_.statics;
-      cold.start_load_factor = 0.0;
-      ++solves_;
-      r = SolveStatic(work_, data_, cold);
-    }
-    if (!r.converged) {
-      RestoreState(saved, data_);
-      data_.lambda = lambda;
-      UpdateBranchReferences(work_, data_);
-      failure_ = "no equilibrium at the parameters tried: " + r.message;
-      return false;
-    }
+    if (!Reequilibrate(work_, data_, options_.statics, &solves_, &failure_)) return false;
     have_state_ = true;
     return true;
   }
@@ -117,8 +85,12 @@ class InverseProblem {
       failure_ = "no sensitivity: " + s.message;
       return false;
     }
-    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-        jac, s.outputs.rows(), s.outputs.cols()) = s.outputs;
+    // A stiffness or mass factor is perturbed relative to its current value (1 + value).
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
+        jac, s.outputs.rows(), s.outputs.cols());
+    J = s.outputs;
+    for (Eigen::Index j = 0; j < J.cols(); ++j)
+      J.col(j) *= ParameterChainFactor(params_[static_cast<std::size_t>(j)], current_(j));
     return true;
   }
 

@@ -2,10 +2,12 @@
 // docs/inverse.md).
 #include "screwfem/solve/sensitivity.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "exact_tangent.h"
+#include "reequilibrate.h"
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/common.h"
@@ -31,6 +33,18 @@ ProfileTerm ConstantTerm(double value) {
   return t;
 }
 
+// Adds value * shape (the constant 1 when it has no terms) to a profile.
+void AddShaped(Profile& profile, const Profile& shape, double value) {
+  if (shape.terms().empty()) {
+    profile.Add(ConstantTerm(value));
+    return;
+  }
+  for (ProfileTerm t : shape.terms()) {
+    t.scale *= value;
+    profile.Add(t);
+  }
+}
+
 }  // namespace
 
 SensitivityWorkspace MakeSensitivityWorkspace(const Model& model) {
@@ -45,6 +59,16 @@ void ValidateParameter(const Model& m, const Parameter& p, const std::string& ow
   const auto fail = [&](const std::string& what) {
     throw InputError(owner + ": parameter " + ParameterLabel(p) + ": " + what);
   };
+  const bool profiled = p.kind == ParameterKind::kTendonTension ||
+                        p.kind == ParameterKind::kJointDrive || p.kind == ParameterKind::kActuator;
+  if (!p.shape.terms().empty()) {
+    if (!profiled) fail("only tendon tensions, joint drives and actuators take a shape");
+    try {
+      p.shape.Validate("shape", static_cast<int>(m.inputs.size()));
+    } catch (const InputError& e) {
+      fail(e.what());
+    }
+  }
   switch (p.kind) {
     case ParameterKind::kTendonTension:
       if (!InRange(p.index, m.tendons)) fail("no such tendon");
@@ -70,6 +94,12 @@ void ValidateParameter(const Model& m, const Parameter& p, const std::string& ow
       return;
     case ParameterKind::kInput:
       if (!InRange(p.index, m.inputs)) fail("no such input");
+      return;
+    case ParameterKind::kActuator:
+      if (!InRange(p.index, m.actuators)) fail("no such actuator");
+      return;
+    case ParameterKind::kRodMass:
+      if (!InRange(p.index, m.rods)) fail("no such rod");
       return;
   }
   fail("unknown kind");
@@ -103,7 +133,7 @@ void OffsetParameter(Model& m, Data& data, const Parameter& p, double delta) {
   const std::size_t i = static_cast<std::size_t>(p.index);
   switch (p.kind) {
     case ParameterKind::kTendonTension:
-      m.tendons[i].tension.Add(ConstantTerm(delta));
+      AddShaped(m.tendons[i].tension, p.shape, delta);
       return;
     case ParameterKind::kPointLoad:
       if (p.component < 3)
@@ -112,7 +142,7 @@ void OffsetParameter(Model& m, Data& data, const Parameter& p, double delta) {
         m.point_loads[i].moment(p.component - 3) += delta;
       return;
     case ParameterKind::kJointDrive:
-      m.joints[i].drive_profile.Add(ConstantTerm(delta));
+      AddShaped(m.joints[i].drive_profile, p.shape, delta);
       return;
     case ParameterKind::kRodStiffness:
       if (p.component < 0)
@@ -130,6 +160,12 @@ void OffsetParameter(Model& m, Data& data, const Parameter& p, double delta) {
     }
     case ParameterKind::kInput:
       data.inputs(p.index) += delta;
+      return;
+    case ParameterKind::kActuator:
+      AddShaped(m.actuators[i].profile, p.shape, delta);
+      return;
+    case ParameterKind::kRodMass:
+      m.rods[i].section.inertia *= 1.0 + delta;
       return;
   }
 }
@@ -157,6 +193,12 @@ void ResetParameter(Model& m, const Model& original, const Parameter& p) {
       return;
     }
     case ParameterKind::kInput:
+      return;
+    case ParameterKind::kActuator:
+      m.actuators[i].profile = original.actuators[i].profile;
+      return;
+    case ParameterKind::kRodMass:
+      m.rods[i].section = original.rods[i].section;
       return;
   }
 }
@@ -308,6 +350,45 @@ StaticSensitivity CalcStaticSensitivity(const Model& model, Data& data,
   }
   out.ok = true;
   return out;
+}
+
+bool Reequilibrate(const Model& model, Data& data, const StaticOptions& statics, int* solves,
+                   std::string* failure) {
+  StaticOptions warm = statics;
+  warm.start_load_factor = warm.end_load_factor;
+  warm.load_steps = 1;
+  warm.max_halvings = 0;
+  warm.max_iterations = std::min(warm.max_iterations, 12);
+  State saved;
+  SaveState(data, &saved);
+  const Eigen::VectorXd lambda = data.lambda;
+  ++*solves;
+  StaticResult r = SolveStatic(model, data, warm);
+  if (!r.converged) {
+    // ... else load stepping from the reference state.
+    const Data fresh = MakeData(model);
+    RestoreState(State{fresh.H, fresh.HJ, fresh.q_joint}, data);
+    data.lambda = fresh.lambda;
+    data.w_ref = fresh.w_ref;
+    data.tendon_slack = fresh.tendon_slack;
+    StaticOptions cold = statics;
+    cold.start_load_factor = 0.0;
+    ++*solves;
+    r = SolveStatic(model, data, cold);
+  }
+  if (!r.converged) {
+    RestoreState(saved, data);
+    data.lambda = lambda;
+    UpdateBranchReferences(model, data);
+    *failure = "no equilibrium at the parameters tried: " + r.message;
+    return false;
+  }
+  return true;
+}
+
+double ParameterChainFactor(const Parameter& p, double value) {
+  const bool factor = p.kind == ParameterKind::kRodStiffness || p.kind == ParameterKind::kRodMass;
+  return factor ? 1.0 / (1.0 + value) : 1.0;
 }
 
 }  // namespace screwfem

@@ -1,8 +1,10 @@
 // Sensitivities of static equilibria (solve/sensitivity.h): forward derivatives against central
 // finite differences of re-solved equilibria (1e-6 relative) for a cantilever (load,
-// stiffness, rest curvature), a driven revolute joint (drive value; multipliers) and a
-// two-tendon finger (tensions); the adjoint mode against the forward mode (1e-10); inverse
-// statics of a three-tendon finger (20 reachable targets to 1e-8 m, an unreachable one).
+// stiffness, rest curvature), a driven revolute joint (drive value; multipliers), a
+// two-tendon finger (tensions), a pressurised chamber (pressure, mass) and a rod pressed on a
+// plane (an active contact); the adjoint mode against the forward mode (1e-10); inverse
+// statics of a three-tendon finger (20 reachable targets to 1e-8 m, an unreachable one);
+// calibration of stiffness and rest curvature from noisy shapes (intervals, Monte Carlo).
 #include "screwfem/solve/sensitivity.h"
 
 #include <gtest/gtest.h>
@@ -235,6 +237,94 @@ TEST(StaticSensitivity, TendonTensionsMatchFiniteDifferences) {
       TipOutputs(f.tip, Vec3(0.0, 0.0, 0.01), true), {1e-3, 1e-3});
 }
 
+// A cantilever with a pressurised chamber off its axis (2 cm along section y and 1 cm along
+// z, 1 cm^2): the pressure bends it, a tip load and gravity act too. Parameters: the pressure
+// (kActuator) and the rod's mass (kRodMass, its weight) besides a load and the stiffness.
+TEST(StaticSensitivity, ChamberPressureAndMassMatchFiniteDifferences) {
+  ModelBuilder b;
+  Vec6 inertia;
+  inertia << 0.5, 0.5, 0.5, 1e-4, 1e-4, 2e-4;
+  const RodId rod =
+      b.AddStraightRod("arm", Vec3::Zero(), Vec3::UnitX(), 10,
+                       Section::FromDiagonals(RodSection(1e4, 1.0).stiffness, inertia));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
+  b.FixNode(nodes.front());
+  b.SetGravity(Vec3(0.0, 0.0, -9.81));
+  Actuator chamber;
+  chamber.name = "chamber";
+  chamber.type = ActuatorType::kPressure;
+  chamber.rod = rod;
+  chamber.area = 1e-4;
+  chamber.offset = Vec3(0.0, 0.02, 0.01);
+  chamber.profile = Profile::Constant(5e4);  // 50 kPa: 5 N over 2 cm, 0.1 N m of bending
+  b.AddActuator(chamber);
+  PointLoad load;
+  load.node = nodes.back();
+  load.force = Vec3(0.0, 0.3, 0.0);
+  b.AddPointLoad(load);
+  const Model m = b.Build();
+  Data d = MakeData(m);
+  ASSERT_TRUE(SolveStatic(m, d).converged);
+  EXPECT_GT(std::abs(d.H[nodes.back()].x.y()), 0.03);  // a large deflection
+  CheckSensitivities(m, d,
+                     {{ParameterKind::kActuator, 0, -1},
+                      {ParameterKind::kRodMass, 0, -1},
+                      {ParameterKind::kPointLoad, 0, 1},
+                      {ParameterKind::kRodStiffness, 0, 4}},
+                     TipOutputs(nodes.back(), Vec3(0.0, 0.02, 0.0), true), {1.0, 1e-4, 1e-4, 1e-4});
+}
+
+// A rod above a plane, clamped at one end and pushed down at the other so that its last
+// nodes press into the plane (penalty contact of the node spheres and element capsules, whose
+// tangent is in the Newton matrix): loads, stiffness and the rod's weight against central
+// differences, and the contact force's share of the load checked to be substantial.
+TEST(StaticSensitivity, ActiveContactOnAPlaneMatchesFiniteDifferences) {
+  ModelBuilder b;
+  Vec6 inertia;
+  inertia << 0.2, 0.2, 0.2, 1e-5, 1e-5, 2e-5;
+  const RodId rod =
+      b.AddStraightRod("arm", Vec3(0.0, 0.0, 0.1), Vec3(1.0, 0.0, 0.1), 10,
+                       Section::FromDiagonals(RodSection(1e4, 1.0).stiffness, inertia));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
+  b.FixNode(nodes.front());
+  b.SetGravity(Vec3(0.0, 0.0, -9.81));
+  b.AddContactRod(rod, 0.01);
+  b.AddObstacle({"ground", ObstacleType::kPlane, Vec3::Zero(), Vec3::UnitZ(), Vec3::Zero(), 0.0});
+  ContactSettings contact;
+  contact.stiffness = 1e4;
+  contact.onset = 1e-3;
+  b.SetContactSettings(contact);
+  PointLoad load;
+  load.node = nodes.back();
+  load.force = Vec3(0.2, 0.1, -1.0);
+  b.AddPointLoad(load);
+  const Model m = b.Build();
+  Data d = MakeData(m);
+  const StaticResult r = SolveStatic(m, d);
+  ASSERT_TRUE(r.converged) << r.message;
+  // In contact: the tip sits near the plane (within the radius and the onset).
+  EXPECT_LT(d.H[nodes.back()].x.z(), 0.0115);
+  CheckSensitivities(m, d,
+                     {{ParameterKind::kPointLoad, 0, 2},
+                      {ParameterKind::kPointLoad, 0, 1},
+                      {ParameterKind::kRodStiffness, 0, -1},
+                      {ParameterKind::kRodMass, 0, -1}},
+                     TipOutputs(nodes.back(), Vec3(0.0, 0.0, 0.01), true),
+                     {1e-4, 1e-4, 1e-4, 1e-4});
+  // Without the plane the same load takes the tip far below it: the contact carries load.
+  ModelBuilder free_builder;
+  const RodId free_rod =
+      free_builder.AddStraightRod("arm", Vec3(0.0, 0.0, 0.1), Vec3(1.0, 0.0, 0.1), 10,
+                                  Section::FromDiagonals(RodSection(1e4, 1.0).stiffness, inertia));
+  free_builder.FixNode(free_builder.RodNodes(free_rod).front());
+  free_builder.SetGravity(Vec3(0.0, 0.0, -9.81));
+  free_builder.AddPointLoad(load);
+  const Model fm = free_builder.Build();
+  Data fd = MakeData(fm);
+  ASSERT_TRUE(SolveStatic(fm, fd).converged);
+  EXPECT_LT(fd.H[nodes.back()].x.z(), -0.1);
+}
+
 // The sparse LU (KLU, klu_tsolve for the adjoint) gives the banded LU's sensitivities: the
 // driven joint's model solved with each.
 TEST(StaticSensitivity, SparseAndBandedSolversAgree) {
@@ -349,6 +439,127 @@ TEST(InverseStatics, ThreeTendonFingerReachesTwentyTargetsWithinBounds) {
             std::string::npos)
       << r.message;
   EXPECT_TRUE((r.values.array() >= 0.0).all() && (r.values.array() <= 40.0).all());
+}
+
+// Calibration: a cantilever (1 m, 10 elements, EI 1 N m^2) whose true bending is 1.25 times the
+// model's (stiffness factor 0.25) and whose rest curvature is 0.3 1/m, measured at five nodes
+// in four load cases (tip forces along y and z) with Gaussian noise of 1 mm per coordinate
+// (fixed seed). The fit recovers both within the reported 3-sigma intervals, and the reported
+// covariance sigma^2 (J^T J)^-1 agrees with the scatter of 40 fits to independent noise draws.
+struct CalibrationSetup {
+  Model model;
+  std::vector<NodeId> nodes;
+  std::vector<Parameter> params;
+  std::vector<CalibrationCase> cases;  // measurements: the noise-free truth
+};
+
+CalibrationSetup MakeCalibrationSetup() {
+  ModelBuilder b;
+  const RodId rod = b.AddStraightRod("beam", Vec3::Zero(), Vec3::UnitX(), 10, RodSection(1e4, 1.0));
+  CalibrationSetup s;
+  s.nodes = b.RodNodes(rod);
+  b.FixNode(s.nodes.front());
+  PointLoad load;
+  load.node = s.nodes.back();
+  b.AddPointLoad(load);
+  s.model = b.Build();
+  s.params = {{ParameterKind::kRodStiffness, 0, -1}, {ParameterKind::kRodRestStrain, 0, 5}};
+  const Eigen::Vector2d truth(0.25, 0.3);
+  const std::vector<Parameter> loads = {{ParameterKind::kPointLoad, 0, 1},
+                                        {ParameterKind::kPointLoad, 0, 2}};
+  for (const Eigen::Vector2d& f : {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.5, 0.0),
+                                   Eigen::Vector2d(1.0, 0.0), Eigen::Vector2d(0.0, 0.5)}) {
+    Model m = s.model;
+    Data d = MakeData(m);
+    for (int i = 0; i < 2; ++i) {
+      OffsetParameter(m, d, s.params[static_cast<std::size_t>(i)], truth(i));
+      OffsetParameter(m, d, loads[static_cast<std::size_t>(i)], f(i));
+    }
+    EXPECT_TRUE(SolveStatic(m, d).converged);
+    CalibrationCase c{loads, f, {}};
+    for (int k = 2; k <= 10; k += 2)
+      c.measurements.push_back({s.nodes[static_cast<std::size_t>(k)], Vec3::Zero(),
+                                d.H[s.nodes[static_cast<std::size_t>(k)]].x});
+    s.cases.push_back(c);
+  }
+  return s;
+}
+
+std::vector<CalibrationCase> WithNoise(std::vector<CalibrationCase> cases, double sigma,
+                                       std::mt19937& rng) {
+  std::normal_distribution<double> noise(0.0, sigma);
+  for (CalibrationCase& c : cases)
+    for (InverseTarget& t : c.measurements)
+      for (int k = 0; k < 3; ++k) t.target(k) += noise(rng);
+  return cases;
+}
+
+TEST(Calibration, RecoversStiffnessAndRestCurvatureWithinTheReportedIntervals) {
+  const CalibrationSetup s = MakeCalibrationSetup();
+  const Eigen::Vector2d truth(0.25, 0.3), start(0.0, 0.0);
+  // Noise-free: the truth to round-off.
+  const CalibrationResult exact = Calibrate(s.model, s.params, start, s.cases);
+  ASSERT_TRUE(exact.converged) << exact.message;
+  EXPECT_LT((exact.values - truth).cwiseAbs().maxCoeff(), 1e-8);
+  EXPECT_LT(exact.rms, 1e-10);
+  // With noise of 1 mm, sigma estimated from the residual.
+  const double sigma = 1e-3;
+  std::mt19937 rng(11);
+  const CalibrationResult r = Calibrate(s.model, s.params, start, WithNoise(s.cases, sigma, rng));
+  ASSERT_TRUE(r.converged) << r.message;
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_LE(r.lower(i), truth(i)) << "parameter " << i;
+    EXPECT_GE(r.upper(i), truth(i)) << "parameter " << i;
+    EXPECT_NEAR(r.upper(i) - r.values(i), 3.0 * r.standard_error(i), 1e-15);
+    EXPECT_GT(r.standard_error(i), 0.0);
+  }
+  // 60 coordinates, 2 parameters: the estimated sigma within 30 % (its spread is ~9 %).
+  EXPECT_NEAR(r.sigma, sigma, 0.3 * sigma);
+  CalibrationOptions given;
+  given.sigma = sigma;
+  // Monte Carlo: 40 fits to independent draws, sigma given; their scatter against the
+  // covariance the first reports (sample variances of 40 draws spread by ~23 %).
+  const int draws = 40;
+  Eigen::MatrixXd fits(draws, 2);
+  Eigen::Matrix2d reported = Eigen::Matrix2d::Zero();
+  for (int k = 0; k < draws; ++k) {
+    const CalibrationResult f =
+        Calibrate(s.model, s.params, start, WithNoise(s.cases, sigma, rng), given);
+    ASSERT_TRUE(f.converged) << f.message;
+    fits.row(k) = f.values.transpose();
+    if (k == 0) reported = f.covariance;
+  }
+  const Eigen::RowVector2d mean = fits.colwise().mean();
+  const Eigen::MatrixXd centred = fits.rowwise() - mean;
+  const Eigen::Matrix2d sample = centred.transpose() * centred / (draws - 1);
+  for (int i = 0; i < 2; ++i) {
+    const double ratio = sample(i, i) / reported(i, i);
+    EXPECT_GT(ratio, 0.5) << "parameter " << i;
+    EXPECT_LT(ratio, 1.6) << "parameter " << i;
+    // Unbiased: the mean of the fits within 3 standard errors of the mean of the truth.
+    EXPECT_NEAR(mean(i), truth(i), 3.0 * std::sqrt(reported(i, i) / draws)) << "parameter " << i;
+  }
+  const double rho_sample = sample(0, 1) / std::sqrt(sample(0, 0) * sample(1, 1));
+  const double rho_reported = reported(0, 1) / std::sqrt(reported(0, 0) * reported(1, 1));
+  EXPECT_NEAR(rho_sample, rho_reported, 0.3);
+}
+
+TEST(Calibration, InvalidInputsAreNamed) {
+  const CalibrationSetup s = MakeCalibrationSetup();
+  try {
+    Calibrate(s.model, s.params, Eigen::VectorXd::Zero(1), s.cases);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "Calibrate: start needs one finite value per parameter");
+  }
+  std::vector<CalibrationCase> bad = s.cases;
+  bad[1].measurements.clear();
+  try {
+    Calibrate(s.model, s.params, Eigen::VectorXd::Zero(2), bad);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "Calibrate: load case 1: no measurements");
+  }
 }
 
 }  // namespace

@@ -10,10 +10,12 @@
 
 #include <array>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "screwfem/model/data.h"
 #include "screwfem/model/enum_names.h"
+#include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/statics.h"
 
 namespace screwfem {
@@ -31,23 +33,36 @@ enum class ParameterKind {
   kRodRestStrain,  // a rod's uniform rest strain offset, component 0-5 (3: twist, 4, 5:
                    // curvatures [1/m]), added to every element's reference strain d0 / L
   kInput,          // the value of a run-time input (Model::inputs, Data::inputs)
+  kActuator,       // the value of an actuator's profile (Model::actuators; a chamber's pressure
+                   // [Pa], a muscle's activation, the factor of a rest strain or active stress)
+  kRodMass,        // a rod's sectional inertia (mass and rotary inertia per length) as a
+                   // factor (1 + p): its weight in statics
 };
 template <>
 struct EnumNames<ParameterKind> {
-  static constexpr std::array<EnumName<ParameterKind>, 6> kValues = {{
+  static constexpr std::array<EnumName<ParameterKind>, 8> kValues = {{
       {ParameterKind::kTendonTension, "tendon_tension", "a tension-driven tendon's tension"},
       {ParameterKind::kPointLoad, "point_load", "a component of a point load"},
       {ParameterKind::kJointDrive, "joint_drive", "the value of a joint's drive"},
       {ParameterKind::kRodStiffness, "rod_stiffness", "a rod's section stiffness factor"},
       {ParameterKind::kRodRestStrain, "rod_rest_strain", "a rod's uniform rest strain"},
       {ParameterKind::kInput, "input", "the value of a run-time input"},
+      {ParameterKind::kActuator, "actuator", "the value of an actuator's profile (a pressure)"},
+      {ParameterKind::kRodMass, "rod_mass", "a rod's sectional inertia factor"},
   }};
 };
 
 struct Parameter {
+  Parameter() = default;
+  Parameter(ParameterKind kind_, int index_, int component_ = -1, Profile shape_ = {})
+      : kind(kind_), index(index_), component(component_), shape(std::move(shape_)) {}
   ParameterKind kind = ParameterKind::kTendonTension;
-  int index = 0;       // the tendon, point load, joint, rod or input (Model's arrays)
+  int index = 0;       // the tendon, point load, joint, rod, input or actuator (Model's arrays)
   int component = -1;  // kPointLoad 0-5, kRodStiffness -1 or 0-5, kRodRestStrain 0-5
+  // kTendonTension, kJointDrive, kActuator: the parameter's value multiplies this profile,
+  // added to the item's own (no terms: the constant 1). A knot of a piecewise-linear input
+  // profile is a hat-shaped Profile::Table (docs/inverse.md, "Dynamic sensitivities").
+  Profile shape;
 };
 
 // What an output is (SensitivityOutput::kind).
@@ -176,5 +191,98 @@ InverseStaticsResult SolveInverseStatics(const Model& model, Data& data,
                                          const std::vector<InverseTarget>& targets,
                                          const Eigen::VectorXd& start,
                                          const InverseStaticsOptions& options = {});
+
+// ---- Calibration (docs/inverse.md, "Calibration") ----
+
+// One static load case of a calibration: the loads that make it (parameters of the model
+// offset by `load_values`, as OffsetParameter applies them; kInput: the inputs' values) and the
+// measured world positions of points fixed in node frames (InverseTarget: node, offset, the
+// measured position as target).
+struct CalibrationCase {
+  std::vector<Parameter> loads;
+  Eigen::VectorXd load_values;
+  std::vector<InverseTarget> measurements;
+};
+
+struct CalibrationOptions {
+  StaticOptions statics;               // the equilibrium solves
+  int max_iterations = 100;            // of the optimiser (Ceres' Levenberg-Marquardt)
+  double parameter_tolerance = 1e-12;  // relative parameter step below which it stops
+  // The measurement noise's standard deviation per coordinate [m]; 0: estimated from the
+  // residual at the fit, s^2 = |r|^2 / (m - n) (m coordinates measured, n parameters).
+  double sigma = 0.0;
+  double interval_sigmas = 3.0;  // the half-width of the confidence intervals, in standard errors
+};
+
+struct CalibrationResult {
+  bool converged = false;          // the optimiser converged (a least-squares minimum)
+  std::string message;             // why not
+  Eigen::VectorXd values;          // the parameters' values fitted
+  Eigen::MatrixXd covariance;      // sigma^2 (J^T J)^-1 at the fit (linearised)
+  Eigen::VectorXd standard_error;  // sqrt(diag(covariance))
+  Eigen::VectorXd lower, upper;    // values -+ interval_sigmas * standard_error
+  double sigma = 0.0;              // the noise level used (given, or estimated)
+  Eigen::VectorXd residual;        // model - measured, 3 per measurement, cases in order [m]
+  Eigen::MatrixXd jacobian;        // d(residual)/d(values) at the fit
+  double rms = 0.0;                // sqrt(|residual|^2 / m) [m]
+  int iterations = 0;
+  int equilibrium_solves = 0;
+};
+
+// Fits `parameters` (kRodStiffness, kRodRestStrain, kRodMass, loads, tensions, ...: values as
+// offsets, OffsetParameter's meaning, from `start`) to measured positions of several static
+// load cases: min 1/2 sum |x_k(p) - measured_k|^2 by Ceres' Levenberg-Marquardt with the exact
+// Jacobian (CalcStaticSensitivity per case), each case's equilibrium warm-started from its last
+// one. Returns the fit with the covariance sigma^2 (J^T J)^-1 and confidence intervals. Throws
+// InputError for invalid parameters, cases or options, or fewer measured coordinates than
+// parameters.
+CalibrationResult Calibrate(const Model& model, const std::vector<Parameter>& parameters,
+                            const Eigen::VectorXd& start, const std::vector<CalibrationCase>& cases,
+                            const CalibrationOptions& options = {});
+
+// d(value of the model's item)/d(sensitivity parameter) at an offset `value`: the sensitivity
+// perturbs a stiffness or mass factor relative to the current one, (1 + value)(1 + p), so the
+// derivative with respect to the offset is the sensitivity divided by (1 + value); 1 for the
+// additive kinds.
+double ParameterChainFactor(const Parameter& p, double value);
+
+// ---- Sensitivities of dynamic trajectories (docs/inverse.md, "Dynamic sensitivities") ----
+
+struct DynamicSensitivityOptions {
+  DynamicOptions dynamics;  // the integrator (rho_inf, tolerances; steps are full Newton)
+  double step = 1e-3;       // the fixed step h [s]; profile breakpoints must fall on step ends
+  int steps = 100;          // steps from data.time
+};
+
+struct DynamicSensitivity {
+  bool ok = false;
+  std::string message;  // why not (empty when ok)
+  // The outputs (point positions: kPointPosition) at every step end t_n = t_0 + n h,
+  // n = 0 .. steps: values(n, k) = y_k(t_n).
+  Eigen::MatrixXd values;
+  // Forward mode: d y_k(t_n) / dp_j in row n * outputs + k, column j.
+  Eigen::MatrixXd outputs;
+  // The objective J = sum_n sum_k weights(n, k) y_k(t_n) and dJ/dp (both modes; empty
+  // weights: J = the outputs at the final time summed).
+  double objective = 0.0;
+  Eigen::VectorXd gradient;
+  int restarts = 0;  // re-initialisations at profile breakpoints along the run
+};
+
+// Runs `steps` generalized-alpha steps of size `step` from data's state (data ends at the
+// final state; InitializeDynamics is called here, from data's configuration and velocities),
+// and differentiates the discrete trajectory with respect to `parameters` (the initial state
+// taken independent of them): forward (one sensitivity recursion per parameter, through the
+// converged step's exact linearisation) or adjoint (one backward sweep for the objective).
+// Restarts at profile breakpoints (DynamicOptions::restart_at_breakpoints) are differentiated
+// as well. Supported: models without multipliers (nc = 0: rods, rigid bodies, fixed nodes,
+// tension tendons, loads, actuators, contact without friction); dense matrices per step (a
+// small model: the adjoint keeps them for the whole run). ok = false with the reason otherwise.
+DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
+                                          const std::vector<Parameter>& parameters,
+                                          const std::vector<SensitivityOutput>& outputs,
+                                          const Eigen::MatrixXd& weights,
+                                          SensitivityMode mode = SensitivityMode::kForward,
+                                          const DynamicSensitivityOptions& options = {});
 
 }  // namespace screwfem

@@ -1,0 +1,199 @@
+// Sensitivities of dynamic trajectories (solve/sensitivity.h, CalcDynamicSensitivity): the
+// forward sensitivities of a swinging tendon-driven rod against central differences of whole
+// re-run trajectories (1e-6 relative), through restarts at the breakpoints of the tendon's
+// piecewise-linear tension profile, for a constant tension offset, a knot of the profile (a
+// hat-shaped parameter), the stiffness, the mass and a tip load; the discrete adjoint against
+// the forward mode (1e-10) for an objective over the whole run.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "screwfem/build/model_builder.h"
+#include "screwfem/model/errors.h"
+#include "screwfem/solve/sensitivity.h"
+
+namespace screwfem::dynamic_sensitivity_test {
+namespace {
+
+// A 1 m rod of 4 elements clamped at its base (EI 1 N m^2, EA 1e3 N, 10 g/m: its first bending
+// mode has a period of 0.18 s), with a tendon 2 cm off its axis whose tension follows a
+// piecewise-linear profile with knots every 10 ms (breakpoints: restarts; positive from the
+// start, where a tendon's tension would otherwise sit on its clamp at zero), and a small tip
+// load. Option B's inertia without damping (the assembled K and C are the exact derivatives),
+// or option A with Rayleigh damping (K and C by differences of the residual).
+struct Arm {
+  Model model;
+  NodeId tip;
+};
+
+Arm MakeArm(RodInertia inertia = RodInertia::kExact) {
+  ModelBuilder b;
+  Vec6 k, m;
+  k << 1e3, 1e3, 1e3, 1.0, 1.0, 1.0;
+  m << 1e-2, 1e-2, 1e-2, 1e-6, 1e-6, 2e-6;
+  Section section = Section::FromDiagonals(k, m);
+  section.rayleigh_stiffness = inertia == RodInertia::kConstant ? 0.0 : 1e-4;
+  const RodId rod = b.AddStraightRod("arm", Vec3::Zero(), Vec3::UnitX(), 4, section);
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
+  b.FixNode(nodes.front());
+  std::vector<BodyPoint> eyelets;
+  for (NodeId n : nodes) eyelets.push_back({n, Vec3(0.0, 0.02, 0.0)});
+  b.AddTendon("pull", eyelets,
+              Profile::Table({0.0, 0.01, 0.02, 0.03, 0.04}, {0.5, 3.0, 5.0, 5.0, 4.0}));
+  PointLoad load;
+  load.node = nodes.back();
+  load.force = Vec3(0.0, 0.0, 0.02);
+  b.AddPointLoad(load);
+  Arm arm{b.Build(), nodes.back()};
+  arm.model.rod_inertia = inertia;
+  return arm;
+}
+
+DynamicSensitivityOptions RunOptions() {
+  DynamicSensitivityOptions o;
+  o.step = 2e-3;
+  o.steps = 20;  // 40 ms: through the breakpoints at 10, 20 and 30 ms
+  o.dynamics.newton_matrix = NewtonMatrix::kFull;
+  o.dynamics.increment_tolerance = 1e-14;
+  o.dynamics.residual_tolerance = 1e-13;
+  return o;
+}
+
+// The tip's trajectory by the ordinary integrator (InitializeDynamics, Step).
+Eigen::MatrixXd Trajectory(const Model& m, const std::vector<SensitivityOutput>& outputs,
+                           const DynamicSensitivityOptions& o) {
+  Data d = MakeData(m);
+  Integrator integ;
+  std::string why;
+  EXPECT_TRUE(InitializeDynamics(m, d, integ, o.dynamics, &why)) << why;
+  Eigen::MatrixXd y(o.steps + 1, static_cast<Eigen::Index>(outputs.size()));
+  const auto record = [&](int n) {
+    for (std::size_t k = 0; k < outputs.size(); ++k)
+      y(n, static_cast<Eigen::Index>(k)) = d.H[static_cast<std::size_t>(outputs[k].index)].Act(
+          outputs[k].offset)(outputs[k].component);
+  };
+  record(0);
+  for (int n = 0; n < o.steps; ++n) {
+    const StepResult r = Step(m, d, integ, o.step);
+    EXPECT_TRUE(r.ok) << r.message;
+    record(n + 1);
+  }
+  return y;
+}
+
+std::vector<SensitivityOutput> TipOutputs(NodeId tip) {
+  std::vector<SensitivityOutput> out;
+  for (int c = 0; c < 3; ++c)
+    out.push_back({OutputKind::kPointPosition, tip, c, Vec3(0.0, 0.01, 0.0)});
+  return out;
+}
+
+std::vector<Parameter> ArmParameters() {
+  Parameter knot{ParameterKind::kTendonTension, 0, -1};
+  knot.shape = Profile::Table({0.01, 0.02, 0.03}, {0.0, 1.0, 0.0});  // the knot at 20 ms
+  return {{ParameterKind::kTendonTension, 0, -1},
+          knot,
+          {ParameterKind::kRodStiffness, 0, -1},
+          {ParameterKind::kRodMass, 0, -1},
+          {ParameterKind::kPointLoad, 0, 2}};
+}
+
+void CheckForwardAgainstFiniteDifferences(RodInertia inertia) {
+  const Arm arm = MakeArm(inertia);
+  const std::vector<SensitivityOutput> outputs = TipOutputs(arm.tip);
+  const std::vector<Parameter> params = ArmParameters();
+  const DynamicSensitivityOptions o = RunOptions();
+  Data d = MakeData(arm.model);
+  const DynamicSensitivity s = CalcDynamicSensitivity(
+      arm.model, d, params, outputs, Eigen::MatrixXd(), SensitivityMode::kForward, o);
+  ASSERT_TRUE(s.ok) << s.message;
+  EXPECT_EQ(s.restarts, 4);  // at 10, 20, 30 and 40 ms (the end)
+  // The run is the integrator's: the same trajectory as Step's.
+  const Eigen::MatrixXd nominal = Trajectory(arm.model, outputs, o);
+  EXPECT_LT((s.values - nominal).cwiseAbs().maxCoeff(), 1e-12);
+  // The tip swings: it has moved by centimetres.
+  EXPECT_GT(std::abs(nominal(o.steps, 1) - nominal(0, 1)), 0.005);
+  const std::vector<double> steps = {1e-4, 1e-4, 1e-6, 1e-6, 1e-5};
+  const int no = static_cast<int>(outputs.size());
+  for (std::size_t j = 0; j < params.size(); ++j) {
+    Eigen::MatrixXd y[2];
+    for (int side = 0; side < 2; ++side) {
+      Model m = arm.model;
+      Data unused = MakeData(m);
+      OffsetParameter(m, unused, params[j], side == 0 ? steps[j] : -steps[j]);
+      y[side] = Trajectory(m, outputs, o);
+    }
+    const Eigen::MatrixXd fd = (y[0] - y[1]) / (2.0 * steps[j]);
+    const Eigen::Index col = static_cast<Eigen::Index>(j);
+    // Every step's tip, relative to the largest derivative along the run.
+    const double scale = fd.cwiseAbs().maxCoeff();
+    ASSERT_GT(scale, 0.0);
+    for (int n = 0; n <= o.steps; ++n)
+      for (int k = 0; k < no; ++k)
+        EXPECT_NEAR(s.outputs(n * no + k, col), fd(n, k), 1e-6 * scale)
+            << "parameter " << j << " step " << n << " output " << k;
+  }
+}
+
+// Option B (constant mass matrix), undamped: the assembled matrices are the exact derivatives.
+TEST(DynamicSensitivity, ForwardMatchesFiniteDifferencesOfTheWholeRunThroughRestarts) {
+  CheckForwardAgainstFiniteDifferences(RodInertia::kConstant);
+}
+
+// Option A (the default) with Rayleigh damping: K and C by central differences of the
+// residual (the iteration matrix leaves out parts of the inertia's and the damping's
+// derivatives).
+TEST(DynamicSensitivity, ExactInertiaForwardMatchesFiniteDifferencesOfTheWholeRun) {
+  CheckForwardAgainstFiniteDifferences(RodInertia::kExact);
+}
+
+TEST(DynamicSensitivity, AdjointEqualsForwardForAnObjectiveOverTheRun) {
+  const Arm arm = MakeArm();
+  const std::vector<SensitivityOutput> outputs = TipOutputs(arm.tip);
+  const std::vector<Parameter> params = ArmParameters();
+  const DynamicSensitivityOptions o = RunOptions();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::MatrixXd weights(o.steps + 1, 3);
+  for (Eigen::Index i = 0; i < weights.size(); ++i) weights(i) = u(rng);
+  Data d1 = MakeData(arm.model), d2 = MakeData(arm.model);
+  const DynamicSensitivity fwd =
+      CalcDynamicSensitivity(arm.model, d1, params, outputs, weights, SensitivityMode::kForward, o);
+  const DynamicSensitivity adj =
+      CalcDynamicSensitivity(arm.model, d2, params, outputs, weights, SensitivityMode::kAdjoint, o);
+  ASSERT_TRUE(fwd.ok && adj.ok) << fwd.message << adj.message;
+  EXPECT_EQ(fwd.objective, adj.objective);
+  const double scale = fwd.gradient.cwiseAbs().maxCoeff();
+  ASSERT_GT(scale, 0.0);
+  EXPECT_LT((adj.gradient - fwd.gradient).cwiseAbs().maxCoeff(), 1e-10 * scale)
+      << fwd.gradient.transpose() << "\n"
+      << adj.gradient.transpose();
+  // The final-time objective (no weights) too.
+  Data d3 = MakeData(arm.model), d4 = MakeData(arm.model);
+  const DynamicSensitivity f2 =
+      CalcDynamicSensitivity(arm.model, d3, params, outputs, {}, SensitivityMode::kForward, o);
+  const DynamicSensitivity a2 =
+      CalcDynamicSensitivity(arm.model, d4, params, outputs, {}, SensitivityMode::kAdjoint, o);
+  ASSERT_TRUE(f2.ok && a2.ok);
+  EXPECT_LT((a2.gradient - f2.gradient).cwiseAbs().maxCoeff(),
+            1e-10 * f2.gradient.cwiseAbs().maxCoeff());
+}
+
+TEST(DynamicSensitivity, ABreakpointInsideAStepIsRefused) {
+  const Arm arm = MakeArm();
+  DynamicSensitivityOptions o = RunOptions();
+  o.step = 3e-3;
+  Data d = MakeData(arm.model);
+  const DynamicSensitivity s = CalcDynamicSensitivity(
+      arm.model, d, ArmParameters(), TipOutputs(arm.tip), {}, SensitivityMode::kForward, o);
+  EXPECT_FALSE(s.ok);
+  EXPECT_EQ(s.message,
+            "the breakpoint at t = 0.01 s lies inside a step: choose a step size whose step ends "
+            "fall on the breakpoints");
+}
+
+}  // namespace
+}  // namespace screwfem::dynamic_sensitivity_test
