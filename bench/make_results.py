@@ -294,10 +294,15 @@ def pairs_section():
             cpu = c["cpu_per_step"] / n
             heap = c["heap_bytes"] / n
             ratio = f"{cpu / previous[0]:.2f}× / {heap / previous[1]:.2f}×" if previous else ""
+            # Data and integrator part of the estimate (what the heap column measures); older
+            # results have the total only.
+            data_estimate = c.get("data_estimated_bytes", float("nan")) / n
             sphere_rows.append(
                 f"| {layout} | {n} | {c['chosen']} | {c['unknowns']} | {c['pairs']} "
                 f"| {format_number(c['newton_per_step'])} | {format_time(c['cpu_per_step'])} "
                 f"| {format_time(cpu)} | {format_bytes(heap)} "
+                f"| {format_bytes(data_estimate)} | {data_estimate / heap:.2f}× "
+                f"| {format_bytes(c.get('model_bytes', float('nan')) / n)} "
                 f"| {format_bytes(c['estimated_bytes'] / n)} | {ratio} "
                 f"| {c['analyses']} / {c['pattern_changes']} / {c['pattern_hits']} |")
             previous = (cpu, heap)
@@ -307,6 +312,13 @@ def pairs_section():
                 f"- Spheres {layout}: per sphere, N = {n} against N = {first[0]}: CPU per step "
                 f"{previous[0] / first[1]:.2f}×, heap {previous[1] / first[2]:.2f}× "
                 "(1 would be exactly linear).")
+    def predicted(c):
+        """auto's predicted costs (banded with its contact coupling / sparse), if recorded."""
+        if "banded_cost" not in c:
+            return "–"
+        sparse = "–" if c["sparse_cost"] < 0 else format_number(c["sparse_cost"])
+        return f"{format_number(c['banded_cost'])} ({c['coupled_nodes']}) / {sparse}"
+
     rod_rows = []
     order = []
     for c in data["cases"]:
@@ -319,7 +331,7 @@ def pairs_section():
             if c is None:
                 continue
             if c["failed"]:
-                rod_rows.append(f"| {name} | {solver} | failed |||||||")
+                rod_rows.append(f"| {name} | {solver} | failed ||||||||")
                 continue
             ratio = (c["cpu_per_step"] / banded["cpu_per_step"]
                      if banded and not banded["failed"] else float("nan"))
@@ -327,6 +339,7 @@ def pairs_section():
                 f"| {name} | {solver} | {c['chosen']} | {c['bandwidth']} | {c['pairs']} "
                 f"| {c['most_coupled_nodes']} | {format_number(c['newton_per_step'])} "
                 f"| {format_time(c['cpu_per_step'])} | {ratio:.2f}× "
+                f"| {predicted(c)} "
                 f"| {c['analyses']} / {c['pattern_changes']} / {c['pattern_hits']} |")
     return [
         "## Contact pairs in the sparse pattern",
@@ -337,13 +350,16 @@ def pairs_section():
         f"(`{path}`). Spheres: r = 5 cm, 0.1 kg, on a plane, `auto`; *apart* 0.2 m in a grid "
         "(no pairs), *rows* of 100 touching their neighbours (2r − 0.2 mm apart). Heap: the "
         "bytes in use (glibc `mallinfo2`) that the Data and the integrator hold after the timed "
-        "steps; estimate: `EstimateRunMemory`. Analyses / pattern changes / hits: the sparse "
+        "steps; estimate: `EstimateRunMemory`'s parts for the Data and the integrator (what the "
+        "heap column measures) and their ratio to the heap; model: `EstimateModelMemory`; "
+        "total: the whole estimate. Analyses / pattern changes / hits: the sparse "
         "LU's counters at the end of a run. Ratio: per sphere, to the size before.",
         "",
         "| Spheres | N | Chosen | Unknowns | Pairs | Newton per step | CPU per step "
-        "| CPU per step and sphere | Heap per sphere | Estimate per sphere "
+        "| CPU per step and sphere | Heap per sphere | Estimate per sphere | Estimate / heap "
+        "| Model per sphere | Total estimate per sphere "
         "| Ratio CPU / heap | Analyses / changes / hits |",
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
         *sphere_rows,
         "",
         *notes,
@@ -351,11 +367,14 @@ def pairs_section():
         "Rods: K clamped rods (20 elements, 0.2 m, r = 5 mm) along x under K free rods along y "
         "laid on them (K² crossings), banded (off-band pairs by the Woodbury coupling, room 128 "
         "nodes), sparse (pairs in the pattern) and `auto`. Most coupled: the most nodes in the "
-        "Woodbury coupling at the end of a step (banded). Ratio: CPU per step to banded.",
+        "Woodbury coupling at the end of a step (banded). Ratio: CPU per step to banded. "
+        "Predicted: the costs `auto` compares (docs/numerics.md, \"Sparse direct solve\"), the "
+        "banded LU's flops with its Woodbury coupling for the nodes predicted coupled (in "
+        "brackets) / the sparse LU's weighed flops.",
         "",
         "| Rods | Asked | Chosen | Bandwidth | Pairs | Most coupled | Newton per step "
-        "| CPU per step | Ratio | Analyses / changes / hits |",
-        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        "| CPU per step | Ratio | Predicted banded (nodes) / sparse | Analyses / changes / hits |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
         *rod_rows,
         "",
     ]

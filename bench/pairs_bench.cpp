@@ -12,12 +12,14 @@
 //                    pairs, far beyond the banded solve's coupling room (128 nodes).
 //   rods/KxK         K rods (20 elements, 0.2 m, r = 5 mm, clamped at both ends) along x under
 //                    K free rods along y laid on them (0.5 mm gap, falling in gravity and
-//                    pushed down at 0.05 m/s), mu = 0.3: K^2 crossings; K = 3 (the pairs'
-//                    nodes fit the Woodbury room) and K = 6 (they exceed it: quasi-Newton).
+//                    pushed down at 0.05 m/s), mu = 0.3: K^2 crossings; K = 1 and 3 (the
+//                    pairs' nodes fit the Woodbury room) and K = 6 (they exceed it:
+//                    quasi-Newton).
 // Spheres run with linear_solver auto (which takes the sparse LU: more nodes may be coupled
 // than the room holds); rods with banded (Woodbury) and sparse. Memory: the heap the Data and
 // the integrator hold after the timed steps (glibc mallinfo2, the in-use bytes beyond those
-// before MakeData) and EstimateRunMemory's total, each per sphere. The variants are interleaved
+// before MakeData) and EstimateRunMemory's total and its Data and integrator parts (what the
+// heap holds), each per sphere. The variants are interleaved
 // (one timed run of each in turn, `rounds` times); the median run is reported.
 // Output: JSON (format "screwfem pairs bench 1") on stdout or into the file given as the first
 // argument; bench/make_results.py writes the section "Contact pairs in the sparse pattern" of
@@ -141,7 +143,8 @@ struct Variant {
   long iterations = 0, timed_steps = 0;
   double heap = 0.0;  // bytes held by Data and the integrator after the timed steps
   double estimate = 0.0;
-  double model_bytes = 0.0;  // EstimateModelMemory (its table of entities that may touch: N^2)
+  double model_bytes = 0.0;    // EstimateModelMemory
+  double data_estimate = 0.0;  // EstimateDataMemory + EstimateIntegratorMemory (what heap holds)
   long pairs = 0, most_coupled = 0, analyses = 0, pattern_changes = 0, pattern_hits = 0;
   bool failed = false;
 };
@@ -193,6 +196,7 @@ Variant MakeVariant(const std::string& name, const char* solver, Model model, in
   const std::vector<MemoryPart> parts = EstimateRunMemory(v.model, IntegratorMemoryOptions{});
   v.estimate = TotalBytes(parts);
   v.model_bytes = EstimateModelMemory(v.model).bytes;
+  v.data_estimate = v.estimate - v.model_bytes;
   for (const MemoryPart& p : parts)
     std::fprintf(stderr, "%s: %s %.3g MB\n", name.c_str(), p.part.c_str(), 1e-6 * p.bytes);
   return v;
@@ -216,7 +220,7 @@ int main(int argc, char** argv) {
     variants.push_back(MakeVariant(Name("spheres/rows/", n), "auto",
                                    SpheresModel(n, true, LinearSolver::kAuto), n));
   }
-  for (int k : {3, 6})
+  for (int k : {1, 3, 6})
     for (const auto& [solver, name] :
          {std::pair{LinearSolver::kBanded, "banded"}, std::pair{LinearSolver::kSparse, "sparse"},
           std::pair{LinearSolver::kAuto, "auto"}}) {
@@ -251,12 +255,15 @@ int main(int argc, char** argv) {
                  "\"count\": %d, \"unknowns\": %d, \"bandwidth\": %d, \"pairs\": %ld, "
                  "\"most_coupled_nodes\": %ld, \"cpu_per_step\": %.6g, \"newton_per_step\": %.4g, "
                  "\"heap_bytes\": %.6g, \"estimated_bytes\": %.6g, \"model_bytes\": %.6g, "
-                 "\"analyses\": %ld, "
+                 "\"data_estimated_bytes\": %.6g, \"banded_cost\": %.6g, \"sparse_cost\": %.6g, "
+                 "\"coupled_nodes\": %d, \"analyses\": %ld, "
                  "\"pattern_changes\": %ld, \"pattern_hits\": %ld}%s\n",
                  v.name.c_str(), v.solver.c_str(), v.model.sparse_solver ? "sparse" : "banded",
                  v.failed ? "true" : "false", v.count, v.model.num_unknowns(), v.model.bandwidth,
                  v.pairs, v.most_coupled, Median(v.seconds), newton, v.heap, v.estimate,
-                 v.model_bytes, v.analyses, v.pattern_changes, v.pattern_hits,
+                 v.model_bytes, v.data_estimate, PredictedBandedCost(v.model),
+                 std::isfinite(PredictedSparseCost(v.model)) ? PredictedSparseCost(v.model) : -1.0,
+                 v.model.coupled_nodes, v.analyses, v.pattern_changes, v.pattern_hits,
                  i + 1 < variants.size() ? "," : "");
   }
   std::fprintf(out, "  ]\n}\n");

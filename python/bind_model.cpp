@@ -181,6 +181,20 @@ void BindModel(py::module_& m) {
       .def_readonly("sparse_flops", &Model::sparse_flops,
                     "Predicted flops of one sparse factorisation, from KLU's symbolic analysis "
                     "(0 when BANDED was asked for).")
+      .def_readonly("coupled_nodes", &Model::coupled_nodes,
+                    "Nodes the pairs of moving shapes are predicted to couple off the band at "
+                    "once (the banded LU's contact coupling in the choice of AUTO).")
+      .def_readonly("coupling_flops", &Model::coupling_flops,
+                    "Predicted flops of the banded LU's off-band contact coupling per "
+                    "factorisation (counted with banded_flops in the choice of AUTO).")
+      .def_property_readonly(
+          "banded_cost", [](const Model& mo) { return PredictedBandedCost(mo); },
+          "The banded LU's predicted cost that AUTO compares: banded_flops + 0.25 "
+          "coupling_flops.")
+      .def_property_readonly(
+          "sparse_cost", [](const Model& mo) { return PredictedSparseCost(mo); },
+          "The sparse LU's predicted cost that AUTO compares: 4 sparse_flops + 200 per "
+          "unknown (inf when it was not analysed).")
       .def_readonly("redundant_rows", &Model::redundant_rows,
                     "Constraint rows found linearly dependent at build time (their multipliers "
                     "are held at zero).")

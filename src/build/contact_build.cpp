@@ -212,7 +212,7 @@ void WeighEntityPair(const EntitySizes& sizes, int a, int b, double gravity, dou
   *r_min = std::min(*r_min, std::min(sizes.smallest[ka], sizes.smallest[kb]));
 }
 
-// Model::contact_entity_pairs (both orders) for the entities that may touch, and the self skip
+// Model::contact_entity_pairs (the entities' group bits, the pairs set apart), and the self skip
 // of each rod in self-contact; weighs every pair that can occur.
 void PairContactEntities(Model& m, const std::vector<ContactEntity>& entities,
                          const EntitySizes& sizes, double* r_min, double* w_max) {
@@ -239,18 +239,17 @@ void PairContactEntities(Model& m, const std::vector<ContactEntity>& entities,
       groups[static_cast<std::size_t>(e)] = g;
     }
   }
-  const std::set<std::pair<int, int>> separated = SeparatedEntityPairs(m, entities);
+  ContactEntityPairs& table = m.contact_entity_pairs;
+  for (int i = 0; i < ne; ++i) {
+    const ContactGroup& g = groups[static_cast<std::size_t>(i)];
+    table.SetGroups(i, g.contype, g.conaffinity);
+  }
+  for (const auto& [i, k] : SeparatedEntityPairs(m, entities)) table.SetApart(i, k);
+  table.Finish();
   for (int i = 0; i < ne; ++i) {
     const ContactEntity& a = entities[static_cast<std::size_t>(i)];
-    const ContactGroup& ga = groups[static_cast<std::size_t>(i)];
-    for (int k = i + 1; k < ne; ++k) {
-      const ContactGroup& gb = groups[static_cast<std::size_t>(k)];
-      if (((ga.contype & gb.conaffinity) | (gb.contype & ga.conaffinity)) == 0u) continue;
-      if (!separated.empty() && separated.count({i, k}) > 0) continue;
-      m.contact_entity_pairs[static_cast<std::size_t>(i) * une + static_cast<std::size_t>(k)] = 1;
-      m.contact_entity_pairs[static_cast<std::size_t>(k) * une + static_cast<std::size_t>(i)] = 1;
-      WeighEntityPair(sizes, i, k, gravity, r_min, w_max);
-    }
+    for (int k = i + 1; k < ne; ++k)
+      if (table.MayTouch(i, k)) WeighEntityPair(sizes, i, k, gravity, r_min, w_max);
     if (a.rod && law.self) {
       const double skip = law.self_skip > 0.0
                               ? law.self_skip
@@ -276,7 +275,7 @@ void PairContactEntities(Model& m, const std::vector<ContactEntity>& entities,
 // lighter side of the heaviest pair) for the law's defaults.
 void BuildContactSegments(Model& m, double* r_min, double* w_max) {
   m.contact_segments.clear();
-  m.contact_entity_pairs.clear();
+  m.contact_entity_pairs.Reset(0);
   m.contact_entity_self_skip.clear();
   m.num_contact_entities = 0;
   const ContactSettings& law = m.contact;
@@ -285,15 +284,8 @@ void BuildContactSegments(Model& m, double* r_min, double* w_max) {
   const std::vector<ContactEntity> entities = ListContactEntities(m);
   CheckPairExclusions(m);
   const int ne = static_cast<int>(entities.size());
-  // The table of entity pairs (a byte per ordered pair), before it is allocated.
-  const double table = static_cast<double>(ne) * static_cast<double>(ne);
-  CheckMemory({{"table of contact entities that may touch", table,
-                std::to_string(ne) + " contact entities (soft bodies with contact, rigid bodies "
-                                     "with shapes), squared"}},
-              m.memory_limit, "contact between moving shapes",
-              "Fewer bodies with contact shapes would make it smaller");
   m.num_contact_entities = ne;
-  m.contact_entity_pairs.assign(static_cast<std::size_t>(ne) * static_cast<std::size_t>(ne), 0);
+  m.contact_entity_pairs.Reset(ne);
   m.contact_entity_self_skip.assign(static_cast<std::size_t>(ne), -1.0);
   const EntitySizes sizes = AddContactSegments(m, entities);
   PairContactEntities(m, entities, sizes, r_min, w_max);

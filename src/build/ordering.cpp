@@ -139,6 +139,9 @@ struct ContactLinks {
   // Nodes of the entities that may touch one they are not linked with: at most this many
   // nodes can enter the banded solve's off-band coupling at once.
   int off_band_nodes = 0;
+  // The nodes predicted in that coupling at once: per pair of such entities (a rod with
+  // itself), up to kContactRegionNodes of each (Model::coupled_nodes), at most off_band_nodes.
+  double region_nodes = 0.0;
   std::string warning;  // for the banded LU: the links were too many to make
 };
 ContactLinks LinkContactEntities(Model& m, BlockGraph& g) {
@@ -155,10 +158,8 @@ ContactLinks LinkContactEntities(Model& m, BlockGraph& g) {
     list.erase(std::unique(list.begin(), list.end()), list.end());
   }
   const auto touch = [&](int a, int b) {
-    return a == b
-               ? m.contact_entity_self_skip[static_cast<std::size_t>(a)] >= 0.0
-               : m.contact_entity_pairs[static_cast<std::size_t>(a) * static_cast<std::size_t>(ne) +
-                                        static_cast<std::size_t>(b)] != 0;
+    return a == b ? m.contact_entity_self_skip[static_cast<std::size_t>(a)] >= 0.0
+                  : m.contact_entity_pairs.MayTouch(a, b);
   };
   const auto linked = [&](int a, int b) {
     const double links = static_cast<double>(entity_nodes[static_cast<std::size_t>(a)].size()) *
@@ -178,13 +179,20 @@ ContactLinks LinkContactEntities(Model& m, BlockGraph& g) {
   // The nodes that may enter the off-band coupling: those of an entity that may touch one it
   // is not linked with.
   std::vector<char> off_band(static_cast<std::size_t>(ne), 0);
+  const auto region = [&](int a) {
+    return std::min(static_cast<double>(entity_nodes[static_cast<std::size_t>(a)].size()),
+                    static_cast<double>(kContactRegionNodes));
+  };
   for (int a = 0; a < ne; ++a)
     for (int b = a; b < ne; ++b)
-      if (touch(a, b) && (none || linked(a, b) == 0.0))
+      if (touch(a, b) && (none || linked(a, b) == 0.0)) {
         off_band[static_cast<std::size_t>(a)] = off_band[static_cast<std::size_t>(b)] = 1;
+        out.region_nodes += region(a) + region(b);
+      }
   for (int a = 0; a < ne; ++a)
     if (off_band[static_cast<std::size_t>(a)])
       out.off_band_nodes += static_cast<int>(entity_nodes[static_cast<std::size_t>(a)].size());
+  out.region_nodes = std::min(out.region_nodes, static_cast<double>(out.off_band_nodes));
   if (none) {
     char text[320];
     std::snprintf(text, sizeof text,
@@ -341,10 +349,20 @@ void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<i
                                   g.blocks[static_cast<std::size_t>(c)].size});
   }
   m.banded_flops = 0.0;
+  double envelope = 0.0;  // the entries below the diagonal in the envelope
   for (int j = 0; j < m.num_unknowns(); ++j) {
     const double r = m.pattern_last[static_cast<std::size_t>(j)] - j;
     m.banded_flops += 2.0 * r * r + r;
+    envelope += r;
   }
+  // The Woodbury coupling of the contact pairs predicted at once (BandCoupling::Factorize):
+  // k banded solves (forward and back through the envelope, a multiply and an add per
+  // entry) and the dense LU of k x k.
+  m.coupled_nodes = static_cast<int>(std::min(contact.region_nodes, double{kMaxCoupledNodes}));
+  const double k = 6.0 * m.coupled_nodes;
+  m.coupling_flops =
+      k > 0.0 ? k * (4.0 * envelope + 2.0 * m.num_unknowns()) + 2.0 / 3.0 * k * k * k : 0.0;
+  const double banded_cost = PredictedBandedCost(m);
   m.sparse_flops = m.sparse_factor_nonzeros = 0.0;
   // A pattern that fills a quarter of the matrix or more (hundreds of bodies that may all
   // touch each other, linked in the pattern) gains nothing from a sparse LU: auto does not
@@ -356,7 +374,7 @@ void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<i
   // Nor a band so narrow that the sparse LU's least cost (its fixed cost per unknown, and the
   // LU of the 6 x 6 diagonal blocks alone, 24 flops per unknown) exceeds the band's: rods and
   // chains need no analysis (a rod of 100,000 elements: 600,000 unknowns).
-  const bool narrow = m.banded_flops < (kSparseFixedCost + kSparseFlopCost * 24.0) * n;
+  const bool narrow = banded_cost < (kSparseFixedCost + kSparseFlopCost * 24.0) * n;
   const bool contact_room = contact.off_band_nodes > kMaxCoupledNodes;
   const bool skip = m.linear_solver == LinearSolver::kAuto && !contact_room &&
                     ((entries > 0.25 * n * n && n > 64) || narrow);
@@ -370,7 +388,7 @@ void ChooseSolver(Model& m, const BlockGraph& g, const std::vector<std::vector<i
       m.linear_solver == LinearSolver::kSparse ||
       (m.linear_solver == LinearSolver::kAuto && !skip &&
        (contact_room ||
-        kSparseFlopCost * m.sparse_flops + kSparseFixedCost * m.num_unknowns() < m.banded_flops));
+        kSparseFlopCost * m.sparse_flops + kSparseFixedCost * m.num_unknowns() < banded_cost));
   if (!m.sparse_solver) std::vector<SparseLU::Block>().swap(m.sparse_pattern);
   if (!m.sparse_solver && !contact.warning.empty()) m.warnings.push_back(contact.warning);
 }

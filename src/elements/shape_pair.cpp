@@ -411,8 +411,7 @@ class PairWriter {
     if (a.entity == b.entity) {
       const double skip = m_.contact_entity_self_skip[static_cast<std::size_t>(a.entity)];
       if (skip < 0.0 || std::max(b.s0 - a.s1, a.s0 - b.s1) < skip) return;
-    } else if (!m_.contact_entity_pairs[static_cast<std::size_t>(
-                   a.entity * m_.num_contact_entities + b.entity)]) {
+    } else if (!m_.contact_entity_pairs.MayTouch(a.entity, b.entity)) {
       return;
     }
     if (std::isinf(a.mass) && std::isinf(b.mass)) return;
@@ -623,8 +622,7 @@ class BroadPhase {
       const double far =
           std::max(Segment(b1 - 1).s0 - Segment(a0).s1, Segment(a1 - 1).s0 - Segment(b0).s1);
       if (skip < 0.0 || far < skip) return;
-    } else if (!m_.contact_entity_pairs[static_cast<std::size_t>(ea * m_.num_contact_entities +
-                                                                 eb)]) {
+    } else if (!m_.contact_entity_pairs.MayTouch(ea, eb)) {
       return;
     }
     for (int i = a0; i < a1; ++i)

@@ -839,6 +839,11 @@ class Recording::Impl {
     j.Field("requested", NameOf(model_.linear_solver));
     j.Field("chosen", model_.sparse_solver ? "sparse" : "banded");
     j.Field("banded_flops", model_.banded_flops).Field("sparse_flops", model_.sparse_flops);
+    // The costs auto compares (PredictedBandedCost, PredictedSparseCost; the sparse one null
+    // when it was not analysed), and the contact coupling counted in the banded one.
+    j.Field("coupled_nodes", model_.coupled_nodes).Field("coupling_flops", model_.coupling_flops);
+    j.Field("banded_cost", PredictedBandedCost(model_));
+    j.Field("sparse_cost", PredictedSparseCost(model_));
     j.Field("symbolic_analyses", static_cast<long>(data_.sparse.analyses()));
     // Patterns of contact couplings (SelectSparsePattern): changes of the pattern in use, and
     // those that took a kept pattern back without an analysis.

@@ -23,6 +23,25 @@ std::atomic<std::size_t> g_default_limit{0};
 // When sysconf cannot tell.
 constexpr std::size_t kUnknownPhysicalLimit = std::size_t{16} << 30;
 
+// The sparse LU's storage per pattern (SparseLU, KLU): 12 bytes an entry of the matrix and of
+// L + U (a value and a row index), per unknown the column starts and KLU's symbolic analysis
+// (its permutations and counts), and per unknown and kept pivot sequence KLU's numeric
+// object's arrays (pivots, column pointers and lengths, the diagonal, the scaling). The base
+// pattern keeps two sequences (the iteration matrix; the mass matrix of the consistent
+// accelerations at the start and restarts) unless its matrices change kind often (up to 8:
+// docs/numerics.md, "Sparse direct solve"); a pattern of contact couplings one (the
+// iteration matrix). Fitted to the heap of the spheres of bench/pairs_bench.cpp (apart: the
+// base pattern; in rows: the base and one of couplings).
+constexpr double kSparseEntryBytes = 12.0;
+constexpr double kSparseSymbolicBytes = 24.0;
+constexpr double kSparseColumnBytes = 20.0;
+constexpr double kBasePivotSequences = 2.0;
+
+double SparsePatternBytes(double entries, double factor_nonzeros, double n, double sequences) {
+  return entries * kSparseEntryBytes + n * kSparseSymbolicBytes +
+         sequences * (factor_nonzeros * kSparseEntryBytes + n * kSparseColumnBytes);
+}
+
 }  // namespace
 
 std::size_t PhysicalMemoryBytes() {
@@ -113,18 +132,20 @@ std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
   const double kl = m.bandwidth;
   char why[256];
   if (m.sparse_solver) {
-    // SparseLU: the matrix in compressed columns (12 bytes an entry, at most the blocks of the
-    // pattern), KLU's factors (about 12 bytes an entry of L + U, its estimate, for each of the
-    // up to eight pivot sequences it keeps) and about 15 ints/doubles per unknown of workspace.
+    // SparseLU: the matrix in compressed columns (12 bytes an entry, the blocks of the
+    // pattern), KLU's symbolic analysis and its factors for the pivot sequences a run keeps
+    // (SparsePatternBytes).
     double entries = 0.0;
     for (const SparseLU::Block& b : m.sparse_pattern)
       entries += static_cast<double>(b.rows) * static_cast<double>(b.cols);
     std::snprintf(why, sizeof why,
-                  "%d unknowns (nv = %d, nc = %d): at most %.0f matrix entries and 8 x %.0f "
+                  "%d unknowns (nv = %d, nc = %d): %.0f matrix entries and %.0f x %.0f "
                   "entries of L + U (KLU's estimate) x 12 bytes",
-                  m.num_unknowns(), m.nv, m.nc, entries, m.sparse_factor_nonzeros);
+                  m.num_unknowns(), m.nv, m.nc, entries, kBasePivotSequences,
+                  m.sparse_factor_nonzeros);
     parts.push_back({"sparse LU factors of the iteration matrix",
-                     (entries + 8.0 * m.sparse_factor_nonzeros) * 12.0 + n * 120.0, why});
+                     SparsePatternBytes(entries, m.sparse_factor_nonzeros, n, kBasePivotSequences),
+                     why});
   } else {
     // BandedLU::Resize: ldab = 2 kl + ku + 1 doubles per column; per unknown 9 ints/doubles
     // more.
@@ -146,25 +167,25 @@ std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
   const double segments = static_cast<double>(m.contact_segments.size());
   if (segments > 0 && MayHaveShapePairs(m) && m.sparse_solver) {
     // The sparse LU's patterns of contact couplings (SelectSparsePattern): the list of
-    // couplings (6 per pair of the first pool); for each of the kCachedPatterns patterns, the
-    // blocks of one coupling per contact segment (72 entries: a pair per neighbour of a chain
-    // of spheres or elements) in the matrix and twice in L + U (two pivot sequences); and
-    // for each pattern kept besides the one in use, the base pattern with two sequences of its
-    // factors (measured: 7.1 kB per sphere in rows of touching spheres, 4.4 kB apart;
-    // bench/RESULTS.md, "Contact pairs in the sparse pattern").
+    // couplings (6 per pair of the first pool) and one pattern besides the base (which is
+    // kept): the base's blocks and a 6 x 6 coupling per contact segment (72 entries: a pair
+    // per neighbour of a chain of spheres or elements) in the matrix and in L + U. A run
+    // whose pairs change pattern often keeps up to SparseLU::kCachedPatterns such patterns
+    // (bench/RESULTS.md, "Contact pairs in the sparse pattern": the heap of spheres apart and
+    // in rows against this estimate).
     double entries = 0.0;
     for (const SparseLU::Block& b : m.sparse_pattern)
       entries += static_cast<double>(b.rows) * static_cast<double>(b.cols);
     const double pool = 4.0 * segments + 64.0;
-    const double kept = SparseLU::kCachedPatterns;
     std::snprintf(why, sizeof why,
-                  "%.0f contact segments: %d patterns of one 6 x 6 coupling per segment (x 3 "
-                  "with L + U) and %d copies of the base pattern and its factors",
-                  segments, SparseLU::kCachedPatterns, SparseLU::kCachedPatterns - 1);
+                  "%.0f contact segments: the base pattern with a 6 x 6 coupling per segment "
+                  "(72 entries in the matrix and in L + U, one pivot sequence) and the list of "
+                  "%.0f couplings",
+                  segments, 6.0 * pool);
     parts.push_back(
         {"sparse patterns of pairs of moving shapes",
-         pool * 6.0 * 8.0 + kept * segments * 72.0 * 12.0 * 3.0 +
-             (kept - 1.0) * ((entries + 2.0 * m.sparse_factor_nonzeros) * 12.0 + n * 120.0),
+         pool * 6.0 * 8.0 + SparsePatternBytes(entries + 72.0 * segments,
+                                               m.sparse_factor_nonzeros + 72.0 * segments, n, 1.0),
          why});
   } else if (segments > 0 && MayHaveShapePairs(m)) {
     // BandCoupling at its largest (kMaxCoupledNodes): 3 k^2 + 2 k + n doubles, k = 6 nodes.
@@ -216,8 +237,9 @@ MemoryPart EstimateModelMemory(const Model& m) {
       VectorBytes(m.force_elements) + VectorBytes(m.actuators) + VectorBytes(m.element_actuators) +
       VectorBytes(m.contact_shapes) + VectorBytes(m.contact_rods) + VectorBytes(m.obstacles) +
       VectorBytes(m.contact_pairs) + VectorBytes(m.contact_segments) +
-      VectorBytes(m.contact_entity_pairs) + VectorBytes(m.contact_entity_self_skip) +
-      VectorBytes(m.permutation) + VectorBytes(m.pattern_last) + VectorBytes(m.redundant_rows);
+      static_cast<double>(m.contact_entity_pairs.bytes()) +
+      VectorBytes(m.contact_entity_self_skip) + VectorBytes(m.permutation) +
+      VectorBytes(m.pattern_last) + VectorBytes(m.redundant_rows);
   for (const Rod& rod : m.rods) bytes += VectorBytes(rod.nodes);
   char why[160];
   std::snprintf(why, sizeof why,

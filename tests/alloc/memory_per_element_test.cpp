@@ -4,7 +4,9 @@
 // and mmapped blocks), measured at two sizes and divided by the difference in elements, so that
 // what does not grow with the rod cancels. Deterministic: a single thread, the same calls.
 // The bound (3.5 kB per element, issue 36) and the estimate of model/memory.h
-// (EstimateRunMemory, which `screwfem check` prints) within 20 % of the measurement.
+// (EstimateRunMemory, which `screwfem check` prints) within 20 % of the measurement; for
+// spheres on a plane with the sparse LU, apart and in rows of touching ones, the estimate of
+// the Data and integrator within 1.5x of the heap they hold.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -17,6 +19,7 @@
 #include "screwfem/build/model_builder.h"
 #include "screwfem/model/memory.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/solve/initial_state.h"
 
 #if defined(SCREWFEM_SANITIZED) || defined(__SANITIZE_ADDRESS__)
 #define SCREWFEM_MEMORY_TEST_SKIP 1
@@ -142,6 +145,72 @@ TEST(MemoryPerElement, AdaptiveWorkspaceOnlyForErrorControlledSteps) {
   const double state = static_cast<double>(model.nodes.size()) * sizeof(SE3);
   EXPECT_DOUBLE_EQ(auto_steps.back().bytes - fixed.back().bytes,
                    (9.0 * model.nv + 2.0 * model.nc) * 8.0 + state);
+}
+
+#ifndef SCREWFEM_MEMORY_TEST_SKIP
+// N spheres (r = 5 cm) on a plane, as bench/pairs_bench.cpp: `touching`, rows of 100 whose
+// neighbours overlap the onset (a pair each), else 0.2 m apart (no pairs).
+Model SpheresOnAPlane(int n, bool touching) {
+  const double r = 0.05;
+  ModelBuilder b;
+  for (int i = 0; i < n; ++i) {
+    const double x = touching ? (2.0 * r - 2e-4) * (i % 100) : 0.2 * (i % 100);
+    const NodeId node =
+        b.AddNode(SE3::Translation(Vec3(x, 0.2 * (i / 100), r - 1e-4)), "s" + std::to_string(i));
+    b.AddRigidBody("s" + std::to_string(i), node, 0.1, Vec3::Zero(), 1e-4 * Mat3::Identity());
+    ContactShape shape;
+    shape.body = i;
+    shape.type = ContactShapeType::kSphere;
+    shape.radius = r;
+    b.AddContactShape(shape);
+  }
+  ContactObstacle plane;
+  plane.name = "ground";
+  b.AddObstacle(plane);
+  ContactSettings law;
+  law.stiffness = 1e4;
+  law.onset = 1e-3;
+  law.friction = 0.3;
+  law.slip_velocity = 1e-3;
+  b.SetContactSettings(law);
+  b.SetGravity(Vec3(0, 0, -9.81));
+  return b.Build();
+}
+#endif
+
+// The heap a run of `steps` steps holds in its Data and integrator (as the pairs bench
+// measures it), against EstimateDataMemory + EstimateIntegratorMemory.
+TEST(MemoryEstimate, SpheresApartAndInRowsWithinOneAndAHalfOfTheHeap) {
+#ifdef SCREWFEM_MEMORY_TEST_SKIP
+  GTEST_SKIP() << "needs glibc's malloc statistics (not under a sanitizer)";
+#else
+  for (const bool touching : {false, true}) {
+    SCOPED_TRACE(touching ? "rows" : "apart");
+    const Model m = SpheresOnAPlane(500, touching);
+    ASSERT_TRUE(m.sparse_solver);
+    const double estimate =
+        TotalBytes(EstimateDataMemory(m)) + EstimateIntegratorMemory(m, {}).bytes;
+    const double heap0 = HeapInUse();
+    double heap = 0.0;
+    {
+      Data data = MakeData(m);
+      Integrator integ;
+      DynamicOptions options;
+      options.rho_inf = 0.8;
+      ASSERT_TRUE(AssembleInitialState(m, data));
+      ASSERT_TRUE(InitializeDynamics(m, data, integ, options));
+      for (int i = 0; i < 5; ++i) {
+        ASSERT_TRUE(Step(m, data, integ, 1e-3).ok);
+      }
+      if (touching) {
+        EXPECT_GT(data.num_shape_pairs, 400);
+      }
+      heap = HeapInUse() - heap0;
+    }
+    EXPECT_LT(estimate, 1.5 * heap) << estimate / 500 << " " << heap / 500;
+    EXPECT_GT(estimate, heap / 1.5) << estimate / 500 << " " << heap / 500;
+  }
+#endif
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 // with a message.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -218,6 +219,52 @@ TEST(BandContactLinks, ManyEntitiesThatMayTouchStayOffTheBand) {
   EXPECT_TRUE(sparse.warnings.empty());
   // Its base pattern is the bodies' own blocks (the contact pairs enter at run time).
   EXPECT_EQ(sparse.sparse_pattern.size(), 1500u);
+}
+
+// Which two contact entities may touch (Model::contact_entity_pairs): the group bits and the
+// pairs set apart (excluded, joined), against the rule applied pair by pair; memory linear in
+// the entities (a byte per ordered pair made 100 MB for 10,000 spheres).
+TEST(ContactEntityPairs, GroupBitsAndPairsSetApartInMemoryLinearInTheEntities) {
+  const int n = 12;
+  ModelBuilder b = OverlappingSpheres(n);
+  const unsigned type[n] = {1, 1, 2, 2, 4, 1, 3, 0, 1, 2, 1, 1};
+  const unsigned affinity[n] = {1, 2, 1, 4, 2, 0, 1, 3, 1, 1, 1, 1};
+  for (int i = 0; i < n; ++i) b.SetContactGroup(BodyId(i), type[i], affinity[i]);
+  b.ExcludeContactPair(BodyId(0), BodyId(1));
+  b.ExcludeContactPair(BodyId(8), BodyId(3));
+  b.ExcludeContactPair(BodyId(4), BodyId(7));  // bits that do not match anyway
+  // Joined: a joint between the nodes of 10 and 11.
+  b.AddJointAt("j", JointType::kSpherical, NodeId(10), NodeId(11), Vec3::Zero());
+  const Model m = b.Build();
+  const ContactEntityPairs& t = m.contact_entity_pairs;
+  ASSERT_EQ(t.size(), n);
+  double pairs = 0.0;
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < n; ++k) {
+      if (i == k) continue;
+      const int lo = std::min(i, k), hi = std::max(i, k);
+      const bool apart = (lo == 0 && hi == 1) || (lo == 3 && hi == 8) || (lo == 10 && hi == 11);
+      const bool bits = ((type[i] & affinity[k]) | (type[k] & affinity[i])) != 0u;
+      EXPECT_EQ(t.MayTouch(i, k), bits && !apart) << i << " " << k;
+      if (i < k && bits && !apart) pairs += 1.0;
+    }
+  EXPECT_EQ(t.pairs(), pairs);
+  EXPECT_TRUE(MayHaveShapePairs(m));
+  // 3000 spheres that may all touch: the model holds a few bytes per sphere for it, not
+  // 3000 (a byte per ordered pair), and the model's estimate is linear in them.
+  const Model many = OverlappingSpheres(3000).Build();
+  EXPECT_EQ(many.contact_entity_pairs.pairs(), 3000.0 * 2999.0 / 2.0);
+  EXPECT_LE(many.contact_entity_pairs.bytes(), 3000u * 2u * sizeof(unsigned) + 64u);
+  const double per_sphere = EstimateModelMemory(many).bytes / 3000.0;
+  const double per_sphere_small =
+      EstimateModelMemory(OverlappingSpheres(300).Build()).bytes / 300.0;
+  EXPECT_LT(per_sphere, 1.2 * per_sphere_small) << per_sphere << " " << per_sphere_small;
+  // None may touch: no pairs, and the broad phase has nothing to find.
+  ModelBuilder none = OverlappingSpheres(3);
+  for (int i = 0; i < 3; ++i) none.SetContactGroup(BodyId(i), 1u, 2u);
+  const Model apart = none.Build();
+  EXPECT_FALSE(apart.contact_entity_pairs.any());
+  EXPECT_FALSE(MayHaveShapePairs(apart));
 }
 
 }  // namespace

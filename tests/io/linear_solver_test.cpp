@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "run_test_util.h"
+#include "screwfem/build/model_builder.h"
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
 #include "screwfem/model/errors.h"
@@ -116,6 +117,19 @@ TEST(LinearSolver, BandedAndSparseGiveTheSameIteratesOnEveryExampleScene) {
     EXPECT_EQ(SummaryNumber(banded, "linear_solver.symbolic_analyses"), 0.0);
     EXPECT_GT(SummaryNumber(sparse, "linear_solver.sparse_flops"), 0.0);
     EXPECT_GT(SummaryNumber(banded, "linear_solver.banded_flops"), 0.0);
+    // The costs auto compares: the banded one with its contact coupling; the sparse one is
+    // null when the pattern was not analysed (banded asked for).
+    EXPECT_EQ(SummaryNumber(banded, "linear_solver.banded_cost"),
+              banded.model.banded_flops + kCouplingFlopCost * banded.model.coupling_flops);
+    EXPECT_EQ(SummaryNumber(sparse, "linear_solver.sparse_cost"),
+              kSparseFlopCost * sparse.model.sparse_flops +
+                  kSparseFixedCost * sparse.model.num_unknowns());
+    const Json* null_cost =
+        banded.summary ? banded.summary->Find("linear_solver.sparse_cost") : nullptr;
+    ASSERT_NE(null_cost, nullptr);
+    EXPECT_EQ(null_cost->kind, Json::Kind::kNull);
+    EXPECT_EQ(SummaryNumber(sparse, "linear_solver.coupled_nodes"),
+              static_cast<double>(sparse.model.coupled_nodes));
   }
 }
 
@@ -190,9 +204,12 @@ TEST(LinearSolver, AutoPicksTheBandedLUForARodAndTheSparseLUForAHand) {
 }
 
 // Two crossing rods that may touch (not linked in the band: 51 x 51 or 101 x 101 nodes >
-// band_pair_nodes): auto keeps the banded LU while their nodes fit the Woodbury coupling's room
-// (102 <= kMaxCoupledNodes = 128), and takes the sparse LU, whose pattern takes every pair,
-// when they may exceed it (202 nodes).
+// band_pair_nodes): auto keeps the banded LU while their nodes fit the Woodbury coupling's
+// room (102 <= kMaxCoupledNodes = 128) and its cost with the coupling of the nodes one crossing
+// is predicted to couple (2 x kContactRegionNodes) is below the sparse LU's (one crossing of
+// two 20-element rods, bench/pairs_bench.cpp rods/1x1: sparse 1.15x the CPU time of banded),
+// and takes the sparse LU, whose pattern takes every pair, when they may exceed it (202
+// nodes).
 std::string CrossingRods(int elements) {
   char text[512];
   std::snprintf(text, sizeof text,
@@ -208,6 +225,9 @@ std::string CrossingRods(int elements) {
 TEST(LinearSolver, AutoPicksTheSparseLUWhenContactPairsMayExceedTheCouplingRoom) {
   const Scene fits = ParseScene(CrossingRods(50), "rods.yaml");
   EXPECT_FALSE(fits.model.sparse_solver);
+  EXPECT_EQ(fits.model.coupled_nodes, 2 * kContactRegionNodes);
+  EXPECT_GT(fits.model.coupling_flops, 0.0);
+  EXPECT_LT(PredictedBandedCost(fits.model), PredictedSparseCost(fits.model));
   const Scene exceeds = ParseScene(CrossingRods(100), "rods.yaml");
   EXPECT_TRUE(exceeds.model.sparse_solver);
   EXPECT_GT(exceeds.model.sparse_flops, 0.0);
@@ -219,6 +239,129 @@ TEST(LinearSolver, AutoPicksTheSparseLUWhenContactPairsMayExceedTheCouplingRoom)
   const Scene forced =
       ParseScene(CrossingRods(100), "rods.yaml", {"analysis.linear_solver=banded"});
   EXPECT_FALSE(forced.model.sparse_solver);
+}
+
+// The cases of bench/solver_bench.cpp and bench/pairs_bench.cpp (the same models): auto picks
+// the solver that was the cheaper there (bench/RESULTS.md, "Sparse direct solve" and "Contact
+// pairs in the sparse pattern": CPU per step, banded against sparse).
+screwfem::Section ArmSection() {
+  Vec6 K, M;
+  K << 1e6, 1e6, 1e6, 1, 1, 1;
+  M << 0.1, 0.1, 0.1, 0.05, 0.25, 0.25;
+  return screwfem::Section::FromDiagonals(K, M);
+}
+std::string Label(const char* prefix, int i) {
+  std::string s(prefix);
+  s += std::to_string(i);
+  return s;
+}
+Model BenchRod() {
+  ModelBuilder b;
+  const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0, 0), 320, ArmSection());
+  b.FixNode(b.RodNodes(rod).front());
+  return b.Build();
+}
+Model BenchHand() {
+  ModelBuilder b;
+  const NodeId palm = b.AddNode(SE3::Identity(), "palm");
+  b.AddRigidBody("palm", palm, 0.2, Vec3::Zero(), 1e-4 * Mat3::Identity());
+  b.AddJointAt("wrist", JointType::kSpherical, kGround, palm, Vec3(0, 0, 0.02));
+  Vec6 K, M;
+  K << 1e5, 1e5, 1e5, 0.05, 0.05, 0.05;
+  M << 0.01, 0.01, 0.01, 1e-4, 1e-4, 1e-4;
+  for (int f = 0; f < 40; ++f) {
+    const double a = -1.0 + 2.0 * f / 39.0;
+    const Vec3 dir(std::cos(a), std::sin(a), f % 2 == 0 ? 0.2 : -0.2);
+    b.AddStraightRod(Label("f", f), Vec3::Zero(), 0.1 * dir.normalized(), 8,
+                     screwfem::Section::FromDiagonals(K, M), Vec3::UnitZ(), palm);
+  }
+  return b.Build();
+}
+Model BenchFinger(bool tendon) {
+  ModelBuilder b;
+  const RodId rod = b.AddStraightRod("finger", Vec3::Zero(), Vec3(1, 0, 0), 256, ArmSection());
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
+  b.FixNode(nodes.front());
+  if (tendon) {
+    std::vector<BodyPoint> eyelets;
+    for (const NodeId n : nodes) eyelets.push_back({n, Vec3(0, 0.02, 0)});
+    b.AddLengthDrivenTendon("flexor", eyelets,
+                            Profile::Constant(1.0).Add(Profile::Ramp(0, 0.1, -0.002)));
+  }
+  return b.Build();
+}
+Model BenchChain() {
+  ModelBuilder b;
+  NodeId prev = kGround;
+  for (int i = 0; i < 64; ++i) {
+    const NodeId node = b.AddNode(SE3::Translation(Vec3(0.05 * (i + 1), 0, 0)), Label("l", i));
+    b.AddRigidBody(Label("l", i), node, 0.01, Vec3(-0.025, 0, 0), 1e-6 * Mat3::Identity());
+    b.AddJointAt(Label("j", i), JointType::kSpherical, prev, node, Vec3(0.05 * i, 0, 0));
+    prev = node;
+  }
+  return b.Build();
+}
+// K clamped rods along x under K free rods along y (bench/pairs_bench.cpp, rods/KxK).
+Model BenchRods(int k) {
+  const double r = 0.005, L = 0.2;
+  Material mat;
+  mat.youngs_modulus = 1e8;
+  mat.poisson_ratio = 0.4;
+  mat.density = 1000.0;
+  const screwfem::Section section = screwfem::Section::Circle(r, mat);
+  ModelBuilder b;
+  for (int i = 0; i < k; ++i) {
+    const double y = L * (i + 0.5) / k;
+    const RodId rod = b.AddStraightRod(Label("x", i), Vec3(0, y, 0), Vec3(L, y, 0), 20, section);
+    b.FixNode(b.RodNodes(rod).front());
+    b.FixNode(b.RodNodes(rod).back());
+    b.AddContactRod(rod, r);
+  }
+  for (int i = 0; i < k; ++i) {
+    const double x = L * (i + 0.5) / k;
+    const RodId rod = b.AddStraightRod(Label("y", i), Vec3(x, 0, 2 * r + 5e-4),
+                                       Vec3(x, L, 2 * r + 5e-4), 20, section);
+    b.AddContactRod(rod, r);
+  }
+  ContactSettings law;
+  law.stiffness = 100.0;
+  law.onset = 1e-3;
+  law.friction = 0.3;
+  b.SetContactSettings(law);
+  return b.Build();
+}
+
+TEST(LinearSolver, AutoPicksTheCheaperSolverOnTheBenchmarkCases) {
+  struct Case {
+    const char* name;
+    Model model;
+    bool sparse_cheaper;  // measured
+  };
+  const Scene grm = LoadScene(std::string(SCREWFEM_SOURCE_DIR) + "/examples/grm/grm_rigid.yaml",
+                              {"defaults.elements=4"});
+  const Case cases[] = {
+      {"rod/320", BenchRod(), false},
+      {"hand/40x8", BenchHand(), true},
+      {"finger/256", BenchFinger(false), false},
+      {"finger/256+tendon", BenchFinger(true), true},
+      {"chain/64", BenchChain(), false},
+      {"grm_rigid", grm.model, false},
+      {"rods/1x1", BenchRods(1), false},
+      {"rods/3x3", BenchRods(3), true},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    EXPECT_EQ(c.model.sparse_solver, c.sparse_cheaper)
+        << PredictedBandedCost(c.model) << " " << PredictedSparseCost(c.model);
+    EXPECT_EQ(c.model.sparse_solver, PredictedSparseCost(c.model) < PredictedBandedCost(c.model));
+  }
+  // Crossing rods: the Woodbury coupling of the nodes their contacts are predicted to couple
+  // enters the banded cost; a model without pairs of moving shapes has none.
+  const Model rods = BenchRods(3);
+  EXPECT_GT(rods.coupled_nodes, 0);
+  EXPECT_GT(rods.coupling_flops, rods.banded_flops);
+  EXPECT_EQ(BenchRod().coupled_nodes, 0);
+  EXPECT_EQ(BenchRod().coupling_flops, 0.0);
 }
 
 }  // namespace

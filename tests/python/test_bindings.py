@@ -212,6 +212,17 @@ class InputErrorTest(unittest.TestCase):
             self.assertEqual(scene.model.linear_solver, getattr(sf.LinearSolver, solver.upper()))
             self.assertEqual(scene.model.sparse_solver, solver == "sparse")
             self.assertGreater(scene.model.banded_flops, 0.0)
+            # The costs auto compares: no contact coupling; the sparse one infinite unless
+            # the pattern was analysed.
+            self.assertEqual(scene.model.coupled_nodes, 0)
+            self.assertEqual(scene.model.coupling_flops, 0.0)
+            self.assertEqual(scene.model.banded_cost, scene.model.banded_flops)
+            if solver == "sparse":
+                self.assertAlmostEqual(
+                    scene.model.sparse_cost,
+                    4.0 * scene.model.sparse_flops + 200.0 * (scene.model.nv + scene.model.nc))
+            else:
+                self.assertEqual(scene.model.sparse_cost, float("inf"))
             sim = sf.Simulation(scene)
             sim.initialize(sf.DynamicOptions())
             for _ in range(20):

@@ -1,7 +1,6 @@
 // The memory a model needs, estimated before it is allocated, against a limit (docs/limits.md,
 // "Memory"). ModelBuilder::Build() checks the parts it is about to allocate (the pairs of moving
-// shapes and obstacles, the table of contact entities that may touch, the contact couplings of
-// the solver ordering) and, once the unknowns are ordered, the workspace MakeData will allocate
+// shapes and obstacles, the contact couplings of the solver ordering) and, once the unknowns are ordered, the workspace MakeData will allocate
 // (the banded LU factors, the off-band coupling, the broad phase's pair pool); a scene over the
 // limit is an InputError naming the part, its bytes, why it is that large and the settings
 // that change it. `screwfem check` therefore refuses it without allocating it.

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -297,11 +298,20 @@ struct EnumNames<LinearSolver> {
   }};
 };
 // The choice of LinearSolver::kAuto: the sparse LU when kSparseFlopCost x its predicted flops
-// + kSparseFixedCost x the unknowns is below the banded LU's predicted flops (a flop of KLU's
+// + kSparseFixedCost x the unknowns is below the banded LU's predicted flops, its off-band
+// contact coupling's included (Model::coupling_flops; a flop of KLU's
 // indexed columns costs more than one of the band's contiguous ones, and each column has a
 // fixed cost; measured on bench/solver_bench.cpp, docs/numerics.md, "Sparse direct solve").
 inline constexpr double kSparseFlopCost = 4.0;
 inline constexpr double kSparseFixedCost = 200.0;
+// The nodes of one entity a contact with another is predicted to couple (a rod crossing
+// another: the two nodes of its nearest element and a neighbour's).
+inline constexpr int kContactRegionNodes = 3;
+// The weight of a flop of the banded LU's Woodbury coupling (Model::coupling_flops: banded
+// solves on contiguous columns and a dense LU in cache) against one of the band's
+// elimination: measured on one crossing of two rods (bench/pairs_bench.cpp rods/1x1, the
+// sparse LU 1.15x the CPU time of banded + Woodbury) and nine (rods/3x3, 0.55x).
+inline constexpr double kCouplingFlopCost = 0.25;
 
 // A run-time input (MuJoCo's ctrl): a named value that any profile can take (ProfileTerm::kInput),
 // set between steps (Data::inputs; Python sim.inputs["name"], the CLI's --inputs table).
@@ -360,6 +370,55 @@ struct ContactGroup {
   bool rod = false;  // a rod (index into Model::rods) or a rigid body (Model::bodies)
   int index = -1;
   unsigned contype = 1, conaffinity = 1;
+};
+// Which two contact entities (rods with contact, bodies with shapes; Model::contact_entity_pairs)
+// may touch: those whose group bits match ((contype_a & conaffinity_b) | (contype_b &
+// conaffinity_a) != 0) and that are not set apart (excluded, or joined by a shared node or a
+// joint). Memory linear in the entities and the pairs set apart (a table of every ordered pair
+// took a byte each: 100 MB for 10^4 spheres), one lookup of two entities' bits per query and
+// a binary search when some pair is set apart. Filled by Build (Reset, SetGroups, SetApart,
+// Finish).
+class ContactEntityPairs {
+ public:
+  // n entities, none of which may touch another until SetGroups.
+  void Reset(int n) {
+    contype_.assign(static_cast<std::size_t>(n), 0u);
+    conaffinity_.assign(static_cast<std::size_t>(n), 0u);
+    apart_.clear();
+    pairs_ = 0.0;
+  }
+  void SetGroups(int e, unsigned contype, unsigned conaffinity) {
+    contype_[static_cast<std::size_t>(e)] = contype;
+    conaffinity_[static_cast<std::size_t>(e)] = conaffinity;
+  }
+  // Entities a and b never touch (any order; repeats allowed).
+  void SetApart(int a, int b) { apart_.push_back(Key(a < b ? a : b, a < b ? b : a)); }
+  // Sorts the pairs set apart and counts the unordered pairs that may touch.
+  void Finish();
+  int size() const { return static_cast<int>(contype_.size()); }
+  // Whether entities a != b may touch.
+  bool MayTouch(int a, int b) const {
+    const std::size_t ka = static_cast<std::size_t>(a), kb = static_cast<std::size_t>(b);
+    if (((contype_[ka] & conaffinity_[kb]) | (contype_[kb] & conaffinity_[ka])) == 0u) return false;
+    return apart_.empty() || !IsApart(a < b ? a : b, a < b ? b : a);
+  }
+  // The unordered pairs of two entities that may touch.
+  double pairs() const { return pairs_; }
+  bool any() const { return pairs_ > 0.0; }
+  std::size_t bytes() const {
+    return (contype_.capacity() + conaffinity_.capacity()) * sizeof(unsigned) +
+           apart_.capacity() * sizeof(unsigned long long);
+  }
+
+ private:
+  static unsigned long long Key(int a, int b) {
+    return (static_cast<unsigned long long>(static_cast<unsigned>(a)) << 32) |
+           static_cast<unsigned>(b);
+  }
+  bool IsApart(int a, int b) const;
+  std::vector<unsigned> contype_, conaffinity_;
+  std::vector<unsigned long long> apart_;  // sorted keys (a < b)
+  double pairs_ = 0.0;
 };
 // An excluded (moving entity, obstacle) pair.
 struct ContactExclusion {
@@ -491,12 +550,12 @@ struct Model {
   std::vector<ContactPair> contact_pairs;
   std::vector<ContactPairExclusion> contact_pair_exclusions;
   // Moving shapes (elements/shape_pair.h): the segments, and which two entities (rods, bodies
-  // with shapes) may touch: contact_entity_pairs[a * n + b] != 0 for n entities (Build); a rod
+  // with shapes) may touch: contact_entity_pairs.MayTouch(a, b) for a != b (Build); a rod
   // touches itself when contact_entity_self_skip[a] >= 0 (the arc length between two elements'
   // nearest ends below which they do not). The pairs are found per assembly (Data).
   std::vector<ContactSegment> contact_segments;
   int num_contact_entities = 0;
-  std::vector<char> contact_entity_pairs;
+  ContactEntityPairs contact_entity_pairs;
   std::vector<double> contact_entity_self_skip;
   Vec3 gravity = Vec3::Zero();  // [m/s^2], world frame
   RodInertia rod_inertia =
@@ -526,6 +585,14 @@ struct Model {
   // LU's from the band pattern, the sparse LU's from KLU's symbolic analysis (0 when not
   // analysed), and KLU's predicted nonzeros of L + U.
   double banded_flops = 0.0, sparse_flops = 0.0, sparse_factor_nonzeros = 0.0;
+  // The banded LU's share for contact between moving shapes (kAuto's rule adds it to
+  // banded_flops, weighed by kCouplingFlopCost): the nodes the pairs of moving shapes are predicted to couple off the band
+  // at once (coupled_nodes: per pair of entities that may touch and are not linked in the
+  // band, up to kContactRegionNodes nodes of each, at most the nodes of such entities) and the
+  // flops of the Woodbury coupling per factorisation for them (k = 6 x coupled_nodes banded
+  // solves and the dense LU of k x k; docs/numerics.md, "Sparse direct solve").
+  int coupled_nodes = 0;
+  double coupling_flops = 0.0;
   double length_scale = 1.0;  // characteristic length (bounding box diagonal) [m]
 
   // Constraint rows found linearly dependent at build time (redundant constraints, e.g. a
@@ -554,11 +621,21 @@ struct Model {
 // True when two moving shapes of the model may touch (two entities allowed to, or a rod with
 // itself): the broad phase has something to find and the run pairs to output.
 inline bool MayHaveShapePairs(const Model& model) {
-  for (char allowed : model.contact_entity_pairs)
-    if (allowed) return true;
+  if (model.contact_entity_pairs.any()) return true;
   for (double skip : model.contact_entity_self_skip)
     if (skip >= 0.0) return true;
   return false;
+}
+
+// The two costs LinearSolver::kAuto compares (flops of one factorisation weighed as in
+// kSparseFlopCost, kCouplingFlopCost): the banded LU's with its off-band contact coupling,
+// and the sparse LU's (infinite when it was not analysed: Model::sparse_flops is 0).
+inline double PredictedBandedCost(const Model& model) {
+  return model.banded_flops + kCouplingFlopCost * model.coupling_flops;
+}
+inline double PredictedSparseCost(const Model& model) {
+  if (model.sparse_flops <= 0.0 && model.num_unknowns() > 0) return INFINITY;
+  return kSparseFlopCost * model.sparse_flops + kSparseFixedCost * model.num_unknowns();
 }
 
 // The reference frame H_0 of a node, or the identity for kGround (the one ground-or-node
