@@ -1077,8 +1077,10 @@ class SceneSpec:
         where = f"contact.pairs[{len(c.pairs)}]"
         obstacles = [o.name for o in c.obstacles]
 
+        new_groups = []  # groups of their own, added only when the pair is valid
+
         def group(name, w):
-            for i, g in enumerate(c.groups):
+            for i, g in enumerate(c.groups + new_groups):
                 if g[0] == name:
                     return i
             if name in obstacles:
@@ -1088,8 +1090,8 @@ class SceneSpec:
             for g in c.groups:
                 if index in g[slot]:
                     raise _error(w, f"'{name}' is in contact group '{g[0]}': name the group")
-            c.groups.append((name, [index] if slot == 1 else [], [index] if slot == 2 else []))
-            return len(c.groups) - 1
+            new_groups.append((name, [index] if slot == 1 else [], [index] if slot == 2 else []))
+            return len(c.groups) + len(new_groups) - 1
 
         m = _m.ContactMaterial()
         ga, gb = group(a, f"{where}.groups[0]"), group(b, f"{where}.groups[1]")
@@ -1111,6 +1113,7 @@ class SceneSpec:
         if m.static_friction >= 0 and m.static_friction < kinetic:
             raise _error(f"{where}.static_friction", f"expected a value >= the pair's friction "
                          f"{kinetic:g} (mu_s >= mu_k)")
+        c.groups.extend(new_groups)
         c.pairs.append(m)
         c.present = True
         return m
