@@ -401,6 +401,28 @@ void BindValues(py::module_& m) {
                      "Self-contact skips element pairs whose nearest ends are closer along the "
                      "rod [m] (default 4 r).");
 
+  py::class_<ContactMaterial>(
+      m, "ContactMaterial",
+      "The contact law's parameters for a pair of contact material groups (model.h; the "
+      "scene's contact.pairs, MuJoCo's pair); negative values are the scene's settings "
+      "(static_friction: this pair's friction when it gives one; tangential_stiffness: this "
+      "pair's stiffness unless the scene sets one). Model.contact_laws holds them resolved.")
+      .def(py::init<>())
+      .def_property(
+          "groups", [](const ContactMaterial& c) { return py::make_tuple(c.group[0], c.group[1]); },
+          [](ContactMaterial& c, const std::pair<int, int>& g) {
+            c.group[0] = g.first;
+            c.group[1] = g.second;
+          },
+          "The two groups (indices of ModelBuilder.add_contact_material_group; may be equal).")
+      .def_readwrite("friction", &ContactMaterial::friction, "mu_k >= 0")
+      .def_readwrite("static_friction", &ContactMaterial::static_friction, "mu_s >= mu_k")
+      .def_readwrite("stiffness", &ContactMaterial::stiffness, "k_n [N/m] > 0")
+      .def_readwrite("damping_ratio", &ContactMaterial::damping_ratio,
+                     "zeta >= 0: c_n = 2 zeta sqrt(k_n m_pair)")
+      .def_readwrite("tangential_stiffness", &ContactMaterial::tangential_stiffness,
+                     "k_t [N/m] > 0 of the stick law's anchor");
+
   py::class_<NodeMatch>(m, "NodeMatch", "Result of ModelBuilder.find_node_at.")
       .def_readonly("node", &NodeMatch::node, "The node within the tolerance, or -1.")
       .def_readonly("nearest", &NodeMatch::nearest, "The nearest node (-1 when there is none).")
@@ -492,6 +514,22 @@ void BindBuild(py::module_& m) {
           },
           py::arg("rod_a"), py::arg("index_a"), py::arg("rod_b"), py::arg("index_b"),
           "No contact between two moving entities (each a rod or a rigid body, by index).")
+      .def(
+          "add_contact_material_group",
+          [](B& b, const std::string& name, const std::vector<std::pair<bool, int>>& members,
+             const std::vector<int>& obstacles) {
+            std::vector<ContactEntity> entities;
+            for (const auto& [rod, index] : members) entities.push_back(Entity(rod, index));
+            std::vector<ObstacleId> ids;
+            for (int o : obstacles) ids.push_back(ObstacleId(o));
+            return b.AddContactMaterialGroup(name, entities, ids);
+          },
+          py::arg("name"), py::arg("members"), py::arg("obstacles") = std::vector<int>{},
+          "A named group of contact entities ((rod, index) pairs: a rod with rod=True, else a "
+          "rigid body) and obstacles (indices), each in one group at most; returns its index "
+          "for ContactMaterial.groups.")
+      .def("add_contact_material", &B::AddContactMaterial, py::arg("material"),
+           "The law's parameters (ContactMaterial) for a pair of groups; each pair once.")
       .def("set_contact_settings", &B::SetContactSettings, py::arg("settings"),
            "The contact law's settings (ContactSettings) for every pair.")
       .def(

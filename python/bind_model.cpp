@@ -167,6 +167,19 @@ void BindModel(py::module_& m) {
             return names;
           },
           "Names of the run-time inputs, in Simulation.input_values order.")
+      .def_readonly("contact_laws", &Model::contact_laws,
+                    "The contact law of each pair of material groups as Build resolved it "
+                    "(ContactMaterial objects): the scene's settings first, then each "
+                    "contact.pairs entry with its defaults (docs/scene-format.md, 'contact').")
+      .def_property_readonly(
+          "contact_group_names",
+          [](const Model& model) {
+            std::vector<std::string> names;
+            for (const ContactMaterialGroup& g : model.contact_material_groups)
+              names.push_back(g.name);
+            return names;
+          },
+          "Names of the contact material groups, in ContactMaterial.groups order.")
       .def_readonly("rod_inertia", &Model::rod_inertia,
                     "RodInertia of the rods: EXACT (the exact helical velocity field) or CONSTANT "
                     "(linear velocity field, constant mass matrix).")

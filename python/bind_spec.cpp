@@ -530,6 +530,28 @@ ContactSpec SpecReader::ReadContact(py::handle obj, const std::string& path) con
   };
   c.exclude = pairs("exclude", false);
   c.exclude_bodies = pairs("exclude_bodies", true);
+  // Material groups: (name, body indices, obstacle indices); pairs: ContactMaterial objects
+  // (groups and values are checked by Build).
+  const py::list groups = List(Attr(obj, "groups", path), Key(path, "groups"));
+  for (std::size_t i = 0; i < groups.size(); ++i) {
+    const std::string f = Index(Key(path, "groups"), i);
+    const py::list g = List(groups[i], f);
+    if (g.size() != 3) Fail(f, "expected (name, bodies, obstacles), got " + Describe(groups[i]));
+    ContactGroupSpec spec;
+    spec.name = Text(g[0], Index(f, 0));
+    const py::list bodies = List(g[1], Index(f, 1));
+    for (std::size_t k = 0; k < bodies.size(); ++k)
+      spec.bodies.push_back(Body(bodies[k], Index(Index(f, 1), k), false));
+    const py::list obs = List(g[2], Index(f, 2));
+    for (std::size_t k = 0; k < obs.size(); ++k)
+      spec.obstacles.push_back(
+          Integer(obs[k], Index(Index(f, 2), k), 0, static_cast<long>(names.size()) - 1));
+    c.groups.push_back(std::move(spec));
+  }
+  const py::list materials = List(Attr(obj, "pairs", path), Key(path, "pairs"));
+  for (std::size_t i = 0; i < materials.size(); ++i)
+    c.pairs.push_back(
+        Object<ContactMaterial>(materials[i], Index(Key(path, "pairs"), i), "ContactMaterial"));
   return c;
 }
 
@@ -759,6 +781,8 @@ py::object ToPython(const ActuatorSpec& a) {
       py::arg("vector") = Tuple(a.vector), py::arg("profile") = a.profile);
 }
 
+py::object ToPython(const ContactMaterial& m) { return py::cast(m); }
+
 py::object ToPython(const OutputPointSpec& p) {
   return SpecClass("OutputPointSpec")(
       py::arg("name") = p.name, py::arg("body") = p.body, py::arg("along_rod") = p.along_rod,
@@ -778,6 +802,13 @@ py::list Pairs(const std::vector<std::pair<int, int>>& pairs) {
   return out;
 }
 
+py::list ContactGroups(const std::vector<ContactGroupSpec>& groups) {
+  py::list out;
+  for (const ContactGroupSpec& g : groups)
+    out.append(py::make_tuple(g.name, py::cast(g.bodies), py::cast(g.obstacles)));
+  return out;
+}
+
 py::object ToPython(const SceneSpec& s) {
   py::dict points, inputs;
   for (const auto& [name, p] : s.points) points[py::str(name)] = Tuple(p);
@@ -787,7 +818,9 @@ py::object ToPython(const SceneSpec& s) {
   const py::object contact = SpecClass("ContactSpec")(
       py::arg("present") = s.contact.present, py::arg("settings") = s.contact.settings,
       py::arg("obstacles") = obstacles, py::arg("exclude") = Pairs(s.contact.exclude),
-      py::arg("exclude_bodies") = Pairs(s.contact.exclude_bodies));
+      py::arg("exclude_bodies") = Pairs(s.contact.exclude_bodies),
+      py::arg("groups") = ContactGroups(s.contact.groups),
+      py::arg("pairs") = ListOf(s.contact.pairs));
   const OutputsSpec& o = s.outputs;
   const py::object outputs = SpecClass("OutputsSpec")(
       py::arg("points") = ListOf(o.points), py::arg("all_joints") = o.all_joints,

@@ -55,7 +55,7 @@ import screwfem_vtk  # noqa: E402
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_THREE_DIR = "/usr/share/javascript/three"
 KNOWN_POINT_ARRAYS = {"frame_x", "frame_y", "frame_z", "velocity", "joint_id", "contact_force",
-                      "radius", "half_size"}
+                      "contact_state", "radius", "half_size"}
 MAX_RECORDED_ROWS = 4000  # recorded-point rows kept for the trails (every k-th row beyond)
 DEFAULT_MAX_FRAMES = 1500  # frames kept in the page (every k-th beyond; --max-frames)
 
@@ -342,6 +342,12 @@ def frame_forces(f, contacts):
     return [x for i in contacts for x in v[3 * i:3 * i + 3]]
 
 
+def frame_states(f, contacts):
+    """(slip, deflection [m], share) of each drawn contact (the frames' contact_state)."""
+    v = f["point_data"]["contact_state"][1]
+    return [x for i in contacts for x in v[3 * i:3 * i + 3]]
+
+
 def page_data(frames, frames_total, summary, joints_info, names, name, recorded, notes,
               live=False):
     """The page's data ('screwfem viewer data 2') from frames [(t, frame)]: tracks of the
@@ -399,6 +405,9 @@ def page_data(frames, frames_total, summary, joints_info, names, name, recorded,
     tension = [v for _, f in frames for v in frame_tensions(f, lines, ncell)]
     forces = [v for _, f in frames for v in frame_forces(f, contacts)] \
         if "contact_force" in pd else []
+    # Each contact's state (stick/slip, the anchor's deflection, the share of friction used).
+    states = [v for _, f in frames for v in frame_states(f, contacts)] \
+        if "contact_state" in pd and contacts else []
     field_points = sorted({i for k in rods for i in rods[k]})
     fields = []
     for field in field_list(pd):
@@ -440,6 +449,7 @@ def page_data(frames, frames_total, summary, joints_info, names, name, recorded,
         "tension": track(tension, zero=True),
         "contacts": contacts,
         "forces": track(forces, 3, zero=True),
+        "contact_states": track(states, 3, zero=True) if states else None,
         "obstacles": top["obstacles"],
         "chambers": top["chambers"],
         "field_points": field_points,

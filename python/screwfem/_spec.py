@@ -257,6 +257,11 @@ class ContactSpec:
     exclude: list = _f(factory=list, doc="(body, obstacle) index pairs that never touch.")
     exclude_bodies: list = _f(factory=list, doc="(body, body) index pairs that never touch.",
                               scene="exclude: [[body, body]]")
+    groups: list = _f(factory=list, doc="Contact material groups: (name, body indices, "
+                      "obstacle indices) tuples.", scene="groups (and pairs naming a body or "
+                      "obstacle)")
+    pairs: list = _f(factory=list, doc="ContactMaterial objects: the law per pair of groups "
+                     "(groups: indices into groups).")
 
 
 @_documented
@@ -1033,6 +1038,85 @@ class SceneSpec:
             if a == b:
                 raise _error("contact.exclude", "a body cannot be excluded from itself")
             self.contact.exclude_bodies.append((a, b))
+
+    def add_contact_group(self, name, members):
+        """A contact material group (the scene's ``contact.groups``): bodies and obstacles by
+        name, each in one group at most; turns contact on. Returns its index."""
+        where = self._name(name, "contact.groups", "contact group")
+        c = self.contact
+        if any(g[0] == name for g in c.groups):
+            raise _error(where, "defined twice")
+        obstacles = [o.name for o in c.obstacles]
+        if name in obstacles or any(b.name == name for b in self.bodies):
+            raise _error(where, "a contact group cannot take the name of a body or obstacle "
+                         f"('{name}')")
+        bodies, obs = [], []
+        for i, member in enumerate(members):
+            w = f"{where}[{i}]"
+            if member in obstacles:
+                index, kind = obstacles.index(member), obs
+            else:
+                index, kind = self.body_index(member, w), bodies
+            for g in c.groups:
+                if index in (g[2] if kind is obs else g[1]):
+                    raise _error(w, f"'{member}' is in contact group '{g[0]}' already (each "
+                                 "body or obstacle is in one group at most)")
+            kind.append(index)
+        c.groups.append((name, bodies, obs))
+        c.present = True
+        return len(c.groups) - 1
+
+    def add_contact_pair(self, a, b, *, friction=None, static_friction=None, stiffness=None,
+                         damping_ratio=None, tangential_stiffness=None):
+        """The contact law of a pair of groups (the scene's ``contact.pairs``): a and b are
+        group names, or a body's or obstacle's name in no group (a group of its own);
+        friction (mu_k), static_friction (mu_s >= mu_k), stiffness [N/m], damping_ratio,
+        tangential_stiffness [N/m], each defaulting to the scene's contact settings. Returns its
+        ContactMaterial."""
+        c = self.contact
+        where = f"contact.pairs[{len(c.pairs)}]"
+        obstacles = [o.name for o in c.obstacles]
+
+        new_groups = []  # groups of their own, added only when the pair is valid
+
+        def group(name, w):
+            for i, g in enumerate(c.groups + new_groups):
+                if g[0] == name:
+                    return i
+            if name in obstacles:
+                index, slot = obstacles.index(name), 2
+            else:
+                index, slot = self.body_index(name, w), 1
+            for g in c.groups:
+                if index in g[slot]:
+                    raise _error(w, f"'{name}' is in contact group '{g[0]}': name the group")
+            new_groups.append((name, [index] if slot == 1 else [], [index] if slot == 2 else []))
+            return len(c.groups) + len(new_groups) - 1
+
+        m = _m.ContactMaterial()
+        ga, gb = group(a, f"{where}.groups[0]"), group(b, f"{where}.groups[1]")
+        for p in c.pairs:
+            if sorted(p.groups) == sorted((ga, gb)):
+                raise _error(f"{where}.groups", f"the pair [{a}, {b}] is given twice")
+        m.groups = (ga, gb)
+        for key, value in (("friction", friction), ("static_friction", static_friction),
+                           ("stiffness", stiffness), ("damping_ratio", damping_ratio),
+                           ("tangential_stiffness", tangential_stiffness)):
+            if value is not None:
+                v = _number(value, f"{where}.{key}")
+                stiff = key in ("stiffness", "tangential_stiffness")
+                if v < 0 or (v == 0 and stiff):
+                    sign = "positive" if stiff else "non-negative"
+                    raise _error(f"{where}.{key}", f"expected a {sign} number, got {value!r}")
+                setattr(m, key, v)
+        kinetic = m.friction if m.friction >= 0 else c.settings.friction
+        if m.static_friction >= 0 and m.static_friction < kinetic:
+            raise _error(f"{where}.static_friction", f"expected a value >= the pair's friction "
+                         f"{kinetic:g} (mu_s >= mu_k)")
+        c.groups.extend(new_groups)
+        c.pairs.append(m)
+        c.present = True
+        return m
 
     # -- analysis and outputs
 

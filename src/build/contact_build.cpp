@@ -30,6 +30,119 @@ ContactGroup ContactGroupOf(const Model& m, bool rod, int index) {
   return ContactGroup{rod, index, 1u, 1u};
 }
 
+// ---- Contact materials (model.h, ContactMaterial) ------------------------------------------
+
+// The material group of a rod or body, or -1 (CheckMaterialGroups: at most one).
+int MaterialGroupOf(const Model& m, bool rod, int index) {
+  for (std::size_t g = 0; g < m.contact_material_groups.size(); ++g) {
+    const std::vector<int>& members =
+        rod ? m.contact_material_groups[g].rods : m.contact_material_groups[g].bodies;
+    if (std::find(members.begin(), members.end(), index) != members.end())
+      return static_cast<int>(g);
+  }
+  return -1;
+}
+
+int ObstacleMaterialGroup(const Model& m, int obstacle) {
+  for (std::size_t g = 0; g < m.contact_material_groups.size(); ++g) {
+    const std::vector<int>& members = m.contact_material_groups[g].obstacles;
+    if (std::find(members.begin(), members.end(), obstacle) != members.end())
+      return static_cast<int>(g);
+  }
+  return -1;
+}
+
+// Groups: unique non-empty names, members that exist, each in at most one group.
+void CheckMaterialGroups(const Model& m) {
+  std::set<std::string> names;
+  std::set<std::pair<int, int>> seen;  // (kind, index): 0 rod, 1 body, 2 obstacle
+  const char* kinds[3] = {"rod", "body", "obstacle"};
+  for (const ContactMaterialGroup& g : m.contact_material_groups) {
+    if (g.name.empty()) throw InputError("contact group: the name must not be empty");
+    if (!names.insert(g.name).second)
+      throw InputError("contact group '" + g.name + "' is defined twice");
+    const std::vector<int>* lists[3] = {&g.rods, &g.bodies, &g.obstacles};
+    const std::size_t sizes[3] = {m.rods.size(), m.bodies.size(), m.obstacles.size()};
+    for (int k = 0; k < 3; ++k)
+      for (int i : *lists[k]) {
+        if (i < 0 || i >= static_cast<int>(sizes[k]))
+          throw InputError("contact group '" + g.name + "': no " + kinds[k] + " " +
+                           std::to_string(i));
+        if (!seen.insert({k, i}).second)
+          throw InputError("contact group '" + g.name + "': " + kinds[k] + " " + std::to_string(i) +
+                           " is in another group already");
+      }
+  }
+}
+
+// The materials: existing groups, each pair of groups once, values finite and in range.
+void CheckMaterials(const Model& m) {
+  const int groups = static_cast<int>(m.contact_material_groups.size());
+  std::set<std::pair<int, int>> pairs;
+  for (std::size_t i = 0; i < m.contact_materials.size(); ++i) {
+    const ContactMaterial& c = m.contact_materials[i];
+    const std::string label = "contact pair " + std::to_string(i);
+    for (int g : c.group)
+      if (g < 0 || g >= groups) throw InputError(label + ": no contact group " + std::to_string(g));
+    const auto name = [&](int g) {
+      return "'" + m.contact_material_groups[static_cast<std::size_t>(g)].name + "'";
+    };
+    if (!pairs.insert({std::min(c.group[0], c.group[1]), std::max(c.group[0], c.group[1])}).second)
+      throw InputError(label + ": the groups " + name(c.group[0]) + " and " + name(c.group[1]) +
+                       " have a material already");
+    for (double v :
+         {c.friction, c.static_friction, c.stiffness, c.damping_ratio, c.tangential_stiffness})
+      if (!std::isfinite(v)) throw InputError(label + ": the parameters must be finite");
+    if (c.stiffness == 0.0 || c.tangential_stiffness == 0.0)
+      throw InputError(label +
+                       ": stiffness and tangential stiffness must be positive (or left "
+                       "to the scene's)");
+  }
+}
+
+// Model::contact_laws and contact_law_table from the resolved settings (ResolveContactLaw).
+void ResolveMaterials(Model& m) {
+  const ContactSettings& c = m.contact;
+  m.contact_laws.clear();
+  m.contact_laws.emplace_back();
+  ContactMaterial& base = m.contact_laws[0];
+  base.friction = c.friction;
+  base.static_friction = std::max(c.static_friction, c.friction);
+  base.stiffness = c.stiffness;
+  base.damping_ratio = c.damping_ratio;
+  base.tangential_stiffness = c.tangential_stiffness > 0.0 ? c.tangential_stiffness : c.stiffness;
+  const std::size_t n = m.contact_material_groups.size() + 1;
+  m.contact_law_table.assign(n * n, 0);
+  for (std::size_t i = 0; i < m.contact_materials.size(); ++i) {
+    const ContactMaterial& given = m.contact_materials[i];
+    ContactMaterial law = given;
+    const ContactMaterial& d = m.contact_laws[0];
+    const bool own_friction = given.friction >= 0.0;
+    if (!own_friction) law.friction = d.friction;
+    if (given.static_friction < 0.0)
+      law.static_friction = own_friction ? law.friction : std::max(d.static_friction, law.friction);
+    if (given.stiffness < 0.0) law.stiffness = d.stiffness;
+    if (given.damping_ratio < 0.0) law.damping_ratio = d.damping_ratio;
+    if (given.tangential_stiffness < 0.0)
+      law.tangential_stiffness =
+          c.tangential_stiffness > 0.0 ? c.tangential_stiffness : law.stiffness;
+    if (law.static_friction < law.friction) {
+      char buf[256];
+      std::snprintf(buf, sizeof buf,
+                    "contact pair %zu: the static friction coefficient must be >= the friction "
+                    "(mu_s >= mu_k), got %g < %g",
+                    i, law.static_friction, law.friction);
+      throw InputError(buf);
+    }
+    m.contact_laws.push_back(law);
+    const int index = static_cast<int>(m.contact_laws.size()) - 1;
+    const std::size_t a = static_cast<std::size_t>(given.group[0] + 1);
+    const std::size_t b = static_cast<std::size_t>(given.group[1] + 1);
+    m.contact_law_table[a * n + b] = index;
+    m.contact_law_table[b * n + a] = index;
+  }
+}
+
 // ---- Moving shapes: entities, their segments and the entity pairs that may touch ----------
 
 // Entities: rods (contact_rods) and bodies with shapes (spheres, capsules, boxes).
@@ -187,6 +300,7 @@ EntitySizes AddContactSegments(Model& m, const std::vector<ContactEntity>& entit
       cs.entity = e;
       cs.s0 = g.s0;
       cs.s1 = g.s1;
+      cs.material_group = MaterialGroupOf(m, entity.rod, entity.index);
       m.contact_segments.push_back(cs);
       const std::size_t k = static_cast<std::size_t>(e);
       if (std::isinf(g.mass))
@@ -554,9 +668,14 @@ void ResolveContactLaw(Model& m, const std::vector<double>& masses, double r_min
   if (law.onset < 0.0) law.onset = std::isfinite(r_min) ? 0.01 * r_min : 1e-4;
   if (law.stiffness < 0.0) law.stiffness = w_max > 0.0 ? 100.0 * w_max / law.onset : 1e6;
   if (law.slip_velocity < 0.0) law.slip_velocity = 1e-3;
-  for (std::size_t i = 0; i < m.contact_pairs.size(); ++i)
-    m.contact_pairs[i].damping =
-        2.0 * law.damping_ratio * std::sqrt(law.stiffness * std::max(masses[i], 0.0));
+  ResolveMaterials(m);
+  for (std::size_t i = 0; i < m.contact_pairs.size(); ++i) {
+    ContactPair& p = m.contact_pairs[i];
+    p.material = ContactLawIndex(m, MaterialGroupOf(m, p.rod, p.owner),
+                                 ObstacleMaterialGroup(m, p.obstacle));
+    const ContactMaterial& pl = m.contact_laws[static_cast<std::size_t>(p.material)];
+    p.damping = 2.0 * pl.damping_ratio * std::sqrt(pl.stiffness * std::max(masses[i], 0.0));
+  }
 }
 
 }  // namespace
@@ -569,6 +688,8 @@ void BuildContacts(Model& m) {
   ValidateContactShapes(m);
   ValidateObstacles(m);
   ValidateContactLaw(m);
+  CheckMaterialGroups(m);
+  CheckMaterials(m);
   // Pairs: each moving shape against each obstacle it may touch; counted before they are made.
   CheckObstaclePairs(m);
   double r_min = INFINITY, w_max = 0.0;

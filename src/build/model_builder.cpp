@@ -189,6 +189,21 @@ void ModelBuilder::ExcludeContactPair(ContactEntity a, ContactEntity b) {
   model_.contact_pair_exclusions.push_back({{a.rod, b.rod}, {a.index, b.index}});
 }
 
+int ModelBuilder::AddContactMaterialGroup(const std::string& name,
+                                          const std::vector<ContactEntity>& members,
+                                          const std::vector<ObstacleId>& obstacles) {
+  ContactMaterialGroup g;
+  g.name = name;
+  for (const ContactEntity& e : members) (e.rod ? g.rods : g.bodies).push_back(e.index);
+  for (ObstacleId o : obstacles) g.obstacles.push_back(o);
+  model_.contact_material_groups.push_back(std::move(g));
+  return static_cast<int>(model_.contact_material_groups.size()) - 1;
+}
+
+void ModelBuilder::AddContactMaterial(const ContactMaterial& material) {
+  model_.contact_materials.push_back(material);
+}
+
 void ModelBuilder::SetContactSettings(const ContactSettings& settings) {
   model_.contact = settings;
 }

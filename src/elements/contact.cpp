@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "screwfem/elements/crossing.h"
 #include "screwfem/elements/shape_pair.h"
 
 namespace screwfem {
@@ -33,26 +34,37 @@ double ContactPotential(double g, double delta, double k) {
   return k * delta * delta / 6.0 - 0.5 * k * delta * g + 0.5 * k * g * g;
 }
 
-ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping, bool dynamics) {
+ContactLawParameters ContactLawFor(const ContactSettings& settings, const ContactMaterial& material,
+                                   double damping, bool dynamics) {
   ContactLawParameters p;
-  p.stiffness = settings.stiffness;
+  p.stiffness = material.stiffness;
   p.onset = settings.onset;
   p.damping = dynamics ? damping : 0.0;
   p.law = settings.friction_law;
   p.slip_velocity = settings.slip_velocity;
   if (p.law == FrictionLaw::kStick) {
     // Stick law: friction in statics too; the anchor damped in proportion to the normal.
-    p.friction = settings.friction;
-    p.static_friction = std::max(settings.static_friction, settings.friction);
+    p.friction = material.friction;
+    p.static_friction = std::max(material.static_friction, material.friction);
     p.tangential_stiffness =
-        settings.tangential_stiffness > 0.0 ? settings.tangential_stiffness : settings.stiffness;
+        material.tangential_stiffness > 0.0 ? material.tangential_stiffness : material.stiffness;
     p.tangential_damping =
-        dynamics ? damping * std::sqrt(p.tangential_stiffness / settings.stiffness) : 0.0;
+        dynamics ? damping * std::sqrt(p.tangential_stiffness / material.stiffness) : 0.0;
   } else {
-    p.friction = dynamics ? settings.friction : 0.0;
+    p.friction = dynamics ? material.friction : 0.0;
     p.static_friction = p.friction;
   }
   return p;
+}
+
+ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping, bool dynamics) {
+  ContactMaterial material;
+  material.friction = settings.friction;
+  material.static_friction = settings.static_friction;
+  material.stiffness = settings.stiffness;
+  material.damping_ratio = settings.damping_ratio;
+  material.tangential_stiffness = settings.tangential_stiffness;
+  return ContactLawFor(settings, material, damping, dynamics);
 }
 
 ContactNormal ContactNormalLaw(double gap, double gap_rate, const ContactLawParameters& law) {
@@ -258,7 +270,8 @@ bool ContactKind::Calc(const Model& model, const Data& data, const Item& item,
   const bool dyn = o.dynamics;
   const Vec3 v_c = dyn ? Vec3(J * x.eta) : Vec3::Zero();
   // The law (ContactForceLaw): friction and damping in dynamics only.
-  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dyn);
+  const ContactLawParameters law =
+      ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, dyn);
   AnchorTrial trial;
   Eigen::Matrix<double, 3, 12> dslip;
   const AnchorTrial* anchor =
@@ -330,13 +343,14 @@ void ContactKind::AddEnergy(const Model& model, const Data& data, const Item& it
   if (!CalcContactGeometry(model, pair, NodeFrame(data, pair.node[0]),
                            NodeFrame(data, pair.node[1]), &G))
     return;
-  E->spring += ContactPotential(G.gap, model.contact.onset, model.contact.stiffness);
+  const ContactLawParameters law =
+      ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, false);
+  E->spring += ContactPotential(G.gap, model.contact.onset, law.stiffness);
   // The stick law's anchor: its elastic energy 1/2 k_t |u|^2 after the return mapping.
   AnchorTrial trial;
   const SE3* H[2] = {&NodeFrame(data, pair.node[0]), &NodeFrame(data, pair.node[1])};
   const AnchorTrial* anchor = PairAnchorTrial(data, item, H, &trial, nullptr);
   if (anchor == nullptr || G.gap >= model.contact.onset) return;
-  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, false);
   const ContactForce c = ContactForceLaw(G.gap, G.normal, Vec3::Zero(), law, false, anchor);
   if (c.active) E->spring += 0.5 * law.tangential_stiffness * c.deflection.squaredNorm();
 }
@@ -356,7 +370,7 @@ bool CalcPairLaw(const Model& model, const Data& data, int item, bool dynamics, 
     x.T[k] = &identity;
   }
   if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], G)) return false;
-  *law = ContactLawFor(model.contact, pair.damping, dynamics);
+  *law = ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, dynamics);
   *c = ContactForce{};
   if (G->gap >= model.contact.onset) return true;
   GatherNodeMotion<2>(model, data, pair.node, &x.eta, nullptr);
@@ -420,6 +434,7 @@ std::string ContactFailureHint(const Model& model, const Data& data, double h) {
 }
 
 void AcceptContactHistory(const Model& model, Data& data, bool dynamics) {
+  SaveCrossingReference(model, data);  // the swept check's reference (elements/crossing.h)
   AcceptShapePairHistory(model, data, dynamics);
   if (data.contact_anchors.empty()) return;
   for (std::size_t i = 0; i < model.contact_pairs.size(); ++i) {

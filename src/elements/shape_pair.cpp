@@ -311,7 +311,8 @@ bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePa
   const bool dyn = o.dynamics;
   const Vec3 v_c = dyn ? Vec3(J * x.eta) : Vec3::Zero();
   // The law (ContactForceLaw): friction and damping in dynamics only.
-  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dyn);
+  const ContactLawParameters law =
+      ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, dyn);
   AnchorTrial trial;
   Eigen::Matrix<double, 3, 24> dslip;
   const AnchorTrial* anchor =
@@ -418,8 +419,10 @@ class PairWriter {
     const double reduced = std::isinf(a.mass)   ? b.mass
                            : std::isinf(b.mass) ? a.mass
                                                 : a.mass * b.mass / (a.mass + b.mass);
-    damping_ =
-        2.0 * m_.contact.damping_ratio * std::sqrt(m_.contact.stiffness * std::max(reduced, 0.0));
+    // The pair's material: O(1) from the two entities' groups (model.h, ContactLawIndex).
+    material_ = ContactLawIndex(m_, a.material_group, b.material_group);
+    const ContactMaterial law = ContactLawOf(m_, material_);
+    damping_ = 2.0 * law.damping_ratio * std::sqrt(law.stiffness * std::max(reduced, 0.0));
     const bool box_a = IsBox(a.side), box_b = IsBox(b.side);
     if (box_a && box_b) {
       edge_ = 0;
@@ -470,6 +473,7 @@ class PairWriter {
     p.segment[0] = seg_a;
     p.segment[1] = seg_b;
     p.damping = damping_;
+    p.material = material_;
     p.part = part;
     p.edge = edge_;
     sink_(p);
@@ -478,6 +482,7 @@ class PairWriter {
   const Model& m_;
   Sink& sink_;
   double damping_ = 0.0;
+  int material_ = 0;
   int edge_ = -1;
 };
 
@@ -728,13 +733,14 @@ void ShapePairKind::AddEnergy(const Model& model, const Data& data, const Item& 
                      &NodeFrame(data, pair.side[1].node[1])};
   ShapePairGeometry G;
   if (!CalcShapePairGeometry(pair, H, model.contact.onset, &G)) return;
-  E->spring += ContactPotential(G.gap, model.contact.onset, model.contact.stiffness);
+  const ContactLawParameters law =
+      ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, false);
+  E->spring += ContactPotential(G.gap, model.contact.onset, law.stiffness);
   // The stick law's anchor: its elastic energy 1/2 k_t |u|^2 after the return mapping.
   AnchorTrial trial;
   const AnchorTrial* anchor = MakeAnchorTrial(FindShapePairAnchor(model, data, pair),
                                               !data.shape_pair_anchors.empty(), H, &trial, nullptr);
   if (anchor == nullptr || G.gap >= model.contact.onset) return;
-  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, false);
   const ContactForce c = ContactForceLaw(G.gap, G.normal, Vec3::Zero(), law, false, anchor);
   if (c.active) E->spring += 0.5 * law.tangential_stiffness * c.deflection.squaredNorm();
 }
@@ -763,7 +769,8 @@ ShapePairState CalcShapePairState(const Model& model, const Data& data, int item
   Vec3 m[4];
   CalcRelativeVelocityMap(G, x, &J, m);
   const Vec3 v_c = dynamics ? Vec3(J * x.eta) : Vec3::Zero();
-  const ContactLawParameters law = ContactLawFor(model.contact, pair.damping, dynamics);
+  const ContactLawParameters law =
+      ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, dynamics);
   AnchorTrial trial;
   const AnchorTrial* anchor =
       MakeAnchorTrial(FindShapePairAnchor(model, data, pair), !data.shape_pair_anchors.empty(), x.H,
@@ -806,8 +813,10 @@ void AcceptShapePairHistory(const Model& model, Data& data, bool dynamics) {
       AnchorTrial trial;
       const AnchorTrial* anchor =
           MakeAnchorTrial(FindShapePairAnchor(model, data, pair), true, x.H, &trial, nullptr);
-      c = ContactForceLaw(G.gap, G.normal, v_c,
-                          ContactLawFor(model.contact, pair.damping, dynamics), false, anchor);
+      c = ContactForceLaw(
+          G.gap, G.normal, v_c,
+          ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, dynamics),
+          false, anchor);
     }
     ShapePairAnchor& a = data.shape_pair_anchors_next[static_cast<std::size_t>(count++)];
     a.key = ShapePairAnchorKey(model, pair);

@@ -713,6 +713,35 @@ class Recording::Impl {
     return false;
   }
 
+  // The contact law as resolved (only with contact, so that other runs' summaries keep their
+  // text): its settings and the law of each pair of material groups, the scene's first
+  // (groups null).
+  void WriteContactLaws(JsonWriter& j) const {
+    const ContactSettings& c = model_.contact;
+    j.Key("contact").BeginObject();
+    j.Field("friction_law", NameOf(c.friction_law)).Field("onset", c.onset);
+    if (c.friction_law == FrictionLaw::kSmooth) j.Field("slip_velocity", c.slip_velocity);
+    j.Key("materials").BeginArray();
+    for (std::size_t i = 0; i < model_.contact_laws.size(); ++i) {
+      const ContactMaterial& law = model_.contact_laws[i];
+      j.BeginObject();
+      if (i == 0) {
+        j.Key("groups").Null();
+      } else {
+        j.Key("groups").BeginArray();
+        for (int g : law.group)
+          j.String(model_.contact_material_groups[static_cast<std::size_t>(g)].name);
+        j.EndArray();
+      }
+      j.Field("friction", law.friction).Field("static_friction", law.static_friction);
+      j.Field("stiffness", law.stiffness).Field("damping_ratio", law.damping_ratio);
+      j.Field("tangential_stiffness", law.tangential_stiffness);
+      j.EndObject();
+    }
+    j.EndArray();
+    j.EndObject();
+  }
+
   // The summary of the run so far (run.h); false if it could not be written.
   bool WriteSummary() {
     last_summary_ = Clock::now();
@@ -779,6 +808,7 @@ class Recording::Impl {
       j.EndObject();
     }
     j.Field("rod_inertia", NameOf(model_.rod_inertia));
+    if (!model_.contact_pairs.empty() || !model_.contact_segments.empty()) WriteContactLaws(j);
     j.Key("gravity").BeginArray();
     for (int i = 0; i < 3; ++i) j.Number(model_.gravity(i));
     j.EndArray();

@@ -633,6 +633,14 @@ void SceneCompiler::AddContacts() {
     // Obstacles are added in spec order (an index out of range is Build's error).
     builder_.ExcludeContact(EntityOf(b), ObstacleId(obstacle));
   for (const auto& [a, b] : c.exclude_bodies) builder_.ExcludeContactPair(EntityOf(a), EntityOf(b));
+  for (const ContactGroupSpec& g : c.groups) {
+    std::vector<ContactEntity> members;
+    for (int b : g.bodies) members.push_back(EntityOf(b));
+    std::vector<ObstacleId> obstacles;
+    for (int o : g.obstacles) obstacles.push_back(ObstacleId(o));
+    builder_.AddContactMaterialGroup(g.name, members, obstacles);
+  }
+  for (const ContactMaterial& m : c.pairs) builder_.AddContactMaterial(m);
 }
 
 Scene SceneCompiler::Compile() {

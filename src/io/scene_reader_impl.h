@@ -101,6 +101,8 @@ class SceneReader {
   ContactObstacle ReadObstacle(const Node& v, const std::string& path,
                                const std::string& name) const;
   void ReadContactExclusions(const Node& exclude, const std::vector<std::string>& names);
+  void ReadContactGroups(const Node& groups, const std::vector<std::string>& names);
+  void ReadContactPairs(const Node& pairs, const std::vector<std::string>& names);
   void ReadShapes(const Node& node, const std::string& path, BodySpec& b) const;
   void ReadGroups(const Node& node, const std::string& path, unsigned* contype,
                   unsigned* conaffinity) const;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -379,10 +380,10 @@ void SceneReader::ReadContact(const Node* node) {
   if (node == nullptr) return;
   const std::string path = "contact";
   r_.ExpectMap(*node, path);
-  r_.CheckKeys(
-      *node, path,
-      {"stiffness", "onset", "damping_ratio", "friction", "slip_velocity", "friction_law",
-       "static_friction", "tangential_stiffness", "obstacles", "exclude", "self", "self_skip"});
+  r_.CheckKeys(*node, path,
+               {"stiffness", "onset", "damping_ratio", "friction", "slip_velocity", "friction_law",
+                "static_friction", "tangential_stiffness", "obstacles", "exclude", "self",
+                "self_skip", "groups", "pairs"});
   ContactSpec& c = spec_.contact;
   c.present = true;
   if (const Node* v = node->Find("stiffness"))
@@ -418,6 +419,143 @@ void SceneReader::ReadContact(const Node* node) {
     }
   }
   if (const Node* en = node->Find("exclude")) ReadContactExclusions(*en, names);
+  if (const Node* gn = node->Find("groups")) ReadContactGroups(*gn, names);
+  if (const Node* pn = node->Find("pairs")) ReadContactPairs(*pn, names);
+}
+
+namespace {
+
+// A body's or obstacle's name as a member of a contact group: (false, body) or (true, obstacle),
+// or (false, -1) when neither.
+std::pair<bool, int> ContactMember(const SceneSpec& spec, const std::vector<std::string>& obstacles,
+                                   const std::string& name) {
+  for (std::size_t b = 0; b < spec.bodies.size(); ++b)
+    if (spec.bodies[b].name == name) return {false, static_cast<int>(b)};
+  for (std::size_t o = 0; o < obstacles.size(); ++o)
+    if (obstacles[o] == name) return {true, static_cast<int>(o)};
+  return {false, -1};
+}
+
+std::vector<std::string> ContactMemberNames(const SceneSpec& spec,
+                                            const std::vector<std::string>& obstacles) {
+  std::vector<std::string> known = obstacles;
+  for (const BodySpec& b : spec.bodies) known.push_back(b.name);
+  return known;
+}
+
+}  // namespace
+
+// contact.groups: {NAME: [body or obstacle, ...]}, each member in one group at most.
+void SceneReader::ReadContactGroups(const Node& gn, const std::vector<std::string>& names) {
+  const std::string gp = "contact.groups";
+  r_.CheckNames(gn, gp, "contact group");
+  std::map<std::string, std::string> group_of;  // member name -> its group
+  for (const auto& [entry, v] : gn.entries) {
+    const std::string p = Join(gp, entry.key);
+    if (ContactMember(spec_, names, entry.key).second >= 0)
+      r_.Fail(entry.key_location, p,
+              "a contact group cannot take the name of a body or obstacle ('" + entry.key + "')");
+    if (!v.IsSequence() || v.items.empty())
+      r_.Fail(v.location, p,
+              "expected a non-empty list of bodies and obstacles, got " + scene_yaml::Describe(v));
+    ContactGroupSpec g;
+    g.name = entry.key;
+    for (std::size_t i = 0; i < v.items.size(); ++i) {
+      const std::string ip = Index(p, i);
+      const std::string name = r_.Text(v.items[i], ip);
+      const auto [obstacle, index] = ContactMember(spec_, names, name);
+      if (index < 0)
+        r_.Fail(v.items[i].location, ip,
+                "undefined body or obstacle '" + name + "'" +
+                    scene_yaml::DidYouMean(name, ContactMemberNames(spec_, names)));
+      const auto [it, fresh] = group_of.emplace(name, entry.key);
+      if (!fresh)
+        r_.Fail(v.items[i].location, ip,
+                "'" + name + "' is in contact group '" + it->second +
+                    "' already (each body or obstacle is in one group at most)");
+      (obstacle ? g.obstacles : g.bodies).push_back(index);
+    }
+    spec_.contact.groups.push_back(std::move(g));
+  }
+}
+
+// contact.pairs: [{groups: [a, b], friction, static_friction, stiffness, damping_ratio,
+// tangential_stiffness}]; a name that is no group is a body or obstacle in no group (a group of
+// its own).
+void SceneReader::ReadContactPairs(const Node& pn, const std::vector<std::string>& names) {
+  const std::string pp = "contact.pairs";
+  if (!pn.IsSequence())
+    r_.Fail(pn.location, pp,
+            "expected a list of {groups: [a, b], friction, ...}, got " + scene_yaml::Describe(pn));
+  ContactSpec& c = spec_.contact;
+  const auto group_index = [&](const Node& node, const std::string& path) -> int {
+    const std::string name = r_.Text(node, path);
+    for (std::size_t g = 0; g < c.groups.size(); ++g)
+      if (c.groups[g].name == name) return static_cast<int>(g);
+    const auto [obstacle, index] = ContactMember(spec_, names, name);
+    if (index < 0) {
+      std::vector<std::string> known = ContactMemberNames(spec_, names);
+      for (const ContactGroupSpec& g : c.groups) known.push_back(g.name);
+      r_.Fail(node.location, path,
+              "undefined contact group '" + name + "' (nor a body or obstacle)" +
+                  scene_yaml::DidYouMean(name, known));
+    }
+    for (const ContactGroupSpec& g : c.groups) {
+      const std::vector<int>& members = obstacle ? g.obstacles : g.bodies;
+      if (std::find(members.begin(), members.end(), index) != members.end())
+        r_.Fail(node.location, path,
+                "'" + name + "' is in contact group '" + g.name + "': name the group");
+    }
+    // A group of its own, named after it.
+    ContactGroupSpec g;
+    g.name = name;
+    (obstacle ? g.obstacles : g.bodies).push_back(index);
+    c.groups.push_back(std::move(g));
+    return static_cast<int>(c.groups.size()) - 1;
+  };
+  std::map<std::pair<int, int>, std::size_t> seen;
+  for (std::size_t i = 0; i < pn.items.size(); ++i) {
+    const Node& v = pn.items[i];
+    const std::string p = Index(pp, i);
+    r_.ExpectMap(v, p);
+    r_.CheckKeys(v, p,
+                 {"groups", "friction", "static_friction", "stiffness", "damping_ratio",
+                  "tangential_stiffness"});
+    const Node& gn = r_.Require(v, p, "groups");
+    const std::string gp = Join(p, "groups");
+    if (!gn.IsSequence() || gn.items.size() != 2)
+      r_.Fail(gn.location, gp,
+              "expected two contact groups [a, b], got " + scene_yaml::Describe(gn));
+    ContactMaterial m;
+    m.group[0] = group_index(gn.items[0], Index(gp, 0));
+    m.group[1] = group_index(gn.items[1], Index(gp, 1));
+    const auto key =
+        std::make_pair(std::min(m.group[0], m.group[1]), std::max(m.group[0], m.group[1]));
+    if (const auto [it, fresh] = seen.emplace(key, i); !fresh)
+      r_.Fail(gn.location, gp,
+              "the pair [" + c.groups[static_cast<std::size_t>(m.group[0])].name + ", " +
+                  c.groups[static_cast<std::size_t>(m.group[1])].name + "] is given twice (" +
+                  Index(pp, it->second) + ")");
+    if (const Node* x = v.Find("friction"))
+      m.friction = r_.NonNegativeNumber(*x, Join(p, "friction"));
+    if (const Node* x = v.Find("stiffness"))
+      m.stiffness = r_.PositiveNumber(*x, Join(p, "stiffness"));
+    if (const Node* x = v.Find("damping_ratio"))
+      m.damping_ratio = r_.NonNegativeNumber(*x, Join(p, "damping_ratio"));
+    if (const Node* x = v.Find("tangential_stiffness"))
+      m.tangential_stiffness = r_.PositiveNumber(*x, Join(p, "tangential_stiffness"));
+    if (const Node* x = v.Find("static_friction")) {
+      m.static_friction = r_.NonNegativeNumber(*x, Join(p, "static_friction"));
+      const double kinetic = m.friction >= 0.0 ? m.friction : c.settings.friction;
+      if (m.static_friction < kinetic) {
+        char buf[128];
+        std::snprintf(buf, sizeof buf, "expected a value >= the pair's friction %g (mu_s >= mu_k)",
+                      kinetic);
+        r_.Fail(x->location, Join(p, "static_friction"), buf);
+      }
+    }
+    c.pairs.push_back(m);
+  }
 }
 
 // contact.exclude: [body, obstacle] or [body, body] pairs that never touch; `names` are the

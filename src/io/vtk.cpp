@@ -257,6 +257,7 @@ void VtkWriter::LayOut(const Model& model) {
   velocity_.assign(n, 0.0);
   position_.assign(n, 0.0);
   contact_force_.assign(n, 0.0);
+  contact_state_.assign(model.contact_pairs.empty() && model.contact_segments.empty() ? 0 : n, 0.0);
 }
 
 // Rigid bodies: segments from the node origin to the centre of mass and the attachments (a
@@ -372,6 +373,7 @@ void VtkWriter::LayOutContact(const Model& model) {
   segment_force_.assign(model.contact_segments.size(), Vec3::Zero());
   segment_point_.assign(model.contact_segments.size(), Vec3::Zero());
   segment_weight_.assign(model.contact_segments.size(), 0.0);
+  segment_state_.assign(model.contact_segments.size(), Vec3::Zero());
 
   // Obstacles, fixed in the world: a plane's point with z along its normal, a sphere's
   // centre, a capsule's axis.
@@ -470,6 +472,7 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data, double load_fac
   std::fill(segment_force_.begin(), segment_force_.end(), Vec3::Zero());
   std::fill(segment_point_.begin(), segment_point_.end(), Vec3::Zero());
   std::fill(segment_weight_.begin(), segment_weight_.end(), 0.0);
+  std::fill(segment_state_.begin(), segment_state_.end(), Vec3::Zero());
   for (int p = 0; p < data.num_shape_pairs && !segment_force_.empty(); ++p) {
     const ShapePairState c = CalcShapePairState(model, data, p);
     if (!c.active) continue;
@@ -480,6 +483,9 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data, double load_fac
       segment_force_[g] += side == 0 ? F : Vec3(-F);
       segment_point_[g] += F.norm() * c.point[side];
       segment_weight_[g] += F.norm();
+      Vec3& st = segment_state_[g];
+      st = Vec3(std::max(st(0), c.slipping ? 1.0 : 0.0), std::max(st(1), c.deflection),
+                std::max(st(2), c.friction_share));
     }
   }
   const auto node_point = [&](int node, const Vec3& p) {
@@ -501,6 +507,11 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data, double load_fac
       v = Vec3::Zero();
       const Vec3 F = c.active ? Vec3(c.normal_force * c.normal + c.friction_force) : Vec3::Zero();
       for (int k = 0; k < 3; ++k) contact_force_[3 * i + k] = F(k);
+      if (!contact_state_.empty()) {
+        contact_state_[3 * i] = c.active && c.slipping ? 1.0 : 0.0;
+        contact_state_[3 * i + 1] = c.active ? c.deflection : 0.0;
+        contact_state_[3 * i + 2] = c.active ? c.friction_share : 0.0;
+      }
     } else if (s.kind == PointSource::Kind::kSection) {
       // H_A exp(xi d) and the interpolated body velocity N(xi, d) [eta_A; eta_B] (docs/numerics.md, "Rod inertia").
       const RodElement& e = model.elements[static_cast<std::size_t>(s.index)];
@@ -529,6 +540,8 @@ void VtkWriter::CalcPoints(const Model& model, const Data& data, double load_fac
       R = Mat3::Identity();
       v = Vec3::Zero();
       for (int k = 0; k < 3; ++k) contact_force_[3 * i + k] = segment_force_[g](k);
+      for (int k = 0; k < 3 && !contact_state_.empty(); ++k)
+        contact_state_[3 * i + static_cast<std::size_t>(k)] = segment_state_[g](k);
     } else if (s.kind == PointSource::Kind::kJoint) {
       const Joint& j = model.joints[static_cast<std::size_t>(s.index)];
       const SE3 H =
@@ -604,6 +617,9 @@ void VtkWriter::ComposeBinaryImage() {
           &frame_axes_at_[axis]);
   array("        ", kFloat64, "velocity", 3, velocity_.data(), 3 * n, &velocity_at_);
   array("        ", kFloat64, "contact_force", 3, contact_force_.data(), 3 * n, &contact_force_at_);
+  if (!contact_state_.empty())
+    array("        ", kFloat64, "contact_state", 3, contact_state_.data(), 3 * n,
+          &contact_state_at_);
   array("        ", kInt32, "joint_id", 1, point_joint_.data(), n, nullptr);
   array("        ", kFloat64, "radius", 1, radius_.data(), n, nullptr);
   array("        ", kFloat64, "half_size", 3, half_size_.data(), 3 * n, nullptr);
@@ -694,6 +710,7 @@ void VtkWriter::ComposeAsciiImage(double time) {
   doubles("frame_z", frame_axes_[2]);
   doubles("velocity", velocity_);
   doubles("contact_force", contact_force_);
+  if (!contact_state_.empty()) doubles("contact_state", contact_state_);
   integers(kInt32, "joint_id", point_joint_);
   doubles("radius", radius_, 1);
   doubles("half_size", half_size_);
@@ -746,6 +763,8 @@ const std::string& VtkWriter::ComposeFrame(const Model& model, const Data& data,
       std::memcpy(&image_[frame_axes_at_[axis]], frame_axes_[axis].data(), bytes);
     std::memcpy(&image_[velocity_at_], velocity_.data(), bytes);
     std::memcpy(&image_[contact_force_at_], contact_force_.data(), bytes);
+    if (!contact_state_.empty())
+      std::memcpy(&image_[contact_state_at_], contact_state_.data(), bytes);
     std::memcpy(&image_[tension_at_], tension_.data(), tension_.size() * sizeof(double));
     std::memcpy(&image_[position_at_], position_.data(), bytes);
     if (rod_fields_) {

@@ -23,8 +23,16 @@ Data MakeData(const Model& model) {
   for (std::size_t i = 0; i < model.inputs.size(); ++i)
     d.inputs(static_cast<Eigen::Index>(i)) = model.inputs[i].default_value;
   d.tendon_slack.assign(model.tendons.size(), 0);
-  if (model.contact.friction_law == FrictionLaw::kStick && model.contact.friction > 0.0)
+  if (KeepsContactAnchors(model))
     d.contact_anchors.assign(model.contact_pairs.size(), ContactAnchor{});
+  // The swept check's reference and buffers (elements/crossing.h).
+  if (!model.contact_segments.empty() || !model.contact_pairs.empty()) {
+    d.crossing_points.assign(2 * (model.contact_segments.size() + model.contact_pairs.size()),
+                             Vec3::Zero());
+    d.crossing_lo.assign(model.contact_segments.size(), Vec3::Zero());
+    d.crossing_hi.assign(model.contact_segments.size(), Vec3::Zero());
+    d.crossing_order.assign(model.contact_segments.size(), 0);
+  }
   d.residual = Eigen::VectorXd::Zero(model.num_unknowns());
   d.rhs = Eigen::VectorXd::Zero(model.num_unknowns());
   d.increment = Eigen::VectorXd::Zero(model.num_unknowns());
@@ -62,7 +70,7 @@ Data MakeData(const Model& model) {
     g.bucket_start.resize(buckets + 1);
     g.large_chunks.resize(segments);
     d.shape_pairs.resize(4 * segments + 64);
-    if (model.contact.friction_law == FrictionLaw::kStick && model.contact.friction > 0.0) {
+    if (KeepsContactAnchors(model)) {
       d.shape_pair_anchors.resize(d.shape_pairs.size());
       d.shape_pair_anchors_next.resize(d.shape_pairs.size());
     }

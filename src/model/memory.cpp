@@ -209,7 +209,7 @@ std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
                      why});
   }
   // The stick law's history (Data::contact_anchors, shape_pair_anchors).
-  if (m.contact.friction_law == FrictionLaw::kStick && m.contact.friction > 0.0) {
+  if (KeepsContactAnchors(m)) {
     double bytes = static_cast<double>(m.contact_pairs.size()) * sizeof(ContactAnchor);
     if (segments > 0 && MayHaveShapePairs(m))
       bytes += 2.0 * (4 * segments + 64) * sizeof(ShapePairAnchor);
@@ -217,6 +217,13 @@ std::vector<MemoryPart> EstimateDataMemory(const Model& m) {
                      "the history of each pair of a shape and an obstacle, and two per pair of "
                      "moving shapes in the pool"});
   }
+  // The swept check against tunnelling (Data::crossing_points and its sweep's buffers).
+  if (segments > 0 || !m.contact_pairs.empty())
+    parts.push_back({"swept check against tunnelling",
+                     2.0 * (segments + static_cast<double>(m.contact_pairs.size())) * sizeof(Vec3) +
+                         segments * (2 * sizeof(Vec3) + sizeof(int)),
+                     "two axis end points per contact segment and obstacle pair, and a sweep's "
+                     "box ends and order per segment"});
   return parts;
 }
 
@@ -238,7 +245,8 @@ MemoryPart EstimateModelMemory(const Model& m) {
       VectorBytes(m.contact_shapes) + VectorBytes(m.contact_rods) + VectorBytes(m.obstacles) +
       VectorBytes(m.contact_pairs) + VectorBytes(m.contact_segments) +
       static_cast<double>(m.contact_entity_pairs.bytes()) +
-      VectorBytes(m.contact_entity_self_skip) + VectorBytes(m.permutation) +
+      VectorBytes(m.contact_entity_self_skip) + VectorBytes(m.contact_materials) +
+      VectorBytes(m.contact_laws) + VectorBytes(m.contact_law_table) + VectorBytes(m.permutation) +
       VectorBytes(m.pattern_last) + VectorBytes(m.redundant_rows);
   for (const Rod& rod : m.rods) bytes += VectorBytes(rod.nodes);
   char why[160];

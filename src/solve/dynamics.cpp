@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/crossing.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/registry.h"
 #include "screwfem/elements/tendon.h"
@@ -396,7 +397,9 @@ StepResult Step(const Model& model, Data& data, Integrator& integ, double h,
       result.message = "perturbed start: " + why;
       return result;
     }
-    const int its = TryStepWithRetry(model, data, integ, sub.h, sub.t_end, sub.at_breakpoint, &why);
+    const int its = CheckStepCrossing(
+        model, data,
+        TryStepWithRetry(model, data, integ, sub.h, sub.t_end, sub.at_breakpoint, &why), &why);
     if (its >= 0) {
       UpdateBranchReferences(model, data);
       result.iterations += its;
@@ -451,6 +454,7 @@ void RestoreSimulationState(const SimulationState& state, Data& data, Integrator
     throw InputError("the saved state belongs to a different model (its sizes differ)");
   data.time = state.time;
   RestoreState(state.q, data);
+  data.crossing_valid = false;  // the swept check resumes from the next accepted step
   data.w_ref = state.w_ref;
   data.v = state.v;
   data.vdot = state.vdot;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/crossing.h"
 #include "screwfem/solve/dynamics.h"
 #include "step_stages.h"
 
@@ -196,7 +197,9 @@ StepResult AdaptiveStep(const Model& model, Data& data, Integrator& integ, doubl
       return result;
     }
     RescaleAuxiliaryAcceleration(data, integ, hs);
-    const int its = TryStepWithRetry(model, data, integ, hs, end.t_end, end.left_limit, &why);
+    const int its = CheckStepCrossing(
+        model, data, TryStepWithRetry(model, data, integ, hs, end.t_end, end.left_limit, &why),
+        &why);
     double err = INFINITY;
     int worst = 0;
     if (its >= 0) {

@@ -8,6 +8,7 @@
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/crossing.h"
 #include "screwfem/elements/tendon.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/common.h"
@@ -338,6 +339,21 @@ class LoadStepPath {
       const LoadStepEnd end = S_.IterateLoadStep(step, last_cause_);
       if (end == LoadStepEnd::kStopped) return Interrupted();
       result_.total_iterations += step.iterations;
+      // A load step that carried a contact shape through another is retried smaller
+      // (elements/crossing.h); one that still does at the smallest increment ends the solve.
+      if (end == LoadStepEnd::kConverged && FindCrossing(S_.model, S_.data, &crossing_)) {
+        last_cause_ = "the load step carried " + DescribeCrossing(S_.model, crossing_) +
+                      " through each other (contact tunnelling)";
+        if (RetryShorter()) continue;
+        result_.message =
+            FormatNumbers("static solve stopped at load factor %.9g: the load step to %.9g ",
+                          result_.load_factor, s_target) +
+            "carried " + DescribeCrossing(S_.model, crossing_) +
+            " through each other even at the smallest increment (analysis.max_halvings); a "
+            "stiffer or thicker contact (contact.stiffness, contact_radius), more load steps "
+            "or a dynamic settle resolves it";
+        return result_;
+      }
       if (end == LoadStepEnd::kConverged) {
         std::string why;
         const JumpCheck check = CheckForJump(target, &why);
@@ -483,6 +499,7 @@ class LoadStepPath {
   double path_speed0_ = NAN;
   double path_speed_ = NAN;  // |dx/ds| at the last converged state
   std::string last_cause_;
+  Crossing crossing_;  // the last crossing found (elements/crossing.h)
 };
 
 }  // namespace
@@ -534,6 +551,12 @@ class ArcLengthPath {
       if (accepted && have_prev_ && S_.Dot(dx_, prev_dx_) + c2_ * ds * prev_ds_ < 0.0) {
         accepted = false;
         last_cause = "the step turned back along the path";
+      }
+      Crossing crossing;
+      if (accepted && FindCrossing(model, data, &crossing)) {
+        accepted = false;
+        last_cause = "the step carried " + DescribeCrossing(model, crossing) +
+                     " through each other (contact tunnelling)";
       }
       if (accepted && (s_ + ds - o.end_load_factor) * direction_ >= 0.0) {
         const LoadStepEnd landed = LandOnEnd(ds, last_cause);

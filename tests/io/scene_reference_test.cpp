@@ -102,6 +102,7 @@ const std::vector<SectionRule> kSections = {
     {"", "actuation.*", {"`actuation`"}},
     {"", "contact", {"`contact`"}},
     {"", "contact.obstacles.*", {"`contact`"}},
+    {"", "contact.pairs[]", {"`contact`"}},
     {"", "analysis", {"`analysis`"}},
     {"", "analysis.tolerance", {"`analysis`"}},
     {"", "analysis.tolerances", {"`analysis`"}},

@@ -518,5 +518,88 @@ class Defaults(unittest.TestCase):
         self.assertEqual(self.plain(cpp.contact.settings), self.plain(empty.contact.settings))
 
 
+class ContactMaterials(unittest.TestCase):
+    """Materials per pair of contact groups (the scene's contact.groups and contact.pairs) from
+    the spec and from ModelBuilder, read back from Model.contact_laws with their defaults, and
+    the spec's round trip of a file that has them."""
+
+    def spec(self):
+        spec = sf.SceneSpec()
+        for name, y in (("grip", 0.0), ("slick", 0.5)):
+            spec.add_rigid_body(name, at=[0, y, 0.05], mass=1, inertia=[0.00167] * 3, free=True,
+                                shapes=[{"type": "box", "center": [0, y, 0.05],
+                                         "half_sizes": [0.05] * 3}])
+        spec.set_contact(stiffness=1e5, friction=0.3)
+        spec.add_obstacle("ground", "plane", point=[0, 0, 0], normal=[0, 0, 1])
+        return spec
+
+    def test_spec_pairs_resolve_with_the_scenes_defaults(self):
+        spec = self.spec()
+        self.assertEqual(spec.add_contact_group("gripping", ["grip"]), 0)
+        spec.add_contact_pair("gripping", "ground", friction=0.5, static_friction=0.6)
+        spec.add_contact_pair("slick", "ground", friction=0.1, stiffness=2e5, damping_ratio=0.5)
+        model = spec.compile().model
+        self.assertEqual(model.contact_group_names, ["gripping", "ground", "slick"])
+        laws = [(m.groups, m.friction, m.static_friction, m.stiffness, m.damping_ratio,
+                 m.tangential_stiffness) for m in model.contact_laws]
+        self.assertEqual(laws, [((-1, -1), 0.3, 0.3, 1e5, 1.0, 1e5),
+                                ((0, 1), 0.5, 0.6, 1e5, 1.0, 1e5),
+                                ((2, 1), 0.1, 0.1, 2e5, 0.5, 2e5)])
+
+    def test_file_and_spec_agree(self):
+        text = """
+bodies:
+  a: {type: rigid, at: [0, 0, 0.05], mass: 1, inertia: [1, 1, 1], free: true,
+      shapes: [{type: sphere, center: [0, 0, 0.05], radius: 0.05}]}
+contact:
+  friction: 0.2
+  obstacles: {ground: {type: plane, point: [0, 0, 0], normal: [0, 0, 1]}}
+  pairs: [{groups: [a, ground], friction: 0.7}]
+"""
+        spec = sf.read_scene_spec(text)
+        self.assertEqual([g[0] for g in spec.contact.groups], ["a", "ground"])
+        self.assertEqual(spec.contact.pairs[0].groups, (0, 1))
+        self.assertEqual(spec.contact.pairs[0].friction, 0.7)
+        self.assertEqual(spec.compile().model.contact_laws[1].friction, 0.7)
+
+    def test_bad_pairs(self):
+        spec = self.spec()
+        spec.add_contact_pair("grip", "ground", friction=0.4)
+        with self.assertRaisesRegex(ValueError, r"contact\.pairs\[1\]\.groups: the pair "
+                                    r"\[ground, grip\] is given twice"):
+            spec.add_contact_pair("ground", "grip")
+        with self.assertRaisesRegex(ValueError, r"contact\.pairs\[1\]\.static_friction: "
+                                    r"expected a value >= the pair's friction 0\.3"):
+            spec.add_contact_pair("slick", "ground", static_friction=0.2)
+        with self.assertRaisesRegex(ValueError, r"undefined body 'slik'"):
+            spec.add_contact_pair("slik", "ground")
+        with self.assertRaisesRegex(ValueError, r"contact\.groups\.both\[1\]: 'grip' is in "
+                                    r"contact group 'grip' already"):
+            spec.add_contact_group("both", ["slick", "grip"])
+
+    def test_model_builder(self):
+        b = sf.ModelBuilder()
+        frame = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0.1], [0, 0, 0, 1]]
+        body = b.add_rigid_body("ball", b.add_node(frame), 1.0, [0, 0, 0],
+                                [[1, 0, 0], [0, 1, 0], [0, 0, 1]])
+        b.add_contact_shape(sf.ContactShape(body, sf.ContactShapeType.SPHERE, [0, 0, 0],
+                                            radius=0.1))
+        plane = sf.ContactObstacle()
+        plane.name = "ground"
+        ground = b.add_obstacle(plane)
+        m = sf.ContactMaterial()
+        m.groups = (b.add_contact_material_group("ball", [(False, body)]),
+                    b.add_contact_material_group("floor", [], [ground]))
+        m.friction = 0.8
+        b.add_contact_material(m)
+        model = b.build()
+        self.assertEqual(model.contact_laws[1].friction, 0.8)
+        self.assertEqual(model.contact_laws[1].static_friction, 0.8)
+        b.add_contact_material(m)
+        with self.assertRaisesRegex(ValueError, "contact pair 1: the groups 'ball' and 'floor' "
+                                    "have a material already"):
+            b.build()
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -88,6 +88,43 @@ class Frames(unittest.TestCase):
         lift = sum(force[3 * c[0] + 2] for c, k in zip(binary["cells"], kinds) if k == "contact")
         self.assertAlmostEqual(lift, 0.064 * 9.81, delta=0.05 * 0.064 * 9.81)
 
+    def test_contact_states_stick_and_slip_reach_the_viewer(self):
+        # examples/contact/slide.yaml: the box launched at 2 m/s slides (mu 0.3) until 0.68 s,
+        # then sticks. Its four bottom corners' contact_state: slipping with the whole friction
+        # (share mu_k / mu_s = 1) at 0.3 s, sticking at 0.8 s inside the cone (share and
+        # deflection below half their limits); the viewer's page data carries them per contact.
+        import screwfem_view
+        scene = os.path.join(SOURCE, "examples", "contact", "slide.yaml")
+        out = os.path.join(self.tmp, "slide")
+        subprocess.run([os.environ["SCREWFEM_CLI"], "run", scene, "-o", out, "-q",
+                        "--set", "analysis.end_time=0.8", "--set", "outputs.interval=0.1"],
+                       check=True)
+        frames = [(t, screwfem_vtk.read_frame(f)) for t, f in screwfem_vtk.read_collection(out)]
+        by_time = {round(t, 6): f for t, f in frames}
+
+        def corners(f):
+            force = f["point_data"]["contact_force"][1]
+            state = f["point_data"]["contact_state"][1]
+            cells = [c[0] for c, k in zip(f["cells"], f["kinds"]) if k == "contact"]
+            return [state[3 * i:3 * i + 3] for i in cells if abs(force[3 * i + 2]) > 1e-6 and
+                    f["points"][i][1] < 0.5]  # the box (y = 0), not the rod (y = 1)
+
+        sliding, stuck = corners(by_time[0.3]), corners(by_time[0.8])
+        self.assertEqual(len(sliding), 4)
+        self.assertEqual(len(stuck), 4)
+        for slip, deflection, share in sliding:
+            self.assertEqual(slip, 1.0)
+            self.assertAlmostEqual(share, 1.0, places=9)
+        for slip, deflection, share in stuck:
+            self.assertEqual(slip, 0.0)
+            self.assertLess(share, 0.5)
+            self.assertLess(deflection, 0.5 * 0.3 * 9.81 / 4 / 1e5)  # below mu f_n / k_t
+        summary = screwfem_view.read_json(os.path.join(out, "summary.json"), True)
+        data = screwfem_view.page_data(frames, len(frames), summary, None, {}, "slide", None, [])
+        self.assertIsNotNone(data["contact_states"])
+        self.assertEqual(len(data["contacts"]) * 3 * len(frames),
+                         len(__import__("base64").b64decode(data["contact_states"]["data"])) // 2)
+
     def test_chambers_and_visual_radius(self):
         # tests/view/chamber.yaml: a static run of 4 load steps (a frame each, the load factor
         # as its time) of a rod drawn by visual_radius 10 mm with a pressure chamber of 50 mm^2

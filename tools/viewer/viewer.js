@@ -63,6 +63,9 @@
   var oriented = data.oriented, q0 = floats(data.q0), turning = data.turning, quats = decode(data.quats);
   var radius = floats(data.radius), half = floats(data.half);
   var tensionTrack = decode(data.tension), forceTrack = decode(data.forces);
+  // Per contact and frame: slipping (1) or sticking (0), the anchor's deflection [m], the share
+  // of static friction used (none in live pages and runs without the stick law's outputs).
+  var stateTrack = data.contact_states ? decode(data.contact_states) : new Float32Array(0);
   var nm = moving.length, nt = turning.length, nl = data.lines.length, nc = data.contacts.length;
   var fieldPoints = data.field_points || [];
   var fields = data.fields.map(function (f) {
@@ -78,6 +81,7 @@
   // the colour field on the field points.
   var cur = new Float32Array(x0), curQ = new Float32Array(q0);
   var curTension = new Float32Array(nl), curForce = new Float32Array(3 * nc);
+  var curState = new Float32Array(3 * nc);
   var curField = new Float32Array(fieldPoints.length), field = null;
   var slot = new Int32Array(np).fill(-1);  // point -> its index in `oriented`
   oriented.forEach(function (p, k) { slot[p] = k; });
@@ -108,6 +112,8 @@
     }
     for (i = 0; i < nl; ++i) curTension[i] = lerp(tensionTrack, nl, k, w, i);
     for (i = 0; i < 3 * nc && forceTrack.length; ++i) curForce[i] = lerp(forceTrack, 3 * nc, k, w, i);
+    if (stateTrack.length >= 3 * nc * nf)
+      for (i = 0; i < 3 * nc; ++i) curState[i] = lerp(stateTrack, 3 * nc, k, w, i);
     if (field) for (i = 0; i < fieldPoints.length; ++i) curField[i] = lerp(field.values, fieldPoints.length, k, w, i);
   }
   function point(i) { return new THREE.Vector3(cur[3 * i], cur[3 * i + 1], cur[3 * i + 2]); }
@@ -606,6 +612,23 @@
   if (!(forceScale > 0)) forceScale = maxForce > 0 ? 0.15 * size0 / maxForce : 0;
   var arrowRadius = 0.004 * size0;
   var arrowMaterial = new THREE.MeshBasicMaterial({ color: 0xe31a1c, depthTest: false, transparent: true });
+  // A slipping contact's arrow is orange (sticking, and without state data: red).
+  var slipMaterial = new THREE.MeshBasicMaterial({ color: 0xff9f1c, depthTest: false, transparent: true });
+  function hasStates() { return nc > 0 && stateTrack.length >= 3 * nc * nf; }
+  // "contacts: 3 stick, 1 slip; share <= 0.62; deflection <= 8.4 um" at the current time.
+  function contactSummary() {
+    if (!hasStates()) return "";
+    var stick = 0, slip = 0, share = 0, defl = 0;
+    for (var k = 0; k < nc; ++k) {
+      if (!(Math.hypot(curForce[3 * k], curForce[3 * k + 1], curForce[3 * k + 2]) > 1e-9 * maxForce)) continue;
+      if (curState[3 * k] > 0.5) ++slip; else ++stick;
+      defl = Math.max(defl, curState[3 * k + 1]);
+      share = Math.max(share, curState[3 * k + 2]);
+    }
+    if (stick + slip === 0) return "";
+    return "  \u00b7  contacts: " + stick + " stick, " + slip + " slip; friction share \u2264 " +
+      share.toFixed(2) + "; deflection \u2264 " + (defl * 1e6).toPrecision(3) + " \u00b5m";
+  }
   var arrows = data.contacts.map(function (p) {
     var shaft = placed(cylinder, arrowMaterial, layers.forces), head = placed(cone, arrowMaterial, layers.forces);
     shaft.renderOrder = head.renderOrder = 5;
@@ -618,6 +641,8 @@
       var on = len > 1e-6 * size0 && F.length() > 1e-9 * maxForce;
       a.shaft.visible = a.head.visible = on;
       if (!on) return;
+      var mat = hasStates() && curState[3 * k] > 0.5 ? slipMaterial : arrowMaterial;
+      a.shaft.material = a.head.material = mat;
       var dir = F.normalize(), from = point(a.point);
       var headLen = Math.min(4 * arrowRadius, 0.5 * len);
       var neck = from.clone().addScaledVector(dir, len - headLen);
@@ -786,6 +811,7 @@
     document.getElementById("time").textContent = data.static
       ? "\u03bb = " + time.toFixed(3) + "  (load factor, " + t0.toFixed(3) + " to " + t1.toFixed(3) + ")"
       : "t = " + time.toFixed(3) + " s  (" + t0.toFixed(3) + " to " + t1.toFixed(3) + " s)";
+    document.getElementById("time").textContent += contactSummary();
     var slider = document.getElementById("slider");
     if (document.activeElement !== slider || playing)
       slider.value = String(Math.round(1000 * (t1 > t0 ? (time - t0) / (t1 - t0) : 0)));

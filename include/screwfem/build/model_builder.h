@@ -175,6 +175,14 @@ class ModelBuilder {
   // unless excluded here or joined (a shared node or a joint between their nodes); a rod with
   // itself when ContactSettings::self.
   void ExcludeContactPair(ContactEntity a, ContactEntity b);
+  // Contact materials (model.h, ContactMaterial; docs/scene-format.md, `contact.pairs`): a named
+  // group of rods, bodies and obstacles (each in at most one group), returning its index, and
+  // the law's parameters for a pair of groups (ContactMaterial::group; negative values: the
+  // scene's). Build checks them (unknown groups or members, a pair of groups given twice,
+  // mu_s < mu_k) and resolves them into Model::contact_laws.
+  int AddContactMaterialGroup(const std::string& name, const std::vector<ContactEntity>& members,
+                              const std::vector<ObstacleId>& obstacles = {});
+  void AddContactMaterial(const ContactMaterial& material);
   Model& model() { return model_; }
   const Model& model() const { return model_; }
   // The memory the model may need [bytes] (0: the process default; model/memory.h). Build()

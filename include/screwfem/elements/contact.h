@@ -32,8 +32,8 @@ NormalLaw CalcNormalLaw(double gap, double onset, double stiffness);
 // Its potential Psi(g) = integral from g to delta of f_e [J].
 double ContactPotential(double gap, double onset, double stiffness);
 
-// The parameters of the contact law at one pair: the scene's ContactSettings with the pair's
-// damping c_n [N s/m]; ContactLawFor gives no damping in statics, and no friction in statics
+// The parameters of the contact law at one pair: the scene's ContactSettings and the pair's
+// material (stiffness, friction coefficients, anchor stiffness) with its damping c_n [N s/m]; ContactLawFor gives no damping in statics, and no friction in statics
 // under the smooth law.
 struct ContactLawParameters {
   double stiffness = 0.0;      // k_n [N/m]
@@ -46,6 +46,10 @@ struct ContactLawParameters {
   double tangential_stiffness = 0.0;  // k_t [N/m] (stick law)
   double tangential_damping = 0.0;    // c_t = c_n sqrt(k_t / k_n) [N s/m] (stick law)
 };
+// The law of a pair with its material (model.h, ContactMaterial, resolved: Model::contact_laws),
+// or with the scene's settings alone (every pair of one material).
+ContactLawParameters ContactLawFor(const ContactSettings& settings, const ContactMaterial& material,
+                                   double damping, bool dynamics);
 ContactLawParameters ContactLawFor(const ContactSettings& settings, double damping, bool dynamics);
 
 // The stick law's input at one evaluation (docs/numerics.md, "Stick friction"): the anchor's
@@ -165,6 +169,7 @@ std::string ContactFailureHint(const Model& model, const Data& data, double h);
 // The stick law's history (Data::contact_anchors): each pair's anchor deflection after the
 // return mapping at the current state, and the material point in contact now. Call when a step
 // or load step is accepted and at the start of a run (no-op without the stick law's anchors).
+// Also saves the reference of the swept check against tunnelling (elements/crossing.h).
 void AcceptContactHistory(const Model& model, Data& data, bool dynamics);
 
 // Closest parameters (s, t) of segments P0 + s (P1 - P0) and Q0 + t (Q1 - Q0), clamped to

@@ -140,6 +140,14 @@ struct OutputPointSpec {
   double arc_length = 0.0;  // [m]
 };
 
+// A contact material group (contact.groups; ModelBuilder::AddContactMaterialGroup): bodies
+// (rigid or soft; spec indices) and obstacles (ContactSpec::obstacles indices).
+struct ContactGroupSpec {
+  std::string name;
+  std::vector<int> bodies;
+  std::vector<int> obstacles;
+};
+
 // The contact: section (ModelBuilder::SetContactSettings, AddObstacle, ExcludeContact).
 struct ContactSpec {
   bool present = false;
@@ -147,6 +155,10 @@ struct ContactSpec {
   std::vector<ContactObstacle> obstacles;
   std::vector<std::pair<int, int>> exclude;         // (body index, obstacle index)
   std::vector<std::pair<int, int>> exclude_bodies;  // (body index, body index): moving pairs
+  // Materials per pair of groups (contact.groups, contact.pairs; model.h, ContactMaterial with
+  // group indices into `groups`).
+  std::vector<ContactGroupSpec> groups;
+  std::vector<ContactMaterial> pairs;
 };
 
 // What to record. The defaults depend on the rest of the spec and are resolved by the

@@ -190,11 +190,17 @@ class VtkWriter {
   // the contact forces on it, and of its contact points weighted by |F| (and the weights).
   std::vector<Vec3> segment_force_, segment_point_;
   std::vector<double> segment_weight_;
+  // With contact: the state of each contact point (docs/numerics.md, "Stick friction"), 3 per
+  // point: slipping (1) or sticking (0), the anchor's deflection [m] and the share of static
+  // friction used (zero elsewhere); per contact segment the same over its active pairs (slip
+  // if any slips, the largest deflection and share).
+  std::vector<double> contact_state_;
+  std::vector<Vec3> segment_state_;
   // The file: binary, composed at Open, with the byte offsets of the per-frame values;
   // ascii, recomposed per frame in the same buffer.
   std::string image_;
   std::size_t time_at_ = 0, frame_axes_at_[3] = {0, 0, 0}, velocity_at_ = 0, position_at_ = 0,
-              contact_force_at_ = 0, tension_at_ = 0;
+              contact_force_at_ = 0, contact_state_at_ = 0, tension_at_ = 0;
   std::vector<double> times_;  // of the frames written, frame i in frame_<i>.vtp
 
   // Rod fields (Open's rod_fields): per rod node point, the point and its two stations

@@ -97,6 +97,14 @@ struct Data {
   // the assembly fails, and the step's message says so.
   bool shape_pair_limit_reached = false;
   ShapePairGrid shape_pair_grid;
+  // The swept check against tunnelling (elements/crossing.h): the axis end points of each
+  // contact segment, then of each obstacle pair, at the last accepted state (valid once set),
+  // and the sweep's buffers (per segment: its swept box's corners, and the segments sorted by
+  // the box's low x). Sized by MakeData.
+  std::vector<Vec3> crossing_points;
+  bool crossing_valid = false;
+  std::vector<Vec3> crossing_lo, crossing_hi;
+  std::vector<int> crossing_order;
 
   // Workspaces of the Newton solvers.
   Eigen::VectorXd residual;        // global order, size nv + nc

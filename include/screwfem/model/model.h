@@ -8,6 +8,7 @@
 // computed once at build time.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -461,6 +462,26 @@ struct ContactSettings {
   // solver's matrix; the others by off-band blocks (docs/numerics.md, "Pairs and the band").
   int band_pair_nodes = 64;
 };
+// Contact materials (docs/scene-format.md, `contact.pairs`; MuJoCo's <pair>): named groups of
+// contact entities (rods, bodies with shapes) and obstacles, and the law's parameters for a pair
+// of groups. An entity or obstacle belongs to at most one group; pairs of entities in no group,
+// or of groups without a material, take the scene's ContactSettings.
+struct ContactMaterialGroup {
+  std::string name;
+  std::vector<int> rods, bodies, obstacles;  // members: Model::rods, bodies, obstacles indices
+};
+// The parameters of the law at a pair of groups (group[0] may equal group[1]). As given,
+// negative values are the scene's (ContactSettings; static_friction: this pair's friction when
+// it gives one, tangential_stiffness: this pair's stiffness unless the scene sets one); Build
+// resolves them into Model::contact_laws, every value set.
+struct ContactMaterial {
+  int group[2] = {-1, -1};             // Model::contact_material_groups indices
+  double friction = -1.0;              // mu_k >= 0
+  double static_friction = -1.0;       // mu_s >= mu_k
+  double stiffness = -1.0;             // k_n [N/m] > 0
+  double damping_ratio = -1.0;         // zeta >= 0: c_n = 2 zeta sqrt(k_n m_pair)
+  double tangential_stiffness = -1.0;  // k_t [N/m] > 0 of the stick law's anchor
+};
 // One (moving shape, obstacle) pair, made by Build: the shape is a segment p(s) = (1-s) p_0 +
 // s p_1 with p_j = x_j + R_j c_j of item node j (both ends on node 0 for a rigid shape, whose
 // node 1 is kGround; a sphere has p_0 = p_1), inflated by `radius`.
@@ -473,6 +494,7 @@ struct ContactPair {
   double damping = 0.0;  // c_n [N s/m] (Build: from the pair's mass)
   bool rod = false;      // the owner: a rod or a rigid body (index), for outputs
   int owner = -1;
+  int material = 0;  // its law: Model::contact_laws index (Build)
 };
 // One side of a pair between two moving shapes (elements/shape_pair.h): a segment p(s) =
 // (1-s) p_0 + s p_1 with p_j = x_j + R_j c_j of the side's item node end_node[j] (a rigid shape
@@ -505,6 +527,7 @@ struct ShapePair {
   // Two boxes: which of the 24 edges (12 of each box against the other) this pair is; -1
   // otherwise (with the segments and part, the pair's name for the stick law's history).
   int edge = -1;
+  int material = 0;  // its law: Model::contact_laws index (the broad phase, ContactLawIndex)
 };
 // A shape the broad phase sorts (Build): a rod element's capsule, or a body's sphere, capsule
 // or box, as the side of a pair it would be.
@@ -513,6 +536,7 @@ struct ContactSegment {
   double mass = 0.0;  // the element's or body's mass; INFINITY when all its nodes are fixed
   int entity = -1;    // the contact entity (a rod or a body): index of Model's entity tables
   double s0 = 0.0, s1 = 0.0;  // a rod element: its arc-length span along the rod [m]
+  int material_group = -1;    // its entity's Model::contact_material_groups index, or -1
 };
 // An excluded pair of moving entities (scene `contact: exclude: [[a, b]]` with two bodies or rods).
 struct ContactPairExclusion {
@@ -549,6 +573,15 @@ struct Model {
   ContactSettings contact;
   std::vector<ContactPair> contact_pairs;
   std::vector<ContactPairExclusion> contact_pair_exclusions;
+  // Materials per pair of groups, as given (ModelBuilder::AddContactMaterialGroup,
+  // AddContactMaterial), and as Build resolves them: contact_laws[0] the scene's settings,
+  // contact_laws[1 + i] contact_materials[i] with its defaults, and the law of groups (a, b) at
+  // contact_law_table[(a + 1) * (G + 1) + b + 1] (G groups; -1: no group), both orders: a
+  // lookup in O(1) at assembly (ContactLawIndex).
+  std::vector<ContactMaterialGroup> contact_material_groups;
+  std::vector<ContactMaterial> contact_materials;
+  std::vector<ContactMaterial> contact_laws;
+  std::vector<int> contact_law_table;
   // Moving shapes (elements/shape_pair.h): the segments, and which two entities (rods, bodies
   // with shapes) may touch: contact_entity_pairs.MayTouch(a, b) for a != b (Build); a rod
   // touches itself when contact_entity_self_skip[a] >= 0 (the arc length between two elements'
@@ -636,6 +669,38 @@ inline double PredictedBandedCost(const Model& model) {
 inline double PredictedSparseCost(const Model& model) {
   if (model.sparse_flops <= 0.0 && model.num_unknowns() > 0) return INFINITY;
   return kSparseFlopCost * model.sparse_flops + kSparseFixedCost * model.num_unknowns();
+}
+
+// The law (Model::contact_laws index) of a pair of contact material groups (-1: none).
+inline int ContactLawIndex(const Model& model, int group_a, int group_b) {
+  if (model.contact_law_table.empty()) return 0;
+  const std::size_t n = model.contact_material_groups.size() + 1;
+  return model.contact_law_table[static_cast<std::size_t>(group_a + 1) * n +
+                                 static_cast<std::size_t>(group_b + 1)];
+}
+
+// The resolved law of a pair (Model::contact_laws[index]), or the scene's settings before Build.
+inline ContactMaterial ContactLawOf(const Model& model, int index) {
+  if (static_cast<std::size_t>(index) < model.contact_laws.size())
+    return model.contact_laws[static_cast<std::size_t>(index)];
+  const ContactSettings& c = model.contact;
+  ContactMaterial out;
+  out.friction = c.friction;
+  out.static_friction = std::max(c.static_friction, c.friction);
+  out.stiffness = c.stiffness;
+  out.damping_ratio = c.damping_ratio;
+  out.tangential_stiffness = c.tangential_stiffness > 0.0 ? c.tangential_stiffness : c.stiffness;
+  return out;
+}
+
+// Whether the stick law keeps anchors (Data::contact_anchors, shape_pair_anchors): the stick
+// law with friction on some pair.
+inline bool KeepsContactAnchors(const Model& model) {
+  if (model.contact.friction_law != FrictionLaw::kStick) return false;
+  if (model.contact_laws.empty()) return model.contact.friction > 0.0;
+  for (const ContactMaterial& law : model.contact_laws)
+    if (law.friction > 0.0) return true;
+  return false;
 }
 
 // The reference frame H_0 of a node, or the identity for kGround (the one ground-or-node

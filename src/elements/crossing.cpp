@@ -1,0 +1,235 @@
+#include "screwfem/elements/crossing.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "screwfem/elements/contact.h"
+
+namespace screwfem {
+
+namespace {
+
+// A segment's axis end points in the world at the state in data.
+void SideEnds(const Data& data, const ShapePairSide& side, Vec3* p0, Vec3* p1) {
+  const SE3& H0 = NodeFrame(data, side.node[side.end_node[0]]);
+  const SE3& H1 = NodeFrame(data, side.node[side.end_node[1]]);
+  *p0 = H0.x + H0.R * side.offset[0];
+  *p1 = H1.x + H1.R * side.offset[1];
+}
+
+void PairEnds(const Data& data, const ContactPair& pair, Vec3* p0, Vec3* p1) {
+  const SE3& H0 = NodeFrame(data, pair.node[pair.end_node[0]]);
+  const SE3& H1 = NodeFrame(data, pair.node[pair.end_node[1]]);
+  *p0 = H0.x + H0.R * pair.offset[0];
+  *p1 = H1.x + H1.R * pair.offset[1];
+}
+
+bool IsBox(const ShapePairSide& side) { return side.half.x() > 0.0; }
+
+// The distance between segments P and Q.
+double SegmentDistance(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1) {
+  double s = 0.0, t = 0.0;
+  ClosestSegmentParameters(P0, P1, Q0, Q1, &s, &t);
+  return ((P0 + s * (P1 - P0)) - (Q0 + t * (Q1 - Q0))).norm();
+}
+
+// The signed distance of the two axis lines times |d_A x d_B| (0 for a point or parallel axes).
+double LineSide(const Vec3& a0, const Vec3& a1, const Vec3& b0, const Vec3& b1) {
+  return (a1 - a0).cross(b1 - b0).dot(a0 - b0);
+}
+
+// Segment pair (A, B) from the reference r (4 points a0 a1 b0 b1) to the candidate c, radii sum
+// `reach`: the axes passed through each other, or went into each other.
+bool SegmentsCrossed(const Vec3 (&r)[4], const Vec3 (&c)[4], double reach) {
+  const double near = 0.5 * reach;
+  const double d_c = SegmentDistance(c[0], c[1], c[2], c[3]);
+  if (d_c < near) return SegmentDistance(r[0], r[1], r[2], r[3]) >= near;
+  const double f0 = LineSide(r[0], r[1], r[2], r[3]);
+  const double f1 = LineSide(c[0], c[1], c[2], c[3]);
+  if (!(f0 * f1 < 0.0)) return false;
+  // The parameter where the lines meet, by bisection on the linear motion of the end points.
+  double lo = 0.0, hi = 1.0;
+  Vec3 p[4];
+  for (int it = 0; it < 40; ++it) {
+    const double t = 0.5 * (lo + hi);
+    for (int k = 0; k < 4; ++k) p[k] = r[k] + t * (c[k] - r[k]);
+    const double f = LineSide(p[0], p[1], p[2], p[3]);
+    if ((f < 0.0) == (f0 < 0.0))
+      lo = t;
+    else
+      hi = t;
+  }
+  const double t = 0.5 * (lo + hi);
+  for (int k = 0; k < 4; ++k) p[k] = r[k] + t * (c[k] - r[k]);
+  return SegmentDistance(p[0], p[1], p[2], p[3]) < near;
+}
+
+// A shape against an obstacle: its axis went `depth` behind a plane, or into a capsule's or sphere's
+// axis (nearer than half the sum of the radii), from the reference r to the candidate c.
+bool ObstacleCrossed(const ContactObstacle& o, double radius, double depth, const Vec3 (&r)[2],
+                     const Vec3 (&c)[2]) {
+  if (o.type == ObstacleType::kPlane) {
+    const double h_r = std::min(o.normal.dot(r[0] - o.point), o.normal.dot(r[1] - o.point));
+    const double h_c = std::min(o.normal.dot(c[0] - o.point), o.normal.dot(c[1] - o.point));
+    return h_r >= -depth && h_c < -depth;
+  }
+  const Vec3 q1 = o.type == ObstacleType::kSphere ? o.point : o.to;
+  const Vec3 rr[4] = {r[0], r[1], o.point, q1};
+  const Vec3 cc[4] = {c[0], c[1], o.point, q1};
+  return SegmentsCrossed(rr, cc, radius + o.radius);
+}
+
+// Whether two contact segments may touch (as the broad phase's PairWriter decides).
+bool SegmentsMayTouch(const Model& m, const ContactSegment& a, const ContactSegment& b) {
+  if (a.entity == b.entity) {
+    const double skip = m.contact_entity_self_skip[static_cast<std::size_t>(a.entity)];
+    return skip >= 0.0 && std::max(b.s0 - a.s1, a.s0 - b.s1) >= skip;
+  }
+  return m.contact_entity_pairs.MayTouch(a.entity, b.entity);
+}
+
+}  // namespace
+
+bool MayCross(const Model& model) {
+  return !model.contact_segments.empty() || !model.contact_pairs.empty();
+}
+
+void SaveCrossingReference(const Model& model, Data& data) {
+  if (data.crossing_points.empty()) return;
+  std::size_t k = 0;
+  for (const ContactSegment& s : model.contact_segments) {
+    SideEnds(data, s.side, &data.crossing_points[k], &data.crossing_points[k + 1]);
+    k += 2;
+  }
+  for (const ContactPair& p : model.contact_pairs) {
+    PairEnds(data, p, &data.crossing_points[k], &data.crossing_points[k + 1]);
+    k += 2;
+  }
+  data.crossing_valid = true;
+}
+
+bool FindCrossing(const Model& model, Data& data, Crossing* out) {
+  if (!data.crossing_valid || data.crossing_points.empty()) return false;
+  const std::vector<Vec3>& ref = data.crossing_points;
+  // Obstacle pairs: each against its obstacle.
+  const std::size_t ns = model.contact_segments.size();
+  // Behind a plane: deeper than 100 onsets (the default onset is 1 % of the smallest radius),
+  // far beyond any resting penetration.
+  const double depth = 100.0 * model.contact.onset;
+  for (std::size_t i = 0; i < model.contact_pairs.size(); ++i) {
+    const ContactPair& p = model.contact_pairs[i];
+    const Vec3 r[2] = {ref[2 * (ns + i)], ref[2 * (ns + i) + 1]};
+    Vec3 c[2];
+    PairEnds(data, p, &c[0], &c[1]);
+    if (ObstacleCrossed(model.obstacles[static_cast<std::size_t>(p.obstacle)], p.radius, depth, r,
+                        c)) {
+      out->found = true;
+      out->a = static_cast<int>(i);
+      out->b = -1;
+      return true;
+    }
+  }
+  if (ns < 2 || !MayHaveShapePairs(model)) return false;
+  // Swept boxes (reference and candidate ends, inflated by the radius), sorted by their low x;
+  // then sweep-and-prune on x with the full boxes' overlap.
+  for (std::size_t i = 0; i < ns; ++i) {
+    const ContactSegment& s = model.contact_segments[i];
+    Vec3 c0, c1;
+    SideEnds(data, s.side, &c0, &c1);
+    const double r = IsBox(s.side) ? s.side.half.norm() : s.side.radius;
+    data.crossing_lo[i] =
+        ref[2 * i].cwiseMin(ref[2 * i + 1]).cwiseMin(c0.cwiseMin(c1)) - Vec3::Constant(r);
+    data.crossing_hi[i] =
+        ref[2 * i].cwiseMax(ref[2 * i + 1]).cwiseMax(c0.cwiseMax(c1)) + Vec3::Constant(r);
+    data.crossing_order[i] = static_cast<int>(i);
+  }
+  std::sort(data.crossing_order.begin(), data.crossing_order.end(), [&](int a, int b) {
+    return data.crossing_lo[static_cast<std::size_t>(a)].x() <
+           data.crossing_lo[static_cast<std::size_t>(b)].x();
+  });
+  for (std::size_t u = 0; u < ns; ++u) {
+    const std::size_t i = static_cast<std::size_t>(data.crossing_order[u]);
+    const ContactSegment& a = model.contact_segments[i];
+    if (IsBox(a.side)) continue;
+    for (std::size_t w = u + 1; w < ns; ++w) {
+      const std::size_t j = static_cast<std::size_t>(data.crossing_order[w]);
+      if (data.crossing_lo[j].x() > data.crossing_hi[i].x()) break;
+      if ((data.crossing_lo[j].array() > data.crossing_hi[i].array()).any() ||
+          (data.crossing_lo[i].array() > data.crossing_hi[j].array()).any())
+        continue;
+      const ContactSegment& b = model.contact_segments[j];
+      if (IsBox(b.side) || !SegmentsMayTouch(model, a, b)) continue;
+      if (std::isinf(a.mass) && std::isinf(b.mass)) continue;
+      Vec3 c[4];
+      SideEnds(data, a.side, &c[0], &c[1]);
+      SideEnds(data, b.side, &c[2], &c[3]);
+      const Vec3 r[4] = {ref[2 * i], ref[2 * i + 1], ref[2 * j], ref[2 * j + 1]};
+      if (SegmentsCrossed(r, c, a.side.radius + b.side.radius)) {
+        out->found = true;
+        out->a = static_cast<int>(i);
+        out->b = static_cast<int>(j);
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+namespace {
+
+// "rod 'a' element 3" or "body 'b'" into buf (no allocation).
+int FormatSide(const Model& model, const ShapePairSide& side, char* buf, std::size_t size) {
+  if (side.rod) {
+    const Rod& rod = model.rods[static_cast<std::size_t>(side.owner)];
+    return std::snprintf(buf, size, "rod '%s' element %d", rod.name.c_str(),
+                         side.element - rod.first_element);
+  }
+  return std::snprintf(buf, size, "body '%s'",
+                       model.bodies[static_cast<std::size_t>(side.owner)].name.c_str());
+}
+
+}  // namespace
+
+void FormatCrossing(const Model& model, const Crossing& c, char* buf, std::size_t size) {
+  if (size == 0) return;
+  buf[0] = 0;
+  if (!c.found) return;
+  if (c.b < 0) {
+    const ContactPair& p = model.contact_pairs[static_cast<std::size_t>(c.a)];
+    const char* owner = p.rod ? model.rods[static_cast<std::size_t>(p.owner)].name.c_str()
+                              : model.bodies[static_cast<std::size_t>(p.owner)].name.c_str();
+    std::snprintf(buf, size, "%s '%s' and obstacle '%s'", p.rod ? "rod" : "body", owner,
+                  model.obstacles[static_cast<std::size_t>(p.obstacle)].name.c_str());
+    return;
+  }
+  int n = FormatSide(model, model.contact_segments[static_cast<std::size_t>(c.a)].side, buf, size);
+  if (n < 0 || static_cast<std::size_t>(n) + 5 >= size) return;
+  std::snprintf(buf + n, size - static_cast<std::size_t>(n), " and ");
+  n += 5;
+  FormatSide(model, model.contact_segments[static_cast<std::size_t>(c.b)].side, buf + n,
+             size - static_cast<std::size_t>(n));
+}
+
+std::string DescribeCrossing(const Model& model, const Crossing& c) {
+  char buf[512];
+  FormatCrossing(model, c, buf, sizeof buf);
+  return buf;
+}
+
+int CheckStepCrossing(const Model& model, Data& data, int iterations, std::string* why) {
+  if (iterations < 0) return iterations;
+  Crossing c;
+  if (!FindCrossing(model, data, &c)) return iterations;
+  if (why) {
+    char buf[256];
+    FormatCrossing(model, c, buf, sizeof buf);
+    why->assign("the step carried ");
+    why->append(buf);
+    why->append(" through each other (contact tunnelling)");
+  }
+  return -1;
+}
+
+}  // namespace screwfem
