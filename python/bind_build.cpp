@@ -329,8 +329,10 @@ void BindValues(py::module_& m) {
       .def_readwrite("type", &Actuator::type,
                      "ActuatorType: PRESSURE, MUSCLE, REST_STRAIN or ACTIVE_STRESS.")
       .def_readwrite("rod", &Actuator::rod, "Rod index.")
-      .def_readwrite("from_", &Actuator::from, "Start of the range, arc length [m] (at a node).")
-      .def_readwrite("to", &Actuator::to, "End of the range [m] (at a node); < 0: the rod's end.")
+      .def_readwrite("from_", &Actuator::from,
+                     "Start of the range, arc length [m] (build puts a node there with "
+                     "set_conform_mesh, the default; else it must be at one).")
+      .def_readwrite("to", &Actuator::to, "End of the range [m] (as from_); < 0: the rod's end.")
       .def_readwrite("area", &Actuator::area, "Chamber or muscle area [m^2].")
       .def_readwrite("offset", &Actuator::offset, "Centroid (0, r2, r3) in the section [m].")
       .def_readwrite("max_stress", &Actuator::max_stress, "Muscle [Pa].")
@@ -541,6 +543,13 @@ void BindBuild(py::module_& m) {
           "The memory the model and its solver may need: bytes or a size such as '8G' (None: "
           "the process default, screwfem.set_memory_limit). build() raises InputError naming "
           "the part beyond it (docs/limits.md).")
+      .def("set_conform_mesh", &B::SetConformMesh, py::arg("conform"),
+           "Whether build() puts a node wherever a tendon eyelet, a force element's end, a "
+           "concentrated rod load or an actuator's end falls inside a rod element, splitting "
+           "the element there (default True; scene: defaults.conform_mesh). Second-order "
+           "convergence with such features; the nodes added come after all others "
+           "(Model.conformed_nodes counts them), so node indices taken before build() stay "
+           "valid.")
       .def("set_linear_solver", &B::SetLinearSolver, py::arg("solver"),
            "The direct solver of the Newton systems (LinearSolver; scene: "
            "analysis.linear_solver): AUTO picks the lower predicted factorisation cost.")

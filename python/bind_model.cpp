@@ -183,6 +183,11 @@ void BindModel(py::module_& m) {
       .def_readonly("rod_inertia", &Model::rod_inertia,
                     "RodInertia of the rods: EXACT (the exact helical velocity field) or CONSTANT "
                     "(linear velocity field, constant mass matrix).")
+      .def_readonly("conform_mesh", &Model::conform_mesh,
+                    "Whether build() conformed the rod meshes to their features (scene: "
+                    "defaults.conform_mesh).")
+      .def_readonly("conformed_nodes", &Model::conformed_nodes,
+                    "Nodes build() added where features fell inside rod elements.")
       .def_readonly("linear_solver", &Model::linear_solver,
                     "LinearSolver asked for (AUTO, BANDED or SPARSE; scene: "
                     "analysis.linear_solver).")

@@ -620,6 +620,7 @@ SceneSpec SpecReader::Read() {
   s.gravity = Vector3(Attr(spec_, "gravity", ""), "gravity");
   s.rod_inertia = Enum<RodInertia>(Attr(spec_, "rod_inertia", ""), "rod_inertia");
   s.linear_solver = Enum<LinearSolver>(Attr(spec_, "linear_solver", ""), "linear_solver");
+  s.conform_mesh = Bool(Attr(spec_, "conform_mesh", ""), "conform_mesh");
   for (const auto& [name, p] : NamedValues(Attr(spec_, "points", ""), "points"))
     s.points.emplace_back(name, Vector3(p, Key("points", name.c_str())));
   for (const auto& [name, v] : NamedValues(Attr(spec_, "inputs", ""), "inputs"))
@@ -832,7 +833,8 @@ py::object ToPython(const SceneSpec& s) {
   return SpecClass("SceneSpec")(
       py::arg("name") = s.name, py::arg("gravity") = Tuple(s.gravity),
       py::arg("rod_inertia") = s.rod_inertia, py::arg("linear_solver") = s.linear_solver,
-      py::arg("points") = points, py::arg("inputs") = inputs, py::arg("bodies") = ListOf(s.bodies),
+      py::arg("conform_mesh") = s.conform_mesh, py::arg("points") = points,
+      py::arg("inputs") = inputs, py::arg("bodies") = ListOf(s.bodies),
       py::arg("joints") = ListOf(s.joints), py::arg("loads") = ListOf(s.loads),
       py::arg("tendons") = ListOf(s.tendons), py::arg("forces") = ListOf(s.forces),
       py::arg("actuators") = ListOf(s.actuators), py::arg("contact") = contact,

@@ -217,8 +217,9 @@ class ActuatorSpec:
     type: Any = _f(_m.ActuatorType.ACTIVE_STRESS, doc="ActuatorType (or its name): PRESSURE, "
                    "MUSCLE, REST_STRAIN, ACTIVE_STRESS.")
     body: int = _f(-1, doc="The soft body (index or name).", scene="rod")
-    from_: float = _f(0.0, doc="Start of the range, arc length [m] (at a node).", scene="from")
-    to: float = _f(-1.0, doc="End of the range [m] (at a node); negative: the rod's end.")
+    from_: float = _f(0.0, doc="Start of the range, arc length [m] (a node there with "
+                      "conform_mesh; else it must be at one).", scene="from")
+    to: float = _f(-1.0, doc="End of the range [m] (as from_); negative: the rod's end.")
     area: float = _f(0.0, doc="Chamber or muscle area [m^2].")
     offset: Any = _f(_ZERO3, doc="Centroid (0, r2, r3) in the section frame [m].",
                      scene="offset [r2, r3]")
@@ -362,6 +363,9 @@ class SceneSpec:
                           scene="analysis.rod_inertia")
     linear_solver: Any = _f(_m.LinearSolver.AUTO, doc="LinearSolver (or its name).",
                             scene="analysis.linear_solver")
+    conform_mesh: bool = _f(True, doc="Nodes where eyelets, force-element ends, concentrated "
+                            "rod loads and actuator ends fall between a rod's nodes (ModelBuilder."
+                            "set_conform_mesh).", scene="defaults.conform_mesh")
     points: dict = _f(factory=dict, doc="Named points: name -> (x, y, z) [m], world "
                       "(Scene.named_points).")
     inputs: dict = _f(factory=dict, doc="Run-time inputs: name -> default value, in order "

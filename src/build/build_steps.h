@@ -24,6 +24,9 @@ void ValidateProfile(const Model& m, const Profile& profile, const std::string& 
 // Validation of nodes, rods, bodies and joints (build/validate.cpp). `used` marks the nodes
 // that a rod, a body or a joint is attached to; CheckConnected reads it.
 void ValidateNodes(const Model& m);
+// The rod meshes conformed to the features on them (build/conform_mesh.cpp; Model::conform_mesh):
+// runs before BuildRodElements, on the rods' node lists.
+void ConformRodMeshes(Model& m);
 void BuildRodElements(Model& m, std::vector<char>& used);
 void ValidateBodies(const Model& m, std::vector<char>& used);
 void ValidateJoints(const Model& m, std::vector<char>& used);

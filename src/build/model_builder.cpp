@@ -212,6 +212,7 @@ Model ModelBuilder::Build() const {
   using namespace build_steps;
   Model m = model_;
   ValidateNodes(m);
+  ConformRodMeshes(m);
   std::vector<char> used(m.nodes.size(), 0);  // nodes that something is attached to
   BuildRodElements(m, used);
   ValidateBodies(m, used);

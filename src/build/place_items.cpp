@@ -295,12 +295,15 @@ void PlaceActuatorRange(const Model& m, Actuator& a, const ActuatorError& fail) 
     if (std::abs(s - to) <= tol) last = k;
     if (std::abs(s - to) < std::abs(near_to - to)) near_to = s;
   }
+  // Only without a conforming mesh (Model::conform_mesh puts nodes at both ends).
+  const std::string hint = "; a conforming mesh (defaults.conform_mesh: true) puts one there";
   if (first < 0)
     fail("from", "arc length " + std::to_string(a.from) + " m is not at a node of rod '" +
-                     rod.name + "' (the nearest node is at " + std::to_string(near_from) + " m)");
+                     rod.name + "' (the nearest node is at " + std::to_string(near_from) + " m)" +
+                     hint);
   if (last < 0)
     fail("to", "arc length " + std::to_string(to) + " m is not at a node of rod '" + rod.name +
-                   "' (the nearest node is at " + std::to_string(near_to) + " m)");
+                   "' (the nearest node is at " + std::to_string(near_to) + " m)" + hint);
   a.first_element = rod.first_element + first;
   a.num_elements = last - first + 1;
 }
@@ -315,6 +318,13 @@ void SetActuatorUnits(Actuator& a, const ActuatorError& fail) {
     if (!(a.area > 0.0) || !std::isfinite(a.area))
       fail("area", "must be a positive area [m^2], got " + std::to_string(a.area));
     if (!a.offset.allFinite()) fail("offset", "must be finite");
+    // A chamber or muscle runs along the rod: its offset lies in the section plane, and a
+    // first (axial) component would be ignored.
+    if (a.offset(0) != 0.0)
+      fail("offset",
+           "the first (axial) component must be 0: a chamber or muscle runs along the "
+           "rod, its offset lies in the section plane (got " +
+               std::to_string(a.offset(0)) + " m)");
     // sigma_a per unit pressure: A [e1; r x e1] (docs/numerics.md, "Active stress and rest strain").
     Vec6 unit;
     unit << 1.0, 0.0, 0.0, 0.0, a.offset(2), -a.offset(1);
@@ -326,7 +336,15 @@ void SetActuatorUnits(Actuator& a, const ActuatorError& fail) {
       unit *= -a.max_stress;
     }
     a.active_stress_unit = unit;
+    if (!a.vector.isZero()) fail("vector", "is not used by a chamber or muscle (it must be 0)");
+    if (a.type == ActuatorType::kPressure && a.max_stress != 0.0)
+      fail("max_stress", "is not used by a pressure chamber (it must be 0)");
   } else {
+    if (a.area != 0.0 || !a.offset.isZero() || a.max_stress != 0.0)
+      fail(a.area != 0.0        ? "area"
+           : !a.offset.isZero() ? "offset"
+                                : "max_stress",
+           std::string("is not used by type '") + NameOf(a.type) + "' (it must be 0)");
     if (!a.vector.allFinite()) fail("vector", "must be finite");
     (a.type == ActuatorType::kRestStrain ? a.rest_strain_unit : a.active_stress_unit) = a.vector;
   }

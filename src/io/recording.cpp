@@ -833,6 +833,7 @@ class Recording::Impl {
     j.Field("nodes", static_cast<long>(model_.nodes.size())).Field("free_nodes", free_nodes);
     j.Field("rods", static_cast<long>(model_.rods.size()));
     j.Field("elements", static_cast<long>(model_.elements.size()));
+    j.Field("conformed_nodes", static_cast<long>(model_.conformed_nodes));
     j.Field("rigid_bodies", static_cast<long>(model_.bodies.size()));
     j.Field("joints", static_cast<long>(model_.joints.size()));
     j.Field("point_loads", static_cast<long>(model_.point_loads.size()));

@@ -652,6 +652,7 @@ Scene SceneCompiler::Compile() {
   for (const auto& [name, default_value] : spec_.inputs) builder_.AddInput(name, default_value);
   builder_.model().rod_inertia = spec_.rod_inertia;
   builder_.model().linear_solver = spec_.linear_solver;
+  builder_.SetConformMesh(spec_.conform_mesh);
   AddBodies();
   AddJoints();
   AddLoads();

@@ -256,7 +256,9 @@ void SceneReader::ReadUnits(const Node& root) {
 
 void SceneReader::ReadDefaults(const Node* node) {
   if (node == nullptr || node->IsNull()) return;
-  r_.CheckKeys(*node, "defaults", {"elements", "up"});
+  r_.CheckKeys(*node, "defaults", {"elements", "up", "conform_mesh"});
+  if (const Node* c = node->Find("conform_mesh"))
+    spec_.conform_mesh = r_.Bool(*c, "defaults.conform_mesh");
   if (const Node* e = node->Find("elements"))
     default_elements_ = r_.Integer(*e, "defaults.elements", 1, kMaxElements);
   if (const Node* up = node->Find("up")) {

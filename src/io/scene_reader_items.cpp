@@ -217,8 +217,14 @@ void SceneReader::ReadForces(const Node* node) {
       f.stiffness = r_.NonNegativeNumber(*k, Join(path, "stiffness"));
     if (const Node* c = value.Find("damping"))
       f.damping = r_.NonNegativeNumber(*c, Join(path, "damping"));
-    if (const Node* l = value.Find("rest_length"))
+    if (const Node* l = value.Find("rest_length")) {
       f.rest_length = r_.NonNegativeNumber(*l, Join(path, "rest_length"));
+      // The rest length is the spring's: without one it would be ignored.
+      if (value.Find("stiffness") == nullptr)
+        r_.Fail(l->location, Join(path, "rest_length"),
+                "'rest_length' is the spring's rest length; this force element has no "
+                "'stiffness' (give one, or remove 'rest_length')");
+    }
     if (const Node* p = value.Find("force")) f.actuator = ReadProfile(*p, Join(path, "force"));
     if (value.Find("stiffness") == nullptr && value.Find("damping") == nullptr &&
         value.Find("force") == nullptr)

@@ -94,6 +94,7 @@ namespace {
 Model MixedModel(LinearSolver solver = LinearSolver::kAuto) {
   ModelBuilder b;
   b.SetLinearSolver(solver);
+  b.SetConformMesh(false);  // the span kinds: features between nodes stay there
   const NodeId base = b.AddNode(SE3::Translation(Vec3(0, 0, 0)), "base");
   b.AddRigidBody("base", base, 0.15, Vec3(0.1, 0, 0), 1e-4 * Mat3::Identity());
   const NodeId link = b.AddNode(SE3::Translation(Vec3(0.2, 0, 0)), "link");

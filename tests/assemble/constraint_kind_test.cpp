@@ -34,6 +34,7 @@ Section ArmSection() {
 
 Model Mechanism() {
   ModelBuilder b;
+  b.SetConformMesh(false);  // the span kinds: features between nodes stay there
   const RodId rod = b.AddStraightRod("arm", Vec3::Zero(), Vec3::UnitX(), 4, ArmSection());
   const std::vector<NodeId> nodes = b.RodNodes(rod);
   const NodeId root = nodes.front(), tip = nodes.back();

@@ -256,5 +256,50 @@ TEST(BuildErrors, CarryTheEntityTheyAreAbout) {
   }
 }
 
+// Values an actuator's type does not use are errors, not ignored (issue 40 item 6): the axial
+// component of a chamber's or muscle's offset, a vector on a chamber, max_stress on a pressure
+// chamber, area, offset or max_stress on a rest strain or active stress. The error names the
+// part.
+TEST(ModelBuilder, ActuatorValuesItsTypeDoesNotUseAreErrors) {
+  auto error = [](auto edit) {
+    ModelBuilder b;
+    const RodId rod = b.AddStraightRod("r", Vec3::Zero(), Vec3::UnitX(), 2, UnitSection());
+    Actuator a;
+    a.name = "a";
+    a.type = ActuatorType::kPressure;
+    a.rod = rod;
+    a.area = 1e-4;
+    a.offset = Vec3(0.0, 0.01, 0.0);
+    edit(a);
+    b.AddActuator(a);
+    return ErrorOf([&] { b.Build(); });
+  };
+  InputError e = error([](Actuator& a) { a.offset.x() = 0.001; });
+  EXPECT_EQ(e.entity().kind, EntityKind::kActuator);
+  EXPECT_EQ(e.entity().part, "offset");
+  EXPECT_NE(std::string(e.what()).find("the first (axial) component must be 0"), std::string::npos)
+      << e.what();
+  e = error([](Actuator& a) {
+    a.type = ActuatorType::kMuscle;
+    a.max_stress = 1e5;
+    a.offset.x() = -0.002;
+  });
+  EXPECT_EQ(e.entity().part, "offset");
+  e = error([](Actuator& a) { a.vector(0) = 1.0; });
+  EXPECT_EQ(e.entity().part, "vector");
+  e = error([](Actuator& a) { a.max_stress = 1e5; });
+  EXPECT_EQ(e.entity().part, "max_stress");
+  EXPECT_NE(std::string(e.what()).find("is not used by a pressure chamber"), std::string::npos)
+      << e.what();
+  e = error([](Actuator& a) {
+    a.type = ActuatorType::kRestStrain;
+    a.area = 0.0;
+    a.vector(5) = 1.0;
+  });
+  EXPECT_EQ(e.entity().part, "offset");
+  EXPECT_NE(std::string(e.what()).find("is not used by type 'rest_strain'"), std::string::npos)
+      << e.what();
+}
+
 }  // namespace
 }  // namespace screwfem::model_builder_test

@@ -58,6 +58,7 @@ struct Scene {
 
 Scene MakeScene(std::mt19937& rng, double damping, double actuator) {
   ModelBuilder b;
+  b.SetConformMesh(false);  // the span kinds: features between nodes stay there
   std::vector<Vec3> p0, p1;
   for (int i = 0; i <= 4; ++i) p0.emplace_back(0.3 * i, 0.1 * std::sin(1.1 * i), 0.05 * i * i);
   for (int i = 0; i <= 3; ++i) p1.emplace_back(0.2 + 0.25 * i, 0.4, 0.1 * std::cos(0.7 * i));
@@ -114,6 +115,7 @@ TEST(ForceSpan, EndsArePlacedAsEyeletsAndEachElementHasOneKind) {
 
   // An arc length off the rod: the error of the end, as for an eyelet.
   ModelBuilder b;
+  b.SetConformMesh(false);  // the span kinds: features between nodes stay there
   const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 2, RodSection());
   ForceElement f;
   f.name = "spring";
@@ -207,6 +209,7 @@ TEST(ForceSpan, SpringWithinOneFreeRodHasNoNetForceOrMoment) {
   std::mt19937 rng(23);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   ModelBuilder b;
+  b.SetConformMesh(false);  // the span kinds: features between nodes stay there
   const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3(1, 0.2, 0.1), 5, RodSection());
   const double L = b.RodLength(rod);
   // Between two elements, within one element, and from a node to a point between nodes.
@@ -276,6 +279,7 @@ struct Pulled {
 
 Pulled PullCantilever(int elements, double s) {
   ModelBuilder b;
+  b.SetConformMesh(false);  // the span kinds: features between nodes stay there
   // Axial and shear stiffness 1e9 EI: shear adds F s / GA to the tip, ~1e-9 of the bending.
   const RodId rod =
       b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements, RodSection(1e9 * kEI));

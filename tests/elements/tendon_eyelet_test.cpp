@@ -45,6 +45,7 @@ struct Scene {
 
 Scene MakeScene(std::mt19937& rng, double tension) {
   ModelBuilder b;
+  b.SetConformMesh(false);  // the span kinds: features between nodes stay there
   std::vector<Vec3> path;
   for (int i = 0; i <= 4; ++i) path.emplace_back(0.3 * i, 0.1 * std::sin(1.1 * i), 0.05 * i * i);
   const RodId rod = b.AddRodAlongPath("rod", path, 1, RodSection());
@@ -90,6 +91,7 @@ TEST(TendonEyelets, PlacedOnNodesOrBetweenThemAtTheirArcLength) {
   }
   // Off the rod: an error naming the eyelet.
   ModelBuilder b;
+  b.SetConformMesh(false);  // the span kinds: features between nodes stay there
   const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), 2, RodSection());
   BodyPoint off{kGround, Vec3::Zero()};
   off.rod = rod;
@@ -158,6 +160,7 @@ struct Cantilever {
 
 Cantilever SolveCantilever(int elements, double tension, bool by_length = false) {
   ModelBuilder b;
+  b.SetConformMesh(false);  // the span kinds: features between nodes stay there
   const RodId rod = b.AddStraightRod("rod", Vec3::Zero(), Vec3::UnitX(), elements, RodSection());
   b.FixNode(b.RodNodes(rod).front());
   std::vector<BodyPoint> eyelets;

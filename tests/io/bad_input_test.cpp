@@ -629,6 +629,11 @@ TEST(BadInput, ForceElementWithBothEndsOnTheGround) {
               "force element 'f': both ends are on ground");
   ExpectError(kRod + "forces:\n  f: {a: {at: A}, b: {body: r, s: 2}}\n", "bad.yaml:6:6",
               "forces.f: missing key 'stiffness' (or 'damping', or 'force')");
+  // A rest length without a spring would be ignored (issue 40 item 6).
+  ExpectError(kRod + "forces:\n  f: {a: {at: A}, b: {body: r, s: 2}, damping: 1, rest_length: 1}\n",
+              "bad.yaml:6:64",
+              "forces.f.rest_length: 'rest_length' is the spring's rest length; this force "
+              "element has no 'stiffness' (give one, or remove 'rest_length')");
 }
 
 TEST(BadInput, UnknownRunTimeInputName) {
@@ -680,7 +685,9 @@ TEST(BadInput, ActuatorRangeMustLieOnRodNodes) {
   ExpectError(Actuator("{type: rest_strain, rod: r, from: 0.5, vector: [0, 0, 0, 0, 0, 1]}"),
               "bad.yaml:6:40",
               "actuation.a.from: arc length 0.500000 m is not at a node of rod 'r' (the nearest "
-              "node is at 0.000000 m)");
+              "node is at 0.000000 m); a conforming mesh (defaults.conform_mesh: true) puts one "
+              "there",
+              {"defaults.conform_mesh=false"});
   ExpectError(Actuator("{type: rest_strain, rod: r, to: 3, vector: [0, 0, 0, 0, 0, 1]}"),
               "bad.yaml:6:38", "actuation.a.to: must not exceed the rod's length 2.000000 m");
   ExpectError(Actuator("{type: rest_strain, rod: r, from: 1, to: 1, vector: [0, 0, 0, 0, 0, 1]}"),

@@ -447,6 +447,7 @@ TEST(RunScene, SummaryIsValidJsonWithSettingsCountsAndStatistics) {
   EXPECT_EQ(number("counts.nodes"), 9.0);
   EXPECT_EQ(number("counts.free_nodes"), 8.0);
   EXPECT_EQ(number("counts.elements"), 8.0);
+  EXPECT_EQ(number("counts.conformed_nodes"), 0.0);
   EXPECT_EQ(number("counts.rods"), 1.0);
   EXPECT_EQ(number("counts.rigid_bodies"), 0.0);
   EXPECT_EQ(number("counts.joints"), 0.0);

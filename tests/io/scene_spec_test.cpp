@@ -60,7 +60,9 @@ TEST_F(SceneSpecTest, ReaderFillsThePlainSpecAndTheSourcesOfItsEntities) {
   EXPECT_EQ(sources_.joints[1].Part("node_b")->field, "joints.weld.between[1]");
   EXPECT_EQ(sources_.loads[1].Part("s")->location.line, 11);
   const Scene scene = CompileScene(spec_, sources_);
-  EXPECT_EQ(scene.model.rods[0].nodes.size(), 5u);
+  // 4 elements, and the load at s = 2 inside one of them: a node there (defaults.conform_mesh).
+  EXPECT_EQ(scene.model.rods[0].nodes.size(), 6u);
+  EXPECT_EQ(scene.model.conformed_nodes, 1);
   EXPECT_EQ(scene.model.joints.size(), 2u);
 }
 

@@ -136,9 +136,10 @@ outputs: {interval: 0.05}
 }
 
 TEST(TendonScene, EyeletsAtArcLengthsBetweenNodesSitOnTheElementSections) {
-  // Eyelets at element midpoints (s: 0.125, 0.375, ...; nodes at 0, 0.25, ...): the scene
-  // compiles them onto the elements' sections at xi = 1/2, and a static run gives the tip of the
-  // same model built in code (ModelBuilder with BodyPoint rod/arc_length).
+  // Eyelets at element midpoints (s: 0.125, 0.375, ...; nodes at 0, 0.25, ...): with
+  // defaults.conform_mesh false the scene compiles them onto the elements' sections at xi = 1/2,
+  // and a static run gives the tip of the same model built in code (ModelBuilder with
+  // BodyPoint rod/arc_length). By default (conforming) they are nodes: 8 elements.
   test::ScopedDir dir("tendon_eyelet_scene");
   const std::string path = dir.path() + "/midpoints.yaml";
   std::ofstream(path)
@@ -156,7 +157,14 @@ TEST(TendonScene, EyeletsAtArcLengthsBetweenNodesSitOnTheElementSections) {
          "      - {body: r, s: 1, offset: [0, 0.02, 0]}\n"
          "    tension: 50\n"
          "analysis: {type: static, load_steps: 20}\n";
-  const Scene s = LoadScene(path);
+  {
+    const Scene conforming = LoadScene(path);
+    EXPECT_EQ(conforming.model.conformed_nodes, 4);
+    EXPECT_EQ(conforming.model.rods[0].num_elements, 8);
+    for (const BodyPoint& p : conforming.model.tendons[0].eyelets) EXPECT_EQ(p.element, -1);
+  }
+  const Scene s = LoadScene(path, {"defaults.conform_mesh=false"});
+  EXPECT_EQ(s.model.conformed_nodes, 0);
   const Tendon& t = s.model.tendons[0];
   ASSERT_EQ(t.eyelets.size(), 6u);
   EXPECT_EQ(t.eyelets[0].element, -1);
@@ -171,6 +179,7 @@ TEST(TendonScene, EyeletsAtArcLengthsBetweenNodesSitOnTheElementSections) {
   ASSERT_TRUE(r.converged) << r.message;
 
   ModelBuilder b;
+  b.SetConformMesh(false);
   const RodId rod =
       b.AddStraightRod("r", Vec3::Zero(), Vec3::UnitX(), 4,
                        Section::FromDiagonals((Vec6() << 1e5, 1e5, 1e5, 1, 1, 1).finished()));
@@ -223,10 +232,13 @@ TEST(TendonScene, TenThousandEyeletsAlongARodAreEachAtTheirArcLength) {
     ASSERT_EQ(p.node, rod.nodes[static_cast<std::size_t>(k)]) << k;
     ASSERT_EQ(p.element, -1) << k;
   }
+  // The last one is inside the last element: the conforming mesh (the default) splits it.
   const BodyPoint& last = t.eyelets.back();
-  EXPECT_EQ(last.element, rod.first_element + kElements - 1);
-  EXPECT_EQ(last.node, rod.nodes[kElements - 1]);
-  EXPECT_NEAR(last.xi, 0.5, 1e-9);
+  EXPECT_EQ(m.conformed_nodes, 1);
+  EXPECT_EQ(rod.num_elements, kElements + 1);
+  EXPECT_EQ(last.element, -1);
+  EXPECT_EQ(last.node, rod.nodes[kElements]);
+  EXPECT_EQ(last.node, static_cast<int>(m.nodes.size()) - 1);  // appended
   EXPECT_EQ(m.tendon_segments.size(), static_cast<std::size_t>(kElements - 1));
 }
 

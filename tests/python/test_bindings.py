@@ -698,8 +698,10 @@ class ModelBuilderTest(unittest.TestCase):
     def test_tendon_eyelets_between_nodes_from_python(self):
         # Eyelets at the midpoints of 8 elements (BodyPoint.on_rod): the rod curls towards the
         # arc of curvature tau d / EI = 1 1/m (tip error 0.0295 m with 8 elements, second order,
-        # tests/elements/tendon_eyelet_test.cpp).
+        # tests/elements/tendon_eyelet_test.cpp), with the mesh as given (set_conform_mesh(False));
+        # conforming (the default), the 8 eyelets become nodes.
         b = sf.ModelBuilder()
+        b.set_conform_mesh(False)
         section = sf.Section(np.array([1e5, 1e5, 1e5, 1.0, 1.0, 1.0]), np.ones(6))
         rod = b.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 8, section)
         b.fix_node(b.find_node_at([0, 0, 0]).node)
@@ -717,6 +719,13 @@ class ModelBuilderTest(unittest.TestCase):
         arc = (1 - 5e-4) * np.array([math.sin(1.0), 1 - math.cos(1.0)])
         self.assertLess(np.linalg.norm(tip[:2] - arc), 0.032)
         self.assertGreater(np.linalg.norm(tip[:2] - arc), 0.027)
+        self.assertEqual(sim.model.conformed_nodes, 0)
+        b.set_conform_mesh(True)
+        model = b.build()
+        self.assertTrue(model.conform_mesh)
+        self.assertEqual(model.conformed_nodes, 8)
+        self.assertEqual(model.rods[0].num_elements, 16)
+        self.assertEqual([p.element for p in model.tendons[0].eyelets], [-1] * 10)
         with self.assertRaisesRegex(sf.InputError, "off the rod"):
             bad = sf.ModelBuilder()
             r = bad.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 2, section)
@@ -730,6 +739,7 @@ class ModelBuilderTest(unittest.TestCase):
         # actuator's 5 N curls the rod towards its ends' side against the spring
         # (tests/io/force_span_scene_test.cpp: tip y 0.0809 m, length 0.6930 m).
         b = sf.ModelBuilder()
+        b.set_conform_mesh(False)  # the span kind (conforming, the ends would be nodes)
         section = sf.Section(np.array([1e5, 1e5, 1e5, 1.0, 1.0, 1.0]), np.ones(6))
         rod = b.add_rod_along_path("rod", [[0, 0, 0], [1, 0, 0]], 4, section)
         b.fix_node(b.find_node_at([0, 0, 0]).node)

@@ -240,6 +240,24 @@ class Tendons(SpecTestCase):
         # A length instead of the BodySpec's path.
         self.assertEqual(sf.route_helical("arm", s, 0.008, 1.5, 0.25, length=0.3), route)
 
+    def test_conform_mesh(self):
+        """SceneSpec.conform_mesh (defaults.conform_mesh): an eyelet between nodes becomes a node
+        unless it is off (docs/numerics.md, 'Conforming rod meshes')."""
+        spec = self.arm_spec()
+        spec.add_tendon("short", eyelets=[{"body": "arm", "s": 0.0, "offset": (0, 0.009, 0)},
+                                          {"body": "arm", "s": 0.1, "offset": (0, 0.009, 0)}],
+                        tension=1.0)
+        self.assertTrue(spec.conform_mesh)
+        model = spec.compile().model
+        self.assertEqual(model.conformed_nodes, 1)  # s = 0.1 lies inside element 2 (0.075, 0.1125)
+        self.assertEqual(model.rods[0].num_elements, 9)
+        spec.conform_mesh = False
+        model = spec.compile().model
+        self.assertEqual(model.conformed_nodes, 0)
+        self.assertEqual(model.rods[0].num_elements, 8)
+        self.assertGreaterEqual(model.tendons[1].eyelets[1].element, 0)
+        self.assertFalse(sf.read_scene_spec(str(ARM), ["defaults.conform_mesh=false"]).conform_mesh)
+
     def test_route_rule_equals_the_long_form_file_and_builder(self):
         """The scene's route item ({'route': {...}}, docs/scene-format.md 'Routing helpers')
         from Python gives the eyelets of the long form, of the same route in a YAML file and of
@@ -510,7 +528,7 @@ class Defaults(unittest.TestCase):
                                  f"{key}: {f}")
         self.assertEqual(cpp.outputs.points[0], sf.OutputPointSpec())
         empty = sf.SceneSpec()
-        for f in ("name", "gravity", "rod_inertia", "points", "inputs"):
+        for f in ("name", "gravity", "rod_inertia", "conform_mesh", "points", "inputs"):
             self.assertEqual(getattr(cpp, f), getattr(empty, f), f)
         for f in ("all_joints", "joints", "interval", "vtk", "vtk_format", "vtk_interval"):
             self.assertEqual(getattr(cpp.outputs, f), getattr(empty.outputs, f), f)

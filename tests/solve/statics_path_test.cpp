@@ -14,6 +14,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -213,6 +214,86 @@ TEST(PathFollowingStatics, ArcLengthTracesTheVonMisesTrussThroughBothLimitPoints
   ASSERT_EQ(r2.limit_points.size(), 2u);
   EXPECT_NEAR(p_ref * r2.limit_points[0], p_star, 5e-6 * p_star);
   EXPECT_NEAR(p_ref * r2.limit_points[1], -p_star, 5e-6 * p_star);
+}
+
+// A snap-back: the truss loaded through a soft spring (stiffness k, a force element) from a
+// slider on the symmetry axis 1.5 m above the apex (a small body on a prismatic joint; the
+// spring shortens by P / k <= 0.8 m), the load on the slider. With
+// the apex descent w and the slider's descent u: P = P(w) (the truss) and u = w + P / k (the
+// spring), so du/dw = 1 + P'(w) / k turns negative where P'(w) < -k (P'(h) = -2 EA (1/a - 1/L0)
+// = -0.211 here, k = 0.1): the path turns back in u as well as in P. The default arc-length
+// settings trace it through the two load limit points and the two displacement turning points
+// to the far branch at P_ref, every converged point on the closed form.
+TEST(PathFollowingStatics, ArcLengthWithDefaultSettingsTracesASnapBack) {
+  const double p_ref = 0.08, k = 0.1, c = 1.5, p_star = TrussLimitLoad();
+  ModelBuilder b;
+  const Section bar = Section::FromDiagonals((Vec6() << kEA, kEA, kEA, 1.0, 1.0, 1.0).finished());
+  const Vec3 left(-kA, 0.0, 0.0), right(kA, 0.0, 0.0), top(0.0, kH, 0.0), slide(0.0, kH + c, 0.0);
+  const RodId r0 = b.AddStraightRod("left", left, top, 1, bar);
+  const RodId r1 = b.AddStraightRod("right", right, top, 1, bar);
+  const NodeId apex = b.RodNodes(r0).back();
+  b.AddJointAt("left support", JointType::kRevolute, kGround, b.RodNodes(r0).front(), left);
+  b.AddJointAt("right support", JointType::kRevolute, kGround, b.RodNodes(r1).front(), right);
+  b.AddJointAt("apex", JointType::kRevolute, apex, b.RodNodes(r1).back(), top);
+  const NodeId slider = b.AddNode(SE3::Translation(slide), "slider");
+  b.AddRigidBody("slider", slider, 1e-3, Vec3::Zero(), 1e-6 * Mat3::Identity());
+  b.AddJointAt("guide", JointType::kPrismatic, kGround, slider, slide, -Vec3::UnitY());
+  ForceElement spring;
+  spring.name = "spring";
+  spring.a = {slider, Vec3::Zero()};
+  spring.b = {apex, Vec3::Zero()};
+  spring.stiffness = k;
+  b.AddForceElement(spring);
+  PointLoad load;
+  load.node = slider;
+  load.force = Vec3(0.0, -p_ref, 0.0);
+  b.AddPointLoad(load);
+  const Model m = b.Build();
+  Data d = MakeData(m);
+  StaticOptions opt;
+  opt.method = StaticMethod::kArcLength;  // every other setting at its default
+  // The closed-form turning points of u: P'(w) = -k, by bisection on each side of w = h.
+  auto slope = [](double w) { return (TrussLoad(w + 1e-6) - TrussLoad(w - 1e-6)) / 2e-6; };
+  auto turn = [&](double lo, double hi) {  // slope + k changes sign in [lo, hi]
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      ((slope(lo) + k) * (slope(mid) + k) <= 0.0 ? hi : lo) = mid;
+    }
+    return 0.5 * (lo + hi);
+  };
+  const double w_a = turn(0.0, kH), w_b = turn(kH, 2.0 * kH);
+  const double u_a = w_a + TrussLoad(w_a) / k, u_b = w_b + TrussLoad(w_b) / k;
+  ASSERT_GT(u_a, u_b + 0.1);  // a real snap-back: u falls by more than 0.1 m
+  double max_load_error = 0.0, max_spring_error = 0.0, u_max = -1.0, u_min_after = 1e9;
+  double w_max = 0.0;
+  const StaticResult r = SolveStatic(m, d, opt, {}, [&](const StaticStep& step) {
+    const double w = kH - d.H[apex.index()].x.y(), u = kH + c - d.H[slider.index()].x.y();
+    const double p = p_ref * step.load_factor;
+    max_load_error = std::max(max_load_error, std::abs(p - TrussLoad(w)));
+    max_spring_error = std::max(max_spring_error, std::abs(u - w - p / k));
+    u_max = std::max(u_max, u);
+    if (u_max > u_a - 0.02) u_min_after = std::min(u_min_after, u);  // after the first turn
+    w_max = std::max(w_max, w);
+  });
+  ASSERT_TRUE(r.converged) << r.message;
+  EXPECT_EQ(r.load_factor, 1.0);
+  EXPECT_LT(max_load_error, 1e-8 * p_star);
+  EXPECT_LT(max_spring_error, 1e-8);
+  // Both displacement turning points passed: u rose to u_a, fell back to u_b, and rose again.
+  EXPECT_GT(u_max, u_a - 0.02);
+  EXPECT_LT(u_min_after, u_b + 0.02);
+  EXPECT_GT(w_max, 1.0);
+  // And both load limit points (located by the parabola through the steps around each: with
+  // the default arcs within 1.1 % and 0.5 %, measured).
+  ASSERT_EQ(r.limit_points.size(), 2u);
+  EXPECT_NEAR(p_ref * r.limit_points[0], p_star, 2e-2 * p_star);
+  EXPECT_NEAR(p_ref * r.limit_points[1], -p_star, 2e-2 * p_star);
+  EXPECT_LT(r.load_steps, 40);
+  std::printf(
+      "snap-back: %d steps, %d Newton solves, u turns at %.4f and %.4f m (w %.4f, %.4f), limit "
+      "loads %.4g %.4g (P* %.4g)\n",
+      r.load_steps, r.total_iterations, u_a, u_b, w_a, w_b, p_ref * r.limit_points[0],
+      p_ref * r.limit_points[1], p_star);
 }
 
 // The arc-length path with the sparse LU (docs/numerics.md, "Sparse direct solve"): the same

@@ -124,7 +124,8 @@ class ModelBuilder {
   // A tendon through `eyelets` (at least two body points, in routing order: node frames with
   // node-frame offsets, or world points on kGround) pulling with tension tau(t) [N]
   // (docs/numerics.md, "Tendons and force elements"). Eyelets sit on nodes: an eyelet on a rod is a section frame's node
-  // plus an offset (FindRodNodeAtArcLength places one at an arc length). Build checks: at least
+  // plus an offset (FindRodNodeAtArcLength places one at an arc length); one given by rod and
+  // arc length between nodes gets a node of its own (SetConformMesh) or sits on the element. Build checks: at least
   // two eyelets, valid nodes, finite offsets, consecutive eyelets apart in the reference
   // configuration, and a tension profile that cannot become negative (each term's lower bound
   // summed). Errors carry EntityKind::kTendon, part "eyelets[i]" for an eyelet.
@@ -145,9 +146,12 @@ class ModelBuilder {
   // arc-length distance otherwise.
   NodeMatch FindRodNodeAtArcLength(RodId rod, double s, double tolerance = -1.0) const;
   // Internal actuation of a rod (model.h, Actuator; docs/numerics.md, "Active stress and rest strain"). Build checks: a valid
-  // rod, [from, to] inside it and at nodes (an error names the nearest node's arc length),
-  // positive area for pressure and muscle, non-negative max_stress, finite offset and vector,
-  // the profile's inputs, unique names. Errors carry EntityKind::kActuator.
+  // rod, [from, to] inside it and at nodes (SetConformMesh puts nodes there; without it an
+  // error names the nearest node's arc length), positive area for pressure and muscle,
+  // non-negative max_stress, finite offset and vector, the profile's inputs, unique names, and
+  // no value the type does not use (a chamber's or muscle's axial offset component, a vector
+  // on a chamber, max_stress on a pressure chamber, area, offset or max_stress on a rest strain
+  // or active stress). Errors carry EntityKind::kActuator and the field as part.
   ActuatorId AddActuator(const Actuator& actuator);
   PointLoadId AddPointLoad(const PointLoad& load);
   RodLoadId AddRodLoad(const RodLoad& load);
@@ -192,6 +196,15 @@ class ModelBuilder {
   void SetMemoryLimit(std::size_t bytes) { model_.memory_limit = bytes; }
   // The direct solver of the Newton systems (Model::linear_solver; kAuto by default).
   void SetLinearSolver(LinearSolver solver) { model_.linear_solver = solver; }
+
+  // Whether Build conforms the rod meshes to the features placed on them (Model::conform_mesh,
+  // default true; docs/numerics.md, "Conforming rod meshes"): a node where a tendon eyelet, a
+  // force element's end, a concentrated rod load or an actuator's from/to falls inside an
+  // element, the element split there (second-order convergence; element counts grow by the
+  // nodes added, Model::conformed_nodes). The nodes added come after all others, so NodeIds and
+  // RodNodes taken before Build stay valid; element indices of the built Model count the split
+  // elements.
+  void SetConformMesh(bool conform) { model_.conform_mesh = conform; }
 
   // Validates and computes sizes and the ordering. Throws InputError.
   Model Build() const;

@@ -187,7 +187,8 @@ struct SceneSpec {
   std::string name;
   Vec3 gravity = Vec3::Zero();  // [m/s^2]
   RodInertia rod_inertia = RodInertia::kExact;
-  LinearSolver linear_solver = LinearSolver::kAuto;    // analysis.linear_solver
+  LinearSolver linear_solver = LinearSolver::kAuto;  // analysis.linear_solver
+  bool conform_mesh = true;  // defaults.conform_mesh (ModelBuilder::SetConformMesh)
   std::vector<std::pair<std::string, Vec3>> points;    // named points [m], world
   std::vector<std::pair<std::string, double>> inputs;  // run-time inputs and their defaults
   std::vector<BodySpec> bodies;

@@ -628,6 +628,14 @@ struct Model {
   double coupling_flops = 0.0;
   double length_scale = 1.0;  // characteristic length (bounding box diagonal) [m]
 
+  // The rod meshes conform to the scene's features (docs/numerics.md, "Conforming rod
+  // meshes"; scene: defaults.conform_mesh): Build puts a node wherever a tendon eyelet, a
+  // force element's end, a concentrated rod load or an actuator's end falls between a rod's
+  // nodes, splitting the element there. conformed_nodes: how many nodes Build added (after the
+  // nodes the builder was given, so every NodeId handed out stays valid).
+  bool conform_mesh = true;
+  int conformed_nodes = 0;
+
   // Constraint rows found linearly dependent at build time (redundant constraints, e.g. a
   // planar loop closed with spatial revolute joints). Their multipliers are held at zero,
   // which leaves the motion unchanged; see ModelBuilder::Build.
