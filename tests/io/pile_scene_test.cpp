@@ -161,7 +161,6 @@ TEST(PileScene, RodDroppedAcrossAnotherLandsForEveryFrictionWithoutHalving) {
   }
 }
 
-
 // Two crossed layers of ten rods (800 elements) dropped onto the ground with mu = 1: no
 // halving, the energy never above its start, every one of the 100 crossings keeps its upper rod
 // above (never through), overlaps within a small fraction of the radius, and the pile at rest
@@ -172,7 +171,7 @@ TEST(PileScene, TwentyRodsInTwoCrossedLayersSettleWithoutHalvingOrPassingThrough
   Data d = MakeData(m);
   ASSERT_EQ(m.rods.size(), 20u);
   std::vector<Crossing> crossings;
-  for (int i = 0; i < 10; ++i)    // layer 0: along x at y = c_i
+  for (int i = 0; i < 10; ++i)      // layer 0: along x at y = c_i
     for (int j = 0; j < 10; ++j) {  // layer 1: along y at x = c_j
       const double ci = (i - 4.5) * 0.2, cj = (j - 4.5) * 0.2;
       const Rod& lower = m.rods[static_cast<std::size_t>(i)];
