@@ -150,8 +150,9 @@ int Check(const std::string& scene_path, const std::vector<std::string>& overrid
           a.statics.start_load_factor, a.statics.end_load_factor, a.statics.load_steps,
           a.statics.time);
     else
-      std::printf("  analysis: dynamic from %g to %g s, step %g s, rho_inf %g%s\n", a.start_time,
-                  a.end_time, a.step, a.dynamic.rho_inf,
+      std::printf("  analysis: dynamic from %g to %g s, step %g s, rho_inf %g%s%s\n", a.start_time,
+                  a.end_time, a.step, screwfem::ResolvedRhoInf(m, a.dynamic),
+                  a.dynamic.rho_inf < 0.0 ? " (auto)" : "",
                   a.static_preload ? ", static preload" : "");
     std::printf("  %zu nodes, %zu rods (%zu elements), %zu rigid bodies, %zu joints, %zu loads\n",
                 m.nodes.size(), m.rods.size(), m.elements.size(), m.bodies.size(), m.joints.size(),

@@ -29,7 +29,8 @@ The sections "Spring chain against MuJoCo" (written by hand from the output of
 screwfem_bench_mujoco, which is not a Google Benchmark program), "Animation of `screwfem plot`"
 (written by bench/plot_animate_bench.py), "Parameter sweeps on Dask" (written by
 bench/sweep_bench.py, a history of its runs) and "Vector environments (Python)" (written by
-bench/python_vector_env.py, its latest run) of an existing OUTPUT_MD are kept, at the end, in
+bench/python_vector_env.py, its latest run) and "Piles of rods" (written by bench/pile_bench.py)
+of an existing OUTPUT_MD are kept, at the end, in
 the order they have there.
 A failed benchmark is listed as failed and makes the exit status 1 (after writing the file).
 Standard library only.
@@ -953,7 +954,9 @@ SWEEP_SECTION = "## Parameter sweeps on Dask"
 PLOT_SECTION = "## Animation of `screwfem plot`"
 VECTOR_ENV_SECTION = "## Vector environments (Python)"
 CHECK_SECTION = "## Checks at size"
-KEPT_SECTIONS = (MUJOCO_SECTION, PLOT_SECTION, SWEEP_SECTION, VECTOR_ENV_SECTION, CHECK_SECTION)
+PILE_SECTION = "## Piles of rods"
+KEPT_SECTIONS = (MUJOCO_SECTION, PLOT_SECTION, SWEEP_SECTION, VECTOR_ENV_SECTION, CHECK_SECTION,
+                 PILE_SECTION)
 
 
 def main():

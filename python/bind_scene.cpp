@@ -140,6 +140,7 @@ void BindSettings(py::module_& m) {
                                   "How joint constraints enter a step: index 3, stabilised "
                                   "index 2 (GGL) or auto (GGL without rods).");
 
+  m.attr("AUTO_RHO_INF") = kAutoRhoInf;
   py::class_<DynamicOptions>(m, "DynamicOptions",
                              "Settings of the generalized-alpha integrator (dynamics.h). Checked "
                              "when used (ValidateDynamicOptions): out-of-range values, tolerances "
@@ -147,7 +148,11 @@ void BindSettings(py::module_& m) {
                              "InputError.")
       .def(py::init<>())
       .def_readwrite("rho_inf", &DynamicOptions::rho_inf,
-                     "Spectral radius at infinity in [0, 1] (1: no numerical damping).")
+                     "Spectral radius at infinity in [0, 1] (1: no numerical damping); negative "
+                     "(the default, AUTO_RHO_INF): 0.9, or 0 in a model with contact.")
+      .def_readwrite("line_search", &DynamicOptions::line_search,
+                     "Contact line search: in a model with contact (index 3), a Newton "
+                     "correction after which the residual grew is halved (up to 6 times).")
       .def_readwrite("max_iterations", &DynamicOptions::max_iterations,
                      "Newton iterations per step, in [1, 1000].")
       .def_readwrite("max_halvings", &DynamicOptions::max_halvings,
@@ -292,7 +297,8 @@ void BindSettings(py::module_& m) {
       .def_property(
           "rho_inf", [](const AnalysisSettings& a) { return a.dynamic.rho_inf; },
           [](AnalysisSettings& a, double rho) { a.dynamic.rho_inf = rho; },
-          "Shorthand for dynamic.rho_inf: spectral radius at infinity in [0, 1].");
+          "Shorthand for dynamic.rho_inf: spectral radius at infinity in [0, 1]; negative: "
+          "auto (0.9, or 0 with contact).");
 }
 
 void BindScenesAndRuns(py::module_& m) {

@@ -21,6 +21,7 @@
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/assemble/outputs.h"
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/progress.h"
@@ -772,7 +773,8 @@ class Recording::Impl {
     if (!statics) {
       j.Field("start_time", start_time_).Field("end_time", a.end_time).Field("step", a.step);
       j.Field("align_steps", a.align_steps).Field("static_preload", a.static_preload);
-      j.Field("rho_inf", d.rho_inf).Field("max_iterations", d.max_iterations);
+      // rho_inf as the run used it (auto resolved: 0 with contact, docs/numerics.md).
+      j.Field("rho_inf", ResolvedRhoInf(model_, d)).Field("max_iterations", d.max_iterations);
       j.Field("max_halvings", d.max_halvings);
       j.Field("increment_tolerance", d.increment_tolerance);
       j.Field("constraint_tolerance", d.constraint_tolerance);
@@ -818,6 +820,22 @@ class Recording::Impl {
     // (only when off, so that other runs' summaries keep their text)
     if (!outputs_.reactions) j.Field("reactions", false);
     if (!outputs_.energy) j.Field("energy", false);
+    if (HasContact(model_)) {  // the contact law as the run used it, defaults resolved
+      const ContactSettings& c = model_.contact;
+      j.Key("contact").BeginObject();
+      j.Field("stiffness", c.stiffness).Field("onset", c.onset);
+      j.Field("damping_ratio", c.damping_ratio).Field("friction", c.friction);
+      j.Field("friction_law", NameOf(c.friction_law));
+      if (c.friction_law == FrictionLaw::kStick) {
+        const ContactLawParameters law = ContactLawFor(c, 0.0, false);  // defaults resolved
+        j.Field("static_friction", law.static_friction);
+        j.Field("tangential_stiffness", law.tangential_stiffness);
+      } else {
+        j.Field("slip_velocity", c.slip_velocity);
+      }
+      if (!statics) j.Field("line_search", d.line_search);
+      j.EndObject();
+    }
     if (outputs_.rod_fields) {  // (only then, so that other runs' summaries keep their text)
       j.Field("rod_fields", true);
       if (FieldsApart())
@@ -885,6 +903,7 @@ class Recording::Impl {
     j.Field("refactorization_fallbacks", static_cast<long>(data_.sparse.fallbacks()));
     j.EndObject();
     j.Field("step_retries", integ_.retries);
+    if (HasContact(model_)) j.Field("line_search_halvings", integ_.line_search_halvings);
     j.Field("estimated_convergences", integ_.estimated_convergences);
     j.Field("restarts", integ_.restarts);
     j.Field("perturbed_start_skips", integ_.perturbed_start_skips);

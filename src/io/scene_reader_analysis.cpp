@@ -46,7 +46,8 @@ void SceneReader::ReadAnalysis(const Node* node) {
                 "max_step",
                 "initial_step",
                 "statics",
-                "threads"});
+                "threads",
+                "line_search"});
   if (const Node* t = node->Find("type")) a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
   ReadTimes(*node, path);
   ReadSolverOptions(*node, path);
@@ -167,10 +168,17 @@ void SceneReader::ReadStepControl(const Node& node, const std::string& path) {
 void SceneReader::ReadSolverOptions(const Node& node, const std::string& path) {
   AnalysisSettings* a = &spec_.analysis;
   if (const Node* t = node.Find("rho_inf")) {
-    a->dynamic.rho_inf = r_.Number(*t, Join(path, "rho_inf"));
-    if (!(a->dynamic.rho_inf >= 0.0 && a->dynamic.rho_inf <= 1.0))
-      r_.Fail(t->location, Join(path, "rho_inf"), "expected a spectral radius in [0, 1]");
+    if (t->IsScalar() && !t->quoted && t->scalar == "auto") {
+      a->dynamic.rho_inf = kAutoRhoInf;
+    } else {
+      a->dynamic.rho_inf = r_.Number(*t, Join(path, "rho_inf"));
+      if (!(a->dynamic.rho_inf >= 0.0 && a->dynamic.rho_inf <= 1.0))
+        r_.Fail(t->location, Join(path, "rho_inf"),
+                "expected a spectral radius in [0, 1] or 'auto'");
+    }
   }
+  if (const Node* t = node.Find("line_search"))
+    a->dynamic.line_search = r_.Bool(*t, Join(path, "line_search"));
   if (const Node* t = node.Find("tolerances")) {
     const std::string tp = Join(path, "tolerances");
     r_.CheckKeys(*t, tp, {"increment", "constraint", "residual"});

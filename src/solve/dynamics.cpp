@@ -44,11 +44,17 @@ void ConstraintsAlong(const Model& model, Data& data, const State& base, double 
 
 }  // namespace
 
+double ResolvedRhoInf(const Model& model, const DynamicOptions& options) {
+  if (options.rho_inf >= 0.0) return options.rho_inf;
+  return HasContact(model) ? kContactRhoInf : kDefaultRhoInf;
+}
+
 void ValidateDynamicOptions(const DynamicOptions& o, const std::string& owner) {
   const auto require = [&](bool ok, const char* field, const char* what) {
     if (!ok) throw InputError(owner + "." + field + ": " + what);
   };
-  require(o.rho_inf >= 0.0 && o.rho_inf <= 1.0, "rho_inf", "must lie in [0, 1]");
+  require(o.rho_inf <= 1.0 && !std::isnan(o.rho_inf), "rho_inf",
+          "must lie in [0, 1] (negative: auto)");
   require(o.max_iterations >= 1 && o.max_iterations <= kMaxNewtonIterations, "max_iterations",
           "must lie in [1, 1000]");
   require(o.max_halvings >= 0 && o.max_halvings <= kMaxHalvings, "max_halvings",
@@ -257,7 +263,8 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
         model.rods.empty() ? ConstraintFormulation::kGgl : ConstraintFormulation::kIndex3;
     integ.options.perturbed_start = options.perturbed_start && model.rods.empty();
   }
-  integ.params = GeneralizedAlpha::FromSpectralRadius(options.rho_inf);
+  integ.options.rho_inf = ResolvedRhoInf(model, options);
+  integ.params = GeneralizedAlpha::FromSpectralRadius(integ.options.rho_inf);
   const int nv = model.nv, nc = model.nc;
   integ.a = Eigen::VectorXd::Zero(nv);
   integ.v_start = integ.vdot_start = integ.a_start = integ.dq = integ.a_base = integ.v_work =
@@ -265,6 +272,10 @@ bool InitializeDynamics(const Model& model, Data& data, Integrator& integ,
   integ.lambda_start = integ.phi_plus = integ.phi_minus = integ.phi_zero = integ.bdot_v =
       Eigen::VectorXd::Zero(nc);
   if (integ.options.constraints == ConstraintFormulation::kGgl) AllocateGglWorkspace(model, integ);
+  integ.line_search = integ.options.line_search &&
+                      integ.options.constraints == ConstraintFormulation::kIndex3 &&
+                      HasContact(model);
+  integ.line_search_dx = integ.line_search ? Eigen::VectorXd::Zero(nv + nc) : Eigen::VectorXd();
   // The workspaces of error-controlled steps and of the perturbed start only for the runs
   // that use them (PrepareAdaptiveSteps; options.perturbed_start): 12 vectors of nv and two
   // copies of the configuration, 0.75 kB per rod element that fixed steps never touch.

@@ -272,7 +272,19 @@ bool Correct(const Model& model, Data& data, Integrator& integ, const StepConsta
   data.v += c.gamma_p * dx;
   data.vdot += c.beta_p * dx;
   data.lambda += data.increment.tail(model.nc) / c.bh2;
+  if (integ.line_search) integ.line_search_dx = data.increment.head(model.nv + model.nc);
   return true;
+}
+
+// The contact line search (DynamicOptions::line_search): takes back `share` of the last
+// correction (Correct's, index 3), moving dq, v, vdot and lambda along it consistently.
+void TakeBackCorrection(const Model& model, Data& data, Integrator& integ, const StepConstants& c,
+                        double share) {
+  const auto dx = integ.line_search_dx.head(model.nv);
+  integ.dq -= (share / c.h) * dx;
+  data.v -= (share * c.gamma_p) * dx;
+  data.vdot -= (share * c.beta_p) * dx;
+  data.lambda -= (share / c.bh2) * integ.line_search_dx.tail(model.nc);
 }
 
 // Accept: the auxiliary acceleration of the converged state, and the next step's predictor:
@@ -407,14 +419,30 @@ int TryStep(const Model& model, Data& data, Integrator& integ, double h, double 
   if (ggl) PrepareGglStep(model, data, integ, h, conservative);
   for (int it = 0; it <= opt.max_iterations; ++it) {
     UpdateConfiguration(model, data, integ, h);
-    const bool need_matrix = n.full_newton || !n.factorized;
+    bool need_matrix = n.full_newton || !n.factorized;
     // Once the last correction passed the increment test the step usually converges here:
     // assemble the residual alone, and the matrix only if the residual test then fails (the
     // residual does not depend on it).
     const bool may_converge = n.last_increment <= opt.increment_tolerance;
     const bool with_matrix = need_matrix && !may_converge && it < opt.max_iterations;
-    if (!AssembleIterate(model, data, opt, o, with_matrix, why)) return -1;
-    IterateMeasures m = MeasureIterate(model, data, opt);
+    bool assembled = AssembleIterate(model, data, opt, o, with_matrix, why);
+    IterateMeasures m{};
+    if (assembled) m = MeasureIterate(model, data, opt);
+    // The contact line search: a correction after which the residual grew (or the state is
+    // invalid) is halved, and the iteration goes on from there with full Newton.
+    if (integ.line_search && it > 0) {
+      double share = 0.5;
+      for (int k = 0; k < kMaxLineSearchHalvings; ++k, share *= 0.5) {
+        if (assembled && (m.residual_ok || !(m.res > n.last_res))) break;
+        TakeBackCorrection(model, data, integ, c, share);
+        ++integ.line_search_halvings;
+        n.full_newton = need_matrix = true;
+        UpdateConfiguration(model, data, integ, h);
+        assembled = AssembleIterate(model, data, opt, o, with_matrix, why);
+        if (assembled) m = MeasureIterate(model, data, opt);
+      }
+    }
+    if (!assembled) return -1;
     if (ggl) MeasureVelocityConstraint(model, data, integ, h, o.time, m);
     if (it > 0 && m.residual_ok && may_converge) {
       if (ActiveSetChanged(model, data, o.time, n)) continue;

@@ -160,6 +160,12 @@ struct ContactState {
 // `dynamics`: with damping and the velocities (false: the static law).
 ContactState CalcContactState(const Model& model, const Data& data, int pair, bool dynamics = true);
 
+// True when the model has contact: obstacle pairs or contact segments (rod capsules, body
+// shapes) that the broad phase may pair.
+inline bool HasContact(const Model& model) {
+  return !model.contact_pairs.empty() || !model.contact_segments.empty();
+}
+
 // What a failed step's message adds when contact may be the cause (empty without contact or
 // without an active or near pair at the state in data): the number of contacts active, the
 // law's stiffness, onset and friction law with the keys that change them, and, under the smooth

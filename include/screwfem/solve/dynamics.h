@@ -78,8 +78,21 @@ struct EnumNames<ConstraintFormulation> {
 // penalty contacts whose axial modes the step does not resolve).
 inline constexpr double kPerturbedStartMaxChange = 0.5;
 
+// DynamicOptions::rho_inf chosen by the model (any negative value; docs/numerics.md, "Impacts
+// and the contact line search"): kDefaultRhoInf, or kContactRhoInf in a model with contact.
+inline constexpr double kAutoRhoInf = -1.0;
+inline constexpr double kDefaultRhoInf = 0.9;
+// A penalty contact that the step does not resolve (omega_c h >> 1) is a stiff mode that any
+// rho_inf near 1 leaves ringing; in its one-sided spring the ringing turns into bounces that
+// gain energy (two crossed rod layers, h = 1/240 s: 57 J grew to 194 J at 0.9, never above 57 J
+// at 0). 0 annihilates it in a step and keeps the scheme second-order accurate.
+inline constexpr double kContactRhoInf = 0.0;
+
 struct DynamicOptions {
-  double rho_inf = 0.9;     // spectral radius at infinity (1: no numerical damping)
+  // Spectral radius at infinity in [0, 1] (1: no numerical damping); kAutoRhoInf (negative):
+  // kDefaultRhoInf, or kContactRhoInf in a model with contact (InitializeDynamics resolves it
+  // into Integrator::options).
+  double rho_inf = kAutoRhoInf;
   int max_iterations = 20;  // Newton iterations per step
   int max_halvings = 8;     // a failed step is retried as 2, 4, ... 2^max substeps
   // Converged when the last Newton correction of the positions is below increment_tolerance
@@ -151,6 +164,14 @@ struct DynamicOptions {
   //            the time-discretisation error (docs/numerics.md, "Which formulation is the
   //            default").
   ConstraintFormulation constraints = ConstraintFormulation::kAuto;
+  // Contact line search (docs/numerics.md, "Impacts and the contact line search"): in a model
+  // with contact (obstacle pairs or contact segments) and under kIndex3, a Newton correction
+  // after which the residual is larger (or the assembly fails) is halved, up to
+  // kMaxLineSearchHalvings times, before the next correction: a penalty contact activated
+  // inside a step otherwise makes the iterates cycle between "deep inside" (a linearisation
+  // that overshoots to a gap beyond the onset, where the force and its tangent vanish) and
+  // "apart" (a free flight back inside).
+  bool line_search = true;
   // Error-controlled steps (AdaptiveStep, AdvanceTo; docs/numerics.md, "Adaptive time steps";
   // docs/numerics.md, "Adaptive time steps"). A step is accepted when the weighted RMS of its local position error
   // estimate C h^2 (a_{n+1} - a_n) is at most 1, each component weighted by
@@ -166,18 +187,25 @@ struct DynamicOptions {
 };
 
 // Throws InputError "<owner>.<field>: what is expected" unless every setting is in range:
-// rho_inf in [0, 1]; absolute and relative tolerances finite and > 0 (relative may be 0);
+// rho_inf in [0, 1] or negative (auto), not NaN; absolute and relative tolerances finite and > 0 (relative may be 0);
 // 0 < min_step <= max_step (max_step may be infinite); initial_step >= 0 and finite; max_iterations in [1, kMaxNewtonIterations]; max_halvings in
 // [0, kMaxHalvings] (a step is never cut below 2^-30 of itself, so a failing step ends);
 // tolerances finite and > 0; refresh_ratio in (0, 1); enums one of their values. The one
 // check of these settings, for scenes, runs and the Python bindings.
 void ValidateDynamicOptions(const DynamicOptions& options, const std::string& owner);
 
+// The spectral radius a run with these options uses on this model (DynamicOptions::rho_inf,
+// kAutoRhoInf resolved).
+double ResolvedRhoInf(const Model& model, const DynamicOptions& options);
+
 // Largest contraction of two consecutive corrections for which ConvergenceTest::kEstimated
 // accepts a step without assembling the residual at its last iterate, and the fraction of
 // the tolerances the estimated residual and constraints must stay below.
 inline constexpr double kMaxEstimateContraction = 1e-2;
 inline constexpr double kEstimateSafety = 0.1;
+
+// Halvings of one Newton correction by the contact line search (DynamicOptions::line_search).
+inline constexpr int kMaxLineSearchHalvings = 6;
 
 // Per-simulation integrator workspace (allocated once by InitializeDynamics).
 struct Integrator {
@@ -187,6 +215,10 @@ struct Integrator {
   // Step workspace.
   State q_start;
   Eigen::VectorXd v_start, vdot_start, a_start, lambda_start, dq, a_base;
+  // The contact line search (DynamicOptions::line_search): on for this model (contact, index 3),
+  // and the last Newton correction (nv + nc; sized only when on).
+  bool line_search = false;
+  Eigen::VectorXd line_search_dx;
   // Restarts: the breakpoints after the start time (sorted, ProfileBreakpoints) and the
   // workspace of the consistent-acceleration solve (Bdot v by differences, docs/numerics.md, "Restarts at breakpoints").
   std::vector<double> breakpoints;
@@ -238,6 +270,7 @@ struct Integrator {
   long perturbed_start_skips = 0;   // starts and restarts left unperturbed (perturbed_start)
   long tendon_switches = 0;         // steps in which a length-driven tendon went slack or taut
   long tendon_catches = 0;          // inelastic catches of length-driven tendons (CatchTendons)
+  long line_search_halvings = 0;    // Newton corrections halved by the contact line search
   int max_iterations_in_step = 0;
   // Step history (every accepted step or substep, fixed or adaptive): the smallest, largest
   // and summed step sizes, and the steps AdaptiveStep rejected (error estimate above the
