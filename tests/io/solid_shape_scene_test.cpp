@@ -99,7 +99,7 @@ TEST(SolidShapeScene, BadInputIsReportedAtFileLineColumnNamingTheField) {
   can: {type: rigid, at: [0, 0, 1], mass: 1, inertia: [1, 1, 1], free: true,
         shapes: [{type: cylinder, from: [0, 0, 1], to: [0, 0, 1], radius: 0.1}]}
 )",
-              "bad.yaml:3:52: bodies.can.shapes[0].to", "expected 'to' apart from 'from'");
+              "bad.yaml:3:56: bodies.can.shapes[0].to", "expected 'to' apart from 'from'");
   ExpectError(R"(bodies:
   can: {type: rigid, at: [0, 0, 1], mass: 1, inertia: [1, 1, 1], free: true,
         shapes: [{type: cylinder, from: [0, 0, 1], to: [0, 0, 2], radius: 0.1,
@@ -116,21 +116,21 @@ TEST(SolidShapeScene, BadInputIsReportedAtFileLineColumnNamingTheField) {
   ExpectError(kHead +
                   "contact:\n  obstacles:\n    belt: {type: plane, point: [0, 0, 0], normal: [0, "
                   "0, 1], velocity: [0, 0, 1]}\n",
-              "bad.yaml:7:77: contact.obstacles.belt.velocity",
+              "bad.yaml:7:72: contact.obstacles.belt.velocity",
               "expected a velocity along the plane");
   ExpectError(kHead +
                   "contact:\n  obstacles:\n    belt: {type: plane, point: [0, 0, 0], normal: [0, "
                   "0, 1], motion: 1}\n",
-              "bad.yaml:7:75: contact.obstacles.belt.motion",
+              "bad.yaml:7:70: contact.obstacles.belt.motion",
               "'motion' scales 'velocity' or 'spin'");
   ExpectError(kHead +
                   "contact:\n  obstacles:\n    post: {type: sphere, center: [0, 0, 0], radius: "
                   "1, spin: 2}\n",
-              "bad.yaml:7:57: contact.obstacles.post.spin", "'spin' is not used by");
+              "bad.yaml:7:56: contact.obstacles.post.spin", "'spin' is not used by");
   ExpectError(kHead +
                   "contact:\n  obstacles:\n    wall: {type: box, center: [0, 0, 0], half_sizes: "
                   "[1, -1, 1]}\n",
-              "bad.yaml:7:57: contact.obstacles.wall.half_sizes", "expected positive half sizes");
+              "bad.yaml:7:54: contact.obstacles.wall.half_sizes", "expected positive half sizes");
   ExpectError(
       kHead + "contact:\n  obstacles:\n    wall: {type: box, center: [0, 0, 0], radius: 1}\n",
       "bad.yaml:7:42: contact.obstacles.wall.radius", "'radius' is not used by boxes");
