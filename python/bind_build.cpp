@@ -344,37 +344,55 @@ void BindValues(py::module_& m) {
   py::class_<ContactShape>(m, "ContactShape",
                            "A collision shape in a rigid body's frame (model.h): sphere (from = "
                            "centre, radius), capsule (from, to, radius), box (from = centre, to = "
-                           "half sizes along the body axes). Node-frame components [m].")
+                           "half sizes along the columns of rotation), cylinder (from, to: the "
+                           "axis, radius; flat ends). Node-frame components [m].")
       .def(py::init([](int body, ContactShapeType type, const Vec3& from, const Vec3& to,
-                       double radius) {
-             return ContactShape{body, type, from, to, radius};
+                       double radius, const Mat3& rotation) {
+             return ContactShape{body, type, from, to, radius, rotation};
            }),
            py::arg("body"), py::arg("type"), py::arg("from_"), py::arg("to") = Vec3::Zero(),
-           py::arg("radius") = 0.0)
+           py::arg("radius") = 0.0, py::arg("rotation") = Mat3::Identity())
       .def_readwrite("body", &ContactShape::body,
                      "The rigid body the shape moves with (index into Model.bodies).")
-      .def_readwrite("type", &ContactShape::type, "ContactShapeType: SPHERE, CAPSULE or BOX.")
+      .def_readwrite("type", &ContactShape::type,
+                     "ContactShapeType: SPHERE, CAPSULE, BOX or CYLINDER.")
       .def_readwrite("from_", &ContactShape::from,
                      "Sphere and box: the centre; capsule: one end of the axis [m] (world, "
                      "reference configuration).")
       .def_readwrite(
           "to", &ContactShape::to,
-          "Capsule: the other end of the axis [m]; box: the half sizes along the body axes (> 0).")
+          "Capsule and cylinder: the other end of the axis [m]; box: the half sizes along its "
+          "edges (> 0).")
       .def_readwrite("radius", &ContactShape::radius,
-                     "Sphere and capsule: the radius [m] (> 0); box: 0.");
+                     "Sphere, capsule and cylinder: the radius [m] (> 0); box: 0.")
+      .def_readwrite("rotation", &ContactShape::rotation,
+                     "Box: the directions of its edges in the body frame (3 x 3 rotation, "
+                     "columns; scene: orientation); identity by default.");
 
   py::class_<ContactObstacle>(m, "ContactObstacle",
-                              "An obstacle fixed in the world (model.h): plane (point, normal), "
-                              "sphere (point = centre, radius), capsule (point, to, radius).")
+                              "An obstacle fixed in the world (model.h): plane (point, normal; a "
+                              "moving surface: velocity, spin, motion), sphere (point = centre, "
+                              "radius), capsule and cylinder (point, to, radius), box (point = "
+                              "centre, to = half sizes, rotation).")
       .def(py::init<>())
       .def_readwrite("name", &ContactObstacle::name,
                      "Unique name (the scene's contact.obstacles key).")
       .def_readwrite("type", &ContactObstacle::type,
-                     "ObstacleType: PLANE, SPHERE or CAPSULE, fixed in the world.")
+                     "ObstacleType: PLANE, SPHERE, CAPSULE, CYLINDER or BOX, fixed in the world.")
       .def_readwrite("point", &ContactObstacle::point, "[m]")
       .def_readwrite("normal", &ContactObstacle::normal, "Plane: out of the obstacle.")
       .def_readwrite("to", &ContactObstacle::to, "[m]")
       .def_readwrite("radius", &ContactObstacle::radius, "[m]")
+      .def_readwrite("rotation", &ContactObstacle::rotation,
+                     "Box: the directions of its edges in the world (3 x 3 rotation, columns).")
+      .def_readwrite("velocity", &ContactObstacle::velocity,
+                     "Plane: the velocity of its surface along it [m/s] (a conveyor belt), "
+                     "scaled by motion.")
+      .def_readwrite("spin", &ContactObstacle::spin,
+                     "Plane: the spin of its surface about the normal through point [rad/s] (a "
+                     "turntable), scaled by motion.")
+      .def_readwrite("motion", &ContactObstacle::motion,
+                     "Plane: the Profile m(t) scaling velocity and spin (default 1).")
       .def_readwrite("contype", &ContactObstacle::contype,
                      "Contact group bitmask: a pair touches when contype & conaffinity of the "
                      "other is non-zero (either way).")

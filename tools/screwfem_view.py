@@ -238,7 +238,7 @@ def describe(first, joints_info, names):
         elif kind == "inertia_box":
             body(body_of[i])["box"] = cell[0]
             oriented.add(cell[0])
-        elif kind in ("sphere", "capsule", "box"):
+        elif kind in ("sphere", "capsule", "box", "cylinder"):
             body(body_of[i])["shapes"].append(len(shapes))
             shapes.append({"type": kind, "points": cell, "body": body_of[i]})
             if kind == "box":
@@ -247,9 +247,10 @@ def describe(first, joints_info, names):
             lines.append({"kind": kind, "points": cell, "item": item[i], "cell": i})
         elif kind in ("contact", "pair_contact"):
             contacts.append(cell[0])
-        elif kind in ("plane", "obstacle_sphere", "obstacle_capsule"):
+        elif kind in ("plane", "obstacle_sphere", "obstacle_capsule", "obstacle_cylinder",
+                      "obstacle_box"):
             obstacles.append({"type": kind.replace("obstacle_", ""), "points": cell})
-            if kind == "plane":
+            if kind in ("plane", "obstacle_box"):
                 oriented.add(cell[0])
         elif kind == "joint" and cell and joint_of[i] >= 0:
             joints.append({"index": joint_of[i], "point": cell[0]})

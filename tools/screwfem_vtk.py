@@ -234,7 +234,8 @@ def read_collection(outdir):
 # The cell data `kind` of screwfem's frames (VtkCellKind, include/screwfem/io/vtk.h), by value.
 KIND_NAMES = ("joint", "rod", "body", "body_point", "tendon", "force_element", "contact",
               "pair_contact", "sphere", "capsule", "box", "inertia_box", "plane",
-              "obstacle_sphere", "obstacle_capsule", "chamber")
+              "obstacle_sphere", "obstacle_capsule", "chamber", "cylinder", "obstacle_cylinder",
+              "obstacle_box")
 
 
 def cell_kinds(cells, cell_data):

@@ -20,6 +20,12 @@ namespace {
 
 bool IsPositiveSize(double x) { return std::isfinite(x) && x > 0.0; }
 
+// A rotation matrix to round-off: orthonormal, determinant +1.
+bool IsRotation(const Mat3& R) {
+  return R.allFinite() && (R.transpose() * R - Mat3::Identity()).norm() < 1e-9 &&
+         R.determinant() > 0.0;
+}
+
 // The weight per unit mass for the law's defaults: |g|, or standard gravity without gravity.
 double ContactGravity(const Model& m) { return m.gravity.norm() > 0.0 ? m.gravity.norm() : 9.81; }
 
@@ -273,6 +279,11 @@ std::vector<EntitySegment> BodySegments(const Model& m, const ContactEntity& e) 
     g.side.radius = c.radius;
     if (c.type == ContactShapeType::kBox) {
       g.side.half = c.to;
+      g.side.rotation = c.rotation;
+      g.side.radius = 0.0;
+    } else if (c.type == ContactShapeType::kCylinder) {
+      g.side.offset[1] = c.to;
+      g.side.cylinder = c.radius;
       g.side.radius = 0.0;
     }
     g.side.owner = e.index;
@@ -307,8 +318,9 @@ EntitySizes AddContactSegments(Model& m, const std::vector<ContactEntity>& entit
         sizes.has_fixed[k] = 1;
       else
         sizes.heaviest[k] = std::max(sizes.heaviest[k], g.mass);
-      sizes.smallest[k] = std::min(sizes.smallest[k],
-                                   g.side.half.x() > 0.0 ? g.side.half.minCoeff() : g.side.radius);
+      sizes.smallest[k] = std::min(sizes.smallest[k], g.side.half.x() > 0.0 ? g.side.half.minCoeff()
+                                                      : g.side.cylinder > 0.0 ? g.side.cylinder
+                                                                              : g.side.radius);
     }
   }
   return sizes;
@@ -379,6 +391,31 @@ void PairContactEntities(Model& m, const std::vector<ContactEntity>& entities,
   }
 }
 
+// A cylinder touches spheres, capsules and rods (and obstacles), not a box or a cylinder of
+// another body: two entities that may touch with such shapes are an error naming them.
+void CheckCylinderPairs(const Model& m, const std::vector<ContactEntity>& entities) {
+  const std::size_t ne = entities.size();
+  std::vector<char> cylinder(ne, 0), box(ne, 0);
+  for (const ContactSegment& g : m.contact_segments) {
+    const std::size_t e = static_cast<std::size_t>(g.entity);
+    if (g.side.cylinder > 0.0) cylinder[e] = 1;
+    if (g.side.half.x() > 0.0) box[e] = 1;
+  }
+  for (std::size_t i = 0; i < ne; ++i) {
+    if (!cylinder[i]) continue;
+    for (std::size_t k = 0; k < ne; ++k) {
+      if (k == i || !m.contact_entity_pairs[i * ne + k] || !(cylinder[k] || box[k])) continue;
+      const std::string a = m.bodies[static_cast<std::size_t>(entities[i].index)].name;
+      const std::string b = m.bodies[static_cast<std::size_t>(entities[k].index)].name;
+      throw InputError("contact between the cylinder of body '" + a + "' and the " +
+                       (cylinder[k] ? "cylinder" : "box") + " of body '" + b +
+                       "' is not supported (a cylinder touches spheres, capsules, soft bodies "
+                       "and obstacles); exclude the pair (contact: exclude: [[" +
+                       a + ", " + b + "]]) or give one of them spheres or capsules");
+    }
+  }
+}
+
 // The moving shapes (elements/shape_pair.h) as segments for the broad phase, and which two
 // contact entities (a rod: its element capsules; a body: its spheres, capsules and boxes) may
 // touch: their group bitmasks match, they are not excluded and not joined (a shared node or a
@@ -403,6 +440,7 @@ void BuildContactSegments(Model& m, double* r_min, double* w_max) {
   m.contact_entity_self_skip.assign(static_cast<std::size_t>(ne), -1.0);
   const EntitySizes sizes = AddContactSegments(m, entities);
   PairContactEntities(m, entities, sizes, r_min, w_max);
+  CheckCylinderPairs(m, entities);
 }
 
 // ---- Validation -----------------------------------------------------------------------------
@@ -438,6 +476,10 @@ void ValidateContactShapes(const Model& m) {
           label + (c.type == ContactShapeType::kBox ? ": the half sizes must be positive"
                                                     : ": the radius must be positive"),
           entity);
+    if (c.type == ContactShapeType::kCylinder && !((c.to - c.from).norm() > 0.0))
+      throw InputError(label + ": the cylinder's axis ends must differ", entity);
+    if (!IsRotation(c.rotation))
+      throw InputError(label + ": the orientation must be a rotation", entity);
   }
 }
 
@@ -455,10 +497,22 @@ void ValidateObstacles(Model& m) {
       if (!(o.normal.norm() > 0.0))
         throw InputError(label + ": the plane normal must not be zero", entity);
       o.normal.normalize();
+    } else if (o.type == ObstacleType::kBox) {
+      if (!(o.to.minCoeff() > 0.0))
+        throw InputError(label + ": the half sizes must be positive", entity);
+      if (!IsRotation(o.rotation))
+        throw InputError(label + ": the orientation must be a rotation", entity);
     } else if (!IsPositiveSize(o.radius)) {
       throw InputError(label + ": the radius must be positive, got " + std::to_string(o.radius),
                        entity);
+    } else if (o.type == ObstacleType::kCylinder && !((o.to - o.point).norm() > 0.0)) {
+      throw InputError(label + ": the cylinder's axis ends must differ", entity);
     }
+    if (o.moving() && o.type != ObstacleType::kPlane)
+      throw InputError(label + ": only a plane has a moving surface (velocity, spin)", entity);
+    if (!o.velocity.allFinite() || !std::isfinite(o.spin))
+      throw InputError(label + ": the surface velocity and spin must be finite", entity);
+    if (o.type == ObstacleType::kPlane) o.velocity -= o.normal * o.normal.dot(o.velocity);
     if (!o.name.empty() && !names.insert(o.name).second)
       throw InputError("duplicate obstacle name '" + o.name + "'", entity);
   }
@@ -584,12 +638,31 @@ void AddShapeObstaclePairs(Model& m, const ContactShape& c, int oi, double* r_mi
         add(c.from, c.to, c.radius);
       }
       break;
+    case ContactShapeType::kCylinder: {
+      // docs/numerics.md, "Cylinders": against a plane, three rim points of each flat end;
+      // against a sphere or capsule, the cylinder's point nearest to it.
+      *r_min = std::min(*r_min, c.radius);
+      const ObstacleType type = m.obstacles[static_cast<std::size_t>(oi)].type;
+      if (type == ObstacleType::kCylinder || type == ObstacleType::kBox)
+        throw InputError("contact between the cylinder of body '" + body.name + "' and the " +
+                         NameOf(type) + " obstacle '" +
+                         m.obstacles[static_cast<std::size_t>(oi)].name +
+                         "' is not supported (a cylinder touches planes, spheres and capsules); "
+                         "exclude the pair (contact: exclude: [[" +
+                         body.name + ", " + m.obstacles[static_cast<std::size_t>(oi)].name + "]])");
+      for (int part = 0; part < (plane ? 6 : 1); ++part) {
+        add(c.from, c.to, 0.0);
+        m.contact_pairs.back().cylinder = c.radius;
+        m.contact_pairs.back().part = plane ? part : -1;
+      }
+      break;
+    }
     case ContactShapeType::kBox: {
       // docs/numerics.md, "Contact": 8 vertex spheres and (against curved obstacles) 12 edge
-      // capsules, of radius 0.
+      // capsules, of radius 0, at the box's orientation.
       *r_min = std::min(*r_min, c.to.minCoeff());
       Vec3 v[8];
-      for (int k = 0; k < 8; ++k) v[k] = BoxCorner(c.from, c.to, k);
+      for (int k = 0; k < 8; ++k) v[k] = c.from + c.rotation * BoxCorner(Vec3::Zero(), c.to, k);
       for (int k = 0; k < 8; ++k) add(v[k], v[k], 0.0);
       if (!plane)
         for (int k = 0; k < 8; ++k)
@@ -626,6 +699,9 @@ double CountObstaclePairs(const Model& m, int oi) {
         break;
       case ContactShapeType::kBox:
         count += plane ? 8 : 20;
+        break;
+      case ContactShapeType::kCylinder:
+        count += plane ? 6 : 1;
         break;
     }
   }

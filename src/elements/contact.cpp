@@ -1,11 +1,13 @@
 #include "screwfem/elements/contact.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "screwfem/elements/crossing.h"
 #include "screwfem/elements/shape_pair.h"
+#include "screwfem/elements/solid_geometry.h"
 
 namespace screwfem {
 
@@ -157,6 +159,65 @@ double FrictionShare(const ContactForce& c, const ContactLawParameters& law) {
   return c.active && limit > 0.0 ? c.friction.norm() / limit : 0.0;
 }
 
+namespace {
+
+// A body's cylinder against an obstacle (docs/numerics.md, "Cylinders"): the surface point on
+// the cylinder (a rim point against a plane, ContactPair::part; the point nearest to a sphere's
+// centre or a capsule's axis), frozen in the body frame as a lever of radius 0.
+bool CylinderObstacleGeometry(const ContactObstacle& o, const ContactPair& pair, const SE3& H,
+                              const Vec3& A, const Vec3& B, ContactGeometry* out) {
+  Vec3 p, n;
+  double gap = 0.0;
+  if (o.type == ObstacleType::kPlane) {
+    n = o.normal;
+    const Vec3 e = (B - A).normalized();
+    p = CylinderRimPoint(pair.part < 3 ? A : B, e, pair.cylinder, n, pair.part % 3);
+    gap = n.dot(p - o.point);
+  } else if (o.type == ObstacleType::kSphere || o.type == ObstacleType::kCapsule) {
+    const Vec3 Q1 = o.type == ObstacleType::kSphere ? o.point : o.to;
+    const double t = CylinderSegmentParameter(A, B, pair.cylinder, o.point, Q1);
+    const Vec3 q = o.point + t * (Q1 - o.point);
+    const SolidPoint sp = CylinderClosestPoint(A, B, pair.cylinder, q);
+    p = sp.point;
+    n = -sp.normal;  // from the obstacle to the cylinder
+    gap = sp.distance - o.radius;
+  } else {
+    return false;  // Build refuses the other pairs
+  }
+  out->s = 0.0;
+  out->normal = n;
+  out->gap = gap;
+  out->point = p;
+  out->weight[0] = 1.0;
+  out->weight[1] = 0.0;
+  out->lever[0] = H.R.transpose() * (p - H.x);
+  out->lever[1].setZero();
+  out->lever_rate[0].setZero();
+  out->lever_rate[1].setZero();
+  if (o.type == ObstacleType::kPlane) {
+    // The rim point slides along the rim as the body turns: in the body frame l = b_C +
+    // R_c Q_k u_0(nu), u_0 = -w / |w|, w = P_e nu, nu = R^T n, d nu = Skew(nu) d theta, so
+    // dl/d theta = -R_c Q_k (I - w^ w^T) P_e Skew(nu) / |w| (Q_k: the turn by 0, +-120 degrees
+    // about the axis e_b; none when the end face is parallel to the plane).
+    const Vec3 e_b = (pair.offset[1] - pair.offset[0]).normalized();
+    const Vec3 nu = H.R.transpose() * n;
+    const Mat3 P_e = Mat3::Identity() - e_b * e_b.transpose();
+    const Vec3 w = P_e * nu;
+    const double norm = w.norm();
+    if (norm > 1e-12) {
+      const Vec3 w_hat = w / norm;
+      const int k = pair.part % 3;
+      const double angle = k == 0 ? 0.0 : (k == 1 ? 2.0 : -2.0) * 3.14159265358979323846 / 3.0;
+      const Mat3 Q = Eigen::AngleAxisd(angle, e_b).toRotationMatrix();
+      out->lever_rate[0] = -(pair.cylinder / norm) * Q *
+                           (Mat3::Identity() - w_hat * w_hat.transpose()) * P_e * Skew(nu);
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
 bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3& H_0,
                          const SE3& H_1, ContactGeometry* out) {
   const SE3* H[2] = {&H_0, &H_1};
@@ -165,6 +226,7 @@ bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3&
   const Vec3 A = Ha.x + Ha.R * pair.offset[0];
   const Vec3 B = Hb.x + Hb.R * pair.offset[1];
   const ContactObstacle& o = model.obstacles[static_cast<std::size_t>(pair.obstacle)];
+  if (pair.cylinder > 0.0) return CylinderObstacleGeometry(o, pair, H_0, A, B, out);
   double s = 0.0;
   Vec3 n;
   double distance = 0.0;  // from the obstacle's surface (plane) or axis to the shape's axis
@@ -173,6 +235,20 @@ bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3&
     const double ha = n.dot(A - o.point), hb = n.dot(B - o.point);
     s = hb < ha ? 1.0 : 0.0;
     distance = std::min(ha, hb);
+  } else if (o.type == ObstacleType::kCylinder) {
+    // The segment's point nearest to the cylinder or deepest in it (docs/numerics.md,
+    // "Cylinders"), and the cylinder's surface point nearest to that.
+    s = CylinderSegmentParameter(o.point, o.to, o.radius, A, B);
+    const SolidPoint sp = CylinderClosestPoint(o.point, o.to, o.radius, Vec3(A + s * (B - A)));
+    n = sp.normal;
+    distance = sp.distance;
+  } else if (o.type == ObstacleType::kBox) {
+    // The same for a box (its frame: centre `point`, edges along the columns of `rotation`).
+    const Vec3 a = o.rotation.transpose() * (A - o.point), d = o.rotation.transpose() * (B - A);
+    s = BoxSegmentParameter(a, d, o.to);
+    const SolidPoint sp = BoxClosestPoint(a + s * d, o.to);
+    n = o.rotation * sp.normal;
+    distance = sp.distance;
   } else {
     Vec3 q;
     if (o.type == ObstacleType::kSphere) {
@@ -200,6 +276,7 @@ bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3&
   for (int k = 0; k < 2; ++k) {
     out->weight[k] = 0.0;
     out->lever[k].setZero();
+    out->lever_rate[k].setZero();
   }
   Vec3 b[2] = {Vec3::Zero(), Vec3::Zero()};
   for (int j = 0; j < 2; ++j) {
@@ -209,6 +286,8 @@ bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3&
   for (int k = 0; k < 2; ++k) {
     if (out->weight[k] == 0.0) continue;
     out->lever[k] = b[k] / out->weight[k] - pair.radius * (Hk[k]->R.transpose() * n);
+    // l_k = b_k - r R_k^T n at fixed n: dl_k/d theta = -r Skew(R_k^T n).
+    out->lever_rate[k] = -pair.radius * Skew(Vec3(Hk[k]->R.transpose() * n));
   }
   return true;
 }
@@ -227,10 +306,29 @@ void CalcSurfaceVelocityMap(const ContactGeometry& G, const NodeMotion<2>& x,
   }
 }
 
+// A plane's moving surface (ContactObstacle::moving; docs/numerics.md, "Moving surfaces"): the
+// motion's scale m(t), the velocity of its material point at p, v_s = m (v + spin n x (p - o)),
+// and where the material point at p at time t_a is at time t (the trapezoidal rule on m: exact
+// for a constant motion).
+double SurfaceScale(const ContactObstacle& o, const Data& data, double t) {
+  return EvalProfile(o.motion, t, data).value;
+}
+Vec3 SurfaceVelocity(const ContactObstacle& o, const Data& data, const Vec3& p) {
+  return SurfaceScale(o, data, data.time) * (o.velocity + o.spin * o.normal.cross(p - o.point));
+}
+Vec3 SurfacePointMoved(const ContactObstacle& o, const Data& data, const Vec3& p, double t_a) {
+  const double travel =
+      0.5 * (SurfaceScale(o, data, t_a) + SurfaceScale(o, data, data.time)) * (data.time - t_a);
+  const Mat3 turn = ExpSO3(Vec3(o.spin * travel * o.normal));
+  return o.point + turn * (p - o.point) + travel * o.velocity;
+}
+
 // The stick law's trial at the current frames from the pair's history (none without it), and
 // the slip's derivative in the item nodes' increments, dd/dh = [W_k R_k  -W_k R_k Skew(l_k)].
-const AnchorTrial* PairAnchorTrial(const Data& data, int item, const SE3* const (&H)[2],
-                                   AnchorTrial* trial, Eigen::Matrix<double, 3, 12>* dslip) {
+// On a moving surface (dynamics) the slip is relative to the surface's material point then.
+const AnchorTrial* PairAnchorTrial(const Model& model, const Data& data, int item,
+                                   const SE3* const (&H)[2], bool dynamics, AnchorTrial* trial,
+                                   Eigen::Matrix<double, 3, 12>* dslip) {
   if (data.contact_anchors.empty()) return nullptr;
   const ContactAnchor& a = data.contact_anchors[static_cast<std::size_t>(item)];
   if (dslip) dslip->setZero();
@@ -248,7 +346,10 @@ const AnchorTrial* PairAnchorTrial(const Data& data, int item, const SE3* const 
     }
   }
   trial->deflection = a.deflection;
-  trial->slip = p - a.point;
+  const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
+  const ContactObstacle& o = model.obstacles[static_cast<std::size_t>(pair.obstacle)];
+  trial->slip =
+      p - (dynamics && o.moving() ? SurfacePointMoved(o, data, a.point, a.time) : a.point);
   trial->slipping = a.slipping;
   return trial;
 }
@@ -268,14 +369,19 @@ bool ContactKind::Calc(const Model& model, const Data& data, const Item& item,
   Vec3 m[2];
   CalcSurfaceVelocityMap(G, x, &J, m);
   const bool dyn = o.dynamics;
-  const Vec3 v_c = dyn ? Vec3(J * x.eta) : Vec3::Zero();
+  // The velocity relative to the obstacle's surface (a moving plane's, in dynamics).
+  const ContactObstacle& obstacle = model.obstacles[static_cast<std::size_t>(pair.obstacle)];
+  const bool moving = dyn && obstacle.moving();
+  const Vec3 v_c =
+      dyn ? Vec3(J * x.eta - (moving ? SurfaceVelocity(obstacle, data, G.point) : Vec3::Zero()))
+          : Vec3::Zero();
   // The law (ContactForceLaw): friction and damping in dynamics only.
   const ContactLawParameters law =
       ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, dyn);
   AnchorTrial trial;
   Eigen::Matrix<double, 3, 12> dslip;
   const AnchorTrial* anchor =
-      PairAnchorTrial(data, item, x.H, &trial, o.tangent ? &dslip : nullptr);
+      PairAnchorTrial(model, data, item, x.H, dyn, &trial, o.tangent ? &dslip : nullptr);
   const ContactForce c = ContactForceLaw(G.gap, n, v_c, law, o.tangent, anchor);
   if (!c.active) {
     t->active = false;
@@ -303,7 +409,17 @@ bool ContactKind::Calc(const Model& model, const Data& data, const Item& item,
       const Vec3 v = x.eta.segment<3>(6 * k), om = x.eta.segment<3>(6 * k + 3);
       const Vec3 y = v + om.cross(G.lever[k]);
       dV.block<3, 3>(0, 6 * k + 3) =
-          G.weight[k] * x.H[k]->R * (-Skew(y) - pair.radius * Skew(om) * Skew(m[k]));
+          G.weight[k] * x.H[k]->R * (-Skew(y) + Skew(om) * G.lever_rate[k]);
+    }
+    // A turntable's surface velocity at the moving surface point: -m spin n x dp/dh, with
+    // dp/dh = J but for the lever's change (rotation columns W_k R_k dl_k/d theta).
+    if (moving && obstacle.spin != 0.0) {
+      Eigen::Matrix<double, 3, 12> dp = J;
+      for (int k = 0; k < 2; ++k)
+        if (G.weight[k] != 0.0)
+          dp.block<3, 3>(0, 6 * k + 3) += G.weight[k] * x.H[k]->R * G.lever_rate[k];
+      dV.noalias() -=
+          SurfaceScale(obstacle, data, data.time) * obstacle.spin * Skew(obstacle.normal) * dp;
     }
   }
   const Eigen::Matrix<double, 12, 1> j = J.transpose() * n;  // dg/dh
@@ -325,7 +441,7 @@ bool ContactKind::Calc(const Model& model, const Data& data, const Item& item,
     const Mat3 Sf = Skew(f[k]);
     K.block<3, 3>(6 * k, 6 * k + 3) -= G.weight[k] * Sf;
     K.block<3, 3>(6 * k + 3, 6 * k + 3) -=
-        G.weight[k] * (Skew(G.lever[k]) * Sf + pair.radius * Sf * Skew(m[k]));
+        G.weight[k] * (Skew(G.lever[k]) * Sf - Sf * G.lever_rate[k]);
   }
   t->has_stiffness = true;
   if (dyn) {
@@ -349,7 +465,7 @@ void ContactKind::AddEnergy(const Model& model, const Data& data, const Item& it
   // The stick law's anchor: its elastic energy 1/2 k_t |u|^2 after the return mapping.
   AnchorTrial trial;
   const SE3* H[2] = {&NodeFrame(data, pair.node[0]), &NodeFrame(data, pair.node[1])};
-  const AnchorTrial* anchor = PairAnchorTrial(data, item, H, &trial, nullptr);
+  const AnchorTrial* anchor = PairAnchorTrial(model, data, item, H, false, &trial, nullptr);
   if (anchor == nullptr || G.gap >= model.contact.onset) return;
   const ContactForce c = ContactForceLaw(G.gap, G.normal, Vec3::Zero(), law, false, anchor);
   if (c.active) E->spring += 0.5 * law.tangential_stiffness * c.deflection.squaredNorm();
@@ -377,9 +493,13 @@ bool CalcPairLaw(const Model& model, const Data& data, int item, bool dynamics, 
   Eigen::Matrix<double, 3, 12> J;
   Vec3 m[2];
   CalcSurfaceVelocityMap(*G, x, &J, m);
-  const Vec3 v_c = dynamics ? Vec3(J * x.eta) : Vec3::Zero();
+  const ContactObstacle& obstacle = model.obstacles[static_cast<std::size_t>(pair.obstacle)];
+  const Vec3 v_c =
+      dynamics ? Vec3(J * x.eta - (obstacle.moving() ? SurfaceVelocity(obstacle, data, G->point)
+                                                     : Vec3::Zero()))
+               : Vec3::Zero();
   AnchorTrial trial;
-  const AnchorTrial* anchor = PairAnchorTrial(data, item, x.H, &trial, nullptr);
+  const AnchorTrial* anchor = PairAnchorTrial(model, data, item, x.H, dynamics, &trial, nullptr);
   *c = ContactForceLaw(G->gap, G->normal, v_c, *law, false, anchor);
   return true;
 }
@@ -451,6 +571,7 @@ void AcceptContactHistory(const Model& model, Data& data, bool dynamics) {
     a.deflection = c.active ? c.deflection : Vec3::Zero();
     a.slipping = c.active && c.slipping;
     a.point = G.point;
+    a.time = data.time;
     for (int k = 0; k < 2; ++k) {
       a.weight[k] = G.weight[k];
       a.lever[k] = G.lever[k];

@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/solid_geometry.h"
 
 namespace screwfem {
 
@@ -16,6 +17,9 @@ void SideEnds(const ShapePairSide& side, const SE3* const (&H)[4], int first, Ve
   *P0 = Ha.x + Ha.R * side.offset[0];
   *P1 = Hb.x + Hb.R * side.offset[1];
 }
+
+// A box or cylinder side: its surface point is ShapePairGeometry::box_point.
+bool IsSolid(const ShapePairSide& side) { return side.half.x() > 0.0 || side.cylinder > 0.0; }
 
 // Weights and levers of the item nodes at parameters s and normal n.
 void SetLevers(const ShapePair& pair, const SE3* const (&H)[4], ShapePairGeometry* out) {
@@ -29,7 +33,7 @@ void SetLevers(const ShapePair& pair, const SE3* const (&H)[4], ShapePairGeometr
     Vec3 b[2] = {Vec3::Zero(), Vec3::Zero()};
     for (int j = 0; j < 2; ++j) {
       out->weight[2 * side + sd.end_node[j]] += w[j];
-      b[sd.end_node[j]] += w[j] * (sd.half.x() > 0.0 ? out->box_point : sd.offset[j]);
+      b[sd.end_node[j]] += w[j] * (IsSolid(sd) ? out->box_point : sd.offset[j]);
     }
     const double sign = side == 0 ? 1.0 : -1.0;
     for (int i = 0; i < 2; ++i) {
@@ -39,80 +43,6 @@ void SetLevers(const ShapePair& pair, const SE3* const (&H)[4], ShapePairGeometr
           b[i] / out->weight[k] - sign * sd.radius * (H[k]->R.transpose() * out->normal);
     }
   }
-}
-
-// Signed distance from a point c to the box |x_i| <= h_i (box frame): the distance outside,
-// minus the depth below the nearest face inside. Convex in c.
-double BoxSignedDistance(const Vec3& c, const Vec3& h) {
-  const Vec3 q = c.cwiseAbs() - h;
-  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
-}
-
-// The parameter s in [0, 1] of the point a + s d (box frame) nearest to the box |x_i| <= h_i
-// or deepest in it: the minimum of the convex function BoxSignedDistance(a + s d) over the
-// segment, exactly. Outside the box it is the root of a piecewise quadratic (sum over the
-// axes out of the box of (|c_i| - h_i)^2, pieces between the breakpoints |c_i| = h_i); inside
-// it is the maximum of the six lines +-c_i(s) - h_i, least at an end or where two lines cross.
-// So the minimum is among: the ends, the breakpoints, each piece's clamped minimiser and the
-// crossings of the lines; every candidate is evaluated. A flat minimum (a segment parallel to
-// a face) takes the middle of the set where the distance is least (as parallel segments do).
-double BoxSegmentParameter(const Vec3& a, const Vec3& d, const Vec3& h) {
-  double candidate[40];
-  int n = 0;
-  candidate[n++] = 0.0;
-  candidate[n++] = 1.0;
-  auto inside = [](double s) { return s > 0.0 && s < 1.0; };
-  // Breakpoints |a_i + s d_i| = h_i, sorted with the ends: the pieces.
-  double breaks[8];
-  int nb = 0;
-  breaks[nb++] = 0.0;
-  for (int i = 0; i < 3; ++i) {
-    if (d(i) == 0.0) continue;
-    for (double sign : {-1.0, 1.0}) {
-      const double s = (sign * h(i) - a(i)) / d(i);
-      if (inside(s)) breaks[nb++] = s;
-    }
-  }
-  breaks[nb++] = 1.0;
-  for (int k = 1; k < nb; ++k)  // insertion sort of at most 8 values
-    for (int j = k; j > 0 && breaks[j - 1] > breaks[j]; --j) std::swap(breaks[j - 1], breaks[j]);
-  for (int k = 1; k < nb - 1; ++k) candidate[n++] = breaks[k];
-  for (int k = 0; k + 1 < nb; ++k) {
-    const double lo = breaks[k], hi = breaks[k + 1];
-    const Vec3 mid = a + 0.5 * (lo + hi) * d;
-    double num = 0.0, den = 0.0;
-    for (int i = 0; i < 3; ++i) {
-      if (std::abs(mid(i)) <= h(i)) continue;
-      const double sign = mid(i) > 0.0 ? 1.0 : -1.0;
-      num -= d(i) * (a(i) - sign * h(i));
-      den += d(i) * d(i);
-    }
-    if (den > 0.0) candidate[n++] = std::clamp(num / den, lo, hi);
-  }
-  // Crossings of the lines sign_i c_i(s) - h_i (15 pairs, the centre planes c_i = 0 included).
-  for (int l = 0; l < 6; ++l)
-    for (int m = l + 1; m < 6; ++m) {
-      const int i = l / 2, j = m / 2;
-      const double si = (l % 2) ? 1.0 : -1.0, sj = (m % 2) ? 1.0 : -1.0;
-      const double den = si * d(i) - sj * d(j);
-      if (den == 0.0) continue;
-      const double s = (sj * a(j) - h(j) - si * a(i) + h(i)) / den;
-      if (inside(s)) candidate[n++] = s;
-    }
-  double value[40];
-  double best = INFINITY;
-  for (int k = 0; k < n; ++k) {
-    value[k] = BoxSignedDistance(a + candidate[k] * d, h);
-    best = std::min(best, value[k]);
-  }
-  const double tolerance = 1e-12 * (h.maxCoeff() + d.norm());
-  double s_lo = 1.0, s_hi = 0.0;
-  for (int k = 0; k < n; ++k)
-    if (value[k] <= best + tolerance) {
-      s_lo = std::min(s_lo, candidate[k]);
-      s_hi = std::max(s_hi, candidate[k]);
-    }
-  return 0.5 * (s_lo + s_hi);
 }
 
 // A segment carried at two points by a box (ShapePair::part): the face is the one the
@@ -162,14 +92,35 @@ bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], doub
   // Bounding spheres of the two capsules (a box: of its corners).
   const Vec3& half = pair.side[1].half;
   const double bound = 0.5 * ((A1 - A0).norm() + (B1 - B0).norm()) + pair.side[0].radius +
-                       pair.side[1].radius + half.norm() + reject;
+                       pair.side[1].radius + half.norm() + pair.side[1].cylinder + reject;
   if ((0.5 * (A0 + A1 - B0 - B1)).squaredNorm() > bound * bound) return false;
+  if (pair.side[1].cylinder > 0.0) {
+    // A segment (a sphere: A0 = A1) against a cylinder with axis B0..B1 (docs/numerics.md,
+    // "Cylinders"): the segment's point nearest to it or deepest in it, and the cylinder's
+    // surface point nearest to that (side, flat face or rim), frozen in node 2's frame.
+    const double R = pair.side[1].cylinder;
+    const double s = CylinderSegmentParameter(B0, B1, R, A0, A1);
+    const Vec3 c = A0 + s * (A1 - A0);
+    const SolidPoint sp = CylinderClosestPoint(B0, B1, R, c);
+    const SE3& Hb = *H[2];
+    out->s[0] = s;
+    out->s[1] = 0.0;
+    out->box_point = Hb.R.transpose() * (sp.point - Hb.x);
+    out->normal = sp.normal;
+    out->gap = sp.distance - pair.side[0].radius;
+    out->point[0] = c - pair.side[0].radius * out->normal;
+    out->point[1] = sp.point;
+    SetLevers(pair, H, out);
+    return true;
+  }
   if (half.x() > 0.0) {
     // A segment (a sphere: A0 = A1) against a box centred at B0: the point of the segment
     // nearest to the box, or deepest in it, clamped into the box; a point inside leaves through
     // the face nearest to it.
     const SE3& Hb = *H[2];
-    const Vec3 a = Hb.R.transpose() * (A0 - B0), d = Hb.R.transpose() * (A1 - A0);
+    const Mat3& Rs = pair.side[1].rotation;  // the box's axes in the node frame
+    const Mat3 Rb = Hb.R * Rs;
+    const Vec3 a = Rb.transpose() * (A0 - B0), d = Rb.transpose() * (A1 - A0);
     double s = BoxSegmentParameter(a, d, half);
     if (pair.part >= 0 && !BoxFaceClipParameter(a, d, half, s, pair.part, &s)) return false;
     const Vec3 c = a + s * d;
@@ -190,8 +141,8 @@ bool CalcShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4], doub
     }
     out->s[0] = s;
     out->s[1] = 0.0;
-    out->box_point = pair.side[1].offset[0] + q;
-    out->normal = Hb.R * d_local;
+    out->box_point = pair.side[1].offset[0] + Rs * q;
+    out->normal = Rb * d_local;
     out->gap = distance - pair.side[0].radius;
     out->point[0] = A0 + s * (A1 - A0) - pair.side[0].radius * out->normal;
     out->point[1] = Hb.x + Hb.R * out->box_point;
@@ -220,8 +171,8 @@ void FreezeShapePairGeometry(const ShapePair& pair, const SE3* const (&H)[4],
   SideEnds(pair.side[1], H, 2, &B0, &B1);
   *out = frozen;
   const Vec3 p = A0 + frozen.s[0] * (A1 - A0);
-  const Vec3 q = pair.side[1].half.x() > 0.0 ? Vec3(H[2]->x + H[2]->R * frozen.box_point)
-                                             : Vec3(B0 + frozen.s[1] * (B1 - B0));
+  const Vec3 q = IsSolid(pair.side[1]) ? Vec3(H[2]->x + H[2]->R * frozen.box_point)
+                                       : Vec3(B0 + frozen.s[1] * (B1 - B0));
   const Vec3& n = frozen.normal;
   out->gap = n.dot(p - q) - pair.side[0].radius - pair.side[1].radius;
   out->point[0] = p - pair.side[0].radius * n;
@@ -383,14 +334,14 @@ void SegmentBox(const ContactSegment& g, const Data& d, double pad, Vec3* lo, Ve
   if (sd.half.x() > 0.0) {
     // |R h| per axis: the half extent of the rotated box.
     const Vec3 c = Ha.x + Ha.R * sd.offset[0];
-    const Vec3 e = Ha.R.cwiseAbs() * sd.half;
+    const Vec3 e = (Ha.R * sd.rotation).cwiseAbs() * sd.half;
     *lo = c - e - Vec3::Constant(pad);
     *hi = c + e + Vec3::Constant(pad);
     return;
   }
   const SE3& Hb = NodeFrame(d, sd.node[sd.end_node[1]]);
   const Vec3 p0 = Ha.x + Ha.R * sd.offset[0], p1 = Hb.x + Hb.R * sd.offset[1];
-  const double r = sd.radius + pad;
+  const double r = sd.radius + sd.cylinder + pad;
   *lo = p0.cwiseMin(p1) - Vec3::Constant(r);
   *hi = p0.cwiseMax(p1) + Vec3::Constant(r);
 }
@@ -437,13 +388,24 @@ class PairWriter {
             ShapePairSide edge = edges.side;
             edge.half.setZero();
             edge.radius = 0.0;
-            edge.offset[0] = BoxCorner(edges.side.offset[0], h, k);
-            edge.offset[1] = BoxCorner(edges.side.offset[0], h, k | bit);
+            edge.rotation.setIdentity();
+            const Vec3& c = edges.side.offset[0];
+            const Mat3& R = edges.side.rotation;
+            edge.offset[0] = c + R * BoxCorner(Vec3::Zero(), h, k);
+            edge.offset[1] = c + R * BoxCorner(Vec3::Zero(), h, k | bit);
             Push(edge, box.side, first == 0 ? i : j, first == 0 ? j : i);
             ++edge_;
           }
       }
       edge_ = -1;
+    } else if (a.side.cylinder > 0.0 || b.side.cylinder > 0.0) {
+      // A cylinder against a segment side (the cylinder is side B); Build refuses a cylinder
+      // against a box or a cylinder.
+      if (box_a || box_b || (a.side.cylinder > 0.0 && b.side.cylinder > 0.0)) return;
+      if (a.side.cylinder > 0.0)
+        Store(b.side, a.side, j, i, -1);
+      else
+        Store(a.side, b.side, i, j, -1);
     } else if (box_a) {
       Push(b.side, a.side, j, i);  // the box is side B
     } else {

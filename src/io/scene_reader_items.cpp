@@ -322,17 +322,20 @@ void SceneReader::ReadShapes(const Node& node, const std::string& path, BodySpec
     const Node& v = node.items[i];
     const std::string sp = Index(path, i);
     r_.ExpectMap(v, sp);
-    r_.CheckKeys(v, sp, {"type", "center", "from", "to", "radius", "half_sizes"});
+    r_.CheckKeys(v, sp, {"type", "center", "from", "to", "radius", "half_sizes", "orientation"});
     ContactShape shape;
     shape.type = r_.Enum<ContactShapeType>(r_.Require(v, sp, "type"), Join(sp, "type"));
     auto point = [&](const char* key) -> Vec3 {
       const Vec3 world = Point(r_.Require(v, sp, key), Join(sp, key));
       return Vec3(world - b.origin);
     };
-    if (shape.type == ContactShapeType::kCapsule) {
-      NotUsedBy(v, sp, {"center", "half_sizes"}, "capsules");
+    if (shape.type == ContactShapeType::kCapsule || shape.type == ContactShapeType::kCylinder) {
+      NotUsedBy(v, sp, {"center", "half_sizes"}, "capsules and cylinders");
       shape.from = point("from");
       shape.to = point("to");
+      if (shape.from == shape.to)
+        r_.Fail(r_.Require(v, sp, "to").location, Join(sp, "to"),
+                "expected 'to' apart from 'from' (the axis of a capsule or cylinder)");
     } else {
       NotUsedBy(v, sp, {"from", "to"}, "spheres and boxes");
       shape.from = shape.to = point("center");
@@ -343,38 +346,71 @@ void SceneReader::ReadShapes(const Node& node, const std::string& path, BodySpec
       shape.to = r_.Vector3(hn, Join(sp, "half_sizes"));
       if (!(shape.to.minCoeff() > 0.0))
         r_.Fail(hn.location, Join(sp, "half_sizes"), "expected positive half sizes");
+      if (const Node* on = v.Find("orientation"))
+        shape.rotation = ReadOrientation(*on, Join(sp, "orientation"));
     } else {
-      NotUsedBy(v, sp, {"half_sizes"}, "spheres and capsules");
+      NotUsedBy(v, sp, {"half_sizes", "orientation"}, "spheres, capsules and cylinders");
       shape.radius = r_.PositiveNumber(r_.Require(v, sp, "radius"), Join(sp, "radius"));
     }
     b.shapes.push_back(shape);
   }
 }
 
-// One entry of contact.obstacles: a plane, sphere or capsule with its contact groups.
+// One entry of contact.obstacles: a plane (with a moving surface), sphere, capsule, cylinder
+// or box with its contact groups.
 ContactObstacle SceneReader::ReadObstacle(const Node& v, const std::string& p,
                                           const std::string& name) const {
   r_.ExpectMap(v, p);
-  r_.CheckKeys(
-      v, p,
-      {"type", "point", "normal", "center", "from", "to", "radius", "contype", "conaffinity"});
+  r_.CheckKeys(v, p,
+               {"type", "point", "normal", "center", "from", "to", "radius", "half_sizes",
+                "orientation", "velocity", "spin", "motion", "contype", "conaffinity"});
   ContactObstacle o;
   o.name = name;
   o.type = r_.Enum<ObstacleType>(r_.Require(v, p, "type"), Join(p, "type"));
+  if (o.type != ObstacleType::kPlane)
+    NotUsedBy(v, p, {"point", "normal", "velocity", "spin", "motion"},
+              "spheres, capsules, cylinders and boxes");
+  if (o.type != ObstacleType::kBox)
+    NotUsedBy(v, p, {"half_sizes", "orientation"}, "planes, spheres, capsules and cylinders");
   if (o.type == ObstacleType::kPlane) {
     NotUsedBy(v, p, {"center", "from", "to", "radius"}, "planes");
     o.point = Point(r_.Require(v, p, "point"), Join(p, "point"));
     o.normal = UnitAxis(r_.Require(v, p, "normal"), Join(p, "normal"));
+    // A moving surface: a belt's velocity (its part along the normal is an error), a
+    // turntable's spin about the normal through `point`, both scaled by `motion`.
+    if (const Node* vn = v.Find("velocity")) {
+      o.velocity = r_.Vector3(*vn, Join(p, "velocity"));
+      if (std::abs(o.velocity.dot(o.normal)) > 1e-12 * o.velocity.norm())
+        r_.Fail(vn->location, Join(p, "velocity"),
+                "expected a velocity along the plane (perpendicular to its normal)");
+    }
+    if (const Node* sn = v.Find("spin")) o.spin = r_.Number(*sn, Join(p, "spin"));
+    if (const Node* mn = v.Find("motion")) {
+      if (v.Find("velocity") == nullptr && v.Find("spin") == nullptr)
+        r_.Fail(mn->location, Join(p, "motion"), "'motion' scales 'velocity' or 'spin': give one");
+      o.motion = ReadProfile(*mn, Join(p, "motion"));
+    }
+  } else if (o.type == ObstacleType::kBox) {
+    NotUsedBy(v, p, {"from", "to", "radius"}, "boxes");
+    o.point = Point(r_.Require(v, p, "center"), Join(p, "center"));
+    const Node& hn = r_.Require(v, p, "half_sizes");
+    o.to = r_.Vector3(hn, Join(p, "half_sizes"));
+    if (!(o.to.minCoeff() > 0.0))
+      r_.Fail(hn.location, Join(p, "half_sizes"), "expected positive half sizes");
+    if (const Node* on = v.Find("orientation"))
+      o.rotation = ReadOrientation(*on, Join(p, "orientation"));
   } else {
     o.radius = r_.PositiveNumber(r_.Require(v, p, "radius"), Join(p, "radius"));
-    NotUsedBy(v, p, {"point", "normal"}, "spheres and capsules");
     if (o.type == ObstacleType::kSphere) {
       NotUsedBy(v, p, {"from", "to"}, "spheres");
       o.point = Point(r_.Require(v, p, "center"), Join(p, "center"));
     } else {
-      NotUsedBy(v, p, {"center"}, "capsules");
+      NotUsedBy(v, p, {"center"}, "capsules and cylinders");
       o.point = Point(r_.Require(v, p, "from"), Join(p, "from"));
       o.to = Point(r_.Require(v, p, "to"), Join(p, "to"));
+      if (o.point == o.to)
+        r_.Fail(r_.Require(v, p, "to").location, Join(p, "to"),
+                "expected 'to' apart from 'from' (the axis of a capsule or cylinder)");
     }
   }
   ReadGroups(v, p, &o.contype, &o.conaffinity);

@@ -140,27 +140,27 @@ void Importer::AddShapes(const urdf::Link& link, const Mat3& R, const Vec3& p, B
         const auto& g = static_cast<const urdf::Box&>(*c.geometry);
         const Vec3 dim = Vector(g.dim);
         if (!(dim.minCoeff() > 0.0)) Fail(at, who + ": the box's sizes must be positive");
-        // Box shapes have world-aligned edges in the reference configuration: the box's
-        // rotation must be a signed permutation (its axes along world axes, in any order).
-        Vec3 half = Vec3::Zero();
-        for (int i_row = 0; i_row < 3; ++i_row) {
-          int col = 0;
-          Rc.row(i_row).cwiseAbs().maxCoeff(&col);
-          if (std::abs(std::abs(Rc(i_row, col)) - 1.0) > 1e-9)
-            Fail(at, who +
-                         ": the box is not aligned with the world axes in the reference "
-                         "configuration (box shapes have world-aligned edges)");
-          half(i_row) = 0.5 * dim(col);
-        }
+        // The box's edges along the collision frame's axes (ContactShape::rotation).
+        const Vec3 half = 0.5 * dim;
         s.type = ContactShapeType::kBox;
         s.from = Vec3(centre - p);
         s.to = half;
+        s.rotation = Rc;
         break;
       }
-      case urdf::Geometry::CYLINDER:
-        Fail(at, who + ": cylinder shapes are not supported (spheres and boxes are)");
+      case urdf::Geometry::CYLINDER: {
+        // URDF's cylinder: its axis along the collision frame's z, `length` long.
+        const auto& g = static_cast<const urdf::Cylinder&>(*c.geometry);
+        if (!(g.radius > 0.0) || !(g.length > 0.0))
+          Fail(at, who + ": the cylinder's radius and length must be positive");
+        s.type = ContactShapeType::kCylinder;
+        s.from = Vec3(centre - p - 0.5 * g.length * Rc.col(2));
+        s.to = Vec3(centre - p + 0.5 * g.length * Rc.col(2));
+        s.radius = g.radius;
+        break;
+      }
       case urdf::Geometry::MESH:
-        Fail(at, who + ": mesh shapes are not supported (spheres and boxes are)");
+        Fail(at, who + ": mesh shapes are not supported (spheres, boxes and cylinders are)");
     }
     b.shapes.push_back(s);
   }

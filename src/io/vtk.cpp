@@ -313,8 +313,18 @@ void VtkWriter::LayOutBodies(const Model& model,
         AddVertex(AddPoint(s, r, Vec3::Constant(r)), {VtkCellKind::kSphere, id, -1, shape.body});
         break;
       case ContactShapeType::kBox:
+        // Its frame axes along its edges (half_size along them).
+        s.rotated = true;
+        s.axes = shape.rotation;
         AddVertex(AddPoint(s, shape.to.norm(), shape.to), {VtkCellKind::kBox, id, -1, shape.body});
         break;
+      case ContactShapeType::kCylinder: {
+        PointSource to = s;
+        to.offset = shape.to;
+        AddLine({AddPoint(s, r, Vec3::Constant(r)), AddPoint(to, r, Vec3::Constant(r))},
+                {VtkCellKind::kCylinder, id, -1, shape.body});
+        break;
+      }
       case ContactShapeType::kCapsule: {
         PointSource to = s;
         to.offset = shape.to;
@@ -396,13 +406,21 @@ void VtkWriter::LayOutContact(const Model& model) {
       case ObstacleType::kSphere:
         AddVertex(AddPoint(s, o.radius, r3), {VtkCellKind::kObstacleSphere, id});
         break;
-      case ObstacleType::kCapsule: {
+      case ObstacleType::kCapsule:
+      case ObstacleType::kCylinder: {
         PointSource to = s;
         to.offset = o.to;
         AddLine({AddPoint(s, o.radius, r3), AddPoint(to, o.radius, r3)},
-                {VtkCellKind::kObstacleCapsule, id});
+                {o.type == ObstacleType::kCapsule ? VtkCellKind::kObstacleCapsule
+                                                  : VtkCellKind::kObstacleCylinder,
+                 id});
         break;
       }
+      case ObstacleType::kBox:
+        s.rotated = true;
+        s.axes = o.rotation;
+        AddVertex(AddPoint(s, o.to.norm(), o.to), {VtkCellKind::kObstacleBox, id});
+        break;
     }
   }
 }

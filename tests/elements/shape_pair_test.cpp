@@ -50,6 +50,12 @@ enum class Kind {
   kRodBoxFace,
   kRodBoxEdge,
   kCapsuleBoxCorner,
+  // A cylinder (radius 0.04, axis 0.1 long along node 2's z) against a rod beside its side, a
+  // sphere off its rim and a capsule above its flat face; a sphere against a turned box.
+  kRodCylinderSide,
+  kSphereCylinderRim,
+  kCapsuleCylinderFace,
+  kSphereTurnedBox,
   kRodBoxPenetrating,
   kBoxEdgeBox,  // a segment of radius 0 (an edge of another box) across an edge
 };
@@ -114,6 +120,32 @@ Case MakeCase(Kind kind, double mu, unsigned seed) {
       rigid_side(a, Vec3(0.03, -0.02, 0.01), Vec3(0.03, -0.02, 0.01), 0.05);
       rigid_side(b, Vec3(0.02, 0.01, -0.03), Vec3(0.02, 0.01, -0.03), 0.0);
       b.half = Vec3(0.04, 0.06, 0.03);
+      b.node[0] = 2;
+      break;
+    case Kind::kRodCylinderSide:
+    case Kind::kSphereCylinderRim:
+    case Kind::kCapsuleCylinderFace: {
+      const Vec3 o(0.02, 0.01, -0.03);
+      rigid_side(b, o - Vec3(0.0, 0.0, 0.05), o + Vec3(0.0, 0.0, 0.05), 0.0);
+      b.cylinder = 0.04;
+      b.node[0] = 2;
+      auto world = [&](const Vec3& local) { return Vec3(c.H[2].x + c.H[2].R * (o + local)); };
+      auto body = [&](const Vec3& local) {
+        return Vec3(c.H[0].R.transpose() * (world(local) - c.H[0].x));
+      };
+      if (kind == Kind::kRodCylinderSide)
+        rod_side(a, 0, world(Vec3(0.045, -0.08, 0.01)), world(Vec3(0.05, 0.08, -0.02)));
+      else if (kind == Kind::kSphereCylinderRim)
+        rigid_side(a, body(Vec3(0.05, 0.01, 0.06)), body(Vec3(0.05, 0.01, 0.06)), 0.01);
+      else
+        rigid_side(a, body(Vec3(-0.01, 0.0, 0.06)), body(Vec3(0.02, 0.01, 0.065)), 0.01);
+      break;
+    }
+    case Kind::kSphereTurnedBox:
+      rigid_side(a, Vec3(0.03, -0.02, 0.01), Vec3(0.03, -0.02, 0.01), 0.05);
+      rigid_side(b, Vec3(0.02, 0.01, -0.03), Vec3(0.02, 0.01, -0.03), 0.0);
+      b.half = Vec3(0.04, 0.06, 0.03);
+      b.rotation = ExpSO3(Vec3(0.3, -0.5, 0.7));
       b.node[0] = 2;
       break;
     case Kind::kRodBoxFace:
@@ -190,7 +222,8 @@ TEST(ShapePairKind, TangentsMatchFiniteDifferencesAtTheFrozenClosestPointsAndInT
   int active_parts = 0;
   for (Kind kind : {Kind::kRodRod, Kind::kRodCapsule, Kind::kSphereCapsule, Kind::kParallelRods,
                     Kind::kSphereBox, Kind::kRodBoxFace, Kind::kRodBoxEdge, Kind::kCapsuleBoxCorner,
-                    Kind::kRodBoxPenetrating, Kind::kBoxEdgeBox}) {
+                    Kind::kRodBoxPenetrating, Kind::kBoxEdgeBox, Kind::kRodCylinderSide,
+                    Kind::kSphereCylinderRim, Kind::kCapsuleCylinderFace, Kind::kSphereTurnedBox}) {
     for (const double mu : {0.0, 0.4}) {
       for (unsigned seed : {1u, 2u, 3u}) {
         // A segment against a box also as the two clipped ends (ShapePair::part), where active.

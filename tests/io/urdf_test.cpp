@@ -195,22 +195,17 @@ TEST_F(UrdfFiles, ErrorsNameTheElementAndTheInclude) {
                   "link=\"b\"/></joint>\n  <joint name=\"j2\" type=\"continuous\"><parent "
                   "link=\"b\"/><child link=\"c\"/><mimic joint=\"j1\"/></joint>\n"));
   test::ExpectErrorAt(Error(p), at + p + ":10:3", "joint 'j2': <mimic> is not supported");
-  // A cylinder collision shape: the <collision> element.
+  // A cylinder collision shape of zero length: the <collision> element.
   p = Write("cylinder.urdf", "<robot name=\"r\">\n  <link name=\"a\">" + kLink +
                                  "\n    <collision name=\"can\"><geometry><cylinder radius=\"0.1\" "
-                                 "length=\"0.2\"/></geometry></collision>\n  </link>\n</robot>\n");
+                                 "length=\"0\"/></geometry></collision>\n  </link>\n</robot>\n");
   test::ExpectErrorAt(Error(p), at + p + ":4:5",
-                      "link 'a': <collision> 'can': cylinder shapes are not supported (spheres "
-                      "and boxes are)");
+                      "link 'a': <collision> 'can': the cylinder's radius and length must be "
+                      "positive");
   p = Write("mesh.urdf", "<robot name=\"r\">\n  <link name=\"a\">" + kLink +
                              "\n    <collision><geometry><mesh filename=\"a.stl\"/></geometry>"
                              "</collision>\n  </link>\n</robot>\n");
   test::ExpectErrorAt(Error(p), at + p + ":4:5", "link 'a': <collision> 0: mesh shapes");
-  // A box turned by 30 degrees about z: box shapes have world-aligned edges.
-  p = Write("box.urdf", "<robot name=\"r\">\n  <link name=\"a\">" + kLink +
-                            "\n    <collision><origin rpy=\"0 0 0.5236\"/><geometry><box "
-                            "size=\"1 1 1\"/></geometry></collision>\n  </link>\n</robot>\n");
-  test::ExpectErrorAt(Error(p), at + p + ":4:5", "the box is not aligned with the world axes");
   // Bad inertia and mass.
   p = Write("inertia.urdf",
             "<robot name=\"r\">\n  <link name=\"a\"><inertial><mass value=\"1\"/><inertia "
@@ -272,10 +267,12 @@ TEST_F(UrdfFiles, RotatedBaseAndInertialGiveTheClosedFormWorldValues) {
   EXPECT_LT((a.inertia - expected).norm(), 1e-17);
   // The centre of mass 0.1 along the link's x = world x.
   EXPECT_LT((a.com - Vec3(1.1, 2, 3)).norm(), 1e-15);
-  // The box (0.1, 0.2, 0.3) turned as the inertial: half sizes on world axes (0.1, 0.15, 0.05)
-  // at the link's y (world z) 0.2.
+  // The box (0.1, 0.2, 0.3) turned as the inertial: its half sizes along its own edges, which
+  // lie along the world axes with extents (0.1, 0.15, 0.05), at the link's y (world z) 0.2.
   ASSERT_EQ(a.shapes.size(), 1u);
-  EXPECT_LT((a.shapes[0].to - Vec3(0.1, 0.15, 0.05)).norm(), 1e-15);
+  EXPECT_LT((a.shapes[0].to - Vec3(0.05, 0.1, 0.15)).norm(), 1e-15);
+  EXPECT_LT((a.shapes[0].rotation.cwiseAbs() * a.shapes[0].to - Vec3(0.1, 0.15, 0.05)).norm(),
+            1e-15);
   EXPECT_LT((a.shapes[0].from - Vec3(0, 0, 0.2)).norm(), 1e-15);  // relative to the origin
   // The joint at the link's z 0.5 (world -y), its axis the link's y (world z).
   const JointSpec& j = spec.joints[0].joint;

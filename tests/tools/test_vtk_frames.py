@@ -124,6 +124,32 @@ class Frames(unittest.TestCase):
         self.assertIsNotNone(data["contact_states"])
         self.assertEqual(len(data["contacts"]) * 3 * len(frames),
                          len(__import__("base64").b64decode(data["contact_states"]["data"])) // 2)
+    def test_cylinders_turned_boxes_and_box_obstacles_at_their_size_and_pose(self):
+        # examples/contact/shapes.yaml: the crate's box turned by 0.3 rad about z, the wall box
+        # by 0.2 rad, the can and the post cylinders of radius 0.04 and 0.05.
+        scene = os.path.join(SOURCE, "examples", "contact", "shapes.yaml")
+        out = os.path.join(self.tmp, "shapes")
+        subprocess.run([os.environ["SCREWFEM_CLI"], "run", scene, "-o", out, "-q",
+                        "--set", "analysis.end_time=0.01"], check=True)
+        f = screwfem_vtk.read_frame(screwfem_vtk.read_collection(out)[0][1])
+        kinds, pd, cells = f["kinds"], f["point_data"], f["cells"]
+        radius, half = pd["radius"][1], pd["half_size"][1]
+        fx = pd["frame_x"][1]
+
+        def one(kind):
+            self.assertEqual(kinds.count(kind), 1, kind)
+            return cells[kinds.index(kind)]
+        for kind, r, turn, halves in (("box", None, 0.3, [0.05, 0.05, 0.05]),
+                                      ("obstacle_box", None, 0.2, [0.05, 0.3, 0.1])):
+            p = one(kind)[0]
+            self.assertEqual(half[3 * p:3 * p + 3], halves)
+            for k, value in enumerate((math.cos(turn), math.sin(turn), 0.0)):
+                self.assertAlmostEqual(fx[3 * p + k], value, delta=1e-12)
+        for kind, r, length in (("cylinder", 0.04, 0.12), ("obstacle_cylinder", 0.05, 0.4)):
+            a, b = one(kind)
+            self.assertEqual((radius[a], radius[b]), (r, r))
+            d = [f["points"][b][k] - f["points"][a][k] for k in range(3)]
+            self.assertAlmostEqual(math.sqrt(sum(x * x for x in d)), length, delta=1e-9)
 
     def test_chambers_and_visual_radius(self):
         # tests/view/chamber.yaml: a static run of 4 load steps (a frame each, the load factor

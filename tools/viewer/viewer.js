@@ -337,6 +337,7 @@
   var unitBox = new THREE.BoxBufferGeometry(1, 1, 1);
   var sphere = new THREE.SphereBufferGeometry(1, 24, 16);
   var cylinder = new THREE.CylinderBufferGeometry(1, 1, 1, 20, 1, true);  // along y, from -0.5 to 0.5
+  var solidCylinder = new THREE.CylinderBufferGeometry(1, 1, 1, 32, 1, false);  // with flat ends
   var cone = new THREE.ConeBufferGeometry(1, 1, 16);
   var Y = new THREE.Vector3(0, 1, 0);
   // Sets m's matrix to a cylinder (or cone) of radius r from a to b.
@@ -505,6 +506,8 @@
     if (s.type === "capsule") {
       parts = [placed(cylinder, bodyMaterial, layers.bodies), placed(sphere, bodyMaterial, layers.bodies),
                placed(sphere, bodyMaterial, layers.bodies)];
+    } else if (s.type === "cylinder") {
+      parts = [placed(solidCylinder, bodyMaterial, layers.bodies)];
     } else {
       parts = [placed(s.type === "box" ? unitBox : sphere, bodyMaterial, layers.bodies)];
     }
@@ -516,6 +519,8 @@
       s.parts[0].matrix.compose(c, new THREE.Quaternion(), new THREE.Vector3(r, r, r));
     } else if (s.type === "box") {
       s.parts[0].matrix.compose(c, quaternion(s.points[0]), halfSize(s.points[0]).multiplyScalar(2));
+    } else if (s.type === "cylinder") {
+      between(s.parts[0], c, point(s.points[1]), r);
     } else {
       var b = point(s.points[1]);
       between(s.parts[0], c, b, r);
@@ -570,6 +575,11 @@
       layers.obstacles.add(m);
     } else if (o.type === "sphere") {
       placed(sphere, obstacleMaterial, layers.obstacles).matrix.compose(c, new THREE.Quaternion(), new THREE.Vector3(r, r, r));
+    } else if (o.type === "box") {
+      placed(unitBox, obstacleMaterial, layers.obstacles).matrix.compose(c, quaternion(o.points[0]),
+                                                                        halfSize(o.points[0]).multiplyScalar(2));
+    } else if (o.type === "cylinder") {
+      between(placed(solidCylinder, obstacleMaterial, layers.obstacles), c, point(o.points[1]), r);
     } else {
       var b = point(o.points[1]);
       between(placed(cylinder, obstacleMaterial, layers.obstacles), c, b, r);

@@ -117,6 +117,11 @@ struct ContactGeometry {
   Vec3 point = Vec3::Zero();                     // the surface point p_s of the shape [m], world
   double weight[2] = {0.0, 0.0};                 // W_k
   Vec3 lever[2] = {Vec3::Zero(), Vec3::Zero()};  // l_k, node-frame components
+  // dl_k/d theta_k, the lever's change as node k turns at fixed n and s*: -r Skew(R_k^T n) for
+  // a segment (its surface point p - r n); a cylinder's rim point sliding along the rim
+  // against a plane (docs/numerics.md, "Cylinders"); zero for a cylinder's point nearest to a
+  // sphere or capsule obstacle (frozen, as their n).
+  Mat3 lever_rate[2] = {Mat3::Zero(), Mat3::Zero()};
 };
 // Returns false when the normal is undefined (the shape's axis touches a sphere's centre or a
 // capsule's axis).

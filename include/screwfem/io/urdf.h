@@ -36,17 +36,17 @@ struct UrdfAdded {
 // and its joints to spec->joints (docs/urdf.md, "Mapping"):
 // - a link is a rigid body whose frame sits at the link's origin with world-aligned axes; its
 //   mass, centre of mass and inertia (about the centre of mass, rotated into world axes) come
-//   from <inertial>; its <collision> spheres and boxes become contact shapes (BodySpec::shapes,
-//   centres relative to the body's origin, as the scene reader gives them; a box must be
-//   aligned with the world axes up to a permutation in the reference configuration);
+//   from <inertial>; its <collision> spheres, boxes and cylinders become contact shapes
+//   (BodySpec::shapes, points relative to the body's origin, as the scene reader gives them;
+//   a box keeps its orientation, ContactShape::rotation);
 // - revolute and continuous joints become revolute joints, prismatic and fixed joints theirs,
 //   at the child link's origin with the axis in world components; <dynamics damping> is the
 //   joint's damping. Limits, friction, <visual> and <transmission> are not used.
 // Throws InputError "FILE:LINE:COLUMN: ELEMENT: what" (the URDF file's line and column where
 // known, the element as "link 'forearm'", "joint 'elbow'", "link 'hand': <collision> 0") for a
 // missing or unreadable file, XML or URDF parse errors, a link without <inertial>, a mass or
-// inertia that is not positive (definite), cylinder and mesh collision shapes, mimic joints,
-// planar and floating joints, a box not aligned with the world axes, and a name that is
+// inertia that is not positive (definite), mesh collision shapes, a cylinder without a
+// positive radius and length, mimic joints, planar and floating joints, and a name that is
 // already in the spec.
 UrdfAdded AppendUrdf(const std::string& path, const UrdfImport& import, SceneSpec* spec);
 

@@ -97,6 +97,9 @@ enum class VtkCellKind : int {
   kObstacleSphere = 13,
   kObstacleCapsule = 14,
   kChamber = 15,
+  kCylinder = 16,
+  kObstacleCylinder = 17,
+  kObstacleBox = 18,
 };
 
 class VtkWriter {

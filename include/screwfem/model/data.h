@@ -51,6 +51,7 @@ struct ContactAnchor {
   Vec3 lever[2] = {Vec3::Zero(), Vec3::Zero()};
   bool valid = false;     // a material point is stored (false before the first acceptance)
   bool slipping = false;  // the pair slipped then: the threshold is mu_k, else mu_s
+  double time = 0.0;      // Data::time then (a moving obstacle surface's material point)
 };
 
 // The same for a pair of moving shapes (Data::shape_pair_anchors), named by its key

@@ -325,45 +325,61 @@ struct ModelInput {
 // Coulomb friction between moving shapes and obstacles fixed in the world.
 //
 // A collision shape fixed in a rigid body's frame. Sizes in metres, node-frame components.
-enum class ContactShapeType { kSphere, kCapsule, kBox };
+enum class ContactShapeType { kSphere, kCapsule, kBox, kCylinder };
 template <>
 struct EnumNames<ContactShapeType> {
-  static constexpr std::array<EnumName<ContactShapeType>, 3> kValues = {{
+  static constexpr std::array<EnumName<ContactShapeType>, 4> kValues = {{
       {ContactShapeType::kSphere, "sphere", "centre and radius"},
       {ContactShapeType::kCapsule, "capsule", "segment from..to and radius"},
-      {ContactShapeType::kBox, "box", "centre and half sizes along the body axes"},
+      {ContactShapeType::kBox, "box", "centre, half sizes and orientation"},
+      {ContactShapeType::kCylinder, "cylinder", "axis from..to and radius, flat ends"},
   }};
 };
 struct ContactShape {
   int body = -1;  // index into Model::bodies
   ContactShapeType type = ContactShapeType::kSphere;
-  Vec3 from = Vec3::Zero();  // sphere and box: the centre; capsule: one end of the axis
-  Vec3 to = Vec3::Zero();    // capsule: the other end; box: the half sizes (> 0)
-  double radius = 0.0;       // sphere and capsule (> 0); box: 0
+  Vec3 from = Vec3::Zero();  // sphere and box: the centre; capsule, cylinder: one end of the axis
+  Vec3 to = Vec3::Zero();    // capsule, cylinder: the other end; box: the half sizes (> 0)
+  double radius = 0.0;       // sphere, capsule and cylinder (> 0); box: 0
+  // Box: its edges' directions in the node frame (columns: the axes of the half sizes); a
+  // rotation (Build checks it). The identity: edges along the node axes.
+  Mat3 rotation = Mat3::Identity();
 };
 // A rod taking part in contact: a chain of capsules of `radius` around its element chords.
 struct ContactRod {
   int rod = -1;
   double radius = 0.0;  // [m] > 0
 };
-// An obstacle fixed in the world.
-enum class ObstacleType { kPlane, kSphere, kCapsule };
+// An obstacle fixed in the world (a plane may carry a moving surface: a conveyor, a turntable).
+enum class ObstacleType { kPlane, kSphere, kCapsule, kCylinder, kBox };
 template <>
 struct EnumNames<ObstacleType> {
-  static constexpr std::array<EnumName<ObstacleType>, 3> kValues = {{
+  static constexpr std::array<EnumName<ObstacleType>, 5> kValues = {{
       {ObstacleType::kPlane, "plane", "the half-space behind a point and a normal"},
       {ObstacleType::kSphere, "sphere", "a fixed sphere"},
       {ObstacleType::kCapsule, "capsule", "a fixed capsule (a cylinder with round ends)"},
+      {ObstacleType::kCylinder, "cylinder", "a fixed cylinder with flat ends"},
+      {ObstacleType::kBox, "box", "a fixed box: centre, half sizes and orientation"},
   }};
 };
 struct ContactObstacle {
   std::string name;
   ObstacleType type = ObstacleType::kPlane;
-  Vec3 point = Vec3::Zero();    // plane: a point of it; sphere: centre; capsule: one end
-  Vec3 normal = Vec3::UnitZ();  // plane: unit normal out of the obstacle (Build normalises)
-  Vec3 to = Vec3::Zero();       // capsule: the other end
-  double radius = 0.0;          // sphere and capsule
+  // plane: a point of it; sphere, box: centre; capsule, cylinder: one end of the axis
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();       // plane: unit normal out of the obstacle (Build normalises)
+  Vec3 to = Vec3::Zero();            // capsule, cylinder: the other end; box: the half sizes (> 0)
+  double radius = 0.0;               // sphere, capsule and cylinder
+  Mat3 rotation = Mat3::Identity();  // box: its edges' directions (columns), world
   unsigned contype = 1, conaffinity = 1;
+  // A plane's moving surface (docs/numerics.md, "Moving surfaces"): its material points move in
+  // the plane at v_s(p, t) = motion(t) (velocity + spin n x (p - point)), a belt (velocity
+  // [m/s], tangential) or a turntable (spin [rad/s] about the normal through `point`); the
+  // shapes' slip in the friction law is relative to it. The plane itself does not move.
+  Vec3 velocity = Vec3::Zero();
+  double spin = 0.0;
+  Profile motion = Profile::Constant(1.0);
+  bool moving() const { return velocity != Vec3::Zero() || spin != 0.0; }
 };
 // Group bitmasks of a rod or body (MuJoCo's contype/conaffinity): a moving entity and an
 // obstacle collide when (contype_1 & conaffinity_2) | (contype_2 & conaffinity_1) is non-zero.
@@ -495,6 +511,12 @@ struct ContactPair {
   bool rod = false;      // the owner: a rod or a rigid body (index), for outputs
   int owner = -1;
   int material = 0;  // its law: Model::contact_laws index (Build)
+  // A body's cylinder (docs/numerics.md, "Cylinders"): its radius, with the axis from
+  // offset[0] to offset[1] (on node 0) and `radius` 0; else 0. Against a plane each flat end is
+  // carried at three rim points (part 0..5: end part / 3, the deepest rim point and the two at
+  // +-120 degrees from it); against a sphere or capsule obstacle one pair (part -1).
+  double cylinder = 0.0;
+  int part = -1;
 };
 // One side of a pair between two moving shapes (elements/shape_pair.h): a segment p(s) =
 // (1-s) p_0 + s p_1 with p_j = x_j + R_j c_j of the side's item node end_node[j] (a rigid shape
@@ -508,9 +530,13 @@ struct ShapePairSide {
   int owner = -1;
   int element = -1;  // a rod side: the element (index into Model::elements)
   // A box side (always side B, against a segment side: a sphere, a capsule, a rod element or
-  // an edge of another box): half sizes > 0 along the node axes, centre offset[0]; zero for a
-  // segment side.
+  // an edge of another box): half sizes > 0 along the columns of `rotation` (node frame),
+  // centre offset[0]; zero for a segment side.
   Vec3 half = Vec3::Zero();
+  Mat3 rotation = Mat3::Identity();
+  // A cylinder side (always side B, against a sphere, a capsule or a rod element): its radius
+  // > 0, the axis from offset[0] to offset[1] (both on node 0), `radius` 0; else 0.
+  double cylinder = 0.0;
 };
 // A pair of moving shapes found by the broad phase (rigid-rigid, rod-rigid, rod-rod, rod
 // self-contact; UpdateShapePairs, elements/shape_pair.h): the normal points from side 1 (B) to
