@@ -404,7 +404,9 @@ void CheckCylinderPairs(const Model& m, const std::vector<ContactEntity>& entiti
   for (std::size_t i = 0; i < ne; ++i) {
     if (!cylinder[i]) continue;
     for (std::size_t k = 0; k < ne; ++k) {
-      if (k == i || !m.contact_entity_pairs[i * ne + k] || !(cylinder[k] || box[k])) continue;
+      if (k == i || !(cylinder[k] || box[k]) ||
+          !m.contact_entity_pairs.MayTouch(static_cast<int>(i), static_cast<int>(k)))
+        continue;
       const std::string a = m.bodies[static_cast<std::size_t>(entities[i].index)].name;
       const std::string b = m.bodies[static_cast<std::size_t>(entities[k].index)].name;
       throw InputError("contact between the cylinder of body '" + a + "' and the " +
