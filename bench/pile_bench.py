@@ -102,7 +102,7 @@ def main():
             "halvings": s["step_halvings"], "line_search": s.get("line_search_halvings", 0),
             "per_element_iteration": per, "per_element_iteration_free": per_free,
             "ratio": per / per_free, "rho_inf": s["settings"]["rho_inf"],
-            "stiffness": s["settings"].get("contact", {}).get("stiffness"),
+            "stiffness": s["settings"]["contact"]["materials"][0]["stiffness"],
         })
         print(json.dumps(rows[-1]), flush=True)
     lines = [

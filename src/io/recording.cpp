@@ -775,6 +775,7 @@ class Recording::Impl {
       j.Field("align_steps", a.align_steps).Field("static_preload", a.static_preload);
       // rho_inf as the run used it (auto resolved: 0 with contact, docs/numerics.md).
       j.Field("rho_inf", ResolvedRhoInf(model_, d)).Field("max_iterations", d.max_iterations);
+      if (HasContact(model_)) j.Field("line_search", d.line_search);  // (only with contact)
       j.Field("max_halvings", d.max_halvings);
       j.Field("increment_tolerance", d.increment_tolerance);
       j.Field("constraint_tolerance", d.constraint_tolerance);
@@ -820,22 +821,6 @@ class Recording::Impl {
     // (only when off, so that other runs' summaries keep their text)
     if (!outputs_.reactions) j.Field("reactions", false);
     if (!outputs_.energy) j.Field("energy", false);
-    if (HasContact(model_)) {  // the contact law as the run used it, defaults resolved
-      const ContactSettings& c = model_.contact;
-      j.Key("contact").BeginObject();
-      j.Field("stiffness", c.stiffness).Field("onset", c.onset);
-      j.Field("damping_ratio", c.damping_ratio).Field("friction", c.friction);
-      j.Field("friction_law", NameOf(c.friction_law));
-      if (c.friction_law == FrictionLaw::kStick) {
-        const ContactLawParameters law = ContactLawFor(c, 0.0, false);  // defaults resolved
-        j.Field("static_friction", law.static_friction);
-        j.Field("tangential_stiffness", law.tangential_stiffness);
-      } else {
-        j.Field("slip_velocity", c.slip_velocity);
-      }
-      if (!statics) j.Field("line_search", d.line_search);
-      j.EndObject();
-    }
     if (outputs_.rod_fields) {  // (only then, so that other runs' summaries keep their text)
       j.Field("rod_fields", true);
       if (FieldsApart())
