@@ -27,3 +27,13 @@ def cpu_model(unknown="unknown"):
     except OSError:
         pass
     return unknown
+
+
+def append_run(results, section, explanation, text):
+    """Appends one run's `text` to the section `section` of bench/RESULTS.md (`results`, a
+    pathlib.Path), creating the section with its `explanation` when it is missing
+    (bench/make_results.py keeps such sections when it rewrites the file)."""
+    body = results.read_text() if results.exists() else "# Benchmark results\n"
+    if section not in body:
+        body = body.rstrip("\n") + "\n\n" + section + "\n\n" + explanation + "\n"
+    results.write_text(body.rstrip("\n") + "\n\n" + text)

@@ -27,7 +27,7 @@ import sys
 import tempfile
 import time
 
-from bench_common import cpu_model, revision
+from bench_common import append_run, cpu_model, revision
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "bench" / "RESULTS.md"
@@ -129,10 +129,7 @@ def main():
     text = "\n".join(lines)
     print(text)
     if not args.no_write:
-        body = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-        if SECTION not in body:
-            body = body.rstrip("\n") + "\n\n" + SECTION + "\n\n" + EXPLANATION + "\n"
-        RESULTS.write_text(body.rstrip("\n") + "\n\n" + text)
+        append_run(RESULTS, SECTION, EXPLANATION, text)
     return 0
 
 

@@ -34,7 +34,7 @@ import numpy as np
 
 import screwfem as sf
 from screwfem import _sweep
-from bench_common import revision
+from bench_common import append_run, revision
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "bench" / "RESULTS.md"
@@ -174,10 +174,7 @@ def main():
     text = "\n".join(lines)
     print(text)
     if not args.no_write:
-        body = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-        if SECTION not in body:
-            body = body.rstrip("\n") + "\n\n" + SECTION + "\n\n" + EXPLANATION + "\n"
-        RESULTS.write_text(body.rstrip("\n") + "\n\n" + text)
+        append_run(RESULTS, SECTION, EXPLANATION, text)
     return 0 if met and grm_same and tiny_same else 1
 
 
