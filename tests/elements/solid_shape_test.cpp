@@ -83,7 +83,10 @@ TEST(CylinderGeometry, ClosestPointAndSegmentParameterAreTheSampledMinima) {
       best = std::min(best, CylinderSignedDistance(A, B, R, Vec3(P0 + (i / 20000.0) * (P1 - P0))));
     const double at = CylinderSignedDistance(A, B, R, Vec3(P0 + s * (P1 - P0)));
     EXPECT_LE(at, best + 1e-15) << trial;
-    EXPECT_GT(at, best - 1e-6) << trial;
+    // Sampled every 1/20000 of the segment: where the nearest feature changes (side, rim, face)
+    // the distance has a kink, and the samples may miss the minimum by half a spacing times a
+    // slope up to 1 (1.2e-5 m on these segments; clang found one 1e-6 below).
+    EXPECT_GT(at, best - 2e-5) << trial;
   }
 }
 
