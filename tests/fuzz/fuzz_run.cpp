@@ -71,7 +71,10 @@ long PollBudgetFor(const screwfem::Model& m, const RunCaps& caps) {
 }
 
 bool TooLarge(const screwfem::Model& m, const RunCaps& caps) {
-  const double n = m.num_unknowns();
+  // With contact a pattern analysis may come with every assembly (pairs that change), and the
+  // line search assembles up to 7 times per iteration: such models count 7 times their size.
+  const double n =
+      m.num_unknowns() * (screwfem::HasContact(m) ? 1.0 + screwfem::kMaxLineSearchHalvings : 1.0);
   return n > caps.max_unknowns || n * (m.bandwidth + 1.0) > caps.max_band_entries;
 }
 
