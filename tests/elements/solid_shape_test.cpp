@@ -21,6 +21,7 @@
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
 #include "screwfem/solve/statics.h"
+#include "kind_assembly.h"
 
 namespace screwfem::solid_shape_test {
 namespace {
@@ -90,36 +91,10 @@ TEST(CylinderGeometry, ClosestPointAndSegmentParameterAreTheSampledMinima) {
   }
 }
 
-// Assembles the obstacle pairs alone over all nodes (6 rows each).
+// The obstacle pairs alone over all nodes (6 rows each): kind_assembly.h.
 void AssembleContacts(const Model& m, const Data& d, const KernelOptions& o, Eigen::VectorXd* r,
                       Eigen::MatrixXd* K, Eigen::MatrixXd* C) {
-  const int n = static_cast<int>(m.nodes.size());
-  r->setZero(6 * n);
-  if (K) K->setZero(6 * n, 6 * n);
-  if (C) C->setZero(6 * n, 6 * n);
-  ContactKind::ForEach(m, [&](const int& item, const int(&nodes)[2]) {
-    NodeMotion<2> x;
-    const Mat6 I = Mat6::Identity();
-    for (int i = 0; i < 2; ++i) {
-      x.H[i] = &NodeFrame(d, nodes[i]);
-      x.T[i] = &I;
-    }
-    GatherNodeMotion<2>(m, d, nodes, &x.eta, &x.eta_dot);
-    ElementTerms<2> t;
-    ASSERT_TRUE(ContactKind::Calc(m, d, item, x, o, &t));
-    if (!t.active) return;
-    for (int a = 0; a < 2; ++a) {
-      if (nodes[a] == kGround) continue;
-      r->segment<6>(6 * nodes[a]) += t.residual.segment<6>(6 * a);
-      for (int b = 0; b < 2; ++b) {
-        if (nodes[b] == kGround) continue;
-        if (K && t.has_stiffness)
-          K->block<6, 6>(6 * nodes[a], 6 * nodes[b]) += t.stiffness.block<6, 6>(6 * a, 6 * b);
-        if (C && t.has_damping)
-          C->block<6, 6>(6 * nodes[a], 6 * nodes[b]) += t.damping.block<6, 6>(6 * a, 6 * b);
-      }
-    }
-  });
+  kind_assembly::AssembleKind<ContactKind>(m, d, o, r, K, C);
 }
 
 double RelativeError(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
@@ -204,24 +179,18 @@ Scene CylinderOnPlane(double friction, FrictionLaw law_kind, double tilt, unsign
 // velocities (C).
 void DifferenceTangents(const Scene& s, const KernelOptions& o, double eps, Eigen::MatrixXd* K,
                         Eigen::MatrixXd* C) {
-  const int n = static_cast<int>(s.model.nodes.size());
-  K->resize(6 * n, 6 * n);
-  C->resize(6 * n, 6 * n);
-  for (int j = 0; j < 6 * n; ++j) {
-    Data p = s.data, m = s.data;
-    const Vec6 dh = eps * Vec6::Unit(j % 6);
-    p.H[static_cast<std::size_t>(j / 6)] = p.H[static_cast<std::size_t>(j / 6)] * ExpSE3(dh);
-    m.H[static_cast<std::size_t>(j / 6)] = m.H[static_cast<std::size_t>(j / 6)] * ExpSE3(-dh);
-    Eigen::VectorXd rp, rm;
-    AssembleContacts(s.model, p, o, &rp, nullptr, nullptr);
-    AssembleContacts(s.model, m, o, &rm, nullptr, nullptr);
-    K->col(j) = (rp - rm) / (2 * eps);
+  const auto residual = [&](const Data& d) {
+    Eigen::VectorXd r;
+    AssembleContacts(s.model, d, o, &r, nullptr, nullptr);
+    return r;
+  };
+  *K = kind_assembly::FiniteDifference(s.model, s.data, residual, eps);
+  C->resize(K->rows(), K->cols());
+  for (int j = 0; j < K->cols(); ++j) {
     Data vp = s.data, vm = s.data;
     vp.v(j) += eps;
     vm.v(j) -= eps;
-    AssembleContacts(s.model, vp, o, &rp, nullptr, nullptr);
-    AssembleContacts(s.model, vm, o, &rm, nullptr, nullptr);
-    C->col(j) = (rp - rm) / (2 * eps);
+    C->col(j) = (residual(vp) - residual(vm)) / (2 * eps);
   }
 }
 
