@@ -253,6 +253,19 @@ void BindSettings(py::module_& m) {
 
   BindEnum<AnalysisKind>(m, "AnalysisKind", "What a scene's analysis does (scene.h).");
 
+  py::class_<RestCriterion>(m, "RestCriterion",
+                            "When a dynamic run has come to rest (solve/rest.h; the scene's "
+                            "analysis.stop_at_rest).")
+      .def(py::init<>())
+      .def_readwrite("enabled", &RestCriterion::enabled,
+                     "End the run, completed, once the scene is at rest.")
+      .def_readwrite("speed", &RestCriterion::speed,
+                     "Every free node's translational speed below this [m/s].")
+      .def_readwrite("angular_speed", &RestCriterion::angular_speed,
+                     "Every free node's angular speed below this [rad/s].")
+      .def_readwrite("hold", &RestCriterion::hold,
+                     "For this long without interruption [s] (simulated time).");
+
   py::class_<AnalysisSettings>(m, "AnalysisSettings", "What a scene does (scene.h).")
       .def(py::init<>())
       .def_readwrite("kind", &AnalysisSettings::kind,
@@ -270,6 +283,9 @@ void BindSettings(py::module_& m) {
       .def_readwrite("static_preload", &AnalysisSettings::static_preload,
                      "Dynamic analyses start from a static equilibrium of the loads at "
                      "start_time.")
+      .def_readwrite("stop_at_rest", &AnalysisSettings::stop_at_rest,
+                     "RestCriterion (a reference): dynamic runs end once the scene is at rest "
+                     "(summary.json rest_time).")
       .def_property(
           "threads",
           [](const AnalysisSettings& a) -> py::object {

@@ -181,6 +181,22 @@ void BindResults(py::module_& m) {
       .def_readonly("gravity", &Energy::gravity, "Potential of gravity, zero at the world origin.")
       .def("total", &Energy::total, "kinetic + strain + spring + gravity [J].");
 
+  py::class_<SettlingState>(m, "SettlingState",
+                            "How far a state is from rest (outputs.h, CalcSettlingState; the "
+                            "row of settling.csv).")
+      .def_readonly("kinetic", &SettlingState::kinetic, "Kinetic energy [J].")
+      .def_readonly("speed", &SettlingState::speed,
+                    "Largest translational speed of a free node [m/s].")
+      .def_readonly("angular_speed", &SettlingState::angular_speed,
+                    "Largest angular speed of a free node [rad/s].")
+      .def_readonly("contacts", &SettlingState::contacts,
+                    "Active contacts (obstacle pairs and pairs of moving shapes).")
+      .def_readonly("slipping", &SettlingState::slipping,
+                    "Of them, those slipping under the stick law (0 under the smooth law).")
+      .def_readonly("overlap", &SettlingState::overlap, "Deepest overlap of a pair [m].")
+      .def_readonly("overlap_ratio", &SettlingState::overlap_ratio,
+                    "Deepest overlap relative to the pair's smaller round radius.");
+
   py::class_<PointMotion>(m, "PointMotion",
                           "World position [m], velocity [m/s] and acceleration [m/s^2] of a point "
                           "(outputs.h); read-only views into this object.")
@@ -932,6 +948,14 @@ A signal (Ctrl-C) between Newton iterations ends the call with the signal's exce
           "calc_energy", [](S& s) { return CalcEnergy(s.model(), s.data()); },
           "calc_energy() -> Energy\n\nKinetic, strain, spring and gravity energies of the "
           "current state [J] (CalcEnergy).")
+      .def(
+          "calc_settling",
+          [](S& s) {
+            return CalcSettlingState(s.model(), s.data(),
+                                     s.scene().analysis.kind != AnalysisKind::kStatic);
+          },
+          "calc_settling() -> SettlingState\n\nKinetic energy, largest node speeds, active and "
+          "slipping contacts and the deepest overlap of the current state (settling.csv's row).")
       .def(
           "view",
           [](py::object self, int port, bool open_browser, const std::string& host,

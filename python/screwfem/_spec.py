@@ -1132,7 +1132,8 @@ class SceneSpec:
         rod_inertia, linear_solver, newton, predictor, convergence, restart_at_breakpoints,
         perturbed_start, constraints, statics ({method, end_load_factor, max_steps, arc_length, arc_length_min,
         arc_length_max, desired_iterations, psi, rotation_weight, exact_tangent}), threads
-        ('auto' or an integer from 1 to 256)."""
+        ('auto' or an integer from 1 to 256), line_search, stop_at_rest (a bool or {speed,
+        angular_speed, hold})."""
         a, d, st = self.analysis, self.analysis.dynamic, self.analysis.statics
         auto = {}
         for key, value in keys.items():
@@ -1147,9 +1148,16 @@ class SceneSpec:
                 else:
                     a.step = _number(value, where)
             elif key == "rho_inf":
+                if value == "auto":
+                    d.rho_inf = _m.AUTO_RHO_INF
+                    continue
                 d.rho_inf = _number(value, where)
                 if not 0 <= d.rho_inf <= 1:
-                    raise _error(where, "expected a spectral radius in [0, 1]")
+                    raise _error(where, "expected a spectral radius in [0, 1] or 'auto'")
+            elif key == "line_search":
+                d.line_search = _bool(value, where)
+            elif key == "stop_at_rest":
+                self._set_stop_at_rest(value, where)
             elif key == "tolerances":
                 if not isinstance(value, dict) or set(value) - {"increment", "constraint",
                                                                 "residual"}:
@@ -1200,6 +1208,25 @@ class SceneSpec:
         if "step" in auto:
             self._set_step_control(auto)
         return a
+
+    def _set_stop_at_rest(self, value, where):
+        """analysis.stop_at_rest as the scene reads it: a bool or {speed, angular_speed, hold}."""
+        c = self.analysis.stop_at_rest
+        if isinstance(value, dict):
+            for key, v in value.items():
+                w = f"{where}.{key}"
+                if key not in ("speed", "angular_speed", "hold"):
+                    raise _error(w, "unknown key (expected speed, angular_speed or hold)")
+                x = _number(v, w)
+                if not (x > 0 if key != "hold" else x >= 0):
+                    raise _error(w, f"expected a value {'>' if key != 'hold' else '>='} 0, "
+                                    f"got {v!r}")
+                setattr(c, key, x)
+            c.enabled = True
+        else:
+            c.enabled = _bool(value, where)
+        if c.enabled and self.analysis.kind == _m.AnalysisKind.STATIC:
+            raise _error(where, "applies to dynamic analyses only")
 
     def _set_statics(self, value, where):
         st = self.analysis.statics

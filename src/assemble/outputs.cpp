@@ -3,10 +3,12 @@
 #include <algorithm>
 
 #include "screwfem/assemble/assemble.h"
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/joint.h"
 #include "screwfem/elements/quadrature.h"
 #include "screwfem/elements/rigid_body.h"
 #include "screwfem/elements/rod.h"
+#include "screwfem/elements/shape_pair.h"
 
 namespace screwfem {
 
@@ -133,6 +135,53 @@ Vec6 CalcJointReaction(const Model& model, const Data& data, int joint) {
 Vec6 CalcMomentum(const Model& model, const Data& data) {
   // Summed with the energies, item by item (Energy::momentum: RigidBodyKind and RodElementKind).
   return CalcEnergy(model, data).momentum;
+}
+
+namespace {
+
+// The smaller positive of two radii (0 when neither is positive).
+double SmallerRadius(double a, double b) {
+  if (a > 0.0 && b > 0.0) return std::min(a, b);
+  return std::max(a, b) > 0.0 ? std::max(a, b) : 0.0;
+}
+
+void CountContact(bool active, bool slipping, double gap, double radius, SettlingState* s) {
+  if (!active) return;
+  ++s->contacts;
+  if (slipping) ++s->slipping;
+  if (gap < 0.0) {
+    s->overlap = std::max(s->overlap, -gap);
+    if (radius > 0.0) s->overlap_ratio = std::max(s->overlap_ratio, -gap / radius);
+  }
+}
+
+}  // namespace
+
+SettlingState CalcSettlingState(const Model& model, const Data& data, bool dynamics) {
+  SettlingState s;
+  s.kinetic = CalcEnergy(model, data).kinetic;
+  for (const Node& node : model.nodes) {
+    if (node.dof < 0) continue;
+    s.speed = std::max(s.speed, data.v.segment<3>(node.dof).norm());
+    s.angular_speed = std::max(s.angular_speed, data.v.segment<3>(node.dof + 3).norm());
+  }
+  for (int i = 0; i < static_cast<int>(model.contact_pairs.size()); ++i) {
+    const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(i)];
+    const ContactState c = CalcContactState(model, data, i, dynamics);
+    const ContactObstacle& o = model.obstacles[static_cast<std::size_t>(pair.obstacle)];
+    const double obstacle_radius =
+        o.type == ObstacleType::kPlane || o.type == ObstacleType::kBox ? 0.0 : o.radius;
+    CountContact(c.active, c.slipping, c.gap,
+                 SmallerRadius(SmallerRadius(pair.radius, pair.cylinder), obstacle_radius), &s);
+  }
+  for (int i = 0; i < data.num_shape_pairs; ++i) {
+    const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(i)];
+    const ShapePairState c = CalcShapePairState(model, data, i, dynamics);
+    const double a = SmallerRadius(pair.side[0].radius, pair.side[0].cylinder);
+    const double b = SmallerRadius(pair.side[1].radius, pair.side[1].cylinder);
+    CountContact(c.active, c.slipping, c.gap, SmallerRadius(a, b), &s);
+  }
+  return s;
 }
 
 }  // namespace screwfem

@@ -26,6 +26,7 @@
 #include "screwfem/elements/shape_pair.h"
 #include "screwfem/io/progress.h"
 #include "screwfem/solve/initial_state.h"
+#include "screwfem/solve/rest.h"
 #include "screwfem/solve/schedule.h"
 #include "screwfem/io/vtk.h"
 #include "screwfem/io/writers.h"
@@ -350,6 +351,11 @@ class Recording::Impl {
         pair_contacts_.Open(folder_, kPairContactsFile, StaticColumns(PairContactColumns()));
         tables_[num_tables_++] = &pair_contacts_;
       }
+      // Settling (kinetic energy, contacts, deepest overlap): with contact.
+      if (HasContact(model_)) {
+        settling_.Open(folder_, kSettlingFile, StaticColumns(SettlingColumns()));
+        tables_[num_tables_++] = &settling_;
+      }
       if (outputs_.vtk) {
         vtk_.emplace();
         vtk_->Open(folder_, model_, outputs_.vtk_format, ExpectedFrames(scene, outputs_),
@@ -447,6 +453,7 @@ class Recording::Impl {
     return r;
   }
   // Dynamic analyses: the first row and frame, the output clocks from there.
+  void StopAtRest(const RestCriterion& c) { stop_at_rest_ = c; }
   bool Start() {
     start_time_ = data_.time;
     max_constraint_ = CalcMaxJointConstraint(model_, data_, data_.time);
@@ -458,6 +465,15 @@ class Recording::Impl {
                     outputs_.vtk_interval > 0.0 ? outputs_.vtk_interval : outputs_.interval,
                     a.step);
     if (FieldsApart()) fields_.emplace(start_time_, outputs_.rod_fields_interval, a.step);
+    if (stop_at_rest_.enabled) {
+      // Not at rest before the inputs stop changing: the last profile breakpoint and the
+      // last row of a run-time input table.
+      double earliest = start_time_;
+      for (double b : ProfileBreakpoints(model_)) earliest = std::max(earliest, b);
+      if (!options_.inputs.times.empty())
+        earliest = std::max(earliest, options_.inputs.times.back());
+      rest_.emplace(stop_at_rest_, earliest);
+    }
     if (!Record(data_.time, true, true, FieldsApart())) return false;
     rows_->Recorded(data_.time);
     frames_->Recorded(data_.time);
@@ -496,6 +512,9 @@ class Recording::Impl {
     const double t = data_.time;
     max_constraint_ = std::max(max_constraint_, CalcMaxJointConstraint(model_, data_, t));
     max_rotation_ = std::max(max_rotation_, MaxElementRotation(data_));
+    // analysis.stop_at_rest: the state at rest is the run's last (its row and frame).
+    const bool at_rest = !last && rest_ && rest_->Update(model_, data_);
+    last = last || at_rest;
     const bool row = last || rows_->Due(t), frame = last || frames_->Due(t);
     const bool fields = fields_ && (last || fields_->Due(t));
     if (row || frame || fields) {
@@ -509,6 +528,16 @@ class Recording::Impl {
       options_.on_step(t);
     }
     if (progress_) progress_->Update(t, integ_.steps);
+    if (at_rest) {
+      rest_time_ = t;
+      Finish("completed",
+             FormatNumbers("at rest at t = %.9g s (analysis.stop_at_rest: every node slower than "
+                           "%.3g m/s ",
+                           t, rest_->criterion().speed) +
+                 FormatNumbers("and %.3g rad/s since t = %.9g s)", rest_->criterion().angular_speed,
+                               rest_->since()));
+      return false;
+    }
     if (Clock::now() - last_summary_ > std::chrono::seconds(2)) {
       if (!FlushRows(t)) return false;
       WriteSummary();
@@ -667,6 +696,10 @@ class Recording::Impl {
             if (CalcPairContactRow(model_, data, i, &row_))
               pair_contacts_.WriteRow(t, WithLoadFactor(row_), key);
         }
+        if (settling_.path().size() > 0) {
+          CalcSettlingRow(model_, data, !statics, &row_);
+          settling_.WriteRow(t, WithLoadFactor(row_), key);
+        }
         last_row_time_ = t;
       }
       std::size_t batch = 0;
@@ -776,6 +809,15 @@ class Recording::Impl {
       // rho_inf as the run used it (auto resolved: 0 with contact, docs/numerics.md).
       j.Field("rho_inf", ResolvedRhoInf(model_, d)).Field("max_iterations", d.max_iterations);
       if (HasContact(model_)) j.Field("line_search", d.line_search);  // (only with contact)
+      if (a.stop_at_rest.enabled) {
+        j.Key("stop_at_rest").BeginObject();
+        j.Field("speed", a.stop_at_rest.speed);
+        j.Field("angular_speed", a.stop_at_rest.angular_speed);
+        j.Field("hold", a.stop_at_rest.hold);
+        j.EndObject();
+      } else {
+        j.Field("stop_at_rest", false);
+      }
       j.Field("max_halvings", d.max_halvings);
       j.Field("increment_tolerance", d.increment_tolerance);
       j.Field("constraint_tolerance", d.constraint_tolerance);
@@ -863,6 +905,13 @@ class Recording::Impl {
     j.EndObject();
 
     j.Field("time", data_.time);
+    // analysis.stop_at_rest: when the run ended at rest (null otherwise).
+    if (!statics) {
+      if (std::isnan(rest_time_))
+        j.Key("rest_time").Null();
+      else
+        j.Field("rest_time", rest_time_);
+    }
     j.Field("steps", integ_.steps);
     j.Field("newton_iterations", integ_.iterations);
     j.Field("max_iterations_per_step", integ_.max_iterations_in_step);
@@ -943,10 +992,15 @@ class Recording::Impl {
                               // in static analyses, none otherwise
   CsvWriter contacts_;        // long format (one row per active pair)
   CsvWriter pair_contacts_;   // the same for pairs of moving shapes (pair_contacts.csv)
+  CsvWriter settling_;        // settling.csv (scenes with contact)
+  // analysis.stop_at_rest (solve/rest.h): watched from Start; rest_time_ when it ended the run.
+  RestCriterion stop_at_rest_;
+  std::optional<RestWatch> rest_;
+  double rest_time_ = NAN;
   // The open tables, flushed together (points and joints always), their
   // rows keyed by the output event (events_), so that a write error cuts every one of them
   // at the same output time.
-  std::array<CsvWriter*, 10> tables_ = {&points_, &joints_, nullptr, nullptr, nullptr,
+  std::array<CsvWriter*, 11> tables_ = {&points_, &joints_, nullptr, nullptr, nullptr, nullptr,
                                         nullptr,  nullptr,  nullptr, nullptr, nullptr};
   std::size_t num_tables_ = 2;
   std::optional<VtkWriter> vtk_;
@@ -981,6 +1035,7 @@ Recording::~Recording() {
   if (!impl_->finished()) impl_->Finish("failed", "the recording was not finished");
 }
 
+void Recording::StopAtRest(const RestCriterion& criterion) { impl_->StopAtRest(criterion); }
 bool Recording::Start() { return impl_->Start(); }
 bool Recording::started() const { return impl_->started(); }
 void Recording::BeforeStep(double t_inputs) { impl_->BeforeStep(t_inputs); }

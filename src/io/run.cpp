@@ -28,9 +28,12 @@ void ValidateSettings(const Scene& scene) {
   require(IsEnumValue(a.kind), "analysis.kind", "must be " + EnumNameAlternatives<AnalysisKind>());
   if (a.kind == AnalysisKind::kStatic || a.static_preload)
     ValidateStaticOptions(a.statics, "analysis.statics");
+  require(!(a.kind == AnalysisKind::kStatic && a.stop_at_rest.enabled), "analysis.stop_at_rest",
+          "applies to dynamic analyses only");
   if (a.kind == AnalysisKind::kStatic) return;
   ValidateTimeGrid(a.start_time, a.end_time, a.step, "analysis");
   ValidateDynamicOptions(a.dynamic, "analysis.dynamic");
+  if (a.stop_at_rest.enabled) ValidateRestCriterion(a.stop_at_rest, "analysis.stop_at_rest");
 }
 
 // One call of RunScene: the state, the stepping and the files (Recording).
@@ -125,6 +128,7 @@ class Run {
              why);
       return;
     }
+    if (a.stop_at_rest.enabled) recording_.StopAtRest(a.stop_at_rest);
     if (!recording_.Start()) return;
 
     // Fixed steps end on the schedule's step ends (profile breakpoints inserted with
@@ -137,7 +141,7 @@ class Run {
         a.adaptive_steps ? StepPolicy::ErrorControlled(a.step) : StepPolicy::OnSchedule(schedule);
     const AdvanceResult r =
         Advance(model_, data_, integ_, policy, a.end_time, &recording_, options_.stop);
-    if (r.stopped) return;  // a write error ended the run
+    if (r.stopped) return;  // a write error ended the run, or it came to rest (stop_at_rest)
     if (r.interrupted) {
       Interrupted(r.interrupted_in_step
                       ? FormatNumbers("at t = %.9g s (within a halved step); the last recorded "

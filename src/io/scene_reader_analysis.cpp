@@ -47,7 +47,8 @@ void SceneReader::ReadAnalysis(const Node* node) {
                 "initial_step",
                 "statics",
                 "threads",
-                "line_search"});
+                "line_search",
+                "stop_at_rest"});
   if (const Node* t = node->Find("type")) a->kind = r_.Enum<AnalysisKind>(*t, Join(path, "type"));
   ReadTimes(*node, path);
   ReadSolverOptions(*node, path);
@@ -67,7 +68,27 @@ void SceneReader::ReadAnalysis(const Node* node) {
   if (const Node* t = node->Find("linear_solver"))
     spec_.linear_solver = r_.Enum<LinearSolver>(*t, Join(path, "linear_solver"));
   if (const Node* t = node->Find("threads")) ReadThreads(*t, Join(path, "threads"));
+  if (const Node* t = node->Find("stop_at_rest")) ReadStopAtRest(*t, Join(path, "stop_at_rest"));
   // analysis.statics.time follows from the kind; the compiler sets it (SceneSpec::analysis).
+}
+
+// analysis.stop_at_rest: a bool (the default criterion) or a map of speed, angular_speed and
+// hold; dynamic analyses only.
+void SceneReader::ReadStopAtRest(const Node& node, const std::string& path) {
+  RestCriterion* c = &spec_.analysis.stop_at_rest;
+  if (node.IsMap()) {
+    r_.CheckKeys(node, path, {"speed", "angular_speed", "hold"});
+    c->enabled = true;
+    if (const Node* v = node.Find("speed")) c->speed = r_.PositiveNumber(*v, Join(path, "speed"));
+    if (const Node* v = node.Find("angular_speed"))
+      c->angular_speed = r_.PositiveNumber(*v, Join(path, "angular_speed"));
+    if (const Node* v = node.Find("hold")) c->hold = r_.NonNegativeNumber(*v, Join(path, "hold"));
+  } else {
+    c->enabled = r_.Bool(node, path);
+  }
+  if (c->enabled && spec_.analysis.kind == AnalysisKind::kStatic)
+    r_.Fail(node.location, path,
+            "applies to dynamic analyses only (a static analysis has no motion to come to rest)");
 }
 
 // analysis.threads: 'auto' or an integer from 1 to kMaxAssemblyThreads.

@@ -111,6 +111,7 @@ class SceneReader {
   void ReadAnalysis(const Node* node);
   void ReadTimes(const Node& node, const std::string& path);
   void ReadThreads(const Node& node, const std::string& path);
+  void ReadStopAtRest(const Node& node, const std::string& path);
   void ReadStepControl(const Node& node, const std::string& path);
   void ReadSolverOptions(const Node& node, const std::string& path);
   void ReadStatics(const Node& node, const std::string& path);

@@ -107,6 +107,24 @@ std::vector<std::string> RodFieldColumns() {
           "kappa3", "n1", "n2",     "n3",     "m1",     "m2",     "m3"};
 }
 
+std::vector<std::string> SettlingColumns() {
+  return {"kinetic", "speed", "angular_speed", "contacts", "slipping", "overlap", "overlap_ratio"};
+}
+
+void CalcSettlingRow(const Model& model, const Data& data, bool dynamics,
+                     std::vector<double>* row) {
+  const SettlingState s = CalcSettlingState(model, data, dynamics);
+  row->resize(7);
+  double* r = row->data();
+  r[0] = s.kinetic;
+  r[1] = s.speed;
+  r[2] = s.angular_speed;
+  r[3] = s.contacts;
+  r[4] = s.slipping;
+  r[5] = s.overlap;
+  r[6] = s.overlap_ratio;
+}
+
 std::vector<std::string> EnergyColumns() {
   return {"kinetic", "strain", "spring", "gravity", "total", "px", "py", "pz", "Lx", "Ly", "Lz"};
 }

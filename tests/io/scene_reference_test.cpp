@@ -106,6 +106,7 @@ const std::vector<SectionRule> kSections = {
     {"", "analysis", {"`analysis`"}},
     {"", "analysis.tolerance", {"`analysis`"}},
     {"", "analysis.tolerances", {"`analysis`"}},
+    {"", "analysis.stop_at_rest", {"`analysis`"}},
     {"", "analysis.statics", {"`analysis.statics`"}},
     {"", "outputs", {"`outputs`"}},
     {"", "outputs.points.*", {"`outputs`"}},

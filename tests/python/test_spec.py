@@ -536,6 +536,64 @@ class Defaults(unittest.TestCase):
         self.assertEqual(self.plain(cpp.contact.settings), self.plain(empty.contact.settings))
 
 
+class Settling(unittest.TestCase):
+    """analysis.stop_at_rest from the spec (set_analysis) and Simulation.calc_settling: a box
+    thrown across a plane slides v0^2 / (2 mu g) and the run ends at rest, settling.csv holding
+    what calc_settling gives."""
+
+    def spec(self, **analysis):
+        spec = sf.SceneSpec()
+        spec.gravity = [0, 0, -9.81]
+        spec.add_rigid_body("box", at=[0, 0, 0.10002996], mass=1, inertia=[0.00667] * 3,
+                            free=True, initial_velocity={"linear": [2, 0, 0]},
+                            shapes=[{"type": "box", "center": [0, 0, 0.10002996],
+                                     "half_sizes": [0.1] * 3}])
+        spec.set_contact(stiffness=1e5, onset=1e-4, friction=0.3)
+        spec.add_obstacle("ground", "plane", point=[0, 0, 0], normal=[0, 0, 1])
+        spec.set_analysis(type="dynamic", end_time=5, step=1e-3, **analysis)
+        return spec
+
+    def test_stop_at_rest_ends_the_run_at_rest(self):
+        spec = self.spec(stop_at_rest={"speed": 1e-3, "hold": 0.1})
+        self.assertTrue(spec.analysis.stop_at_rest.enabled)
+        self.assertEqual(spec.analysis.stop_at_rest.angular_speed, 1e-2)
+        with tempfile.TemporaryDirectory() as d:
+            result = sf.run_scene(spec.compile(), d)
+            self.assertTrue(result.ok, result.message)
+            t_stop = 2 / (0.3 * 9.81)
+            self.assertGreater(result.end_time, t_stop + 0.1)
+            self.assertLess(result.end_time, t_stop + 0.12)
+            self.assertIn("at rest at t = ", result.message)
+            rows = pathlib.Path(d, "settling.csv").read_text().splitlines()
+            self.assertEqual(rows[0], "t,kinetic,speed,angular_speed,contacts,slipping,"
+                                      "overlap,overlap_ratio")
+            last = [float(x) for x in rows[-1].split(",")]
+            self.assertEqual(last[0], result.end_time)
+            self.assertLess(last[2], 1e-3)
+            self.assertEqual(last[4:6], [4.0, 0.0])
+
+    def test_calc_settling_while_sliding(self):
+        sim = sf.Simulation(self.spec().compile())
+        sim.initialize()
+        sim.advance_to(0.3)
+        s = sim.calc_settling()
+        # Sliding at v0 - mu g t on its four bottom corners, every one slipping.
+        self.assertAlmostEqual(s.speed, 2 - 0.3 * 9.81 * 0.3, delta=0.02)
+        self.assertEqual((s.contacts, s.slipping), (4, 4))
+        self.assertAlmostEqual(s.kinetic, sim.calc_energy().kinetic, places=12)
+
+    def test_bad_values(self):
+        with self.assertRaisesRegex(ValueError, r"analysis\.stop_at_rest\.hold: expected a "
+                                    r"value >= 0"):
+            self.spec(stop_at_rest={"hold": -1})
+        with self.assertRaisesRegex(ValueError, r"analysis\.stop_at_rest\.sped: unknown key"):
+            self.spec(stop_at_rest={"sped": 1})
+        spec = sf.SceneSpec()
+        with self.assertRaisesRegex(ValueError, r"analysis\.stop_at_rest: applies to dynamic "
+                                    r"analyses only"):
+            spec.set_analysis(type="static", stop_at_rest=True)
+
+
 class ContactMaterials(unittest.TestCase):
     """Materials per pair of contact groups (the scene's contact.groups and contact.pairs) from
     the spec and from ModelBuilder, read back from Model.contact_laws with their defaults, and

@@ -78,4 +78,24 @@ Vec6 CalcJointReaction(const Model& model, const Data& data, int joint);
 // velocity field eta(xi) = N(xi, d) eta_AB with the sectional mass matrix (docs/numerics.md, "Rod inertia").
 Vec6 CalcMomentum(const Model& model, const Data& data);
 
+// How far a scene is from rest (settling.csv; docs/numerics.md, "Settling and rest"): the
+// kinetic energy [J] (CalcEnergy), the largest node speeds (LargestNodeSpeeds, solve/rest.h's
+// measure, computed here the same way), the active contacts of obstacle pairs and of pairs of
+// moving shapes, how many of them slip (stick law; 0 under the smooth law, which has no stick
+// state), the deepest overlap [m] (the largest -gap, 0 when no pair overlaps) and the largest
+// overlap relative to the smaller radius of the pair's round shapes (rod capsules, spheres,
+// capsules, cylinders; pairs without one, e.g. a box corner on a plane, do not count there).
+// `dynamics`: the law with damping and the velocities (false: the static law). Allocates
+// nothing.
+struct SettlingState {
+  double kinetic = 0.0;
+  double speed = 0.0;
+  double angular_speed = 0.0;
+  int contacts = 0;
+  int slipping = 0;
+  double overlap = 0.0;
+  double overlap_ratio = 0.0;
+};
+SettlingState CalcSettlingState(const Model& model, const Data& data, bool dynamics = true);
+
 }  // namespace screwfem

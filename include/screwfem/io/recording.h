@@ -17,6 +17,7 @@
 #include "screwfem/model/data.h"
 #include "screwfem/solve/advance.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/solve/rest.h"
 #include "screwfem/solve/statics.h"
 #include "screwfem/solve/stop.h"
 
@@ -43,6 +44,12 @@ class Recording final : public AdvanceObserver {
   // row and frame and starts the output clocks there. False on a write error (then finished).
   bool Start();
   bool started() const;
+  // Before Start, for a run that ends at rest (analysis.stop_at_rest, RunScene's loop): from
+  // Start on, AfterStep watches the accepted steps (RestWatch, solve/rest.h, not before the
+  // last profile breakpoint or input-table row); at rest it records the state's row and frame,
+  // finishes "completed" with the time in the message and summary.json's rest_time, and
+  // returns false, which ends Advance. Steps driven from Python stay the caller's to end.
+  void StopAtRest(const RestCriterion& criterion);
 
   // AdvanceObserver: inputs from options.inputs, the rows and frames due, the largest
   // constraint residual and element rotation, options.on_step, the progress bar, the summary.

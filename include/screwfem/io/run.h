@@ -14,6 +14,8 @@
 // OUTDIR/rod_fields.csv (outputs.rod_fields) t, then per rod element, one row each: rod s
 //                     gamma1 gamma2 gamma3 kappa1 kappa2 kappa3 n1 n2 n3 m1 m2 m3 (section
 //                     strain and stress at the element's midpoint, CalcRodFieldRows)
+// OUTDIR/settling.csv (scenes with contact) t, kinetic speed angular_speed contacts slipping
+//                     overlap overlap_ratio (CalcSettlingState, assemble/outputs.h)
 // OUTDIR/summary.json resolved settings, counts, steps, Newton iterations, halvings, wall time,
 //                     largest element rotation,
 //                     largest constraint residual, status and message

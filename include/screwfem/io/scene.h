@@ -9,6 +9,7 @@
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/model/data.h"
 #include "screwfem/solve/dynamics.h"
+#include "screwfem/solve/rest.h"
 #include "screwfem/solve/statics.h"
 #include "screwfem/solve/stop.h"
 
@@ -39,6 +40,9 @@ struct AnalysisSettings {
   // analysis.threads: the threads of the assembly (assemble.h, SetAssemblyThreads), >= 1 or
   // kAutoThreads (every core for a model of at least kParallelMinElements rod elements).
   int threads = kAutoThreads;
+  // analysis.stop_at_rest (dynamic analyses): the run ends, completed, once the scene has been
+  // at rest for the criterion's hold time (solve/rest.h; summary.json's rest_time).
+  RestCriterion stop_at_rest;
 };
 
 // A recorded point: a point fixed in a node frame (rigid body, joint side or rod node), or a

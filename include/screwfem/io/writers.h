@@ -107,6 +107,12 @@ void CalcReactionRow(const Model& model, const Data& data, std::vector<double>* 
 // Lx Ly Lz [kg m^2/s] (CalcMomentum: world, angular momentum about the world origin).
 std::vector<std::string> EnergyColumns();
 void CalcEnergyRow(const Model& model, const Data& data, std::vector<double>* row);
+// settling.csv (scenes with contact): kinetic [J], speed [m/s] and angular_speed [rad/s] (the
+// largest of the free nodes), contacts (active pairs, obstacle and moving), slipping (of them,
+// those slipping under the stick law), overlap [m] (the deepest) and overlap_ratio (the deepest
+// relative to the pair's smaller round radius): CalcSettlingState (assemble/outputs.h).
+std::vector<std::string> SettlingColumns();
+void CalcSettlingRow(const Model& model, const Data& data, bool dynamics, std::vector<double>* row);
 // rod_fields.csv (long format, outputs.rod_fields): at each output time one row per station
 // (one per rod element, at its mid arc length): rod s gamma1 gamma2 gamma3 kappa1 kappa2 kappa3
 // n1 n2 n3 m1 m2 m3, the values of CalcRodFieldRows (assemble/outputs.h: units, section axes
@@ -142,15 +148,16 @@ inline constexpr const char* kActuatorsFile = "actuators.csv";
 inline constexpr const char* kContactsFile = "contacts.csv";
 inline constexpr const char* kPairContactsFile = "pair_contacts.csv";
 inline constexpr const char* kRodFieldsFile = "rod_fields.csv";
+inline constexpr const char* kSettlingFile = "settling.csv";
 inline constexpr const char* kVtkFolder = "vtk";
 inline constexpr const char* kCollectionFile = "motion.pvd";
 // The temporary files of WriteFileAtomically: the name followed by this.
 inline constexpr const char* kTemporarySuffix = ".tmp";
-inline constexpr std::array<const char*, 14> kOutputFiles = {
+inline constexpr std::array<const char*, 15> kOutputFiles = {
     kSummaryFile,      "summary.json.tmp", kJointsDescriptionFile, "joints.json.tmp",
     kPointsFile,       kJointsFile,        kReactionsFile,         kEnergyFile,
     kTendonsFile,      kForcesFile,        kActuatorsFile,         kContactsFile,
-    kPairContactsFile, kRodFieldsFile};
+    kPairContactsFile, kRodFieldsFile,     kSettlingFile};
 inline constexpr std::array<const char*, 2> kVtkFiles = {kCollectionFile, "motion.pvd.tmp"};
 // frame_NNNNN.vtp: "frame_", five or more digits, ".vtp" (VtkWriter's frame files).
 bool IsFrameFileName(std::string_view name);
