@@ -73,7 +73,7 @@ SparseLU::SparseLU() {
   // Diagonal preference only down to a tenth of the column's largest entry (KLU's default
   // 0.001): a pivot sequence then suits more of the matrices of one pattern (the mixed model
   // of tests/alloc/no_alloc_test.cpp with GGL: 4 sequences instead of more than 8).
-  c->tol = 0.1;
+  c->tol = kConstrainedPivotTolerance;
   common_ = c;
   numeric_ = new PivotSequences;
   kept_.resize(kCachedPatterns - 1);
@@ -94,6 +94,7 @@ SparseLU& SparseLU::operator=(const SparseLU& other) {
   if (this == &other) return *this;
   Release();
   ReleaseKept();
+  Common(common_)->tol = Common(other.common_)->tol;
   n_ = other.n_;
   col_start_ = other.col_start_;
   row_ = other.row_;
@@ -391,6 +392,8 @@ bool SparseLU::FullFactorize() {
   p.Promote(k);
   return true;
 }
+
+void SparseLU::SetPivotTolerance(double tolerance) { Common(common_)->tol = tolerance; }
 
 int SparseLU::Factorize() {
   klu_common* c = Common(common_);

@@ -88,6 +88,8 @@ Data MakeData(const Model& model) {
   d.coupling.Resize(model.num_unknowns(), 6, coupled_nodes);
   if (model.sparse_solver) {
     d.matrix.Resize(0, 0, 0);
+    d.sparse.SetPivotTolerance(model.nc == 0 ? SparseLU::kDiagonalPivotTolerance
+                                             : SparseLU::kConstrainedPivotTolerance);
     d.sparse.SetPattern(model.num_unknowns(), model.sparse_pattern);
   } else {
     d.matrix.Resize(model.num_unknowns(), model.bandwidth, model.bandwidth);

@@ -30,13 +30,15 @@ bodies:
     free: true
     initial_velocity: {linear: [2, 0, 0]}
     shapes: [{type: box, center: [0, 0, 0.10002996], half_sizes: [0.1, 0.1, 0.1]}]
-)" + extra + R"(contact:
+)" + extra +
+         R"(contact:
   stiffness: 1e5
   onset: 1e-4
   friction: 0.3
   obstacles:
     ground: {type: plane, point: [0, 0, 0], normal: [0, 0, 1]}
-analysis: )" + analysis +
+analysis: )" +
+         analysis +
          R"(
 outputs:
   points:
@@ -83,8 +85,8 @@ TEST(Settling, BoxSlidesToRestAndTheRunEndsThere) {
   const test::Table st = test::ReadCsv(dir.path() + "/settling.csv");
   ASSERT_TRUE(st.well_formed) << st.problem;
   ASSERT_EQ(st.rows.size(), p.rows.size());
-  const std::vector<std::string> columns = {"t",        "kinetic", "speed",        "angular_speed",
-                                            "contacts", "slipping", "overlap",     "overlap_ratio"};
+  const std::vector<std::string> columns = {"t",        "kinetic",  "speed",   "angular_speed",
+                                            "contacts", "slipping", "overlap", "overlap_ratio"};
   EXPECT_EQ(st.columns, columns);
   const test::Table e = test::ReadCsv(dir.path() + "/energy.csv");
   ASSERT_TRUE(e.well_formed) << e.problem;
@@ -108,9 +110,8 @@ TEST(Settling, BoxSlidesToRestAndTheRunEndsThere) {
   EXPECT_LT(Cell(st, last, "kinetic"), 0.5 * 1e-3 * 1e-3 + 0.5 * 0.00667 * 1e-4 * 3.0);
   // The same run without stop_at_rest goes on to end_time, through the same states.
   test::ScopedDir full("settling_box_full");
-  const RunResult rf =
-      RunScene(ParseScene(Box("{type: dynamic, end_time: 1, step: 1e-3}"), "box.yaml"),
-               full.path());
+  const RunResult rf = RunScene(
+      ParseScene(Box("{type: dynamic, end_time: 1, step: 1e-3}"), "box.yaml"), full.path());
   ASSERT_TRUE(rf.ok) << rf.message;
   EXPECT_DOUBLE_EQ(rf.end_time, 1.0);
   const test::Table pf = test::ReadCsv(full.path() + "/points.csv");
@@ -174,12 +175,12 @@ outputs: {interval: 0.05, vtk: false}
 }
 
 TEST(Settling, BadValuesAreReportedAtTheirPlace) {
-  const std::string bad_speed = test::SceneError(
-      Box("{type: dynamic, end_time: 1, stop_at_rest: {speed: -1}}"), "box.yaml");
+  const std::string bad_speed =
+      test::SceneError(Box("{type: dynamic, end_time: 1, stop_at_rest: {speed: -1}}"), "box.yaml");
   EXPECT_NE(bad_speed.find("analysis.stop_at_rest.speed"), std::string::npos) << bad_speed;
   EXPECT_EQ(bad_speed.rfind("box.yaml:", 0), 0u) << bad_speed;
-  const std::string unknown = test::SceneError(
-      Box("{type: dynamic, end_time: 1, stop_at_rest: {sped: 1}}"), "box.yaml");
+  const std::string unknown =
+      test::SceneError(Box("{type: dynamic, end_time: 1, stop_at_rest: {sped: 1}}"), "box.yaml");
   EXPECT_NE(unknown.find("sped"), std::string::npos) << unknown;
   EXPECT_EQ(unknown.rfind("box.yaml:", 0), 0u) << unknown;
   const std::string word =
