@@ -95,7 +95,7 @@ std::vector<SensitivityOutput> TipOutputs(NodeId tip) {
 
 std::vector<Parameter> ArmParameters() {
   Parameter knot{ParameterKind::kTendonTension, 0, -1};
-  knot.shape = Profile::Table({0.01, 0.02, 0.03}, {0.0, 1.0, 0.0});  // the knot at 20 ms
+  knot.shape = Profile::Table({0.0, 0.01, 0.02, 0.03}, {0.0, 0.0, 1.0, 0.0});  // the knot at 20 ms
   return {{ParameterKind::kTendonTension, 0, -1},
           knot,
           {ParameterKind::kRodStiffness, 0, -1},
@@ -302,7 +302,7 @@ TEST(DynamicSensitivity, JointedArmThroughDriveBreakpointsMatchesWholeRuns) {
   Parameter ramp{ParameterKind::kJointDrive, 0, -1};
   ramp.shape = Profile::Table({0.0, 0.04}, {0.0, 1.0});  // zero at the start (consistent q_0)
   Parameter knot{ParameterKind::kJointDrive, 0, -1};
-  knot.shape = Profile::Table({0.01, 0.02, 0.03}, {0.0, 1.0, 0.0});
+  knot.shape = Profile::Table({0.0, 0.01, 0.02, 0.03}, {0.0, 0.0, 1.0, 0.0});
   const std::vector<Parameter> params = {ramp,
                                          knot,
                                          {ParameterKind::kRodStiffness, 0, -1},
@@ -349,7 +349,7 @@ std::vector<Parameter> FingerParameters() {
   Parameter ramp{ParameterKind::kTendonLength, 0, -1};
   ramp.shape = Profile::Table({0.0, 0.04}, {0.0, -1.0});
   Parameter knot{ParameterKind::kTendonLength, 0, -1};
-  knot.shape = Profile::Table({0.01, 0.02, 0.03}, {0.0, 1.0, 0.0});
+  knot.shape = Profile::Table({0.0, 0.01, 0.02, 0.03}, {0.0, 0.0, 1.0, 0.0});
   return {ramp,
           knot,
           {ParameterKind::kRodStiffness, 0, -1},
