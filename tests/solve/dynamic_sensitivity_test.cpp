@@ -316,6 +316,47 @@ TEST(DynamicSensitivity, JointedArmThroughDriveBreakpointsMatchesWholeRuns) {
   CheckAgainstWholeRuns(arm.model, outputs, params, {1e-4, 1e-4, 1e-4, 1e-4, 1e-3}, o, 4);
 }
 
+// The tendon-driven arm of MakeArm carrying a 10 g body on a spherical joint at its tip (a joint
+// whose coordinates retract by the exponential: T and Ad on its three coordinates), under
+// gravity: the tension's breakpoints restart the run. The joint's damper reads the coordinates'
+// rates, so the joint's T matters (with the identity instead the derivatives are off by 1e-5).
+TEST(DynamicSensitivity, SphericalJointThroughRestartsMatchesWholeRuns) {
+  ModelBuilder b;
+  Vec6 k, m;
+  k << 1e3, 1e3, 1e3, 1.0, 1.0, 1.0;
+  m << 1e-2, 1e-2, 1e-2, 1e-6, 1e-6, 2e-6;
+  const RodId rod =
+      b.AddStraightRod("arm", Vec3::Zero(), Vec3::UnitX(), 4, Section::FromDiagonals(k, m));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
+  b.FixNode(nodes.front());
+  std::vector<BodyPoint> eyelets;
+  for (NodeId n : nodes) eyelets.push_back({n, Vec3(0.0, 0.02, 0.0)});
+  b.AddTendon("pull", eyelets,
+              Profile::Table({0.0, 0.01, 0.02, 0.03, 0.04}, {0.5, 3.0, 5.0, 5.0, 4.0}));
+  const NodeId body = b.AddNode(SE3::Translation(Vec3::UnitX()), "body");
+  b.AddRigidBody("body", body, 0.01, Vec3(0.05, 0.01, 0.0), 1e-5 * Mat3::Identity());
+  JointSpec ball;
+  ball.name = "ball";
+  ball.type = JointType::kSpherical;
+  ball.node_a = nodes.back();
+  ball.node_b = body;
+  ball.point = Vec3::UnitX();
+  ball.stiffness << 0.01, 0.01, 0.01, 0.0, 0.0, 0.0;  // [N m/rad]
+  ball.damping << 2e-4, 2e-4, 2e-4, 0.0, 0.0, 0.0;    // [N m s/rad]: the rates matter
+  b.AddJoint(ball);
+  b.SetGravity(Vec3(0.0, 0.0, -9.81));
+  Model model = b.Build();
+  model.rod_inertia = RodInertia::kConstant;
+  ASSERT_EQ(model.nc, 6);
+  std::vector<SensitivityOutput> outputs;
+  for (int c = 0; c < 3; ++c)
+    outputs.push_back({OutputKind::kPointPosition, body, c, Vec3(0.05, 0.01, 0.0)});
+  const std::vector<Parameter> params = {{ParameterKind::kTendonTension, 0, -1},
+                                         {ParameterKind::kRodStiffness, 0, -1},
+                                         {ParameterKind::kRodMass, 0, -1}};
+  CheckAgainstWholeRuns(model, outputs, params, {1e-3, 1e-4, 1e-4}, RunOptions(), 4);
+}
+
 // A finger drawn by a length-driven tendon 2 cm off its axis (the arm of MakeArm): the
 // prescribed length shortens piecewise-linearly (knots every 10 ms: restarts, each with the
 // tendon's inelastic catch), the tendon stays taut, its tension the multiplier. Parameters:
