@@ -41,7 +41,7 @@ void BindInverse(py::module_& m) {
                         "A parameter of a static equilibrium (docs/inverse.md): kind, index of "
                         "the tendon, point load, joint, rod, input or actuator, and component "
                         "(point loads 0-5; rod stiffness -1 for all six or 0-5; rod rest strain "
-                        "0-5).")
+                        "0-5; tendon offset 0-2).")
       .def(py::init([](ParameterKind kind, int index, int component,
                        const std::optional<Profile>& shape) {
              Parameter p{kind, index, component, {}};
@@ -55,9 +55,11 @@ void BindInverse(py::module_& m) {
                      "The tendon, point load, joint, rod, input or actuator (the model's index).")
       .def_readwrite(
           "component", &Parameter::component,
-          "Point loads 0-5 (force, moment); rod stiffness -1 (all) or 0-5; rest strain 0-5.")
+          "Point loads 0-5 (force, moment); rod stiffness -1 (all) or 0-5; rest strain 0-5; "
+          "tendon offset 0-2 (node-frame axis).")
       .def_readwrite("shape", &Parameter::shape,
-                     "TENDON_TENSION, JOINT_DRIVE, ACTUATOR: the profile the value multiplies "
+                     "TENDON_TENSION, TENDON_LENGTH, JOINT_DRIVE, ACTUATOR: the profile the "
+                     "value multiplies "
                      "(none: the constant 1); a hat-shaped Profile.table is a knot of a "
                      "piecewise-linear input.")
       .def("__repr__", [](const Parameter& p) {
@@ -282,7 +284,8 @@ far the nearest equilibrium within the bounds is.)doc");
       py::arg("options") = py::none(),
       R"doc(calibrate(simulation, parameters, start, cases, options=None) -> CalibrationResult
 
-Fits parameters (stiffness factors, rest strains, masses, ...; values as offsets from the
+Fits parameters (stiffness factors, rest strains, masses, tendon offsets, ...; values as
+offsets from the
 model's own) to measured point positions of several static load cases (CalibrationCase) by
 least squares with the exact Jacobian of each equilibrium (Ceres' Levenberg-Marquardt;
 docs/inverse.md, Calibration). Returns the fit, its covariance sigma^2 (J^T J)^-1 and
@@ -337,8 +340,9 @@ copy: the simulation is not advanced) and differentiates the discrete trajectory
 outputs (point positions) with respect to the parameters: forward (every output at every step)
 or adjoint (the gradient of J = sum of weights[n, k] * y_k(t_n); weights (steps + 1) x outputs,
 default: the final outputs summed). Restarts at profile breakpoints are differentiated too.
-Models without multipliers (no joints or length-driven tendons); docs/inverse.md, Dynamic
-sensitivities. Raises SolverError when it cannot.)doc");
+Models with multipliers (joints, drives, length-driven tendons) under constraints: index3;
+ggl (the default of models without rods) and a tendon going slack or taut during the run are
+refused. docs/inverse.md, Dynamic sensitivities. Raises SolverError when it cannot.)doc");
 }
 
 }  // namespace screwfem::python

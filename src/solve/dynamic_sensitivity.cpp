@@ -10,6 +10,7 @@
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/elements/contact.h"
+#include "screwfem/elements/joint.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/schedule.h"
 #include "screwfem/solve/sensitivity.h"
@@ -63,16 +64,19 @@ bool AssembledTangentIsExact(const Model& model) {
   return true;
 }
 
-// The derivatives of the dynamic residual r = M vdot + f(q, v, t) (unscaled) at data's state:
-// K = dr/dq (right-trivialised), C = dr/dv, M = dr/dvdot, and dr/dp for every parameter
-// (r(p + 1) - r(p): the residual is affine in each, as in statics).
+// The derivatives of the dynamic residual (unscaled) at data's state, its equilibrium rows
+// r = M vdot + f(q, v, t) + B^T lambda and its constraint rows phi(q, t) (held rows, ForEachHeldRow:
+// lambda_r): K = dr/dq (right-trivialised), C = dr/dv, M = dr/dvdot, B = dphi/dq (nc x nv),
+// Bt = dr/dlambda (nv x nc: B^T), H = the constraint rows' dlambda (the identity in held rows,
+// zero elsewhere), and dR/dp of both row sets for every parameter ((nv + nc) x parameters;
+// R(p + 1) - R(p): the residual is affine in each, as in statics).
 struct Linearisation {
-  MatrixXd K, C, M, Rp;
+  MatrixXd K, C, M, B, Bt, H, Rp;
 };
 
 bool Linearise(const Model& model, Data& data, const std::vector<Parameter>& params,
                SensitivityWorkspace& ws, double time, Linearisation* out, std::string* why) {
-  const int nv = model.nv;
+  const int nv = model.nv, nc = model.nc, n = nv + nc;
   const bool by_differences = !AssembledTangentIsExact(model);
   AssemblyOptions o;
   o.time = time;
@@ -87,20 +91,27 @@ bool Linearise(const Model& model, Data& data, const std::vector<Parameter>& par
       *why = "off-band couplings (pairs of moving shapes) are not supported";
       return false;
     }
-    *A = DenseMatrix(model, data).topLeftCorner(nv, nv);
+    *A = DenseMatrix(model, data);
     return true;
   };
-  if (!matrix(0.0, 0.0, 1.0, &out->K) || !matrix(0.0, 1.0, 0.0, &out->C) ||
-      !matrix(1.0, 0.0, 0.0, &out->M)) {
+  MatrixXd AK, AC, AM;
+  if (!matrix(0.0, 0.0, 1.0, &AK) || !matrix(0.0, 1.0, 0.0, &AC) || !matrix(1.0, 0.0, 0.0, &AM)) {
     if (why->empty()) *why = "the matrices could not be assembled";
     return false;
   }
+  // The constraint blocks do not depend on the coefficients (Scatter::GradientMatrix).
+  out->K = AK.topLeftCorner(nv, nv);
+  out->C = AC.topLeftCorner(nv, nv);
+  out->M = AM.topLeftCorner(nv, nv);
+  out->B = AK.bottomLeftCorner(nc, nv);
+  out->Bt = AK.topRightCorner(nv, nc);
+  out->H = AK.bottomRightCorner(nc, nc);
   o.assemble_matrix = false;
   if (!Assemble(model, data, o)) {
     *why = "the residual could not be assembled";
     return false;
   }
-  const VectorXd r0 = data.residual.head(nv);
+  const VectorXd r0 = data.residual.head(n);
   if (by_differences) {
     // K and C by central differences of the residual, one pair of assemblies per unknown each
     // (AssembledTangentIsExact says when the assembled ones are not the derivatives). The
@@ -109,7 +120,7 @@ bool Linearise(const Model& model, Data& data, const std::vector<Parameter>& par
     State saved;
     SaveState(data, &saved);
     const VectorXd v0 = data.v;
-    VectorXd dx = VectorXd::Zero(nv), rq(nv), rv(nv);
+    VectorXd dx = VectorXd::Zero(nv), rq(n), rv(nv);
     const double ev = std::max(1.0, v0.cwiseAbs().maxCoeff()) * 1e-3;
     for (int j = 0; j < nv; ++j) {
       const bool translation = j < model.nv_nodes && j % 6 < 3;
@@ -123,10 +134,12 @@ bool Linearise(const Model& model, Data& data, const std::vector<Parameter>& par
           return false;
         }
         RestoreState(saved, data);
-        if (side == 0)
-          rq = data.residual.head(nv);
-        else
-          out->K.col(j) = (rq - data.residual.head(nv)) / (2.0 * e);
+        if (side == 0) {
+          rq = data.residual.head(n);
+        } else {
+          out->K.col(j) = (rq.head(nv) - data.residual.head(nv)) / (2.0 * e);
+          out->B.col(j) = (rq.tail(nc) - data.residual.segment(nv, nc)) / (2.0 * e);
+        }
         data.v(j) = v0(j) + (side == 0 ? ev : -ev);
         Assemble(model, data, o);
         data.v(j) = v0(j);
@@ -138,33 +151,120 @@ bool Linearise(const Model& model, Data& data, const std::vector<Parameter>& par
       dx(j) = 0.0;
     }
   }
-  out->Rp.resize(nv, static_cast<Eigen::Index>(params.size()));
+  out->Rp.resize(n, static_cast<Eigen::Index>(params.size()));
   for (std::size_t j = 0; j < params.size(); ++j) {
     const Parameter& p = params[j];
     const double saved = p.kind == ParameterKind::kInput ? data.inputs(p.index) : 0.0;
-    OffsetParameter(ws.model, data, p, 1.0);
-    const bool ok = Assemble(ws.model, data, o);
-    ResetParameter(ws.model, model, p);
-    if (p.kind == ParameterKind::kInput) data.inputs(p.index) = saved;
-    if (!ok) {
-      *why = "the residual could not be assembled with a parameter perturbed";
-      return false;
+    // Affine: R(p + 1) - R(p); else (R(p + e) - R(p - e)) / 2e (ParameterIsAffine).
+    const bool affine = ParameterIsAffine(p);
+    const double e = ParameterDifferenceStep(model, p);
+    const Eigen::Index c = static_cast<Eigen::Index>(j);
+    for (int side = 0; side < (affine ? 1 : 2); ++side) {
+      OffsetParameter(ws.model, data, p, side == 0 ? e : -e);
+      const bool ok = Assemble(ws.model, data, o);
+      ResetParameter(ws.model, model, p);
+      if (p.kind == ParameterKind::kInput) data.inputs(p.index) = saved;
+      if (!ok) {
+        *why = "the residual could not be assembled with a parameter perturbed";
+        return false;
+      }
+      if (side == 0) out->Rp.col(c) = data.residual.head(n);
     }
-    out->Rp.col(static_cast<Eigen::Index>(j)) = data.residual.head(nv) - r0;
+    if (affine)
+      out->Rp.col(c) -= r0;
+    else
+      out->Rp.col(c) = (out->Rp.col(c) - data.residual.head(n)) / (2.0 * e);
   }
   return true;
 }
 
 // One step n -> n+1 linearised at its converged solution, and the restart after it.
 struct StepRecord {
-  MatrixXd K, C, Rp;                // of the step's residual at the new state
+  MatrixXd KB, C, Rp;               // [K; B], C and dR/dp of the step's residual at the new state
   MatrixXd T, Ad;                   // block diagonal: T(h dq) and Ad(exp(-h dq)) of the nodes
-  Eigen::PartialPivLU<MatrixXd> S;  // beta' M + gamma' C + K T (its transpose: adjoint)
+                                    // (and of joints whose coordinates retract by exp)
+  Eigen::PartialPivLU<MatrixXd> S;  // [beta' M + gamma' C + K T, B^T; B T, H] (its transpose:
+                                    // adjoint)
   bool restart = false;
-  MatrixXd K2, C2, Rp2;  // of the restart's consistent acceleration
+  // The restart without multipliers: the consistent acceleration's M vdot = -r.
+  MatrixXd K2, C2, Rp2;
   Eigen::PartialPivLU<MatrixXd> M2;
+  // The restart with multipliers (catch and consistent start, RestartAfterStep): its Jacobian
+  // d(v+, vdot+)/d(eta, v, p), 2 nv x (2 nv + parameters).
+  MatrixXd J;
   MatrixXd G;  // the outputs' rows at t_{n+1} (over eta)
 };
+
+// The Jacobian of a restart with multipliers, d(v+, vdot+)/d(eta, v, p) (2 nv x (2 nv + np)),
+// by central differences of the whole map at data's state: the inelastic catch of length-driven
+// tendons and the consistent accelerations [M B^T; B 0] [vdot; lambda] = -[r; Bdot v + phi_tt]
+// (`with_catch`: RestartAfterStep, else the start's RestartDynamics). Their derivatives hold
+// second derivatives of the constraints (Bdot v, the catch's B(q)), which the assembly does
+// not provide (docs/inverse.md, "Multipliers"). The map is smooth in q and v; in each
+// parameter it is affine or (a mass factor) smooth. Data and the integrator are restored.
+bool RestartJacobian(const Model& model, Data& data, Integrator& integ,
+                     const std::vector<Parameter>& params, SensitivityWorkspace& ws,
+                     bool with_catch, bool state_columns, MatrixXd* J, std::string* why) {
+  const int nv = model.nv, np = static_cast<int>(params.size());
+  State saved;
+  SaveState(data, &saved);
+  const VectorXd v0 = data.v, vdot0 = data.vdot, lambda0 = data.lambda, a0 = integ.a;
+  const std::vector<char> slack0 = data.tendon_slack;
+  const double t = data.time;
+  const auto restore = [&] {
+    RestoreState(saved, data);
+    data.v = v0;
+    data.vdot = vdot0;
+    data.lambda = lambda0;
+    integ.a = a0;
+    data.tendon_slack = slack0;
+    data.time = t;
+  };
+  const auto eval = [&](const Model& m, Eigen::Ref<VectorXd> col, double sign) {
+    bool restarted = false;
+    const bool ok = with_catch
+                        ? generalized_alpha::RestartAfterStep(m, data, integ, true, &restarted, why)
+                        : RestartDynamics(m, data, integ, why);
+    if (ok) {
+      col.head(nv) += sign * data.v;
+      col.tail(nv) += sign * data.vdot;
+    }
+    restore();
+    return ok;
+  };
+  J->setZero(2 * nv, 2 * nv + np);
+  if (state_columns) {
+    VectorXd dx = VectorXd::Zero(nv);
+    const double ev = 1e-4 * std::max(1.0, v0.cwiseAbs().maxCoeff());
+    for (int j = 0; j < nv; ++j) {
+      const bool translation = j < model.nv_nodes && j % 6 < 3;
+      const double e = 1e-5 * (translation ? model.length_scale : 1.0);
+      for (int side = 0; side < 2; ++side) {
+        const double sign = side == 0 ? 1.0 : -1.0;
+        dx(j) = sign * e;
+        Retract(model, data, dx);
+        if (!eval(model, J->col(j), sign / (2.0 * e))) return false;
+        data.v(j) = v0(j) + sign * ev;
+        if (!eval(model, J->col(nv + j), sign / (2.0 * ev))) return false;
+      }
+      dx(j) = 0.0;
+    }
+  }
+  for (int j = 0; j < np; ++j) {
+    const Parameter& p = params[static_cast<std::size_t>(j)];
+    const double e = ParameterIsAffine(p) ? 1e-4 : ParameterDifferenceStep(model, p);
+    for (int side = 0; side < 2; ++side) {
+      const double sign = side == 0 ? 1.0 : -1.0;
+      const double saved_input = p.kind == ParameterKind::kInput ? data.inputs(p.index) : 0.0;
+      OffsetParameter(ws.model, data, p, sign * e);
+      const bool ok = eval(ws.model, J->col(2 * nv + j), sign / (2.0 * e));
+      ResetParameter(ws.model, model, p);
+      if (p.kind == ParameterKind::kInput) data.inputs(p.index) = saved_input;
+      if (!ok) return false;
+    }
+  }
+  return true;
+}
 
 // The state's derivative: configuration eta (right-trivialised), v, vdot and the auxiliary
 // acceleration a, one column per parameter (forward) or the adjoint vectors (one column).
@@ -217,12 +317,20 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
   if (!(options.step > 0.0) || !std::isfinite(options.step) || options.steps < 1)
     throw InputError(owner + ": step must be > 0 and steps >= 1");
   const int N = options.steps, no = static_cast<int>(outputs.size());
-  const int np = static_cast<int>(parameters.size()), nv = model.nv;
+  const int np = static_cast<int>(parameters.size()), nv = model.nv, nc = model.nc;
   if (weights.size() > 0 && (weights.rows() != N + 1 || weights.cols() != no))
     throw InputError(owner + ": weights must be (steps + 1) x outputs");
   DynamicSensitivity out;
-  if (model.nc > 0) {
-    out.message = "models with multipliers (joints, length-driven tendons) are not supported yet";
+  // Stabilised index 2 (GGL, the default of models without rods) is not differentiated: its
+  // step holds the start's gradient B(q_n) and a second multiplier (docs/inverse.md,
+  // "Multipliers").
+  const bool ggl =
+      options.dynamics.constraints == ConstraintFormulation::kGgl ||
+      (options.dynamics.constraints == ConstraintFormulation::kAuto && model.rods.empty());
+  if (nc > 0 && ggl) {
+    out.message =
+        "constraints: ggl (stabilised index 2, the default of models without rods) is not "
+        "differentiated; run with constraints: index3";
     return out;
   }
   if (model.contact.friction > 0.0 &&
@@ -268,9 +376,19 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
     out.message = "at the start: " + why;
     return out;
   }
+  // Without multipliers M vdot_0 = -r (M0, Rp0); with them the start's consistent
+  // accelerations by RestartJacobian (its parameter columns: q_0 and v_0 do not depend on p).
   const Eigen::PartialPivLU<MatrixXd> M0(
       mode == SensitivityMode::kForward ? MatrixXd(lin.M) : MatrixXd(lin.M.transpose()));
   const MatrixXd Rp0 = lin.Rp;
+  MatrixXd J0;
+  if (nc > 0) {
+    if (!RestartJacobian(model, data, integ, parameters, ws, false, false, &J0, &why)) {
+      out.message = "at the start: " + why;
+      return out;
+    }
+    J0 = MatrixXd(J0.bottomRightCorner(nv, np));
+  }
   out.values.resize(N + 1, no);
   out.values.row(0) = OutputValues(data, outputs).transpose();
   const MatrixXd G0 = OutputRows(model, data, outputs);
@@ -299,6 +417,13 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
       out.message = FormatNumbers("step %g failed: ", n) + why;
       return out;
     }
+    if (data.tendon_slack != integ.slack_start) {
+      out.message = FormatNumbers(
+          "a length-driven tendon went slack or taut in the step to t = %.9g s (the trajectory "
+          "is not differentiable there)",
+          t_end);
+      return out;
+    }
     UpdateBranchReferences(model, data);
     AcceptContactHistory(model, data, true);
     // The step's linearisation at its converged state (the profiles' left limits when it ends
@@ -317,21 +442,45 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
       rec.T.block<6, 6>(node.dof, node.dof) = TSE3(x);
       rec.Ad.block<6, 6>(node.dof, node.dof) = Ad(ExpSE3(-x));
     }
+    // Joints whose frame H_J retracts by the exponential (spherical, planar, free): A_J^T T A_J
+    // and A_J^T Ad A_J on their k coordinates (a subgroup: Ad maps its algebra into itself).
+    for (const Joint& j : model.joints) {
+      const int k = j.k();
+      if (k == 0 || JointHasGlobalCoordinates(j.type)) continue;
+      const Vec6 x = j.basis * (hs * integ.dq.segment(j.coord, k));
+      rec.T.block(j.coord, j.coord, k, k) = j.basis.transpose() * TSE3(x) * j.basis;
+      rec.Ad.block(j.coord, j.coord, k, k) = j.basis.transpose() * Ad(ExpSE3(-x)) * j.basis;
+    }
     if (std::abs(hs - h) > 1e-12 * h) {
       out.message = "a step of another size than the others (the run's end or a breakpoint)";
       return out;
     }
-    rec.K = lin.K;
+    rec.KB.resize(nv + nc, nv);
+    rec.KB << lin.K, lin.B;
     rec.C = lin.C;
     rec.Rp = lin.Rp;
-    const MatrixXd S = beta_p * lin.M + gamma_p * lin.C + lin.K * rec.T;
+    MatrixXd S(nv + nc, nv + nc);
+    S << beta_p * lin.M + gamma_p * lin.C + lin.K * rec.T, lin.Bt, lin.B * rec.T, lin.H;
     if (mode == SensitivityMode::kForward)
       rec.S.compute(S);
     else
       rec.S.compute(S.transpose());
     // The restart at a breakpoint: consistent vdot and a = vdot from the right limits.
     rec.restart = at_bp;
-    if (at_bp) {
+    if (at_bp && nc > 0) {
+      // The catch of length-driven tendons and the consistent start, as Step restarts
+      // (RestartAfterStep), differentiated as one map.
+      if (!RestartJacobian(model, data, integ, parameters, ws, true, true, &rec.J, &why)) {
+        out.message = "at a restart: " + why;
+        return out;
+      }
+      bool restarted = false;
+      if (!generalized_alpha::RestartAfterStep(model, data, integ, true, &restarted, &why)) {
+        out.message = why;
+        return out;
+      }
+      ++out.restarts;
+    } else if (at_bp) {
       if (!RestartDynamics(model, data, integ, &why)) {
         out.message = why;
         return out;
@@ -357,7 +506,8 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
   const GeneralizedAlpha p = ga;
   if (mode == SensitivityMode::kForward) {
     out.outputs.resize(static_cast<Eigen::Index>(N + 1) * no, np);
-    Tangent z{MatrixXd::Zero(nv, np), MatrixXd::Zero(nv, np), -M0.solve(Rp0), MatrixXd()};
+    Tangent z{MatrixXd::Zero(nv, np), MatrixXd::Zero(nv, np),
+              nc > 0 ? J0 : MatrixXd(-M0.solve(Rp0)), MatrixXd()};
     z.a = z.vdot;
     out.outputs.topRows(no) = G0 * z.eta;
     for (int n = 0; n < N; ++n) {
@@ -366,12 +516,20 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
       const MatrixXd dq0 = z.v + h * (0.5 - p.beta) * z.a + h * p.beta * a_base;
       const MatrixXd v0 = z.v + h * (1.0 - p.gamma) * z.a + h * p.gamma * a_base;
       const MatrixXd eta0 = rec.Ad * z.eta + h * rec.T * dq0;
-      const MatrixXd dx = -rec.S.solve(rec.K * eta0 + rec.C * v0 + rec.Rp);
+      MatrixXd rhs = rec.KB * eta0 + rec.Rp;
+      rhs.topRows(nv) += rec.C * v0;
+      const MatrixXd dx = -rec.S.solve(rhs).topRows(nv);
       z.eta = eta0 + rec.T * dx;
       z.v = v0 + gamma_p * dx;
       z.vdot = beta_p * dx;
       z.a = a_base + c_a * beta_p * dx;
-      if (rec.restart) {
+      if (rec.restart && nc > 0) {
+        const MatrixXd x =
+            rec.J.leftCols(nv) * z.eta + rec.J.middleCols(nv, nv) * z.v + rec.J.rightCols(np);
+        z.v = x.topRows(nv);
+        z.vdot = x.bottomRows(nv);
+        z.a = z.vdot;
+      } else if (rec.restart) {
         z.vdot = -rec.M2.solve(rec.K2 * z.eta + rec.C2 * z.v + rec.Rp2);
         z.a = z.vdot;
       }
@@ -388,7 +546,15 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
     VectorXd grad = VectorXd::Zero(np);
     for (int n = N - 1; n >= 0; --n) {
       const StepRecord& rec = records[static_cast<std::size_t>(n)];
-      if (rec.restart) {
+      if (rec.restart && nc > 0) {
+        VectorXd w(2 * nv);
+        w << v, vdot + a;
+        eta += rec.J.leftCols(nv).transpose() * w;
+        v = rec.J.middleCols(nv, nv).transpose() * w;
+        grad += rec.J.rightCols(np).transpose() * w;
+        vdot.setZero();
+        a.setZero();
+      } else if (rec.restart) {
         const VectorXd r = -rec.M2.solve(vdot + a);
         eta += rec.K2.transpose() * r;
         v += rec.C2.transpose() * r;
@@ -399,9 +565,11 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
       const VectorXd dx = rec.T.transpose() * eta + gamma_p * v + beta_p * vdot + c_a * beta_p * a;
       VectorXd eta0 = eta, v0 = v;
       VectorXd a_base = a;
-      const VectorXd r = -rec.S.solve(dx);
-      eta0 += rec.K.transpose() * r;
-      v0 += rec.C.transpose() * r;
+      VectorXd dxl = VectorXd::Zero(nv + nc);
+      dxl.head(nv) = dx;
+      const VectorXd r = -rec.S.solve(dxl);
+      eta0 += rec.KB.transpose() * r;
+      v0 += rec.C.transpose() * r.head(nv);
       grad += rec.Rp.transpose() * r;
       eta = rec.Ad.transpose() * eta0;
       const VectorXd dq0 = h * rec.T.transpose() * eta0;
@@ -414,8 +582,12 @@ DynamicSensitivity CalcDynamicSensitivity(const Model& model, Data& data,
       eta += G.transpose() * W.row(n).transpose();
     }
     // The start: vdot_0 = a_0 = -M^-1 r_p (q_0, v_0 independent of the parameters).
-    const VectorXd r = -M0.solve(vdot + a);
-    grad += Rp0.transpose() * r;
+    if (nc > 0) {
+      grad += J0.transpose() * (vdot + a);
+    } else {
+      const VectorXd r = -M0.solve(vdot + a);
+      grad += Rp0.transpose() * r;
+    }
     out.gradient = grad;
   }
   if (!out.gradient.allFinite() ||

@@ -60,9 +60,11 @@ void ValidateParameter(const Model& m, const Parameter& p, const std::string& ow
     throw InputError(owner + ": parameter " + ParameterLabel(p) + ": " + what);
   };
   const bool profiled = p.kind == ParameterKind::kTendonTension ||
+                        p.kind == ParameterKind::kTendonLength ||
                         p.kind == ParameterKind::kJointDrive || p.kind == ParameterKind::kActuator;
   if (!p.shape.terms().empty()) {
-    if (!profiled) fail("only tendon tensions, joint drives and actuators take a shape");
+    if (!profiled)
+      fail("only tendon tensions and lengths, joint drives and actuators take a shape");
     try {
       p.shape.Validate("shape", static_cast<int>(m.inputs.size()));
     } catch (const InputError& e) {
@@ -100,6 +102,15 @@ void ValidateParameter(const Model& m, const Parameter& p, const std::string& ow
       return;
     case ParameterKind::kRodMass:
       if (!InRange(p.index, m.rods)) fail("no such rod");
+      return;
+    case ParameterKind::kTendonLength:
+      if (!InRange(p.index, m.tendons)) fail("no such tendon");
+      if (m.tendons[static_cast<std::size_t>(p.index)].drive != TendonDrive::kLength)
+        fail("the tendon is tension-driven (it has no length profile)");
+      return;
+    case ParameterKind::kTendonOffset:
+      if (!InRange(p.index, m.tendons)) fail("no such tendon");
+      if (p.component < 0 || p.component > 2) fail("component must lie in [0, 2]");
       return;
   }
   fail("unknown kind");
@@ -167,6 +178,19 @@ void OffsetParameter(Model& m, Data& data, const Parameter& p, double delta) {
     case ParameterKind::kRodMass:
       m.rods[i].section.inertia *= 1.0 + delta;
       return;
+    case ParameterKind::kTendonLength:
+      AddShaped(m.tendons[i].length, p.shape, delta);
+      return;
+    case ParameterKind::kTendonOffset:
+      // The eyelets on nodes (not world points on the ground) and the segments' copies of them.
+      for (BodyPoint& e : m.tendons[i].eyelets)
+        if (e.node != kGround) e.offset(p.component) += delta;
+      for (TendonSegment& s : m.tendon_segments) {
+        if (s.tendon != p.index) continue;
+        if (s.a.node != kGround) s.a.offset(p.component) += delta;
+        if (s.b.node != kGround) s.b.offset(p.component) += delta;
+      }
+      return;
   }
 }
 
@@ -200,7 +224,22 @@ void ResetParameter(Model& m, const Model& original, const Parameter& p) {
     case ParameterKind::kRodMass:
       m.rods[i].section = original.rods[i].section;
       return;
+    case ParameterKind::kTendonLength:
+      m.tendons[i].length = original.tendons[i].length;
+      return;
+    case ParameterKind::kTendonOffset:
+      m.tendons[i].eyelets = original.tendons[i].eyelets;
+      for (std::size_t k = 0; k < m.tendon_segments.size(); ++k)
+        if (m.tendon_segments[k].tendon == p.index)
+          m.tendon_segments[k] = original.tendon_segments[k];
+      return;
   }
+}
+
+bool ParameterIsAffine(const Parameter& p) { return p.kind != ParameterKind::kTendonOffset; }
+
+double ParameterDifferenceStep(const Model& model, const Parameter& p) {
+  return ParameterIsAffine(p) ? 1.0 : 1e-6 * model.length_scale;
 }
 
 namespace {
@@ -260,16 +299,27 @@ bool ResidualDerivatives(const Model& model, Data& data, const std::vector<Param
   for (std::size_t j = 0; j < params.size(); ++j) {
     const Parameter& p = params[j];
     const double saved_input = p.kind == ParameterKind::kInput ? data.inputs(p.index) : 0.0;
-    OffsetParameter(ws.model, data, p, 1.0);
-    const bool ok = Assemble(ws.model, data, opt);
-    ResetParameter(ws.model, model, p);
-    if (p.kind == ParameterKind::kInput) data.inputs(p.index) = saved_input;
+    // Affine: R(p + 1) - R(p); else (R(p + e) - R(p - e)) / 2e.
+    const bool affine = ParameterIsAffine(p);
+    const double e = ParameterDifferenceStep(model, p);
+    bool ok = true;
+    for (int side = 0; side < (affine ? 1 : 2) && ok; ++side) {
+      OffsetParameter(ws.model, data, p, side == 0 ? e : -e);
+      ok = Assemble(ws.model, data, opt);
+      ResetParameter(ws.model, model, p);
+      if (p.kind == ParameterKind::kInput) data.inputs(p.index) = saved_input;
+      if (side == 0) ws.dr.col(static_cast<Eigen::Index>(j)) = data.residual;
+    }
     if (!ok) {
       *why = "the residual could not be assembled with parameter " + ParameterLabel(p) +
-             " perturbed by 1 (an element past its rotation limit)";
+             " perturbed (an element past its rotation limit)";
       return false;
     }
-    ws.dr.col(static_cast<Eigen::Index>(j)) = data.residual - ws.r0;
+    const Eigen::Index c = static_cast<Eigen::Index>(j);
+    if (affine)
+      ws.dr.col(c) -= ws.r0;
+    else
+      ws.dr.col(c) = (ws.dr.col(c) - data.residual) / (2.0 * e);
   }
   return true;
 }

@@ -237,6 +237,48 @@ TEST(StaticSensitivity, TendonTensionsMatchFiniteDifferences) {
       TipOutputs(f.tip, Vec3(0.0, 0.0, 0.01), true), {1e-3, 1e-3});
 }
 
+// The tendons' offsets from the centreline (kTendonOffset, nonlinear in the route: dR/dp by
+// central differences) of the two-tendon finger, components along and across the offset.
+TEST(StaticSensitivity, TendonOffsetsMatchFiniteDifferences) {
+  const Finger f = MakeFinger({0.0, 0.5 * std::numbers::pi}, {30.0, 20.0}, 1e4);
+  Data d = MakeData(f.model);
+  ASSERT_TRUE(SolveStatic(f.model, d).converged);
+  CheckSensitivities(f.model, d,
+                     {{ParameterKind::kTendonOffset, 0, 1},
+                      {ParameterKind::kTendonOffset, 0, 2},
+                      {ParameterKind::kTendonOffset, 1, 2}},
+                     TipOutputs(f.tip, Vec3(0.0, 0.0, 0.01), true), {1e-6, 1e-6, 1e-6});
+}
+
+// A length-driven tendon (the tension a multiplier) shortened by 5 mm under a tip load: its
+// prescribed length (kTendonLength) and its offset move the tip and the tension.
+TEST(StaticSensitivity, LengthDrivenTendonLengthAndOffsetMatchFiniteDifferences) {
+  ModelBuilder b;
+  const RodId rod =
+      b.AddStraightRod("finger", Vec3::Zero(), Vec3::UnitX(), 8, RodSection(1e4, 2.0));
+  const std::vector<NodeId> nodes = b.RodNodes(rod);
+  b.FixNode(nodes.front());
+  std::vector<BodyPoint> eyelets;
+  for (NodeId n : nodes) eyelets.push_back({n, Vec3(0.0, 0.02, 0.0)});
+  b.AddLengthDrivenTendon("pull", eyelets, Profile::Constant(0.995));
+  PointLoad load;
+  load.node = nodes.back();
+  load.force = Vec3(0.0, 0.0, -0.5);
+  b.AddPointLoad(load);
+  const Model m = b.Build();
+  Data d = MakeData(m);
+  const StaticResult r = SolveStatic(m, d);
+  ASSERT_TRUE(r.converged) << r.message;
+  ASSERT_GT(d.lambda(0), 0.0);  // taut
+  std::vector<SensitivityOutput> outputs = TipOutputs(nodes.back(), Vec3::Zero(), true);
+  outputs.push_back({OutputKind::kMultiplier, 0, 0, Vec3::Zero()});
+  CheckSensitivities(m, d,
+                     {{ParameterKind::kTendonLength, 0, -1},
+                      {ParameterKind::kTendonOffset, 0, 1},
+                      {ParameterKind::kRodStiffness, 0, 4}},
+                     outputs, {1e-6, 1e-6, 1e-6});
+}
+
 // A cantilever with a pressurised chamber off its axis (2 cm along section y and 1 cm along
 // z, 1 cm^2): the pressure bends it, a tip load and gravity act too. Parameters: the pressure
 // (kActuator) and the rod's mass (kRodMass, its weight) besides a load and the stiffness.

@@ -20,10 +20,11 @@
 
 namespace screwfem {
 
-// What a parameter is (Parameter::kind). The residual is affine in every one of them at a
-// fixed state, so dR/dp is the difference R(p + 1) - R(p) of one more residual assembly, exact
-// up to round-off (docs/inverse.md, "The derivative of the residual"); a tendon's tension is
-// clamped at zero, where this is the right derivative.
+// What a parameter is (Parameter::kind). The residual is affine in every one but a tendon's
+// offset at a fixed state, so dR/dp is the difference R(p + 1) - R(p) of one more residual
+// assembly, exact up to round-off (docs/inverse.md, "The derivative of the residual"); a
+// tendon's tension is clamped at zero, where this is the right derivative. A tendon's offset
+// moves its route nonlinearly: dR/dp by a central difference (ParameterIsAffine).
 enum class ParameterKind {
   kTendonTension,  // a tension-driven tendon's tension [N] (an offset added to its profile)
   kPointLoad,      // a point load's component: 0-2 force [N], 3-5 moment [N m] (load frame)
@@ -37,10 +38,14 @@ enum class ParameterKind {
                    // [Pa], a muscle's activation, the factor of a rest strain or active stress)
   kRodMass,        // a rod's sectional inertia (mass and rotary inertia per length) as a
                    // factor (1 + p): its weight in statics
+  kTendonLength,   // a length-driven tendon's prescribed length [m] (an offset added to its
+                   // length profile)
+  kTendonOffset,   // component 0-2 of the offsets of a tendon's eyelets on nodes [m] (node
+                   // frames; added to each: the route's distance from the rods' centrelines)
 };
 template <>
 struct EnumNames<ParameterKind> {
-  static constexpr std::array<EnumName<ParameterKind>, 8> kValues = {{
+  static constexpr std::array<EnumName<ParameterKind>, 10> kValues = {{
       {ParameterKind::kTendonTension, "tendon_tension", "a tension-driven tendon's tension"},
       {ParameterKind::kPointLoad, "point_load", "a component of a point load"},
       {ParameterKind::kJointDrive, "joint_drive", "the value of a joint's drive"},
@@ -49,6 +54,8 @@ struct EnumNames<ParameterKind> {
       {ParameterKind::kInput, "input", "the value of a run-time input"},
       {ParameterKind::kActuator, "actuator", "the value of an actuator's profile (a pressure)"},
       {ParameterKind::kRodMass, "rod_mass", "a rod's sectional inertia factor"},
+      {ParameterKind::kTendonLength, "tendon_length", "a length-driven tendon's length"},
+      {ParameterKind::kTendonOffset, "tendon_offset", "a component of a tendon's eyelet offsets"},
   }};
 };
 
@@ -58,8 +65,10 @@ struct Parameter {
       : kind(kind_), index(index_), component(component_), shape(std::move(shape_)) {}
   ParameterKind kind = ParameterKind::kTendonTension;
   int index = 0;       // the tendon, point load, joint, rod, input or actuator (Model's arrays)
-  int component = -1;  // kPointLoad 0-5, kRodStiffness -1 or 0-5, kRodRestStrain 0-5
-  // kTendonTension, kJointDrive, kActuator: the parameter's value multiplies this profile,
+  int component = -1;  // kPointLoad 0-5, kRodStiffness -1 or 0-5, kRodRestStrain 0-5,
+                       // kTendonOffset 0-2
+  // kTendonTension, kTendonLength, kJointDrive, kActuator: the parameter's value multiplies
+  // this profile,
   // added to the item's own (no terms: the constant 1). A knot of a piecewise-linear input
   // profile is a hat-shaped Profile::Table (docs/inverse.md, "Dynamic sensitivities").
   Profile shape;
@@ -131,6 +140,11 @@ void ValidateOutput(const Model& model, const SensitivityOutput& o, const std::s
 // caller restores data.inputs).
 void OffsetParameter(Model& model, Data& data, const Parameter& p, double delta);
 void ResetParameter(Model& model, const Model& original, const Parameter& p);
+// Whether the residual is affine in the parameter at a fixed state (all kinds but
+// kTendonOffset): dR/dp = R(p + 1) - R(p). Otherwise the derivatives take central differences
+// with the step ParameterDifferenceStep (1e-6 of the model's length scale).
+bool ParameterIsAffine(const Parameter& p);
+double ParameterDifferenceStep(const Model& model, const Parameter& p);
 
 // The sensitivities at data's state, an equilibrium of SolveStatic(model, data, options) (at
 // its end load factor and time; options.constraint_force_tangent must be true, the default:
