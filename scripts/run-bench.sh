@@ -15,7 +15,7 @@
 #   screwfem_bench_mujoco_box -> bench/results_mujoco_box.json (a box dropped and sliding,
 #                               against MuJoCo; its own JSON and interleaving; built when
 #                               libmujoco-dev is found; not in the default set, about 2 minutes)
-#   bench/pyelastica_bench.py -> bench/results_pyelastica.json (a rod sliding to rest, against
+#   bench/pyelastica_bench.py -> bench/results_pyelastica_E*.json (a rod sliding to rest, against
 #                               PyElastica; run by hand with --pyelastica DIR, a checkout of its
 #                               source; make_results.py renders the file when it is there)
 #   vector_env               -> its own section of bench/RESULTS.md (bench/python_vector_env.py:
@@ -103,7 +103,7 @@ done
   bench/results_statics.json bench/results_dynamics.json bench/results_outputs.json \
   bench/results_tendons.json bench/results_contact.json bench/results_solver.json \
   bench/results_parallel.json bench/results_pairs.json bench/results_mujoco_box.json \
-  bench/results_pyelastica.json
+  bench/results_pyelastica_*.json
 echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact,solver,parallel,pairs}.json"
 # After make_results.py, which keeps the section the Python benchmark replaces. It exits 1 when
 # its target is missed (on a loaded machine); the table is written either way.
