@@ -22,6 +22,11 @@ skipped. One table per benchmark family:
                    rods, contact pairs in the sparse pattern
   parallel         BM_ParallelRodStep/<elements>/<threads>, BM_ParallelRodAssemble/...,
                    BM_ParallelGrm/<case>/<threads>           (parallel_bench.cpp)
+  mujoco box       screwfem_bench_mujoco_box's own JSON (format "screwfem mujoco box bench
+                   1", bench/results_mujoco_box.json; mujoco_box_bench.cpp): a box dropped
+                   and sliding, against MuJoCo at 1 cm and 1 mm
+  pyelastica       bench/pyelastica_bench.py's JSON (format "screwfem pyelastica bench 1",
+                   bench/results_pyelastica_E*.json): a rod sliding to rest, against PyElastica
 Each JSON's revision comes from its context (the script passes --benchmark_context=revision=...),
 else from REVISION. Uses the median over repetitions when the JSON holds aggregates, else the
 single run. Times are real time (wall clock; manual time where the benchmark times itself).
@@ -121,6 +126,12 @@ def load(paths, default_revision):
             continue
         if data.get("format") == PAIRS_FORMAT:  # screwfem_bench_pairs's own JSON
             PAIRS_RESULTS.append((path, data))
+            continue
+        if data.get("format") == MUJOCO_BOX_FORMAT:  # screwfem_bench_mujoco_box's own JSON
+            MUJOCO_BOX_RESULTS.append((path, data))
+            continue
+        if data.get("format") == PYELASTICA_FORMAT:  # bench/pyelastica_bench.py's JSON
+            PYELASTICA_RESULTS.append((path, data))
             continue
         context = data.get("context", {})
         benchmarks = data.get("benchmarks", [])
@@ -949,6 +960,102 @@ def rod_statics_section(entries):
     ]
 
 
+MUJOCO_BOX_FORMAT = "screwfem mujoco box bench 1"
+MUJOCO_BOX_RESULTS = []  # (path, data) of screwfem_bench_mujoco_box's JSON files
+
+
+def mujoco_box_section():
+    """The section of screwfem_bench_mujoco_box (bench/mujoco_box_bench.cpp): a box dropped
+    onto a plane and sliding to rest, each code against its own fine run; issue 37's target:
+    screwfem at least as fast as MuJoCo at 1 cm and at 1 mm."""
+    if not MUJOCO_BOX_RESULTS:
+        return []
+    path, d = MUJOCO_BOX_RESULTS[-1]
+    lines = [
+        "## Sliding box against MuJoCo",
+        "",
+        "A 1 kg cube of half size 0.1 m dropped from 5 cm onto a plane at 2 m/s along x, "
+        "mu = 0.4, sliding 0.51 m to rest (`bench/mujoco_box_bench.cpp`, built when "
+        "`libmujoco-dev` is installed; the model and each code's contact parameters are in its "
+        "header). Each code's error: the largest distance of the box centre (every "
+        f"{d['sample'] * 1e3:g} ms over {d['horizon']:g} s) from its own run at "
+        f"h = {d['reference_step']:g} s (MuJoCo {d['mujoco']} against itself at 2h: "
+        f"{format_number(d['mujoco_self_error'])} m; screwfem: "
+        f"{format_number(d['screwfem_self_error'])} m; the two references come to rest at "
+        f"x = {d['mujoco_rest_x']:.4f} and {d['screwfem_rest_x']:.4f} m, at most "
+        f"{format_number(d['references_apart'])} m apart over the run). For each target the "
+        "cheapest setting of each variant on a grid (steps dividing the sampling interval, "
+        "tolerances by sqrt 10); CPU and wall time of the stepping loop only (resets outside), "
+        f"{d['rounds']} interleaved rounds, medians; ratios: median over rounds of each "
+        "setting's time over the fastest MuJoCo setting's in the same round. Revision "
+        f"{d['revision']}, load average {d['load']}.",
+        "",
+    ]
+    verdicts = []
+    for t in d["targets"]:
+        lines += [
+            f"Target {t['target'] * 1e3:g} mm:",
+            "",
+            "| code | variant | setting | error | steps | Newton it. | CPU per run | wall per run "
+            "| CPU ratio | wall ratio |",
+            "|---|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        ]
+        best = None
+        for r in t["rows"]:
+            iterations = r["iterations"] if r["code"] == "screwfem" else "–"
+            lines.append(
+                f"| {r['code']} | {r['variant']} | {r['setting']} | "
+                f"{format_number(r['error'] * 1e3)} mm | {r['steps']} | {iterations} | "
+                f"{format_time(r['cpu'])} | {format_time(r['wall'])} | {r['cpu_ratio']:.2f} | "
+                f"{r['wall_ratio']:.2f} |")
+            if r["code"] == "screwfem" and (best is None or r["cpu_ratio"] < best["cpu_ratio"]):
+                best = r
+        lines.append("")
+        if best is not None:
+            met = "met" if best["cpu_ratio"] <= 1.0 else "missed"
+            verdicts.append(f"- {t['target'] * 1e3:g} mm: screwfem's cheapest ({best['setting']}) "
+                            f"at {best['cpu_ratio']:.2f}× MuJoCo's CPU time: target {met}.")
+    lines += ["Issue 37's target, screwfem at most 1× MuJoCo's time:", "", *verdicts, "",
+              "Reproduce with", "", "```",
+              "SCREWFEM_BENCH=mujoco_box bash scripts/run-bench.sh", "```", "",
+              "(about 2 minutes idle: the grids, then the timed rounds; options "
+              "`--rounds N --block-ms B`, `--profile mujoco|screwfem --profile-step H` for "
+              "callgrind).", ""]
+    return lines
+
+
+PYELASTICA_FORMAT = "screwfem pyelastica bench 1"
+PYELASTICA_RESULTS = []  # (path, data) of bench/pyelastica_bench.py's JSON files
+
+
+def pyelastica_section():
+    """The section of bench/pyelastica_bench.py: a rod sliding to rest on a plane, screwfem
+    against PyElastica (issue 37's target: at least 3× faster at equal accuracy), one table per
+    results file (one per Young's modulus)."""
+    if not PYELASTICA_RESULTS:
+        return []
+    lines = ["## Sliding rod against PyElastica", "",
+             "`bench/pyelastica_bench.py` (the model, each code's contact and the method in its "
+             "docstring) runs a checkout of PyElastica's published source on Debian's numba "
+             "(`python3-numba`) and screwfem's Python module. PyElastica steps explicitly at its "
+             "largest stable step on a grid (1e-4 … 5e-6 s) within the target; screwfem at the "
+             "largest fixed step within it. One table per Young's modulus of the rod and accuracy "
+             "target.", ""]
+    for path, d in sorted(PYELASTICA_RESULTS,
+                          key=lambda x: (x[1].get("youngs", 0), -x[1].get("target", 0))):
+        lines += [f"### E = {d.get('youngs', float('nan')):g} Pa, target "
+                  f"{d.get('target', float('nan')) * 1e3:g} mm", "", d["description"], "",
+                  "| code | setting | error | steps | CPU of the stepping loop | ratio to "
+                  "PyElastica |", "|---|---|---:|---:|---:|---:|"]
+        for r in d["rows"]:
+            ratio = f"{r['cpu_ratio']:.3g}" if r.get("cpu_ratio") is not None else "–"
+            lines.append(f"| {r['code']} | {r['setting']} | {format_number(r['error'] * 1e3)} mm "
+                         f"| {r['steps']} | {format_time(r['cpu'])} | {ratio} |")
+        lines += ["", *d.get("notes", []), "", "Reproduce with", "", "```", d["command"], "```",
+                  ""]
+    return lines
+
+
 MUJOCO_SECTION = "## Spring chain against MuJoCo"
 SWEEP_SECTION = "## Parameter sweeps on Dask"
 PLOT_SECTION = "## Animation of `screwfem plot`"
@@ -992,6 +1099,8 @@ def main():
         *solver_section(),
         *pairs_section(),
         *parallel_section(entries),
+        *mujoco_box_section(),
+        *pyelastica_section(),
         "## Machine and run",
         "",
         f"- CPU: {cpu_model()} ({nproc()} cores available, `nproc`)",

@@ -441,7 +441,9 @@ void BindValues(py::module_& m) {
       .def_readwrite("damping_ratio", &ContactMaterial::damping_ratio,
                      "zeta >= 0: c_n = 2 zeta sqrt(k_n m_pair)")
       .def_readwrite("tangential_stiffness", &ContactMaterial::tangential_stiffness,
-                     "k_t [N/m] > 0 of the stick law's anchor");
+                     "k_t [N/m] > 0 of the stick law's anchor")
+      .def_readwrite("onset", &ContactMaterial::onset,
+                     "delta [m] > 0: the force starts at gap delta (default: contact.onset)");
 
   py::class_<NodeMatch>(m, "NodeMatch", "Result of ModelBuilder.find_node_at.")
       .def_readonly("node", &NodeMatch::node, "The node within the tolerance, or -1.")

@@ -12,6 +12,12 @@
 #   screwfem_bench_pairs     -> bench/results_pairs.json     (spheres on a plane and crossing
 #                               rods: contact pairs in the sparse pattern; its own JSON and
 #                               interleaving; about 2 minutes)
+#   screwfem_bench_mujoco_box -> bench/results_mujoco_box.json (a box dropped and sliding,
+#                               against MuJoCo; its own JSON and interleaving; built when
+#                               libmujoco-dev is found; not in the default set, about 2 minutes)
+#   bench/pyelastica_bench.py -> bench/results_pyelastica_E*.json (a rod sliding to rest, against
+#                               PyElastica; run by hand with --pyelastica DIR, a checkout of its
+#                               source; make_results.py renders the file when it is there)
 #   vector_env               -> its own section of bench/RESULTS.md (bench/python_vector_env.py:
 #                               screwfem.VectorEnv's steps per second at 1, 2, 4 copies; builds
 #                               the Python module; not in the default set)
@@ -30,7 +36,7 @@ jobs=$(nproc 2> /dev/null || echo 2)
 programs=${SCREWFEM_BENCH:-statics dynamics outputs tendons contact solver parallel pairs}
 for p in $programs; do
   case $p in
-    statics | dynamics | outputs | tendons | contact | solver | parallel | pairs | vector_env) ;;
+    statics | dynamics | outputs | tendons | contact | solver | parallel | pairs | mujoco_box | vector_env) ;;
     *) echo "run-bench.sh: unknown benchmark program '$p' in SCREWFEM_BENCH" >&2; exit 2 ;;
   esac
 done
@@ -70,6 +76,10 @@ for p in "${benchmarks[@]}"; do
     "$build_dir/bench/screwfem_bench_$p" "$tmp" && mv "$tmp" "$out"
     continue
   fi
+  if [[ $p == mujoco_box ]]; then
+    "$build_dir/bench/screwfem_bench_$p" --json "$tmp" --revision "$revision" && mv "$tmp" "$out"
+    continue
+  fi
   # statics: median of 5 repetitions, so the numbers stay stable on a machine with other
   # load. dynamics: each benchmark sets its own iterations and repetitions (fewer for the
   # slow cases: a GRM run takes seconds, a 10000-element rod step about half a second).
@@ -92,7 +102,8 @@ done
 /usr/bin/python3 bench/make_results.py bench/RESULTS.md "bash scripts/run-bench.sh" "$revision" \
   bench/results_statics.json bench/results_dynamics.json bench/results_outputs.json \
   bench/results_tendons.json bench/results_contact.json bench/results_solver.json \
-  bench/results_parallel.json bench/results_pairs.json
+  bench/results_parallel.json bench/results_pairs.json bench/results_mujoco_box.json \
+  bench/results_pyelastica_*.json
 echo "Wrote bench/RESULTS.md from bench/results_{statics,dynamics,outputs,tendons,contact,solver,parallel,pairs}.json"
 # After make_results.py, which keeps the section the Python benchmark replaces. It exits 1 when
 # its target is missed (on a loaded machine); the table is written either way.

@@ -16,7 +16,10 @@ set -euo pipefail
 #   bench  build + what only the benchmarks use: MuJoCo, which screwfem_bench_mujoco runs side
 #          by side with screwfem on the same model (bench/RESULTS.md, "Spring chain against
 #          MuJoCo"; the bench builds only when it is found, the tests never need it), and
-#          NLopt, which screwfem_bench_inverse compares with Ceres (docs/inverse.md);
+#          NLopt, which screwfem_bench_inverse compares with Ceres (docs/inverse.md), and
+#          numba (and typing_extensions, which PyElastica 1.0 imports), on which
+#          bench/pyelastica_bench.py runs a checkout of PyElastica's source (bench/RESULTS.md,
+#          "Sliding rod against PyElastica");
 #   all    everything (the default).
 # Usage: setup-deps.sh [build|main|rest|bench|all]
 build_packages=(
@@ -26,7 +29,7 @@ build_packages=(
   pybind11-dev python3-dev python3-numpy libsuitesparse-dev liburdfdom-dev libceres-dev
 )
 view_packages=(python3-matplotlib python3-pil libjs-three)
-bench_packages=(libmujoco-dev libnlopt-dev)
+bench_packages=(libmujoco-dev libnlopt-dev python3-numba python3-typing-extensions)
 test_packages=(
   clang clang-format python3-venv python3-pip
   python3-dask python3-distributed python3-pandas

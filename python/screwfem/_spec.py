@@ -1071,11 +1071,12 @@ class SceneSpec:
         return len(c.groups) - 1
 
     def add_contact_pair(self, a, b, *, friction=None, static_friction=None, stiffness=None,
-                         damping_ratio=None, tangential_stiffness=None):
+                         damping_ratio=None, tangential_stiffness=None, onset=None):
         """The contact law of a pair of groups (the scene's ``contact.pairs``): a and b are
         group names, or a body's or obstacle's name in no group (a group of its own);
         friction (mu_k), static_friction (mu_s >= mu_k), stiffness [N/m], damping_ratio,
-        tangential_stiffness [N/m], each defaulting to the scene's contact settings. Returns its
+        tangential_stiffness [N/m], onset [m] (the gap at which the pair's force starts), each
+        defaulting to the scene's contact settings. Returns its
         ContactMaterial."""
         c = self.contact
         where = f"contact.pairs[{len(c.pairs)}]"
@@ -1105,10 +1106,10 @@ class SceneSpec:
         m.groups = (ga, gb)
         for key, value in (("friction", friction), ("static_friction", static_friction),
                            ("stiffness", stiffness), ("damping_ratio", damping_ratio),
-                           ("tangential_stiffness", tangential_stiffness)):
+                           ("tangential_stiffness", tangential_stiffness), ("onset", onset)):
             if value is not None:
                 v = _number(value, f"{where}.{key}")
-                stiff = key in ("stiffness", "tangential_stiffness")
+                stiff = key in ("stiffness", "tangential_stiffness", "onset")
                 if v < 0 or (v == 0 and stiff):
                     sign = "positive" if stiff else "non-negative"
                     raise _error(f"{where}.{key}", f"expected a {sign} number, got {value!r}")

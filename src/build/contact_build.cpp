@@ -96,12 +96,12 @@ void CheckMaterials(const Model& m) {
     if (!pairs.insert({std::min(c.group[0], c.group[1]), std::max(c.group[0], c.group[1])}).second)
       throw InputError(label + ": the groups " + name(c.group[0]) + " and " + name(c.group[1]) +
                        " have a material already");
-    for (double v :
-         {c.friction, c.static_friction, c.stiffness, c.damping_ratio, c.tangential_stiffness})
+    for (double v : {c.friction, c.static_friction, c.stiffness, c.damping_ratio,
+                     c.tangential_stiffness, c.onset})
       if (!std::isfinite(v)) throw InputError(label + ": the parameters must be finite");
-    if (c.stiffness == 0.0 || c.tangential_stiffness == 0.0)
+    if (c.stiffness == 0.0 || c.tangential_stiffness == 0.0 || c.onset == 0.0)
       throw InputError(label +
-                       ": stiffness and tangential stiffness must be positive (or left "
+                       ": stiffness, tangential stiffness and onset must be positive (or left "
                        "to the scene's)");
   }
 }
@@ -117,6 +117,7 @@ void ResolveMaterials(Model& m) {
   base.stiffness = c.stiffness;
   base.damping_ratio = c.damping_ratio;
   base.tangential_stiffness = c.tangential_stiffness > 0.0 ? c.tangential_stiffness : c.stiffness;
+  base.onset = c.onset;
   const std::size_t n = m.contact_material_groups.size() + 1;
   m.contact_law_table.assign(n * n, 0);
   for (std::size_t i = 0; i < m.contact_materials.size(); ++i) {
@@ -129,6 +130,7 @@ void ResolveMaterials(Model& m) {
       law.static_friction = own_friction ? law.friction : std::max(d.static_friction, law.friction);
     if (given.stiffness < 0.0) law.stiffness = d.stiffness;
     if (given.damping_ratio < 0.0) law.damping_ratio = d.damping_ratio;
+    if (given.onset < 0.0) law.onset = d.onset;
     if (given.tangential_stiffness < 0.0)
       law.tangential_stiffness =
           c.tangential_stiffness > 0.0 ? c.tangential_stiffness : law.stiffness;

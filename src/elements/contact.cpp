@@ -40,7 +40,7 @@ ContactLawParameters ContactLawFor(const ContactSettings& settings, const Contac
                                    double damping, bool dynamics) {
   ContactLawParameters p;
   p.stiffness = material.stiffness;
-  p.onset = settings.onset;
+  p.onset = material.onset > 0.0 ? material.onset : settings.onset;
   p.damping = dynamics ? damping : 0.0;
   p.law = settings.friction_law;
   p.slip_velocity = settings.slip_velocity;
@@ -66,6 +66,7 @@ ContactLawParameters ContactLawFor(const ContactSettings& settings, double dampi
   material.stiffness = settings.stiffness;
   material.damping_ratio = settings.damping_ratio;
   material.tangential_stiffness = settings.tangential_stiffness;
+  material.onset = settings.onset;
   return ContactLawFor(settings, material, damping, dynamics);
 }
 
@@ -360,7 +361,8 @@ bool ContactKind::Calc(const Model& model, const Data& data, const Item& item,
                        const NodeMotion<2>& x, const KernelOptions& o, ElementTerms<2>* t) {
   const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(item)];
   ContactGeometry G;
-  if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G) || G.gap >= model.contact.onset) {
+  if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], &G) ||
+      G.gap >= ContactOnsetOf(model, pair.material)) {
     t->active = false;
     return true;
   }
@@ -461,12 +463,12 @@ void ContactKind::AddEnergy(const Model& model, const Data& data, const Item& it
     return;
   const ContactLawParameters law =
       ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, false);
-  E->spring += ContactPotential(G.gap, model.contact.onset, law.stiffness);
+  E->spring += ContactPotential(G.gap, law.onset, law.stiffness);
   // The stick law's anchor: its elastic energy 1/2 k_t |u|^2 after the return mapping.
   AnchorTrial trial;
   const SE3* H[2] = {&NodeFrame(data, pair.node[0]), &NodeFrame(data, pair.node[1])};
   const AnchorTrial* anchor = PairAnchorTrial(model, data, item, H, false, &trial, nullptr);
-  if (anchor == nullptr || G.gap >= model.contact.onset) return;
+  if (anchor == nullptr || G.gap >= law.onset) return;
   const ContactForce c = ContactForceLaw(G.gap, G.normal, Vec3::Zero(), law, false, anchor);
   if (c.active) E->spring += 0.5 * law.tangential_stiffness * c.deflection.squaredNorm();
 }
@@ -488,7 +490,7 @@ bool CalcPairLaw(const Model& model, const Data& data, int item, bool dynamics, 
   if (!CalcContactGeometry(model, pair, *x.H[0], *x.H[1], G)) return false;
   *law = ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, dynamics);
   *c = ContactForce{};
-  if (G->gap >= model.contact.onset) return true;
+  if (G->gap >= law->onset) return true;
   GatherNodeMotion<2>(model, data, pair.node, &x.eta, nullptr);
   Eigen::Matrix<double, 3, 12> J;
   Vec3 m[2];

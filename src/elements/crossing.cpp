@@ -6,6 +6,7 @@
 #include <string>
 
 #include "screwfem/elements/contact.h"
+#include "screwfem/lie/se3.h"
 
 namespace screwfem {
 
@@ -27,6 +28,59 @@ void PairEnds(const Data& data, const ContactPair& pair, Vec3* p0, Vec3* p1) {
 }
 
 bool IsBox(const ShapePairSide& side) { return side.half.x() > 0.0; }
+
+// A box's reference: its centre and the rotation vector of its frame (node frame times the
+// box's rotation), in place of a segment's two end points.
+void BoxPose(const Data& data, const ShapePairSide& side, Vec3* centre, Mat3* R) {
+  const SE3& H = NodeFrame(data, side.node[0]);
+  *centre = H.x + H.R * side.offset[0];
+  *R = H.R * side.rotation;
+}
+
+// Whether the segment from p to q meets the box [-e, e] (slab test).
+bool SegmentMeetsBox(const Vec3& p, const Vec3& q, const Vec3& e) {
+  double lo = 0.0, hi = 1.0;
+  const Vec3 d = q - p;
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(d(k)) < 1e-300) {
+      if (std::abs(p(k)) > e(k)) return false;
+      continue;
+    }
+    double t0 = (-e(k) - p(k)) / d(k), t1 = (e(k) - p(k)) / d(k);
+    if (t0 > t1) std::swap(t0, t1);
+    lo = std::max(lo, t0);
+    hi = std::min(hi, t1);
+    if (lo > hi) return false;
+  }
+  return true;
+}
+
+// Box A against box B, both moved from the reference (centre a_r, rotation A_r; b_r, B_r) to the
+// candidate, seen from B's frame with A's points moved linearly there: crossed when one of A's
+// corners went into B's core, the box of half sizes h_B / 2 (past half its depth, where the
+// penalty law of an edge, measured below B's nearest face, pushes it out of the far side), or
+// A's centre into the box of half sizes (h_B + min h_A) / 2, each from outside it. A box resting
+// or sliding on another keeps its corners within the contact's penetration of B's faces and its
+// centre h_A + h_B from B's; a box carried through a thin one in a step passes through both.
+bool BoxEnteredCore(const Vec3& a_r, const Mat3& A_r, const Vec3& b_r, const Mat3& B_r,
+                    const Vec3& a_c, const Mat3& A_c, const Vec3& b_c, const Mat3& B_c,
+                    const Vec3& half_a, const Vec3& half_b) {
+  const auto entered = [](const Vec3& u_r, const Vec3& u_c, const Vec3& e) {
+    if ((u_r.cwiseAbs().array() <= e.array()).all()) return false;  // inside already
+    return SegmentMeetsBox(u_r, u_c, e);
+  };
+  const Vec3 e_centre = 0.5 * (half_b + Vec3::Constant(half_a.minCoeff()));
+  if (entered(B_r.transpose() * (a_r - b_r), B_c.transpose() * (a_c - b_c), e_centre)) return true;
+  const Vec3 e_corner = 0.5 * half_b;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 c((k & 1) ? half_a.x() : -half_a.x(), (k & 2) ? half_a.y() : -half_a.y(),
+                 (k & 4) ? half_a.z() : -half_a.z());
+    if (entered(B_r.transpose() * (a_r + A_r * c - b_r), B_c.transpose() * (a_c + A_c * c - b_c),
+                e_corner))
+      return true;
+  }
+  return false;
+}
 
 // The distance between segments P and Q.
 double SegmentDistance(const Vec3& P0, const Vec3& P1, const Vec3& Q0, const Vec3& Q1) {
@@ -100,7 +154,13 @@ void SaveCrossingReference(const Model& model, Data& data) {
   if (data.crossing_points.empty()) return;
   std::size_t k = 0;
   for (const ContactSegment& s : model.contact_segments) {
-    SideEnds(data, s.side, &data.crossing_points[k], &data.crossing_points[k + 1]);
+    if (IsBox(s.side)) {
+      Mat3 R;
+      BoxPose(data, s.side, &data.crossing_points[k], &R);
+      data.crossing_points[k + 1] = LogSO3(R);
+    } else {
+      SideEnds(data, s.side, &data.crossing_points[k], &data.crossing_points[k + 1]);
+    }
     k += 2;
   }
   for (const ContactPair& p : model.contact_pairs) {
@@ -115,11 +175,11 @@ bool FindCrossing(const Model& model, Data& data, Crossing* out) {
   const std::vector<Vec3>& ref = data.crossing_points;
   // Obstacle pairs: each against its obstacle.
   const std::size_t ns = model.contact_segments.size();
-  // Behind a plane: deeper than 100 onsets (the default onset is 1 % of the smallest radius),
-  // far beyond any resting penetration.
-  const double depth = 100.0 * model.contact.onset;
   for (std::size_t i = 0; i < model.contact_pairs.size(); ++i) {
     const ContactPair& p = model.contact_pairs[i];
+    // Behind a plane: deeper than 100 onsets of the pair's law (the default onset is 1 % of the
+    // smallest radius), far beyond any resting penetration.
+    const double depth = 100.0 * ContactOnsetOf(model, p.material);
     const Vec3 r[2] = {ref[2 * (ns + i)], ref[2 * (ns + i) + 1]};
     Vec3 c[2];
     PairEnds(data, p, &c[0], &c[1]);
@@ -139,10 +199,10 @@ bool FindCrossing(const Model& model, Data& data, Crossing* out) {
     Vec3 c0, c1;
     SideEnds(data, s.side, &c0, &c1);
     const double r = IsBox(s.side) ? s.side.half.norm() : s.side.radius;
-    data.crossing_lo[i] =
-        ref[2 * i].cwiseMin(ref[2 * i + 1]).cwiseMin(c0.cwiseMin(c1)) - Vec3::Constant(r);
-    data.crossing_hi[i] =
-        ref[2 * i].cwiseMax(ref[2 * i + 1]).cwiseMax(c0.cwiseMax(c1)) + Vec3::Constant(r);
+    // A box's reference holds its centre and its rotation vector (SaveCrossingReference).
+    const Vec3& r1 = IsBox(s.side) ? ref[2 * i] : ref[2 * i + 1];
+    data.crossing_lo[i] = ref[2 * i].cwiseMin(r1).cwiseMin(c0.cwiseMin(c1)) - Vec3::Constant(r);
+    data.crossing_hi[i] = ref[2 * i].cwiseMax(r1).cwiseMax(c0.cwiseMax(c1)) + Vec3::Constant(r);
     data.crossing_order[i] = static_cast<int>(i);
   }
   std::sort(data.crossing_order.begin(), data.crossing_order.end(), [&](int a, int b) {
@@ -152,7 +212,6 @@ bool FindCrossing(const Model& model, Data& data, Crossing* out) {
   for (std::size_t u = 0; u < ns; ++u) {
     const std::size_t i = static_cast<std::size_t>(data.crossing_order[u]);
     const ContactSegment& a = model.contact_segments[i];
-    if (IsBox(a.side)) continue;
     for (std::size_t w = u + 1; w < ns; ++w) {
       const std::size_t j = static_cast<std::size_t>(data.crossing_order[w]);
       if (data.crossing_lo[j].x() > data.crossing_hi[i].x()) break;
@@ -160,8 +219,26 @@ bool FindCrossing(const Model& model, Data& data, Crossing* out) {
           (data.crossing_lo[i].array() > data.crossing_hi[j].array()).any())
         continue;
       const ContactSegment& b = model.contact_segments[j];
-      if (IsBox(b.side) || !SegmentsMayTouch(model, a, b)) continue;
+      // A box against a segment is left out; two boxes: BoxEnteredCore both ways.
+      if (IsBox(a.side) != IsBox(b.side) || !SegmentsMayTouch(model, a, b)) continue;
       if (std::isinf(a.mass) && std::isinf(b.mass)) continue;
+      if (IsBox(a.side)) {
+        Vec3 ca, cb;
+        Mat3 Ra, Rb;
+        BoxPose(data, a.side, &ca, &Ra);
+        BoxPose(data, b.side, &cb, &Rb);
+        const Mat3 Ra_r = ExpSO3(ref[2 * i + 1]), Rb_r = ExpSO3(ref[2 * j + 1]);
+        if (BoxEnteredCore(ref[2 * i], Ra_r, ref[2 * j], Rb_r, ca, Ra, cb, Rb, a.side.half,
+                           b.side.half) ||
+            BoxEnteredCore(ref[2 * j], Rb_r, ref[2 * i], Ra_r, cb, Rb, ca, Ra, b.side.half,
+                           a.side.half)) {
+          out->found = true;
+          out->a = static_cast<int>(i);
+          out->b = static_cast<int>(j);
+          return true;
+        }
+        continue;
+      }
       Vec3 c[4];
       SideEnds(data, a.side, &c[0], &c[1]);
       SideEnds(data, b.side, &c[2], &c[3]);

@@ -248,7 +248,7 @@ const ShapePairAnchor* FindShapePairAnchor(const Model& model, const Data& data,
 bool CalcShapePairTerms(const Model& model, const ShapePair& pair, const ShapePairGeometry& G,
                         const NodeMotion<4>& x, const KernelOptions& o, ElementTerms<4>* t,
                         const ShapePairAnchor* anchor_history, bool stick) {
-  if (G.gap >= model.contact.onset) {
+  if (G.gap >= ContactOnsetOf(model, pair.material)) {
     t->active = false;
     return true;
   }
@@ -512,7 +512,7 @@ class BroadPhase {
   // chunk (or of any chunk when there is no rod); a larger box is tested against all. False
   // when no pair is possible (no extent, or a state that is not finite: the step fails).
   bool BoundChunks() {
-    const double pad = 0.5 * m_.contact.onset;
+    const double pad = 0.5 * MaxContactOnset(m_);
     double cell = 0.0, cell_any = 0.0;
     for (int c = 0; c < chunks_; ++c) {
       const std::size_t k = static_cast<std::size_t>(c);
@@ -680,7 +680,7 @@ bool ShapePairKind::Calc(const Model& model, const Data& data, const Item& item,
                          const NodeMotion<4>& x, const KernelOptions& o, ElementTerms<4>* t) {
   const ShapePair& pair = data.shape_pairs[static_cast<std::size_t>(item)];
   ShapePairGeometry G;
-  if (!CalcShapePairGeometry(pair, x.H, model.contact.onset, &G)) {
+  if (!CalcShapePairGeometry(pair, x.H, ContactOnsetOf(model, pair.material), &G)) {
     t->active = false;
     return true;
   }
@@ -694,15 +694,15 @@ void ShapePairKind::AddEnergy(const Model& model, const Data& data, const Item& 
                      &NodeFrame(data, pair.side[1].node[0]),
                      &NodeFrame(data, pair.side[1].node[1])};
   ShapePairGeometry G;
-  if (!CalcShapePairGeometry(pair, H, model.contact.onset, &G)) return;
+  if (!CalcShapePairGeometry(pair, H, ContactOnsetOf(model, pair.material), &G)) return;
   const ContactLawParameters law =
       ContactLawFor(model.contact, ContactLawOf(model, pair.material), pair.damping, false);
-  E->spring += ContactPotential(G.gap, model.contact.onset, law.stiffness);
+  E->spring += ContactPotential(G.gap, law.onset, law.stiffness);
   // The stick law's anchor: its elastic energy 1/2 k_t |u|^2 after the return mapping.
   AnchorTrial trial;
   const AnchorTrial* anchor = MakeAnchorTrial(FindShapePairAnchor(model, data, pair),
                                               !data.shape_pair_anchors.empty(), H, &trial, nullptr);
-  if (anchor == nullptr || G.gap >= model.contact.onset) return;
+  if (anchor == nullptr || G.gap >= ContactOnsetOf(model, pair.material)) return;
   const ContactForce c = ContactForceLaw(G.gap, G.normal, Vec3::Zero(), law, false, anchor);
   if (c.active) E->spring += 0.5 * law.tangential_stiffness * c.deflection.squaredNorm();
 }
@@ -720,12 +720,12 @@ ShapePairState CalcShapePairState(const Model& model, const Data& data, int item
   }
   GatherNodeMotion<4>(model, data, nodes, &x.eta, &x.eta_dot);
   ShapePairGeometry G;
-  if (!CalcShapePairGeometry(pair, x.H, model.contact.onset, &G)) return out;
+  if (!CalcShapePairGeometry(pair, x.H, ContactOnsetOf(model, pair.material), &G)) return out;
   out.gap = G.gap;
   out.point[0] = G.point[0];
   out.point[1] = G.point[1];
   out.normal = G.normal;
-  if (G.gap >= model.contact.onset) return out;
+  if (G.gap >= ContactOnsetOf(model, pair.material)) return out;
   // The kernel's velocity map and law, with damping and friction (dynamics).
   Eigen::Matrix<double, 3, 24> J;
   Vec3 m[4];
@@ -764,9 +764,9 @@ void AcceptShapePairHistory(const Model& model, Data& data, bool dynamics) {
       x.T[k] = &identity;
     }
     ShapePairGeometry G;
-    if (!CalcShapePairGeometry(pair, x.H, model.contact.onset, &G)) continue;
+    if (!CalcShapePairGeometry(pair, x.H, ContactOnsetOf(model, pair.material), &G)) continue;
     ContactForce c;
-    if (G.gap < model.contact.onset) {
+    if (G.gap < ContactOnsetOf(model, pair.material)) {
       GatherNodeMotion<4>(model, data, nodes, &x.eta, nullptr);
       Eigen::Matrix<double, 3, 24> J;
       Vec3 m[4];

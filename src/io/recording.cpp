@@ -769,7 +769,7 @@ class Recording::Impl {
       }
       j.Field("friction", law.friction).Field("static_friction", law.static_friction);
       j.Field("stiffness", law.stiffness).Field("damping_ratio", law.damping_ratio);
-      j.Field("tangential_stiffness", law.tangential_stiffness);
+      j.Field("tangential_stiffness", law.tangential_stiffness).Field("onset", law.onset);
       j.EndObject();
     }
     j.EndArray();

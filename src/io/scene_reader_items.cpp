@@ -522,7 +522,7 @@ void SceneReader::ReadContactGroups(const Node& gn, const std::vector<std::strin
 }
 
 // contact.pairs: [{groups: [a, b], friction, static_friction, stiffness, damping_ratio,
-// tangential_stiffness}]; a name that is no group is a body or obstacle in no group (a group of
+// tangential_stiffness, onset}]; a name that is no group is a body or obstacle in no group (a group of
 // its own).
 void SceneReader::ReadContactPairs(const Node& pn, const std::vector<std::string>& names) {
   const std::string pp = "contact.pairs";
@@ -562,7 +562,7 @@ void SceneReader::ReadContactPairs(const Node& pn, const std::vector<std::string
     r_.ExpectMap(v, p);
     r_.CheckKeys(v, p,
                  {"groups", "friction", "static_friction", "stiffness", "damping_ratio",
-                  "tangential_stiffness"});
+                  "tangential_stiffness", "onset"});
     const Node& gn = r_.Require(v, p, "groups");
     const std::string gp = Join(p, "groups");
     if (!gn.IsSequence() || gn.items.size() != 2)
@@ -586,6 +586,7 @@ void SceneReader::ReadContactPairs(const Node& pn, const std::vector<std::string
       m.damping_ratio = r_.NonNegativeNumber(*x, Join(p, "damping_ratio"));
     if (const Node* x = v.Find("tangential_stiffness"))
       m.tangential_stiffness = r_.PositiveNumber(*x, Join(p, "tangential_stiffness"));
+    if (const Node* x = v.Find("onset")) m.onset = r_.PositiveNumber(*x, Join(p, "onset"));
     if (const Node* x = v.Find("static_friction")) {
       m.static_friction = r_.NonNegativeNumber(*x, Join(p, "static_friction"));
       const double kinetic = m.friction >= 0.0 ? m.friction : c.settings.friction;

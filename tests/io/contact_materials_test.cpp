@@ -12,6 +12,8 @@
 
 #include "run_test_util.h"
 #include "scene_error_util.h"
+#include "screwfem/assemble/assemble.h"
+#include "screwfem/elements/contact.h"
 #include "screwfem/elements/crossing.h"
 #include "screwfem/io/run.h"
 #include "screwfem/io/scene.h"
@@ -143,6 +145,100 @@ TEST(ContactMaterials, OneBoxSticksTheOtherSlidesAndSummaryHasThePairs) {
   }
 }
 
+// A pair's own onset (contact.pairs[].onset): two boxes held at a gap g above the plane with the
+// scene's onset 1e-4 m and box `grip`'s pair at 1e-3 m. The force starts at each pair's onset:
+// grip's bottom corners push with f_n = k (delta - g)^2 / (2 delta) (gap within its onset), slick's
+// (the scene's onset) not at all; the potential k (delta - g)^3 / (6 delta) likewise.
+std::string OnsetBoxes(double gap) {
+  const std::string z = std::to_string(0.05 + gap);
+  return R"(gravity: [0, 0, -9.81]
+bodies:
+  grip: {type: rigid, at: [0, 0, )" +
+         z + R"(], mass: 1, inertia: [0.00167, 0.00167, 0.00167], free: true,
+         shapes: [{type: box, center: [0, 0, )" +
+         z + R"(], half_sizes: [0.05, 0.05, 0.05]}]}
+  slick: {type: rigid, at: [0, 0.5, )" +
+         z + R"(], mass: 1, inertia: [0.00167, 0.00167, 0.00167], free: true,
+          shapes: [{type: box, center: [0, 0.5, )" +
+         z + R"(], half_sizes: [0.05, 0.05, 0.05]}]}
+contact:
+  stiffness: 1e5
+  onset: 1e-4
+  friction: 0.5
+  obstacles:
+    ground: {type: plane, point: [0, 0, 0], normal: [0, 0, 1]}
+  pairs:
+    - {groups: [grip, ground], onset: 1e-3}
+analysis: {type: static}
+outputs:
+  vtk: false
+  points:
+    grip: {body: grip, at: [0, 0, )" +
+         z + R"(]}
+    slick: {body: slick, at: [0, 0.5, )" +
+         z + R"(]}
+)";
+}
+
+TEST(ContactMaterials, ThePairsOwnOnsetStartsItsForce) {
+  const double k = 1e5, delta = 1e-3, scene_delta = 1e-4;
+  for (double gap : {5e-4, 0.9e-4, 1.01e-3}) {
+    const Scene s = ParseScene(OnsetBoxes(gap), "onset.yaml");
+    const Model& m = s.model;
+    ASSERT_EQ(m.contact_laws.size(), 2u);
+    EXPECT_EQ(m.contact_laws[0].onset, scene_delta);
+    EXPECT_EQ(m.contact_laws[1].onset, delta);
+    EXPECT_EQ(ContactOnsetOf(m, 1), delta);
+    EXPECT_EQ(ContactOnsetOf(m, 0), scene_delta);
+    const Data data = MakeData(m);
+    double grip_force = 0.0, slick_force = 0.0;
+    int grip_active = 0, slick_active = 0;
+    for (std::size_t i = 0; i < m.contact_pairs.size(); ++i) {
+      const ContactState c = CalcContactState(m, data, static_cast<int>(i), false);
+      if (!c.active) continue;
+      // The box's bottom corners, at the gap to within the position's printed digits.
+      EXPECT_NEAR(c.gap, gap, 1e-9);
+      (m.contact_pairs[i].owner == 0 ? grip_force : slick_force) += c.normal_force;
+      ++(m.contact_pairs[i].owner == 0 ? grip_active : slick_active);
+    }
+    const double g = gap;
+    const double expected_grip =
+        g < delta ? 4.0 * k * (delta - g) * (delta - g) / (2.0 * delta) : 0.0;
+    const double expected_slick =
+        g < scene_delta ? 4.0 * k * (scene_delta - g) * (scene_delta - g) / (2.0 * scene_delta)
+                        : 0.0;
+    EXPECT_EQ(grip_active, g < delta ? 4 : 0) << "gap " << g;
+    EXPECT_EQ(slick_active, g < scene_delta ? 4 : 0) << "gap " << g;
+    EXPECT_NEAR(grip_force, expected_grip, 1e-6 * (1.0 + expected_grip)) << "gap " << g;
+    EXPECT_NEAR(slick_force, expected_slick, 1e-6 * (1.0 + expected_slick)) << "gap " << g;
+    // The potential: the spring energy of both boxes' contacts (gravity apart).
+    const double potential =
+        (g < delta ? 4.0 * k * std::pow(delta - g, 3) / (6.0 * delta) : 0.0) +
+        (g < scene_delta ? 4.0 * k * std::pow(scene_delta - g, 3) / (6.0 * scene_delta) : 0.0);
+    EXPECT_NEAR(CalcEnergy(m, data).spring, potential, 1e-6 * (1e-9 + potential)) << "gap " << g;
+  }
+  // At rest in statics each box sinks to its own equilibrium within its onset, 4 k (delta -
+  // g)^2 / (2 delta) = m g: g = delta - sqrt(m g delta / (2 k)), 0.78 mm for grip, 30 um for slick.
+  test::ScopedDir dir("contact_onset");
+  const RunResult r = RunScene(ParseScene(OnsetBoxes(5e-5), "onset.yaml"), dir.path());
+  ASSERT_TRUE(r.ok) << r.message;
+  const test::Table p = test::ReadCsv(dir.path() + "/points.csv");
+  ASSERT_TRUE(p.well_formed) << p.problem;
+  const std::vector<double>& last = p.rows.back();
+  const double w = 9.81;  // m g [N]
+  EXPECT_NEAR(last[static_cast<std::size_t>(p.Column("grip.z"))] - 0.05,
+              delta - std::sqrt(w * delta / (2.0 * k)), 1e-8);
+  EXPECT_NEAR(last[static_cast<std::size_t>(p.Column("slick.z"))] - 0.05,
+              scene_delta - std::sqrt(w * scene_delta / (2.0 * k)), 1e-8);
+  const std::optional<test::Json> summary = test::ParseJsonFile(dir.path() + "/summary.json");
+  ASSERT_TRUE(summary.has_value());
+  const test::Json* laws = summary->Find("settings.contact.materials");
+  ASSERT_NE(laws, nullptr);
+  ASSERT_EQ(laws->array.size(), 2u);
+  EXPECT_EQ(laws->array[0].Find("onset")->number, scene_delta);
+  EXPECT_EQ(laws->array[1].Find("onset")->number, delta);
+}
+
 // The same scene with its groups and pairs replaced (from line 13).
 std::string WithPairs(const std::string& tail) {
   const std::size_t at = kBoxes.find("  groups:");
@@ -180,6 +276,10 @@ TEST(ContactMaterials, BadPairsAreReportedAtFileLineColumn) {
   ExpectErrorAt(
       SceneError(WithPairs("  pairs: [{groups: [grip, ground], stiffness: 0}]\n"), "b.yaml"),
       "b.yaml:13:47: contact.pairs[0].stiffness", "");
+  ExpectErrorAt(SceneError(WithPairs("  pairs: [{groups: [grip, ground], onset: 0}]\n"), "b.yaml"),
+                "b.yaml:13:43: contact.pairs[0].onset", "expected a positive number, got '0'");
+  ExpectErrorAt(SceneError(WithPairs("  pairs: [{groups: [grip, ground], onset: x}]\n"), "b.yaml"),
+                "b.yaml:13:43: contact.pairs[0].onset", "");
   ExpectErrorAt(SceneError(WithPairs("  pairs: [{groups: [grip], friction: 1}]\n"), "b.yaml"),
                 "b.yaml:13:20: contact.pairs[0].groups", "expected two contact groups [a, b]");
   ExpectErrorAt(SceneError(WithPairs("  pairs: [{groups: [grip, ground], mu: 1}]\n"), "b.yaml"),
@@ -282,6 +382,73 @@ TEST(Tunnelling, FastDynamicDropIsRejectedAndRetriedSmaller) {
   ASSERT_TRUE(p.well_formed) << p.problem;
   for (const std::vector<double>& row : p.rows)
     EXPECT_GT(row[static_cast<std::size_t>(p.Column("tip.z"))], -0.005) << "t = " << row[0];
+}
+
+// Two boxes (the swept check's box case): a block of half size 0.05 m thrown at 20 m/s at a
+// fixed wall 4 cm thick, 5 cm away. One step of 10 ms carries its centre from x = -0.12 to
+// +0.08, its faces from [-0.17, -0.07] to [0.03, 0.13], clear of the wall's [-0.02, 0.02]:
+// without the check the penalty contact never sees the pair and the block passes through.
+std::string BoxAndWall(double end_time) {
+  return R"(gravity: [0, 0, 0]
+bodies:
+  wall: {type: rigid, at: [0, 0, 0], mass: 1, inertia: [0.001, 0.001, 0.001],
+         shapes: [{type: box, center: [0, 0, 0], half_sizes: [0.02, 0.2, 0.2]}]}
+  block: {type: rigid, at: [-0.12, 0, 0], mass: 1, inertia: [0.00167, 0.00167, 0.00167],
+          free: true, initial_velocity: {linear: [20, 0, 0]},
+          shapes: [{type: box, center: [-0.12, 0, 0], half_sizes: [0.05, 0.05, 0.05]}]}
+joints:
+  hold: {type: fixed, at: [0, 0, 0], between: [ground, wall]}
+contact: {stiffness: 1e6, onset: 1e-4}
+analysis: {type: dynamic, end_time: )" +
+         std::to_string(end_time) + R"(, step: 1e-2, max_halvings: 12}
+outputs: {vtk: false, interval: 1e-2, points: {c: {body: block, at: [-0.12, 0, 0]}}}
+)";
+}
+
+TEST(Tunnelling, BoxCarriedThroughAThinBoxIsFound) {
+  const Scene s = ParseScene(BoxAndWall(0.03), "walls.yaml");
+  const Model& m = s.model;
+  Data data = MakeData(m);
+  const int block = m.bodies[1].node;
+  ASSERT_EQ(m.bodies[1].name, "block");
+  SaveCrossingReference(m, data);
+  const auto crossed_at = [&](double x, double angle) {
+    Data d = data;
+    d.H[static_cast<std::size_t>(block)].x = Vec3(x, 0.0, 0.0);
+    d.H[static_cast<std::size_t>(block)].R = ExpSO3(Vec3(0.0, 0.0, angle));
+    Crossing c;
+    const bool found = FindCrossing(m, d, &c);
+    return found ? DescribeCrossing(m, c) : std::string();
+  };
+  // Through the wall, turned or not: found, naming both bodies.
+  const std::string through = crossed_at(0.08, 0.0);
+  EXPECT_NE(through.find("body 'wall'"), std::string::npos) << through;
+  EXPECT_NE(through.find("body 'block'"), std::string::npos) << through;
+  EXPECT_NE(crossed_at(0.08, 0.3), "");
+  EXPECT_NE(crossed_at(-0.02, 0.0), "");  // the leading corners past the wall's mid-plane
+  // Touching (resting at x = -0.07), pressed 5 mm in, moved away: not a crossing.
+  EXPECT_EQ(crossed_at(-0.07, 0.0), "");
+  EXPECT_EQ(crossed_at(-0.065, 0.0), "");
+  EXPECT_EQ(crossed_at(-0.3, 0.5), "");
+  // Past the wall's side (its half width 0.2 m): the block's path misses the wall's core.
+  Data d = data;
+  d.H[static_cast<std::size_t>(block)].x = Vec3(0.08, 0.6, 0.0);
+  Crossing c;
+  EXPECT_FALSE(FindCrossing(m, d, &c));
+}
+
+TEST(Tunnelling, BoxThrownAtAThinBoxIsStoppedNotCarriedThrough) {
+  // The steps that carry the block through are rejected and retried smaller, until the contact
+  // stops it (its 12 corner points at 1e6 N/m take its 200 J within 6 mm): its centre never
+  // gets past x = -0.06, its face 1 cm into the wall.
+  test::ScopedDir dir("tunnel_boxes");
+  const RunResult r = RunScene(ParseScene(BoxAndWall(0.03), "walls.yaml"), dir.path());
+  ASSERT_TRUE(r.ok) << r.message;
+  const test::Table p = test::ReadCsv(dir.path() + "/points.csv");
+  ASSERT_TRUE(p.well_formed) << p.problem;
+  ASSERT_GE(p.rows.size(), 4u);
+  for (const std::vector<double>& row : p.rows)
+    EXPECT_LT(row[static_cast<std::size_t>(p.Column("c.x"))], -0.06) << "t = " << row[0];
 }
 
 }  // namespace

@@ -622,6 +622,32 @@ class ContactMaterials(unittest.TestCase):
                                 ((0, 1), 0.5, 0.6, 1e5, 1.0, 1e5),
                                 ((2, 1), 0.1, 0.1, 2e5, 0.5, 2e5)])
 
+    def test_pair_onset(self):
+        """A pair's own onset (contact.pairs[].onset) from the spec and from a file: resolved
+        per law, the others the scene's (the force starting there: contact_materials_test.cpp),
+        and the spec's error for a zero onset."""
+        spec = self.spec()
+        spec.set_contact(stiffness=1e5, friction=0.3, onset=1e-4)
+        spec.add_contact_pair("grip", "ground", onset=1e-3)
+        spec.add_contact_pair("slick", "ground", friction=0.1)
+        model = spec.compile().model
+        self.assertEqual([m.onset for m in model.contact_laws], [1e-4, 1e-3, 1e-4])
+        with self.assertRaisesRegex(ValueError, r"contact\.pairs\[2\]\.onset: expected a "
+                                    r"positive number, got 0"):
+            spec.add_contact_pair("grip", "slick", onset=0)
+        text = """
+bodies:
+  a: {type: rigid, at: [0, 0, 0.05], mass: 1, inertia: [1, 1, 1], free: true,
+      shapes: [{type: sphere, center: [0, 0, 0.05], radius: 0.05}]}
+contact:
+  onset: 2e-4
+  obstacles: {ground: {type: plane, point: [0, 0, 0], normal: [0, 0, 1]}}
+  pairs: [{groups: [a, ground], onset: 5e-4}]
+"""
+        spec = sf.read_scene_spec(text)
+        self.assertEqual(spec.contact.pairs[0].onset, 5e-4)
+        self.assertEqual([m.onset for m in spec.compile().model.contact_laws], [2e-4, 5e-4])
+
     def test_file_and_spec_agree(self):
         text = """
 bodies:

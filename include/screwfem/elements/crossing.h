@@ -4,13 +4,18 @@
 // contact never saw the pair (a rod swinging through a rod in one load step).
 //
 // The reference is the shapes' axis segments at the last accepted state (Data::crossing_points,
-// kept by AcceptContactHistory). A pair of moving shapes (two rod element capsules, a capsule or
-// sphere of a body; boxes are left out) crossed when the signed distance of their axis lines,
+// kept by AcceptContactHistory; for a box its centre and rotation vector). A pair of moving
+// shapes (two rod element capsules, a capsule or sphere of a body) crossed when the signed
+// distance of their axis lines,
 // (d_A x d_B) . (a_0 - b_0) with the end points moved linearly from the reference to the
 // candidate, changes sign at a parameter where the two axis segments are nearer than half the
 // sum of their radii, or when the axes are that near at the candidate and were not at the
 // reference. A shape against an obstacle crossed when its axis point went behind a plane or
-// into the axis of a capsule or sphere obstacle in the same sense. Candidate pairs come from a
+// into the axis of a capsule or sphere obstacle in the same sense. Two boxes crossed when, with
+// one's points moved linearly in the other's frame, a corner went into the other's core (half
+// its half sizes) or the centre into the box of half sizes (h_B + min h_A) / 2, from outside:
+// a box carried through a thin one in a step.
+// A box against a capsule, sphere or rod element is not checked. Candidate pairs come from a
 // sweep-and-prune of the segments' swept boxes on one axis (Data's buffers, sized by MakeData):
 // time O(n log n + k), no allocation.
 #pragma once

@@ -497,6 +497,7 @@ struct ContactMaterial {
   double stiffness = -1.0;             // k_n [N/m] > 0
   double damping_ratio = -1.0;         // zeta >= 0: c_n = 2 zeta sqrt(k_n m_pair)
   double tangential_stiffness = -1.0;  // k_t [N/m] > 0 of the stick law's anchor
+  double onset = -1.0;                 // delta [m] > 0: the force starts at gap delta
 };
 // One (moving shape, obstacle) pair, made by Build: the shape is a segment p(s) = (1-s) p_0 +
 // s p_1 with p_j = x_j + R_j c_j of item node j (both ends on node 0 for a rigid shape, whose
@@ -723,8 +724,26 @@ inline ContactMaterial ContactLawOf(const Model& model, int index) {
   out.static_friction = std::max(c.static_friction, c.friction);
   out.stiffness = c.stiffness;
   out.damping_ratio = c.damping_ratio;
+  out.onset = c.onset;
   out.tangential_stiffness = c.tangential_stiffness > 0.0 ? c.tangential_stiffness : c.stiffness;
   return out;
+}
+
+// The onset delta [m] of a pair's law (Model::contact_laws[index]): the gap at which its force
+// starts; the scene's contact.onset unless the pair's material gives its own.
+inline double ContactOnsetOf(const Model& model, int index) {
+  if (static_cast<std::size_t>(index) < model.contact_laws.size()) {
+    const double onset = model.contact_laws[static_cast<std::size_t>(index)].onset;
+    if (onset > 0.0) return onset;
+  }
+  return model.contact.onset;
+}
+
+// The largest onset of any law (the broad phase's padding).
+inline double MaxContactOnset(const Model& model) {
+  double onset = model.contact.onset;
+  for (const ContactMaterial& law : model.contact_laws) onset = std::max(onset, law.onset);
+  return onset;
 }
 
 // Whether the stick law keeps anchors (Data::contact_anchors, shape_pair_anchors): the stick
