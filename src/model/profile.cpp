@@ -79,7 +79,9 @@ ProfileValue EvalTerm(const ProfileTerm& p, double t, const Eigen::VectorXd* inp
     case ProfileTerm::Kind::kTable: {
       const auto& ts = p.times;
       const auto& vs = p.values;
-      if (t <= ts.front()) {
+      // Before the first time: constant (rate 0); at it, the first segment's slope (right-
+      // continuous, as every other kind at its start time).
+      if (t < ts.front()) {
         r.value = s * vs.front();
         break;
       }

@@ -82,8 +82,12 @@ TEST(Profile, ClosedFormsOfRampSmoothStepSineAndTable) {
   EXPECT_DOUBLE_EQ(table.Eval(2.0).rate, -1.5);
   EXPECT_DOUBLE_EQ(table(-1.0), 0.0);
   EXPECT_DOUBLE_EQ(table(9.0), 3.0);
-  // Right-continuous at an interior knot: the slope of the segment that starts there.
+  // Right-continuous at an interior knot: the slope of the segment that starts there; at the
+  // first knot as well (the first segment's), and the left limit there is the constant before.
   EXPECT_DOUBLE_EQ(table.Eval(1.0).rate, -1.5);
+  EXPECT_DOUBLE_EQ(table.Eval(0.0).value, 0.0);
+  EXPECT_DOUBLE_EQ(table.Eval(0.0).rate, 6.0);
+  EXPECT_DOUBLE_EQ(table.EvalLeft(0.0).rate, 0.0);
 }
 
 // [G] Table III/IV: bang-bang acceleration over T = 1 s, a = 4 q_f / T^2.
