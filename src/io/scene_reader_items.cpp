@@ -376,7 +376,8 @@ ContactObstacle SceneReader::ReadObstacle(const Node& v, const std::string& p,
   if (o.type != ObstacleType::kBox) NotUsedBy(v, p, {"half_sizes"}, "obstacles other than boxes");
   if (o.type != ObstacleType::kBox && !mesh)
     NotUsedBy(v, p, {"orientation"}, "planes, spheres, capsules and cylinders");
-  if (o.type != ObstacleType::kMesh) NotUsedBy(v, p, {"scale", "vertices", "faces"}, "non-meshes");
+  if (o.type != ObstacleType::kMesh)
+    NotUsedBy(v, p, {"scale", "vertices", "faces"}, "obstacles other than meshes");
   if (o.type != ObstacleType::kHeightfield)
     NotUsedBy(v, p, {"heights", "spacing"}, "obstacles other than height fields");
   if (!mesh) NotUsedBy(v, p, {"file"}, "obstacles other than meshes and height fields");
