@@ -4,6 +4,7 @@
 // file:line:col, and bad files by file and line.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -124,6 +125,19 @@ TEST(MeshScene, StlAndObjFilesReadToTheSameTriangles) {
   EXPECT_EQ(message.rfind(scene + ":9:31: contact.obstacles.wrong.file: ", 0), 0u) << message;
   EXPECT_NE(message.find("bad.obj:4: vertex index 9 out of range"), std::string::npos) << message;
   std::filesystem::remove_all(dir);
+}
+
+// The example reads its OBJ relative to itself: 32 side quads and two 32-gons, 124 triangles,
+// the prism's volume.
+TEST(MeshScene, ExampleReadsItsObjNextToIt) {
+  const Scene s = LoadScene(std::string(SCREWFEM_SOURCE_DIR) + "/examples/contact/mesh_wrap.yaml");
+  ASSERT_EQ(s.model.obstacles.size(), 1u);
+  const ContactObstacle& post = s.model.obstacles[0];
+  ASSERT_TRUE(post.mesh);
+  EXPECT_EQ(post.mesh->faces.size(), 124u);
+  const double volume = 0.5 * 32 * 0.05 * 0.05 * std::sin(2.0 * M_PI / 32) * 0.4;
+  EXPECT_NEAR(CalcMeshMassProperties(*post.mesh).volume, volume, 1e-15);
+  EXPECT_EQ(s.model.contact_pairs.size(), 24u);  // one per rod element
 }
 
 TEST(MeshScene, BadInputIsReportedAtFileLineColumnNamingTheField) {
