@@ -15,6 +15,7 @@
 #include "screwfem/build/model_builder.h"
 #include "screwfem/build/routing.h"
 #include "screwfem/model/errors.h"
+#include "screwfem/model/mesh.h"
 
 namespace py = pybind11;
 
@@ -369,16 +370,20 @@ void BindValues(py::module_& m) {
                      "Box: the directions of its edges in the body frame (3 x 3 rotation, "
                      "columns; scene: orientation); identity by default.");
 
-  py::class_<ContactObstacle>(m, "ContactObstacle",
-                              "An obstacle fixed in the world (model.h): plane (point, normal; a "
-                              "moving surface: velocity, spin, motion), sphere (point = centre, "
-                              "radius), capsule and cylinder (point, to, radius), box (point = "
-                              "centre, to = half sizes, rotation).")
+  py::class_<ContactObstacle>(
+      m, "ContactObstacle",
+      "An obstacle fixed in the world (model.h): plane (point, normal; a "
+      "moving surface: velocity, spin, motion), sphere (point = centre, "
+      "radius), capsule and cylinder (point, to, radius), box (point = "
+      "centre, to = half sizes, rotation), mesh (point, rotation, scale, set_mesh) and "
+      "heightfield (point, rotation, set_heights).")
       .def(py::init<>())
       .def_readwrite("name", &ContactObstacle::name,
                      "Unique name (the scene's contact.obstacles key).")
-      .def_readwrite("type", &ContactObstacle::type,
-                     "ObstacleType: PLANE, SPHERE, CAPSULE, CYLINDER or BOX, fixed in the world.")
+      .def_readwrite(
+          "type", &ContactObstacle::type,
+          "ObstacleType: PLANE, SPHERE, CAPSULE, CYLINDER, BOX, MESH or HEIGHTFIELD, fixed in "
+          "the world.")
       .def_readwrite("point", &ContactObstacle::point, "[m]")
       .def_readwrite("normal", &ContactObstacle::normal, "Plane: out of the obstacle.")
       .def_readwrite("to", &ContactObstacle::to, "[m]")
@@ -397,7 +402,78 @@ void BindValues(py::module_& m) {
                      "Contact group bitmask: a pair touches when contype & conaffinity of the "
                      "other is non-zero (either way).")
       .def_readwrite("conaffinity", &ContactObstacle::conaffinity,
-                     "Contact affinity bitmask (see contype).");
+                     "Contact affinity bitmask (see contype).")
+      .def_readwrite("scale", &ContactObstacle::scale,
+                     "Mesh: the factor on its vertices (default 1).")
+      .def(
+          "set_mesh",
+          [](ContactObstacle& o, const Eigen::Matrix<double, Eigen::Dynamic, 3>& vertices,
+             const Eigen::Matrix<int, Eigen::Dynamic, 3>& faces) {
+            auto mesh = std::make_shared<TriangleMesh>();
+            for (Eigen::Index i = 0; i < vertices.rows(); ++i)
+              mesh->vertices.push_back(vertices.row(i).transpose());
+            for (Eigen::Index i = 0; i < faces.rows(); ++i)
+              mesh->faces.push_back({faces(i, 0), faces(i, 1), faces(i, 2)});
+            const std::string why = CheckTriangleMesh(*mesh, "obstacle '" + o.name + "'");
+            if (!why.empty()) throw InputError(why);
+            o.mesh = std::move(mesh);
+          },
+          py::arg("vertices"), py::arg("faces"),
+          "Mesh: its triangles in the obstacle frame (placed at point + rotation scale v): "
+          "vertices (n x 3) [m], faces (m x 3, 0-based, counter-clockwise seen from outside).")
+      .def(
+          "set_heights",
+          [](ContactObstacle& o, const Eigen::MatrixXd& heights, double dx, double dy) {
+            if (heights.rows() < 2 || heights.cols() < 2)
+              throw InputError("obstacle '" + o.name + "': expected at least 2 x 2 heights");
+            if (!(dx > 0.0) || !(dy > 0.0))
+              throw InputError("obstacle '" + o.name + "': expected positive spacings");
+            std::vector<double> h;
+            for (Eigen::Index i = 0; i < heights.rows(); ++i)
+              for (Eigen::Index j = 0; j < heights.cols(); ++j) h.push_back(heights(i, j));
+            o.mesh = std::make_shared<TriangleMesh>(HeightFieldMesh(
+                h, static_cast<int>(heights.rows()), static_cast<int>(heights.cols()), dx, dy));
+          },
+          py::arg("heights"), py::arg("dx"), py::arg("dy"),
+          "Height field: heights[i, j] (rows along y, columns along x) [m] on a grid of spacing "
+          "dx, dy [m] centred on point.")
+      .def(
+          "mesh_vertices",
+          [](const ContactObstacle& o) {
+            Eigen::Matrix<double, Eigen::Dynamic, 3> v(o.mesh ? o.mesh->vertices.size() : 0, 3);
+            for (Eigen::Index i = 0; i < v.rows(); ++i)
+              v.row(i) = o.mesh->vertices[static_cast<std::size_t>(i)].transpose();
+            return v;
+          },
+          "Mesh and height field: the vertices in the obstacle frame (n x 3) [m].")
+      .def(
+          "mesh_faces",
+          [](const ContactObstacle& o) {
+            Eigen::Matrix<int, Eigen::Dynamic, 3> f(o.mesh ? o.mesh->faces.size() : 0, 3);
+            for (Eigen::Index i = 0; i < f.rows(); ++i)
+              for (int k = 0; k < 3; ++k)
+                f(i, k) = o.mesh->faces[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+            return f;
+          },
+          "Mesh and height field: the triangles (m x 3, 0-based).");
+
+  m.def(
+      "mesh_mass_properties",
+      [](const Eigen::Matrix<double, Eigen::Dynamic, 3>& vertices,
+         const Eigen::Matrix<int, Eigen::Dynamic, 3>& faces, double density) {
+        TriangleMesh mesh;
+        for (Eigen::Index i = 0; i < vertices.rows(); ++i)
+          mesh.vertices.push_back(vertices.row(i).transpose());
+        for (Eigen::Index i = 0; i < faces.rows(); ++i)
+          mesh.faces.push_back({faces(i, 0), faces(i, 1), faces(i, 2)});
+        const std::string why = CheckTriangleMesh(mesh, "mesh_mass_properties");
+        if (!why.empty()) throw InputError(why);
+        const MeshMassProperties p = CalcMeshMassProperties(mesh);
+        return py::make_tuple(density * p.volume, p.centroid, Mat3(density * p.inertia));
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("density"),
+      "Mass [kg], centre of mass [m] and inertia about it [kg m^2] of the solid a closed, "
+      "outward-oriented triangle mesh bounds (Mirtich 1996), at a density [kg/m^3].");
 
   py::class_<ContactSettings>(
       m, "ContactSettings",

@@ -506,6 +506,18 @@ void ValidateObstacles(Model& m) {
         throw InputError(label + ": the half sizes must be positive", entity);
       if (!IsRotation(o.rotation))
         throw InputError(label + ": the orientation must be a rotation", entity);
+    } else if (o.type == ObstacleType::kMesh || o.type == ObstacleType::kHeightfield) {
+      // docs/numerics.md, "Triangle meshes": the world triangles and their tree, built once.
+      if (!o.mesh) throw InputError(label + ": the mesh has no triangles", entity);
+      const std::string why = CheckTriangleMesh(*o.mesh, label);
+      if (!why.empty()) throw InputError(why, entity);
+      if (!IsPositiveSize(o.scale))
+        throw InputError(label + ": the scale must be positive and finite", entity);
+      if (!IsRotation(o.rotation))
+        throw InputError(label + ": the orientation must be a rotation", entity);
+      auto tree = std::make_shared<MeshTree>();
+      tree->Build(*o.mesh, o.rotation, o.point, o.scale);
+      o.tree = std::move(tree);
     } else if (!IsPositiveSize(o.radius)) {
       throw InputError(label + ": the radius must be positive, got " + std::to_string(o.radius),
                        entity);
@@ -647,7 +659,8 @@ void AddShapeObstaclePairs(Model& m, const ContactShape& c, int oi, double* r_mi
       // against a sphere or capsule, the cylinder's point nearest to it.
       *r_min = std::min(*r_min, c.radius);
       const ObstacleType type = m.obstacles[static_cast<std::size_t>(oi)].type;
-      if (type == ObstacleType::kCylinder || type == ObstacleType::kBox)
+      if (type == ObstacleType::kCylinder || type == ObstacleType::kBox ||
+          type == ObstacleType::kMesh || type == ObstacleType::kHeightfield)
         throw InputError("contact between the cylinder of body '" + body.name + "' and the " +
                          NameOf(type) + " obstacle '" +
                          m.obstacles[static_cast<std::size_t>(oi)].name +
@@ -665,6 +678,14 @@ void AddShapeObstaclePairs(Model& m, const ContactShape& c, int oi, double* r_mi
       // docs/numerics.md, "Contact": 8 vertex spheres and (against curved obstacles) 12 edge
       // capsules, of radius 0, at the box's orientation.
       *r_min = std::min(*r_min, c.to.minCoeff());
+      const ObstacleType type = m.obstacles[static_cast<std::size_t>(oi)].type;
+      if (type == ObstacleType::kMesh || type == ObstacleType::kHeightfield)
+        throw InputError("contact between the box of body '" + body.name + "' and the " +
+                         NameOf(type) + " obstacle '" +
+                         m.obstacles[static_cast<std::size_t>(oi)].name +
+                         "' is not supported (a mesh touches rods, spheres and capsules); "
+                         "exclude the pair (contact: exclude: [[" +
+                         body.name + ", " + m.obstacles[static_cast<std::size_t>(oi)].name + "]])");
       Vec3 v[8];
       for (int k = 0; k < 8; ++k) v[k] = c.from + c.rotation * BoxCorner(Vec3::Zero(), c.to, k);
       for (int k = 0; k < 8; ++k) add(v[k], v[k], 0.0);

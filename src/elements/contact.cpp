@@ -250,6 +250,17 @@ bool CalcContactGeometry(const Model& model, const ContactPair& pair, const SE3&
     const SolidPoint sp = BoxClosestPoint(a + s * d, o.to);
     n = o.rotation * sp.normal;
     distance = sp.distance;
+  } else if (o.type == ObstacleType::kMesh || o.type == ObstacleType::kHeightfield) {
+    // docs/numerics.md, "Triangle meshes": the segment's point nearest to the triangles (or
+    // deepest behind a face, within the shape's radius), and the mesh's point there.
+    // Nothing within the onset: the nearest feature anyway (the stick law's anchor keeps the
+    // material point at the last accepted state, as for the other obstacles).
+    MeshHit hit = o.tree->ClosestToSegment(A, B, pair.radius + model.contact.onset, pair.radius);
+    if (!hit.found) hit = o.tree->ClosestToSegment(A, B, INFINITY, pair.radius);
+    if (!hit.found) return false;
+    s = hit.s;
+    n = hit.normal;
+    distance = hit.distance;
   } else {
     Vec3 q;
     if (o.type == ObstacleType::kSphere) {

@@ -124,6 +124,10 @@ bool SegmentsCrossed(const Vec3 (&r)[4], const Vec3 (&c)[4], double reach) {
 // axis (nearer than half the sum of the radii), from the reference r to the candidate c.
 bool ObstacleCrossed(const ContactObstacle& o, double radius, double depth, const Vec3 (&r)[2],
                      const Vec3 (&c)[2]) {
+  // No swept check against meshes (nor boxes and cylinders): their pairs keep the penalty.
+  if (o.type == ObstacleType::kMesh || o.type == ObstacleType::kHeightfield ||
+      o.type == ObstacleType::kBox || o.type == ObstacleType::kCylinder)
+    return false;
   if (o.type == ObstacleType::kPlane) {
     const double h_r = std::min(o.normal.dot(r[0] - o.point), o.normal.dot(r[1] - o.point));
     const double h_c = std::min(o.normal.dot(c[0] - o.point), o.normal.dot(c[1] - o.point));

@@ -100,6 +100,7 @@ class SceneReader {
   void ReadContact(const Node* node);
   ContactObstacle ReadObstacle(const Node& v, const std::string& path,
                                const std::string& name) const;
+  void ReadMeshObstacle(const Node& v, const std::string& path, ContactObstacle& o) const;
   void ReadContactExclusions(const Node& exclude, const std::vector<std::string>& names);
   void ReadContactGroups(const Node& groups, const std::vector<std::string>& names);
   void ReadContactPairs(const Node& pairs, const std::vector<std::string>& names);

@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "scene_reader_impl.h"
+#include "screwfem/io/mesh_file.h"
 #include "screwfem/io/scene_spec.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/solve/schedule.h"
@@ -361,18 +362,28 @@ void SceneReader::ReadShapes(const Node& node, const std::string& path, BodySpec
 ContactObstacle SceneReader::ReadObstacle(const Node& v, const std::string& p,
                                           const std::string& name) const {
   r_.ExpectMap(v, p);
-  r_.CheckKeys(v, p,
-               {"type", "point", "normal", "center", "from", "to", "radius", "half_sizes",
-                "orientation", "velocity", "spin", "motion", "contype", "conaffinity"});
+  r_.CheckKeys(
+      v, p, {"type",       "point",       "normal",   "center", "from",    "to",      "radius",
+             "half_sizes", "orientation", "velocity", "spin",   "motion",  "contype", "conaffinity",
+             "scale",      "file",        "vertices", "faces",  "heights", "spacing"});
   ContactObstacle o;
   o.name = name;
   o.type = r_.Enum<ObstacleType>(r_.Require(v, p, "type"), Join(p, "type"));
+  const bool mesh = o.type == ObstacleType::kMesh || o.type == ObstacleType::kHeightfield;
   if (o.type != ObstacleType::kPlane)
     NotUsedBy(v, p, {"point", "normal", "velocity", "spin", "motion"},
-              "spheres, capsules, cylinders and boxes");
-  if (o.type != ObstacleType::kBox)
-    NotUsedBy(v, p, {"half_sizes", "orientation"}, "planes, spheres, capsules and cylinders");
-  if (o.type == ObstacleType::kPlane) {
+              "spheres, capsules, cylinders, boxes and meshes");
+  if (o.type != ObstacleType::kBox) NotUsedBy(v, p, {"half_sizes"}, "obstacles other than boxes");
+  if (o.type != ObstacleType::kBox && !mesh)
+    NotUsedBy(v, p, {"orientation"}, "planes, spheres, capsules and cylinders");
+  if (o.type != ObstacleType::kMesh)
+    NotUsedBy(v, p, {"scale", "vertices", "faces"}, "obstacles other than meshes");
+  if (o.type != ObstacleType::kHeightfield)
+    NotUsedBy(v, p, {"heights", "spacing"}, "obstacles other than height fields");
+  if (!mesh) NotUsedBy(v, p, {"file"}, "obstacles other than meshes and height fields");
+  if (mesh) {
+    ReadMeshObstacle(v, p, o);
+  } else if (o.type == ObstacleType::kPlane) {
     NotUsedBy(v, p, {"center", "from", "to", "radius"}, "planes");
     o.point = Point(r_.Require(v, p, "point"), Join(p, "point"));
     o.normal = UnitAxis(r_.Require(v, p, "normal"), Join(p, "normal"));
@@ -415,6 +426,107 @@ ContactObstacle SceneReader::ReadObstacle(const Node& v, const std::string& p,
   }
   ReadGroups(v, p, &o.contype, &o.conaffinity);
   return o;
+}
+
+// A mesh or height-field obstacle (docs/scene-format.md): its pose, and its triangles inline
+// or from a file relative to the scene file's directory.
+void SceneReader::ReadMeshObstacle(const Node& v, const std::string& p, ContactObstacle& o) const {
+  NotUsedBy(v, p, {"from", "to", "radius"}, "meshes and height fields");
+  if (const Node* cn = v.Find("center")) o.point = Point(*cn, Join(p, "center"));
+  if (const Node* on = v.Find("orientation"))
+    o.rotation = ReadOrientation(*on, Join(p, "orientation"));
+  const Node* file = v.Find("file");
+  const char* inline_key = o.type == ObstacleType::kMesh ? "vertices" : "heights";
+  const Node* inline_node = v.Find(inline_key);
+  if ((file == nullptr) == (inline_node == nullptr))
+    r_.Fail(v.location, p,
+            std::string("give either 'file' or '") + inline_key + "'" + (file ? ", not both" : ""));
+  std::filesystem::path path;
+  if (file) {
+    path = r_.Text(*file, Join(p, "file"));
+    if (path.empty()) r_.Fail(file->location, Join(p, "file"), "expected a file name, got ''");
+    std::error_code ec;
+    const std::filesystem::path scene_file(r_.source());
+    if (path.is_relative() && scene_file.has_parent_path() &&
+        std::filesystem::is_regular_file(scene_file, ec))
+      path = scene_file.parent_path() / path;
+  }
+  auto mesh = std::make_shared<TriangleMesh>();
+  if (o.type == ObstacleType::kMesh) {
+    if (const Node* sn = v.Find("scale")) o.scale = r_.PositiveNumber(*sn, Join(p, "scale"));
+    if (file) {
+      try {
+        *mesh = ReadMeshFile(path.string());
+      } catch (const InputError& e) {
+        r_.Fail(file->location, Join(p, "file"), e.what());
+      }
+    } else {
+      const std::string vp = Join(p, "vertices"), fp = Join(p, "faces");
+      if (!inline_node->IsSequence() || inline_node->items.empty())
+        r_.Fail(inline_node->location, vp,
+                "expected a list of vertices [x, y, z], got " + scene_yaml::Describe(*inline_node));
+      for (std::size_t i = 0; i < inline_node->items.size(); ++i)
+        mesh->vertices.push_back(r_.Vector3(inline_node->items[i], Index(vp, i)));
+      const Node& fn = r_.Require(v, p, "faces");
+      if (!fn.IsSequence() || fn.items.empty())
+        r_.Fail(fn.location, fp,
+                "expected a list of faces [i, j, k, ...], got " + scene_yaml::Describe(fn));
+      const int n = static_cast<int>(mesh->vertices.size());
+      for (std::size_t i = 0; i < fn.items.size(); ++i) {
+        const Node& face = fn.items[i];
+        const std::string ip = Index(fp, i);
+        if (!face.IsSequence() || face.items.size() < 3)
+          r_.Fail(face.location, ip,
+                  "expected a face of at least 3 vertex indices (0-based), got " +
+                      scene_yaml::Describe(face));
+        std::vector<int> c;
+        for (std::size_t k = 0; k < face.items.size(); ++k)
+          c.push_back(r_.Integer(face.items[k], Index(ip, k), 0, n - 1));
+        for (std::size_t k = 1; k + 1 < c.size(); ++k)
+          mesh->faces.push_back({c[0], c[k], c[k + 1]});
+      }
+    }
+  } else {
+    const Node& sp = r_.Require(v, p, "spacing");
+    double dx = 0.0, dy = 0.0;
+    if (sp.IsSequence()) {
+      const std::vector<double> d = r_.FixedNumbers(sp, Join(p, "spacing"), 2);
+      dx = d[0];
+      dy = d[1];
+    } else {
+      dx = dy = r_.Number(sp, Join(p, "spacing"));
+    }
+    if (!(dx > 0.0) || !(dy > 0.0))
+      r_.Fail(sp.location, Join(p, "spacing"), "expected positive spacings [dx, dy]");
+    std::vector<std::vector<double>> rows;
+    if (file) {
+      try {
+        rows = ReadHeightFile(path.string());
+      } catch (const InputError& e) {
+        r_.Fail(file->location, Join(p, "file"), e.what());
+      }
+    } else {
+      const std::string hp = Join(p, "heights");
+      if (!inline_node->IsSequence() || inline_node->items.size() < 2)
+        r_.Fail(inline_node->location, hp,
+                "expected at least 2 rows of heights, got " + scene_yaml::Describe(*inline_node));
+      for (std::size_t i = 0; i < inline_node->items.size(); ++i) {
+        rows.push_back(r_.Numbers(inline_node->items[i], Index(hp, i)));
+        if (rows.back().size() < 2 || rows.back().size() != rows.front().size())
+          r_.Fail(inline_node->items[i].location, Index(hp, i),
+                  "expected " + std::to_string(std::max<std::size_t>(rows.front().size(), 2)) +
+                      " or more heights, as many in every row, got " +
+                      std::to_string(rows.back().size()));
+      }
+    }
+    std::vector<double> h;
+    for (const std::vector<double>& row : rows) h.insert(h.end(), row.begin(), row.end());
+    *mesh = HeightFieldMesh(h, static_cast<int>(rows.size()), static_cast<int>(rows.front().size()),
+                            dx, dy);
+  }
+  const std::string why = CheckTriangleMesh(*mesh, "the mesh");
+  if (!why.empty()) r_.Fail((file ? file : inline_node)->location, p, why);
+  o.mesh = std::move(mesh);
 }
 
 void SceneReader::ReadContact(const Node* node) {

@@ -421,8 +421,30 @@ void VtkWriter::LayOutContact(const Model& model) {
         s.axes = o.rotation;
         AddVertex(AddPoint(s, o.to.norm(), o.to), {VtkCellKind::kObstacleBox, id});
         break;
+      case ObstacleType::kMesh:
+      case ObstacleType::kHeightfield:
+        LayOutMesh(o, id);
+        break;
     }
   }
+}
+
+// A mesh or height-field obstacle: its world vertices, each triangle a closed polyline
+// a-b-c-a (a wireframe; kind kObstacleMesh, item the obstacle).
+void VtkWriter::LayOutMesh(const ContactObstacle& o, int id) {
+  if (!o.tree) return;
+  const std::vector<Vec3>& v = o.tree->vertices();
+  const long long first = static_cast<long long>(sources_.size());
+  for (const Vec3& p : v) {
+    PointSource s;
+    s.kind = PointSource::Kind::kWorld;
+    s.offset = p;
+    s.origin = false;
+    AddPoint(s);
+  }
+  for (const std::array<int, 3>& t : o.tree->faces())
+    AddLine({first + t[0], first + t[1], first + t[2], first + t[0]},
+            {VtkCellKind::kObstacleMesh, id});
 }
 
 // The rods' polylines are the first lines (LayOut): point k of rod r is its node k, between

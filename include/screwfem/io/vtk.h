@@ -16,7 +16,8 @@
 //   lines      per rigid body, from its node origin to its centre of mass and to every joint
 //              attachment point on it (kBodySegment: a link between two joints is drawn between
 //              them); one per capsule shape and capsule obstacle, between its ends (kCapsule,
-//              kObstacleCapsule);
+//              kObstacleCapsule); per triangle of a mesh or height-field obstacle, a closed
+//              polyline through its corners (kObstacleMesh, item_id the obstacle);
 //   polylines  one per tendon, through its eyelets at their current positions (kTendon), and one
 //              line per force element between its ends (kForceElement); on the ground the frame
 //              axes are the world's;
@@ -100,6 +101,7 @@ enum class VtkCellKind : int {
   kCylinder = 16,
   kObstacleCylinder = 17,
   kObstacleBox = 18,
+  kObstacleMesh = 19,
 };
 
 class VtkWriter {
@@ -158,6 +160,7 @@ class VtkWriter {
   void LayOut(const Model& model);
   void LayOutBodies(const Model& model, const std::vector<std::vector<Vec3>>& attachments);
   void LayOutLines(const Model& model);
+  void LayOutMesh(const ContactObstacle& o, int id);
   void LayOutContact(const Model& model);
   void LayOutChambers(const Model& model);
   long long AddPoint(const PointSource& source, double radius = 0.0,

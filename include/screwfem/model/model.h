@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "screwfem/model/enum_names.h"
 #include "screwfem/model/errors.h"
 #include "screwfem/model/ids.h"
+#include "screwfem/model/mesh.h"
 #include "screwfem/model/profile.h"
 #include "screwfem/model/section.h"
 
@@ -351,15 +353,18 @@ struct ContactRod {
   double radius = 0.0;  // [m] > 0
 };
 // An obstacle fixed in the world (a plane may carry a moving surface: a conveyor, a turntable).
-enum class ObstacleType { kPlane, kSphere, kCapsule, kCylinder, kBox };
+enum class ObstacleType { kPlane, kSphere, kCapsule, kCylinder, kBox, kMesh, kHeightfield };
 template <>
 struct EnumNames<ObstacleType> {
-  static constexpr std::array<EnumName<ObstacleType>, 5> kValues = {{
+  static constexpr std::array<EnumName<ObstacleType>, 7> kValues = {{
       {ObstacleType::kPlane, "plane", "the half-space behind a point and a normal"},
       {ObstacleType::kSphere, "sphere", "a fixed sphere"},
       {ObstacleType::kCapsule, "capsule", "a fixed capsule (a cylinder with round ends)"},
       {ObstacleType::kCylinder, "cylinder", "a fixed cylinder with flat ends"},
       {ObstacleType::kBox, "box", "a fixed box: centre, half sizes and orientation"},
+      {ObstacleType::kMesh, "mesh", "a fixed triangle mesh: centre, orientation and scale"},
+      {ObstacleType::kHeightfield, "heightfield",
+       "a fixed grid of heights, as triangles: centre, orientation and spacing"},
   }};
 };
 struct ContactObstacle {
@@ -370,7 +375,13 @@ struct ContactObstacle {
   Vec3 normal = Vec3::UnitZ();       // plane: unit normal out of the obstacle (Build normalises)
   Vec3 to = Vec3::Zero();            // capsule, cylinder: the other end; box: the half sizes (> 0)
   double radius = 0.0;               // sphere, capsule and cylinder
-  Mat3 rotation = Mat3::Identity();  // box: its edges' directions (columns), world
+  Mat3 rotation = Mat3::Identity();  // box, mesh, heightfield: its axes (columns), world
+  // Mesh and heightfield (docs/numerics.md, "Triangle meshes"): the triangles in the obstacle's
+  // frame (a height field's as HeightFieldMesh makes them), placed at point + rotation scale v;
+  // Build makes `tree` (the world triangles and their AABB tree) from them.
+  std::shared_ptr<const TriangleMesh> mesh = nullptr;
+  double scale = 1.0;
+  std::shared_ptr<const MeshTree> tree = nullptr;
   unsigned contype = 1, conaffinity = 1;
   // A plane's moving surface (docs/numerics.md, "Moving surfaces"): its material points move in
   // the plane at v_s(p, t) = motion(t) (velocity + spin n x (p - point)), a belt (velocity
