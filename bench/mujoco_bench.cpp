@@ -43,9 +43,17 @@
 #include "screwfem/build/model_builder.h"
 #include "screwfem/model/model.h"
 #include "screwfem/solve/dynamics.h"
+#include "mujoco_common.h"
 
 namespace screwfem::mujoco_bench {
 namespace {
+
+using mujoco_common::LoadMjcf;
+using mujoco_common::MaxDistance;
+using mujoco_common::Median;
+using mujoco_common::MjDataDeleter;
+using mujoco_common::MjModelDeleter;
+using mujoco_common::Trajectory;
 
 constexpr double kSample = 8e-3;  // sampling interval = MuJoCo's step [s]
 constexpr double kLinkLength = 0.5;
@@ -56,15 +64,7 @@ bool g_revolute_base = false;
 // --base spherical-nospring: the spherical joint without its spring (a second control model).
 bool g_no_base_spring = false;
 
-// Link end points at the sample times k * kSample, k = 1..n: 9 values per sample.
-using Trajectory = std::vector<double>;
-
-double MaxDistance(const Trajectory& a, const Trajectory& b) {
-  double d = 0.0;
-  for (std::size_t i = 0; i + 2 < a.size() && i + 2 < b.size(); i += 3)
-    d = std::max(d, std::hypot(a[i] - b[i], a[i + 1] - b[i + 1], a[i + 2] - b[i + 2]));
-  return d;
-}
+// Trajectories: the three link end points at the sample times k * kSample, 9 values per sample.
 
 // ---- MuJoCo ----
 
@@ -91,13 +91,6 @@ const char* kMjcf = R"(<mujoco model="spring_chain">
 </mujoco>
 )";
 
-struct MjModelDeleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-};
-struct MjDataDeleter {
-  void operator()(mjData* d) const { mj_deleteData(d); }
-};
-
 std::unique_ptr<mjModel, MjModelDeleter> LoadMujocoModel() {
   std::string xml = kMjcf;
   if (g_no_base_spring) {
@@ -108,18 +101,7 @@ std::unique_ptr<mjModel, MjModelDeleter> LoadMujocoModel() {
     const std::string ball = "type=\"ball\"";
     xml.replace(xml.find(ball), ball.size(), "type=\"hinge\" axis=\"0 1 0\"");
   }
-  auto vfs = std::make_unique<mjVFS>();  // large: on the heap
-  mj_defaultVFS(vfs.get());
-  const int size = static_cast<int>(xml.size());
-  if (mj_makeEmptyFileVFS(vfs.get(), "chain.xml", size) != 0)
-    throw std::runtime_error("mj_makeEmptyFileVFS failed");
-  const int f = mj_findFileVFS(vfs.get(), "chain.xml");
-  std::memcpy(vfs->filedata[f], xml.data(), static_cast<std::size_t>(size));
-  char error[1000] = "";
-  mjModel* m = mj_loadXML("chain.xml", vfs.get(), error, sizeof(error));
-  mj_deleteVFS(vfs.get());
-  if (!m) throw std::runtime_error(std::string("MuJoCo: ") + error);
-  return std::unique_ptr<mjModel, MjModelDeleter>(m);
+  return LoadMjcf(xml, "chain.xml");
 }
 
 struct MujocoRun {
@@ -236,37 +218,15 @@ struct ScrewfemRun {
       throw std::runtime_error("InitializeDynamics: " + message);
     const int samples = static_cast<int>(std::lround(horizon / kSample));
     traj->resize(static_cast<std::size_t>(9 * samples));
-    bool ok = true;
-    if (!setting.adaptive) {
-      const int per_sample = static_cast<int>(std::lround(kSample / setting.h));
-      for (int s = 0; s < samples && ok; ++s) {
-        for (int k = 0; k < per_sample && ok; ++k) ok = Step(model, data, integ, setting.h).ok;
-        Record(data, s, traj);
-      }
-    } else {
-      int s = 0;
-      while (ok && s < samples) {
-        ok = AdaptiveStep(model, data, integ, horizon).ok;
-        // Dense output at the sample times inside the step (as `screwfem run` writes rows).
-        while (ok && s < samples && (s + 1) * kSample <= data.time + 1e-12) {
-          InterpolateStep(model, data, integ, (s + 1) * kSample, out);
-          Record(out, s, traj);
-          ++s;
-        }
-      }
-    }
+    const bool ok =
+        mujoco_common::RunSampled(model, data, out, integ, setting.adaptive, setting.h, kSample,
+                                  horizon, [&](const Data& d, int s) { Record(d, s, traj); });
     steps = integ.steps - steps0;
     iterations = integ.iterations - iterations0;
     rejected = integ.rejected - rejected0;
     return ok;
   }
 };
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 double Seconds(std::chrono::steady_clock::duration d) {
   return std::chrono::duration<double>(d).count();

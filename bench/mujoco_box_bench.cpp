@@ -49,21 +49,22 @@
 #include "screwfem/model/model.h"
 #include "screwfem/solve/dynamics.h"
 #include "screwfem/solve/initial_state.h"
+#include "mujoco_common.h"
 
 namespace screwfem::mujoco_box_bench {
 namespace {
 
+using mujoco_common::LoadMjcf;
+using mujoco_common::MaxDistance;
+using mujoco_common::Median;
+using mujoco_common::MjDataDeleter;
+using mujoco_common::MjModelDeleter;
+using mujoco_common::Trajectory;
+
 constexpr double kSample = 1e-2;      // sampling interval of the centre [s]
 constexpr double kReferenceH = 1e-5;  // both codes' reference step [s]
 
-using Trajectory = std::vector<double>;  // the centre at k * kSample, k = 1..n: 3 per sample
-
-double MaxDistance(const Trajectory& a, const Trajectory& b) {
-  double d = 0.0;
-  for (std::size_t i = 0; i + 2 < a.size() && i + 2 < b.size(); i += 3)
-    d = std::max(d, std::hypot(a[i] - b[i], a[i + 1] - b[i + 1], a[i + 2] - b[i + 2]));
-  return d;
-}
+// Trajectories: the centre at k * kSample, k = 1..n, 3 values per sample.
 
 double CpuSeconds() {
   timespec t{};
@@ -93,28 +94,7 @@ const char* kMjcf = R"(<mujoco model="sliding_box">
 </mujoco>
 )";
 
-struct MjModelDeleter {
-  void operator()(mjModel* m) const { mj_deleteModel(m); }
-};
-struct MjDataDeleter {
-  void operator()(mjData* d) const { mj_deleteData(d); }
-};
-
-std::unique_ptr<mjModel, MjModelDeleter> LoadMujocoModel() {
-  const std::string xml = kMjcf;
-  auto vfs = std::make_unique<mjVFS>();
-  mj_defaultVFS(vfs.get());
-  const int size = static_cast<int>(xml.size());
-  if (mj_makeEmptyFileVFS(vfs.get(), "box.xml", size) != 0)
-    throw std::runtime_error("mj_makeEmptyFileVFS failed");
-  const int f = mj_findFileVFS(vfs.get(), "box.xml");
-  std::memcpy(vfs->filedata[f], xml.data(), static_cast<std::size_t>(size));
-  char error[1000] = "";
-  mjModel* m = mj_loadXML("box.xml", vfs.get(), error, sizeof(error));
-  mj_deleteVFS(vfs.get());
-  if (!m) throw std::runtime_error(std::string("MuJoCo: ") + error);
-  return std::unique_ptr<mjModel, MjModelDeleter>(m);
-}
+std::unique_ptr<mjModel, MjModelDeleter> LoadMujocoModel() { return LoadMjcf(kMjcf, "box.xml"); }
 
 struct MujocoSetting {
   int integrator = mjINT_EULER;
@@ -227,37 +207,15 @@ struct ScrewfemRun {
   }
   // The stepping loop; false if a step failed.
   bool Run(const ScrewfemSetting& s, double horizon, Trajectory* traj) {
-    const int samples = static_cast<int>(std::lround(horizon / kSample));
-    bool ok = true;
-    if (!s.adaptive) {
-      const int per_sample = static_cast<int>(std::lround(kSample / s.h));
-      for (int k = 0; k < samples && ok; ++k) {
-        for (int j = 0; j < per_sample && ok; ++j) ok = Step(model, data, integ, s.h).ok;
-        Record(data, k, traj);
-      }
-    } else {
-      int k = 0;
-      while (ok && k < samples) {
-        ok = AdaptiveStep(model, data, integ, horizon).ok;
-        while (ok && k < samples && (k + 1) * kSample <= data.time + 1e-12) {
-          InterpolateStep(model, data, integ, (k + 1) * kSample, out);
-          Record(out, k, traj);
-          ++k;
-        }
-      }
-    }
+    const bool ok =
+        mujoco_common::RunSampled(model, data, out, integ, s.adaptive, s.h, kSample, horizon,
+                                  [&](const Data& d, int k) { Record(d, k, traj); });
     steps = integ.steps - steps0;
     iterations = integ.iterations - iterations0;
     rejected = integ.rejected - rejected0;
     return ok;
   }
 };
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 std::string LoadAverage() {
   std::ifstream f("/proc/loadavg");
