@@ -44,8 +44,7 @@ struct MjDataDeleter {
 };
 
 // The model of MJCF text `xml`, through MuJoCo's virtual file system under `name`.
-inline std::unique_ptr<mjModel, MjModelDeleter> LoadMjcf(const std::string& xml,
-                                                         const char* name) {
+inline std::unique_ptr<mjModel, MjModelDeleter> LoadMjcf(const std::string& xml, const char* name) {
   auto vfs = std::make_unique<mjVFS>();  // large: on the heap
   mj_defaultVFS(vfs.get());
   const int size = static_cast<int>(xml.size());
