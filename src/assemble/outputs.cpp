@@ -1,6 +1,7 @@
 #include "screwfem/assemble/outputs.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "screwfem/assemble/assemble.h"
 #include "screwfem/elements/contact.h"
@@ -157,14 +158,23 @@ void CountContact(bool active, bool slipping, double gap, double radius, Settlin
 
 }  // namespace
 
-SettlingState CalcSettlingState(const Model& model, const Data& data, bool dynamics) {
-  SettlingState s;
-  s.kinetic = CalcEnergy(model, data).kinetic;
+NodeSpeeds LargestNodeSpeeds(const Model& model, const Data& data) {
+  NodeSpeeds s;
   for (const Node& node : model.nodes) {
     if (node.dof < 0) continue;
-    s.speed = std::max(s.speed, data.v.segment<3>(node.dof).norm());
-    s.angular_speed = std::max(s.angular_speed, data.v.segment<3>(node.dof + 3).norm());
+    s.linear = std::max(s.linear, data.v.segment<3>(node.dof).norm());
+    s.angular = std::max(s.angular, data.v.segment<3>(node.dof + 3).norm());
   }
+  return s;
+}
+
+SettlingState CalcSettlingState(const Model& model, const Data& data, bool dynamics,
+                                double kinetic) {
+  SettlingState s;
+  s.kinetic = std::isnan(kinetic) ? CalcEnergy(model, data).kinetic : kinetic;
+  const NodeSpeeds speeds = LargestNodeSpeeds(model, data);
+  s.speed = speeds.linear;
+  s.angular_speed = speeds.angular;
   for (int i = 0; i < static_cast<int>(model.contact_pairs.size()); ++i) {
     const ContactPair& pair = model.contact_pairs[static_cast<std::size_t>(i)];
     const ContactState c = CalcContactState(model, data, i, dynamics);

@@ -670,8 +670,10 @@ class Recording::Impl {
           CalcReactionRow(model_, data, &row_);
           reactions_.WriteRow(t, WithLoadFactor(row_), key);
         }
+        double kinetic = NAN;  // from energy.csv's row, for settling.csv's
         if (outputs_.energy) {
           CalcEnergyRow(model_, data, &row_);
+          kinetic = row_[0];
           energy_.WriteRow(t, WithLoadFactor(row_), key);
         }
         if (tendons_.path().size() > 0) {
@@ -697,7 +699,7 @@ class Recording::Impl {
               pair_contacts_.WriteRow(t, WithLoadFactor(row_), key);
         }
         if (settling_.path().size() > 0) {
-          CalcSettlingRow(model_, data, !statics, &row_);
+          CalcSettlingRow(model_, data, !statics, kinetic, &row_);
           settling_.WriteRow(t, WithLoadFactor(row_), key);
         }
         last_row_time_ = t;

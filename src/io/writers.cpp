@@ -111,9 +111,9 @@ std::vector<std::string> SettlingColumns() {
   return {"kinetic", "speed", "angular_speed", "contacts", "slipping", "overlap", "overlap_ratio"};
 }
 
-void CalcSettlingRow(const Model& model, const Data& data, bool dynamics,
+void CalcSettlingRow(const Model& model, const Data& data, bool dynamics, double kinetic,
                      std::vector<double>* row) {
-  const SettlingState s = CalcSettlingState(model, data, dynamics);
+  const SettlingState s = CalcSettlingState(model, data, dynamics, kinetic);
   row->resize(7);
   double* r = row->data();
   r[0] = s.kinetic;

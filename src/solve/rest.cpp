@@ -18,16 +18,6 @@ void ValidateRestCriterion(const RestCriterion& c, const std::string& owner) {
   require(std::isfinite(c.hold) && c.hold >= 0.0, "hold", "must be a duration >= 0 [s]");
 }
 
-NodeSpeeds LargestNodeSpeeds(const Model& model, const Data& data) {
-  NodeSpeeds s;
-  for (const Node& node : model.nodes) {
-    if (node.dof < 0) continue;
-    s.linear = std::max(s.linear, data.v.segment<3>(node.dof).norm());
-    s.angular = std::max(s.angular, data.v.segment<3>(node.dof + 3).norm());
-  }
-  return s;
-}
-
 bool RestWatch::Update(const Model& model, const Data& data) {
   const NodeSpeeds s = LargestNodeSpeeds(model, data);
   if (!(s.linear < criterion_.speed && s.angular < criterion_.angular_speed)) {

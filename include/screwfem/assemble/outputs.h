@@ -1,6 +1,7 @@
 // Output quantities (assemble/outputs.h).
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "screwfem/model/data.h"
@@ -78,9 +79,18 @@ Vec6 CalcJointReaction(const Model& model, const Data& data, int joint);
 // velocity field eta(xi) = N(xi, d) eta_AB with the sectional mass matrix (docs/numerics.md, "Rod inertia").
 Vec6 CalcMomentum(const Model& model, const Data& data);
 
+// The largest translational [m/s] and angular [rad/s] speed of the free nodes (|v| and |w| of
+// each node's body velocity, which equal the world ones), zero without free nodes: the measure
+// of rest (solve/rest.h, RestWatch) and of settling.csv.
+struct NodeSpeeds {
+  double linear = 0.0;
+  double angular = 0.0;
+};
+NodeSpeeds LargestNodeSpeeds(const Model& model, const Data& data);
+
 // How far a scene is from rest (settling.csv; docs/numerics.md, "Settling and rest"): the
-// kinetic energy [J] (CalcEnergy), the largest node speeds (LargestNodeSpeeds, solve/rest.h's
-// measure, computed here the same way), the active contacts of obstacle pairs and of pairs of
+// kinetic energy [J] (CalcEnergy, unless the caller has it: `kinetic` not NaN), the largest
+// node speeds (LargestNodeSpeeds), the active contacts of obstacle pairs and of pairs of
 // moving shapes, how many of them slip (stick law; 0 under the smooth law, which has no stick
 // state), the deepest overlap [m] (the largest -gap, 0 when no pair overlaps) and the largest
 // overlap relative to the smaller radius of the pair's round shapes (rod capsules, spheres,
@@ -96,6 +106,7 @@ struct SettlingState {
   double overlap = 0.0;
   double overlap_ratio = 0.0;
 };
-SettlingState CalcSettlingState(const Model& model, const Data& data, bool dynamics = true);
+SettlingState CalcSettlingState(const Model& model, const Data& data, bool dynamics = true,
+                                double kinetic = std::numeric_limits<double>::quiet_NaN());
 
 }  // namespace screwfem

@@ -112,7 +112,9 @@ void CalcEnergyRow(const Model& model, const Data& data, std::vector<double>* ro
 // those slipping under the stick law), overlap [m] (the deepest) and overlap_ratio (the deepest
 // relative to the pair's smaller round radius): CalcSettlingState (assemble/outputs.h).
 std::vector<std::string> SettlingColumns();
-void CalcSettlingRow(const Model& model, const Data& data, bool dynamics, std::vector<double>* row);
+// `kinetic`: the state's kinetic energy when the caller has it (energy.csv's row), else NaN.
+void CalcSettlingRow(const Model& model, const Data& data, bool dynamics, double kinetic,
+                     std::vector<double>* row);
 // rod_fields.csv (long format, outputs.rod_fields): at each output time one row per station
 // (one per rod element, at its mid arc length): rod s gamma1 gamma2 gamma3 kappa1 kappa2 kappa3
 // n1 n2 n3 m1 m2 m3, the values of CalcRodFieldRows (assemble/outputs.h: units, section axes

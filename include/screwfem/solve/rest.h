@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "screwfem/assemble/outputs.h"  // LargestNodeSpeeds
 #include "screwfem/model/data.h"
 
 namespace screwfem {
@@ -22,14 +23,6 @@ struct RestCriterion {
 
 // Throws InputError "<owner>.<field>: ..." unless the values are finite and in range.
 void ValidateRestCriterion(const RestCriterion& c, const std::string& owner);
-
-// The largest translational [m/s] and angular [rad/s] speed of the free nodes (|v| and |w| of
-// each node's body velocity, which equal the world ones), zero without free nodes.
-struct NodeSpeeds {
-  double linear = 0.0;
-  double angular = 0.0;
-};
-NodeSpeeds LargestNodeSpeeds(const Model& model, const Data& data);
 
 // Watches the accepted steps of a run for rest. Update after each accepted step: true once the
 // criterion has held for `hold` from the first state below it, and not before `earliest` (the
